@@ -1,0 +1,5 @@
+//! The `presrs` command line.
+
+fn main() {
+    println!("presrs");
+}
