@@ -1,9 +1,14 @@
 #![doc = include_str!("../README.md")]
 
+pub mod classifier;
 pub mod crop;
 pub mod error;
+pub mod features;
 pub mod frame;
+pub mod pca;
+pub mod pipeline;
 pub mod recording;
+pub mod stance;
 
 pub use crop::Crop;
 pub use error::CoreError;
