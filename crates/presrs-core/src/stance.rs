@@ -1,1 +1,586 @@
 //! Stance segmentation: finding the stance phases of a recording from its total load per frame.
+//!
+//! The paper classifies one pressure image per stance: the 7th of the ~14 frames a hopper stance lasts at
+//! 100 Hz, i.e. the mid-stance frame `(len - 1) / 2` frames after touchdown. To pick that frame from a movie
+//! we need touchdown and lift-off, which we read off the total load per frame:
+//!
+//! 1. **Baseline and noise.** Real sensors do not read zero in flight/swing, and their zero drifts over a
+//!    long recording (temperature, creep). The recording is cut into blocks of about
+//!    [`SegmentParams::baseline_window_frames`] frames; a low quantile of each block is a first baseline
+//!    (robust as long as every block has a few unloaded frames, which holds when the window spans a few
+//!    strides), interpolated linearly between block centres so that a linear drift is followed exactly. The
+//!    unloaded frames are then found by sigma clipping the residuals (median +- 3 x 1.4826 x MAD, iterated
+//!    from the low tail upwards); their median corrects each block's level and their MAD is the noise.
+//!    Cost: O(n log n).
+//! 2. **Hysteresis.** A frame is *loaded* when its load above the baseline exceeds the *off* level and a
+//!    stance must reach the higher *on* level somewhere. Each level is the larger of a multiple of the
+//!    baseline noise (so that noise does not make stances) and a fraction of the recording's load range
+//!    above the baseline (so that a noiseless sensor, which reads exactly zero in swing, still needs real
+//!    load). Stance boundaries therefore come from the low level (touchdown is the first frame with real
+//!    load, not the first *heavily* loaded one) while detection is decided by the high one.
+//! 3. **Clean-up.** Loaded runs separated by at most [`SegmentParams::max_gap_frames`] unloaded frames are
+//!    merged (a sensor dropout of a frame or two inside a stance), then runs shorter than
+//!    [`SegmentParams::min_stance_frames`] are dropped (a knock or spike is not a stance).
+//! 4. **Partial stances.** A stance that starts at the first frame or ends at the last one was cut by the
+//!    recording; its touchdown (and therefore its mid-stance frame) is unknown. It is reported with
+//!    `partial: true` and skipped by [`Segmentation::samples`] unless asked for.
+//!
+//! Non-finite loads (NaN, infinity) are rejected with an error rather than guessed at: a NaN total means
+//! a broken frame upstream, and silently treating it as "no load" could split a stance.
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+use crate::recording::Recording;
+
+/// Scale factor turning a median absolute deviation into a standard deviation for Gaussian noise.
+const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
+/// Residuals further than this many noise sigmas from the baseline are not "unloaded" frames.
+const CLIP_SIGMAS: f64 = 3.0;
+/// Sigma clipping normally converges in a handful of rounds; this bounds a (rare) oscillation.
+const MAX_CLIP_ROUNDS: usize = 32;
+/// A block needs this many unloaded frames to get its own baseline correction (else the global one).
+const MIN_QUIET_PER_BLOCK: usize = 3;
+
+/// Settings of [`segment`], as written by a user (unchecked). Turn them into [`ValidSegmentParams`] with
+/// [`SegmentParams::check`] once; the segmentation functions only accept the checked type.
+///
+/// The defaults work for both the paper's hopper (100 Hz, ~14-frame stances, ~20-frame flights) and
+/// overground walking sampled at ~31 Hz (~23-frame stances, ~12-frame swings).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SegmentParams {
+    /// A stance must somewhere exceed this fraction of the load range above baseline (default 0.10).
+    pub on_fraction: f64,
+    /// A frame belongs to a stance while its load exceeds this fraction of the load range above baseline
+    /// (default 0.01). Low, so that touchdown is the first frame with real load: on a real walking file
+    /// 1% puts the boundaries on the first/last non-zero frames of each stance.
+    pub off_fraction: f64,
+    /// A stance must somewhere exceed this many baseline noise sigmas (default 8: pure noise never does).
+    pub on_noise: f64,
+    /// A frame belongs to a stance while its load exceeds this many baseline noise sigmas (default 4: a
+    /// swing frame does so with probability ~3e-5, so noise rarely lengthens a stance).
+    pub off_noise: f64,
+    /// Shortest stance kept, in frames (default 3). In frames rather than seconds because the frame period
+    /// is not always known; 3 rejects one- and two-frame spikes while keeping the stances of any gait we
+    /// know of (14 frames for the hopper at 100 Hz, ~23 for walking at 31 Hz, and still ~4 for a hopper
+    /// sampled as slowly as 30 Hz). Applies to partial stances too (a 2-frame tail is not worth reporting).
+    pub min_stance_frames: usize,
+    /// Loaded runs separated by at most this many unloaded frames are one stance (default 2; 0 disables).
+    /// Flights and swings last far longer than two frames at any rate we use.
+    pub max_gap_frames: usize,
+    /// Length of the blocks the baseline is estimated on, in frames (default 128, at least 4). It must span
+    /// a few strides so that every block holds unloaded frames (128 frames is ~4 hopper strides at 100 Hz,
+    /// ~3.5 walking strides at 31 Hz), and be short against the time scale of the baseline's drift.
+    /// A stance longer than about `(1 - baseline_quantile)` of a window (standing still) is taken for
+    /// baseline.
+    pub baseline_window_frames: usize,
+    /// The quantile of a block's loads used as its first baseline guess (default 0.10, in (0, 0.5]).
+    /// Tolerates stance duty factors up to ~85%.
+    pub baseline_quantile: f64,
+}
+
+impl Default for SegmentParams {
+    fn default() -> Self {
+        Self {
+            on_fraction: 0.10,
+            off_fraction: 0.01,
+            on_noise: 8.0,
+            off_noise: 4.0,
+            min_stance_frames: 3,
+            max_gap_frames: 2,
+            baseline_window_frames: 128,
+            baseline_quantile: 0.10,
+        }
+    }
+}
+
+impl SegmentParams {
+    /// Checks every setting once, so that the algorithm never meets a nonsensical one.
+    pub fn check(&self) -> Result<ValidSegmentParams> {
+        let bad = |name: &'static str, reason: String| Err(CoreError::Param { name, reason });
+        if !(self.on_fraction > 0.0 && self.on_fraction <= 1.0) {
+            return bad(
+                "on_fraction",
+                format!(
+                    "must be in (0, 1] (a stance needs some real load), got {}",
+                    self.on_fraction
+                ),
+            );
+        }
+        if !(self.off_fraction >= 0.0 && self.off_fraction <= self.on_fraction) {
+            return bad(
+                "off_fraction",
+                format!(
+                    "must be in [0, on_fraction = {}] (hysteresis), got {}",
+                    self.on_fraction, self.off_fraction
+                ),
+            );
+        }
+        if !(self.on_noise.is_finite() && self.on_noise >= 0.0) {
+            return bad(
+                "on_noise",
+                format!("must be a finite number >= 0, got {}", self.on_noise),
+            );
+        }
+        if !(self.off_noise >= 0.0 && self.off_noise <= self.on_noise) {
+            return bad(
+                "off_noise",
+                format!(
+                    "must be in [0, on_noise = {}] (hysteresis), got {}",
+                    self.on_noise, self.off_noise
+                ),
+            );
+        }
+        if self.min_stance_frames == 0 {
+            return bad("min_stance_frames", "must be at least 1".to_owned());
+        }
+        if self.baseline_window_frames < 4 {
+            return bad(
+                "baseline_window_frames",
+                format!(
+                    "must be at least 4 frames, got {}",
+                    self.baseline_window_frames
+                ),
+            );
+        }
+        if !(self.baseline_quantile > 0.0 && self.baseline_quantile <= 0.5) {
+            return bad(
+                "baseline_quantile",
+                format!("must be in (0, 0.5], got {}", self.baseline_quantile),
+            );
+        }
+        Ok(ValidSegmentParams(self.clone()))
+    }
+}
+
+/// [`SegmentParams`] that passed [`SegmentParams::check`]. Deserializing checks too.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "SegmentParams", into = "SegmentParams")]
+pub struct ValidSegmentParams(SegmentParams);
+
+impl ValidSegmentParams {
+    pub fn params(&self) -> &SegmentParams {
+        &self.0
+    }
+}
+
+impl Default for ValidSegmentParams {
+    /// The defaults of [`SegmentParams`], which are valid.
+    fn default() -> Self {
+        Self(SegmentParams::default())
+    }
+}
+
+impl TryFrom<SegmentParams> for ValidSegmentParams {
+    type Error = CoreError;
+
+    fn try_from(params: SegmentParams) -> Result<Self> {
+        params.check()
+    }
+}
+
+impl From<ValidSegmentParams> for SegmentParams {
+    fn from(valid: ValidSegmentParams) -> Self {
+        valid.0
+    }
+}
+
+/// One stance phase. Frames are 0-based indices into the recording.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Stance {
+    /// First loaded frame (touchdown, unless `partial`).
+    pub start: usize,
+    /// Number of frames, touchdown to lift-off inclusive.
+    pub len: usize,
+    /// Largest total load in the stance, as recorded (the baseline is not subtracted).
+    pub peak_load: f64,
+    /// Frame of `peak_load` (the first one on ties).
+    pub peak_frame: usize,
+    /// The stance touches the first or last frame of the recording, so it may have been cut.
+    pub partial: bool,
+}
+
+impl Stance {
+    /// One past the last frame.
+    pub fn end(&self) -> usize {
+        self.start + self.len
+    }
+
+    /// The paper's mid-stance frame: `(len - 1) / 2` frames after touchdown (the 7th of 14).
+    pub fn mid_frame(&self) -> usize {
+        self.start + self.len.saturating_sub(1) / 2
+    }
+
+    pub fn contains(&self, frame: usize) -> bool {
+        (self.start..self.end()).contains(&frame)
+    }
+}
+
+/// Which frame(s) of a stance to use as samples. Parsed from `mid`, `peak`, `all`, or a 0-based frame
+/// offset `K` after touchdown (the paper uses a fixed stance time: `6` is its 7th frame).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub enum SampleFrame {
+    /// [`Stance::mid_frame`].
+    #[default]
+    Mid,
+    /// [`Stance::peak_frame`].
+    Peak,
+    /// The K-th frame after touchdown (0 = touchdown).
+    Offset(usize),
+    /// Every frame of the stance.
+    All,
+}
+
+impl FromStr for SampleFrame {
+    type Err = CoreError;
+
+    fn from_str(text: &str) -> Result<Self> {
+        let text = text.trim();
+        match text.to_ascii_lowercase().as_str() {
+            "mid" => Ok(Self::Mid),
+            "peak" => Ok(Self::Peak),
+            "all" => Ok(Self::All),
+            _ => text.parse().map(Self::Offset).map_err(|_| CoreError::Param {
+                name: "sample frame",
+                reason: format!(
+                    "expected mid, peak, all or a frame offset K >= 0 after touchdown, got {text:?}"
+                ),
+            }),
+        }
+    }
+}
+
+impl fmt::Display for SampleFrame {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Mid => f.write_str("mid"),
+            Self::Peak => f.write_str("peak"),
+            Self::All => f.write_str("all"),
+            Self::Offset(k) => write!(f, "{k}"),
+        }
+    }
+}
+
+impl TryFrom<String> for SampleFrame {
+    type Error = CoreError;
+
+    fn try_from(text: String) -> Result<Self> {
+        text.parse()
+    }
+}
+
+impl From<SampleFrame> for String {
+    fn from(sample: SampleFrame) -> Self {
+        sample.to_string()
+    }
+}
+
+/// The frames of `stance` selected by `sample`, in increasing order.
+///
+/// An offset at or past the end of the stance is an error, not clamped: clamping would silently sample a
+/// different phase of the stance (lift-off instead of, say, frame 20), which is exactly what a fixed
+/// stance time is meant to avoid. The caller decides whether to skip such a stance or stop.
+pub fn sample_frames(stance: &Stance, sample: SampleFrame) -> Result<Vec<usize>> {
+    match sample {
+        SampleFrame::Mid => Ok(vec![stance.mid_frame()]),
+        SampleFrame::Peak => Ok(vec![stance.peak_frame]),
+        SampleFrame::All => Ok((stance.start..stance.end()).collect()),
+        SampleFrame::Offset(k) if k < stance.len => Ok(vec![stance.start + k]),
+        SampleFrame::Offset(k) => Err(CoreError::Param {
+            name: "sample frame",
+            reason: format!(
+                "frame offset {k} is past the stance at frames {}..{} ({} frames long)",
+                stance.start,
+                stance.end(),
+                stance.len
+            ),
+        }),
+    }
+}
+
+/// The result of [`segment`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Segmentation {
+    /// Every stance found, in time order, partial ones included (flagged).
+    pub stances: Vec<Stance>,
+    /// Estimated unloaded level of every frame (same length as the input).
+    pub baseline: Vec<f64>,
+    /// Estimated standard deviation of the unloaded level (0 for a sensor that reads exactly zero).
+    pub noise: f64,
+    /// Largest load above the baseline in the recording (0 when nothing rises above it).
+    pub load_range: f64,
+    /// Load above baseline a stance had to exceed somewhere.
+    pub on_level: f64,
+    /// Load above baseline that a frame had to exceed to be part of a stance.
+    pub off_level: f64,
+}
+
+impl Segmentation {
+    /// The stances not cut by the start or end of the recording: the ones to sample by default.
+    pub fn complete(&self) -> impl Iterator<Item = &Stance> + '_ {
+        self.stances.iter().filter(|stance| !stance.partial)
+    }
+
+    /// The sample frames of every complete stance (and of partial ones with `include_partial`), in order.
+    /// Fails like [`sample_frames`] when an offset is past the end of a stance.
+    pub fn samples(&self, sample: SampleFrame, include_partial: bool) -> Result<Vec<usize>> {
+        let mut frames = Vec::new();
+        for stance in self
+            .stances
+            .iter()
+            .filter(|stance| include_partial || !stance.partial)
+        {
+            frames.extend(sample_frames(stance, sample)?);
+        }
+        Ok(frames)
+    }
+}
+
+/// Finds the stance phases in a series of total loads (one value per frame). See the module docs for the
+/// method. Empty input, or a recording without contact, gives no stances; a non-finite load is an error.
+pub fn segment(total_load: &[f64], params: &ValidSegmentParams) -> Result<Segmentation> {
+    if let Some((frame, value)) = total_load
+        .iter()
+        .enumerate()
+        .find(|(_, value)| !value.is_finite())
+    {
+        return Err(CoreError::Param {
+            name: "total load",
+            reason: format!("frame {frame} has load {value}; total loads must be finite"),
+        });
+    }
+    let p = params.params();
+    let (baseline, noise) =
+        estimate_baseline(total_load, p.baseline_window_frames, p.baseline_quantile);
+    let above: Vec<f64> = total_load
+        .iter()
+        .zip(&baseline)
+        .map(|(load, base)| load - base)
+        .collect();
+    let load_range = above.iter().copied().fold(0.0, f64::max);
+    let on_level = (p.on_noise * noise).max(p.on_fraction * load_range);
+    let off_level = (p.off_noise * noise).max(p.off_fraction * load_range);
+    let mut segmentation = Segmentation {
+        stances: Vec::new(),
+        baseline,
+        noise,
+        load_range,
+        on_level,
+        off_level,
+    };
+    if load_range <= 0.0 {
+        return Ok(segmentation);
+    }
+
+    // Maximal runs of frames above the off level, [start, end).
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut open: Option<usize> = None;
+    for (frame, &value) in above.iter().enumerate() {
+        match (value > off_level, open) {
+            (true, None) => open = Some(frame),
+            (false, Some(start)) => {
+                runs.push((start, frame));
+                open = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(start) = open {
+        runs.push((start, above.len()));
+    }
+
+    // Bridge short dropouts.
+    let mut merged: Vec<(usize, usize)> = Vec::with_capacity(runs.len());
+    for run in runs {
+        match merged.last_mut() {
+            Some(last) if run.0 - last.1 <= p.max_gap_frames => last.1 = run.1,
+            _ => merged.push(run),
+        }
+    }
+
+    let n = total_load.len();
+    for (start, end) in merged {
+        let len = end - start;
+        if len < p.min_stance_frames || !above[start..end].iter().any(|&v| v > on_level) {
+            continue;
+        }
+        let mut peak_frame = start;
+        for frame in start..end {
+            if total_load[frame] > total_load[peak_frame] {
+                peak_frame = frame;
+            }
+        }
+        segmentation.stances.push(Stance {
+            start,
+            len,
+            peak_load: total_load[peak_frame],
+            peak_frame,
+            partial: start == 0 || end == n,
+        });
+    }
+    Ok(segmentation)
+}
+
+/// [`segment`] on a recording's total load per frame.
+pub fn segment_recording(
+    recording: &Recording,
+    params: &ValidSegmentParams,
+) -> Result<Segmentation> {
+    segment(&recording.total_per_frame(), params)
+}
+
+/// Per-frame baseline and the baseline noise sigma (see the module docs). `values` must be finite.
+fn estimate_baseline(values: &[f64], window: usize, quantile_level: f64) -> (Vec<f64>, f64) {
+    let n = values.len();
+    if n == 0 {
+        return (Vec::new(), 0.0);
+    }
+    // Blocks of about `window` frames; at most n blocks since window >= 1, so none is empty.
+    let blocks = ((n + window / 2) / window).clamp(1, n);
+    let bounds: Vec<(usize, usize)> = (0..blocks)
+        .map(|b| (b * n / blocks, (b + 1) * n / blocks))
+        .collect();
+    let centres: Vec<f64> = bounds
+        .iter()
+        .map(|&(start, end)| (start + end - 1) as f64 / 2.0)
+        .collect();
+    let mut scratch = Vec::with_capacity(n.min(2 * window));
+    let levels: Vec<f64> = bounds
+        .iter()
+        .map(|&(start, end)| {
+            scratch.clear();
+            scratch.extend_from_slice(&values[start..end]);
+            quantile(&mut scratch, quantile_level)
+        })
+        .collect();
+    let coarse = interpolate(&centres, &levels, n);
+    let residual: Vec<f64> = values.iter().zip(&coarse).map(|(v, c)| v - c).collect();
+
+    // Sigma clipping from the low tail upwards: the unloaded frames are the cluster at the bottom.
+    let mut scratch = residual.clone();
+    let start_cut = quantile(&mut scratch, quantile_level);
+    let mut quiet: Vec<bool> = residual.iter().map(|&r| r <= start_cut).collect();
+    let (mut centre, mut sigma) = (0.0, 0.0);
+    for _ in 0..MAX_CLIP_ROUNDS {
+        scratch.clear();
+        scratch.extend(
+            residual
+                .iter()
+                .zip(&quiet)
+                .filter(|&(_, &q)| q)
+                .map(|(r, _)| *r),
+        );
+        if scratch.is_empty() {
+            break;
+        }
+        (centre, sigma) = median_and_sigma(&mut scratch);
+        let next: Vec<bool> = residual
+            .iter()
+            .map(|&r| (r - centre).abs() <= CLIP_SIGMAS * sigma)
+            .collect();
+        if next == quiet || !next.contains(&true) {
+            break;
+        }
+        quiet = next;
+    }
+
+    // Correct each block's level by the median residual of its unloaded frames.
+    let knots: Vec<f64> = bounds
+        .iter()
+        .zip(&levels)
+        .map(|(&(start, end), &level)| {
+            scratch.clear();
+            scratch.extend(
+                (start..end)
+                    .filter(|&frame| quiet[frame])
+                    .map(|frame| residual[frame]),
+            );
+            if scratch.len() >= MIN_QUIET_PER_BLOCK {
+                level + quantile(&mut scratch, 0.5)
+            } else {
+                level + centre
+            }
+        })
+        .collect();
+    // The coarse baseline's interpolation differs from the final one only by the per-block offsets, so the
+    // final baseline is the interpolation of the corrected knots.
+    (interpolate(&centres, &knots, n), sigma)
+}
+
+/// Median of `values` and its robust sigma (1.4826 x MAD). Reorders `values`; must not be empty.
+fn median_and_sigma(values: &mut [f64]) -> (f64, f64) {
+    let median = quantile(values, 0.5);
+    for value in values.iter_mut() {
+        *value = (*value - median).abs();
+    }
+    (median, MAD_TO_SIGMA * quantile(values, 0.5))
+}
+
+/// Linearly interpolated quantile `level` in [0, 1] of `values` (sorted in place). 0 for no values.
+fn quantile(values: &mut [f64], level: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    let position = level.clamp(0.0, 1.0) * (values.len() - 1) as f64;
+    let below = position.floor() as usize;
+    let above = (below + 1).min(values.len() - 1);
+    let weight = position - below as f64;
+    values[below] * (1.0 - weight) + values[above] * weight
+}
+
+/// Piecewise-linear curve through `(xs[i], ys[i])` evaluated at 0..n, extrapolated linearly beyond the
+/// first/last knots (so that a linear drift is followed to the ends). `xs` strictly increasing.
+fn interpolate(xs: &[f64], ys: &[f64], n: usize) -> Vec<f64> {
+    match (xs, ys) {
+        ([_, _, ..], [_, _, ..]) => {
+            let last_segment = xs.len().min(ys.len()) - 2;
+            let mut segment = 0;
+            (0..n)
+                .map(|t| {
+                    let t = t as f64;
+                    while segment < last_segment && t > xs[segment + 1] {
+                        segment += 1;
+                    }
+                    let (x0, x1, y0, y1) =
+                        (xs[segment], xs[segment + 1], ys[segment], ys[segment + 1]);
+                    y0 + (y1 - y0) * (t - x0) / (x1 - x0)
+                })
+                .collect()
+        }
+        (_, [y, ..]) => vec![*y; n],
+        _ => vec![0.0; n],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantile_interpolates() {
+        assert_eq!(quantile(&mut [3.0, 1.0, 2.0], 0.5), 2.0);
+        assert_eq!(quantile(&mut [4.0, 1.0], 0.5), 2.5);
+        assert_eq!(quantile(&mut [4.0, 1.0, 2.0, 3.0, 0.0], 0.0), 0.0);
+        assert_eq!(quantile(&mut [], 0.3), 0.0);
+    }
+
+    #[test]
+    fn interpolation_extrapolates_linearly() {
+        let curve = interpolate(&[1.0, 3.0], &[10.0, 20.0], 6);
+        assert_eq!(curve, vec![5.0, 10.0, 15.0, 20.0, 25.0, 30.0]);
+        assert_eq!(interpolate(&[2.0], &[7.0], 3), vec![7.0; 3]);
+    }
+
+    #[test]
+    fn baseline_of_a_constant_is_the_constant_without_noise() {
+        let (baseline, noise) = estimate_baseline(&[5.0; 300], 128, 0.1);
+        assert!(baseline.iter().all(|&b| (b - 5.0).abs() < 1e-12));
+        assert_eq!(noise, 0.0);
+    }
+}
