@@ -1,0 +1,684 @@
+//! The Parzen-window estimator (PWE) of the paper: a Gaussian kernel density per class.
+//!
+//! The density of class `c` at `x` is the mean over that class's stored vectors `p` of
+//! `exp(-|x - p|² / (2 σ²))` (the normalisation `(2πσ²)^(-h/2)` is common to all classes and left out of
+//! scores). Scores are kept as logarithms and summed with log-sum-exp, so far-away samples do not underflow
+//! to 0/0. The prediction is the class with the largest density; the posteriors assume **equal class
+//! priors** (the paper trains on the same number of images per terrain, and equal priors keep the
+//! confidence independent of how many images each class happened to get).
+//!
+//! # Choosing σ
+//! `σ = factor · scale`, where `scale` is the median, over the training vectors, of the Euclidean distance
+//! to their nearest other training vector (robust to outliers and to the units of the features), and
+//! `factor` runs over a log-spaced grid ([`SigmaSearch`]). A model fitted on the training vectors alone
+//! classifies the validation vectors for each σ; the σ with the highest validation accuracy wins, ties going
+//! to the **larger** σ (the smoother density). The final model stores training and validation vectors, like
+//! the paper's `P` with `p + q` columns. Every grid point is recorded in [`ParzenModel::validation_curve`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+
+/// How σ is chosen.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "mode", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SigmaChoice {
+    /// Grid search on the validation set (the default).
+    Search(SigmaSearch),
+    /// A fixed kernel width in the units of the reduced feature vectors; no validation set needed.
+    Fixed { sigma: f64 },
+}
+
+impl Default for SigmaChoice {
+    fn default() -> Self {
+        Self::Search(SigmaSearch::default())
+    }
+}
+
+/// A log-spaced grid of `steps` factors from `min_factor` to `max_factor` (both included), multiplied by
+/// the median nearest-neighbour distance of the training vectors.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SigmaSearch {
+    pub min_factor: f64,
+    pub max_factor: f64,
+    pub steps: usize,
+}
+
+impl Default for SigmaSearch {
+    /// 1/32 to 32 times the nearest-neighbour scale, 41 points (about six per factor of two).
+    fn default() -> Self {
+        Self {
+            min_factor: 1.0 / 32.0,
+            max_factor: 32.0,
+            steps: 41,
+        }
+    }
+}
+
+impl SigmaSearch {
+    /// The grid factors, ascending.
+    pub fn factors(&self) -> Vec<f64> {
+        if self.steps == 1 {
+            return vec![self.min_factor];
+        }
+        let (lo, hi) = (self.min_factor.ln(), self.max_factor.ln());
+        (0..self.steps)
+            .map(|i| (lo + (hi - lo) * i as f64 / (self.steps - 1) as f64).exp())
+            .collect()
+    }
+}
+
+/// Parameters of the Parzen-window classifier.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParzenConfig {
+    #[serde(default)]
+    pub sigma: SigmaChoice,
+}
+
+impl ParzenConfig {
+    /// Checks the parameters on their own (no data needed).
+    pub fn check(&self) -> Result<()> {
+        let bad = |reason: String| {
+            Err(CoreError::Param {
+                name: "pwe sigma",
+                reason,
+            })
+        };
+        match &self.sigma {
+            SigmaChoice::Fixed { sigma } if !(sigma.is_finite() && *sigma > 0.0) => bad(format!(
+                "a fixed sigma must be positive and finite, got {sigma}"
+            )),
+            SigmaChoice::Search(search) => {
+                let SigmaSearch {
+                    min_factor,
+                    max_factor,
+                    steps,
+                } = *search;
+                if steps == 0 {
+                    bad("the sigma grid needs at least one step".into())
+                } else if !(min_factor.is_finite()
+                    && max_factor.is_finite()
+                    && min_factor > 0.0
+                    && max_factor >= min_factor)
+                {
+                    bad(format!(
+                        "the sigma grid needs 0 < min_factor <= max_factor, got {min_factor} and {max_factor}"
+                    ))
+                } else {
+                    Ok(())
+                }
+            }
+            SigmaChoice::Fixed { .. } => Ok(()),
+        }
+    }
+}
+
+/// One point of the validation curve.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SigmaPoint {
+    pub factor: f64,
+    pub sigma: f64,
+    /// Fraction of validation vectors classified correctly by the training-only model.
+    pub accuracy: f64,
+    /// Mean over validation vectors of the log density (normalised Gaussian kernel) of their true class.
+    pub mean_log_likelihood: f64,
+}
+
+/// A trained Parzen-window classifier.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ParzenFields", into = "ParzenFields")]
+pub struct ParzenModel {
+    dims: usize,
+    sigma: f64,
+    /// Stored vectors grouped by class: class `c` owns rows `class_starts[c]..class_starts[c + 1]`.
+    vectors: Vec<f64>,
+    class_starts: Vec<usize>,
+    /// The median nearest-neighbour distance the σ grid was scaled by (`None` for a fixed σ).
+    scale: Option<f64>,
+    validation_curve: Vec<SigmaPoint>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ParzenFields {
+    dims: usize,
+    sigma: f64,
+    vectors: Vec<f64>,
+    class_starts: Vec<usize>,
+    scale: Option<f64>,
+    validation_curve: Vec<SigmaPoint>,
+}
+
+impl From<ParzenModel> for ParzenFields {
+    fn from(model: ParzenModel) -> Self {
+        Self {
+            dims: model.dims,
+            sigma: model.sigma,
+            vectors: model.vectors,
+            class_starts: model.class_starts,
+            scale: model.scale,
+            validation_curve: model.validation_curve,
+        }
+    }
+}
+
+impl TryFrom<ParzenFields> for ParzenModel {
+    type Error = CoreError;
+
+    fn try_from(fields: ParzenFields) -> Result<Self> {
+        let bad = |reason: String| CoreError::Param {
+            name: "pwe model",
+            reason,
+        };
+        if fields.dims == 0 || !(fields.sigma.is_finite() && fields.sigma > 0.0) {
+            return Err(bad(format!(
+                "needs dims > 0 and a positive sigma, got {} and {}",
+                fields.dims, fields.sigma
+            )));
+        }
+        let starts = &fields.class_starts;
+        let rows = fields.vectors.len() / fields.dims;
+        let consistent = fields.vectors.len() % fields.dims == 0
+            && starts.len() >= 2
+            && starts.first() == Some(&0)
+            && starts.last() == Some(&rows)
+            && starts.windows(2).all(|pair| pair[0] < pair[1]);
+        if !consistent {
+            return Err(bad(
+                "class_starts must split the stored vectors into non-empty classes".into(),
+            ));
+        }
+        if fields.vectors.iter().any(|value| !value.is_finite()) {
+            return Err(bad("non-finite stored vectors".into()));
+        }
+        Ok(Self {
+            dims: fields.dims,
+            sigma: fields.sigma,
+            vectors: fields.vectors,
+            class_starts: fields.class_starts,
+            scale: fields.scale,
+            validation_curve: fields.validation_curve,
+        })
+    }
+}
+
+/// Reduced vectors with their class indices, `n x dims` row-major.
+#[derive(Clone, Copy, Debug)]
+pub struct LabeledVectors<'a> {
+    pub vectors: &'a [f64],
+    pub classes: &'a [usize],
+}
+
+impl LabeledVectors<'_> {
+    fn check(&self, what: &'static str, dims: usize, n_classes: usize) -> Result<()> {
+        if self.vectors.len() != self.classes.len() * dims {
+            return Err(CoreError::Shape {
+                what,
+                expected: format!(
+                    "{} values ({} vectors of {dims})",
+                    self.classes.len() * dims,
+                    self.classes.len()
+                ),
+                got: self.vectors.len().to_string(),
+            });
+        }
+        if let Some(&class) = self.classes.iter().find(|&&class| class >= n_classes) {
+            return Err(CoreError::Param {
+                name: what,
+                reason: format!("class index {class} but only {n_classes} classes"),
+            });
+        }
+        if self.vectors.iter().any(|value| !value.is_finite()) {
+            return Err(CoreError::Param {
+                name: what,
+                reason: "contains NaN or infinite values".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl ParzenModel {
+    /// Trains on `train`, choosing σ with `validation` as described in the module documentation; the
+    /// returned model stores both sets. Every class in `0..n_classes` needs a training vector.
+    pub fn fit(
+        train: LabeledVectors<'_>,
+        validation: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        config: &ParzenConfig,
+    ) -> Result<Self> {
+        config.check()?;
+        if dims == 0 {
+            return Err(CoreError::Param {
+                name: "pwe dims",
+                reason: "vectors are empty".into(),
+            });
+        }
+        train.check("pwe training vectors", dims, n_classes)?;
+        validation.check("pwe validation vectors", dims, n_classes)?;
+        if let Some(missing) = (0..n_classes).find(|c| !train.classes.contains(c)) {
+            return Err(CoreError::NotEnoughData(format!(
+                "class {missing} has no training vector"
+            )));
+        }
+
+        let (sigma, scale, validation_curve) = match &config.sigma {
+            SigmaChoice::Fixed { sigma } => (*sigma, None, Vec::new()),
+            SigmaChoice::Search(search) => {
+                if validation.classes.is_empty() {
+                    return Err(CoreError::NotEnoughData(
+                        "choosing the Parzen sigma needs a validation set (or give a fixed sigma)"
+                            .into(),
+                    ));
+                }
+                let scale = median_nearest_neighbour_distance(train.vectors, dims);
+                if !(scale > 0.0) {
+                    return Err(CoreError::NotEnoughData(
+                        "the training vectors are all identical to a neighbour; sigma cannot be scaled".into(),
+                    ));
+                }
+                let curve = validation_curve(train, validation, n_classes, dims, scale, search)?;
+                // Highest accuracy; ties to the larger sigma (the grid is ascending, so the last maximum).
+                let best = curve
+                    .iter()
+                    .copied()
+                    .reduce(|best, point| {
+                        if point.accuracy >= best.accuracy {
+                            point
+                        } else {
+                            best
+                        }
+                    })
+                    .ok_or_else(|| CoreError::Param {
+                        name: "pwe sigma",
+                        reason: "empty sigma grid".into(),
+                    })?;
+                (best.sigma, Some(scale), curve)
+            }
+        };
+
+        let all = LabeledVectors {
+            vectors: &[train.vectors, validation.vectors].concat(),
+            classes: &[train.classes, validation.classes].concat(),
+        };
+        let (vectors, class_starts) = group_by_class(all, n_classes, dims);
+        Ok(Self {
+            dims,
+            sigma,
+            vectors,
+            class_starts,
+            scale,
+            validation_curve,
+        })
+    }
+
+    /// A model from already grouped data with a given σ (used for the validation search).
+    fn from_parts(train: LabeledVectors<'_>, n_classes: usize, dims: usize, sigma: f64) -> Self {
+        let (vectors, class_starts) = group_by_class(train, n_classes, dims);
+        Self {
+            dims,
+            sigma,
+            vectors,
+            class_starts,
+            scale: None,
+            validation_curve: Vec::new(),
+        }
+    }
+
+    /// Length of the vectors this model classifies.
+    pub fn dims(&self) -> usize {
+        self.dims
+    }
+
+    pub fn n_classes(&self) -> usize {
+        self.class_starts.len() - 1
+    }
+
+    /// Number of stored vectors (training + validation).
+    pub fn n_stored(&self) -> usize {
+        self.vectors.len() / self.dims
+    }
+
+    /// The chosen kernel width.
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    /// The data scale the σ grid was multiplied by (`None` when σ was fixed).
+    pub fn scale(&self) -> Option<f64> {
+        self.scale
+    }
+
+    /// Validation accuracy for each σ of the grid, ascending σ (empty when σ was fixed).
+    pub fn validation_curve(&self) -> &[SigmaPoint] {
+        &self.validation_curve
+    }
+
+    /// The stored vectors of class `class`, `n x dims` row-major.
+    pub fn class_vectors(&self, class: usize) -> &[f64] {
+        &self.vectors
+            [self.class_starts[class] * self.dims..self.class_starts[class + 1] * self.dims]
+    }
+
+    /// A scratch buffer sized for [`classify_into`](Self::classify_into).
+    pub fn scratch(&self) -> ParzenScratch {
+        ParzenScratch {
+            sq_distances: vec![0.0; self.n_stored()],
+        }
+    }
+
+    /// Classifies `x`: writes the class posteriors (equal priors) into `posteriors` (`n_classes` long) and
+    /// returns the most likely class. Does not allocate.
+    pub fn classify_into(
+        &self,
+        x: &[f64],
+        scratch: &mut ParzenScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        self.log_scores_into(x, scratch, posteriors)?;
+        Ok(normalise_log_scores(posteriors))
+    }
+
+    /// Writes `log(mean_p exp(-|x - p|² / (2σ²)))` for each class into `out`. Does not allocate.
+    pub fn log_scores_into(
+        &self,
+        x: &[f64],
+        scratch: &mut ParzenScratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        check_len("pwe input", self.dims, x.len())?;
+        check_len("pwe class scores", self.n_classes(), out.len())?;
+        scratch.sq_distances.resize(self.n_stored(), 0.0);
+        for (dist, p) in scratch
+            .sq_distances
+            .iter_mut()
+            .zip(self.vectors.chunks_exact(self.dims))
+        {
+            *dist = squared_distance(x, p);
+        }
+        let inv_two_var = 0.5 / (self.sigma * self.sigma);
+        for (class, score) in out.iter_mut().enumerate() {
+            let members =
+                &scratch.sq_distances[self.class_starts[class]..self.class_starts[class + 1]];
+            let nearest = members.iter().copied().fold(f64::INFINITY, f64::min);
+            // log-sum-exp around the nearest member: the largest term is exp(0) = 1, no underflow.
+            let sum: f64 = members
+                .iter()
+                .map(|d| (-(d - nearest) * inv_two_var).exp())
+                .sum();
+            *score = -nearest * inv_two_var + (sum / members.len() as f64).ln();
+        }
+        Ok(())
+    }
+}
+
+/// Reusable buffers of [`ParzenModel::classify_into`].
+#[derive(Clone, Debug, Default)]
+pub struct ParzenScratch {
+    sq_distances: Vec<f64>,
+}
+
+/// Turns log scores into posteriors in place (softmax) and returns the arg-max (first on ties).
+pub(crate) fn normalise_log_scores(scores: &mut [f64]) -> usize {
+    let mut best = 0;
+    for (class, &score) in scores.iter().enumerate() {
+        if score > scores[best] {
+            best = class;
+        }
+    }
+    let top = scores[best];
+    let mut total = 0.0;
+    for score in scores.iter_mut() {
+        *score = (*score - top).exp();
+        total += *score;
+    }
+    for score in scores.iter_mut() {
+        *score /= total;
+    }
+    best
+}
+
+fn validation_curve(
+    train: LabeledVectors<'_>,
+    validation: LabeledVectors<'_>,
+    n_classes: usize,
+    dims: usize,
+    scale: f64,
+    search: &SigmaSearch,
+) -> Result<Vec<SigmaPoint>> {
+    let n_validation = validation.classes.len();
+    let mut model = ParzenModel::from_parts(train, n_classes, dims, scale);
+    let mut scratch = model.scratch();
+    let mut scores = vec![0.0; n_classes];
+    let mut curve = Vec::with_capacity(search.steps);
+    for factor in search.factors() {
+        model.sigma = factor * scale;
+        let log_norm =
+            -0.5 * dims as f64 * (2.0 * std::f64::consts::PI * model.sigma * model.sigma).ln();
+        let mut correct = 0usize;
+        let mut log_likelihood = 0.0;
+        for (x, &class) in validation
+            .vectors
+            .chunks_exact(dims)
+            .zip(validation.classes)
+        {
+            model.log_scores_into(x, &mut scratch, &mut scores)?;
+            log_likelihood += scores[class] + log_norm;
+            if normalise_log_scores(&mut scores) == class {
+                correct += 1;
+            }
+        }
+        curve.push(SigmaPoint {
+            factor,
+            sigma: model.sigma,
+            accuracy: correct as f64 / n_validation as f64,
+            mean_log_likelihood: log_likelihood / n_validation as f64,
+        });
+    }
+    Ok(curve)
+}
+
+/// Median over the rows of the distance to the nearest other row. `O(n² d)`, fine for training sets.
+pub fn median_nearest_neighbour_distance(vectors: &[f64], dims: usize) -> f64 {
+    let rows: Vec<&[f64]> = vectors.chunks_exact(dims).collect();
+    let mut nearest: Vec<f64> = rows
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            rows.iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, b)| squared_distance(a, b))
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+        .filter(|d| d.is_finite())
+        .collect();
+    if nearest.is_empty() {
+        return 0.0;
+    }
+    nearest.sort_by(f64::total_cmp);
+    let mid = nearest.len() / 2;
+    if nearest.len() % 2 == 1 {
+        nearest[mid]
+    } else {
+        0.5 * (nearest[mid - 1] + nearest[mid])
+    }
+}
+
+/// Stable grouping by class: returns the rows class by class (input order within a class) and the starts.
+fn group_by_class(
+    data: LabeledVectors<'_>,
+    n_classes: usize,
+    dims: usize,
+) -> (Vec<f64>, Vec<usize>) {
+    let mut vectors = Vec::with_capacity(data.vectors.len());
+    let mut class_starts = Vec::with_capacity(n_classes + 1);
+    for class in 0..n_classes {
+        class_starts.push(vectors.len() / dims);
+        for (row, _) in data
+            .vectors
+            .chunks_exact(dims)
+            .zip(data.classes)
+            .filter(|&(_, &c)| c == class)
+        {
+            vectors.extend_from_slice(row);
+        }
+    }
+    class_starts.push(vectors.len() / dims);
+    (vectors, class_starts)
+}
+
+/// `|a - b|²` with four independent partial sums (vectorisable).
+fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
+    const LANES: usize = 4;
+    let mut partial = [0.0; LANES];
+    let a_chunks = a.chunks_exact(LANES);
+    let b_chunks = b.chunks_exact(LANES);
+    let tail: f64 = a_chunks
+        .remainder()
+        .iter()
+        .zip(b_chunks.remainder())
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum();
+    for (x, y) in a_chunks.zip(b_chunks) {
+        for lane in 0..LANES {
+            let d = x[lane] - y[lane];
+            partial[lane] += d * d;
+        }
+    }
+    partial.iter().sum::<f64>() + tail
+}
+
+fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(CoreError::Shape {
+            what,
+            expected: expected.to_string(),
+            got: got.to_string(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn two_blobs() -> (Vec<f64>, Vec<usize>) {
+        // class 0 around (0, 0), class 1 around (10, 0)
+        let vectors = vec![
+            0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 10.0, 0.0, 11.0, 0.0, 10.0, 1.0,
+        ];
+        (vectors, vec![0, 0, 0, 1, 1, 1])
+    }
+
+    #[test]
+    fn scores_match_the_definition() {
+        let (vectors, classes) = two_blobs();
+        let train = LabeledVectors {
+            vectors: &vectors,
+            classes: &classes,
+        };
+        let none = LabeledVectors {
+            vectors: &[],
+            classes: &[],
+        };
+        let config = ParzenConfig {
+            sigma: SigmaChoice::Fixed { sigma: 2.0 },
+        };
+        let model = ParzenModel::fit(train, none, 2, 2, &config).unwrap();
+        let x = [3.0, 0.5];
+        let mut scratch = ParzenScratch::default();
+        let mut scores = [0.0; 2];
+        model
+            .log_scores_into(&x, &mut scratch, &mut scores)
+            .unwrap();
+        for class in 0..2 {
+            let naive: f64 = vectors
+                .chunks(2)
+                .zip(&classes)
+                .filter(|&(_, &c)| c == class)
+                .map(|(p, _)| {
+                    let d2 = (x[0] - p[0]).powi(2) + (x[1] - p[1]).powi(2);
+                    (-d2 / 8.0).exp()
+                })
+                .sum::<f64>()
+                / 3.0;
+            assert!((scores[class] - naive.ln()).abs() < 1e-12);
+        }
+        let mut posteriors = [0.0; 2];
+        assert_eq!(
+            model
+                .classify_into(&x, &mut scratch, &mut posteriors)
+                .unwrap(),
+            0
+        );
+        let expected = 1.0 / (1.0 + (scores[1] - scores[0]).exp());
+        assert!((posteriors[0] - expected).abs() < 1e-12);
+        assert!((posteriors.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn far_away_points_do_not_underflow() {
+        let (vectors, classes) = two_blobs();
+        let train = LabeledVectors {
+            vectors: &vectors,
+            classes: &classes,
+        };
+        let none = LabeledVectors {
+            vectors: &[],
+            classes: &[],
+        };
+        let config = ParzenConfig {
+            sigma: SigmaChoice::Fixed { sigma: 0.01 },
+        };
+        let model = ParzenModel::fit(train, none, 2, 2, &config).unwrap();
+        let mut scratch = model.scratch();
+        let mut posteriors = [0.0; 2];
+        // every kernel value is exp(-huge) = 0 in floating point; log-sum-exp still ranks the classes
+        let class = model
+            .classify_into(&[1e3, 0.0], &mut scratch, &mut posteriors)
+            .unwrap();
+        assert_eq!(class, 1);
+        assert!(posteriors.iter().all(|p| p.is_finite()));
+        assert!((posteriors[1] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn config_checks() {
+        assert!(ParzenConfig::default().check().is_ok());
+        let zero = ParzenConfig {
+            sigma: SigmaChoice::Fixed { sigma: 0.0 },
+        };
+        assert!(zero.check().is_err());
+        let inverted = ParzenConfig {
+            sigma: SigmaChoice::Search(SigmaSearch {
+                min_factor: 2.0,
+                max_factor: 1.0,
+                steps: 3,
+            }),
+        };
+        assert!(inverted.check().is_err());
+        let factors = SigmaSearch {
+            min_factor: 0.5,
+            max_factor: 8.0,
+            steps: 5,
+        }
+        .factors();
+        for (got, want) in factors.iter().zip([0.5, 1.0, 2.0, 4.0, 8.0]) {
+            assert!((got - want).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn median_nearest_neighbour() {
+        // 1-D points 0, 1, 3, 7: nearest distances 1, 1, 2, 4 -> median 1.5
+        let d = median_nearest_neighbour_distance(&[0.0, 1.0, 3.0, 7.0], 1);
+        assert!((d - 1.5).abs() < 1e-12);
+    }
+}
