@@ -1,0 +1,439 @@
+//! NumPy `.npy` arrays: 2-D (one frame, `rows x cols`) or 3-D (`frames x rows x cols`).
+//!
+//! Any integer or float dtype is read (`u1`..`u8`, `i1`..`i8`, `f4`, `f8`; little or big endian; `bool`
+//! as 0/1) and converted to `f64` (64-bit integers beyond 2^53 are rounded to the nearest `f64`). C and
+//! Fortran order are both read (Fortran-order arrays are transposed into the row-major layout). NaN and
+//! infinities are rejected, naming the element. The writers produce C-order little-endian `f8` or `u1`.
+
+use std::io::Write;
+use std::path::Path;
+
+use npyz::{DType, NpyFile, TypeChar, WriterBuilder};
+use presrs_core::{Grid, Recording, SensorMeta};
+
+use crate::error::{IoError, display_name};
+
+/// The first bytes of every `.npy` file.
+pub const NPY_MAGIC: &[u8] = b"\x93NUMPY";
+
+/// Reads a 2-D or 3-D `.npy` file as a recording (no frame period, raw units, frames numbered from 1).
+pub fn read_npy(path: &Path) -> Result<Recording, IoError> {
+    let bytes = std::fs::read(path).map_err(|source| IoError::io("read", path, source))?;
+    parse_npy(&bytes, &display_name(path))
+}
+
+/// Parses the bytes of a `.npy` file; `source_name` names it in error messages.
+pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> {
+    let file = source_name;
+    if !bytes.starts_with(NPY_MAGIC) {
+        return Err(IoError::format(
+            file,
+            "not a NumPy .npy file (it does not start with the \\x93NUMPY magic bytes)",
+        ));
+    }
+    let npy = NpyFile::new(bytes)
+        .map_err(|err| IoError::format(file, format!("invalid .npy header: {err}")))?;
+    let shape: Vec<u64> = npy.shape().to_vec();
+    let (frames, rows, cols) = match *shape.as_slice() {
+        [rows, cols] => (1, rows, cols),
+        [frames, rows, cols] => (frames, rows, cols),
+        _ => {
+            return Err(IoError::unsupported(
+                file,
+                format!(
+                    "expected a 2-D (rows x cols) or 3-D (frames x rows x cols) array, found a {}-D array of shape {shape:?}",
+                    shape.len()
+                ),
+            ));
+        }
+    };
+    let dims = (
+        usize::try_from(frames),
+        usize::try_from(rows),
+        usize::try_from(cols),
+    );
+    let (Ok(frames), Ok(rows), Ok(cols)) = dims else {
+        return Err(IoError::format(file, format!("shape {shape:?} is too large")));
+    };
+    if frames == 0 || rows == 0 || cols == 0 {
+        return Err(IoError::format(
+            file,
+            format!("the array is empty (shape {shape:?}); expected at least one frame of one sensel"),
+        ));
+    }
+    let dtype = npy.dtype();
+    let kind = scalar_kind(&dtype).ok_or_else(|| {
+        IoError::unsupported(
+            file,
+            format!(
+                "unsupported dtype {}; expected an integer, float or bool dtype (u1..u8, i1..i8, f4, f8)",
+                dtype.descr()
+            ),
+        )
+    })?;
+    let total = shape_len(frames, rows, cols)
+        .ok_or_else(|| IoError::format(file, format!("shape {shape:?} is too large")))?;
+    let order = npy.order();
+    let strides: Vec<u64> = npy.strides().to_vec();
+    // Check the data is all there before allocating for it (a header can claim any shape).
+    let item_size = kind.size();
+    let needed = total.checked_mul(item_size);
+    let available = npy.into_inner().len();
+    let reader = NpyFile::new(bytes)
+        .map_err(|err| IoError::format(file, format!("invalid .npy header: {err}")))?;
+    match needed {
+        Some(needed) if needed <= available => {}
+        _ => {
+            return Err(IoError::format(
+                file,
+                format!(
+                    "truncated data: shape {shape:?} of {} needs {} bytes, the file holds {available}",
+                    dtype.descr(),
+                    needed.map_or_else(|| "too many".to_owned(), |n| n.to_string())
+                ),
+            ));
+        }
+    }
+    let stored = kind
+        .read_all(reader)
+        .map_err(|err| IoError::format(file, format!("cannot read the array data: {err}")))?;
+    if stored.len() != total {
+        return Err(IoError::format(
+            file,
+            format!("truncated data: expected {total} values, read {}", stored.len()),
+        ));
+    }
+    // Gather into frames x rows x cols, row-major, whatever the storage order.
+    let data: Vec<f64> = if order == npyz::Order::C {
+        stored
+    } else {
+        let strides: Vec<usize> = strides.iter().map(|&s| s as usize).collect();
+        let (sf, sr, sc) = match *strides.as_slice() {
+            [sr, sc] => (0, sr, sc),
+            [sf, sr, sc] => (sf, sr, sc),
+            _ => (0, 0, 0),
+        };
+        let mut out = Vec::with_capacity(total);
+        for f in 0..frames {
+            for r in 0..rows {
+                for c in 0..cols {
+                    out.push(stored[f * sf + r * sr + c * sc]);
+                }
+            }
+        }
+        out
+    };
+    if let Some(at) = data.iter().position(|v| !v.is_finite()) {
+        let per_frame = rows * cols;
+        let (f, cell) = (at / per_frame, at % per_frame);
+        let position = if shape.len() == 3 {
+            format!("[{f}, {}, {}]", cell / cols, cell % cols)
+        } else {
+            format!("[{}, {}]", cell / cols, cell % cols)
+        };
+        return Err(IoError::format(
+            file,
+            format!(
+                "element {position} is {}; expected finite numbers",
+                data[at]
+            ),
+        ));
+    }
+    Recording::new(Grid::new(rows, cols), None, data, None, SensorMeta::default()).map_err(|source| {
+        IoError::Model {
+            file: file.to_owned(),
+            source,
+        }
+    })
+}
+
+fn shape_len(frames: usize, rows: usize, cols: usize) -> Option<usize> {
+    frames.checked_mul(rows)?.checked_mul(cols)
+}
+
+/// The element types read.
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Bool,
+    U8,
+    U16,
+    U32,
+    U64,
+    I8,
+    I16,
+    I32,
+    I64,
+    F32,
+    F64,
+}
+
+fn scalar_kind(dtype: &DType) -> Option<Kind> {
+    let DType::Plain(ty) = dtype else {
+        return None;
+    };
+    Some(match (ty.type_char(), ty.size_field()) {
+        (TypeChar::Bool, 1) => Kind::Bool,
+        (TypeChar::Uint, 1) => Kind::U8,
+        (TypeChar::Uint, 2) => Kind::U16,
+        (TypeChar::Uint, 4) => Kind::U32,
+        (TypeChar::Uint, 8) => Kind::U64,
+        (TypeChar::Int, 1) => Kind::I8,
+        (TypeChar::Int, 2) => Kind::I16,
+        (TypeChar::Int, 4) => Kind::I32,
+        (TypeChar::Int, 8) => Kind::I64,
+        (TypeChar::Float, 4) => Kind::F32,
+        (TypeChar::Float, 8) => Kind::F64,
+        _ => return None,
+    })
+}
+
+impl Kind {
+    fn size(self) -> usize {
+        match self {
+            Self::Bool | Self::U8 | Self::I8 => 1,
+            Self::U16 | Self::I16 => 2,
+            Self::U32 | Self::I32 | Self::F32 => 4,
+            Self::U64 | Self::I64 | Self::F64 => 8,
+        }
+    }
+
+    /// Reads every element, in storage order, as `f64`.
+    fn read_all(self, npy: NpyFile<&[u8]>) -> std::io::Result<Vec<f64>> {
+        fn all<T: npyz::Deserialize>(
+            npy: NpyFile<&[u8]>,
+            convert: impl Fn(T) -> f64,
+        ) -> std::io::Result<Vec<f64>> {
+            let len = usize::try_from(npy.len()).unwrap_or(0);
+            let reader = npy
+                .data::<T>()
+                .map_err(|err| std::io::Error::new(std::io::ErrorKind::InvalidData, err))?;
+            let mut out = Vec::with_capacity(len);
+            for value in reader {
+                out.push(convert(value?));
+            }
+            Ok(out)
+        }
+        match self {
+            Self::Bool => all::<bool>(npy, |v| f64::from(u8::from(v))),
+            Self::U8 => all::<u8>(npy, f64::from),
+            Self::U16 => all::<u16>(npy, f64::from),
+            Self::U32 => all::<u32>(npy, f64::from),
+            Self::U64 => all::<u64>(npy, |v| v as f64),
+            Self::I8 => all::<i8>(npy, f64::from),
+            Self::I16 => all::<i16>(npy, f64::from),
+            Self::I32 => all::<i32>(npy, f64::from),
+            Self::I64 => all::<i64>(npy, |v| v as f64),
+            Self::F32 => all::<f32>(npy, f64::from),
+            Self::F64 => all::<f64>(npy, |v| v),
+        }
+    }
+}
+
+fn check_shape(shape: &[usize], len: usize) -> std::io::Result<Vec<u64>> {
+    let product = shape
+        .iter()
+        .try_fold(1usize, |acc, &n| acc.checked_mul(n));
+    if product != Some(len) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("shape {shape:?} does not hold {len} values"),
+        ));
+    }
+    Ok(shape.iter().map(|&n| n as u64).collect())
+}
+
+/// Writes `data` (C order) as a little-endian `f8` array of `shape`.
+pub fn write_npy_f64<W: Write>(w: W, shape: &[usize], data: &[f64]) -> std::io::Result<()> {
+    let shape = check_shape(shape, data.len())?;
+    let dtype = DType::Plain("<f8".parse().map_err(std::io::Error::other)?);
+    let mut writer = npyz::WriteOptions::new()
+        .dtype(dtype)
+        .shape(&shape)
+        .writer(w)
+        .begin_nd()?;
+    writer.extend(data.iter().copied())?;
+    writer.finish()
+}
+
+/// Writes `data` (C order) as a `u1` array of `shape`.
+pub fn write_npy_u8<W: Write>(w: W, shape: &[usize], data: &[u8]) -> std::io::Result<()> {
+    let shape = check_shape(shape, data.len())?;
+    let dtype = DType::Plain("|u1".parse().map_err(std::io::Error::other)?);
+    let mut writer = npyz::WriteOptions::new()
+        .dtype(dtype)
+        .shape(&shape)
+        .writer(w)
+        .begin_nd()?;
+    writer.extend(data.iter().copied())?;
+    writer.finish()
+}
+
+/// Writes a recording's values as a 3-D `frames x rows x cols` `f8` array, atomically. The mask of
+/// absent sensels, the frame period and the metadata are not stored (`.npy` holds only the array).
+pub fn write_recording_npy(recording: &Recording, path: &Path) -> Result<(), IoError> {
+    let grid = recording.grid();
+    let shape = [recording.frame_count(), grid.rows, grid.cols];
+    crate::atomic::write_atomic(path, |w| write_npy_f64(w, &shape, recording.data()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn npy_f64(shape: &[usize], data: &[f64]) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        write_npy_f64(&mut bytes, shape, data).unwrap();
+        bytes
+    }
+
+    /// A `.npy` file with an arbitrary header dict and raw data bytes (what numpy would write).
+    fn raw_npy(descr: &str, fortran: bool, shape: &str, data: &[u8]) -> Vec<u8> {
+        let mut dict = format!(
+            "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+            if fortran { "True" } else { "False" }
+        );
+        while (10 + dict.len() + 1) % 64 != 0 {
+            dict.push(' ');
+        }
+        dict.push('\n');
+        let mut out = Vec::new();
+        out.extend_from_slice(b"\x93NUMPY\x01\x00");
+        out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+        out.extend_from_slice(dict.as_bytes());
+        out.extend_from_slice(data);
+        out
+    }
+
+    #[test]
+    fn f64_round_trip_2d_and_3d() {
+        let data: Vec<f64> = (0..12).map(|i| f64::from(i) * 0.5 - 1.0).collect();
+        let rec = parse_npy(&npy_f64(&[3, 4], &data), "a.npy").unwrap();
+        assert_eq!(rec.grid(), Grid::new(3, 4));
+        assert_eq!(rec.frame_count(), 1);
+        assert_eq!(rec.data(), data.as_slice());
+        let rec = parse_npy(&npy_f64(&[2, 3, 2], &data), "b.npy").unwrap();
+        assert_eq!(rec.grid(), Grid::new(3, 2));
+        assert_eq!(rec.frame_count(), 2);
+        assert_eq!(rec.frame(1).unwrap().get(2, 1), data[11]);
+    }
+
+    #[test]
+    fn u8_writer_and_reader() {
+        let mut bytes = Vec::new();
+        write_npy_u8(&mut bytes, &[2, 2], &[0, 7, 200, 255]).unwrap();
+        let rec = parse_npy(&bytes, "u.npy").unwrap();
+        assert_eq!(rec.data(), &[0.0, 7.0, 200.0, 255.0]);
+    }
+
+    #[test]
+    fn every_integer_and_float_dtype_both_endians() {
+        let cases: Vec<(&str, Vec<u8>)> = vec![
+            ("|u1", vec![1, 255]),
+            ("|i1", vec![1, 0xFF]),
+            ("<u2", vec![1, 0, 0, 1]),
+            (">u2", vec![0, 1, 1, 0]),
+            ("<i2", vec![1, 0, 0xFF, 0xFF]),
+            ("<u4", [1u32.to_le_bytes(), 256u32.to_le_bytes()].concat()),
+            (">i4", [1i32.to_be_bytes(), (-1i32).to_be_bytes()].concat()),
+            ("<u8", [1u64.to_le_bytes(), 256u64.to_le_bytes()].concat()),
+            (">i8", [1i64.to_be_bytes(), (-1i64).to_be_bytes()].concat()),
+            ("<f4", [1f32.to_le_bytes(), 2.5f32.to_le_bytes()].concat()),
+            (">f8", [1f64.to_be_bytes(), (-2.5f64).to_be_bytes()].concat()),
+            ("|b1", vec![1, 0]),
+        ];
+        let expected = |descr: &str| -> [f64; 2] {
+            match descr {
+                "|u1" => [1.0, 255.0],
+                "|i1" | ">i4" | ">i8" => [1.0, -1.0],
+                "<u2" | ">u2" | "<u4" | "<u8" => [1.0, 256.0],
+                "<i2" => [1.0, -1.0],
+                "<f4" => [1.0, 2.5],
+                ">f8" => [1.0, -2.5],
+                "|b1" => [1.0, 0.0],
+                _ => unreachable!(),
+            }
+        };
+        for (descr, data) in cases {
+            let bytes = raw_npy(descr, false, "(1, 2)", &data);
+            let rec = parse_npy(&bytes, "t.npy").unwrap_or_else(|e| panic!("{descr}: {e}"));
+            assert_eq!(rec.data(), &expected(descr), "{descr}");
+        }
+    }
+
+    #[test]
+    fn fortran_order_is_transposed() {
+        // numpy: np.asfortranarray([[1, 2, 3], [4, 5, 6]], dtype='<i4') stores 1, 4, 2, 5, 3, 6.
+        let stored: Vec<u8> = [1i32, 4, 2, 5, 3, 6]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let rec = parse_npy(&raw_npy("<i4", true, "(2, 3)", &stored), "f.npy").unwrap();
+        assert_eq!(rec.data(), &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        // 3-D: element [f, r, c] = 100 f + 10 r + c, shape (2, 2, 3), Fortran order: f fastest.
+        let mut stored = Vec::new();
+        for c in 0..3 {
+            for r in 0..2 {
+                for f in 0..2 {
+                    stored.extend_from_slice(&f64::from(100 * f + 10 * r + c).to_le_bytes());
+                }
+            }
+        }
+        let rec = parse_npy(&raw_npy("<f8", true, "(2, 2, 3)", &stored), "f3.npy").unwrap();
+        let expected: Vec<f64> = (0..2)
+            .flat_map(|f| (0..2).flat_map(move |r| (0..3).map(move |c| f64::from(100 * f + 10 * r + c))))
+            .collect();
+        assert_eq!(rec.data(), expected.as_slice());
+    }
+
+    #[test]
+    fn errors_are_clear() {
+        let msg = |bytes: &[u8]| parse_npy(bytes, "bad.npy").unwrap_err().to_string();
+        let m = msg(&npy_f64(&[6], &[0.0; 6]));
+        assert!(m.contains("bad.npy") && m.contains("1-D") && m.contains("expected a 2-D"), "{m}");
+        let m = msg(&npy_f64(&[1, 1, 2, 3], &[0.0; 6]));
+        assert!(m.contains("4-D"), "{m}");
+        let m = msg(&npy_f64(&[0, 3], &[]));
+        assert!(m.contains("empty"), "{m}");
+        let m = msg(&raw_npy("<c16", false, "(1, 1)", &[0; 16]));
+        assert!(m.contains("unsupported dtype") && m.contains("c16"), "{m}");
+        let m = msg(&raw_npy("<U3", false, "(1, 1)", &[0; 12]));
+        assert!(m.contains("unsupported dtype"), "{m}");
+        let full = npy_f64(&[2, 2], &[1.0, 2.0, 3.0, 4.0]);
+        let m = msg(&full[..full.len() - 3]);
+        assert!(m.contains("truncated") && m.contains("32 bytes"), "{m}");
+        let m = msg(&npy_f64(&[2, 2], &[1.0, 2.0, f64::NAN, 4.0]));
+        assert!(m.contains("[1, 0]") && m.contains("NaN"), "{m}");
+        let m = msg(&npy_f64(&[2, 1, 2], &[1.0, 2.0, 3.0, f64::INFINITY]));
+        assert!(m.contains("[1, 0, 1]") && m.contains("inf"), "{m}");
+        let m = msg(b"PK\x03\x04 not npy");
+        assert!(m.contains("not a NumPy"), "{m}");
+        let m = msg(b"\x93NUMPY\x01\x00\xff\xff{'descr'");
+        assert!(m.contains("invalid .npy header"), "{m}");
+        // A header claiming a huge shape with no data must fail fast, not allocate.
+        let m = msg(&raw_npy("<f8", false, "(100000, 100000, 100000)", &[]));
+        assert!(m.contains("truncated") || m.contains("too large"), "{m}");
+        let m = msg(&raw_npy("<f8", false, "(100000, 100000)", &[0; 8]));
+        assert!(m.contains("truncated"), "{m}");
+    }
+
+    #[test]
+    fn writer_rejects_bad_shape_and_recording_file_round_trips() {
+        let mut sink = Vec::new();
+        assert!(write_npy_f64(&mut sink, &[2, 2], &[1.0]).is_err());
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.npy");
+        let rec = Recording::new(
+            Grid::new(2, 3),
+            Some(0.01),
+            (0..12).map(f64::from).collect(),
+            None,
+            SensorMeta::default(),
+        )
+        .unwrap();
+        write_recording_npy(&rec, &path).unwrap();
+        let back = read_npy(&path).unwrap();
+        assert_eq!(back.data(), rec.data());
+        assert_eq!(back.grid(), rec.grid());
+        assert_eq!(back.frame_count(), 2);
+    }
+}

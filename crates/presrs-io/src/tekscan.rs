@@ -1,0 +1,971 @@
+//! TekScan ASCII movies and snapshots (`.asf`, sometimes `.csv`): reader and writer.
+//!
+//! See `shared/docs/tekscan-ascii.md` for the format. What this module does where the format notes are
+//! silent:
+//!
+//! * **Header.** Lines up to `ASCII_DATA` (found by search) are `KEY value` lines; the key is the first
+//!   token and is matched case-insensitively, with a trailing `:` ignored (`ROWS: 44` works). A line whose
+//!   first token is not an upper-case identifier (`overground walk p10`), and the line right after a bare
+//!   `KEY:` line such as `COMMENTS:` (unless it starts with a known key), is free text: it is kept in
+//!   [`SensorMeta::extra`] as the whole line with an empty value. Blank lines in the header are skipped.
+//!   If `ASCII_DATA` is missing but a `Frame N` line follows the header, the header ends there.
+//! * **Typed keys.** `ROWS`/`COLS` (required, positive integers) give the grid; `SENSOR_TYPE`,
+//!   `ROW_SPACING`/`COL_SPACING` (converted to mm from `mm`/`millimeters`/`cm`/`inches`/...), `UNITS`,
+//!   `NOISE_THRESHOLD`, `SECONDS_PER_FRAME` and `SATURATION_PRESSURE` (as `full_scale`, when its unit is
+//!   `UNITS` or convertible to it) fill [`SensorMeta`] and the frame period. A typed value that cannot be
+//!   understood (`ROW_SPACING 5 furlongs`, `SECONDS_PER_FRAME 0`) is kept verbatim in `extra` and
+//!   reported as a warning; nothing is lost. `DATA_TYPE`, `START_FRAME`, `END_FRAME` and `ASCII_DATA` are
+//!   structural: they are checked but not kept (the writer derives them). Every other key is kept verbatim,
+//!   in file order, in `extra`. A repeated typed key keeps the first value (a conflicting repeated
+//!   `ROWS`/`COLS` is an error) and is reported as a warning.
+//! * **Frames.** Frame numbers and `Frame` line suffixes are kept as written in [`FrameInfo`]. Files
+//!   without `Frame` lines (snapshots) are cut into frames of `ROWS` rows, numbered from `START_FRAME`
+//!   (default 1). Blank and comma-only lines are skipped anywhere; `@@` ends the data and must be followed
+//!   only by blank lines. `B` cells must be at the same positions in every frame.
+//! * **Frame count.** `START_FRAME`/`END_FRAME` announce `END - START + 1` frames. Fewer frames in a file
+//!   without the `@@` terminator means the file was cut at a frame boundary: an error (a warning when
+//!   reading leniently). Any other disagreement (more frames, or fewer before an `@@`) is a warning: the
+//!   frames in the file are the truth.
+//! * **Truncation.** A last frame with missing rows, or whose last line has fewer than `COLS` values, at
+//!   the end of the file is an error; with [`ReadOptions::lenient`] it is dropped and reported as a warning.
+//!   A short frame anywhere else (before another `Frame` line or `@@`) is always an error.
+//! * **Memory.** Nothing is allocated from the header's `ROWS x COLS` alone: the data grows as rows are
+//!   read, and reservations are capped by the size of the input.
+
+use std::collections::HashMap;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use presrs_core::{FrameInfo, Grid, PressureUnit, Recording, SensorMeta};
+
+use crate::error::{IoError, display_name};
+use crate::textutil::{Cell, decode_text, is_blank, numbered_lines, parse_cell, push_int, push_number, split_cells};
+use crate::{Parsed, ReadOptions};
+
+/// The result of parsing a TekScan file: the recording and any warnings (see [`Parsed`]).
+pub type ParsedTekscan = Parsed;
+
+/// Header keys this module interprets (everything else goes to [`SensorMeta::extra`] untouched).
+const KNOWN_KEYS: &[&str] = &[
+    "DATA_TYPE",
+    "ROWS",
+    "COLS",
+    "SENSOR_TYPE",
+    "ROW_SPACING",
+    "COL_SPACING",
+    "UNITS",
+    "NOISE_THRESHOLD",
+    "SECONDS_PER_FRAME",
+    "SATURATION_PRESSURE",
+    "START_FRAME",
+    "END_FRAME",
+    "ASCII_DATA",
+];
+
+/// Reads a TekScan ASCII file strictly (any problem is an error; warnings are discarded).
+pub fn read_tekscan(path: &Path) -> Result<Recording, IoError> {
+    Ok(read_tekscan_with(path, &ReadOptions::default())?.recording)
+}
+
+/// Reads a TekScan ASCII file with options, returning the warnings too.
+pub fn read_tekscan_with(path: &Path, options: &ReadOptions) -> Result<ParsedTekscan, IoError> {
+    let bytes = std::fs::read(path).map_err(|source| IoError::io("read", path, source))?;
+    parse_tekscan(&decode_text(&bytes), &display_name(path), options)
+}
+
+/// Whether `text` looks like a TekScan ASCII export: a `KEY value` header with `ASCII_DATA` or
+/// `DATA_TYPE` among its first lines. Used to recognise `.csv`/`.txt` files that are TekScan exports.
+pub fn looks_like_tekscan(text: &str) -> bool {
+    numbered_lines(text).into_iter().take(200).any(|(_, line)| {
+        let token = line.split_whitespace().next().unwrap_or("");
+        let key = token.trim_end_matches(':');
+        key.eq_ignore_ascii_case("ASCII_DATA") || key.eq_ignore_ascii_case("DATA_TYPE")
+    })
+}
+
+/// Parses the text of a TekScan ASCII file. `source_name` names the file in error messages.
+pub fn parse_tekscan(
+    text: &str,
+    source_name: &str,
+    options: &ReadOptions,
+) -> Result<ParsedTekscan, IoError> {
+    let lines = numbered_lines(text);
+    if lines.iter().all(|(_, line)| is_blank(line)) {
+        return Err(IoError::format(
+            source_name,
+            "empty file: expected a TekScan ASCII header (`DATA_TYPE MOVIE`, `ROWS`, `COLS`, ..., \
+             `ASCII_DATA`) followed by frames",
+        ));
+    }
+    let mut warnings = Vec::new();
+    let header = parse_header(&lines, source_name, &mut warnings)?;
+    let data_lines = &lines[header.data_start..];
+    let body = parse_frames(&header, data_lines, text.len(), source_name, options, &mut warnings)?;
+    check_frame_count(&header, &body, source_name, options, &mut warnings)?;
+    let recording = Recording::with_info(
+        header.grid,
+        header.period,
+        body.data,
+        body.mask,
+        body.info,
+        header.meta,
+    )
+    .map_err(|source| IoError::Model {
+        file: source_name.to_owned(),
+        source,
+    })?;
+    Ok(Parsed {
+        recording,
+        warnings,
+    })
+}
+
+/// What the header says.
+struct Header {
+    grid: Grid,
+    period: Option<f64>,
+    meta: SensorMeta,
+    start_frame: Option<(usize, i64)>,
+    end_frame: Option<(usize, i64)>,
+    /// Index into the file's lines of the first data line.
+    data_start: usize,
+    /// Line number of the `ASCII_DATA` line (or of the last header line).
+    end_line: usize,
+}
+
+fn parse_header(
+    lines: &[(usize, &str)],
+    file: &str,
+    warnings: &mut Vec<String>,
+) -> Result<Header, IoError> {
+    let mut meta = SensorMeta::default();
+    let mut rows: Option<(usize, usize)> = None;
+    let mut cols: Option<(usize, usize)> = None;
+    let mut period = None;
+    let mut start_frame = None;
+    let mut end_frame = None;
+    // (value, position in `extra` where it belongs if it stays verbatim)
+    let mut saturation: Option<(String, usize)> = None;
+    let mut seen: HashMap<String, usize> = HashMap::new();
+    let mut after_label = false;
+    let mut end = None;
+    // A `Frame N` line ends the header only in files without an `ASCII_DATA` line (so that a comment such
+    // as `Frame 3 was bad` in a normal header is kept as text).
+    let has_ascii_data = lines.iter().any(|(_, line)| {
+        let token = line.split_whitespace().next().unwrap_or("");
+        token.trim_end_matches(':').eq_ignore_ascii_case("ASCII_DATA")
+    });
+
+    for (index, &(line_no, raw)) in lines.iter().enumerate() {
+        let line = raw.trim();
+        if is_blank(line) {
+            after_label = false;
+            continue;
+        }
+        let token = line.split_whitespace().next().unwrap_or("");
+        let key = token.trim_end_matches(':').to_ascii_uppercase();
+        if key == "ASCII_DATA" {
+            end = Some((index + 1, line_no));
+            break;
+        }
+        if !has_ascii_data && frame_line(line).is_some() {
+            end = Some((index, line_no));
+            break;
+        }
+        let known = KNOWN_KEYS.contains(&key.as_str());
+        if !known && (after_label || !looks_like_key(token)) {
+            meta.extra.push((line.to_owned(), String::new()));
+            after_label = false;
+            continue;
+        }
+        let value = line[token.len()..].trim();
+        after_label = token.ends_with(':') && value.is_empty();
+        if !known {
+            meta.extra.push((token.to_owned(), value.to_owned()));
+            continue;
+        }
+        if let Some(first) = seen.get(&key) {
+            let same_dims = match key.as_str() {
+                "ROWS" | "COLS" => {
+                    let previous = if key == "ROWS" { rows } else { cols };
+                    let now = parse_dim(&key, value, file, line_no)?;
+                    if previous.map(|(_, n)| n) != Some(now) {
+                        return Err(IoError::parse(
+                            file,
+                            line_no,
+                            format!(
+                                "{key} {now} contradicts {key} {} on line {first}",
+                                previous.map_or(0, |(_, n)| n)
+                            ),
+                        ));
+                    }
+                    true
+                }
+                _ => false,
+            };
+            if !same_dims {
+                warnings.push(format!(
+                    "{file} line {line_no}: repeated {key} ignored, keeping the value of line {first}"
+                ));
+            }
+            continue;
+        }
+        seen.insert(key.clone(), line_no);
+        match key.as_str() {
+            "DATA_TYPE" => {}
+            "ROWS" => rows = Some((line_no, parse_dim(&key, value, file, line_no)?)),
+            "COLS" => cols = Some((line_no, parse_dim(&key, value, file, line_no)?)),
+            "START_FRAME" => start_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?)),
+            "END_FRAME" => end_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?)),
+            "SENSOR_TYPE" => meta.sensor = (!value.is_empty()).then(|| value.to_owned()),
+            "UNITS" => meta.units = PressureUnit::parse(value),
+            "ROW_SPACING" | "COL_SPACING" => match parse_length_mm(value) {
+                Some(mm) if key == "ROW_SPACING" => meta.row_pitch_mm = Some(mm),
+                Some(mm) => meta.col_pitch_mm = Some(mm),
+                None => keep_verbatim(
+                    &mut meta,
+                    warnings,
+                    file,
+                    line_no,
+                    token,
+                    value,
+                    "expected a positive length with a unit (mm, cm or inches)",
+                ),
+            },
+            "SECONDS_PER_FRAME" => match value.parse::<f64>() {
+                Ok(p) if p.is_finite() && p > 0.0 => period = Some(p),
+                _ => keep_verbatim(
+                    &mut meta,
+                    warnings,
+                    file,
+                    line_no,
+                    token,
+                    value,
+                    "expected a positive number of seconds; the frame period is unknown",
+                ),
+            },
+            "NOISE_THRESHOLD" => match value.parse::<f64>() {
+                Ok(n) if n.is_finite() => meta.noise_threshold = Some(n),
+                _ => keep_verbatim(
+                    &mut meta,
+                    warnings,
+                    file,
+                    line_no,
+                    token,
+                    value,
+                    "expected a number",
+                ),
+            },
+            "SATURATION_PRESSURE" => {
+                saturation = Some((value.to_owned(), meta.extra.len()));
+            }
+            _ => meta.extra.push((token.to_owned(), value.to_owned())),
+        }
+    }
+
+    let last_line = lines.last().map_or(1, |&(n, _)| n);
+    let Some((data_start, end_line)) = end else {
+        return Err(IoError::parse(
+            file,
+            last_line,
+            "expected an `ASCII_DATA` line ending the TekScan header, found the end of the file \
+             (is this a TekScan ASCII export?)",
+        ));
+    };
+    let (rows, cols) = match (rows, cols) {
+        (Some((_, r)), Some((_, c))) => (r, c),
+        (r, c) => {
+            let missing: Vec<&str> = [("ROWS", r.is_none()), ("COLS", c.is_none())]
+                .into_iter()
+                .filter_map(|(k, missing)| missing.then_some(k))
+                .collect();
+            return Err(IoError::parse(
+                file,
+                end_line,
+                format!(
+                    "the header has no {} line; expected `ROWS <n>` and `COLS <n>` before the data",
+                    missing.join(" or ")
+                ),
+            ));
+        }
+    };
+    if rows.checked_mul(cols).is_none() {
+        return Err(IoError::parse(
+            file,
+            end_line,
+            format!("ROWS {rows} x COLS {cols} is too large"),
+        ));
+    }
+    if let Some((value, at)) = saturation {
+        match saturation_in_units(&value, &meta.units) {
+            Some(full_scale) => meta.full_scale = Some(full_scale),
+            None => {
+                // Not expressible in the recording's units (e.g. kPa for a raw export): keep it verbatim.
+                meta.extra
+                    .insert(at.min(meta.extra.len()), ("SATURATION_PRESSURE".to_owned(), value));
+            }
+        }
+    }
+    Ok(Header {
+        grid: Grid::new(rows, cols),
+        period,
+        meta,
+        start_frame,
+        end_frame,
+        data_start,
+        end_line,
+    })
+}
+
+/// An upper-case identifier such as `ROWS`, `CALIBRATION_POINT_1` or `COMMENTS:`.
+fn looks_like_key(token: &str) -> bool {
+    let key = token.strip_suffix(':').unwrap_or(token);
+    let mut chars = key.chars();
+    chars.next().is_some_and(|c| c.is_ascii_uppercase())
+        && chars.all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
+}
+
+fn keep_verbatim(
+    meta: &mut SensorMeta,
+    warnings: &mut Vec<String>,
+    file: &str,
+    line_no: usize,
+    token: &str,
+    value: &str,
+    expected: &str,
+) {
+    warnings.push(format!(
+        "{file} line {line_no}: {token} `{value}` not understood ({expected}); kept verbatim"
+    ));
+    meta.extra.push((token.to_owned(), value.to_owned()));
+}
+
+fn parse_dim(key: &str, value: &str, file: &str, line_no: usize) -> Result<usize, IoError> {
+    match value.parse::<usize>() {
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(IoError::parse(
+            file,
+            line_no,
+            format!("{key}: expected a positive whole number, found `{value}`"),
+        )),
+    }
+}
+
+fn parse_frame_number(key: &str, value: &str, file: &str, line_no: usize) -> Result<i64, IoError> {
+    value.parse::<i64>().map_err(|_| {
+        IoError::parse(
+            file,
+            line_no,
+            format!("{key}: expected a whole frame number, found `{value}`"),
+        )
+    })
+}
+
+/// `5.08 mm`, `0.025 inches`, `0.5 cm` -> millimetres.
+fn parse_length_mm(value: &str) -> Option<f64> {
+    let mut parts = value.split_whitespace();
+    let number: f64 = parts.next()?.parse().ok()?;
+    let unit = parts.next()?.to_ascii_lowercase();
+    if parts.next().is_some() || !(number.is_finite() && number > 0.0) {
+        return None;
+    }
+    let factor = match unit.as_str() {
+        "mm" | "millimeter" | "millimeters" | "millimetre" | "millimetres" => 1.0,
+        "cm" | "centimeter" | "centimeters" | "centimetre" | "centimetres" => 10.0,
+        "in" | "inch" | "inches" | "\"" => 25.4,
+        "m" | "meter" | "meters" | "metre" | "metres" => 1000.0,
+        _ => return None,
+    };
+    Some(number * factor)
+}
+
+/// `1514.73 KPa` in the recording's `units`, when the unit is the same or both are pressure units.
+fn saturation_in_units(value: &str, units: &PressureUnit) -> Option<f64> {
+    let mut parts = value.split_whitespace();
+    let number: f64 = parts.next()?.parse().ok()?;
+    let unit = PressureUnit::parse(&parts.collect::<Vec<_>>().join(" "));
+    if !number.is_finite() || value.split_whitespace().count() < 2 {
+        return None;
+    }
+    if &unit == units {
+        return Some(number);
+    }
+    Some(number * unit.kpa_per_unit()? / units.kpa_per_unit()?)
+}
+
+/// `Frame 12, timestamp 728` -> `(12, Some(", timestamp 728"))`; `None` if the line is not a frame line.
+/// `Some(Err(..))` if it starts with `Frame ` but the number is malformed.
+fn frame_line(line: &str) -> Option<Result<(i64, Option<&str>), String>> {
+    let head = line.get(..5)?;
+    if !head.eq_ignore_ascii_case("frame") {
+        return None;
+    }
+    let rest = &line[5..];
+    if !rest.starts_with(|c: char| c.is_whitespace()) {
+        return None;
+    }
+    let rest = rest.trim_start();
+    let digits_end = rest
+        .char_indices()
+        .find(|&(i, c)| !(c.is_ascii_digit() || (i == 0 && (c == '-' || c == '+'))))
+        .map_or(rest.len(), |(i, _)| i);
+    let number = &rest[..digits_end];
+    let suffix = &rest[digits_end..];
+    Some(
+        number
+            .parse::<i64>()
+            .map(|n| (n, (!suffix.is_empty()).then_some(suffix)))
+            .map_err(|_| {
+                format!("expected a frame number after `Frame`, found `{}`", rest)
+            }),
+    )
+}
+
+/// The frames read.
+struct Body {
+    data: Vec<f64>,
+    mask: Option<Vec<bool>>,
+    info: Vec<FrameInfo>,
+    /// Line of the `@@` terminator, when present.
+    terminator: Option<usize>,
+    /// A truncated last frame was dropped (lenient reading).
+    dropped_truncated: bool,
+}
+
+/// The frame being read.
+struct Current {
+    number: i64,
+    suffix: Option<String>,
+    first_line: usize,
+    rows_done: usize,
+}
+
+fn parse_frames(
+    header: &Header,
+    lines: &[(usize, &str)],
+    input_len: usize,
+    file: &str,
+    options: &ReadOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Body, IoError> {
+    let Grid { rows, cols } = header.grid;
+    let grid_len = header.grid.len();
+    // Reserve for the announced frames, but never more than the input could hold (>= 2 bytes per value).
+    let announced = match (header.start_frame, header.end_frame) {
+        (Some((_, s)), Some((_, e))) if e >= s => usize::try_from(e - s + 1).unwrap_or(1),
+        _ => 1,
+    };
+    let cap = announced.saturating_mul(grid_len).min(input_len / 2 + 1);
+    let mut data: Vec<f64> = Vec::with_capacity(cap);
+    let mut mask: Vec<bool> = Vec::new();
+    let mut any_absent = false;
+    let mut info: Vec<FrameInfo> = Vec::new();
+    let mut framed: Option<bool> = None;
+    let mut current: Option<Current> = None;
+    let mut terminator: Option<usize> = None;
+    let mut dropped_truncated = false;
+    let mut cells: Vec<&str> = Vec::new();
+    let next_snapshot_number = |info: &Vec<FrameInfo>| {
+        header.start_frame.map_or(1, |(_, s)| s) + info.len() as i64
+    };
+    let last_nonblank = lines
+        .iter()
+        .rposition(|(_, line)| !is_blank(line))
+        .unwrap_or(0);
+
+    for (index, &(line_no, raw)) in lines.iter().enumerate() {
+        let line = raw.trim();
+        if is_blank(line) {
+            continue;
+        }
+        if let Some(at) = terminator {
+            return Err(IoError::parse(
+                file,
+                line_no,
+                format!("expected nothing after the `@@` terminator on line {at}, found `{}`", clip(line)),
+            ));
+        }
+        if line == "@@" {
+            if let Some(cur) = &current
+                && cur.rows_done < rows
+            {
+                return Err(IoError::parse(
+                    file,
+                    line_no,
+                    format!(
+                        "frame {} (from line {}) has {} rows, expected {rows} (ROWS) before the `@@` terminator",
+                        cur.number, cur.first_line, cur.rows_done
+                    ),
+                ));
+            }
+            terminator = Some(line_no);
+            continue;
+        }
+        if let Some(parsed) = frame_line(line) {
+            let (number, suffix) = parsed.map_err(|message| IoError::parse(file, line_no, message))?;
+            if framed == Some(false) {
+                return Err(IoError::parse(
+                    file,
+                    line_no,
+                    "found a `Frame` line after frame data that had none; expected every frame to \
+                     start with a `Frame N` line, or none to",
+                ));
+            }
+            framed = Some(true);
+            if let Some(cur) = &current
+                && cur.rows_done < rows
+            {
+                return Err(IoError::parse(
+                    file,
+                    line_no,
+                    format!(
+                        "frame {} (from line {}) has {} rows, expected {rows} (ROWS), before the next `Frame` line",
+                        cur.number, cur.first_line, cur.rows_done
+                    ),
+                ));
+            }
+            current = Some(Current {
+                number,
+                suffix: suffix.map(str::to_owned),
+                first_line: line_no,
+                rows_done: 0,
+            });
+            continue;
+        }
+
+        // A data row.
+        if framed.is_none() {
+            framed = Some(false);
+        }
+        let need_new = match &current {
+            Some(cur) if cur.rows_done < rows => false,
+            Some(cur) if framed == Some(true) => {
+                return Err(IoError::parse(
+                    file,
+                    line_no,
+                    format!(
+                        "frame {} (from line {}) already has {rows} rows (ROWS); expected a `Frame` line \
+                         or the `@@` terminator, found another row of data",
+                        cur.number, cur.first_line
+                    ),
+                ));
+            }
+            _ => true,
+        };
+        if need_new {
+            current = Some(Current {
+                number: next_snapshot_number(&info),
+                suffix: None,
+                first_line: line_no,
+                rows_done: 0,
+            });
+        }
+        let Some(cur) = current.as_mut() else {
+            continue;
+        };
+        let row = cur.rows_done;
+        split_cells(line, &mut cells).map_err(|at| {
+            IoError::parse(
+                file,
+                line_no,
+                format!(
+                    "frame {} row {} column {} is empty; expected a number or `B` (no sensel)",
+                    cur.number,
+                    row + 1,
+                    at + 1
+                ),
+            )
+        })?;
+        if cells.len() != cols {
+            if index == last_nonblank && cells.len() < cols && terminator.is_none() {
+                let message = format!(
+                    "frame {} is truncated: its row {} has {} of {cols} values (COLS) at the end of the file",
+                    cur.number,
+                    row + 1,
+                    cells.len()
+                );
+                if options.lenient {
+                    warnings.push(format!("{file} line {line_no}: {message}; frame dropped"));
+                    data.truncate(info.len() * grid_len);
+                    if info.is_empty() {
+                        mask.clear();
+                    }
+                    current = None;
+                    dropped_truncated = true;
+                    break;
+                }
+                return Err(IoError::parse(
+                    file,
+                    line_no,
+                    format!("{message} (read leniently to drop it)"),
+                ));
+            }
+            return Err(IoError::parse(
+                file,
+                line_no,
+                format!(
+                    "frame {} has {} values in row {}, expected {cols} (COLS)",
+                    cur.number,
+                    cells.len(),
+                    row + 1
+                ),
+            ));
+        }
+        let first_frame = info.is_empty();
+        for (col, cell) in cells.iter().enumerate() {
+            let parsed = parse_cell(cell).map_err(|err| {
+                IoError::parse(
+                    file,
+                    line_no,
+                    format!(
+                        "frame {} row {} column {}: {}, found `{}`",
+                        cur.number,
+                        row + 1,
+                        col + 1,
+                        err.expected(true),
+                        clip(cell)
+                    ),
+                )
+            })?;
+            let present = matches!(parsed, Cell::Value(_));
+            if first_frame {
+                mask.push(present);
+                any_absent |= !present;
+            } else if mask[row * cols + col] != present {
+                let first = info[0].number;
+                let message = if present {
+                    format!(
+                        "frame {} row {} column {} holds a value but frame {first} has `B` (no sensel) there; \
+                         expected the same sensel outline in every frame",
+                        cur.number,
+                        row + 1,
+                        col + 1
+                    )
+                } else {
+                    format!(
+                        "frame {} row {} column {} is `B` (no sensel) but frame {first} has a value there; \
+                         expected the same sensel outline in every frame",
+                        cur.number,
+                        row + 1,
+                        col + 1
+                    )
+                };
+                return Err(IoError::parse(file, line_no, message));
+            }
+            data.push(match parsed {
+                Cell::Value(v) => v,
+                Cell::Absent => 0.0,
+            });
+        }
+        cur.rows_done += 1;
+        if cur.rows_done == rows {
+            info.push(FrameInfo {
+                number: cur.number,
+                suffix: cur.suffix.take(),
+            });
+        }
+    }
+
+    if let Some(cur) = &current
+        && cur.rows_done < rows
+    {
+        let last_line = lines.last().map_or(header.end_line, |&(n, _)| n);
+        let message = format!(
+            "frame {} (from line {}) is truncated: the file ends after {} of {rows} rows (ROWS)",
+            cur.number, cur.first_line, cur.rows_done
+        );
+        if options.lenient {
+            warnings.push(format!("{file} line {last_line}: {message}; frame dropped"));
+            data.truncate(info.len() * grid_len);
+            dropped_truncated = true;
+        } else {
+            return Err(IoError::parse(
+                file,
+                last_line,
+                format!("{message} (read leniently to drop it)"),
+            ));
+        }
+    }
+    if info.is_empty() {
+        let line_no = lines.last().map_or(header.end_line, |&(n, _)| n);
+        return Err(IoError::parse(
+            file,
+            line_no,
+            format!(
+                "expected frame data ({rows} rows of {cols} values) after the header ending on line {}, found {}",
+                header.end_line,
+                if dropped_truncated {
+                    "only a truncated frame"
+                } else {
+                    "none"
+                }
+            ),
+        ));
+    }
+    Ok(Body {
+        data,
+        mask: any_absent.then_some(mask),
+        info,
+        terminator,
+        dropped_truncated,
+    })
+}
+
+fn check_frame_count(
+    header: &Header,
+    body: &Body,
+    file: &str,
+    options: &ReadOptions,
+    warnings: &mut Vec<String>,
+) -> Result<(), IoError> {
+    let (Some((start_line, start)), Some((_, end))) = (header.start_frame, header.end_frame) else {
+        return Ok(());
+    };
+    let announced = i128::from(end) - i128::from(start) + 1;
+    let found = body.info.len() as i128 + i128::from(body.dropped_truncated);
+    if announced == found {
+        return Ok(());
+    }
+    if announced <= 0 {
+        warnings.push(format!(
+            "{file} line {start_line}: END_FRAME {end} is before START_FRAME {start}; keeping the frames found"
+        ));
+        return Ok(());
+    }
+    let message = format!(
+        "START_FRAME {start} and END_FRAME {end} announce {announced} frames, the file holds {found}"
+    );
+    if found < announced && body.terminator.is_none() && !body.dropped_truncated {
+        if options.lenient {
+            warnings.push(format!(
+                "{file} line {start_line}: {message} and has no `@@` terminator: it was probably cut short"
+            ));
+            return Ok(());
+        }
+        return Err(IoError::parse(
+            file,
+            start_line,
+            format!(
+                "{message} and has no `@@` terminator: the file looks truncated (read leniently to accept it)"
+            ),
+        ));
+    }
+    warnings.push(format!("{file} line {start_line}: {message}; keeping the frames found"));
+    Ok(())
+}
+
+/// A cell or line shortened for an error message.
+fn clip(text: &str) -> String {
+    const MAX: usize = 40;
+    if text.chars().count() <= MAX {
+        text.to_owned()
+    } else {
+        let head: String = text.chars().take(MAX).collect();
+        format!("{head}...")
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Writer
+
+/// Writes a recording as a TekScan ASCII movie (LF line endings).
+///
+/// The header holds `DATA_TYPE MOVIE`, `ROWS`, `COLS`, `ROW_SPACING`/`COL_SPACING` in mm, `SENSOR_TYPE`,
+/// `SECONDS_PER_FRAME`, `UNITS`, `NOISE_THRESHOLD`, `SATURATION_PRESSURE` (from `full_scale`),
+/// `START_FRAME`/`END_FRAME` (the first and last frame numbers), then the entries of `meta.extra` that are
+/// not already written, then `ASCII_DATA @@`. Absent sensels are written `B`; numbers are written so that
+/// they read back bit-exactly. Reading the output with [`parse_tekscan`] gives back an equal recording.
+///
+/// Fails (`InvalidInput`) without writing anything when the recording cannot be represented: no frames,
+/// non-finite values, or header text / frame suffixes with line breaks or that would be read back as
+/// something else.
+pub fn write_tekscan<W: Write + ?Sized>(recording: &Recording, w: &mut W) -> std::io::Result<()> {
+    validate_for_tekscan(recording)?;
+    let mut out = BufWriter::with_capacity(1 << 16, w);
+    let meta = &recording.meta;
+    let grid = recording.grid();
+    let info = recording.frame_info();
+    let mut written: Vec<&str> = vec!["DATA_TYPE", "ROWS", "COLS", "START_FRAME", "END_FRAME", "ASCII_DATA"];
+    let mut buf: Vec<u8> = Vec::with_capacity(256);
+
+    buf.extend_from_slice(b"DATA_TYPE MOVIE\n");
+    header_number(&mut buf, "ROWS", grid.rows as f64, "");
+    header_number(&mut buf, "COLS", grid.cols as f64, "");
+    if let Some(mm) = meta.row_pitch_mm {
+        header_number(&mut buf, "ROW_SPACING", mm, " mm");
+        written.push("ROW_SPACING");
+    }
+    if let Some(mm) = meta.col_pitch_mm {
+        header_number(&mut buf, "COL_SPACING", mm, " mm");
+        written.push("COL_SPACING");
+    }
+    if let Some(sensor) = &meta.sensor {
+        buf.extend_from_slice(b"SENSOR_TYPE ");
+        buf.extend_from_slice(sensor.as_bytes());
+        buf.push(b'\n');
+        written.push("SENSOR_TYPE");
+    }
+    if let Some(period) = recording.frame_period_s() {
+        header_number(&mut buf, "SECONDS_PER_FRAME", period, "");
+        written.push("SECONDS_PER_FRAME");
+    }
+    buf.extend_from_slice(b"UNITS ");
+    buf.extend_from_slice(meta.units.as_tekscan().as_bytes());
+    buf.push(b'\n');
+    written.push("UNITS");
+    if let Some(noise) = meta.noise_threshold {
+        header_number(&mut buf, "NOISE_THRESHOLD", noise, "");
+        written.push("NOISE_THRESHOLD");
+    }
+    if let Some(full_scale) = meta.full_scale {
+        let unit = format!(" {}", meta.units.as_tekscan());
+        header_number(&mut buf, "SATURATION_PRESSURE", full_scale, &unit);
+        written.push("SATURATION_PRESSURE");
+    }
+    let first = info.first().map_or(1, |i| i.number);
+    let last = info.last().map_or(1, |i| i.number);
+    buf.extend_from_slice(b"START_FRAME ");
+    push_int(&mut buf, first);
+    buf.extend_from_slice(b"\nEND_FRAME ");
+    push_int(&mut buf, last);
+    buf.push(b'\n');
+    for (key, value) in &meta.extra {
+        let skip = !key.contains(char::is_whitespace)
+            && written
+                .iter()
+                .any(|w| w.eq_ignore_ascii_case(key.trim_end_matches(':')));
+        if skip {
+            continue;
+        }
+        buf.extend_from_slice(key.as_bytes());
+        if !value.is_empty() {
+            buf.push(b' ');
+            buf.extend_from_slice(value.as_bytes());
+        }
+        buf.push(b'\n');
+    }
+    buf.extend_from_slice(b"ASCII_DATA @@\n");
+    out.write_all(&buf)?;
+
+    let present = recording.present();
+    for (frame, frame_info) in recording.frames().zip(info) {
+        buf.clear();
+        buf.extend_from_slice(b"\nFrame ");
+        push_int(&mut buf, frame_info.number);
+        if let Some(suffix) = &frame_info.suffix {
+            buf.extend_from_slice(suffix.as_bytes());
+        }
+        buf.push(b'\n');
+        for (r, row) in frame.values().chunks_exact(grid.cols).enumerate() {
+            for (c, &value) in row.iter().enumerate() {
+                if c > 0 {
+                    buf.push(b',');
+                }
+                if present.is_some_and(|mask| !mask[r * grid.cols + c]) {
+                    buf.push(b'B');
+                } else {
+                    push_number(&mut buf, value);
+                }
+            }
+            buf.push(b'\n');
+        }
+        out.write_all(&buf)?;
+    }
+    out.write_all(b"@@\n")?;
+    out.flush()
+}
+
+/// Writes a recording as a TekScan ASCII movie file, atomically (see [`crate::atomic`]).
+pub fn write_tekscan_file(recording: &Recording, path: &Path) -> Result<(), IoError> {
+    crate::atomic::write_atomic(path, |w| write_tekscan(recording, w))
+}
+
+fn header_number(buf: &mut Vec<u8>, key: &str, value: f64, unit: &str) {
+    buf.extend_from_slice(key.as_bytes());
+    buf.push(b' ');
+    push_number(buf, value);
+    buf.extend_from_slice(unit.as_bytes());
+    buf.push(b'\n');
+}
+
+fn invalid(message: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
+}
+
+fn validate_for_tekscan(recording: &Recording) -> std::io::Result<()> {
+    if recording.frame_count() == 0 {
+        return Err(invalid(
+            "a TekScan file holds at least one frame; the recording has none".to_owned(),
+        ));
+    }
+    let grid = recording.grid();
+    if let Some(at) = recording.data().iter().position(|v| !v.is_finite()) {
+        let (frame, cell) = (at / grid.len(), at % grid.len());
+        return Err(invalid(format!(
+            "frame {} (0-based) row {} column {} is {}; TekScan files hold finite numbers only",
+            frame,
+            cell / grid.cols + 1,
+            cell % grid.cols + 1,
+            recording.data()[at]
+        )));
+    }
+    let meta = &recording.meta;
+    for (what, value) in [
+        ("ROW_SPACING", meta.row_pitch_mm),
+        ("COL_SPACING", meta.col_pitch_mm),
+    ] {
+        if let Some(v) = value
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(invalid(format!("{what} must be a positive length, got {v} mm")));
+        }
+    }
+    for (what, value) in [
+        ("NOISE_THRESHOLD", meta.noise_threshold),
+        ("SATURATION_PRESSURE", meta.full_scale),
+    ] {
+        if let Some(v) = value
+            && !v.is_finite()
+        {
+            return Err(invalid(format!("{what} must be a finite number, got {v}")));
+        }
+    }
+    let single_line = |what: &str, text: &str| {
+        if text.contains(['\n', '\r']) {
+            Err(invalid(format!("{what} {text:?} holds a line break")))
+        } else {
+            Ok(())
+        }
+    };
+    if let Some(sensor) = &meta.sensor {
+        single_line("SENSOR_TYPE", sensor)?;
+    }
+    single_line("UNITS", meta.units.as_tekscan())?;
+    for (key, value) in &meta.extra {
+        single_line("header key", key)?;
+        single_line("header value", value)?;
+        let token = key.split_whitespace().next().unwrap_or("");
+        if token.is_empty() || key.starts_with(char::is_whitespace) {
+            return Err(invalid(format!(
+                "header key {key:?} must start with a non-blank character"
+            )));
+        }
+        if token.trim_end_matches(':').eq_ignore_ascii_case("ASCII_DATA") {
+            return Err(invalid(format!(
+                "header entry {key:?} would end the header early"
+            )));
+        }
+    }
+    for info in recording.frame_info() {
+        if let Some(suffix) = &info.suffix {
+            single_line("frame suffix", suffix)?;
+            if suffix.starts_with(|c: char| c.is_ascii_digit()) || suffix.trim_end() != suffix {
+                return Err(invalid(format!(
+                    "frame {} suffix {suffix:?} would not read back (it must not start with a digit or end with a space)",
+                    info.number
+                )));
+            }
+        }
+    }
+    Ok(())
+}
