@@ -1,0 +1,180 @@
+//! Trained model files: readable JSON holding the trained pipeline and where it came from.
+//!
+//! The file is one JSON object `{"format": "presrs-model", "format_version": 1, "presrs_version": ...,
+//! "provenance": {...}, "model": {...}}`. The envelope is checked before the model is decoded, so a file
+//! of another format version says so instead of failing on some inner field.
+
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::Path;
+
+use presrs_core::pipeline::TrainedModel;
+use serde::{Deserialize, Serialize};
+
+use crate::atomic::write_atomic;
+use crate::error::IoError;
+
+/// The `format` field every model file carries.
+pub const MODEL_FORMAT: &str = "presrs-model";
+/// The envelope version this build writes and reads.
+pub const MODEL_FORMAT_VERSION: u32 = 1;
+
+/// Where a model came from: enough to trace it back to its data and settings.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The manifest trained from, as given on the command line.
+    pub manifest: Option<String>,
+    /// SHA-256 of the manifest's bytes.
+    pub manifest_sha256: Option<String>,
+    /// Seed of the random choices (sample selection, splits).
+    pub seed: Option<u64>,
+    /// The condition training was restricted to, if any.
+    pub train_condition: Option<String>,
+    /// Training and validation images per class.
+    pub train_counts: BTreeMap<String, usize>,
+    pub validation_counts: BTreeMap<String, usize>,
+    /// The command line that made the model.
+    pub command: Option<String>,
+    /// Seconds since the Unix epoch when the model was written.
+    pub created_unix_s: Option<u64>,
+}
+
+/// A model file's content.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModelFile {
+    pub format: String,
+    pub format_version: u32,
+    /// The presrs version that wrote the file.
+    pub presrs_version: String,
+    pub provenance: Provenance,
+    pub model: TrainedModel,
+}
+
+impl ModelFile {
+    pub fn new(model: TrainedModel, provenance: Provenance) -> Self {
+        Self {
+            format: MODEL_FORMAT.to_owned(),
+            format_version: MODEL_FORMAT_VERSION,
+            presrs_version: env!("CARGO_PKG_VERSION").to_owned(),
+            provenance,
+            model,
+        }
+    }
+}
+
+/// Writes a model file atomically (a temporary file renamed into place).
+pub fn save_model(path: &Path, file: &ModelFile) -> Result<(), IoError> {
+    write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, file).map_err(std::io::Error::from)?;
+        writeln!(w)
+    })
+}
+
+/// Reads a model file, checking its envelope first.
+pub fn load_model(path: &Path) -> Result<ModelFile, IoError> {
+    let bytes = std::fs::read(path).map_err(|source| IoError::io("read", path, source))?;
+    parse_model(&bytes, &path.display().to_string())
+}
+
+/// Parses model-file bytes; `file` names the source in errors.
+pub fn parse_model(bytes: &[u8], file: &str) -> Result<ModelFile, IoError> {
+    let not_model = |why: String| {
+        IoError::format(
+            file,
+            format!("not a presrs model file ({why}); make one with `presrs train`"),
+        )
+    };
+    let value: serde_json::Value = serde_json::from_slice(bytes)
+        .map_err(|err| IoError::parse(file, err.line(), format!("corrupted model file: {err}")))?;
+    let format = value.get("format").and_then(serde_json::Value::as_str);
+    if format != Some(MODEL_FORMAT) {
+        return Err(not_model(format!(
+            "its `format` is {format:?}, expected {MODEL_FORMAT:?}"
+        )));
+    }
+    let version = value
+        .get("format_version")
+        .and_then(serde_json::Value::as_u64);
+    if version != Some(u64::from(MODEL_FORMAT_VERSION)) {
+        let written_by = value
+            .get("presrs_version")
+            .and_then(serde_json::Value::as_str)
+            .unwrap_or("an unknown version");
+        return Err(IoError::unsupported(
+            file,
+            format!(
+                "model format version {} (written by presrs {written_by}) is not supported: this presrs \
+                 ({}) reads version {MODEL_FORMAT_VERSION}; retrain the model with this version",
+                version.map_or_else(|| "missing".to_owned(), |v| v.to_string()),
+                env!("CARGO_PKG_VERSION"),
+            ),
+        ));
+    }
+    serde_json::from_value(value)
+        .map_err(|err| IoError::format(file, format!("corrupted model file: {err}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use presrs_core::pipeline::bench_fixture;
+
+    fn model_bytes() -> Vec<u8> {
+        let (model, _) = bench_fixture(3, 0).unwrap();
+        let file = ModelFile::new(
+            model,
+            Provenance {
+                seed: Some(3),
+                ..Provenance::default()
+            },
+        );
+        serde_json::to_vec(&file).unwrap()
+    }
+
+    #[test]
+    fn round_trips_through_a_file_and_classifies_the_same() {
+        let (model, frames) = bench_fixture(5, 8).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.json");
+        save_model(&path, &ModelFile::new(model.clone(), Provenance::default())).unwrap();
+        let loaded = load_model(&path).unwrap();
+        assert_eq!(loaded.format_version, MODEL_FORMAT_VERSION);
+        let (mut a, mut b) = (model.session(), loaded.model.session());
+        for frame in &frames {
+            let pa = a.classify(&frame.view()).unwrap().to_classification();
+            let pb = b.classify(&frame.view()).unwrap().to_classification();
+            assert_eq!(pa, pb);
+        }
+    }
+
+    #[test]
+    fn other_versions_and_corruption_are_clear_errors() {
+        let bytes = model_bytes();
+        let mut value: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+        value["format_version"] = serde_json::json!(99);
+        let err = parse_model(&serde_json::to_vec(&value).unwrap(), "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("format version 99") && err.contains("retrain"),
+            "{err}"
+        );
+
+        let err = parse_model(&bytes[..bytes.len() / 2], "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("m.json") && err.contains("corrupted"), "{err}");
+
+        let err = parse_model(b"{\"a\": 1}", "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("not a presrs model file"), "{err}");
+
+        value["format_version"] = serde_json::json!(MODEL_FORMAT_VERSION);
+        value["model"]["class_names"] = serde_json::json!(["only-one"]);
+        let err = parse_model(&serde_json::to_vec(&value).unwrap(), "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("class names"), "{err}");
+    }
+}
