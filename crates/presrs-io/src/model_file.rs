@@ -5,7 +5,6 @@
 //! of another format version says so instead of failing on some inner field.
 
 use std::collections::BTreeMap;
-use std::io::Write as _;
 use std::path::Path;
 
 use presrs_core::pipeline::TrainedModel;

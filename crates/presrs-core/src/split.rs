@@ -1,0 +1,175 @@
+//! Stratified, seeded selection of training and validation samples.
+//!
+//! The paper draws 20 random images per terrain from one gait, 13 for training and 7 for validation, and
+//! tests on everything else. [`stratified_split`] does that for any labels: per class, shuffle with a seeded
+//! RNG, take `per_class` (or all), and put `validation` of those aside.
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+
+/// How many of each class's picked samples go to validation.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ValidationSize {
+    /// Exactly this many per class.
+    Count(usize),
+    /// This fraction of each class's picked samples, rounded to nearest, at least 1 and leaving at least 2
+    /// for training (when the class has at least 3).
+    Fraction(f64),
+}
+
+impl Default for ValidationSize {
+    /// The paper's 7 of 20.
+    fn default() -> Self {
+        Self::Fraction(0.35)
+    }
+}
+
+impl std::str::FromStr for ValidationSize {
+    type Err = CoreError;
+
+    /// `7` (a count per class) or `0.35` (a fraction).
+    fn from_str(text: &str) -> Result<Self> {
+        let bad = || CoreError::Param {
+            name: "validation",
+            reason: format!(
+                "expected a count per class (e.g. 7) or a fraction in (0, 1) (e.g. 0.35), got {text:?}"
+            ),
+        };
+        if let Ok(count) = text.trim().parse::<usize>() {
+            return Ok(Self::Count(count));
+        }
+        let fraction: f64 = text.trim().parse().map_err(|_| bad())?;
+        if fraction > 0.0 && fraction < 1.0 {
+            Ok(Self::Fraction(fraction))
+        } else {
+            Err(bad())
+        }
+    }
+}
+
+/// Indices into the input, by role.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Split {
+    pub train: Vec<usize>,
+    pub validation: Vec<usize>,
+    /// Everything not picked (the test set in the paper's protocol).
+    pub rest: Vec<usize>,
+}
+
+/// Splits `labels` (one per sample) per class. `per_class: None` picks every sample of every class.
+/// Fails when a class has fewer samples than asked for, or too few to train and validate.
+pub fn stratified_split(
+    labels: &[&str],
+    per_class: Option<usize>,
+    validation: ValidationSize,
+    seed: u64,
+) -> Result<Split> {
+    let mut classes: Vec<&str> = labels.to_vec();
+    classes.sort_unstable();
+    classes.dedup();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut split = Split::default();
+    for class in classes {
+        let mut members: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == class).collect();
+        members.shuffle(&mut rng);
+        let picked = per_class.unwrap_or(members.len());
+        if picked > members.len() {
+            return Err(CoreError::NotEnoughData(format!(
+                "class {class:?} has {} samples, fewer than the {picked} per class asked for",
+                members.len()
+            )));
+        }
+        let n_validation = match validation {
+            ValidationSize::Count(count) => count,
+            ValidationSize::Fraction(fraction) => {
+                let rounded = (fraction * picked as f64).round() as usize;
+                if picked >= 3 {
+                    rounded.clamp(1, picked - 2)
+                } else {
+                    0
+                }
+            }
+        };
+        if picked < n_validation + 1 {
+            return Err(CoreError::NotEnoughData(format!(
+                "class {class:?}: {picked} picked samples cannot give {n_validation} for validation and \
+                 at least one for training"
+            )));
+        }
+        let n_train = picked - n_validation;
+        split.train.extend_from_slice(&members[..n_train]);
+        split
+            .validation
+            .extend_from_slice(&members[n_train..picked]);
+        split.rest.extend_from_slice(&members[picked..]);
+    }
+    split.train.sort_unstable();
+    split.validation.sort_unstable();
+    split.rest.sort_unstable();
+    Ok(split)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn labels() -> Vec<&'static str> {
+        let mut labels = Vec::new();
+        for class in ["wood", "carpet", "clay", "grass"] {
+            labels.extend(std::iter::repeat_n(class, 30));
+        }
+        labels
+    }
+
+    #[test]
+    fn paper_split_is_13_plus_7_per_class_and_disjoint() {
+        let labels = labels();
+        let split = stratified_split(&labels, Some(20), ValidationSize::default(), 7).unwrap();
+        assert_eq!(split.train.len(), 52);
+        assert_eq!(split.validation.len(), 28);
+        assert_eq!(split.rest.len(), 40);
+        for class in ["wood", "carpet", "clay", "grass"] {
+            assert_eq!(
+                split.train.iter().filter(|&&i| labels[i] == class).count(),
+                13
+            );
+            assert_eq!(
+                split
+                    .validation
+                    .iter()
+                    .filter(|&&i| labels[i] == class)
+                    .count(),
+                7
+            );
+        }
+        let mut all: Vec<usize> = [split.train, split.validation, split.rest].concat();
+        all.sort_unstable();
+        assert_eq!(all, (0..labels.len()).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn same_seed_same_split_other_seed_other_split() {
+        let labels = labels();
+        let a = stratified_split(&labels, Some(20), ValidationSize::Count(7), 1).unwrap();
+        let b = stratified_split(&labels, Some(20), ValidationSize::Count(7), 1).unwrap();
+        let c = stratified_split(&labels, Some(20), ValidationSize::Count(7), 2).unwrap();
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+    }
+
+    #[test]
+    fn too_few_samples_is_an_error() {
+        let labels = labels();
+        assert!(stratified_split(&labels, Some(31), ValidationSize::Count(7), 1).is_err());
+        assert!(stratified_split(&labels, Some(5), ValidationSize::Count(5), 1).is_err());
+        assert!("1.5".parse::<ValidationSize>().is_err());
+        assert_eq!(
+            "7".parse::<ValidationSize>().unwrap(),
+            ValidationSize::Count(7)
+        );
+    }
+}
