@@ -8,6 +8,7 @@ pub mod frame;
 pub mod pca;
 pub mod pipeline;
 pub mod recording;
+pub mod split;
 pub mod stance;
 
 pub use crop::Crop;
