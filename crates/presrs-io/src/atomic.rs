@@ -153,6 +153,9 @@ mod tests {
         assert!(matches!(r, Err(MyErr::Mine)));
         assert!(!path.exists());
         let r: Result<(), MyErr> = write_atomic_with(&dir.path().join("a/b"), |_| Ok(()));
-        assert!(matches!(r, Err(MyErr::Io(_))));
+        match r {
+            Err(MyErr::Io(err)) => assert!(err.to_string().contains("a"), "{err}"),
+            other => panic!("expected an I/O error, got {other:?}"),
+        }
     }
 }

@@ -101,7 +101,11 @@ mod tests {
 
     #[test]
     fn messages_name_file_line_and_cause() {
-        let err = IoError::parse("a.asf", 58, "frame 3 has 43 values in row 12, expected 44 (COLS)");
+        let err = IoError::parse(
+            "a.asf",
+            58,
+            "frame 3 has 43 values in row 12, expected 44 (COLS)",
+        );
         assert_eq!(
             err.to_string(),
             "a.asf line 58: frame 3 has 43 values in row 12, expected 44 (COLS)"

@@ -68,9 +68,7 @@ pub fn read_recording_with(path: &Path, options: &ReadOptions) -> Result<Parsed,
     match detect_kind(path, &bytes)? {
         FileKind::Npy => npy::parse_npy(&bytes, &name).map(plain),
         FileKind::Png => png::parse_png(&bytes, &name).map(plain),
-        FileKind::TekScan => {
-            tekscan::parse_tekscan(&textutil::decode_text(&bytes), &name, options)
-        }
+        FileKind::TekScan => tekscan::parse_tekscan(&textutil::decode_text(&bytes), &name, options),
         FileKind::TextMatrix => {
             text::parse_text_matrix(&textutil::decode_text(&bytes), &name).map(plain)
         }

@@ -53,12 +53,17 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
         usize::try_from(cols),
     );
     let (Ok(frames), Ok(rows), Ok(cols)) = dims else {
-        return Err(IoError::format(file, format!("shape {shape:?} is too large")));
+        return Err(IoError::format(
+            file,
+            format!("shape {shape:?} is too large"),
+        ));
     };
     if frames == 0 || rows == 0 || cols == 0 {
         return Err(IoError::format(
             file,
-            format!("the array is empty (shape {shape:?}); expected at least one frame of one sensel"),
+            format!(
+                "the array is empty (shape {shape:?}); expected at least one frame of one sensel"
+            ),
         ));
     }
     let dtype = npy.dtype();
@@ -100,7 +105,10 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
     if stored.len() != total {
         return Err(IoError::format(
             file,
-            format!("truncated data: expected {total} values, read {}", stored.len()),
+            format!(
+                "truncated data: expected {total} values, read {}",
+                stored.len()
+            ),
         ));
     }
     // Gather into frames x rows x cols, row-major, whatever the storage order.
@@ -139,11 +147,16 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
             ),
         ));
     }
-    Recording::new(Grid::new(rows, cols), None, data, None, SensorMeta::default()).map_err(|source| {
-        IoError::Model {
-            file: file.to_owned(),
-            source,
-        }
+    Recording::new(
+        Grid::new(rows, cols),
+        None,
+        data,
+        None,
+        SensorMeta::default(),
+    )
+    .map_err(|source| IoError::Model {
+        file: file.to_owned(),
+        source,
     })
 }
 
@@ -230,9 +243,7 @@ impl Kind {
 }
 
 fn check_shape(shape: &[usize], len: usize) -> std::io::Result<Vec<u64>> {
-    let product = shape
-        .iter()
-        .try_fold(1usize, |acc, &n| acc.checked_mul(n));
+    let product = shape.iter().try_fold(1usize, |acc, &n| acc.checked_mul(n));
     if product != Some(len) {
         return Err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
@@ -338,7 +349,10 @@ mod tests {
             ("<u8", [1u64.to_le_bytes(), 256u64.to_le_bytes()].concat()),
             (">i8", [1i64.to_be_bytes(), (-1i64).to_be_bytes()].concat()),
             ("<f4", [1f32.to_le_bytes(), 2.5f32.to_le_bytes()].concat()),
-            (">f8", [1f64.to_be_bytes(), (-2.5f64).to_be_bytes()].concat()),
+            (
+                ">f8",
+                [1f64.to_be_bytes(), (-2.5f64).to_be_bytes()].concat(),
+            ),
             ("|b1", vec![1, 0]),
         ];
         let expected = |descr: &str| -> [f64; 2] {
@@ -380,7 +394,9 @@ mod tests {
         }
         let rec = parse_npy(&raw_npy("<f8", true, "(2, 2, 3)", &stored), "f3.npy").unwrap();
         let expected: Vec<f64> = (0..2)
-            .flat_map(|f| (0..2).flat_map(move |r| (0..3).map(move |c| f64::from(100 * f + 10 * r + c))))
+            .flat_map(|f| {
+                (0..2).flat_map(move |r| (0..3).map(move |c| f64::from(100 * f + 10 * r + c)))
+            })
             .collect();
         assert_eq!(rec.data(), expected.as_slice());
     }
@@ -389,7 +405,10 @@ mod tests {
     fn errors_are_clear() {
         let msg = |bytes: &[u8]| parse_npy(bytes, "bad.npy").unwrap_err().to_string();
         let m = msg(&npy_f64(&[6], &[0.0; 6]));
-        assert!(m.contains("bad.npy") && m.contains("1-D") && m.contains("expected a 2-D"), "{m}");
+        assert!(
+            m.contains("bad.npy") && m.contains("1-D") && m.contains("expected a 2-D"),
+            "{m}"
+        );
         let m = msg(&npy_f64(&[1, 1, 2, 3], &[0.0; 6]));
         assert!(m.contains("4-D"), "{m}");
         let m = msg(&npy_f64(&[0, 3], &[]));

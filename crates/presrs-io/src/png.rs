@@ -25,7 +25,10 @@ pub fn read_png(path: &Path) -> Result<Recording, IoError> {
 pub fn parse_png(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> {
     let file = source_name;
     if !bytes.starts_with(PNG_MAGIC) {
-        return Err(IoError::format(file, "not a PNG file (the PNG signature is missing)"));
+        return Err(IoError::format(
+            file,
+            "not a PNG file (the PNG signature is missing)",
+        ));
     }
     let decoder = png::Decoder::new(Cursor::new(bytes));
     let mut reader = decoder
@@ -110,7 +113,8 @@ pub fn write_png_gray8<W: Write>(w: W, grid: Grid, pixels: &[u8]) -> std::io::Re
             ),
         ));
     }
-    let too_big = |_| std::io::Error::new(std::io::ErrorKind::InvalidInput, "image too large for PNG");
+    let too_big =
+        |_| std::io::Error::new(std::io::ErrorKind::InvalidInput, "image too large for PNG");
     let width = u32::try_from(grid.cols).map_err(too_big)?;
     let height = u32::try_from(grid.rows).map_err(too_big)?;
     let mut encoder = png::Encoder::new(w, width, height);
@@ -139,13 +143,14 @@ pub fn frame_to_gray8(frame: FrameView<'_>, full_scale: Option<f64>) -> Vec<u8> 
             .filter(|v| v.is_finite())
             .fold(0.0, f64::max)
     });
+    let usable_top = top.is_finite() && top > 0.0;
     let present = frame.present();
     values
         .iter()
         .enumerate()
         .map(|(i, &v)| {
             let here = present.is_none_or(|mask| mask[i]);
-            if !here || !v.is_finite() || !(top > 0.0) {
+            if !here || !v.is_finite() || !usable_top {
                 0
             } else {
                 // In [0, 255] after clamping, so the cast is exact.
@@ -156,7 +161,11 @@ pub fn frame_to_gray8(frame: FrameView<'_>, full_scale: Option<f64>) -> Vec<u8> 
 }
 
 /// Writes a frame as an 8-bit greyscale PNG file for viewing (see [`frame_to_gray8`]).
-pub fn write_frame_png(frame: FrameView<'_>, full_scale: Option<f64>, path: &Path) -> Result<(), IoError> {
+pub fn write_frame_png(
+    frame: FrameView<'_>,
+    full_scale: Option<f64>,
+    path: &Path,
+) -> Result<(), IoError> {
     write_png_gray8_file(path, frame.grid(), &frame_to_gray8(frame, full_scale))
 }
 
@@ -164,7 +173,13 @@ pub fn write_frame_png(frame: FrameView<'_>, full_scale: Option<f64>, path: &Pat
 mod tests {
     use super::*;
 
-    fn encode(width: u32, height: u32, color: png::ColorType, depth: png::BitDepth, data: &[u8]) -> Vec<u8> {
+    fn encode(
+        width: u32,
+        height: u32,
+        color: png::ColorType,
+        depth: png::BitDepth,
+        data: &[u8],
+    ) -> Vec<u8> {
         let mut bytes = Vec::new();
         let mut encoder = png::Encoder::new(&mut bytes, width, height);
         encoder.set_color(color);
@@ -188,8 +203,17 @@ mod tests {
 
     #[test]
     fn gray16_keeps_raw_levels() {
-        let data: Vec<u8> = [0u16, 1, 300, 65535].iter().flat_map(|v| v.to_be_bytes()).collect();
-        let bytes = encode(2, 2, png::ColorType::Grayscale, png::BitDepth::Sixteen, &data);
+        let data: Vec<u8> = [0u16, 1, 300, 65535]
+            .iter()
+            .flat_map(|v| v.to_be_bytes())
+            .collect();
+        let bytes = encode(
+            2,
+            2,
+            png::ColorType::Grayscale,
+            png::BitDepth::Sixteen,
+            &data,
+        );
         let rec = parse_png(&bytes, "g16.png").unwrap();
         assert_eq!(rec.data(), &[0.0, 1.0, 300.0, 65535.0]);
     }
@@ -197,28 +221,58 @@ mod tests {
     #[test]
     fn low_bit_depths_unpacked_raw() {
         // 3 pixels per row at 2 bits: 0b11_01_10_00 -> 3, 1, 2 (last 2 bits are padding).
-        let bytes = encode(3, 2, png::ColorType::Grayscale, png::BitDepth::Two, &[0b1101_1000, 0b0001_1000]);
+        let bytes = encode(
+            3,
+            2,
+            png::ColorType::Grayscale,
+            png::BitDepth::Two,
+            &[0b1101_1000, 0b0001_1000],
+        );
         let rec = parse_png(&bytes, "g2.png").unwrap();
         assert_eq!(rec.data(), &[3.0, 1.0, 2.0, 0.0, 1.0, 2.0]);
-        let bytes = encode(9, 1, png::ColorType::Grayscale, png::BitDepth::One, &[0b1010_0000, 0b1000_0000]);
+        let bytes = encode(
+            9,
+            1,
+            png::ColorType::Grayscale,
+            png::BitDepth::One,
+            &[0b1010_0000, 0b1000_0000],
+        );
         let rec = parse_png(&bytes, "g1.png").unwrap();
         assert_eq!(rec.data(), &[1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
     }
 
     #[test]
     fn opaque_grey_alpha_accepted_transparent_rejected() {
-        let bytes = encode(2, 1, png::ColorType::GrayscaleAlpha, png::BitDepth::Eight, &[7, 255, 9, 255]);
+        let bytes = encode(
+            2,
+            1,
+            png::ColorType::GrayscaleAlpha,
+            png::BitDepth::Eight,
+            &[7, 255, 9, 255],
+        );
         assert_eq!(parse_png(&bytes, "ga.png").unwrap().data(), &[7.0, 9.0]);
-        let bytes = encode(2, 1, png::ColorType::GrayscaleAlpha, png::BitDepth::Eight, &[7, 255, 9, 10]);
+        let bytes = encode(
+            2,
+            1,
+            png::ColorType::GrayscaleAlpha,
+            png::BitDepth::Eight,
+            &[7, 255, 9, 10],
+        );
         let m = parse_png(&bytes, "ga.png").unwrap_err().to_string();
-        assert!(m.contains("ga.png") && m.contains("column 2") && m.contains("opaque"), "{m}");
+        assert!(
+            m.contains("ga.png") && m.contains("column 2") && m.contains("opaque"),
+            "{m}"
+        );
     }
 
     #[test]
     fn colour_rejected_with_advice() {
         let bytes = encode(1, 1, png::ColorType::Rgb, png::BitDepth::Eight, &[1, 2, 3]);
         let m = parse_png(&bytes, "c.png").unwrap_err().to_string();
-        assert!(m.contains("c.png") && m.contains("Rgb") && m.contains("greyscale"), "{m}");
+        assert!(
+            m.contains("c.png") && m.contains("Rgb") && m.contains("greyscale"),
+            "{m}"
+        );
     }
 
     #[test]
@@ -227,7 +281,9 @@ mod tests {
         assert!(m.contains("not a PNG"), "{m}");
         let mut bytes = Vec::new();
         write_png_gray8(&mut bytes, Grid::new(20, 20), &[9; 400]).unwrap();
-        let m = parse_png(&bytes[..bytes.len() / 2], "t.png").unwrap_err().to_string();
+        let m = parse_png(&bytes[..bytes.len() / 2], "t.png")
+            .unwrap_err()
+            .to_string();
         assert!(m.contains("t.png"), "{m}");
         assert!(write_png_gray8(&mut Vec::new(), Grid::new(2, 2), &[0; 3]).is_err());
     }
@@ -241,7 +297,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(frame_to_gray8(frame.view(), None), vec![0, 128, 255, 0]);
-        assert_eq!(frame_to_gray8(frame.view(), Some(20.0)), vec![0, 64, 128, 0]);
+        assert_eq!(
+            frame_to_gray8(frame.view(), Some(20.0)),
+            vec![0, 64, 128, 0]
+        );
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("f.png");
         write_frame_png(frame.view(), None, &path).unwrap();

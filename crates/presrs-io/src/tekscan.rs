@@ -39,7 +39,9 @@ use std::path::Path;
 use presrs_core::{FrameInfo, Grid, PressureUnit, Recording, SensorMeta};
 
 use crate::error::{IoError, display_name};
-use crate::textutil::{Cell, decode_text, is_blank, numbered_lines, parse_cell, push_int, push_number, split_cells};
+use crate::textutil::{
+    Cell, decode_text, is_blank, numbered_lines, parse_cell, push_int, push_number, split_cells,
+};
 use crate::{Parsed, ReadOptions};
 
 /// The result of parsing a TekScan file: the recording and any warnings (see [`Parsed`]).
@@ -100,7 +102,14 @@ pub fn parse_tekscan(
     let mut warnings = Vec::new();
     let header = parse_header(&lines, source_name, &mut warnings)?;
     let data_lines = &lines[header.data_start..];
-    let body = parse_frames(&header, data_lines, text.len(), source_name, options, &mut warnings)?;
+    let body = parse_frames(
+        &header,
+        data_lines,
+        text.len(),
+        source_name,
+        options,
+        &mut warnings,
+    )?;
     check_frame_count(&header, &body, source_name, options, &mut warnings)?;
     let recording = Recording::with_info(
         header.grid,
@@ -153,7 +162,9 @@ fn parse_header(
     // as `Frame 3 was bad` in a normal header is kept as text).
     let has_ascii_data = lines.iter().any(|(_, line)| {
         let token = line.split_whitespace().next().unwrap_or("");
-        token.trim_end_matches(':').eq_ignore_ascii_case("ASCII_DATA")
+        token
+            .trim_end_matches(':')
+            .eq_ignore_ascii_case("ASCII_DATA")
     });
 
     for (index, &(line_no, raw)) in lines.iter().enumerate() {
@@ -215,8 +226,12 @@ fn parse_header(
             "DATA_TYPE" => {}
             "ROWS" => rows = Some((line_no, parse_dim(&key, value, file, line_no)?)),
             "COLS" => cols = Some((line_no, parse_dim(&key, value, file, line_no)?)),
-            "START_FRAME" => start_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?)),
-            "END_FRAME" => end_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?)),
+            "START_FRAME" => {
+                start_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?))
+            }
+            "END_FRAME" => {
+                end_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?))
+            }
             "SENSOR_TYPE" => meta.sensor = (!value.is_empty()).then(|| value.to_owned()),
             "UNITS" => meta.units = PressureUnit::parse(value),
             "ROW_SPACING" | "COL_SPACING" => match parse_length_mm(value) {
@@ -301,8 +316,10 @@ fn parse_header(
             Some(full_scale) => meta.full_scale = Some(full_scale),
             None => {
                 // Not expressible in the recording's units (e.g. kPa for a raw export): keep it verbatim.
-                meta.extra
-                    .insert(at.min(meta.extra.len()), ("SATURATION_PRESSURE".to_owned(), value));
+                meta.extra.insert(
+                    at.min(meta.extra.len()),
+                    ("SATURATION_PRESSURE".to_owned(), value),
+                );
             }
         }
     }
@@ -415,9 +432,7 @@ fn frame_line(line: &str) -> Option<Result<(i64, Option<&str>), String>> {
         number
             .parse::<i64>()
             .map(|n| (n, (!suffix.is_empty()).then_some(suffix)))
-            .map_err(|_| {
-                format!("expected a frame number after `Frame`, found `{}`", rest)
-            }),
+            .map_err(|_| format!("expected a frame number after `Frame`, found `{}`", rest)),
     )
 }
 
@@ -465,9 +480,8 @@ fn parse_frames(
     let mut terminator: Option<usize> = None;
     let mut dropped_truncated = false;
     let mut cells: Vec<&str> = Vec::new();
-    let next_snapshot_number = |info: &Vec<FrameInfo>| {
-        header.start_frame.map_or(1, |(_, s)| s) + info.len() as i64
-    };
+    let next_snapshot_number =
+        |info: &Vec<FrameInfo>| header.start_frame.map_or(1, |(_, s)| s) + info.len() as i64;
     let last_nonblank = lines
         .iter()
         .rposition(|(_, line)| !is_blank(line))
@@ -482,7 +496,10 @@ fn parse_frames(
             return Err(IoError::parse(
                 file,
                 line_no,
-                format!("expected nothing after the `@@` terminator on line {at}, found `{}`", clip(line)),
+                format!(
+                    "expected nothing after the `@@` terminator on line {at}, found `{}`",
+                    clip(line)
+                ),
             ));
         }
         if line == "@@" {
@@ -502,7 +519,8 @@ fn parse_frames(
             continue;
         }
         if let Some(parsed) = frame_line(line) {
-            let (number, suffix) = parsed.map_err(|message| IoError::parse(file, line_no, message))?;
+            let (number, suffix) =
+                parsed.map_err(|message| IoError::parse(file, line_no, message))?;
             if framed == Some(false) {
                 return Err(IoError::parse(
                     file,
@@ -750,7 +768,9 @@ fn check_frame_count(
             ),
         ));
     }
-    warnings.push(format!("{file} line {start_line}: {message}; keeping the frames found"));
+    warnings.push(format!(
+        "{file} line {start_line}: {message}; keeping the frames found"
+    ));
     Ok(())
 }
 
@@ -785,7 +805,14 @@ pub fn write_tekscan<W: Write + ?Sized>(recording: &Recording, w: &mut W) -> std
     let meta = &recording.meta;
     let grid = recording.grid();
     let info = recording.frame_info();
-    let mut written: Vec<&str> = vec!["DATA_TYPE", "ROWS", "COLS", "START_FRAME", "END_FRAME", "ASCII_DATA"];
+    let mut written: Vec<&str> = vec![
+        "DATA_TYPE",
+        "ROWS",
+        "COLS",
+        "START_FRAME",
+        "END_FRAME",
+        "ASCII_DATA",
+    ];
     let mut buf: Vec<u8> = Vec::with_capacity(256);
 
     buf.extend_from_slice(b"DATA_TYPE MOVIE\n");
@@ -917,7 +944,9 @@ fn validate_for_tekscan(recording: &Recording) -> std::io::Result<()> {
         if let Some(v) = value
             && !(v.is_finite() && v > 0.0)
         {
-            return Err(invalid(format!("{what} must be a positive length, got {v} mm")));
+            return Err(invalid(format!(
+                "{what} must be a positive length, got {v} mm"
+            )));
         }
     }
     for (what, value) in [
@@ -950,7 +979,10 @@ fn validate_for_tekscan(recording: &Recording) -> std::io::Result<()> {
                 "header key {key:?} must start with a non-blank character"
             )));
         }
-        if token.trim_end_matches(':').eq_ignore_ascii_case("ASCII_DATA") {
+        if token
+            .trim_end_matches(':')
+            .eq_ignore_ascii_case("ASCII_DATA")
+        {
             return Err(invalid(format!(
                 "header entry {key:?} would end the header early"
             )));
@@ -968,4 +1000,523 @@ fn validate_for_tekscan(recording: &Recording) -> std::io::Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn strict(text: &str) -> Result<Parsed, IoError> {
+        parse_tekscan(text, "t.asf", &ReadOptions::default())
+    }
+
+    fn lenient(text: &str) -> Result<Parsed, IoError> {
+        parse_tekscan(text, "t.asf", &ReadOptions::lenient())
+    }
+
+    /// The error message of a strict parse that must fail.
+    fn fails(text: &str) -> (Option<usize>, String) {
+        match strict(text) {
+            Ok(parsed) => panic!("expected an error, read {:?}", parsed.recording),
+            Err(err) => (err.line(), err.to_string()),
+        }
+    }
+
+    const HEAD_2X3: &str =
+        "DATA_TYPE MOVIE\nROWS 2\nCOLS 3\nSTART_FRAME 1\nEND_FRAME 2\nASCII_DATA @@\n\n";
+
+    fn movie_2x3() -> String {
+        format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\n\nFrame 2\n7,8,9\n10,11,12\n@@\n")
+    }
+
+    #[test]
+    fn minimal_movie() {
+        let parsed = strict(&movie_2x3()).unwrap();
+        assert!(parsed.warnings.is_empty(), "{:?}", parsed.warnings);
+        let rec = parsed.recording;
+        assert_eq!(rec.grid(), Grid::new(2, 3));
+        assert_eq!(rec.frame_count(), 2);
+        assert_eq!(
+            rec.data(),
+            (1..=12).map(f64::from).collect::<Vec<_>>().as_slice()
+        );
+        assert_eq!(rec.frame_period_s(), None);
+        assert!(rec.present().is_none());
+        assert!(rec.meta.extra.is_empty(), "{:?}", rec.meta.extra);
+    }
+
+    #[test]
+    fn full_header_typed_and_extra_fields() {
+        let text = "DATA_TYPE MOVIE\r\nVERSION Tekscan 7.0\r\nSENSOR_TYPE 5051\r\nROWS 1\r\nCOLS 2\r\n\
+            ROW_SPACING 0.05 inches\r\nCOL_SPACING 0.127 cm\r\nSENSEL_AREA 0.0025 in2\r\nNOISE_THRESHOLD 3\r\n\
+            SECONDS_PER_FRAME 0.01\r\nSATURATION_PRESSURE 20 PSI \r\nCOMMENTS:\r\nWALK on bricks, take 2\r\n\
+            CALIBRATION_POINT_1 75.0001 (Kgs) 4798 (Raw Sum) 240 (Number of Loaded Cells)\r\nUNITS KPa\r\n\
+            START_FRAME 7\r\nEND_FRAME 7\r\nASCII_DATA @@\r\n\r\nFrame 7\r\n1.5,2.25\r\n@@\r\n";
+        let parsed = strict(text).unwrap();
+        assert!(parsed.warnings.is_empty(), "{:?}", parsed.warnings);
+        let rec = parsed.recording;
+        let meta = &rec.meta;
+        assert_eq!(meta.sensor.as_deref(), Some("5051"));
+        assert!((meta.row_pitch_mm.unwrap() - 1.27).abs() < 1e-12);
+        assert!((meta.col_pitch_mm.unwrap() - 1.27).abs() < 1e-12);
+        assert_eq!(meta.units, PressureUnit::KPa);
+        assert_eq!(meta.noise_threshold, Some(3.0));
+        assert!((meta.full_scale.unwrap() - 137.895_145_863_36).abs() < 1e-6);
+        assert_eq!(rec.frame_period_s(), Some(0.01));
+        assert_eq!(rec.frame_info()[0].number, 7);
+        assert_eq!(rec.data(), &[1.5, 2.25]);
+        let extra: Vec<(&str, &str)> = meta
+            .extra
+            .iter()
+            .map(|(k, v)| (k.as_str(), v.as_str()))
+            .collect();
+        assert_eq!(
+            extra,
+            vec![
+                ("VERSION", "Tekscan 7.0"),
+                ("SENSEL_AREA", "0.0025 in2"),
+                ("COMMENTS:", ""),
+                // The line after `COMMENTS:` is free text even though it starts like a key.
+                ("WALK on bricks, take 2", ""),
+                (
+                    "CALIBRATION_POINT_1",
+                    "75.0001 (Kgs) 4798 (Raw Sum) 240 (Number of Loaded Cells)"
+                ),
+            ]
+        );
+    }
+
+    #[test]
+    fn raw_units_keep_saturation_pressure_verbatim_in_place() {
+        let text = "ROWS 1\nCOLS 1\nVERSION x\nSATURATION_PRESSURE 1514.73 KPa\nMAP_VERSION 6.5\nUNITS raw\n\
+                    ASCII_DATA @@\nFrame 1\n3\n";
+        let rec = strict(text).unwrap().recording;
+        assert_eq!(rec.meta.full_scale, None);
+        assert_eq!(
+            rec.meta.extra[1],
+            ("SATURATION_PRESSURE".to_owned(), "1514.73 KPa".to_owned())
+        );
+        assert_eq!(rec.meta.extra[2].0, "MAP_VERSION");
+    }
+
+    #[test]
+    fn unknown_typed_values_kept_with_warnings() {
+        let text = "ROWS 1\nCOLS 1\nROW_SPACING 5 furlongs\nSECONDS_PER_FRAME 0\nNOISE_THRESHOLD low\n\
+                    SENSOR_TYPE A\nSENSOR_TYPE B\nASCII_DATA @@\n4\n";
+        let parsed = strict(text).unwrap();
+        let rec = &parsed.recording;
+        assert_eq!(rec.meta.row_pitch_mm, None);
+        assert_eq!(rec.frame_period_s(), None);
+        assert_eq!(rec.meta.noise_threshold, None);
+        assert_eq!(rec.meta.sensor.as_deref(), Some("A"));
+        assert_eq!(rec.meta.extra.len(), 3);
+        assert_eq!(
+            rec.meta.extra[0],
+            ("ROW_SPACING".into(), "5 furlongs".into())
+        );
+        assert_eq!(parsed.warnings.len(), 4, "{:?}", parsed.warnings);
+        assert!(
+            parsed.warnings[0].starts_with("t.asf line 3: ROW_SPACING"),
+            "{:?}",
+            parsed.warnings
+        );
+        assert!(parsed.warnings[3].contains("line 7") && parsed.warnings[3].contains("line 6"));
+    }
+
+    #[test]
+    fn snapshot_without_frame_lines_trailing_commas_and_comma_lines() {
+        let text = "DATA_TYPE STATIC\r\nROWS 2\r\nCOLS 3\r\nASCII_DATA @@\r\n,,,\r\n1,2,3,\r\n,,,\r\n4,B,6,\r\n,,,\r\n";
+        let rec = strict(text).unwrap().recording;
+        assert_eq!(rec.frame_count(), 1);
+        assert_eq!(
+            rec.frame_info()[0],
+            FrameInfo {
+                number: 1,
+                suffix: None
+            }
+        );
+        assert_eq!(rec.data(), &[1.0, 2.0, 3.0, 4.0, 0.0, 6.0]);
+        assert_eq!(
+            rec.present(),
+            Some(&[true, true, true, true, false, true][..])
+        );
+        // Several snapshots back to back are cut into frames of ROWS rows, numbered from START_FRAME.
+        let text = "ROWS 1\nCOLS 2\nSTART_FRAME 5\nASCII_DATA\n1 2\n3 4\n5 6\n";
+        let rec = strict(text).unwrap().recording;
+        assert_eq!(rec.frame_count(), 3);
+        assert_eq!(rec.frame_info()[2].number, 7);
+        assert_eq!(rec.data(), &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    }
+
+    #[test]
+    fn frame_suffix_negative_numbers_and_missing_ascii_data() {
+        let text = "ROWS 1\nCOLS 1\nFrame -2, timestamp 728\n0\nframe 3\n1\n";
+        let rec = strict(text).unwrap().recording;
+        assert_eq!(
+            rec.frame_info(),
+            &[
+                FrameInfo {
+                    number: -2,
+                    suffix: Some(", timestamp 728".into())
+                },
+                FrameInfo {
+                    number: 3,
+                    suffix: None
+                }
+            ]
+        );
+        // But with ASCII_DATA present, a `Frame ...` comment in the header stays a comment.
+        let text = "ROWS 1\nCOLS 1\nFrame 3 was bad\nASCII_DATA @@\nFrame 1\n5\n";
+        let rec = strict(text).unwrap().recording;
+        assert_eq!(
+            rec.meta.extra,
+            vec![("Frame 3 was bad".to_owned(), String::new())]
+        );
+        assert_eq!(rec.data(), &[5.0]);
+    }
+
+    #[test]
+    fn wrong_column_count_names_line_frame_row_and_cols() {
+        let text =
+            format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\nFrame 2\n7,8,9\n10,11\n12,13,14\n@@\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(13));
+        assert_eq!(
+            msg,
+            "t.asf line 13: frame 2 has 2 values in row 2, expected 3 (COLS)"
+        );
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3,4\n4,5,6\n");
+        assert_eq!(
+            fails(&text).1,
+            "t.asf line 9: frame 1 has 4 values in row 1, expected 3 (COLS)"
+        );
+    }
+
+    #[test]
+    fn too_many_and_too_few_rows() {
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\n7,8,9\nFrame 2\n1,2,3\n4,5,6\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(11));
+        assert!(
+            msg.contains("frame 1 (from line 8) already has 2 rows (ROWS)"),
+            "{msg}"
+        );
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\nFrame 2\n1,2,3\n4,5,6\n@@\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(10));
+        assert!(
+            msg.contains("frame 1 (from line 8) has 1 rows, expected 2 (ROWS)"),
+            "{msg}"
+        );
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\nFrame 2\n1,2,3\n@@\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(13));
+        assert!(
+            msg.contains("has 1 rows, expected 2 (ROWS) before the `@@` terminator"),
+            "{msg}"
+        );
+        // A short frame before `@@` is malformed, not truncated: lenient reading does not excuse it.
+        assert!(lenient(&text).is_err());
+    }
+
+    #[test]
+    fn truncated_last_frame_strict_and_lenient() {
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\n\nFrame 2\n7,8,9\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(13));
+        assert!(
+            msg.contains(
+                "frame 2 (from line 12) is truncated: the file ends after 1 of 2 rows (ROWS)"
+            ),
+            "{msg}"
+        );
+        assert!(msg.contains("leniently"), "{msg}");
+        let parsed = lenient(&text).unwrap();
+        assert_eq!(parsed.recording.frame_count(), 1);
+        assert_eq!(parsed.recording.data(), &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
+        assert!(parsed.warnings[0].contains("frame 2") && parsed.warnings[0].contains("dropped"));
+
+        // Cut in the middle of a row (no final newline).
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\nFrame 2\n7,8,9\n10,1");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(13));
+        assert!(
+            msg.contains("frame 2 is truncated: its row 2 has 2 of 3 values (COLS)"),
+            "{msg}"
+        );
+        let parsed = lenient(&text).unwrap();
+        assert_eq!(parsed.recording.frame_count(), 1);
+        assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
+
+        // Cut right after a `Frame` line.
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\nFrame 2\n");
+        assert!(fails(&text).1.contains("ends after 0 of 2 rows"));
+        assert_eq!(lenient(&text).unwrap().recording.frame_count(), 1);
+
+        // Only a truncated frame: nothing to return even leniently.
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n");
+        let msg = lenient(&text).unwrap_err().to_string();
+        assert!(msg.contains("only a truncated frame"), "{msg}");
+    }
+
+    #[test]
+    fn frame_count_against_start_end_frame() {
+        // Cut exactly at a frame boundary: END_FRAME reveals it.
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(4));
+        assert!(
+            msg.contains("announce 2 frames, the file holds 1") && msg.contains("truncated"),
+            "{msg}"
+        );
+        let parsed = lenient(&text).unwrap();
+        assert_eq!(parsed.recording.frame_count(), 1);
+        assert_eq!(parsed.warnings.len(), 1);
+        // With the terminator the file is complete as written: a warning only.
+        let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\n@@\n");
+        let parsed = strict(&text).unwrap();
+        assert_eq!(parsed.warnings.len(), 1);
+        assert!(parsed.warnings[0].contains("keeping the frames found"));
+        // More frames than announced: a warning.
+        let text = format!(
+            "{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\nFrame 2\n1,2,3\n4,5,6\nFrame 3\n1,2,3\n4,5,6\n"
+        );
+        let parsed = strict(&text).unwrap();
+        assert_eq!(parsed.recording.frame_count(), 3);
+        assert_eq!(parsed.warnings.len(), 1);
+    }
+
+    #[test]
+    fn bad_cells() {
+        let cases = [
+            (
+                "1,x,3",
+                "frame 1 row 1 column 2: expected a number or `B` (no sensel), found `x`",
+            ),
+            (
+                "1,NaN,3",
+                "frame 1 row 1 column 2: expected a finite number, found `NaN`",
+            ),
+            (
+                "1,2,inf",
+                "frame 1 row 1 column 3: expected a finite number, found `inf`",
+            ),
+            (
+                "1,,3",
+                "frame 1 row 1 column 2 is empty; expected a number or `B` (no sensel)",
+            ),
+        ];
+        for (row, expected) in cases {
+            let text = format!("{HEAD_2X3}Frame 1\n{row}\n4,5,6\n@@\n");
+            assert_eq!(fails(&text).1, format!("t.asf line 9: {expected}"));
+        }
+    }
+
+    #[test]
+    fn mask_must_match_across_frames() {
+        let text = format!("{HEAD_2X3}Frame 1\nB,2,3\n4,5,6\nFrame 2\nB,2,3\n4,B,6\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(13));
+        assert!(
+            msg.contains("frame 2 row 2 column 2 is `B` (no sensel) but frame 1 has a value there"),
+            "{msg}"
+        );
+        let text = format!("{HEAD_2X3}Frame 1\nB,2,3\n4,5,6\nFrame 2\n1,2,3\n4,5,6\n");
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(12));
+        assert!(
+            msg.contains("frame 2 row 1 column 1 holds a value but frame 1 has `B`"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn header_errors() {
+        let (line, msg) = fails("DATA_TYPE MOVIE\nCOLS 3\nASCII_DATA @@\n1,2,3\n");
+        assert_eq!(line, Some(3));
+        assert!(msg.contains("no ROWS line"), "{msg}");
+        let msg = fails("DATA_TYPE MOVIE\nASCII_DATA @@\n1,2,3\n").1;
+        assert!(msg.contains("no ROWS or COLS line"), "{msg}");
+        let (line, msg) = fails("ROWS 4.5\nCOLS 3\nASCII_DATA @@\n1,2,3\n");
+        assert_eq!(line, Some(1));
+        assert!(
+            msg.contains("ROWS: expected a positive whole number, found `4.5`"),
+            "{msg}"
+        );
+        assert!(
+            fails("ROWS 0\nCOLS 3\nASCII_DATA\n")
+                .1
+                .contains("found `0`")
+        );
+        assert!(fails("ROWS\nCOLS 3\nASCII_DATA\n").1.contains("found ``"));
+        let (line, msg) = fails("ROWS 2\nCOLS 3\nROWS 3\nASCII_DATA\n");
+        assert_eq!(line, Some(3));
+        assert!(msg.contains("ROWS 3 contradicts ROWS 2 on line 1"), "{msg}");
+        let msg = fails("ROWS 2\nCOLS 3\nSTART_FRAME one\nASCII_DATA\n").1;
+        assert!(
+            msg.contains("line 3: START_FRAME: expected a whole frame number"),
+            "{msg}"
+        );
+        let (line, msg) = fails("DATA_TYPE MOVIE\nROWS 2\nCOLS 3\n");
+        assert_eq!(line, Some(3));
+        assert!(msg.contains("expected an `ASCII_DATA` line"), "{msg}");
+        let msg = fails("1,2,3\n4,5,6\n").1;
+        assert!(msg.contains("ASCII_DATA"), "{msg}");
+    }
+
+    #[test]
+    fn empty_inputs() {
+        for text in ["", "\r\n\n  \n", ",,,\n"] {
+            let err = strict(text).unwrap_err();
+            assert_eq!(err.line(), None);
+            assert!(err.to_string().starts_with("t.asf: empty file"), "{err}");
+        }
+        let (line, msg) = fails("ROWS 2\nCOLS 2\nASCII_DATA @@\n\n@@\n");
+        assert_eq!(line, Some(5));
+        assert!(msg.contains("expected frame data (2 rows of 2 values) after the header ending on line 3, found none"), "{msg}");
+    }
+
+    #[test]
+    fn huge_header_dimensions_do_not_allocate() {
+        // Would be 80 GB if allocated from the header.
+        let text = "ROWS 100000\nCOLS 100000\nSTART_FRAME 1\nEND_FRAME 1000000\nASCII_DATA @@\nFrame 1\n1,2,3\n";
+        let msg = fails(text).1;
+        assert!(
+            msg.contains("frame 1 is truncated: its row 1 has 3 of 100000 values"),
+            "{msg}"
+        );
+        let text = "ROWS 100000\nCOLS 100000\nASCII_DATA @@\n";
+        assert!(fails(text).1.contains("found none"));
+        let text = format!("ROWS {}\nCOLS 4\nASCII_DATA @@\n", usize::MAX);
+        assert!(fails(&text).1.contains("too large"));
+    }
+
+    #[test]
+    fn content_after_terminator_and_mixed_framing() {
+        let text = format!("{}junk\n", movie_2x3());
+        let (line, msg) = fails(&text);
+        assert_eq!(line, Some(16));
+        assert!(
+            msg.contains("expected nothing after the `@@` terminator on line 15, found `junk`"),
+            "{msg}"
+        );
+        let text = "ROWS 1\nCOLS 1\nASCII_DATA\n5\nFrame 2\n6\n";
+        let (line, msg) = fails(text);
+        assert_eq!(line, Some(5));
+        assert!(
+            msg.contains("`Frame` line after frame data that had none"),
+            "{msg}"
+        );
+        let (line, msg) = fails("ROWS 1\nCOLS 1\nASCII_DATA\nFrame x\n5\n");
+        assert_eq!(line, Some(4));
+        assert!(
+            msg.contains("expected a frame number after `Frame`, found `x`"),
+            "{msg}"
+        );
+    }
+
+    fn sample_recording() -> Recording {
+        let grid = Grid::new(2, 3);
+        let meta = SensorMeta {
+            sensor: Some("5051".into()),
+            row_pitch_mm: Some(1.27),
+            col_pitch_mm: Some(0.635),
+            units: PressureUnit::KPa,
+            full_scale: Some(137.9),
+            noise_threshold: Some(3.0),
+            extra: vec![
+                ("VERSION".into(), "presrs 0.1".into()),
+                ("COMMENTS:".into(), String::new()),
+                ("walk 3, wood".into(), String::new()),
+                ("ROWS".into(), "99".into()),
+            ],
+        };
+        let info = vec![
+            FrameInfo {
+                number: 10,
+                suffix: Some(", timestamp 728".into()),
+            },
+            FrameInfo {
+                number: 11,
+                suffix: None,
+            },
+        ];
+        let data = vec![
+            0.0, 1.5, -2.0, 1e-7, 255.0, 3.25, 0.1, 0.2, 0.3, 7.0, 8.0, 9.0,
+        ];
+        Recording::with_info(
+            grid,
+            Some(0.01),
+            data,
+            Some(vec![false, true, true, true, true, true]),
+            info,
+            meta,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn writer_output_layout() {
+        let rec = sample_recording();
+        let mut out = Vec::new();
+        write_tekscan(&rec, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let expected = "DATA_TYPE MOVIE\nROWS 2\nCOLS 3\nROW_SPACING 1.27 mm\nCOL_SPACING 0.635 mm\n\
+            SENSOR_TYPE 5051\nSECONDS_PER_FRAME 0.01\nUNITS KPa\nNOISE_THRESHOLD 3\n\
+            SATURATION_PRESSURE 137.9 KPa\nSTART_FRAME 10\nEND_FRAME 11\nVERSION presrs 0.1\nCOMMENTS:\n\
+            walk 3, wood\nASCII_DATA @@\n\nFrame 10, timestamp 728\nB,1.5,-2\n0.0000001,255,3.25\n\n\
+            Frame 11\nB,0.2,0.3\n7,8,9\n@@\n";
+        assert_eq!(text, expected);
+        let back = strict(&text).unwrap();
+        assert!(back.warnings.is_empty(), "{:?}", back.warnings);
+        let mut want = rec.clone();
+        // The stray `ROWS` entry of `extra` is structural and not written.
+        want.meta.extra.pop();
+        assert_eq!(back.recording, want);
+    }
+
+    #[test]
+    fn writer_rejects_what_cannot_be_read_back() {
+        let grid = Grid::new(1, 2);
+        let nan =
+            Recording::new(grid, None, vec![1.0, f64::NAN], None, SensorMeta::default()).unwrap();
+        let err = write_tekscan(&nan, &mut Vec::new()).unwrap_err();
+        assert!(err.to_string().contains("row 1 column 2 is NaN"), "{err}");
+        let empty = Recording::new(grid, None, vec![], None, SensorMeta::default()).unwrap();
+        assert!(write_tekscan(&empty, &mut Vec::new()).is_err());
+        let bad_suffix = Recording::with_info(
+            grid,
+            None,
+            vec![1.0, 2.0],
+            None,
+            vec![FrameInfo {
+                number: 1,
+                suffix: Some("2 x".into()),
+            }],
+            SensorMeta::default(),
+        )
+        .unwrap();
+        assert!(write_tekscan(&bad_suffix, &mut Vec::new()).is_err());
+        let mut newline =
+            Recording::new(grid, None, vec![1.0, 2.0], None, SensorMeta::default()).unwrap();
+        newline.meta.extra.push(("NOTE".into(), "a\nb".into()));
+        assert!(write_tekscan(&newline, &mut Vec::new()).is_err());
+        newline.meta.extra[0] = ("ASCII_DATA".into(), String::new());
+        assert!(write_tekscan(&newline, &mut Vec::new()).is_err());
+    }
+
+    #[test]
+    fn file_round_trip_is_atomic_and_exact() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("movie.asf");
+        let mut rec = sample_recording();
+        rec.meta.extra.pop();
+        write_tekscan_file(&rec, &path).unwrap();
+        assert_eq!(read_tekscan(&path).unwrap(), rec);
+        let err = read_tekscan(&dir.path().join("missing.asf")).unwrap_err();
+        assert!(
+            err.to_string().starts_with("cannot read ") && err.to_string().contains("missing.asf")
+        );
+    }
 }

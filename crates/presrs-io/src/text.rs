@@ -37,7 +37,11 @@ pub fn parse_text_matrix(text: &str, source_name: &str) -> Result<Recording, IoE
             IoError::parse(
                 file,
                 line_no,
-                format!("value {} of row {} is empty; expected a number", at + 1, rows + 1),
+                format!(
+                    "value {} of row {} is empty; expected a number",
+                    at + 1,
+                    rows + 1
+                ),
             )
         })?;
         match width {
@@ -131,13 +135,24 @@ mod tests {
 
     #[test]
     fn bad_values_and_empty() {
-        let err = parse_text_matrix("1 2\n3 x\n", "b.txt").unwrap_err().to_string();
-        assert_eq!(err, "b.txt line 2: row 2 column 2: expected a number, found `x`");
-        let err = parse_text_matrix("1 nan\n", "n.txt").unwrap_err().to_string();
+        let err = parse_text_matrix("1 2\n3 x\n", "b.txt")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "b.txt line 2: row 2 column 2: expected a number, found `x`"
+        );
+        let err = parse_text_matrix("1 nan\n", "n.txt")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("line 1") && err.contains("finite"), "{err}");
-        let err = parse_text_matrix("1,,2\n", "e.txt").unwrap_err().to_string();
+        let err = parse_text_matrix("1,,2\n", "e.txt")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("line 1") && err.contains("value 2"), "{err}");
-        let err = parse_text_matrix("# only a comment\n\n", "z.txt").unwrap_err().to_string();
+        let err = parse_text_matrix("# only a comment\n\n", "z.txt")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("z.txt") && err.contains("no data"), "{err}");
     }
 }

@@ -29,7 +29,11 @@ pub(crate) fn numbered_lines(text: &str) -> Vec<(usize, &str)> {
             }
             b'\r' => {
                 lines.push(&text[start..i]);
-                i += if bytes.get(i + 1) == Some(&b'\n') { 2 } else { 1 };
+                i += if bytes.get(i + 1) == Some(&b'\n') {
+                    2
+                } else {
+                    1
+                };
                 start = i;
             }
             _ => i += 1,
@@ -119,7 +123,11 @@ const EXACT_INT_LIMIT: f64 = 9_007_199_254_740_992.0;
 pub(crate) fn push_number(buf: &mut Vec<u8>, value: f64) {
     use std::io::Write;
     if value == 0.0 {
-        buf.extend_from_slice(if value.is_sign_negative() { b"-0" } else { b"0" });
+        buf.extend_from_slice(if value.is_sign_negative() {
+            b"-0"
+        } else {
+            b"0"
+        });
     } else if value.fract() == 0.0 && value.abs() < EXACT_INT_LIMIT {
         // `as` is exact here: the value is integral and within i64 range.
         push_int(buf, value as i64);
