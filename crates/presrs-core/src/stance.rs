@@ -18,8 +18,9 @@
 //!    above the baseline (so that a noiseless sensor, which reads exactly zero in swing, still needs real
 //!    load). Stance boundaries therefore come from the low level (touchdown is the first frame with real
 //!    load, not the first *heavily* loaded one) while detection is decided by the high one.
-//! 3. **Clean-up.** Loaded runs separated by at most [`SegmentParams::max_gap_frames`] unloaded frames are
-//!    merged (a sensor dropout of a frame or two inside a stance), then runs shorter than
+//! 3. **Clean-up.** Runs that are both shorter than the minimum stance and never reach the on level are
+//!    noise and dropped. The remaining loaded runs separated by at most [`SegmentParams::max_gap_frames`]
+//!    unloaded frames are merged (a sensor dropout of a frame or two inside a stance), then runs shorter than
 //!    [`SegmentParams::min_stance_frames`] are dropped (a knock or spike is not a stance).
 //! 4. **Partial stances.** A stance that starts at the first frame or ends at the last one was cut by the
 //!    recording; its touchdown (and therefore its mid-stance frame) is unknown. It is reported with
@@ -40,8 +41,17 @@ use crate::recording::Recording;
 const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 /// Residuals further than this many noise sigmas from the baseline are not "unloaded" frames.
 const CLIP_SIGMAS: f64 = 3.0;
+/// While growing the set of unloaded frames from the low tail, frames up to this many (underestimated)
+/// noise sigmas above the median join it.
+const GROW_SIGMAS: f64 = 5.0;
 /// Sigma clipping normally converges in a handful of rounds; this bounds a (rare) oscillation.
 const MAX_CLIP_ROUNDS: usize = 32;
+/// Fewest frames the baseline is fitted to: a line through fewer is mostly noise, and a fit that passes
+/// exactly through its points reports zero noise.
+const MIN_FIT_FRAMES: usize = 5;
+/// The clipping starts from at least this many of the lowest frames: the MAD of a handful of tail values
+/// can collapse by chance and stall the growth of the unloaded set.
+const MIN_START_FRAMES: usize = 10;
 /// A block needs this many unloaded frames to get its own baseline correction (else the global one).
 const MIN_QUIET_PER_BLOCK: usize = 3;
 
@@ -355,8 +365,12 @@ pub fn segment(total_load: &[f64], params: &ValidSegmentParams) -> Result<Segmen
         });
     }
     let p = params.params();
-    let (baseline, noise) =
-        estimate_baseline(total_load, p.baseline_window_frames, p.baseline_quantile);
+    let (baseline, noise) = estimate_baseline(
+        total_load,
+        p.baseline_window_frames,
+        p.baseline_quantile,
+        p.off_fraction,
+    );
     let above: Vec<f64> = total_load
         .iter()
         .zip(&baseline)
@@ -394,7 +408,12 @@ pub fn segment(total_load: &[f64], params: &ValidSegmentParams) -> Result<Segmen
         runs.push((start, above.len()));
     }
 
-    // Bridge short dropouts.
+    // Bridge short dropouts. A run that is both short and weak (never above the on level) is dropped
+    // first rather than bridged: it is far more likely a noise excursion just beside a stance, which
+    // would otherwise lengthen the stance by the gap, than the tail of a stance after a dropout.
+    let reaches_on =
+        |&(start, end): &(usize, usize)| above[start..end].iter().any(|&v| v > on_level);
+    runs.retain(|run| run.1 - run.0 >= p.min_stance_frames || reaches_on(run));
     let mut merged: Vec<(usize, usize)> = Vec::with_capacity(runs.len());
     for run in runs {
         match merged.last_mut() {
@@ -406,7 +425,7 @@ pub fn segment(total_load: &[f64], params: &ValidSegmentParams) -> Result<Segmen
     let n = total_load.len();
     for (start, end) in merged {
         let len = end - start;
-        if len < p.min_stance_frames || !above[start..end].iter().any(|&v| v > on_level) {
+        if len < p.min_stance_frames || !reaches_on(&(start, end)) {
             continue;
         }
         let mut peak_frame = start;
@@ -435,7 +454,12 @@ pub fn segment_recording(
 }
 
 /// Per-frame baseline and the baseline noise sigma (see the module docs). `values` must be finite.
-fn estimate_baseline(values: &[f64], window: usize, quantile_level: f64) -> (Vec<f64>, f64) {
+fn estimate_baseline(
+    values: &[f64],
+    window: usize,
+    quantile_level: f64,
+    off_fraction: f64,
+) -> (Vec<f64>, f64) {
     let n = values.len();
     if n == 0 {
         return (Vec::new(), 0.0);
@@ -445,11 +469,7 @@ fn estimate_baseline(values: &[f64], window: usize, quantile_level: f64) -> (Vec
     let bounds: Vec<(usize, usize)> = (0..blocks)
         .map(|b| (b * n / blocks, (b + 1) * n / blocks))
         .collect();
-    let centres: Vec<f64> = bounds
-        .iter()
-        .map(|&(start, end)| (start + end - 1) as f64 / 2.0)
-        .collect();
-    let mut scratch = Vec::with_capacity(n.min(2 * window));
+    let mut scratch = Vec::with_capacity(n);
     let levels: Vec<f64> = bounds
         .iter()
         .map(|&(start, end)| {
@@ -458,58 +478,164 @@ fn estimate_baseline(values: &[f64], window: usize, quantile_level: f64) -> (Vec
             quantile(&mut scratch, quantile_level)
         })
         .collect();
-    let coarse = interpolate(&centres, &levels, n);
-    let residual: Vec<f64> = values.iter().zip(&coarse).map(|(v, c)| v - c).collect();
-
-    // Sigma clipping from the low tail upwards: the unloaded frames are the cluster at the bottom.
-    let mut scratch = residual.clone();
-    let start_cut = quantile(&mut scratch, quantile_level);
-    let mut quiet: Vec<bool> = residual.iter().map(|&r| r <= start_cut).collect();
-    let (mut centre, mut sigma) = (0.0, 0.0);
-    for _ in 0..MAX_CLIP_ROUNDS {
-        scratch.clear();
-        scratch.extend(
-            residual
-                .iter()
-                .zip(&quiet)
-                .filter(|&(_, &q)| q)
-                .map(|(r, _)| *r),
-        );
-        if scratch.is_empty() {
-            break;
-        }
-        (centre, sigma) = median_and_sigma(&mut scratch);
-        let next: Vec<bool> = residual
+    let fit = BaselineFit {
+        values,
+        centres: bounds
             .iter()
-            .map(|&r| (r - centre).abs() <= CLIP_SIGMAS * sigma)
-            .collect();
-        if next == quiet || !next.contains(&true) {
-            break;
-        }
-        quiet = next;
-    }
+            .map(|&(start, end)| (start + end - 1) as f64 / 2.0)
+            .collect(),
+        coarse: Vec::new(),
+        levels,
+        bounds,
+    };
+    let fit = BaselineFit {
+        coarse: interpolate(&fit.centres, &fit.levels, n),
+        ..fit
+    };
 
-    // Correct each block's level by the median residual of its unloaded frames.
-    let knots: Vec<f64> = bounds
-        .iter()
-        .zip(&levels)
-        .map(|(&(start, end), &level)| {
+    // Sigma clipping from the low tail upwards, refitting the baseline to the unloaded frames each round:
+    // the unloaded frames are the cluster at the bottom once the baseline's drift is removed.
+    let mut residual: Vec<f64> = values.iter().zip(&fit.coarse).map(|(v, c)| v - c).collect();
+    // Start from the lowest `baseline_quantile` of the frames, but from enough of them that a median, a MAD
+    // and a line fitted to them mean something (two points fit a line exactly, with zero "noise").
+    scratch.clone_from(&residual);
+    scratch.sort_unstable_by(f64::total_cmp);
+    let start_count = ((quantile_level * n as f64).ceil() as usize).max(MIN_START_FRAMES);
+    let start_cut = scratch[start_count.min(n) - 1];
+    let mut quiet: Vec<bool> = residual.iter().map(|&r| r <= start_cut).collect();
+    // Rounding noise of an exactly linear baseline must not count as structure.
+    let floor = 1e-12 * values.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
+    let mut baseline = fit.coarse.clone();
+    let mut sigma = 0.0;
+    // Two phases. Growing: a low tail's MAD underestimates the noise (the tail is narrower than the
+    // cluster), so a symmetric 3-sigma clip can stall at the bottom; instead every frame below
+    // median + GROW_SIGMAS x sigma (or below the off level) joins the set (nothing real lies below the
+    // baseline), and the set only grows. Refining: the usual symmetric 3-sigma clip around the median, which drops the stance edges the
+    // generous growth let in.
+    for grow in [true, false] {
+        for _ in 0..MAX_CLIP_ROUNDS {
+            baseline = fit.refit(&quiet, &mut scratch);
+            for ((r, v), b) in residual.iter_mut().zip(values).zip(&baseline) {
+                *r = v - b;
+            }
             scratch.clear();
             scratch.extend(
-                (start..end)
-                    .filter(|&frame| quiet[frame])
-                    .map(|frame| residual[frame]),
+                residual
+                    .iter()
+                    .zip(&quiet)
+                    .filter(|&(_, &q)| q)
+                    .map(|(r, _)| *r),
             );
-            if scratch.len() >= MIN_QUIET_PER_BLOCK {
-                level + quantile(&mut scratch, 0.5)
-            } else {
-                level + centre
+            if scratch.is_empty() {
+                break;
             }
-        })
-        .collect();
-    // The coarse baseline's interpolation differs from the final one only by the per-block offsets, so the
-    // final baseline is the interpolation of the corrected knots.
-    (interpolate(&centres, &knots, n), sigma)
+            let centre;
+            (centre, sigma) = median_and_sigma(&mut scratch);
+            let next: Vec<bool> = if grow {
+                // Anything below the off level is unloaded by definition, whatever the noise estimate:
+                // this lets the set grow across a drift much larger than the noise.
+                let range = residual.iter().fold(0.0, |m: f64, &r| m.max(r - centre));
+                let limit = centre + (GROW_SIGMAS * sigma.max(floor)).max(off_fraction * range);
+                residual
+                    .iter()
+                    .zip(&quiet)
+                    .map(|(&r, &q)| q || r <= limit)
+                    .collect()
+            } else {
+                let width = CLIP_SIGMAS * sigma.max(floor);
+                residual
+                    .iter()
+                    .map(|&r| (r - centre).abs() <= width)
+                    .collect()
+            };
+            if next == quiet || !next.contains(&true) {
+                break;
+            }
+            quiet = next;
+        }
+    }
+    (baseline, sigma)
+}
+
+/// The pieces of a baseline estimate: blocks, their centres and low-quantile levels, and the coarse
+/// baseline interpolated through those levels.
+struct BaselineFit<'a> {
+    values: &'a [f64],
+    bounds: Vec<(usize, usize)>,
+    centres: Vec<f64>,
+    levels: Vec<f64>,
+    coarse: Vec<f64>,
+}
+
+impl BaselineFit<'_> {
+    /// The baseline through the frames flagged `quiet` (unloaded).
+    ///
+    /// With several blocks, each block's level is corrected by the median residual of its unloaded frames
+    /// and the baseline interpolates between block centres, which follows a drift at the time scale of the
+    /// window. A recording of a single block has no second knot to follow a drift with, so there the
+    /// baseline is the least-squares line through the unloaded frames (a drift within a short recording
+    /// would otherwise tilt the residuals and stall the clipping at one end of the recording).
+    fn refit(&self, quiet: &[bool], scratch: &mut Vec<f64>) -> Vec<f64> {
+        let n = self.values.len();
+        let residual = |frame: usize| self.values[frame] - self.coarse[frame];
+        if self.bounds.len() == 1 {
+            return line_through(self.values, quiet);
+        }
+        scratch.clear();
+        scratch.extend((0..n).filter(|&t| quiet[t]).map(residual));
+        let global = quantile(scratch, 0.5);
+        let knots: Vec<f64> = self
+            .bounds
+            .iter()
+            .zip(&self.levels)
+            .map(|(&(start, end), &level)| {
+                scratch.clear();
+                scratch.extend((start..end).filter(|&t| quiet[t]).map(residual));
+                if scratch.len() >= MIN_QUIET_PER_BLOCK {
+                    level + quantile(scratch, 0.5)
+                } else {
+                    level + global
+                }
+            })
+            .collect();
+        interpolate(&self.centres, &knots, n)
+    }
+}
+
+/// The least-squares line through the points `(t, values[t])` with `use_point[t]`, evaluated at every
+/// frame; a constant (their mean) unless at least [`MIN_FIT_FRAMES`] points lie in each of the first and
+/// last thirds of the recording.
+fn line_through(values: &[f64], use_point: &[bool]) -> Vec<f64> {
+    let points = || {
+        values
+            .iter()
+            .zip(use_point)
+            .enumerate()
+            .filter(|&(_, (_, &used))| used)
+            .map(|(t, (&v, _))| (t as f64, v))
+    };
+    let count = points().count() as f64;
+    let n = values.len();
+    let early = points().filter(|&(t, _)| t < (n / 3) as f64).count();
+    let late = points().filter(|&(t, _)| t >= (n - n / 3) as f64).count();
+    if early < MIN_FIT_FRAMES || late < MIN_FIT_FRAMES {
+        // Too few points, or all at one end: a slope fitted there and extrapolated across the recording is
+        // mostly noise. A constant (the mean; 0 without points) until the set has spread.
+        let mean = points().map(|(_, v)| v).sum::<f64>() / count.max(1.0);
+        return vec![mean; n];
+    }
+    let mean_t = points().map(|(t, _)| t).sum::<f64>() / count;
+    let mean_v = points().map(|(_, v)| v).sum::<f64>() / count;
+    let (sxy, sxx) = points().fold((0.0, 0.0), |(sxy, sxx), (t, v)| {
+        (
+            sxy + (t - mean_t) * (v - mean_v),
+            sxx + (t - mean_t) * (t - mean_t),
+        )
+    });
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    (0..values.len())
+        .map(|t| mean_v + slope * (t as f64 - mean_t))
+        .collect()
 }
 
 /// Median of `values` and its robust sigma (1.4826 x MAD). Reorders `values`; must not be empty.
@@ -579,7 +705,7 @@ mod tests {
 
     #[test]
     fn baseline_of_a_constant_is_the_constant_without_noise() {
-        let (baseline, noise) = estimate_baseline(&[5.0; 300], 128, 0.1);
+        let (baseline, noise) = estimate_baseline(&[5.0; 300], 128, 0.1, 0.01);
         assert!(baseline.iter().all(|&b| (b - 5.0).abs() < 1e-12));
         assert_eq!(noise, 0.0);
     }
