@@ -4,11 +4,12 @@
 //! silent:
 //!
 //! * **Header.** Lines up to `ASCII_DATA` (found by search) are `KEY value` lines; the key is the first
-//!   token and is matched case-insensitively, with a trailing `:` ignored (`ROWS: 44` works). A line whose
-//!   first token is not an upper-case identifier (`overground walk p10`), and the line right after a bare
-//!   `KEY:` line such as `COMMENTS:` (unless it starts with a known key), is free text: it is kept in
-//!   [`SensorMeta::extra`] as the whole line with an empty value. Blank lines in the header are skipped.
-//!   If `ASCII_DATA` is missing but a `Frame N` line follows the header, the header ends there.
+//!   token, an upper-case identifier as TekScan writes them, with a trailing `:` ignored (`ROWS: 44`
+//!   works). A line whose first token is not an upper-case identifier (`overground walk p10`, `Rows 3 were
+//!   damaged`), and the line right after a bare `KEY:` line such as `COMMENTS:` (unless it is a plausible
+//!   known key line such as `ROWS 44`), is free text: it is kept in [`SensorMeta::extra`] as the whole line
+//!   with an empty value. Blank lines in the header are skipped. If the file has no `ASCII_DATA` line but
+//!   a `Frame N` line follows the header, the header ends there.
 //! * **Typed keys.** `ROWS`/`COLS` (required, positive integers) give the grid; `SENSOR_TYPE`,
 //!   `ROW_SPACING`/`COL_SPACING` (converted to mm from `mm`/`millimeters`/`cm`/`inches`/...), `UNITS`,
 //!   `NOISE_THRESHOLD`, `SECONDS_PER_FRAME` and `SATURATION_PRESSURE` (as `full_scale`, when its unit is
@@ -81,7 +82,7 @@ pub fn looks_like_tekscan(text: &str) -> bool {
     numbered_lines(text).into_iter().take(200).any(|(_, line)| {
         let token = line.split_whitespace().next().unwrap_or("");
         let key = token.trim_end_matches(':');
-        key.eq_ignore_ascii_case("ASCII_DATA") || key.eq_ignore_ascii_case("DATA_TYPE")
+        key == "ASCII_DATA" || key == "DATA_TYPE"
     })
 }
 
@@ -160,12 +161,9 @@ fn parse_header(
     let mut end = None;
     // A `Frame N` line ends the header only in files without an `ASCII_DATA` line (so that a comment such
     // as `Frame 3 was bad` in a normal header is kept as text).
-    let has_ascii_data = lines.iter().any(|(_, line)| {
-        let token = line.split_whitespace().next().unwrap_or("");
-        token
-            .trim_end_matches(':')
-            .eq_ignore_ascii_case("ASCII_DATA")
-    });
+    let has_ascii_data = lines
+        .iter()
+        .any(|(_, line)| is_ascii_data(line.split_whitespace().next().unwrap_or("")));
 
     for (index, &(line_no, raw)) in lines.iter().enumerate() {
         let line = raw.trim();
@@ -174,8 +172,8 @@ fn parse_header(
             continue;
         }
         let token = line.split_whitespace().next().unwrap_or("");
-        let key = token.trim_end_matches(':').to_ascii_uppercase();
-        if key == "ASCII_DATA" {
+        let key = token.trim_end_matches(':').to_owned();
+        if is_ascii_data(token) {
             end = Some((index + 1, line_no));
             break;
         }
@@ -183,13 +181,17 @@ fn parse_header(
             end = Some((index, line_no));
             break;
         }
-        let known = KNOWN_KEYS.contains(&key.as_str());
-        if !known && (after_label || !looks_like_key(token)) {
+        let value = line[token.len()..].trim();
+        let key_like = looks_like_key(token);
+        // After a `COMMENTS:` label, a known key counts only if its value makes sense for it.
+        let known = key_like
+            && KNOWN_KEYS.contains(&key.as_str())
+            && (!after_label || plausible_value(&key, value));
+        if !known && (after_label || !key_like) {
             meta.extra.push((line.to_owned(), String::new()));
             after_label = false;
             continue;
         }
-        let value = line[token.len()..].trim();
         after_label = token.ends_with(':') && value.is_empty();
         if !known {
             meta.extra.push((token.to_owned(), value.to_owned()));
@@ -332,6 +334,20 @@ fn parse_header(
         data_start,
         end_line,
     })
+}
+
+/// `ASCII_DATA` (or `ASCII_DATA:`), the key that ends the header.
+fn is_ascii_data(token: &str) -> bool {
+    token.trim_end_matches(':') == "ASCII_DATA"
+}
+
+/// Whether `value` parses for the keys whose malformed values are errors.
+fn plausible_value(key: &str, value: &str) -> bool {
+    match key {
+        "ROWS" | "COLS" => value.parse::<usize>().is_ok_and(|n| n > 0),
+        "START_FRAME" | "END_FRAME" => value.parse::<i64>().is_ok(),
+        _ => true,
+    }
 }
 
 /// An upper-case identifier such as `ROWS`, `CALIBRATION_POINT_1` or `COMMENTS:`.
@@ -858,9 +874,7 @@ pub fn write_tekscan<W: Write + ?Sized>(recording: &Recording, w: &mut W) -> std
     buf.push(b'\n');
     for (key, value) in &meta.extra {
         let skip = !key.contains(char::is_whitespace)
-            && written
-                .iter()
-                .any(|w| w.eq_ignore_ascii_case(key.trim_end_matches(':')));
+            && written.iter().any(|&w| w == key.trim_end_matches(':'));
         if skip {
             continue;
         }
@@ -979,10 +993,7 @@ fn validate_for_tekscan(recording: &Recording) -> std::io::Result<()> {
                 "header key {key:?} must start with a non-blank character"
             )));
         }
-        if token
-            .trim_end_matches(':')
-            .eq_ignore_ascii_case("ASCII_DATA")
-        {
+        if is_ascii_data(token) {
             return Err(invalid(format!(
                 "header entry {key:?} would end the header early"
             )));
@@ -1084,6 +1095,34 @@ mod tests {
                 ),
             ]
         );
+    }
+
+    #[test]
+    fn comments_that_look_like_keys_stay_text() {
+        let text = "ROWS 1\nCOLS 1\nRows 3 were damaged\nUnits are kPa\nCOMMENTS:\nROWS 3 damaged\n\
+                    COMMENTS:\nCOLS 1\nUNITS KPa\nascii_data was missing once\nASCII_DATA @@\nFrame 1\n3\n";
+        let parsed = strict(text).unwrap();
+        let rec = parsed.recording;
+        assert_eq!(rec.meta.units, PressureUnit::KPa);
+        let extra: Vec<(&str, &str)> = rec
+            .meta
+            .extra
+            .iter()
+            .map(|(k, v)| (k.as_str(), v.as_str()))
+            .collect();
+        assert_eq!(
+            extra,
+            vec![
+                ("Rows 3 were damaged", ""),
+                ("Units are kPa", ""),
+                ("COMMENTS:", ""),
+                ("ROWS 3 damaged", ""),
+                ("COMMENTS:", ""),
+                ("ascii_data was missing once", ""),
+            ]
+        );
+        // `COLS 1` after the second `COMMENTS:` is a plausible key line: a repeat of COLS, not text.
+        assert!(parsed.warnings.is_empty(), "{:?}", parsed.warnings);
     }
 
     #[test]
