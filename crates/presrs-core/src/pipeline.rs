@@ -1,1 +1,617 @@
 //! The trained pipeline: crop -> features -> PCA -> classifier, with training and a reusable classification session.
+//!
+//! ```text
+//! TrainConfig --check--> CheckedTrainConfig --train(train, validation)--> TrainedModel (serde)
+//! TrainedModel::session() -> Session::classify(&frame) -> Prediction { class, label, confidence, posteriors }
+//! ```
+//!
+//! Training follows the paper: features of the training images fit the PCA (`dims` components, at most
+//! `n_train - 1`), the validation images are projected with that PCA and used to choose the classifier's
+//! hyper-parameters (the Parzen σ), and the final classifier stores the reduced training *and* validation
+//! vectors. Absent (masked) sensels are read as 0. Every image, in training and afterwards, must have the
+//! same grid once cropped.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::classifier::{
+    ClassifierConfig, ClassifierModel, ClassifierScratch, LabeledVectors, SigmaPoint,
+};
+use crate::crop::Crop;
+use crate::error::{CoreError, Result};
+use crate::features::{FeatureConfig, FeatureExtractor};
+use crate::frame::{Frame, FrameView, Grid};
+use crate::pca::Pca;
+
+/// Everything training needs besides the data. `Default` is the paper's setting.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainConfig {
+    /// The region of each image that is used (applied before the features).
+    pub crop: Crop,
+    pub features: FeatureConfig,
+    /// Number of principal components kept (capped at `n_train - 1` and at the feature count).
+    pub dims: usize,
+    pub classifier: ClassifierConfig,
+}
+
+impl Default for TrainConfig {
+    /// The paper: 38 x 41 foot region of the 44 x 44 array, 1-D |FFT| with N = 2048, 51 components,
+    /// Parzen window with σ chosen on the validation set.
+    fn default() -> Self {
+        Self {
+            crop: Crop::PAPER,
+            features: FeatureConfig::default(),
+            dims: 51,
+            classifier: ClassifierConfig::default(),
+        }
+    }
+}
+
+impl TrainConfig {
+    /// Checks the parameters once; the result is what [`train`] takes.
+    pub fn check(self) -> Result<CheckedTrainConfig> {
+        if self.dims == 0 {
+            return Err(CoreError::Param {
+                name: "dims",
+                reason: "at least one principal component must be kept".into(),
+            });
+        }
+        self.features.check()?;
+        self.classifier.check()?;
+        Ok(CheckedTrainConfig(self))
+    }
+}
+
+/// A [`TrainConfig`] whose parameters have been checked ([`TrainConfig::check`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct CheckedTrainConfig(TrainConfig);
+
+impl CheckedTrainConfig {
+    pub fn config(&self) -> &TrainConfig {
+        &self.0
+    }
+
+    pub fn into_inner(self) -> TrainConfig {
+        self.0
+    }
+}
+
+impl TryFrom<TrainConfig> for CheckedTrainConfig {
+    type Error = CoreError;
+
+    fn try_from(config: TrainConfig) -> Result<Self> {
+        config.check()
+    }
+}
+
+/// A training or validation image with its class name.
+#[derive(Clone, Copy, Debug)]
+pub struct LabeledImage<'a> {
+    pub frame: FrameView<'a>,
+    pub label: &'a str,
+}
+
+impl<'a> LabeledImage<'a> {
+    pub fn new(frame: FrameView<'a>, label: &'a str) -> Self {
+        Self { frame, label }
+    }
+}
+
+/// How much data a model was trained on.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainingSummary {
+    pub config: TrainConfig,
+    /// Training and validation images per class, in class order.
+    pub train_per_class: Vec<usize>,
+    pub validation_per_class: Vec<usize>,
+}
+
+/// Everything needed to classify images: crop, feature parameters, PCA, classifier state and class names.
+/// Serialisable; loading re-checks that the parts fit together.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "ModelFields", into = "ModelFields")]
+pub struct TrainedModel {
+    fields: ModelFields,
+    /// Built once from `fields` (checked), cloned by every session.
+    extractor: FeatureExtractor,
+}
+
+/// The serialised form of [`TrainedModel`].
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFields {
+    /// Bumped when the meaning of a field changes.
+    format_version: u32,
+    crop: Crop,
+    /// The grid of the images after cropping.
+    image_grid: Grid,
+    features: FeatureConfig,
+    pca: Pca,
+    classifier: ClassifierModel,
+    class_names: Vec<String>,
+    summary: TrainingSummary,
+}
+
+const FORMAT_VERSION: u32 = 1;
+
+impl From<TrainedModel> for ModelFields {
+    fn from(model: TrainedModel) -> Self {
+        model.fields
+    }
+}
+
+impl TryFrom<ModelFields> for TrainedModel {
+    type Error = CoreError;
+
+    fn try_from(fields: ModelFields) -> Result<Self> {
+        let bad = |reason: String| CoreError::Param {
+            name: "trained model",
+            reason,
+        };
+        if fields.format_version != FORMAT_VERSION {
+            return Err(bad(format!(
+                "format version {} is not supported (this build reads {FORMAT_VERSION})",
+                fields.format_version
+            )));
+        }
+        let extractor = fields.features.extractor(fields.image_grid)?;
+        if extractor.output_len() != fields.pca.n_features() {
+            return Err(bad(format!(
+                "{} features per image but the PCA takes {}",
+                extractor.output_len(),
+                fields.pca.n_features()
+            )));
+        }
+        if fields.pca.n_components() != fields.classifier.dims() {
+            return Err(bad(format!(
+                "the PCA gives {} components but the classifier takes {}",
+                fields.pca.n_components(),
+                fields.classifier.dims()
+            )));
+        }
+        if fields.class_names.len() != fields.classifier.n_classes() {
+            return Err(bad(format!(
+                "{} class names for {} classes",
+                fields.class_names.len(),
+                fields.classifier.n_classes()
+            )));
+        }
+        Ok(Self { fields, extractor })
+    }
+}
+
+/// Trains the pipeline (see the module documentation). Classes are the distinct training labels, sorted;
+/// every validation label must be one of them.
+pub fn train(
+    train: &[LabeledImage<'_>],
+    validation: &[LabeledImage<'_>],
+    config: &CheckedTrainConfig,
+) -> Result<TrainedModel> {
+    let config = config.config();
+    let first = train
+        .first()
+        .ok_or_else(|| CoreError::NotEnoughData("no training images".into()))?;
+    let mut class_names: Vec<String> = train.iter().map(|image| image.label.to_owned()).collect();
+    class_names.sort();
+    class_names.dedup();
+    if class_names.len() < 2 {
+        return Err(CoreError::NotEnoughData(format!(
+            "training needs at least two classes, got {class_names:?}"
+        )));
+    }
+    let class_of = |image: &LabeledImage<'_>| -> Result<usize> {
+        class_names
+            .binary_search_by(|name| name.as_str().cmp(image.label))
+            .map_err(|_| CoreError::Param {
+                name: "validation label",
+                reason: format!(
+                    "{:?} is not among the training classes {class_names:?}",
+                    image.label
+                ),
+            })
+    };
+    let train_classes = train.iter().map(class_of).collect::<Result<Vec<_>>>()?;
+    let validation_classes = validation
+        .iter()
+        .map(class_of)
+        .collect::<Result<Vec<_>>>()?;
+
+    let image_grid = config.crop.output_grid(first.frame.grid())?;
+    let preprocessor = Preprocessor {
+        crop: config.crop,
+        image_grid,
+        cropped: vec![0.0; image_grid.len()],
+        extractor: config.features.extractor(image_grid)?,
+    };
+    let n_features = preprocessor.extractor.output_len();
+    let train_features = features_of(train, &preprocessor)?;
+    let validation_features = features_of(validation, &preprocessor)?;
+
+    let pca = Pca::fit(&train_features, n_features, config.dims)?;
+    let dims = pca.n_components();
+    let project_all = |features: &[f64]| -> Result<Vec<f64>> {
+        let mut reduced = vec![0.0; features.len() / n_features * dims];
+        for (x, out) in features
+            .chunks_exact(n_features)
+            .zip(reduced.chunks_exact_mut(dims))
+        {
+            pca.project_into(x, out)?;
+        }
+        Ok(reduced)
+    };
+    let train_reduced = project_all(&train_features)?;
+    let validation_reduced = project_all(&validation_features)?;
+    let classifier = config.classifier.fit(
+        LabeledVectors {
+            vectors: &train_reduced,
+            classes: &train_classes,
+        },
+        LabeledVectors {
+            vectors: &validation_reduced,
+            classes: &validation_classes,
+        },
+        class_names.len(),
+        dims,
+    )?;
+
+    let count = |classes: &[usize]| {
+        let mut counts = vec![0; class_names.len()];
+        for &class in classes {
+            counts[class] += 1;
+        }
+        counts
+    };
+    let summary = TrainingSummary {
+        config: config.clone(),
+        train_per_class: count(&train_classes),
+        validation_per_class: count(&validation_classes),
+    };
+    TrainedModel::try_from(ModelFields {
+        format_version: FORMAT_VERSION,
+        crop: config.crop,
+        image_grid,
+        features: config.features.clone(),
+        pca,
+        classifier,
+        class_names,
+        summary,
+    })
+}
+
+/// Features of many images (`n x n_features`, row-major), in parallel.
+fn features_of(images: &[LabeledImage<'_>], preprocessor: &Preprocessor) -> Result<Vec<f64>> {
+    let n_features = preprocessor.extractor.output_len();
+    let mut features = vec![0.0; images.len() * n_features];
+    features
+        .par_chunks_mut(n_features)
+        .zip(images.par_iter())
+        .enumerate()
+        .try_for_each_init(
+            || preprocessor.clone(),
+            |preprocessor, (index, (out, image))| {
+                preprocessor
+                    .features_into(&image.frame, out)
+                    .map_err(|err| match err {
+                        CoreError::Shape {
+                            what,
+                            expected,
+                            got,
+                        } => CoreError::Shape {
+                            what,
+                            expected,
+                            got: format!("{got} (image {index}, label {:?})", image.label),
+                        },
+                        other => other,
+                    })
+            },
+        )?;
+    Ok(features)
+}
+
+/// Crop + features for one image grid, with its buffers.
+#[derive(Clone, Debug)]
+struct Preprocessor {
+    crop: Crop,
+    image_grid: Grid,
+    cropped: Vec<f64>,
+    extractor: FeatureExtractor,
+}
+
+impl Preprocessor {
+    /// Crops `frame` (absent sensels read as 0) and writes its features into `out`. Does not allocate.
+    fn features_into(&mut self, frame: &FrameView<'_>, out: &mut [f64]) -> Result<()> {
+        crop_masked_into(&self.crop, self.image_grid, frame, &mut self.cropped)?;
+        self.extractor.extract_into(&self.cropped, out)
+    }
+}
+
+/// Copies the crop of `frame` into `out`, zeroing absent sensels; the crop must give `expected`.
+fn crop_masked_into(
+    crop: &Crop,
+    expected: Grid,
+    frame: &FrameView<'_>,
+    out: &mut [f64],
+) -> Result<()> {
+    let (row0, col0, grid) = crop.window(frame.grid())?;
+    if grid != expected {
+        return Err(CoreError::Shape {
+            what: "image",
+            expected: format!("{expected} sensels after the crop {crop}"),
+            got: format!("{grid} (from a {} image)", frame.grid()),
+        });
+    }
+    let in_cols = frame.grid().cols;
+    let values = frame.values();
+    let mask = frame.present();
+    for (r, dst) in out.chunks_exact_mut(grid.cols).enumerate() {
+        let start = (row0 + r) * in_cols + col0;
+        let src = &values[start..start + grid.cols];
+        match mask {
+            None => dst.copy_from_slice(src),
+            Some(mask) => {
+                for ((d, &s), &here) in dst.iter_mut().zip(src).zip(&mask[start..start + grid.cols])
+                {
+                    *d = if here { s } else { 0.0 };
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The features of one image as the pipeline computes them (crop, absent sensels as 0, then `features`).
+pub fn extract_features(
+    frame: &FrameView<'_>,
+    crop: &Crop,
+    features: &FeatureConfig,
+) -> Result<Vec<f64>> {
+    features.check()?;
+    let image_grid = crop.output_grid(frame.grid())?;
+    let mut preprocessor = Preprocessor {
+        crop: *crop,
+        image_grid,
+        cropped: vec![0.0; image_grid.len()],
+        extractor: features.extractor(image_grid)?,
+    };
+    let mut out = vec![0.0; preprocessor.extractor.output_len()];
+    preprocessor.features_into(frame, &mut out)?;
+    Ok(out)
+}
+
+impl TrainedModel {
+    /// A classification session with its own buffers (one per thread).
+    pub fn session(&self) -> Session<'_> {
+        let fields = &self.fields;
+        Session {
+            model: self,
+            preprocessor: Preprocessor {
+                crop: fields.crop,
+                image_grid: fields.image_grid,
+                cropped: vec![0.0; fields.image_grid.len()],
+                extractor: self.extractor.clone(),
+            },
+            features: vec![0.0; fields.pca.n_features()],
+            reduced: vec![0.0; fields.pca.n_components()],
+            scratch: fields.classifier.scratch(),
+            posteriors: vec![0.0; fields.class_names.len()],
+        }
+    }
+
+    /// Classifies many frames in parallel (one session per rayon worker); results in input order.
+    pub fn classify_batch(&self, frames: &[FrameView<'_>]) -> Vec<Result<Classification>> {
+        frames
+            .par_iter()
+            .map_init(
+                || self.session(),
+                |session, frame| session.classify(frame).map(|p| p.to_classification()),
+            )
+            .collect()
+    }
+
+    /// Class names, in class-index order.
+    pub fn class_names(&self) -> &[String] {
+        &self.fields.class_names
+    }
+
+    pub fn crop(&self) -> Crop {
+        self.fields.crop
+    }
+
+    /// The grid of the images after cropping.
+    pub fn image_grid(&self) -> Grid {
+        self.fields.image_grid
+    }
+
+    pub fn features(&self) -> &FeatureConfig {
+        &self.fields.features
+    }
+
+    pub fn pca(&self) -> &Pca {
+        &self.fields.pca
+    }
+
+    pub fn classifier(&self) -> &ClassifierModel {
+        &self.fields.classifier
+    }
+
+    /// The Parzen kernel width, when the classifier is a Parzen window.
+    pub fn sigma(&self) -> Option<f64> {
+        match &self.fields.classifier {
+            ClassifierModel::Pwe(model) => Some(model.sigma()),
+        }
+    }
+
+    /// Validation accuracy against σ, when σ was searched (empty otherwise).
+    pub fn validation_curve(&self) -> &[SigmaPoint] {
+        match &self.fields.classifier {
+            ClassifierModel::Pwe(model) => model.validation_curve(),
+        }
+    }
+
+    pub fn summary(&self) -> &TrainingSummary {
+        &self.fields.summary
+    }
+}
+
+/// Classifies frames one at a time with reused buffers: no allocation per call.
+#[derive(Debug)]
+pub struct Session<'m> {
+    model: &'m TrainedModel,
+    preprocessor: Preprocessor,
+    features: Vec<f64>,
+    reduced: Vec<f64>,
+    scratch: ClassifierScratch,
+    posteriors: Vec<f64>,
+}
+
+/// The result of [`Session::classify`], borrowing the session's buffers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prediction<'s> {
+    pub class: usize,
+    pub label: &'s str,
+    /// The posterior of `class`.
+    pub confidence: f64,
+    /// Posterior of every class, in class-index order (equal priors).
+    pub posteriors: &'s [f64],
+}
+
+impl Prediction<'_> {
+    pub fn to_classification(&self) -> Classification {
+        Classification {
+            class: self.class,
+            confidence: self.confidence,
+            posteriors: self.posteriors.to_vec(),
+        }
+    }
+}
+
+/// An owned prediction (from [`TrainedModel::classify_batch`]); the label is
+/// `model.class_names()[class]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Classification {
+    pub class: usize,
+    pub confidence: f64,
+    pub posteriors: Vec<f64>,
+}
+
+impl<'m> Session<'m> {
+    pub fn model(&self) -> &'m TrainedModel {
+        self.model
+    }
+
+    /// Classifies one frame. Errors when the frame's grid does not give the model's grid once cropped,
+    /// or when it holds non-finite values.
+    pub fn classify(&mut self, frame: &FrameView<'_>) -> Result<Prediction<'_>> {
+        self.reduce(frame)?;
+        let model = self.model;
+        let class = model.fields.classifier.classify_into(
+            &self.reduced,
+            &mut self.scratch,
+            &mut self.posteriors,
+        )?;
+        Ok(Prediction {
+            class,
+            label: &model.fields.class_names[class],
+            confidence: self.posteriors[class],
+            posteriors: &self.posteriors,
+        })
+    }
+
+    /// The feature vector of `frame` (before PCA).
+    pub fn features(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
+        self.preprocessor.features_into(frame, &mut self.features)?;
+        Ok(&self.features)
+    }
+
+    /// The PCA-reduced feature vector of `frame` (what the classifier sees).
+    pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
+        self.preprocessor.features_into(frame, &mut self.features)?;
+        self.model
+            .fields
+            .pca
+            .project_into(&self.features, &mut self.reduced)?;
+        if self.reduced.iter().any(|value| !value.is_finite()) {
+            return Err(CoreError::Param {
+                name: "image",
+                reason: "contains NaN or infinite values".into(),
+            });
+        }
+        Ok(&self.reduced)
+    }
+}
+
+/// Class names of [`synthetic_frame`]'s four classes, in class-index order (sorted, as [`train`] orders them).
+pub const SYNTHETIC_CLASSES: [&str; 4] = ["carpet", "clay", "grass", "wood"];
+
+/// A synthetic pressure image for benchmarks and tests: a 44 x 44 frame of a foot print whose texture
+/// depends on `class` (an index into [`SYNTHETIC_CLASSES`], taken modulo 4). Deterministic for a given RNG
+/// state. Not a physical model (the simulator crate has one); it only has to be learnable and paper-sized.
+pub fn synthetic_frame(class: usize, rng: &mut impl Rng) -> Frame {
+    const SIZE: usize = 44;
+    let mut frame = Frame::zeros(Grid::new(SIZE, SIZE));
+    // Foot print: an ellipse inside the paper's 38 x 41 region, jittered by a sensel or two.
+    let centre_row = 19.0 + rng.random_range(-1.5..1.5);
+    let centre_col = 23.5 + rng.random_range(-1.5..1.5);
+    let load = rng.random_range(0.8..1.2);
+    let phase = rng.random_range(0.0..std::f64::consts::TAU);
+    for (index, value) in frame.values_mut().iter_mut().enumerate() {
+        let (row, col) = ((index / SIZE) as f64, (index % SIZE) as f64);
+        let radius2 = ((row - centre_row) / 16.0).powi(2) + ((col - centre_col) / 17.0).powi(2);
+        if radius2 >= 1.0 {
+            continue;
+        }
+        let envelope = 120.0 * load * (1.0 - radius2).sqrt();
+        let texture = match class % 4 {
+            // "carpet": fine-grained, independent per sensel
+            0 => 0.5 + rng.random_range(0.0..1.0),
+            // "clay": blotchy, low spatial frequency
+            1 => 1.0 + 0.6 * (0.45 * row + phase).sin() * (0.35 * col).cos(),
+            // "grass": stripes along the columns with sparse sharp points
+            2 => {
+                let stripes = 0.7 + 0.6 * (2.1 * col + phase).sin().max(0.0);
+                let spike = if rng.random_range(0.0..1.0) < 0.05 {
+                    1.5
+                } else {
+                    0.0
+                };
+                stripes + spike
+            }
+            // "wood": smooth and even
+            _ => 1.0 + 0.05 * rng.random_range(-1.0..1.0),
+        };
+        *value = (envelope * texture).round().clamp(0.0, 255.0);
+    }
+    frame
+}
+
+/// The paper-sized setup of `presrs bench` and the criterion benchmarks: four synthetic classes on the
+/// 44 x 44 array, 13 training + 7 validation images each (80 stored vectors), the paper's settings
+/// ([`TrainConfig::default`]: crop to 38 x 41, |FFT| with N = 2048, PCA to 51, Parzen window), and
+/// `n_test` further frames to classify (cycling through the classes). Deterministic in `seed`.
+pub fn bench_fixture(seed: u64, n_test: usize) -> Result<(TrainedModel, Vec<Frame>)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut make = |count: usize| -> Vec<(Frame, &'static str)> {
+        (0..count)
+            .map(|i| (synthetic_frame(i % 4, &mut rng), SYNTHETIC_CLASSES[i % 4]))
+            .collect()
+    };
+    let train_set = make(4 * 13);
+    let validation_set = make(4 * 7);
+    let test_frames = make(n_test).into_iter().map(|(frame, _)| frame).collect();
+    let model = train(
+        &as_images(&train_set),
+        &as_images(&validation_set),
+        &TrainConfig::default().check()?,
+    )?;
+    Ok((model, test_frames))
+}
+
+fn as_images<'a>(set: &'a [(Frame, &'static str)]) -> Vec<LabeledImage<'a>> {
+    set.iter()
+        .map(|(frame, label)| LabeledImage::new(frame.view(), label))
+        .collect()
+}

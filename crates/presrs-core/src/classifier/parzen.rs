@@ -18,6 +18,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
+use crate::pca::matrix_vector;
 
 /// How σ is chosen.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -138,6 +139,9 @@ pub struct ParzenModel {
     /// The median nearest-neighbour distance the σ grid was scaled by (`None` for a fixed σ).
     scale: Option<f64>,
     validation_curve: Vec<SigmaPoint>,
+    /// `|p|²` of each stored vector, derived (not serialised): `|x - p|² = |x|² + |p|² - 2 p·x` turns the
+    /// distances into one SIMD matrix-vector product.
+    sq_norms: Vec<f64>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -193,14 +197,13 @@ impl TryFrom<ParzenFields> for ParzenModel {
         if fields.vectors.iter().any(|value| !value.is_finite()) {
             return Err(bad("non-finite stored vectors".into()));
         }
-        Ok(Self {
-            dims: fields.dims,
-            sigma: fields.sigma,
-            vectors: fields.vectors,
-            class_starts: fields.class_starts,
-            scale: fields.scale,
-            validation_curve: fields.validation_curve,
-        })
+        Ok(Self::assemble(
+            fields.dims,
+            fields.sigma,
+            (fields.vectors, fields.class_starts),
+            fields.scale,
+            fields.validation_curve,
+        ))
     }
 }
 
@@ -304,27 +307,46 @@ impl ParzenModel {
             vectors: &[train.vectors, validation.vectors].concat(),
             classes: &[train.classes, validation.classes].concat(),
         };
-        let (vectors, class_starts) = group_by_class(all, n_classes, dims);
-        Ok(Self {
+        Ok(Self::assemble(
+            dims,
+            sigma,
+            group_by_class(all, n_classes, dims),
+            scale,
+            validation_curve,
+        ))
+    }
+
+    /// A model from already grouped data with a given σ (used for the validation search).
+    fn from_parts(train: LabeledVectors<'_>, n_classes: usize, dims: usize, sigma: f64) -> Self {
+        Self::assemble(
+            dims,
+            sigma,
+            group_by_class(train, n_classes, dims),
+            None,
+            Vec::new(),
+        )
+    }
+
+    /// Builds a model from checked parts and derives the stored vectors' squared norms.
+    fn assemble(
+        dims: usize,
+        sigma: f64,
+        (vectors, class_starts): (Vec<f64>, Vec<usize>),
+        scale: Option<f64>,
+        validation_curve: Vec<SigmaPoint>,
+    ) -> Self {
+        let sq_norms = vectors
+            .chunks_exact(dims)
+            .map(|p| p.iter().map(|v| v * v).sum())
+            .collect();
+        Self {
             dims,
             sigma,
             vectors,
             class_starts,
             scale,
             validation_curve,
-        })
-    }
-
-    /// A model from already grouped data with a given σ (used for the validation search).
-    fn from_parts(train: LabeledVectors<'_>, n_classes: usize, dims: usize, sigma: f64) -> Self {
-        let (vectors, class_starts) = group_by_class(train, n_classes, dims);
-        Self {
-            dims,
-            sigma,
-            vectors,
-            class_starts,
-            scale: None,
-            validation_curve: Vec::new(),
+            sq_norms,
         }
     }
 
@@ -392,12 +414,11 @@ impl ParzenModel {
         check_len("pwe input", self.dims, x.len())?;
         check_len("pwe class scores", self.n_classes(), out.len())?;
         scratch.sq_distances.resize(self.n_stored(), 0.0);
-        for (dist, p) in scratch
-            .sq_distances
-            .iter_mut()
-            .zip(self.vectors.chunks_exact(self.dims))
-        {
-            *dist = squared_distance(x, p);
+        // sq_distances <- p·x, then |x|² + |p|² - 2 p·x (clamped: rounding can make it slightly negative)
+        matrix_vector(&self.vectors, self.dims, x, &mut scratch.sq_distances);
+        let x_sq_norm: f64 = x.iter().map(|v| v * v).sum();
+        for (dist, p_sq_norm) in scratch.sq_distances.iter_mut().zip(&self.sq_norms) {
+            *dist = (x_sq_norm + p_sq_norm - 2.0 * *dist).max(0.0);
         }
         let inv_two_var = 0.5 / (self.sigma * self.sigma);
         for (class, score) in out.iter_mut().enumerate() {

@@ -79,6 +79,17 @@ impl FeatureConfig {
         }
     }
 
+    /// Checks the parameters on their own (the image grid is checked by [`output_len`](Self::output_len)).
+    pub fn check(&self) -> Result<()> {
+        match self {
+            Self::Fft1d(Fft1dConfig { fft_len: Some(0) }) => Err(CoreError::Param {
+                name: "fft_len",
+                reason: "the transform length must be positive".into(),
+            }),
+            Self::Fft1d(_) => Ok(()),
+        }
+    }
+
     /// Number of features for images of `grid`, or an error if this configuration cannot take such images.
     pub fn output_len(&self, grid: Grid) -> Result<usize> {
         match self {

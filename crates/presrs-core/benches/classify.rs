@@ -1,0 +1,63 @@
+//! Classification latency and batch throughput on the paper-sized synthetic setup
+//! (`pipeline::bench_fixture`: 44 x 44 frames cropped to 38 x 41, |FFT| N = 2048 -> 1025 features,
+//! PCA to 51, Parzen window over 80 stored vectors).
+//!
+//! `cargo bench -p presrs-core --bench classify -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use presrs_core::FrameView;
+use presrs_core::pipeline::bench_fixture;
+
+const SEED: u64 = 2024;
+const BATCH: usize = 256;
+
+fn classify(c: &mut Criterion) {
+    let Ok((model, frames)) = bench_fixture(SEED, BATCH) else {
+        panic!("the benchmark fixture failed to train");
+    };
+    let views: Vec<FrameView<'_>> = frames.iter().map(|frame| frame.view()).collect();
+
+    let mut session = model.session();
+    let mut next = 0;
+    c.bench_function("classify_one_38x41", |b| {
+        b.iter(|| {
+            // cycle through different frames so the branch predictor cannot learn one input
+            next = (next + 1) % views.len();
+            let prediction = session.classify(black_box(&views[next]));
+            black_box(prediction.map(|p| p.class).ok())
+        })
+    });
+
+    let mut stages = model.session();
+    c.bench_function("features_only_38x41", |b| {
+        b.iter(|| black_box(stages.features(black_box(&views[0])).map(|f| f[0]).ok()))
+    });
+    let features = model
+        .session()
+        .features(&views[0])
+        .map(<[f64]>::to_vec)
+        .unwrap_or_default();
+    let mut reduced = vec![0.0; model.pca().n_components()];
+    c.bench_function("pca_project_1025_to_51", |b| {
+        b.iter(|| {
+            black_box(
+                model
+                    .pca()
+                    .project_into(black_box(&features), &mut reduced)
+                    .ok(),
+            )
+        })
+    });
+
+    let mut group = c.benchmark_group("batch");
+    group.throughput(Throughput::Elements(BATCH as u64));
+    group.bench_function("classify_batch_256", |b| {
+        b.iter(|| black_box(model.classify_batch(black_box(&views)).len()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, classify);
+criterion_main!(benches);
