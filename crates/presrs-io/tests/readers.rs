@@ -182,6 +182,29 @@ fn simulated_44x44_movie_of_2000_frames() {
 }
 
 #[test]
+fn real_greyscale_png_textures() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/textures");
+    for name in ["grass.png", "gravel.png", "brick.png"] {
+        let rec = read_recording(&dir.join(name)).unwrap();
+        assert_eq!(rec.grid(), Grid::new(512, 512), "{name}");
+        assert_eq!(rec.frame_count(), 1);
+        let values = rec.data();
+        assert!(
+            values
+                .iter()
+                .all(|&v| v.fract() == 0.0 && (0.0..=255.0).contains(&v)),
+            "{name}"
+        );
+        // A photograph: many distinct grey levels, not a constant image.
+        let mut seen = [false; 256];
+        for &v in values {
+            seen[v as usize] = true;
+        }
+        assert!(seen.iter().filter(|&&s| s).count() > 50, "{name}");
+    }
+}
+
+#[test]
 fn detection_by_content_and_extension() {
     let dir = tempfile::tempdir().unwrap();
     let at = |name: &str| dir.path().join(name);
