@@ -9,8 +9,8 @@
 //!    [`SegmentParams::baseline_window_frames`] frames; a low quantile of each block is a first baseline
 //!    (robust as long as every block has a few unloaded frames, which holds when the window spans a few
 //!    strides), interpolated linearly between block centres so that a linear drift is followed exactly. The
-//!    unloaded frames are then found by sigma clipping the residuals (median +- 3 x 1.4826 x MAD, iterated
-//!    from the low tail upwards); their median corrects each block's level and their MAD is the noise.
+//!    unloaded frames are then found by sigma clipping the residuals (grown from the low tail upwards, then
+//!    one pass of median +- 4 x 1.4826 x MAD); their median corrects each block's level and their MAD is the noise.
 //!    Cost: O(n log n).
 //! 2. **Hysteresis.** A frame is *loaded* when its load above the baseline exceeds the *off* level and a
 //!    stance must reach the higher *on* level somewhere. Each level is the larger of a multiple of the
@@ -40,7 +40,7 @@ use crate::recording::Recording;
 /// Scale factor turning a median absolute deviation into a standard deviation for Gaussian noise.
 const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 /// Residuals further than this many noise sigmas from the baseline are not "unloaded" frames.
-const CLIP_SIGMAS: f64 = 3.0;
+const CLIP_SIGMAS: f64 = 4.0;
 /// While growing the set of unloaded frames from the low tail, frames up to this many (underestimated)
 /// noise sigmas above the median join it.
 const GROW_SIGMAS: f64 = 5.0;
@@ -510,8 +510,8 @@ fn estimate_baseline(
     // Two phases. Growing: a low tail's MAD underestimates the noise (the tail is narrower than the
     // cluster), so a symmetric 3-sigma clip can stall at the bottom; instead every frame below
     // median + GROW_SIGMAS x sigma (or below the off level) joins the set (nothing real lies below the
-    // baseline), and the set only grows. Refining: the usual symmetric 3-sigma clip around the median, which drops the stance edges the
-    // generous growth let in.
+    // baseline), and the set only grows. Refining: one symmetric CLIP_SIGMAS clip around the median, which
+    // drops the stance edges the generous growth let in.
     for grow in [true, false] {
         for _ in 0..MAX_CLIP_ROUNDS {
             baseline = fit.refit(&quiet, &mut scratch);
@@ -552,6 +552,24 @@ fn estimate_baseline(
                 break;
             }
             quiet = next;
+            if !grow {
+                // One refining pass only: iterated clipping of a finite sample shrinks the MAD round after
+                // round (each pass trims the tails the previous estimate made look too far).
+                baseline = fit.refit(&quiet, &mut scratch);
+                scratch.clear();
+                scratch.extend(
+                    values
+                        .iter()
+                        .zip(&baseline)
+                        .zip(&quiet)
+                        .filter(|&(_, &q)| q)
+                        .map(|((v, b), _)| v - b),
+                );
+                if !scratch.is_empty() {
+                    sigma = median_and_sigma(&mut scratch).1;
+                }
+                break;
+            }
         }
     }
     (baseline, sigma)
