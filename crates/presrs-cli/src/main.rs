@@ -20,6 +20,17 @@ enum Command {
     /// Simulate the hopper on the paper's terrains and gaits; write TekScan movies and a manifest.
     #[command(after_help = "Example:\n  presrs simulate --out sim --seed 7")]
     Simulate(cmd::simulate::SimulateArgs),
+    /// Describe a recording: sensor, size, frames, period, units, load and the stance phases found.
+    #[command(after_help = "Example:\n  presrs inspect ../shared/data/tekscan/FrasP01L.asf --json")]
+    Inspect(cmd::inspect::InspectArgs),
+    /// Print feature vectors of a recording's frames as CSV.
+    Features(cmd::features::FeaturesArgs),
+    /// Train a classifier from a dataset manifest and write a model file.
+    Train(cmd::train::TrainArgs),
+    /// Classify recordings with a trained model.
+    Classify(cmd::classify::ClassifyArgs),
+    /// Measure classification latency and batch throughput in this process.
+    Bench(cmd::bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -28,6 +39,11 @@ fn main() -> ExitCode {
     let mut out = std::io::BufWriter::new(stdout.lock());
     let result = match &cli.command {
         Command::Simulate(args) => cmd::simulate::run(args, &mut out),
+        Command::Inspect(args) => cmd::inspect::run(args, &mut out),
+        Command::Features(args) => cmd::features::run(args, &mut out),
+        Command::Train(args) => cmd::train::run(args, &mut out),
+        Command::Classify(args) => cmd::classify::run(args, &mut out),
+        Command::Bench(args) => cmd::bench::run(args, &mut out),
     }
     .and_then(|()| out.flush().map_err(anyhow::Error::from));
     match result {
@@ -35,10 +51,26 @@ fn main() -> ExitCode {
         // `presrs ... | head`: the reader went away; that is not an error.
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", error_message(&err));
             ExitCode::from(1)
         }
     }
+}
+
+/// The error and its causes in one sentence, skipping causes whose text the message already contains
+/// (our error types print their source inline).
+fn error_message(err: &anyhow::Error) -> String {
+    let mut message = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if !message.contains(&text) {
+            if !message.is_empty() {
+                message.push_str(": ");
+            }
+            message.push_str(&text);
+        }
+    }
+    message
 }
 
 fn is_broken_pipe(err: &anyhow::Error) -> bool {

@@ -3,6 +3,7 @@
 pub mod classifier;
 pub mod crop;
 pub mod error;
+pub mod evaluation;
 pub mod features;
 pub mod frame;
 pub mod pca;

@@ -1,7 +1,10 @@
 #![doc = include_str!("../README.md")]
 
 pub mod atomic;
+pub mod dataset;
 pub mod error;
+pub mod manifest;
+pub mod model_file;
 pub mod npy;
 pub mod png;
 pub mod tekscan;

@@ -1,3 +1,9 @@
 //! One module per subcommand: each parses its own arguments (a clap `Args` struct) and calls the libraries.
 
+pub mod bench;
+pub mod classify;
+pub mod common;
+pub mod features;
+pub mod inspect;
 pub mod simulate;
+pub mod train;

@@ -1,0 +1,85 @@
+//! `presrs features`: the feature vector of one frame (or of each stance's sample frame), as CSV.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use presrs_core::features::FeatureKind;
+use presrs_core::pipeline::extract_features;
+use presrs_io::read_recording_with;
+
+use super::common::{CropArg, SampleArgs};
+
+/// Print feature vectors as CSV: a header `frame,f0,f1,...`, then one row per frame.
+#[derive(Debug, clap::Args)]
+#[command(after_help = "Example:\n  presrs features walk.asf --frame 40 --features fft1d > f.csv")]
+pub struct FeaturesArgs {
+    /// A recording file (TekScan ASCII, .npy, greyscale .png, text matrix).
+    pub file: PathBuf,
+    /// The 0-based frame; by default every stance phase's sample frame (`--stance-frame`), or the only
+    /// frame of a one-frame file.
+    #[arg(long)]
+    pub frame: Option<usize>,
+    /// Feature family: fft1d (|FFT| of the row-major, zero-padded image: 1025 values for 38x41).
+    #[arg(long, default_value = "fft1d", value_parser = |t: &str| FeatureKind::parse(t).map_err(|e| e.to_string()))]
+    pub features: FeatureKind,
+    #[command(flatten)]
+    pub crop: CropArg,
+    #[command(flatten)]
+    pub samples: SampleArgs,
+}
+
+pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    let parsed = read_recording_with(&args.file, &args.samples.read_options())?;
+    let recording = &parsed.recording;
+    let name = args.file.display();
+    let frames = match args.frame {
+        Some(frame) if frame >= recording.frame_count() => anyhow::bail!(
+            "{name}: --frame {frame} is past the end ({} frames, numbered from 0)",
+            recording.frame_count()
+        ),
+        Some(frame) => vec![frame],
+        None if recording.frame_count() == 1 => vec![0],
+        None => {
+            let segmentation = presrs_core::stance::segment_recording(
+                recording,
+                &presrs_core::stance::ValidSegmentParams::default(),
+            )
+            .with_context(|| format!("{name}: cannot segment"))?;
+            let frames = segmentation
+                .samples(args.samples.stance_frame, args.samples.include_partial)
+                .with_context(|| format!("{name}"))?;
+            if frames.is_empty() {
+                anyhow::bail!(
+                    "{name}: {} frames but no complete stance phase; choose one with --frame K",
+                    recording.frame_count()
+                );
+            }
+            frames
+        }
+    };
+    let crop = args.crop.resolve(recording.grid());
+    let config = args.features.default_config();
+    let mut header_written = false;
+    for index in frames {
+        let Some(frame) = recording.frame(index) else {
+            continue;
+        };
+        let features = extract_features(&frame, &crop, &config)
+            .with_context(|| format!("{name}: frame {index}"))?;
+        if !header_written {
+            write!(out, "frame")?;
+            for k in 0..features.len() {
+                write!(out, ",f{k}")?;
+            }
+            writeln!(out)?;
+            header_written = true;
+        }
+        write!(out, "{index}")?;
+        for value in &features {
+            write!(out, ",{value}")?;
+        }
+        writeln!(out)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,158 @@
+//! `presrs inspect`: what a recording file holds, and the stance phases found in it.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use presrs_core::stance::{ValidSegmentParams, segment_recording};
+use presrs_io::read_recording_with;
+use serde::Serialize;
+
+use super::common::{SampleArgs, write_json};
+
+/// Describe a recording: sensor, size, frames, period, units, load range and stance phases.
+#[derive(Debug, clap::Args)]
+pub struct InspectArgs {
+    /// A TekScan ASCII movie/snapshot, .npy, greyscale .png or text matrix.
+    pub file: PathBuf,
+    /// Print one JSON document instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub samples: SampleArgs,
+}
+
+#[derive(Debug, Serialize)]
+struct StanceReport {
+    start: usize,
+    len: usize,
+    peak_load: f64,
+    peak_frame: usize,
+    /// The frame used as this stance's sample (`--stance-frame`; the first one for `all`).
+    sample_frame: Option<usize>,
+    partial: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct InspectReport {
+    file: String,
+    sensor: Option<String>,
+    rows: usize,
+    cols: usize,
+    frames: usize,
+    frame_period_s: Option<f64>,
+    units: String,
+    row_pitch_mm: Option<f64>,
+    col_pitch_mm: Option<f64>,
+    absent_sensels: usize,
+    /// Smallest and largest total load of a frame (sum of sensel values, in `units`).
+    load_min: f64,
+    load_max: f64,
+    baseline_noise: f64,
+    stances: Vec<StanceReport>,
+    warnings: Vec<String>,
+}
+
+pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    let parsed = read_recording_with(&args.file, &args.samples.read_options())?;
+    let recording = &parsed.recording;
+    let totals = recording.total_per_frame();
+    let segmentation = segment_recording(recording, &ValidSegmentParams::default())
+        .map_err(|err| anyhow::anyhow!("{}: cannot segment: {err}", args.file.display()))?;
+    let sample = args.samples.stance_frame;
+    let stances = segmentation
+        .stances
+        .iter()
+        .map(|stance| StanceReport {
+            start: stance.start,
+            len: stance.len,
+            peak_load: stance.peak_load,
+            peak_frame: stance.peak_frame,
+            sample_frame: presrs_core::stance::sample_frames(stance, sample)
+                .ok()
+                .and_then(|frames| frames.first().copied()),
+            partial: stance.partial,
+        })
+        .collect();
+    let grid = recording.grid();
+    let report = InspectReport {
+        file: args.file.display().to_string(),
+        sensor: recording.meta.sensor.clone(),
+        rows: grid.rows,
+        cols: grid.cols,
+        frames: recording.frame_count(),
+        frame_period_s: recording.frame_period_s(),
+        units: recording.meta.units.to_string(),
+        row_pitch_mm: recording.meta.row_pitch_mm,
+        col_pitch_mm: recording.meta.col_pitch_mm,
+        absent_sensels: recording
+            .present()
+            .map_or(0, |mask| mask.iter().filter(|&&here| !here).count()),
+        load_min: totals.iter().copied().fold(f64::INFINITY, f64::min),
+        load_max: totals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        baseline_noise: segmentation.noise,
+        stances,
+        warnings: parsed.warnings.clone(),
+    };
+    if args.json {
+        return write_json(out, &report);
+    }
+    print_table(&report, out)
+}
+
+fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()> {
+    let or_unknown = |value: Option<String>| value.unwrap_or_else(|| "unknown".to_owned());
+    writeln!(out, "file           {}", report.file)?;
+    writeln!(out, "sensor         {}", or_unknown(report.sensor.clone()))?;
+    writeln!(
+        out,
+        "size           {} rows x {} cols ({} absent sensels)",
+        report.rows, report.cols, report.absent_sensels
+    )?;
+    let pitch = match (report.row_pitch_mm, report.col_pitch_mm) {
+        (Some(r), Some(c)) => format!("{r} mm x {c} mm"),
+        _ => "unknown".to_owned(),
+    };
+    writeln!(out, "pitch          {pitch}")?;
+    let period = report
+        .frame_period_s
+        .map(|p| format!("{p} s ({:.2} Hz)", 1.0 / p));
+    writeln!(
+        out,
+        "frames         {} at {}",
+        report.frames,
+        or_unknown(period)
+    )?;
+    writeln!(out, "units          {}", report.units)?;
+    writeln!(
+        out,
+        "total load     {} .. {} (baseline noise {:.3})",
+        report.load_min, report.load_max, report.baseline_noise
+    )?;
+    for warning in &report.warnings {
+        writeln!(out, "warning        {warning}")?;
+    }
+    let complete = report.stances.iter().filter(|s| !s.partial).count();
+    writeln!(
+        out,
+        "stances        {} found, {complete} complete",
+        report.stances.len()
+    )?;
+    if !report.stances.is_empty() {
+        writeln!(out, "  #  start  len  peak_load  sample_frame  partial")?;
+        for (i, stance) in report.stances.iter().enumerate() {
+            writeln!(
+                out,
+                "{:>3}  {:>5}  {:>3}  {:>9.1}  {:>12}  {}",
+                i,
+                stance.start,
+                stance.len,
+                stance.peak_load,
+                stance
+                    .sample_frame
+                    .map_or_else(|| "-".to_owned(), |f| f.to_string()),
+                if stance.partial { "yes" } else { "no" }
+            )?;
+        }
+    }
+    Ok(())
+}

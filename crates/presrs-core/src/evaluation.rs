@@ -1,0 +1,522 @@
+//! The evaluation engine: train on one part of a dataset, test on the rest, repeat with new seeds.
+//!
+//! Two protocols (see `shared/docs/interface.md`):
+//! - [`Protocol::TrainCondition`], the paper's: draw `per_class` random images per class from one
+//!   condition (a gait), `validation` of them for hyper-parameters, and test on every other sample of every
+//!   condition. Accuracy is reported per tested condition (the training condition's held-out remainder
+//!   included) and overall (over every tested sample).
+//! - [`Protocol::LeaveOneOut`]: for every value of a grouping column, train on all samples with another
+//!   value and test on the held-out ones (leave-one-subject-out, leave-one-gait-out).
+//!
+//! Every repeat draws with its own seed (`seed + repeat`), so a run is reproducible and repeats differ.
+//! Results are means and standard deviations over the repeats; the confusion matrix sums all repeats.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+use crate::frame::FrameView;
+use crate::pipeline::{CheckedTrainConfig, LabeledImage, train};
+use crate::split::{ValidationSize, stratified_split};
+
+/// One sample to evaluate on.
+#[derive(Clone, Copy, Debug)]
+pub struct EvalSample<'a> {
+    pub frame: FrameView<'a>,
+    pub label: &'a str,
+    /// The operating condition (e.g. gait) the sample was recorded in.
+    pub condition: Option<&'a str>,
+    /// The value of the leave-one-out column, when that protocol is used.
+    pub group: Option<&'a str>,
+}
+
+/// How training and test sets are formed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Protocol {
+    /// Train on a random draw (from `condition` only, when given); test on everything else.
+    TrainCondition {
+        condition: Option<String>,
+        per_class: Option<usize>,
+        validation: ValidationSize,
+    },
+    /// Hold out each value of the samples' `group` in turn.
+    LeaveOneOut {
+        /// The column's name (for reports).
+        column: String,
+        per_class: Option<usize>,
+        validation: ValidationSize,
+    },
+}
+
+/// Mean and spread over repeats.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MeanStd {
+    pub mean: f64,
+    pub std: f64,
+}
+
+impl MeanStd {
+    /// Mean and sample standard deviation (0 for a single value).
+    pub fn of(values: &[f64]) -> Self {
+        if values.is_empty() {
+            return Self::default();
+        }
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let std = if values.len() > 1 {
+            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+        } else {
+            0.0
+        };
+        Self { mean, std }
+    }
+}
+
+/// Counts of true class (rows) against predicted class (columns), summed over repeats.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Confusion {
+    pub labels: Vec<String>,
+    pub counts: Vec<Vec<u64>>,
+}
+
+impl Confusion {
+    fn new(labels: Vec<String>) -> Self {
+        let n = labels.len();
+        Self {
+            labels,
+            counts: vec![vec![0; n]; n],
+        }
+    }
+
+    /// Each row divided by its total (rows of an absent class stay 0).
+    pub fn row_normalised(&self) -> Vec<Vec<f64>> {
+        self.counts
+            .iter()
+            .map(|row| {
+                let total: u64 = row.iter().sum();
+                row.iter()
+                    .map(|&c| {
+                        if total == 0 {
+                            0.0
+                        } else {
+                            c as f64 / total as f64
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Recall of each class: correct / true count.
+    pub fn recall(&self) -> Vec<f64> {
+        (0..self.labels.len())
+            .map(|i| ratio(self.counts[i][i], self.counts[i].iter().sum()))
+            .collect()
+    }
+
+    /// Precision of each class: correct / predicted count.
+    pub fn precision(&self) -> Vec<f64> {
+        (0..self.labels.len())
+            .map(|j| {
+                ratio(
+                    self.counts[j][j],
+                    self.counts.iter().map(|row| row[j]).sum(),
+                )
+            })
+            .collect()
+    }
+}
+
+fn ratio(num: u64, den: u64) -> f64 {
+    if den == 0 {
+        0.0
+    } else {
+        num as f64 / den as f64
+    }
+}
+
+/// What one repeat found.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RepeatResult {
+    pub seed: u64,
+    pub overall_accuracy: f64,
+    pub per_condition: BTreeMap<String, f64>,
+    /// The Parzen σ of each model trained in this repeat (one per held-out value for leave-one-out).
+    pub sigmas: Vec<f64>,
+    pub n_train: usize,
+    pub n_validation: usize,
+    pub n_test: usize,
+    pub train_seconds: f64,
+}
+
+/// The result of [`evaluate`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvalReport {
+    pub protocol: Protocol,
+    pub repeats: Vec<RepeatResult>,
+    pub overall: MeanStd,
+    /// Accuracy per tested condition (or held-out value), mean and spread over repeats.
+    pub per_condition: BTreeMap<String, MeanStd>,
+    pub confusion: Confusion,
+    /// Median wall time of one classification (crop + features + PCA + classifier), nanoseconds.
+    pub median_classify_ns: u64,
+}
+
+/// Runs `protocol` `repeats` times (seeds `seed`, `seed + 1`, ...). `progress` is called after each
+/// trained model (for a progress bar).
+pub fn evaluate(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    config: &CheckedTrainConfig,
+    repeats: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Result<EvalReport> {
+    if repeats == 0 {
+        return Err(CoreError::Param {
+            name: "repeats",
+            reason: "at least one repeat is needed".into(),
+        });
+    }
+    if samples.is_empty() {
+        return Err(CoreError::NotEnoughData("no samples to evaluate on".into()));
+    }
+    let mut labels: Vec<String> = samples.iter().map(|s| s.label.to_owned()).collect();
+    labels.sort();
+    labels.dedup();
+    let mut confusion = Confusion::new(labels);
+    let mut times_ns = Vec::new();
+    let mut results = Vec::with_capacity(repeats);
+    for repeat in 0..repeats {
+        let repeat_seed = seed.wrapping_add(repeat as u64);
+        let folds = folds(samples, protocol, repeat_seed)?;
+        let mut correct_by_condition: BTreeMap<String, (u64, u64)> = BTreeMap::new();
+        let mut result = RepeatResult {
+            seed: repeat_seed,
+            overall_accuracy: 0.0,
+            per_condition: BTreeMap::new(),
+            sigmas: Vec::new(),
+            n_train: 0,
+            n_validation: 0,
+            n_test: 0,
+            train_seconds: 0.0,
+        };
+        for fold in folds {
+            let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
+            let train_images: Vec<_> = fold.train.iter().map(image).collect();
+            let validation_images: Vec<_> = fold.validation.iter().map(image).collect();
+            let start = Instant::now();
+            let model = train(&train_images, &validation_images, config)?;
+            result.train_seconds += start.elapsed().as_secs_f64();
+            result.sigmas.extend(model.sigma());
+            result.n_train += fold.train.len();
+            result.n_validation += fold.validation.len();
+            result.n_test += fold.test.len();
+            let outcomes: Vec<Result<(usize, u64)>> = fold
+                .test
+                .par_iter()
+                .map_init(
+                    || model.session(),
+                    |session, &i| {
+                        let start = Instant::now();
+                        let class = session.classify(&samples[i].frame)?.class;
+                        Ok((class, start.elapsed().as_nanos() as u64))
+                    },
+                )
+                .collect();
+            for (&i, outcome) in fold.test.iter().zip(outcomes) {
+                let (predicted, ns) = outcome?;
+                times_ns.push(ns);
+                let predicted_label = &model.class_names()[predicted];
+                let truth = confusion
+                    .labels
+                    .binary_search_by(|l| l.as_str().cmp(samples[i].label));
+                let guess = confusion.labels.binary_search(predicted_label);
+                if let (Ok(t), Ok(g)) = (truth, guess) {
+                    confusion.counts[t][g] += 1;
+                }
+                let key = fold.key_of(&samples[i]);
+                let entry = correct_by_condition.entry(key).or_default();
+                entry.1 += 1;
+                if predicted_label == samples[i].label {
+                    entry.0 += 1;
+                }
+            }
+            progress();
+        }
+        let (correct, total) = correct_by_condition
+            .values()
+            .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
+        if total == 0 {
+            return Err(CoreError::NotEnoughData(
+                "no sample is left to test on after drawing the training set".into(),
+            ));
+        }
+        result.overall_accuracy = ratio(correct, total);
+        result.per_condition = correct_by_condition
+            .into_iter()
+            .map(|(key, (c, t))| (key, ratio(c, t)))
+            .collect();
+        results.push(result);
+    }
+    let overall = MeanStd::of(
+        &results
+            .iter()
+            .map(|r| r.overall_accuracy)
+            .collect::<Vec<_>>(),
+    );
+    let mut keys: Vec<&String> = results
+        .iter()
+        .flat_map(|r| r.per_condition.keys())
+        .collect();
+    keys.sort();
+    keys.dedup();
+    let per_condition = keys
+        .into_iter()
+        .map(|key| {
+            let values: Vec<f64> = results
+                .iter()
+                .filter_map(|r| r.per_condition.get(key).copied())
+                .collect();
+            (key.clone(), MeanStd::of(&values))
+        })
+        .collect();
+    times_ns.sort_unstable();
+    let median_classify_ns = times_ns.get(times_ns.len() / 2).copied().unwrap_or(0);
+    Ok(EvalReport {
+        protocol: protocol.clone(),
+        repeats: results,
+        overall,
+        per_condition,
+        confusion,
+        median_classify_ns,
+    })
+}
+
+/// One train/test partition.
+struct Fold {
+    train: Vec<usize>,
+    validation: Vec<usize>,
+    test: Vec<usize>,
+    /// Leave-one-out reports by held-out value; the other protocol by condition.
+    by_group: bool,
+}
+
+impl Fold {
+    fn key_of(&self, sample: &EvalSample<'_>) -> String {
+        let key = if self.by_group {
+            sample.group
+        } else {
+            sample.condition
+        };
+        key.unwrap_or("all").to_owned()
+    }
+}
+
+fn folds(samples: &[EvalSample<'_>], protocol: &Protocol, seed: u64) -> Result<Vec<Fold>> {
+    match protocol {
+        Protocol::TrainCondition {
+            condition,
+            per_class,
+            validation,
+        } => {
+            let pool: Vec<usize> = (0..samples.len())
+                .filter(|&i| {
+                    condition
+                        .as_deref()
+                        .is_none_or(|c| samples[i].condition == Some(c))
+                })
+                .collect();
+            if pool.is_empty() {
+                return Err(CoreError::NotEnoughData(format!(
+                    "no sample has the training condition {:?}",
+                    condition.as_deref().unwrap_or("")
+                )));
+            }
+            let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
+            let split = stratified_split(&labels, *per_class, *validation, seed)?;
+            let in_pool = |indices: &[usize]| indices.iter().map(|&k| pool[k]).collect::<Vec<_>>();
+            let (train, validation) = (in_pool(&split.train), in_pool(&split.validation));
+            let mut used = vec![false; samples.len()];
+            for &i in train.iter().chain(&validation) {
+                used[i] = true;
+            }
+            let test = (0..samples.len()).filter(|&i| !used[i]).collect();
+            Ok(vec![Fold {
+                train,
+                validation,
+                test,
+                by_group: false,
+            }])
+        }
+        Protocol::LeaveOneOut {
+            column,
+            per_class,
+            validation,
+        } => {
+            let mut values: Vec<&str> = Vec::new();
+            for sample in samples {
+                let value = sample.group.ok_or_else(|| {
+                    CoreError::NotEnoughData(format!(
+                        "a sample has no value in the leave-one-out column `{column}`"
+                    ))
+                })?;
+                values.push(value);
+            }
+            let mut distinct = values.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            if distinct.len() < 2 {
+                return Err(CoreError::NotEnoughData(format!(
+                    "leave-one-out needs at least two values in column `{column}`, found {}",
+                    distinct.len()
+                )));
+            }
+            distinct
+                .iter()
+                .enumerate()
+                .map(|(k, held_out)| {
+                    let pool: Vec<usize> = (0..samples.len())
+                        .filter(|&i| values[i] != *held_out)
+                        .collect();
+                    let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
+                    let split = stratified_split(
+                        &labels,
+                        *per_class,
+                        *validation,
+                        seed.wrapping_add(k as u64 * 7919),
+                    )
+                    .map_err(|err| {
+                        CoreError::NotEnoughData(format!("holding out {held_out:?}: {err}"))
+                    })?;
+                    Ok(Fold {
+                        train: split.train.iter().map(|&j| pool[j]).collect(),
+                        validation: split.validation.iter().map(|&j| pool[j]).collect(),
+                        test: (0..samples.len())
+                            .filter(|&i| values[i] == *held_out)
+                            .collect(),
+                        by_group: true,
+                    })
+                })
+                .collect()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::Frame;
+    use crate::pipeline::{SYNTHETIC_CLASSES, TrainConfig, synthetic_frame};
+    use rand::SeedableRng;
+
+    fn data() -> Vec<(Frame, &'static str, &'static str)> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut out = Vec::new();
+        for condition in ["G1", "G2", "G3"] {
+            for i in 0..48 {
+                out.push((
+                    synthetic_frame(i % 4, &mut rng),
+                    SYNTHETIC_CLASSES[i % 4],
+                    condition,
+                ));
+            }
+        }
+        out
+    }
+
+    fn samples<'a>(data: &'a [(Frame, &'static str, &'static str)]) -> Vec<EvalSample<'a>> {
+        data.iter()
+            .map(|(frame, label, condition)| EvalSample {
+                frame: frame.view(),
+                label,
+                condition: Some(condition),
+                group: Some(condition),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn paper_protocol_counts_and_reproducibility() {
+        let data = data();
+        let samples = samples(&data);
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(10),
+            validation: ValidationSize::Count(3),
+        };
+        let config = TrainConfig {
+            dims: 20,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap();
+        let a = evaluate(&samples, &protocol, &config, 2, 5, &|| {}).unwrap();
+        let b = evaluate(&samples, &protocol, &config, 2, 5, &|| {}).unwrap();
+        // everything but the wall times is reproducible
+        let strip = |report: &EvalReport| {
+            report
+                .repeats
+                .iter()
+                .map(|r| RepeatResult {
+                    train_seconds: 0.0,
+                    ..r.clone()
+                })
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(strip(&a), strip(&b));
+        assert_eq!(a.confusion, b.confusion);
+        let first = &a.repeats[0];
+        assert_eq!((first.n_train, first.n_validation), (28, 12));
+        assert_eq!(first.n_test, samples.len() - 40);
+        assert_eq!(a.per_condition.len(), 3);
+        // the confusion matrix counts every tested sample of every repeat
+        let total: u64 = a.confusion.counts.iter().flatten().sum();
+        assert_eq!(total as usize, 2 * first.n_test);
+        // the synthetic classes are easy: well above chance
+        assert!(a.overall.mean > 0.8, "{:?}", a.overall);
+        let correct: u64 = (0..4).map(|i| a.confusion.counts[i][i]).sum();
+        assert!((correct as f64 / total as f64 - a.overall.mean).abs() < 1e-12);
+    }
+
+    #[test]
+    fn leave_one_out_tests_each_value_once() {
+        let data = data();
+        let samples = samples(&data);
+        let protocol = Protocol::LeaveOneOut {
+            column: "condition".into(),
+            per_class: Some(8),
+            validation: ValidationSize::Count(3),
+        };
+        let config = TrainConfig {
+            dims: 10,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap();
+        let report = evaluate(&samples, &protocol, &config, 1, 3, &|| {}).unwrap();
+        assert_eq!(
+            report.per_condition.keys().collect::<Vec<_>>(),
+            ["G1", "G2", "G3"]
+        );
+        assert_eq!(report.repeats[0].n_test, samples.len());
+        assert_eq!(report.repeats[0].sigmas.len(), 3);
+    }
+
+    #[test]
+    fn mean_std_and_confusion_metrics() {
+        let m = MeanStd::of(&[1.0, 0.0]);
+        assert!((m.mean - 0.5).abs() < 1e-15 && (m.std - 0.5f64.sqrt()).abs() < 1e-15);
+        let c = Confusion {
+            labels: vec!["a".into(), "b".into()],
+            counts: vec![vec![3, 1], vec![0, 4]],
+        };
+        assert_eq!(c.recall(), vec![0.75, 1.0]);
+        assert_eq!(c.precision(), vec![1.0, 0.8]);
+        assert_eq!(c.row_normalised()[0], vec![0.75, 0.25]);
+    }
+}
