@@ -2,6 +2,8 @@
 //! read in place from the shared data folder. The TekScan reader lives in presrs-io; this test carries its
 //! own minimal loader of the per-frame total load so that the core crate stays free of I/O dependencies.
 
+#![allow(clippy::unwrap_used)] // Tests: a failed unwrap is a failed test.
+
 use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment};
 
 const FRAS: &str = concat!(

@@ -1,5 +1,7 @@
 //! Stance segmentation on synthetic total-load series: half-sine stances on a noisy, drifting baseline.
 
+#![allow(clippy::unwrap_used)] // Tests: a failed unwrap is a failed test.
+
 use std::f64::consts::PI;
 
 use presrs_core::stance::{
