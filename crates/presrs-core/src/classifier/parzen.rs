@@ -278,7 +278,7 @@ impl ParzenModel {
                     ));
                 }
                 let scale = median_nearest_neighbour_distance(train.vectors, dims);
-                if !(scale > 0.0) {
+                if scale.is_nan() || scale <= 0.0 {
                     return Err(CoreError::NotEnoughData(
                         "the training vectors are all identical to a neighbour; sigma cannot be scaled".into(),
                     ));

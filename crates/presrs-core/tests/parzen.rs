@@ -1,0 +1,257 @@
+//! The Parzen-window classifier: fast scores against the definition, the sigma search, stored vectors.
+
+#![allow(clippy::unwrap_used)] // helpers of integration tests are test code too
+
+use presrs_core::classifier::{
+    ClassifierConfig, ClassifierModel, LabeledVectors, ParzenConfig, ParzenModel, SigmaChoice,
+    SigmaSearch,
+};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// `per_class` points per class around class centres `spacing` apart along the first axis.
+fn blobs(
+    n_classes: usize,
+    per_class: usize,
+    dims: usize,
+    spacing: f64,
+    seed: u64,
+) -> (Vec<f64>, Vec<usize>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut vectors = Vec::new();
+    let mut classes = Vec::new();
+    for i in 0..n_classes * per_class {
+        let class = i % n_classes;
+        for d in 0..dims {
+            let centre = if d == 0 { spacing * class as f64 } else { 0.0 };
+            vectors.push(centre + rng.random_range(-1.0..1.0));
+        }
+        classes.push(class);
+    }
+    (vectors, classes)
+}
+
+fn labeled<'a>(data: &'a (Vec<f64>, Vec<usize>)) -> LabeledVectors<'a> {
+    LabeledVectors {
+        vectors: &data.0,
+        classes: &data.1,
+    }
+}
+
+/// log(mean_p exp(-|x - p|² / 2σ²)) per class, computed directly (with a shift so it cannot underflow).
+fn naive_log_scores(model: &ParzenModel, x: &[f64]) -> Vec<f64> {
+    let dims = model.dims();
+    (0..model.n_classes())
+        .map(|class| {
+            let exponents: Vec<f64> = model
+                .class_vectors(class)
+                .chunks(dims)
+                .map(|p| {
+                    let d2: f64 = x.iter().zip(p).map(|(a, b)| (a - b) * (a - b)).sum();
+                    -d2 / (2.0 * model.sigma() * model.sigma())
+                })
+                .collect();
+            let top = exponents.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+            top + (exponents.iter().map(|e| (e - top).exp()).sum::<f64>() / exponents.len() as f64)
+                .ln()
+        })
+        .collect()
+}
+
+#[test]
+fn fast_scores_match_the_definition() {
+    let train = blobs(4, 13, 51, 3.0, 1);
+    let validation = blobs(4, 7, 51, 3.0, 2);
+    let model = ParzenModel::fit(
+        labeled(&train),
+        labeled(&validation),
+        4,
+        51,
+        &ParzenConfig::default(),
+    )
+    .unwrap();
+    let queries = blobs(4, 10, 51, 3.0, 3);
+    let mut scratch = model.scratch();
+    let mut scores = vec![0.0; 4];
+    let mut posteriors = vec![0.0; 4];
+    for x in queries.0.chunks(51) {
+        model.log_scores_into(x, &mut scratch, &mut scores).unwrap();
+        let naive = naive_log_scores(&model, x);
+        for (fast, slow) in scores.iter().zip(&naive) {
+            assert!(
+                (fast - slow).abs() <= 1e-9 * slow.abs().max(1.0),
+                "{fast} vs {slow}"
+            );
+        }
+        let class = model
+            .classify_into(x, &mut scratch, &mut posteriors)
+            .unwrap();
+        let best = (0..4)
+            .max_by(|&a, &b| naive[a].total_cmp(&naive[b]))
+            .unwrap();
+        assert_eq!(class, best);
+        let total: f64 = naive.iter().map(|s| (s - naive[best]).exp()).sum();
+        for (p, s) in posteriors.iter().zip(&naive) {
+            assert!(
+                (p - (s - naive[best]).exp() / total).abs() < 1e-9,
+                "equal-prior posterior"
+            );
+        }
+    }
+}
+
+#[test]
+fn stores_training_and_validation_vectors() {
+    let train = blobs(4, 13, 5, 4.0, 4);
+    let validation = blobs(4, 7, 5, 4.0, 5);
+    let model = ParzenModel::fit(
+        labeled(&train),
+        labeled(&validation),
+        4,
+        5,
+        &ParzenConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(
+        model.n_stored(),
+        80,
+        "the paper's P has p + q = 52 + 28 columns"
+    );
+    for class in 0..4 {
+        assert_eq!(model.class_vectors(class).len(), 20 * 5);
+        // the first stored vector of each class is its first training vector
+        let first_train = train.1.iter().position(|&c| c == class).unwrap();
+        assert_eq!(
+            &model.class_vectors(class)[..5],
+            &train.0[first_train * 5..first_train * 5 + 5]
+        );
+    }
+}
+
+#[test]
+fn search_records_the_curve_and_breaks_ties_toward_larger_sigma() {
+    // Well separated classes: every sigma from small to moderate classifies validation perfectly,
+    // so the chosen sigma is the largest perfect one.
+    let train = blobs(3, 10, 4, 50.0, 6);
+    let validation = blobs(3, 5, 4, 50.0, 7);
+    let search = SigmaSearch {
+        min_factor: 0.25,
+        max_factor: 4.0,
+        steps: 5,
+    };
+    let config = ParzenConfig {
+        sigma: SigmaChoice::Search(search),
+    };
+    let model = ParzenModel::fit(labeled(&train), labeled(&validation), 3, 4, &config).unwrap();
+    let curve = model.validation_curve();
+    assert_eq!(curve.len(), 5);
+    assert!(curve.windows(2).all(|w| w[0].sigma < w[1].sigma));
+    let scale = model.scale().unwrap();
+    for (point, factor) in curve.iter().zip([0.25, 0.5, 1.0, 2.0, 4.0]) {
+        assert!((point.factor - factor).abs() < 1e-12);
+        assert!((point.sigma - factor * scale).abs() < 1e-9 * scale);
+        assert!(point.mean_log_likelihood.is_finite());
+    }
+    let best = curve.iter().map(|p| p.accuracy).fold(0.0, f64::max);
+    assert_eq!(best, 1.0);
+    let largest_best = curve.iter().rev().find(|p| p.accuracy == best).unwrap();
+    assert_eq!(model.sigma(), largest_best.sigma);
+}
+
+#[test]
+fn search_prefers_the_accurate_sigma_over_the_larger_one() {
+    // Two classes whose points interleave along the first axis at different offsets: a wide kernel
+    // blurs them together, a narrow one (about the nearest-neighbour distance) separates them.
+    let mut train = (Vec::new(), Vec::new());
+    let mut validation = (Vec::new(), Vec::new());
+    for i in 0..20 {
+        let class = i % 2;
+        let x = i as f64 + 0.5 * class as f64;
+        train.0.extend([x, 0.0]);
+        train.1.push(class);
+        validation.0.extend([x + 0.02, 0.01]);
+        validation.1.push(class);
+    }
+    let config = ParzenConfig {
+        sigma: SigmaChoice::Search(SigmaSearch {
+            min_factor: 1.0 / 16.0,
+            max_factor: 64.0,
+            steps: 11,
+        }),
+    };
+    let model = ParzenModel::fit(labeled(&train), labeled(&validation), 2, 2, &config).unwrap();
+    let curve = model.validation_curve();
+    let chosen = curve.iter().find(|p| p.sigma == model.sigma()).unwrap();
+    assert_eq!(chosen.accuracy, 1.0);
+    assert!(
+        curve.last().unwrap().accuracy < 1.0,
+        "the widest kernel should fail here: {curve:?}"
+    );
+    assert!(model.sigma() < curve.last().unwrap().sigma);
+}
+
+#[test]
+fn fixed_sigma_needs_no_validation_set_but_search_does() {
+    let train = blobs(2, 5, 3, 5.0, 8);
+    let empty = (Vec::new(), Vec::new());
+    let fixed = ParzenConfig {
+        sigma: SigmaChoice::Fixed { sigma: 1.5 },
+    };
+    let model = ParzenModel::fit(labeled(&train), labeled(&empty), 2, 3, &fixed).unwrap();
+    assert_eq!(model.sigma(), 1.5);
+    assert!(model.validation_curve().is_empty());
+    assert!(
+        ParzenModel::fit(
+            labeled(&train),
+            labeled(&empty),
+            2,
+            3,
+            &ParzenConfig::default()
+        )
+        .is_err()
+    );
+}
+
+#[test]
+fn rejects_bad_training_data() {
+    let train = blobs(2, 5, 3, 5.0, 9);
+    let validation = blobs(2, 2, 3, 5.0, 10);
+    let config = ParzenConfig::default();
+    // a class with no training vector
+    assert!(ParzenModel::fit(labeled(&train), labeled(&validation), 3, 3, &config).is_err());
+    // a class index out of range
+    let bad_labels = (validation.0.clone(), vec![0, 1, 5, 0]);
+    assert!(ParzenModel::fit(labeled(&train), labeled(&bad_labels), 2, 3, &config).is_err());
+    // vectors of the wrong length
+    let ragged = (train.0[..train.0.len() - 1].to_vec(), train.1.clone());
+    assert!(ParzenModel::fit(labeled(&ragged), labeled(&validation), 2, 3, &config).is_err());
+    // NaN
+    let mut nan = train.clone();
+    nan.0[4] = f64::NAN;
+    assert!(ParzenModel::fit(labeled(&nan), labeled(&validation), 2, 3, &config).is_err());
+}
+
+#[test]
+fn classifier_model_serde_round_trip_classifies_identically() {
+    let train = blobs(3, 8, 6, 2.0, 11);
+    let validation = blobs(3, 4, 6, 2.0, 12);
+    let model = ClassifierConfig::default()
+        .fit(labeled(&train), labeled(&validation), 3, 6)
+        .unwrap();
+    let json = serde_json::to_string(&model).unwrap();
+    assert!(json.starts_with(r#"{"kind":"pwe""#), "{}", &json[..40]);
+    let back: ClassifierModel = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, model);
+    let queries = blobs(3, 5, 6, 2.0, 13);
+    let (mut s1, mut s2) = (model.scratch(), back.scratch());
+    let (mut p1, mut p2) = (vec![0.0; 3], vec![0.0; 3]);
+    for x in queries.0.chunks(6) {
+        let c1 = model.classify_into(x, &mut s1, &mut p1).unwrap();
+        let c2 = back.classify_into(x, &mut s2, &mut p2).unwrap();
+        assert_eq!((c1, &p1), (c2, &p2));
+    }
+    // tampered: class_starts that do not cover the stored vectors
+    let mut value: serde_json::Value = serde_json::from_str(&json).unwrap();
+    value["class_starts"] = serde_json::json!([0, 5, 3]);
+    assert!(serde_json::from_value::<ClassifierModel>(value).is_err());
+}

@@ -1,0 +1,217 @@
+//! PCA: exactness properties and a slow oracle (power iteration on the covariance matrix).
+
+#![allow(clippy::unwrap_used)] // helpers of integration tests are test code too
+
+use presrs_core::pca::Pca;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// `n x d` data with very different variances along random directions, plus an offset (so centring matters).
+fn anisotropic_data(n: usize, d: usize, seed: u64) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let offset: Vec<f64> = (0..d).map(|_| rng.random_range(-50.0..50.0)).collect();
+    let directions: Vec<Vec<f64>> = (0..d)
+        .map(|_| (0..d).map(|_| rng.random_range(-1.0..1.0)).collect())
+        .collect();
+    let mut data = Vec::with_capacity(n * d);
+    for _ in 0..n {
+        let mut row = offset.clone();
+        for (k, direction) in directions.iter().enumerate() {
+            let weight = rng.random_range(-1.0..1.0) * 10.0 / (1.0 + k as f64).powi(2);
+            for (value, dir) in row.iter_mut().zip(direction) {
+                *value += weight * dir;
+            }
+        }
+        data.extend(row);
+    }
+    data
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[test]
+fn keeps_min_of_dims_and_n_minus_one_components() {
+    let data = anisotropic_data(52, 60, 1);
+    assert_eq!(Pca::fit(&data, 60, 51).unwrap().n_components(), 51);
+    assert_eq!(Pca::fit(&data, 60, 100).unwrap().n_components(), 51);
+    assert_eq!(Pca::fit(&data, 60, 10).unwrap().n_components(), 10);
+    // more samples than features: capped by the feature count
+    let tall = anisotropic_data(30, 5, 2);
+    assert_eq!(Pca::fit(&tall, 5, 100).unwrap().n_components(), 5);
+}
+
+#[test]
+fn paper_shape_52_by_1025_gives_51_orthonormal_components() {
+    let data = anisotropic_data(52, 1025, 3);
+    let pca = Pca::fit(&data, 1025, 51).unwrap();
+    assert_eq!(pca.n_components(), 51);
+    assert_eq!(pca.basis().len(), 51 * 1025);
+    for i in 0..51 {
+        for j in 0..51 {
+            let expected = if i == j { 1.0 } else { 0.0 };
+            let got = dot(pca.component(i), pca.component(j));
+            assert!((got - expected).abs() < 1e-12, "<u{i}, u{j}> = {got}");
+        }
+    }
+}
+
+#[test]
+fn all_components_reconstruct_the_training_data() {
+    let (n, d) = (12, 30);
+    let data = anisotropic_data(n, d, 4);
+    let pca = Pca::fit(&data, d, usize::MAX).unwrap();
+    assert_eq!(pca.n_components(), n - 1);
+    let largest = data.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let mut back = vec![0.0; d];
+    for row in data.chunks(d) {
+        let z = pca.project(row).unwrap();
+        pca.reconstruct_into(&z, &mut back).unwrap();
+        for (b, x) in back.iter().zip(row) {
+            // the n - 1 components span the centred training data exactly, up to rounding
+            assert!((b - x).abs() < 1e-10 * largest, "{b} vs {x}");
+        }
+    }
+}
+
+#[test]
+fn variances_descend_and_match_the_projections() {
+    let (n, d) = (40, 8);
+    let data = anisotropic_data(n, d, 5);
+    let pca = Pca::fit(&data, d, d).unwrap();
+    let variances = pca.explained_variance();
+    assert!(variances.windows(2).all(|w| w[0] >= w[1]), "{variances:?}");
+    let projections: Vec<Vec<f64>> = data
+        .chunks(d)
+        .map(|row| pca.project(row).unwrap())
+        .collect();
+    for k in 0..pca.n_components() {
+        let mean: f64 = projections.iter().map(|p| p[k]).sum::<f64>() / n as f64;
+        assert!(mean.abs() < 1e-9, "projections are centred");
+        let var: f64 = projections.iter().map(|p| p[k] * p[k]).sum::<f64>() / (n - 1) as f64;
+        assert!((var - variances[k]).abs() < 1e-9 * variances[0]);
+        for other in 0..k {
+            let cov: f64 =
+                projections.iter().map(|p| p[k] * p[other]).sum::<f64>() / (n - 1) as f64;
+            assert!(
+                cov.abs() < 1e-9 * variances[0],
+                "components {k} and {other} correlate: {cov}"
+            );
+        }
+    }
+    let ratio: f64 = pca.explained_variance_ratio().iter().sum();
+    assert!(
+        (ratio - 1.0).abs() < 1e-12,
+        "all d components explain everything: {ratio}"
+    );
+}
+
+/// Slow oracle: eigenvectors of the sample covariance by power iteration with deflation.
+fn covariance_eigen_by_power_iteration(
+    data: &[f64],
+    d: usize,
+    count: usize,
+) -> Vec<(f64, Vec<f64>)> {
+    let n = data.len() / d;
+    let mut mean = vec![0.0; d];
+    for row in data.chunks(d) {
+        for (m, x) in mean.iter_mut().zip(row) {
+            *m += x / n as f64;
+        }
+    }
+    let mut cov = vec![0.0; d * d];
+    for row in data.chunks(d) {
+        for i in 0..d {
+            for j in 0..d {
+                cov[i * d + j] += (row[i] - mean[i]) * (row[j] - mean[j]) / (n - 1) as f64;
+            }
+        }
+    }
+    let mut pairs = Vec::new();
+    for _ in 0..count {
+        let mut v: Vec<f64> = (0..d).map(|i| 1.0 + i as f64 * 0.1).collect();
+        let mut lambda = 0.0;
+        for _ in 0..20_000 {
+            let w: Vec<f64> = (0..d).map(|i| dot(&cov[i * d..(i + 1) * d], &v)).collect();
+            let norm = dot(&w, &w).sqrt();
+            v = w.iter().map(|x| x / norm).collect();
+            lambda = norm;
+        }
+        for i in 0..d {
+            for j in 0..d {
+                cov[i * d + j] -= lambda * v[i] * v[j];
+            }
+        }
+        pairs.push((lambda, v));
+    }
+    pairs
+}
+
+#[test]
+fn matches_power_iteration_oracle_on_a_small_case() {
+    let (n, d) = (25, 6);
+    let data = anisotropic_data(n, d, 6);
+    let pca = Pca::fit(&data, d, 3).unwrap();
+    let oracle = covariance_eigen_by_power_iteration(&data, d, 3);
+    for (k, (lambda, vector)) in oracle.iter().enumerate() {
+        let variance = pca.explained_variance()[k];
+        assert!(
+            (variance - lambda).abs() < 1e-8 * lambda,
+            "variance {k}: {variance} vs {lambda}"
+        );
+        let cosine = dot(pca.component(k), vector).abs();
+        assert!((cosine - 1.0).abs() < 1e-8, "axis {k}: |cos| = {cosine}");
+    }
+}
+
+#[test]
+fn signs_are_fixed_and_fitting_is_deterministic() {
+    let data = anisotropic_data(20, 15, 7);
+    let first = Pca::fit(&data, 15, 10).unwrap();
+    let second = Pca::fit(&data, 15, 10).unwrap();
+    assert_eq!(first, second, "same data, same bits");
+    for k in 0..first.n_components() {
+        let axis = first.component(k);
+        let pivot = axis.iter().copied().fold(
+            0.0f64,
+            |best, a| if a.abs() > best.abs() { a } else { best },
+        );
+        assert!(pivot > 0.0, "largest loading of axis {k} is positive");
+    }
+    // flipping the data through the mean flips no axis sign: signs come from the loadings, not the data
+    let negated: Vec<f64> = data.iter().map(|v| -v).collect();
+    let flipped = Pca::fit(&negated, 15, 10).unwrap();
+    for k in 0..first.n_components() {
+        let cosine = dot(first.component(k), flipped.component(k));
+        assert!((cosine - 1.0).abs() < 1e-9, "axis {k}: cos {cosine}");
+    }
+}
+
+#[test]
+fn serde_round_trip_and_checked_loading() {
+    let data = anisotropic_data(10, 4, 8);
+    let pca = Pca::fit(&data, 4, 3).unwrap();
+    let json = serde_json::to_string(&pca).unwrap();
+    let back: Pca = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, pca);
+    let x = [1.0, 2.0, 3.0, 4.0];
+    assert_eq!(back.project(&x).unwrap(), pca.project(&x).unwrap());
+
+    let mut value: serde_json::Value = serde_json::from_str(&json).unwrap();
+    value["mean"] = serde_json::json!([0.0, 0.0]);
+    assert!(
+        serde_json::from_value::<Pca>(value).is_err(),
+        "mean of the wrong length"
+    );
+}
+
+#[test]
+fn projection_checks_lengths() {
+    let data = anisotropic_data(10, 4, 9);
+    let pca = Pca::fit(&data, 4, 3).unwrap();
+    let mut out = vec![0.0; 3];
+    assert!(pca.project_into(&[0.0; 5], &mut out).is_err());
+    assert!(pca.project_into(&[0.0; 4], &mut out[..2]).is_err());
+    assert!(pca.project_into(&[0.0; 4], &mut out).is_ok());
+}
