@@ -29,6 +29,8 @@ enum Command {
     Train(cmd::train::TrainArgs),
     /// Classify recordings with a trained model.
     Classify(cmd::classify::ClassifyArgs),
+    /// Evaluate the pipeline on a manifest (train on one condition, or leave one group out).
+    Eval(cmd::eval::EvalArgs),
     /// Measure classification latency and batch throughput in this process.
     Bench(cmd::bench::BenchArgs),
 }
@@ -43,6 +45,7 @@ fn main() -> ExitCode {
         Command::Features(args) => cmd::features::run(args, &mut out),
         Command::Train(args) => cmd::train::run(args, &mut out),
         Command::Classify(args) => cmd::classify::run(args, &mut out),
+        Command::Eval(args) => cmd::eval::run(args, &mut out),
         Command::Bench(args) => cmd::bench::run(args, &mut out),
     }
     .and_then(|()| out.flush().map_err(anyhow::Error::from));

@@ -37,16 +37,23 @@ pub struct CropArg {
     /// paper (drop the bottom 6 rows and first 3 columns: 44x44 -> 38x41), none, margins
     /// top,bottom,left,right, or a window row0:col0:rows:cols.
     #[arg(long = "crop", default_value = "auto", value_parser = parse_crop_arg)]
-    pub crop: Option<Crop>,
+    pub crop: CropChoice,
+}
+
+/// A crop, or `auto`: decided from the image size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CropChoice {
+    Auto,
+    Fixed(Crop),
 }
 
 impl CropArg {
     /// The crop for images of `grid`: as given, or resolved from `auto`.
     pub fn resolve(&self, grid: presrs_core::Grid) -> Crop {
         match self.crop {
-            Some(crop) => crop,
-            None if grid == presrs_core::Grid::new(44, 44) => Crop::PAPER,
-            None => Crop::NONE,
+            CropChoice::Fixed(crop) => crop,
+            CropChoice::Auto if grid == presrs_core::Grid::new(44, 44) => Crop::PAPER,
+            CropChoice::Auto => Crop::NONE,
         }
     }
 }
@@ -158,11 +165,11 @@ fn parse_classifier(text: &str) -> Result<ClassifierKind, String> {
     ClassifierKind::parse(text).map_err(|err| err.to_string())
 }
 
-fn parse_crop_arg(text: &str) -> Result<Option<Crop>, String> {
+fn parse_crop_arg(text: &str) -> Result<CropChoice, String> {
     if text.trim().eq_ignore_ascii_case("auto") {
-        return Ok(None);
+        return Ok(CropChoice::Auto);
     }
-    Crop::parse(text).map(Some).map_err(|err| err.to_string())
+    Crop::parse(text).map(CropChoice::Fixed).map_err(|err| err.to_string())
 }
 
 fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {
