@@ -16,31 +16,81 @@ fn main() {
             s.split(';')
                 .map(|p| {
                     let v: Vec<f64> = p.split(',').map(|x| x.parse().unwrap()).collect();
-                    GroundParams { stiffness_n_per_m: Some(v[0]), damping_n_s_per_m: v[1] }
+                    GroundParams {
+                        stiffness_n_per_m: Some(v[0]),
+                        damping_n_s_per_m: v[1],
+                    }
                 })
                 .collect()
         })
-        .unwrap_or_else(|| vec![GroundParams { stiffness_n_per_m: Some(2e6), damping_n_s_per_m: 200.0 }]);
-    let paper = [[0.40, 0.43, 0.38, 0.81], [0.64, 0.63, 0.61, 1.11], [0.99, 0.97, 0.84, 1.49]];
+        .unwrap_or_else(|| {
+            vec![GroundParams {
+                stiffness_n_per_m: Some(2e6),
+                damping_n_s_per_m: 200.0,
+            }]
+        });
+    let paper = [
+        [0.40, 0.43, 0.38, 0.81],
+        [0.64, 0.63, 0.61, 1.11],
+        [0.99, 0.97, 0.84, 1.49],
+    ];
     for (gi, gait) in Gait::paper().into_iter().enumerate() {
         for (ti, ground) in grounds.iter().enumerate() {
-            let mut h = Hopper::new(robot.clone(), gait.clone(), *ground, IntegratorParams::default()).unwrap();
+            let mut h = Hopper::new(
+                robot.clone(),
+                gait.clone(),
+                *ground,
+                IntegratorParams::default(),
+            )
+            .unwrap();
             let mut samples = Vec::new();
             let mut hops = Vec::new();
             let mut err = None;
-            let nh: usize = std::env::var("HOPS").ok().and_then(|s| s.parse().ok()).unwrap_or(60);
+            let nh: usize = std::env::var("HOPS")
+                .ok()
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(60);
             for i in 0..nh {
                 match h.hop(i, 0.01, 1e9, &mut samples, 0.0) {
-                    Ok(t) => { if std::env::var("DEBUG").is_ok() { println!("  hop {i}: td={:.3} lo={:.3} v={:.3} st={:.1}ms apex={:.3} E={:.3}", t.touchdown_angle_rad, t.liftoff_angle_rad, t.mean_forward_velocity_m_per_s, t.stance_duration_s*1e3, t.apex_height_m, t.apex_energy_j); } hops.push(t) },
-                    Err(e) => { err = Some(e); break; }
+                    Ok(t) => {
+                        if std::env::var("DEBUG").is_ok() {
+                            println!(
+                                "  hop {i}: td={:.3} lo={:.3} v={:.3} st={:.1}ms apex={:.3} E={:.3}",
+                                t.touchdown_angle_rad,
+                                t.liftoff_angle_rad,
+                                t.mean_forward_velocity_m_per_s,
+                                t.stance_duration_s * 1e3,
+                                t.apex_height_m,
+                                t.apex_energy_j
+                            );
+                        }
+                        hops.push(t)
+                    }
+                    Err(e) => {
+                        err = Some(e);
+                        break;
+                    }
                 }
             }
-            if let Some(e) = err { println!("{} t{ti}: {e} after {} hops", gait.name, hops.len()); continue; }
+            if let Some(e) = err {
+                println!("{} t{ti}: {e} after {} hops", gait.name, hops.len());
+                continue;
+            }
             let last = &hops[nh - 20..];
             let n = last.len() as f64;
-            let v = last.iter().map(|h| h.mean_forward_velocity_m_per_s).sum::<f64>() / n;
-            let vmin = last.iter().map(|h| h.mean_forward_velocity_m_per_s).fold(f64::MAX, f64::min);
-            let vmax = last.iter().map(|h| h.mean_forward_velocity_m_per_s).fold(f64::MIN, f64::max);
+            let v = last
+                .iter()
+                .map(|h| h.mean_forward_velocity_m_per_s)
+                .sum::<f64>()
+                / n;
+            let vmin = last
+                .iter()
+                .map(|h| h.mean_forward_velocity_m_per_s)
+                .fold(f64::MAX, f64::min);
+            let vmax = last
+                .iter()
+                .map(|h| h.mean_forward_velocity_m_per_s)
+                .fold(f64::MIN, f64::max);
             let st = last.iter().map(|h| h.stance_duration_s).sum::<f64>() / n;
             let ap = last.iter().map(|h| h.apex_height_m).sum::<f64>() / n;
             let td = last.iter().map(|h| h.touchdown_angle_rad).sum::<f64>() / n;
@@ -50,7 +100,10 @@ fn main() {
             let paper_v = paper[gi].get(ti).copied().unwrap_or(f64::NAN);
             println!(
                 "{} t{ti}: v={v:.3} ({vmin:.3}..{vmax:.3}) paper {paper_v:.2} ratio {:.2} stance={:.1}ms apex={ap:.3} td={td:.3} lo={lo:.3} Fpk={fz:.1} zg={:.2}mm",
-                gait.name, v / paper_v, st * 1e3, zg * 1e3
+                gait.name,
+                v / paper_v,
+                st * 1e3,
+                zg * 1e3
             );
         }
     }

@@ -16,7 +16,11 @@ fn main() {
     let cfg = SimConfig::default();
     let start = std::time::Instant::now();
     let ds = simulate_dataset(&cfg, &spec).unwrap();
-    println!("simulated {} trials in {:.2} s", ds.trials.len(), start.elapsed().as_secs_f64());
+    println!(
+        "simulated {} trials in {:.2} s",
+        ds.trials.len(),
+        start.elapsed().as_secs_f64()
+    );
     print!("{}", ds.velocity_table().format_with_paper());
     let mut worst: f64 = 0.0;
     let mut stance = Vec::new();
@@ -24,9 +28,13 @@ fn main() {
         for (i, h) in t.hops.iter().enumerate() {
             stance.push(h.truth.stance_duration_s);
             for (a, b) in h.frame_normal_force_n.iter().zip(&h.frame_image_force_n) {
-                if *a > 1.0 { worst = worst.max((a - b).abs() / a); }
+                if *a > 1.0 {
+                    worst = worst.max((a - b).abs() / a);
+                }
             }
-            if i >= 3 { continue; }
+            if i >= 3 {
+                continue;
+            }
             if let Some(mid) = h.mid_stance_frame {
                 let f = t.recording.frame(mid).unwrap();
                 let path = out.join(format!("{}_h{i}.txt", t.plan.name()));
@@ -37,9 +45,22 @@ fn main() {
                 }
             }
         }
-        let frames_in_stance: Vec<usize> = t.hops.iter().map(|h| h.frame_normal_force_n.len()).collect();
-        println!("{} attempts={} stance frames {:?} attempts", t.plan.name(), t.attempts, frames_in_stance);
+        let frames_in_stance: Vec<usize> = t
+            .hops
+            .iter()
+            .map(|h| h.frame_normal_force_n.len())
+            .collect();
+        println!(
+            "{} attempts={} stance frames {:?} attempts",
+            t.plan.name(),
+            t.attempts,
+            frames_in_stance
+        );
     }
     let n = stance.len() as f64;
-    println!("mean stance {:.1} ms, worst image force error {:.2e}", stance.iter().sum::<f64>() / n * 1e3, worst);
+    println!(
+        "mean stance {:.1} ms, worst image force error {:.2e}",
+        stance.iter().sum::<f64>() / n * 1e3,
+        worst
+    );
 }

@@ -119,8 +119,7 @@ impl Default for SimConfig {
 impl SimConfig {
     /// Parses a (partial) JSON document of overrides on top of the defaults.
     pub fn from_json(text: &str) -> Result<Self> {
-        let cfg: Self =
-            serde_json::from_str(text).map_err(|e| param("config", e.to_string()))?;
+        let cfg: Self = serde_json::from_str(text).map_err(|e| param("config", e.to_string()))?;
         cfg.validate()?;
         Ok(cfg)
     }
@@ -141,7 +140,10 @@ impl SimConfig {
             ("realism.noise_threshold_counts", r.noise_threshold_counts),
             ("realism.gain_spread", r.gain_spread),
             ("realism.terrain_variability", r.terrain_variability),
-            ("realism.touchdown_angle_noise_rad", r.touchdown_angle_noise_rad),
+            (
+                "realism.touchdown_angle_noise_rad",
+                r.touchdown_angle_noise_rad,
+            ),
             ("realism.lateral_cop_sd_m", r.lateral_cop_sd_m),
             ("realism.foreaft_cop_sd_m", r.foreaft_cop_sd_m),
         ] {

@@ -115,7 +115,11 @@ pub struct TrialOutput {
 impl TrialOutput {
     /// Mean forward velocity over the recorded hops, m/s.
     pub fn mean_velocity_m_per_s(&self) -> f64 {
-        mean(self.hops.iter().map(|h| h.truth.mean_forward_velocity_m_per_s))
+        mean(
+            self.hops
+                .iter()
+                .map(|h| h.truth.mean_forward_velocity_m_per_s),
+        )
     }
 }
 
@@ -234,7 +238,10 @@ impl Simulator {
         let per_trial = self.config.experiment.hops_per_trial.max(1);
         let load = spec.load_kg.unwrap_or(self.config.robot.body_mass_kg);
         if !(load.is_finite() && load > 0.0) {
-            return Err(param("load", format!("must be a positive mass in kg, got {load}")));
+            return Err(param(
+                "load",
+                format!("must be a positive mass in kg, got {load}"),
+            ));
         }
         let mut plans = Vec::new();
         for terrain in &spec.terrains {
@@ -269,7 +276,13 @@ impl Simulator {
             let seed = if attempt == 0 {
                 plan.seed
             } else {
-                trial_seed(master_seed, &plan.terrain, &plan.gait.name, plan.index, attempt)
+                trial_seed(
+                    master_seed,
+                    &plan.terrain,
+                    &plan.gait.name,
+                    plan.index,
+                    attempt,
+                )
             };
             match self.run_trial_once(plan, seed) {
                 Ok(mut out) => {
@@ -297,13 +310,25 @@ impl Simulator {
         let period = cfg.sensor.frame_period_s;
         let mut samples: Vec<Sample> = Vec::new();
         for i in 0..cfg.robot.warmup_hops {
-            hopper.hop(i, period, f64::INFINITY, &mut samples, angle_noise.sample(&mut dyn_rng))?;
+            hopper.hop(
+                i,
+                period,
+                f64::INFINITY,
+                &mut samples,
+                angle_noise.sample(&mut dyn_rng),
+            )?;
         }
         samples.clear();
         let t0 = hopper.t_s;
         let mut truths = Vec::with_capacity(plan.hops);
         for h in 0..plan.hops {
-            truths.push(hopper.hop(h, period, t0, &mut samples, angle_noise.sample(&mut dyn_rng))?);
+            truths.push(hopper.hop(
+                h,
+                period,
+                t0,
+                &mut samples,
+                angle_noise.sample(&mut dyn_rng),
+            )?);
         }
         // Frames.
         let grid = Grid::new(cfg.foot.rows, cfg.foot.cols);
@@ -336,8 +361,11 @@ impl Simulator {
         // Every hop gets its patch and CoP offsets drawn in order, whether or not a frame hits its stance.
         let mut patches = Vec::with_capacity(plan.hops);
         for _ in 0..plan.hops {
-            let patch =
-                terrain.patch(&self.foot.points, &mut terrain_rng, cfg.realism.terrain_variability);
+            let patch = terrain.patch(
+                &self.foot.points,
+                &mut terrain_rng,
+                cfg.realism.terrain_variability,
+            );
             let offset = (fa.sample(&mut terrain_rng), lat.sample(&mut terrain_rng));
             patches.push(Some((patch, offset)));
         }
@@ -360,8 +388,7 @@ impl Simulator {
                     let n = sample.normal_force_n;
                     let cop = ankle_cop(&cfg.robot, sample, *offset);
                     let image = self.foot.pressure_image(patch, k_eff, n, cop, &mut warm)?;
-                    let image_force: f64 =
-                        image.iter().sum::<f64>() * self.foot.sensel_area_m2();
+                    let image_force: f64 = image.iter().sum::<f64>() * self.foot.sensel_area_m2();
                     let rec = &mut records[h];
                     rec.first_stance_frame.get_or_insert(frame);
                     rec.last_stance_frame = Some(frame);
@@ -420,7 +447,11 @@ impl Simulator {
 /// Centre of pressure (forward, left), m, from the ankle's moment balance: the massless foot carries the
 /// ground reaction `(T, N)` at the CoP, the leg's push `(-T, -N)` at the ankle (height `h_a`), and the
 /// ankle spring's torque `k_a * beta`: `x_cop = -(h_a T + k_a beta) / N`; plus the hop's random offset.
-pub fn ankle_cop(robot: &crate::slip::RobotParams, sample: &Sample, offset: (f64, f64)) -> (f64, f64) {
+pub fn ankle_cop(
+    robot: &crate::slip::RobotParams,
+    sample: &Sample,
+    offset: (f64, f64),
+) -> (f64, f64) {
     let n = sample.normal_force_n.max(1e-9);
     let x = -(robot.ankle_height_m * sample.tangential_force_n
         + robot.ankle_stiffness_n_m_per_rad * sample.leg_angle_rad)
@@ -441,7 +472,10 @@ impl Dataset {
             (
                 t.plan.gait.name.clone(),
                 t.plan.terrain.clone(),
-                t.hops.iter().map(|h| h.truth.mean_forward_velocity_m_per_s).collect(),
+                t.hops
+                    .iter()
+                    .map(|h| h.truth.mean_forward_velocity_m_per_s)
+                    .collect(),
             )
         }))
     }
@@ -540,4 +574,3 @@ impl VelocityTable {
         out
     }
 }
-

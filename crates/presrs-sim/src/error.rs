@@ -10,7 +10,9 @@ pub enum SimError {
     #[error("integrator failed at t = {t_s:.6} s: {reason}")]
     Integrator { t_s: f64, reason: String },
     /// The hopper fell (no flight phase, leg through the ground, body on the ground...).
-    #[error("the hopper fell during hop {hop} ({reason}); the gait/terrain parameters give no stable hopping")]
+    #[error(
+        "the hopper fell during hop {hop} ({reason}); the gait/terrain parameters give no stable hopping"
+    )]
     Fell { hop: usize, reason: String },
     /// The contact solver did not converge.
     #[error("skin contact solver did not converge: {0}")]

@@ -111,8 +111,7 @@ where
     let k7 = f(t + h, &y_new);
     let mut err = [0.0; N];
     for i in 0..N {
-        err[i] = h
-            * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+        err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
     }
     (y_new, err)
 }

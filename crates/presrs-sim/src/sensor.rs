@@ -67,7 +67,10 @@ impl SensorInstance {
             return Err(param("realism.dead_sensel_fraction", "must be in [0, 1]"));
         }
         if !(gain_spread >= 0.0 && faults.noise_counts >= 0.0 && faults.threshold_counts >= 0.0) {
-            return Err(param("realism", "gain spread, noise and threshold must be >= 0"));
+            return Err(param(
+                "realism",
+                "gain spread, noise and threshold must be >= 0",
+            ));
         }
         let normal = Normal::new(0.0, gain_spread.max(0.0))
             .map_err(|e| param("realism.gain_spread", e.to_string()))?;
@@ -98,10 +101,11 @@ impl SensorInstance {
             {
                 c += n.sample(rng);
             }
+            let c = c.clamp(0.0, self.params.max_count).round();
             let c = if self.dead[i] || c <= self.faults.threshold_counts {
                 0.0
             } else {
-                c.min(self.params.max_count).round()
+                c
             };
             out.push(c);
         }

@@ -160,16 +160,23 @@ impl Foot {
         skin.validate()?;
         let p = &params;
         if p.rows == 0 || p.cols == 0 || p.subsamples == 0 || !(p.pitch_m > 0.0) {
-            return Err(param("foot", "rows, cols, subsamples and pitch must be positive"));
+            return Err(param(
+                "foot",
+                "rows, cols, subsamples and pitch must be positive",
+            ));
         }
         let ax = 0.5 * p.length_m;
         let ay = 0.5 * p.width_m;
         // Ellipse centre in sensel coordinates (continuous: sensel (r, c) covers [c, c+1) x [r, r+1)).
         let c_col = p.first_col as f64 + p.length_m / p.pitch_m * 0.5;
         let c_row = p.first_row as f64 + p.width_m / p.pitch_m * 0.5;
-        if c_col + ax / p.pitch_m > p.cols as f64 + 1.0 || c_row + ay / p.pitch_m > p.rows as f64 + 1.0
+        if c_col + ax / p.pitch_m > p.cols as f64 + 1.0
+            || c_row + ay / p.pitch_m > p.rows as f64 + 1.0
         {
-            return Err(param("foot", "the foot's base does not fit on the sensor array"));
+            return Err(param(
+                "foot",
+                "the foot's base does not fit on the sensor array",
+            ));
         }
         let n = p.subsamples;
         let mut points = Vec::new();
@@ -446,7 +453,11 @@ fn solve_contact(
             _ => [-1e-4, 0.0, 0.0],
         };
         let slope = g[0] * dir[0] + g[1] * dir[1] + g[2] * dir[2];
-        let dir = if slope >= 0.0 { [-g[0] * 1e-12, -g[1] * 1e-12, -g[2] * 1e-12] } else { dir };
+        let dir = if slope >= 0.0 {
+            [-g[0] * 1e-12, -g[1] * 1e-12, -g[2] * 1e-12]
+        } else {
+            dir
+        };
         let slope = g[0] * dir[0] + g[1] * dir[1] + g[2] * dir[2];
         let mut t = 1.0;
         let mut accepted = false;
@@ -501,4 +512,3 @@ fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     }
     Some(out)
 }
-

@@ -312,17 +312,11 @@ impl Hopper {
             .beta_des_rad
             .clamp(robot.min_touchdown_angle_rad, robot.max_touchdown_angle_rad);
         let speed = robot.initial_speed_m_per_s.unwrap_or_else(|| {
-            let stance_s = std::f64::consts::PI
-                * (robot.body_mass_kg / robot.leg_stiffness_n_per_m).sqrt();
+            let stance_s =
+                std::f64::consts::PI * (robot.body_mass_kg / robot.leg_stiffness_n_per_m).sqrt();
             2.0 * robot.leg_rest_length_m * beta.sin() / stance_s
         });
-        let state = [
-            0.0,
-            robot.initial_apex_height_m,
-            speed,
-            0.0,
-            0.0,
-        ];
+        let state = [0.0, robot.initial_apex_height_m, speed, 0.0, 0.0];
         Ok(Self {
             robot,
             gait,
@@ -424,7 +418,8 @@ impl Hopper {
         // ---- Stance.
         let (robot, gait, ground) = (self.robot.clone(), self.gait.clone(), self.ground);
         let stance = |t: f64, s: &[f64; 5]| {
-            let (force, zg_dot, ux, uy) = stance_forces(&robot, &gait, &ground, foot_x, t - t_td, s);
+            let (force, zg_dot, ux, uy) =
+                stance_forces(&robot, &gait, &ground, foot_x, t - t_td, s);
             [s[2], s[3], force * ux / m, force * uy / m - g, zg_dot]
         };
         let liftoff_event = |t: f64, s: &[f64; 5]| {
@@ -492,9 +487,13 @@ impl Hopper {
         let apex_event = |_t: f64, s: &[f64; 5]| -s[3];
         let mut sample_t = next_sample(self.t_s);
         loop {
-            let stop =
-                self.integ
-                    .advance(&flight, &apex_event, &mut self.t_s, &mut self.state, sample_t)?;
+            let stop = self.integ.advance(
+                &flight,
+                &apex_event,
+                &mut self.t_s,
+                &mut self.state,
+                sample_t,
+            )?;
             if stop == Stop::Event {
                 break;
             }
@@ -511,8 +510,9 @@ impl Hopper {
         }
 
         // ---- Eq. (2): the next touchdown angle.
-        let commanded =
-            beta_lo + self.robot.touchdown_gain * (beta_td - self.gait.beta_des_rad) + angle_noise_rad;
+        let commanded = beta_lo
+            + self.robot.touchdown_gain * (beta_td - self.gait.beta_des_rad)
+            + angle_noise_rad;
         self.next_touchdown_angle_rad = commanded.clamp(
             self.robot.min_touchdown_angle_rad,
             self.robot.max_touchdown_angle_rad,

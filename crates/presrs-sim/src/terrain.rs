@@ -387,7 +387,8 @@ impl Terrain {
                     let (u, v) = rotate(x, y);
                     let v_w = v
                         + wave
-                            * (std::f64::consts::TAU * u / p.grain_waviness_wavelength_m + wave_phase)
+                            * (std::f64::consts::TAU * u / p.grain_waviness_wavelength_m
+                                + wave_phase)
                                 .sin()
                         + ring_offset;
                     let ring = (v_w / spacing).floor();
@@ -400,8 +401,7 @@ impl Terrain {
                     } else {
                         0.0
                     };
-                    let rough = p.roughness_m
-                        * value_noise(seed ^ 0x55, x / 0.5e-3, y / 0.5e-3);
+                    let rough = p.roughness_m * value_noise(seed ^ 0x55, x / 0.5e-3, y / 0.5e-3);
                     // Plank index across the grain and the seams between planks.
                     let across = v + plank_offset;
                     let plank = (across / p.plank_width_m).floor();
@@ -417,10 +417,7 @@ impl Terrain {
             Self::Carpet(p) => {
                 let scale = jitter(rng, size_sd * 0.5);
                 let (stitch, gauge) = (p.stitch_m * scale, p.gauge_m * scale);
-                let (off_u, off_v) = (
-                    rng.random_range(0.0..stitch),
-                    rng.random_range(0.0..gauge),
-                );
+                let (off_u, off_v) = (rng.random_range(0.0..stitch), rng.random_range(0.0..gauge));
                 let h_sd = p.loop_height_sd_m * jitter(rng, relief_sd);
                 let pos_sd = p.loop_position_sd_m * variability;
                 for (i, &(x, y)) in points.iter().enumerate() {
@@ -433,7 +430,8 @@ impl Terrain {
                             let (a, b) = (ci + di, cj + dj);
                             let gauss = |k: u64| {
                                 // Sum of uniforms: approximately normal, unit variance.
-                                (hash_unit(seed, a, b, k) + hash_unit(seed, a, b, k + 1)
+                                (hash_unit(seed, a, b, k)
+                                    + hash_unit(seed, a, b, k + 1)
                                     + hash_unit(seed, a, b, k + 2)
                                     - 1.5)
                                     * 2.0
@@ -459,7 +457,12 @@ impl Terrain {
                         let dir: f64 = rng.random_range(0.0..std::f64::consts::TAU);
                         let wl = p.undulation_wavelength_m * rng.random_range(1.0..2.5);
                         let k = std::f64::consts::TAU / wl;
-                        (k * dir.cos(), k * dir.sin(), rng.random_range(0.0..6.3), und * 0.5)
+                        (
+                            k * dir.cos(),
+                            k * dir.sin(),
+                            rng.random_range(0.0..6.3),
+                            und * 0.5,
+                        )
                     })
                     .collect();
                 // Clumps over a square twice the foot's size.

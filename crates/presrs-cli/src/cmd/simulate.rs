@@ -1,19 +1,351 @@
 //! `presrs simulate`: write the built-in simulated dataset (TekScan movies + manifest + ground truth).
+//!
+//! Output folder layout:
+//! - `manifest.csv`: `path,label,condition,group,frame,load` (one row per movie; `frame` empty: every
+//!   stance phase in the movie is a sample; `load` is the body mass in kg).
+//! - `recordings/<terrain>_<gait>_<trial>.asf`: TekScan ASCII movies, continuous frames at 100 Hz.
+//! - `truth/hops.csv`: one row per hop (stance frames, times, angles, forces, velocity).
+//! - `truth/trials.json`: per trial, per hop, the full ground truth (including per-frame forces).
+//! - `table1.csv`: simulated forward velocity per gait and terrain beside the paper's Table I.
+//! - `config.json`: the complete configuration used (feed it back with `--config` to reproduce).
 
-use std::io::Write;
-use std::path::PathBuf;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use presrs_sim::terrain::HeightMap;
+use presrs_sim::{DatasetSpec, HopRecord, SimConfig, Simulator, TrialPlan, VelocityTable};
 
 /// Simulate the one-legged hopper with PreSRS on the paper's terrains and gaits.
 #[derive(Debug, clap::Args)]
 pub struct SimulateArgs {
     /// Output folder; receives manifest.csv and one TekScan ASCII movie per trial.
-    #[arg(long)]
-    pub out: PathBuf,
+    #[arg(long, required_unless_present = "print_config")]
+    pub out: Option<PathBuf>,
     /// Seed of every random choice; the same seed gives the same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Recorded hops (stance images) per terrain for each gait [default: 80, i.e. 320 per gait].
+    #[arg(long)]
+    pub hops_per_gait: Option<usize>,
+    /// Terrains, comma separated: wood, carpet, clay, grass, or names given with --terrain-image
+    /// [default: the four built-ins plus every --terrain-image].
+    #[arg(long, value_delimiter = ',')]
+    pub terrains: Vec<String>,
+    /// Gaits, comma separated (names from the configuration) [default: G1,G2,G3].
+    #[arg(long, value_delimiter = ',')]
+    pub gaits: Vec<String>,
+    /// Body mass including payload, kg [default: the configuration's robot.body_mass_kg, 2.5].
+    #[arg(long)]
+    pub load: Option<f64>,
+    /// JSON file of parameter overrides (any subset of what --print-config shows).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Print the complete configuration (defaults plus --config overrides) as JSON and exit.
+    #[arg(long)]
+    pub print_config: bool,
+    /// A terrain given as a greyscale height-map image, NAME=PNG (repeatable), e.g.
+    /// --terrain-image photo_grass=../shared/data/textures/grass.png
+    #[arg(long, value_name = "NAME=PNG")]
+    pub terrain_image: Vec<String>,
 }
 
-pub fn run(_args: &SimulateArgs, _out: &mut dyn Write) -> anyhow::Result<()> {
-    anyhow::bail!("the simulator is not built yet")
+/// What [`write_dataset`] wrote.
+#[derive(Clone, Debug)]
+pub struct DatasetSummary {
+    /// The manifest file.
+    pub manifest: PathBuf,
+    pub trials: usize,
+    pub hops: usize,
+    pub frames: usize,
+    /// Trials that had to be rerun because the hopper fell.
+    pub reruns: usize,
+    pub velocity: VelocityTable,
+    pub mean_stance_s: f64,
+}
+
+/// One trial's truth, kept after its movie is written.
+#[derive(Debug, serde::Serialize)]
+struct TrialTruth {
+    name: String,
+    path: String,
+    terrain: String,
+    gait: String,
+    load_kg: f64,
+    frames: usize,
+    attempts: usize,
+    hops: Vec<HopRecord>,
+}
+
+/// Simulates the data set described by `config` and `spec` and writes it under `out_dir` (see the module
+/// documentation for the layout). `progress(done, total)` is called after each trial (from worker
+/// threads). Same inputs, same bytes.
+pub fn write_dataset(
+    config: &SimConfig,
+    spec: &DatasetSpec,
+    out_dir: &Path,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> anyhow::Result<DatasetSummary> {
+    let sim = Simulator::new(config.clone(), spec.seed, spec.image_terrains.clone())?;
+    let plans: Vec<TrialPlan> = sim.plan(spec)?;
+    let total = plans.len();
+    let rec_dir = out_dir.join("recordings");
+    let truth_dir = out_dir.join("truth");
+    for dir in [out_dir, &rec_dir, &truth_dir] {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+    }
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let truths: Vec<TrialTruth> =
+        sim.for_each_trial(spec, |trial| -> anyhow::Result<TrialTruth> {
+            let name = trial.plan.name();
+            let rel = format!("recordings/{name}.asf");
+            let path = out_dir.join(&rel);
+            presrs_io::write_tekscan_file(&trial.recording, &path)
+                .with_context(|| format!("cannot write the movie {}", path.display()))?;
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(n, total);
+            Ok(TrialTruth {
+                name,
+                path: rel,
+                terrain: trial.plan.terrain.clone(),
+                gait: trial.plan.gait.name.clone(),
+                load_kg: trial.plan.load_kg,
+                frames: trial.recording.frame_count(),
+                attempts: trial.attempts,
+                hops: trial.hops,
+            })
+        })?;
+
+    // Manifest.
+    let manifest = out_dir.join("manifest.csv");
+    presrs_io::write_atomic(&manifest, |w| {
+        writeln!(w, "path,label,condition,group,frame,load")?;
+        for t in &truths {
+            writeln!(
+                w,
+                "{},{},{},{},,{}",
+                csv_cell(&t.path),
+                csv_cell(&t.terrain),
+                csv_cell(&t.gait),
+                csv_cell(&t.name),
+                t.load_kg
+            )?;
+        }
+        Ok(())
+    })?;
+
+    // Per-hop truth.
+    presrs_io::write_atomic(&truth_dir.join("hops.csv"), |w| {
+        writeln!(
+            w,
+            "path,group,label,condition,hop,touchdown_time_s,liftoff_time_s,stance_duration_s,\
+             touchdown_angle_rad,liftoff_angle_rad,first_stance_frame,last_stance_frame,mid_stance_frame,\
+             stance_frames,peak_normal_force_n,peak_tangential_force_n,mid_stance_normal_force_n,\
+             mean_forward_velocity_m_per_s,apex_height_m,load_kg"
+        )?;
+        for t in &truths {
+            for h in &t.hops {
+                let opt = |v: Option<usize>| v.map(|v| v.to_string()).unwrap_or_default();
+                let mid_force = match (h.mid_stance_frame, h.first_stance_frame) {
+                    (Some(mid), Some(first)) => h
+                        .frame_normal_force_n
+                        .get(mid - first)
+                        .map(|f| format!("{f}"))
+                        .unwrap_or_default(),
+                    _ => String::new(),
+                };
+                let tr = &h.truth;
+                writeln!(
+                    w,
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    csv_cell(&t.path),
+                    csv_cell(&t.name),
+                    csv_cell(&t.terrain),
+                    csv_cell(&t.gait),
+                    tr.hop,
+                    tr.touchdown_time_s,
+                    tr.liftoff_time_s,
+                    tr.stance_duration_s,
+                    tr.touchdown_angle_rad,
+                    tr.liftoff_angle_rad,
+                    opt(h.first_stance_frame),
+                    opt(h.last_stance_frame),
+                    opt(h.mid_stance_frame),
+                    h.frame_normal_force_n.len(),
+                    tr.peak_normal_force_n,
+                    tr.peak_tangential_force_n,
+                    mid_force,
+                    tr.mean_forward_velocity_m_per_s,
+                    tr.apex_height_m,
+                    t.load_kg
+                )?;
+            }
+        }
+        Ok(())
+    })?;
+    presrs_io::write_atomic(&truth_dir.join("trials.json"), |w| {
+        serde_json::to_writer(&mut *w, &truths).map_err(std::io::Error::from)?;
+        writeln!(w)
+    })?;
+
+    // Table I.
+    let velocity = VelocityTable::from_trials(truths.iter().map(|t| {
+        (
+            t.gait.clone(),
+            t.terrain.clone(),
+            t.hops
+                .iter()
+                .map(|h| h.truth.mean_forward_velocity_m_per_s)
+                .collect(),
+        )
+    }));
+    presrs_io::write_atomic(&out_dir.join("table1.csv"), |w| {
+        writeln!(w, "gait,terrain,velocity_m_per_s,paper_m_per_s,hops")?;
+        for (g, row) in velocity.gaits.iter().zip(&velocity.velocity_m_per_s) {
+            for (ti, (t, v)) in velocity.terrains.iter().zip(row).enumerate() {
+                let gi = velocity.gaits.iter().position(|x| x == g).unwrap_or(0);
+                let paper = VelocityTable::paper_value(g, t)
+                    .map(|p| p.to_string())
+                    .unwrap_or_default();
+                writeln!(w, "{g},{t},{v},{paper},{}", velocity.hops[gi][ti])?;
+            }
+        }
+        Ok(())
+    })?;
+    presrs_io::write_atomic(&out_dir.join("config.json"), |w| {
+        writeln!(w, "{}", config.to_json_pretty())
+    })?;
+
+    let hops: usize = truths.iter().map(|t| t.hops.len()).sum();
+    let stance_sum: f64 = truths
+        .iter()
+        .flat_map(|t| t.hops.iter().map(|h| h.truth.stance_duration_s))
+        .sum();
+    Ok(DatasetSummary {
+        manifest,
+        trials: truths.len(),
+        hops,
+        frames: truths.iter().map(|t| t.frames).sum(),
+        reruns: truths.iter().map(|t| t.attempts - 1).sum(),
+        velocity,
+        mean_stance_s: if hops == 0 {
+            f64::NAN
+        } else {
+            stance_sum / hops as f64
+        },
+    })
+}
+
+/// Quotes a CSV cell when it needs it.
+fn csv_cell(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_owned()
+    }
+}
+
+/// The configuration: defaults, overridden by the JSON file if one is given.
+pub fn load_config(path: Option<&Path>) -> anyhow::Result<SimConfig> {
+    match path {
+        None => Ok(SimConfig::default()),
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read the configuration {}", path.display()))?;
+            SimConfig::from_json(&text)
+                .with_context(|| format!("invalid configuration in {}", path.display()))
+        }
+    }
+}
+
+/// Reads `NAME=PNG` as a height map scaled to `[0, 1]` (darkest pixel 0, brightest 1).
+fn read_terrain_image(arg: &str) -> anyhow::Result<(String, HeightMap)> {
+    let (name, path) = arg
+        .split_once('=')
+        .filter(|(n, p)| !n.trim().is_empty() && !p.trim().is_empty())
+        .with_context(|| format!("--terrain-image expects NAME=PNG, got {arg:?}"))?;
+    let path = Path::new(path.trim());
+    let rec = presrs_io::png::read_png(path)
+        .with_context(|| format!("cannot read the height map {}", path.display()))?;
+    let grid = rec.grid();
+    let values = rec.data();
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    let scaled = values[..grid.len()]
+        .iter()
+        .map(|&v| ((v - lo) / span) as f32)
+        .collect();
+    let map = HeightMap::new(grid.cols, grid.rows, scaled)
+        .with_context(|| format!("unusable height map {}", path.display()))?;
+    Ok((name.trim().to_owned(), map))
+}
+
+pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    let config = load_config(args.config.as_deref())?;
+    if args.print_config {
+        writeln!(out, "{}", config.to_json_pretty())?;
+        return Ok(());
+    }
+    let Some(out_dir) = args.out.as_deref() else {
+        anyhow::bail!("--out DIR is required");
+    };
+    let images = args
+        .terrain_image
+        .iter()
+        .map(|a| read_terrain_image(a))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut spec = DatasetSpec::paper(args.seed);
+    if args.terrains.is_empty() {
+        spec.terrains
+            .extend(images.iter().map(|(name, _)| name.clone()));
+    } else {
+        spec.terrains = args.terrains.iter().map(|t| t.trim().to_owned()).collect();
+    }
+    if !args.gaits.is_empty() {
+        spec.gaits = args.gaits.iter().map(|g| g.trim().to_owned()).collect();
+    }
+    spec.hops_per_gait = args.hops_per_gait;
+    spec.load_kg = args.load;
+    spec.image_terrains = images;
+
+    let start = std::time::Instant::now();
+    let bar = if std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::new(0);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} trials {elapsed}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Some(bar)
+    } else {
+        None
+    };
+    let progress = |done: usize, total: usize| {
+        if let Some(bar) = &bar {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        }
+    };
+    let summary = write_dataset(&config, &spec, out_dir, &progress)?;
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    let secs = start.elapsed().as_secs_f64();
+    write!(out, "{}", summary.velocity.format_with_paper())?;
+    writeln!(
+        out,
+        "{} trials, {} hops (mean stance {:.0} ms), {} frames in {:.1} s; {} trial(s) rerun after a fall",
+        summary.trials,
+        summary.hops,
+        summary.mean_stance_s * 1e3,
+        summary.frames,
+        secs,
+        summary.reruns
+    )?;
+    writeln!(out, "manifest: {}", summary.manifest.display())?;
+    Ok(())
 }
