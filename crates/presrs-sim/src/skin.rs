@@ -309,12 +309,14 @@ impl Foot {
             .collect();
         // Yield: the plastic cap must leave enough capacity to carry the force.
         let capacity: f64 = patch.yield_pa.iter().map(|y| y * self.point_area_m2).sum();
-        let yield_scale = if capacity < 1.25 * force_n {
-            1.25 * force_n / capacity
+        // With a fully plastic contact the pressure is uniform and cannot carry a moment: keep the
+        // capacity at least twice the force (the clay stiffens as it is compacted).
+        let yield_scale = if capacity < 2.0 * force_n {
+            2.0 * force_n / capacity
         } else {
             1.0
         };
-        let solve = |start| {
+        let solve = |start, cop| {
             solve_contact(
                 &self.points,
                 &surface,
@@ -328,10 +330,17 @@ impl Foot {
             )
         };
         // A warm start from the previous frame is usually a few Newton steps away; fall back to cold.
-        let state = match solve(*warm) {
+        // If the CoP asked for cannot be reached (a contact too plastic or too sparse to carry the
+        // moment), fall back to a CoP halfway to the centre, then to the centre.
+        let state = match solve(*warm, cop) {
             Ok(state) => state,
-            Err(_) if warm.is_some() => solve(None)?,
-            Err(err) => return Err(err),
+            Err(_) => match solve(None, cop) {
+                Ok(state) => state,
+                Err(_) => match solve(None, (0.5 * cop.0, 0.5 * cop.1)) {
+                    Ok(state) => state,
+                    Err(_) => solve(None, (0.0, 0.0))?,
+                },
+            },
         };
         *warm = Some(state);
         // Sensel forces.
@@ -372,7 +381,7 @@ fn law(d: f64, k: f64, py: f64) -> (f64, f64, f64) {
     }
 }
 
-/// Minimises the convex contact energy `sum(w psi(d_i)) + F b0 - F cop_x theta_x - F cop_y theta_y`
+/// Minimises the convex contact energy `sum(w psi(d_i)) + F b0 + F cop_x theta_x + F cop_y theta_y`
 /// whose stationarity conditions are: sum of pressure forces = F, first moments = F * cop.
 #[allow(clippy::too_many_arguments)]
 fn solve_contact(
@@ -391,8 +400,8 @@ fn solve_contact(
         return Err(SimError::Contact("no sample points under the foot".into()));
     }
     let eval = |u: [f64; 3], want_hessian: bool| {
-        let mut energy = force * u[0] - force * cop.0 * u[1] - force * cop.1 * u[2];
-        let mut grad = [force, -force * cop.0, -force * cop.1];
+        let mut energy = force * u[0] + force * cop.0 * u[1] + force * cop.1 * u[2];
+        let mut grad = [force, force * cop.0, force * cop.1];
         let mut hess = [[0.0; 3]; 3];
         for i in 0..n {
             let (x, y) = points[i];
@@ -487,8 +496,10 @@ fn solve_contact(
             )));
         }
     }
+    let (_, g, _) = eval(u, false);
     Err(SimError::Contact(format!(
-        "no convergence in 200 Newton steps (force {force:.4e} N, centre of pressure {cop:?} m)"
+        "no convergence in 200 Newton steps (force {force:.4e} N, centre of pressure {cop:?} m, \
+         residuals {g:?})"
     )))
 }
 
