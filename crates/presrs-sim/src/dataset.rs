@@ -352,7 +352,7 @@ impl Simulator {
             .collect();
         let zeros = vec![0.0; grid.len()];
         let mut counts = Vec::with_capacity(grid.len());
-        let mut current: Option<(usize, crate::terrain::SurfacePatch, Vec<f64>, (f64, f64))> = None;
+        let mut current: Option<CurrentHop> = None;
         let mut warm = None;
         let lat = Normal::new(0.0, cfg.realism.lateral_cop_sd_m)
             .map_err(|e| param("realism.lateral_cop_sd_m", e.to_string()))?;
@@ -458,6 +458,9 @@ pub fn ankle_cop(
         / n;
     (x + offset.0, offset.1)
 }
+
+/// The hop whose stance is being imaged: index, patch, effective stiffness, CoP offset.
+type CurrentHop = (usize, crate::terrain::SurfacePatch, Vec<f64>, (f64, f64));
 
 /// A simulated data set held in memory.
 #[derive(Clone, Debug)]

@@ -159,7 +159,8 @@ impl Foot {
     pub fn new(params: FootParams, skin: &SkinParams) -> Result<Self> {
         skin.validate()?;
         let p = &params;
-        if p.rows == 0 || p.cols == 0 || p.subsamples == 0 || !(p.pitch_m > 0.0) {
+        if p.rows == 0 || p.cols == 0 || p.subsamples == 0 || p.pitch_m.is_nan() || p.pitch_m <= 0.0
+        {
             return Err(param(
                 "foot",
                 "rows, cols, subsamples and pitch must be positive",
