@@ -31,6 +31,8 @@ enum Command {
     Classify(cmd::classify::ClassifyArgs),
     /// Evaluate the pipeline on a manifest (train on one condition, or leave one group out).
     Eval(cmd::eval::EvalArgs),
+    /// The paper's experiment end to end on the built-in simulator: Tables I and II.
+    Reproduce(cmd::reproduce::ReproduceArgs),
     /// Measure classification latency and batch throughput in this process.
     Bench(cmd::bench::BenchArgs),
 }
@@ -46,6 +48,7 @@ fn main() -> ExitCode {
         Command::Train(args) => cmd::train::run(args, &mut out),
         Command::Classify(args) => cmd::classify::run(args, &mut out),
         Command::Eval(args) => cmd::eval::run(args, &mut out),
+        Command::Reproduce(args) => cmd::reproduce::run(args, &mut out),
         Command::Bench(args) => cmd::bench::run(args, &mut out),
     }
     .and_then(|()| out.flush().map_err(anyhow::Error::from));

@@ -6,5 +6,6 @@ pub mod common;
 pub mod eval;
 pub mod features;
 pub mod inspect;
+pub mod reproduce;
 pub mod simulate;
 pub mod train;
