@@ -169,7 +169,9 @@ fn parse_crop_arg(text: &str) -> Result<CropChoice, String> {
     if text.trim().eq_ignore_ascii_case("auto") {
         return Ok(CropChoice::Auto);
     }
-    Crop::parse(text).map(CropChoice::Fixed).map_err(|err| err.to_string())
+    Crop::parse(text)
+        .map(CropChoice::Fixed)
+        .map_err(|err| err.to_string())
 }
 
 fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {
