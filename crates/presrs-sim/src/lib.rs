@@ -8,6 +8,7 @@ pub mod sensor;
 pub mod skin;
 pub mod slip;
 pub mod terrain;
+pub mod trace;
 
 pub use config::{RealismParams, SimConfig};
 pub use dataset::{
