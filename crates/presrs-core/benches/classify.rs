@@ -51,6 +51,19 @@ fn classify(c: &mut Criterion) {
         })
     });
 
+    let classifier = model.classifier();
+    let mut scratch = classifier.scratch();
+    let mut posteriors = vec![0.0; classifier.n_classes()];
+    c.bench_function("parzen_only_80x51", |b| {
+        b.iter(|| {
+            black_box(
+                classifier
+                    .classify_into(black_box(&reduced), &mut scratch, &mut posteriors)
+                    .ok(),
+            )
+        })
+    });
+
     let mut group = c.benchmark_group("batch");
     group.throughput(Throughput::Elements(BATCH as u64));
     group.bench_function("classify_batch_256", |b| {

@@ -15,4 +15,7 @@ pub mod stance;
 pub use crop::Crop;
 pub use error::CoreError;
 pub use frame::{Frame, FrameView, Grid};
+pub use pipeline::{
+    CheckedTrainConfig, LabeledImage, Prediction, Session, TrainConfig, TrainedModel, train,
+};
 pub use recording::{FrameInfo, PressureUnit, Recording, SensorMeta};
