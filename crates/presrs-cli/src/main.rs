@@ -57,6 +57,8 @@ fn main() -> ExitCode {
         // `presrs ... | head`: the reader went away; that is not an error.
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
+            // What was printed before the failure comes first, then the reason.
+            let _ = out.flush();
             eprintln!("error: {}", error_message(&err));
             ExitCode::from(1)
         }

@@ -8,7 +8,8 @@ use std::time::Instant;
 use anyhow::Context;
 use presrs_core::evaluation::{EvalReport, EvalSample, MeanStd, Protocol, evaluate};
 use presrs_core::pipeline::TrainConfig;
-use presrs_core::split::ValidationSize;
+use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, train};
+use presrs_core::split::{ValidationSize, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording};
 use presrs_io::atomic::write_atomic;
@@ -45,6 +46,22 @@ pub struct ReproduceArgs {
     /// Recorded hops per terrain and gait (default: the simulator's paper-sized experiment).
     #[arg(long)]
     pub hops_per_gait: Option<usize>,
+    /// Extra load of the load-independence test, as a fraction of the nominal body mass.
+    #[arg(long, default_value_t = 0.3)]
+    pub extra_load: f64,
+}
+
+/// Load independence: a model trained at the nominal load tested on images recorded at a higher load,
+/// as they are and scaled by nominal / actual load (the paper's "scaling factor").
+#[derive(Debug, Serialize)]
+struct LoadCheck {
+    nominal_load_kg: f64,
+    test_load_kg: f64,
+    test_images: usize,
+    /// Accuracy on the heavier robot's images as recorded.
+    accuracy_unscaled: MeanStd,
+    /// Accuracy after multiplying every test image by nominal / test load.
+    accuracy_scaled: MeanStd,
 }
 
 #[derive(Debug, Serialize)]
@@ -76,6 +93,8 @@ struct Results {
     train_test_matrix: BTreeMap<String, BTreeMap<String, f64>>,
     images_per_gait: BTreeMap<String, usize>,
     segmentation: SegmentationCheck,
+    /// `None` when the heavier hopper could not be simulated (the reason is printed).
+    load_independence: Option<LoadCheck>,
     /// Full reports of every training gait.
     evaluations: BTreeMap<String, EvalReport>,
     timings_s: BTreeMap<String, f64>,
@@ -100,6 +119,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let table = dataset.velocity_table();
     writeln!(out, "Table I (simulated vs paper)")?;
     writeln!(out, "{}", table.format_with_paper())?;
+    out.flush()?;
     let mut table1 = BTreeMap::new();
     let mut table1_paper = BTreeMap::new();
     for (g, gait) in table.gaits.iter().enumerate() {
@@ -222,6 +242,52 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         row.insert("overall".to_owned(), report.overall.mean);
         matrix.insert(train_gait.clone(), row);
     }
+
+    // 5. Load independence.
+    let load_start = Instant::now();
+    let nominal_kg = SimConfig::default().robot.body_mass_kg;
+    let mut heavy_spec = spec.clone();
+    heavy_spec.load_kg = Some(nominal_kg * (1.0 + args.extra_load));
+    heavy_spec.seed = args.seed.wrapping_add(1_000_003);
+    let load_check = match simulate_heavy(&heavy_spec) {
+        Ok(heavy_samples) => {
+            let training_pool: Vec<&StanceSample> =
+                samples.iter().filter(|s| s.gait == "G2").collect();
+            Some(load_independence(
+                &training_pool,
+                &heavy_samples,
+                nominal_kg,
+                nominal_kg * (1.0 + args.extra_load),
+                &config,
+                args.repeats,
+                args.seed,
+            )?)
+        }
+        Err(err) => {
+            // The main tables stand on their own; say why this part is missing instead of failing all.
+            writeln!(out, "\nLoad independence: not measured: {err:#}")?;
+            None
+        }
+    };
+    timings.insert(
+        "load_independence".to_owned(),
+        load_start.elapsed().as_secs_f64(),
+    );
+    if let Some(load_check) = &load_check {
+        writeln!(
+            out,
+            "\nLoad independence (trained on G2 at {:.2} kg, tested on all gaits at {:.2} kg, {} images)",
+            load_check.nominal_load_kg, load_check.test_load_kg, load_check.test_images
+        )?;
+        writeln!(
+            out,
+            "  as recorded        {:5.1} % +- {:.1}\n  scaled by load     {:5.1} % +- {:.1}",
+            100.0 * load_check.accuracy_unscaled.mean,
+            100.0 * load_check.accuracy_unscaled.std,
+            100.0 * load_check.accuracy_scaled.mean,
+            100.0 * load_check.accuracy_scaled.std
+        )?;
+    }
     timings.insert("total".to_owned(), started.elapsed().as_secs_f64());
 
     // 5. Results files.
@@ -242,6 +308,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         train_test_matrix: matrix,
         images_per_gait,
         segmentation,
+        load_independence: load_check,
         evaluations,
         timings_s: timings,
     };
@@ -262,6 +329,78 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64()
     )?;
     Ok(())
+}
+
+/// The stance images of the data set `spec` describes.
+fn simulate_heavy(spec: &DatasetSpec) -> anyhow::Result<Vec<StanceSample>> {
+    let spin = spinner("simulating the heavier hopper");
+    let heavy = simulate_dataset(&SimConfig::default(), spec).with_context(|| {
+        format!(
+            "the simulation at {:.2} kg failed",
+            spec.load_kg.unwrap_or(f64::NAN)
+        )
+    })?;
+    spin.finish_and_clear();
+    Ok(stance_samples(&heavy.trials)?.0)
+}
+
+/// Trains on `pool` (the paper's draw: 20 per terrain, 7 of them for validation) once per repeat and tests
+/// on `heavy`, as recorded and scaled by `nominal_kg / heavy_kg`.
+fn load_independence(
+    pool: &[&StanceSample],
+    heavy: &[StanceSample],
+    nominal_kg: f64,
+    heavy_kg: f64,
+    config: &CheckedTrainConfig,
+    repeats: usize,
+    seed: u64,
+) -> anyhow::Result<LoadCheck> {
+    let factor = nominal_kg / heavy_kg;
+    let scaled: Vec<Frame> = heavy
+        .iter()
+        .map(|s| {
+            let mut frame = s.frame.clone();
+            frame.values_mut().iter_mut().for_each(|v| *v *= factor);
+            frame
+        })
+        .collect();
+    let labels: Vec<&str> = pool.iter().map(|s| s.terrain.as_str()).collect();
+    let (mut unscaled_acc, mut scaled_acc) = (Vec::new(), Vec::new());
+    for repeat in 0..repeats {
+        let split = stratified_split(
+            &labels,
+            Some(20),
+            ValidationSize::Count(7),
+            seed.wrapping_add(repeat as u64),
+        )?;
+        let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
+            indices
+                .iter()
+                .map(|&i| LabeledImage::new(pool[i].frame.view(), labels[i]))
+                .collect()
+        };
+        let model = train(&images(&split.train), &images(&split.validation), config)?;
+        let mut session = model.session();
+        let (mut right_raw, mut right_scaled) = (0usize, 0usize);
+        for (sample, scaled_frame) in heavy.iter().zip(&scaled) {
+            if session.classify(&sample.frame.view())?.label == sample.terrain {
+                right_raw += 1;
+            }
+            if session.classify(&scaled_frame.view())?.label == sample.terrain {
+                right_scaled += 1;
+            }
+        }
+        let n = heavy.len().max(1) as f64;
+        unscaled_acc.push(right_raw as f64 / n);
+        scaled_acc.push(right_scaled as f64 / n);
+    }
+    Ok(LoadCheck {
+        nominal_load_kg: nominal_kg,
+        test_load_kg: heavy_kg,
+        test_images: heavy.len(),
+        accuracy_unscaled: MeanStd::of(&unscaled_acc),
+        accuracy_scaled: MeanStd::of(&scaled_acc),
+    })
 }
 
 /// One stance image of the simulated data set.
@@ -364,6 +503,20 @@ fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io
             )?;
         }
         writeln!(w)?;
+    }
+    if let Some(l) = &results.load_independence {
+        writeln!(
+            w,
+            "\n## Load independence\n\nTrained on G2 at {:.2} kg; tested on every gait at {:.2} kg ({} images): \
+         {:.1} % ± {:.1} as recorded, {:.1} % ± {:.1} scaled by the load ratio.",
+            l.nominal_load_kg,
+            l.test_load_kg,
+            l.test_images,
+            100.0 * l.accuracy_unscaled.mean,
+            100.0 * l.accuracy_unscaled.std,
+            100.0 * l.accuracy_scaled.mean,
+            100.0 * l.accuracy_scaled.std
+        )?;
     }
     let s = &results.segmentation;
     writeln!(
