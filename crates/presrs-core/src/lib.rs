@@ -6,6 +6,7 @@ pub mod error;
 pub mod evaluation;
 pub mod features;
 pub mod frame;
+pub mod online;
 pub mod pca;
 pub mod pipeline;
 pub mod recording;
