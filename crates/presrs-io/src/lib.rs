@@ -3,11 +3,13 @@
 pub mod atomic;
 pub mod dataset;
 pub mod error;
+pub mod frame_protocol;
 pub mod manifest;
 pub mod model_file;
 pub mod npy;
 pub mod png;
 pub mod tekscan;
+pub mod tekscan_stream;
 pub mod text;
 mod textutil;
 

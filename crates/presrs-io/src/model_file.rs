@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::TrainedModel;
 use serde::{Deserialize, Serialize};
 
@@ -47,6 +48,10 @@ pub struct ModelFile {
     pub presrs_version: String,
     pub provenance: Provenance,
     pub model: TrainedModel,
+    /// How to run the model online (`presrs stream`): detector settings, calibration and the
+    /// terrain-to-gait table. Optional and additive: version-1 files without it read as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub online: Option<OnlineProfile>,
 }
 
 impl ModelFile {
@@ -57,6 +62,7 @@ impl ModelFile {
             presrs_version: env!("CARGO_PKG_VERSION").to_owned(),
             provenance,
             model,
+            online: None,
         }
     }
 }
