@@ -35,6 +35,14 @@ enum Command {
     Reproduce(cmd::reproduce::ReproduceArgs),
     /// Measure classification latency and batch throughput in this process.
     Bench(cmd::bench::BenchArgs),
+    /// Classify a live frame stream online (stdin or TCP clients); JSON lines out.
+    #[command(
+        after_help = "Examples:\n  presrs stream --model g2.json --calibrate sim/manifest.csv < sim/recordings/wood_G2_000.asf\n  presrs stream --model g2.json --listen 127.0.0.1:7700"
+    )]
+    Stream(cmd::stream::StreamArgs),
+    /// Send a recording to `presrs stream --listen` as a live stream.
+    #[command(after_help = "Example:\n  presrs replay sim/recordings/grass_G2_000.asf --connect 127.0.0.1:7700 --rate 100")]
+    Replay(cmd::replay::ReplayArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +58,8 @@ fn main() -> ExitCode {
         Command::Eval(args) => cmd::eval::run(args, &mut out),
         Command::Reproduce(args) => cmd::reproduce::run(args, &mut out),
         Command::Bench(args) => cmd::bench::run(args, &mut out),
+        Command::Stream(args) => cmd::stream::run(args, &mut out),
+        Command::Replay(args) => cmd::replay::run(args, &mut out),
     }
     .and_then(|()| out.flush().map_err(anyhow::Error::from));
     match result {
