@@ -1,0 +1,405 @@
+//! `presrs stream` and `presrs replay` end to end: stdin, several TCP clients at once, and faults
+//! (malformed, oversized and wrong-size frames, a client that disconnects mid-frame) that must not
+//! affect the other clients. Every server is started with `--exit-after N` and stops by itself; the
+//! test kills it (by its own child handle) only if it failed to.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{Shutdown, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use presrs_io::frame_protocol::{Dtype, encode_frame};
+use serde_json::Value;
+
+fn presrs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_presrs"))
+}
+
+fn run_ok(args: &[&str]) -> String {
+    let out = presrs().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// A small simulated data set and a model trained on it (built once per test binary).
+fn fixture() -> &'static (PathBuf, PathBuf) {
+    static FIXTURE: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("presrs-stream-test-{}", std::process::id()));
+        let dir_s = dir.to_str().unwrap();
+        run_ok(&[
+            "simulate",
+            "--out",
+            dir_s,
+            "--seed",
+            "5",
+            "--gaits",
+            "G2",
+            "--hops-per-gait",
+            "12",
+        ]);
+        let manifest = dir.join("manifest.csv");
+        let model = dir.join("model.json");
+        run_ok(&[
+            "train",
+            "--manifest",
+            manifest.to_str().unwrap(),
+            "--out",
+            model.to_str().unwrap(),
+            "--per-class",
+            "8",
+            "--validation",
+            "4",
+            "--dims",
+            "10",
+        ]);
+        (dir, model)
+    })
+}
+
+fn recording(terrain: &str) -> PathBuf {
+    fixture().0.join(format!("recordings/{terrain}_G2_000.asf"))
+}
+
+fn json_lines(text: &str) -> Vec<Value> {
+    text.lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+fn count(events: &[Value], kind: &str) -> usize {
+    events.iter().filter(|e| e["event"] == kind).count()
+}
+
+/// Offline complete stances of a recording.
+fn offline_stances(path: &Path) -> usize {
+    let rec = presrs_io::read_recording(path).unwrap();
+    let seg = presrs_core::stance::segment(
+        &rec.total_per_frame(),
+        &presrs_core::stance::ValidSegmentParams::default(),
+    )
+    .unwrap();
+    seg.complete().count()
+}
+
+#[test]
+fn stdin_tekscan_gives_one_decision_per_stance() {
+    let (dir, model) = fixture();
+    let path = recording("grass");
+    let mut child = presrs()
+        .args(["stream", "--model", model.to_str().unwrap(), "--calibrate"])
+        .arg(dir.join("manifest.csv"))
+        .args(["--fuse", "5,6,7", "--gait", "grass=G3"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Write the movie in small pieces, as a live writer would.
+    let bytes = std::fs::read(&path).unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let writer = std::thread::spawn(move || {
+        for chunk in bytes.chunks(7919) {
+            stdin.write_all(chunk).unwrap();
+        }
+    });
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let events = json_lines(&String::from_utf8(out.stdout).unwrap());
+    let stances = offline_stances(&path);
+    assert!(stances >= 10);
+    let singles: Vec<&Value> = events
+        .iter()
+        .filter(|e| e["event"] == "classification" && e["kind"] == "single")
+        .collect();
+    assert_eq!(singles.len(), stances);
+    assert_eq!(count(&events, "liftoff"), stances);
+    assert_eq!(count(&events, "touchdown"), stances);
+    let fused = events.iter().filter(|e| e["kind"] == "fused").count();
+    assert_eq!(fused, stances);
+    let grass = singles.iter().filter(|e| e["label"] == "grass").count();
+    assert!(grass * 10 >= stances * 7, "{grass}/{stances} grass");
+    for e in &singles {
+        assert!(e["latency_us"].as_f64().unwrap() >= 0.0);
+        assert!(e["posteriors"]["grass"].is_number());
+        if e["label"] == "grass" {
+            assert_eq!(e["gait"], "G3");
+        }
+    }
+    assert_eq!(events.last().unwrap()["event"], "end");
+}
+
+struct Server {
+    child: Child,
+    addr: String,
+}
+
+impl Server {
+    fn start(extra: &[&str]) -> Self {
+        let (dir, model) = fixture();
+        let mut child = presrs()
+            .args(["stream", "--model", model.to_str().unwrap(), "--calibrate"])
+            .arg(dir.join("manifest.csv"))
+            .args(["--listen", "127.0.0.1:0"])
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut first = String::new();
+        BufReader::new(child.stdout.as_mut().unwrap())
+            .read_line(&mut first)
+            .unwrap();
+        let v: Value = serde_json::from_str(&first).unwrap();
+        assert_eq!(v["event"], "listening");
+        let addr = v["addr"].as_str().unwrap().to_owned();
+        assert!(addr.starts_with("127.0.0.1:"));
+        Self { child, addr }
+    }
+
+    /// Waits (bounded) for the server to exit by itself; returns its stderr.
+    fn finish(mut self) -> String {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                let mut err = String::new();
+                self.child
+                    .stderr
+                    .take()
+                    .unwrap()
+                    .read_to_string(&mut err)
+                    .unwrap();
+                assert!(status.success(), "server failed: {err}");
+                return err;
+            }
+            if Instant::now() > deadline {
+                let _ = self.child.kill();
+                panic!("the server did not stop by itself");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+fn replay(addr: &str, path: &Path) -> Vec<Value> {
+    let out = presrs()
+        .args(["replay"])
+        .arg(path)
+        .args(["--connect", addr, "--rate", "max"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    json_lines(&String::from_utf8(out.stdout).unwrap())
+}
+
+fn frame_bytes(rows: usize, cols: usize, dtype: Dtype, values: &[f64]) -> Vec<u8> {
+    let mut buf = Vec::new();
+    encode_frame(&mut buf, rows, cols, dtype, 0, values).unwrap();
+    buf
+}
+
+fn read_all_lines(stream: TcpStream) -> Vec<Value> {
+    stream
+        .set_read_timeout(Some(Duration::from_secs(30)))
+        .unwrap();
+    let mut text = String::new();
+    BufReader::new(stream).read_to_string(&mut text).unwrap();
+    json_lines(&text)
+}
+
+#[test]
+fn several_clients_at_once_and_faulty_clients_do_not_disturb_them() {
+    // Two good clients, one sending bad frames then a fatal one, one disconnecting mid-frame.
+    let server = Server::start(&["--exit-after", "4"]);
+    let addr = server.addr.clone();
+    let (wood, grass) = (recording("wood"), recording("grass"));
+    let good = {
+        let (addr, wood, grass) = (addr.clone(), wood.clone(), grass.clone());
+        std::thread::spawn(move || {
+            let a = std::thread::spawn({
+                let addr = addr.clone();
+                move || replay(&addr, &wood)
+            });
+            let b = replay(&addr, &grass);
+            (a.join().unwrap(), b)
+        })
+    };
+
+    // Faulty client 1: good frames, a wrong-size frame, an unknown dtype, a NaN, then an oversized
+    // declaration (fatal).
+    let mut bad = TcpStream::connect(&addr).unwrap();
+    let zeros = vec![0.0; 44 * 44];
+    bad.write_all(&frame_bytes(44, 44, Dtype::U8, &zeros))
+        .unwrap();
+    bad.write_all(&frame_bytes(4, 4, Dtype::U8, &[0.0; 16]))
+        .unwrap();
+    let mut unknown = frame_bytes(44, 44, Dtype::U8, &zeros);
+    unknown[12] = 77;
+    bad.write_all(&unknown).unwrap();
+    let mut nan = zeros.clone();
+    nan[5] = f64::NAN;
+    bad.write_all(&frame_bytes(44, 44, Dtype::F64, &nan))
+        .unwrap();
+    bad.write_all(&frame_bytes(44, 44, Dtype::U8, &zeros))
+        .unwrap();
+    let mut huge = frame_bytes(1, 1, Dtype::U8, &[0.0]);
+    huge[4..8].copy_from_slice(&u32::MAX.to_le_bytes());
+    bad.write_all(&huge).unwrap();
+    let bad_events = read_all_lines(bad);
+    let errors: Vec<&Value> = bad_events
+        .iter()
+        .filter(|e| e["event"] == "error")
+        .collect();
+    assert_eq!(errors.len(), 4, "{bad_events:?}");
+    assert!(errors[0]["message"].as_str().unwrap().contains("4x4"));
+    assert!(
+        errors[1]["message"]
+            .as_str()
+            .unwrap()
+            .contains("unknown dtype 77")
+    );
+    assert!(
+        errors[2]["message"]
+            .as_str()
+            .unwrap()
+            .contains("not finite")
+    );
+    assert!(
+        errors[3]["message"]
+            .as_str()
+            .unwrap()
+            .contains("exceeds the limit")
+    );
+    assert_eq!(errors[3]["fatal"], true);
+    let end = bad_events.last().unwrap();
+    assert_eq!(
+        (end["event"].as_str(), end["frames"].as_u64()),
+        (Some("end"), Some(2))
+    );
+
+    // Faulty client 2: half a frame, then gone.
+    let mut cut = TcpStream::connect(&addr).unwrap();
+    let frame = frame_bytes(44, 44, Dtype::U8, &zeros);
+    cut.write_all(&frame[..frame.len() / 2]).unwrap();
+    cut.shutdown(Shutdown::Write).unwrap();
+    let cut_events = read_all_lines(cut);
+    assert!(
+        cut_events.iter().any(|e| e["event"] == "error"
+            && e["message"]
+                .as_str()
+                .unwrap()
+                .contains("ended inside a message")),
+        "{cut_events:?}"
+    );
+
+    let (wood_events, grass_events) = good.join().unwrap();
+    for (events, path) in [(&wood_events, &wood), (&grass_events, &grass)] {
+        let stances = offline_stances(path);
+        let singles = events
+            .iter()
+            .filter(|e| e["event"] == "classification" && e["kind"] == "single")
+            .count();
+        assert_eq!(singles, stances, "{}", path.display());
+        assert_eq!(count(events, "error"), 0);
+        let end = events.last().unwrap();
+        assert_eq!(end["event"], "end");
+        assert_eq!(end["dropped_events"], 0);
+        assert!(
+            events
+                .iter()
+                .all(|e| e["event"] != "classification" || e["timestamp_us"].is_u64())
+        );
+    }
+    let log = server.finish();
+    assert!(log.contains("ended inside a message"), "{log}");
+    assert!(log.contains("exceeds the limit"), "{log}");
+}
+
+#[test]
+fn clients_over_the_limit_are_refused_and_non_loopback_is_rejected() {
+    let server = Server::start(&["--exit-after", "2", "--max-clients", "1"]);
+    let first = TcpStream::connect(&server.addr).unwrap();
+    // Give the server time to register the first client.
+    std::thread::sleep(Duration::from_millis(300));
+    let second = read_all_lines(TcpStream::connect(&server.addr).unwrap());
+    assert!(
+        second[0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("server full"),
+        "{second:?}"
+    );
+    first.shutdown(Shutdown::Write).unwrap();
+    let events = read_all_lines(first);
+    assert_eq!(events.last().unwrap()["frames"], 0);
+    server.finish();
+
+    let (_, model) = fixture();
+    let out = presrs()
+        .args([
+            "stream",
+            "--model",
+            model.to_str().unwrap(),
+            "--listen",
+            "0.0.0.0:0",
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("only loopback"));
+}
+
+#[test]
+fn malformed_tekscan_on_stdin_is_reported_and_skipped() {
+    let (_, model) = fixture();
+    let text = std::fs::read_to_string(recording("wood")).unwrap();
+    // Break one data row (too few values) in frame 3.
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    let frame3 = lines.iter().position(|l| l == "Frame 3").unwrap();
+    lines[frame3 + 2] = "1,2,3".to_owned();
+    let mut child = presrs()
+        .args(["stream", "--model", model.to_str().unwrap()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let body = lines.join("\n");
+    let writer = std::thread::spawn(move || stdin.write_all(body.as_bytes()));
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap().unwrap();
+    assert!(out.status.success());
+    let events = json_lines(&String::from_utf8(out.stdout).unwrap());
+    let errors: Vec<&Value> = events.iter().filter(|e| e["event"] == "error").collect();
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert!(
+        errors[0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("frame 3 row 2 has 3 values")
+    );
+    let end = events.last().unwrap();
+    let frames = presrs_io::read_recording(&recording("wood"))
+        .unwrap()
+        .frame_count();
+    assert_eq!(end["frames"].as_u64().unwrap() as usize, frames - 1);
+    assert!(count(&events, "classification") > 0);
+}
