@@ -43,6 +43,10 @@ enum Command {
     /// Send a recording to `presrs stream --listen` as a live stream.
     #[command(after_help = "Example:\n  presrs replay sim/recordings/grass_G2_000.asf --connect 127.0.0.1:7700 --rate 100")]
     Replay(cmd::replay::ReplayArgs),
+    /// Draw a pressure image (PNG/SVG heat map in physical units) or a recording's movie (GIF).
+    Plot(cmd::plot::PlotArgs),
+    /// Write an HTML report with figures (pressure images, spectra, load curves, PCA, accuracy).
+    Report(cmd::report::ReportArgs),
 }
 
 fn main() -> ExitCode {
@@ -60,6 +64,8 @@ fn main() -> ExitCode {
         Command::Bench(args) => cmd::bench::run(args, &mut out),
         Command::Stream(args) => cmd::stream::run(args, &mut out),
         Command::Replay(args) => cmd::replay::run(args, &mut out),
+        Command::Plot(args) => cmd::plot::run(args, &mut out),
+        Command::Report(args) => cmd::report::run(args, &mut out),
     }
     .and_then(|()| out.flush().map_err(anyhow::Error::from));
     match result {

@@ -15,7 +15,7 @@ use crate::{ReportError, Result};
 
 const TITLE: f64 = 18.0;
 const LABEL: f64 = 15.0;
-const TICK: f64 = 12.0;
+const TICK: f64 = 13.0;
 
 /// Soft colour for shaded stance phases.
 const STANCE_SHADE: RGBColor = RGBColor(255, 224, 178);
@@ -28,6 +28,22 @@ fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
             None => Some((v, v)),
             Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
         })
+}
+
+/// A tick label: integers without a decimal point, others with up to three decimals.
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if a < 1e-12 {
+        return "0".to_owned();
+    }
+    if (v - v.round()).abs() < 1e-9 * a.max(1.0) && a < 1e9 {
+        return format!("{v:.0}");
+    }
+    if !(1e-3..1e9).contains(&a) {
+        return format!("{v:.1e}");
+    }
+    let text = format!("{v:.3}");
+    text.trim_end_matches('0').trim_end_matches('.').to_owned()
 }
 
 /// `lo..hi` widened by `pad` of its span (and made non-empty).
@@ -53,7 +69,7 @@ where
     } else {
         (Pos::new(HPos::Center, VPos::Top), (x, y + 6))
     };
-    area.draw(&Text::new(text.to_owned(), at, font(TICK + 1.0).pos(pos)))?;
+    area.draw(&Text::new(text.to_owned(), at, font(TICK + 2.0).pos(pos)))?;
     Ok(())
 }
 
@@ -142,7 +158,11 @@ where
             .chain(data.baseline.iter().copied()),
     )
     .unwrap_or((0.0, 1.0));
-    let y_range = padded(lo.min(0.0), hi, 0.08);
+    let mut y_range = padded(lo.min(0.0), hi, 0.08);
+    if legend {
+        // Room above the curve for the legend.
+        y_range.end += 0.8 * (y_range.end - y_range.start);
+    }
     let x_range = data.time(0.0)..data.time((n - 1).max(1) as f64);
     let mut chart = ChartBuilder::on(area)
         .caption(&data.name, title_font(TITLE - 2.0))
@@ -153,11 +173,13 @@ where
         .build_cartesian_2d(x_range, y_range.clone())?;
     chart
         .configure_mesh()
-        .light_line_style(WHITE.mix(0.0))
+        .light_line_style(WHITE)
         .x_desc(data.time_label())
         .y_desc(&data.load_label)
         .axis_desc_style(font(LABEL - 1.0))
         .label_style(font(TICK))
+        .x_label_formatter(&|v| num(*v))
+        .y_label_formatter(&|v| num(*v))
         .y_labels(5)
         .draw()?;
     let shade = |spans: &[(usize, usize)], color: RGBAColor| {
@@ -325,23 +347,24 @@ impl Figure for SpectraFigure {
                 .build_cartesian_2d(x0..x1, (lo * 0.8..hi * 1.25).log_scale())?;
             chart
                 .configure_mesh()
-                .light_line_style(WHITE.mix(0.0))
+                .light_line_style(WHITE)
                 .x_desc(&self.x_label)
                 .y_desc(&self.y_label)
                 .axis_desc_style(font(LABEL - 1.0))
                 .label_style(font(TICK))
+                .x_label_formatter(&|v| num(*v))
                 .y_label_formatter(&|v| format!("{v:.0e}"))
                 .x_labels(6)
                 .draw()?;
             let n = panel.lines.len();
             for (i, (name, values)) in panel.lines.iter().enumerate() {
                 let color = category_color(i);
-                // Later lines thinner so that overlaid, near-identical spectra all stay visible.
-                let width = if n > 1 { (n - i) as u32 } else { 1 };
+                // The first line a little wider, so that overlaid, near-identical spectra all show.
+                let width = if n > 1 && i == 0 { 2 } else { 1 };
                 chart
                     .draw_series(LineSeries::new(
                         self.x.iter().zip(values).map(|(&x, &v)| (x, v.max(lo))),
-                        color.mix(0.85).stroke_width(width),
+                        color.mix(0.75).stroke_width(width),
                     ))?
                     .label(name)
                     .legend(move |(x, y)| {
@@ -410,11 +433,13 @@ impl Figure for ScatterFigure {
             .build_cartesian_2d(padded(x0, x1, 0.06), padded(y0, y1, 0.06))?;
         chart
             .configure_mesh()
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(WHITE)
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .axis_desc_style(font(LABEL))
             .label_style(font(TICK))
+            .x_label_formatter(&|v| num(*v))
+            .y_label_formatter(&|v| num(*v))
             .draw()?;
         for &(x, y, l, c) in &self.points {
             let color = category_color(l);
@@ -510,11 +535,12 @@ impl Figure for ValidationFigure {
             )?;
         chart
             .configure_mesh()
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(WHITE)
             .x_desc("σ (PCA feature units, log scale)")
             .y_desc("validation accuracy (%)")
             .axis_desc_style(font(LABEL - 1.0))
             .label_style(font(TICK))
+            .y_label_formatter(&|v| num(*v))
             .x_label_formatter(&|v| format!("{v:.2e}"))
             .x_labels(5)
             .draw()?;
@@ -572,11 +598,13 @@ impl Figure for ValidationFigure {
             .build_cartesian_2d(0.0..(n as f64 + 1.0), 0.0..101.0)?;
         chart
             .configure_mesh()
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(WHITE)
             .x_desc("principal components kept")
             .y_desc("cumulative explained variance (%)")
             .axis_desc_style(font(LABEL - 1.0))
             .label_style(font(TICK))
+            .x_label_formatter(&|v| num(*v))
+            .y_label_formatter(&|v| num(*v))
             .draw()?;
         let line = category_color(2);
         chart
@@ -675,7 +703,7 @@ impl Figure for ConfusionFigure {
                     ));
                     let color: &'static RGBColor = if share > 0.55 { &WHITE } else { &BLACK };
                     texts.push(Text::new(
-                        format!("{count}\n"),
+                        count.to_string(),
                         (x, y),
                         font(TICK + 2.0)
                             .color(color)
@@ -733,10 +761,18 @@ pub struct BarsFigure {
     pub spread_name: Option<String>,
 }
 
+impl BarsFigure {
+    /// Pixels to the right of the bars for the legend.
+    const LEGEND_ROOM: u32 = 240;
+
+    fn plot_width(&self) -> u32 {
+        (90 * (self.categories.len() * self.series.len().max(1)) as u32 + 80).clamp(480, 1200)
+    }
+}
+
 impl Figure for BarsFigure {
     fn size(&self) -> (u32, u32) {
-        let width = 220 + 90 * (self.categories.len() * self.series.len().max(1)) as u32;
-        (width.clamp(700, 1400), 520)
+        (self.plot_width() + Self::LEGEND_ROOM + 120, 520)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
@@ -763,16 +799,20 @@ impl Figure for BarsFigure {
             .margin_right(20)
             .x_label_area_size(56)
             .y_label_area_size(70)
-            .build_cartesian_2d(-0.5..n - 0.5, y0..y1)?;
+            .build_cartesian_2d(
+                -0.5..n - 0.5 + n * f64::from(Self::LEGEND_ROOM) / f64::from(self.plot_width()),
+                y0..y1,
+            )?;
         chart
             .configure_mesh()
             .disable_x_mesh()
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(WHITE)
             .x_labels(0)
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .axis_desc_style(font(LABEL))
             .label_style(font(TICK))
+            .y_label_formatter(&|v| num(*v))
             .draw()?;
         let k = self.series.len().max(1) as f64;
         let group = 0.8;
@@ -798,13 +838,18 @@ impl Figure for BarsFigure {
             let whiskers = series.values.iter().enumerate().filter_map(|(c, v)| {
                 v.filter(|(_, spread)| *spread > 0.0).map(|(mean, spread)| {
                     let x = c as f64 + offset(s);
-                    ErrorBar::new_vertical(
-                        x,
-                        (mean - spread).max(y0),
-                        mean,
-                        (mean + spread).min(y1),
+                    let (lo, hi) = ((mean - spread).max(y0), (mean + spread).min(y1));
+                    let cap = bar * 0.15;
+                    PathElement::new(
+                        vec![
+                            (x - cap, lo),
+                            (x + cap, lo),
+                            (x, lo),
+                            (x, hi),
+                            (x - cap, hi),
+                            (x + cap, hi),
+                        ],
                         BLACK.stroke_width(2),
-                        10,
                     )
                 })
             });
@@ -854,7 +899,7 @@ impl Figure for BarsFigure {
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
+            .position(SeriesLabelPosition::MiddleRight)
             .background_style(WHITE.mix(0.9))
             .border_style(BLACK)
             .label_font(font(TICK + 1.0))
@@ -903,11 +948,13 @@ impl Figure for TraceFigure {
             .build_cartesian_2d(padded(x0, x1, 0.02), padded(y0, y1, 0.12))?;
         chart
             .configure_mesh()
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(WHITE)
             .x_desc("forward distance (m)")
             .y_desc("body height (m)")
             .axis_desc_style(font(LABEL - 1.0))
             .label_style(font(TICK))
+            .x_label_formatter(&|v| num(*v))
+            .y_label_formatter(&|v| num(*v))
             .draw()?;
         for (i, trace) in self.traces.iter().enumerate() {
             let color = category_color(i);
@@ -963,11 +1010,13 @@ impl Figure for TraceFigure {
             .build_cartesian_2d(t0..t1, padded(f0.min(0.0), f1, 0.06))?;
         chart
             .configure_mesh()
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(WHITE)
             .x_desc("time (s)")
             .y_desc("force on the foot (N)")
             .axis_desc_style(font(LABEL - 1.0))
             .label_style(font(TICK))
+            .x_label_formatter(&|v| num(*v))
+            .y_label_formatter(&|v| num(*v))
             .draw()?;
         for (i, trace) in self.traces.iter().enumerate() {
             let color = category_color(i);

@@ -111,9 +111,11 @@ const LARGE: PanelStyle = PanelStyle {
 };
 
 const SMALL: PanelStyle = PanelStyle {
-    title: 14.0,
-    label: 12.0,
-    tick: 10.0,
+    // plotters' bitmap text drops each glyph's left side bearing, which merges letters below ~16 px
+    // ("cl" reads as "d"); titles stay above that.
+    title: 17.0,
+    label: 13.0,
+    tick: 11.0,
     x_area: 36,
     y_area: 44,
     margin: 6,
@@ -216,8 +218,13 @@ where
     chart.draw_series(cells)?;
     chart.draw_series(crosses)?;
     if let Some(o) = outline {
-        let (x0, y0) = (o.col as f64 * px, -(o.row as f64) * py);
-        let (x1, y1) = (x0 + o.grid.cols as f64 * px, y0 - o.grid.rows as f64 * py);
+        // Inset a little so that edges on the image's border stay visible.
+        let (ix, iy) = (0.25 * px, 0.25 * py);
+        let (x0, y0) = (o.col as f64 * px + ix, -(o.row as f64) * py - iy);
+        let (x1, y1) = (
+            x0 + o.grid.cols as f64 * px - 2.0 * ix,
+            y0 - o.grid.rows as f64 * py + 2.0 * iy,
+        );
         chart.draw_series(std::iter::once(Rectangle::new(
             [(x0, y0), (x1, y1)],
             WHITE.stroke_width(2),
@@ -259,6 +266,7 @@ where
         .disable_mesh()
         .disable_x_axis()
         .y_labels(6)
+        .y_label_formatter(&|v| crate::charts::num(*v))
         .y_desc(unit)
         .axis_desc_style(font(style.label))
         .label_style(font(style.tick))
@@ -398,7 +406,7 @@ pub struct PressureGrid<'a> {
 }
 
 impl PressureGrid<'_> {
-    const PANEL_H: u32 = 250;
+    const PANEL_H: u32 = 260;
     const COLORBAR_W: u32 = 120;
     const TITLE_H: u32 = 40;
 

@@ -6,6 +6,8 @@ pub mod common;
 pub mod eval;
 pub mod features;
 pub mod inspect;
+pub mod plot;
+pub mod report;
 pub mod replay;
 pub mod reproduce;
 pub mod simulate;

@@ -1,0 +1,719 @@
+//! `presrs report`: every figure of a data set (and a model, an evaluation, the simulation) in a folder
+//! with an `index.html` that opens offline.
+//!
+//! Also the entry points `reproduce` and `eval` call to write the same report: [`write_report`] (from
+//! [`ReportInputs`]), [`write_simulation_report`] (from a simulated [`Dataset`] and its evaluations) and
+//! [`write_eval_report`] (from loaded manifest samples and an [`EvalReport`]).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use presrs_core::evaluation::{
+    Confusion, EvalReport, EvalSample, MeanStd, Protocol, RepeatResult, evaluate,
+};
+use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
+use presrs_core::split::{ValidationSize, stratified_split};
+use presrs_core::stance::{ValidSegmentParams, segment_recording};
+use presrs_core::{Frame, Recording, SensorMeta};
+use presrs_io::dataset::{LoadedSamples, Sample};
+use presrs_io::model_file::load_model;
+use presrs_io::read_recording_with;
+use presrs_sim::trace::{HopTrace, trace_hops};
+use presrs_sim::{Dataset, SimConfig, VelocityTable};
+
+pub use presrs_report::{
+    Evaluation, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
+};
+
+use super::common::{PipelineArgs, SampleArgs, load_manifest, progress_bar};
+
+/// The paper's Table II (trained on G2).
+const PAPER_TABLE2: [(&str, f64); 4] = [
+    ("G1", 0.993),
+    ("G2", 0.991),
+    ("G3", 0.986),
+    ("overall", 0.990),
+];
+
+/// Write an HTML report of a data set: pressure images per label and condition (Fig. 5), feature
+/// spectra (Fig. 6), load curves, principal components, validation curve, confusion matrix, accuracy
+/// per condition; Table I and the hopper's motion for `presrs simulate` output.
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Examples:\n  presrs report --manifest sim/manifest.csv --out report\n  presrs report \
+--manifest walks.csv --model model.json --out report"
+)]
+pub struct ReportArgs {
+    /// The dataset manifest.
+    #[arg(long)]
+    pub manifest: PathBuf,
+    /// A trained model to show (crop, PCA, validation curve) and to test on every image. Without it, a
+    /// model is trained on the manifest (paper protocol) and evaluated with repeats.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Output folder (index.html and the figures).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Train on this condition (default: G2 when present, else every condition).
+    #[arg(long)]
+    pub train_condition: Option<String>,
+    /// Images drawn per class for training + validation (fewer if a class has fewer).
+    #[arg(long, default_value_t = 20)]
+    pub per_class: usize,
+    /// Of those, how many per class validate sigma: a count (7) or a fraction (0.35).
+    #[arg(long, default_value = "7", value_parser = |t: &str| t.parse::<ValidationSize>().map_err(|e| e.to_string()))]
+    pub validation: ValidationSize,
+    /// Repeats of the evaluation (0: no evaluation).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub pipeline: PipelineArgs,
+    #[command(flatten)]
+    pub samples: SampleArgs,
+}
+
+/// Writes `out_dir/index.html` and its figures from `inputs`; returns the page's path.
+pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> anyhow::Result<PathBuf> {
+    presrs_report::write_report(inputs, out_dir)
+        .with_context(|| format!("cannot write the report in {}", out_dir.display()))
+}
+
+/// Report samples of manifest samples (`label` and `condition` borrowed).
+pub fn report_samples(samples: &[Sample]) -> Vec<ReportSample<'_>> {
+    samples
+        .iter()
+        .map(|s| ReportSample {
+            frame: s.frame.view(),
+            label: s.label.as_deref(),
+            condition: s.condition.as_deref(),
+            source: s.source.display().to_string(),
+            frame_index: s.frame_index,
+        })
+        .collect()
+}
+
+/// The names of `evaluations`' reports: `trained on KEY`.
+// Called by `reproduce` and `eval` once they write reports.
+#[allow(dead_code)]
+fn named_evaluations(evaluations: &BTreeMap<String, EvalReport>) -> Vec<Evaluation<'_>> {
+    evaluations
+        .iter()
+        .map(|(key, report)| Evaluation {
+            name: format!("trained on {key}"),
+            report,
+            reference: if key == "G2" {
+                PAPER_TABLE2
+                    .iter()
+                    .filter(|(c, _)| *c == "overall" || report.per_condition.contains_key(*c))
+                    .map(|(c, v)| ((*c).to_owned(), *v))
+                    .collect()
+            } else {
+                BTreeMap::new()
+            },
+        })
+        .collect()
+}
+
+/// Trains the model the report shows: `per_class` images per class of `condition` (all conditions when
+/// `None`), `validation` of them for sigma. Returns the model and a description.
+pub fn train_report_model(
+    samples: &[(&Frame, &str, Option<&str>)],
+    condition: Option<&str>,
+    per_class: usize,
+    validation: ValidationSize,
+    seed: u64,
+    config: &CheckedTrainConfig,
+) -> anyhow::Result<(TrainedModel, String)> {
+    let pool: Vec<usize> = (0..samples.len())
+        .filter(|&i| condition.is_none_or(|c| samples[i].2 == Some(c)))
+        .collect();
+    let labels: Vec<&str> = pool.iter().map(|&i| samples[i].1).collect();
+    let smallest = labels
+        .iter()
+        .collect::<BTreeSet<_>>()
+        .iter()
+        .map(|l| labels.iter().filter(|x| x == l).count())
+        .min()
+        .unwrap_or(0);
+    let (per_class, validation) = if smallest >= per_class {
+        (per_class, validation)
+    } else {
+        (smallest, ValidationSize::Fraction(0.35))
+    };
+    let split = stratified_split(&labels, Some(per_class), validation, seed)?;
+    let image = |&k: &usize| {
+        let (frame, label, _) = samples[pool[k]];
+        LabeledImage::new(frame.view(), label)
+    };
+    let train_images: Vec<_> = split.train.iter().map(image).collect();
+    let validation_images: Vec<_> = split.validation.iter().map(image).collect();
+    let model = train(&train_images, &validation_images, config)?;
+    let note = format!(
+        "Trained for this report on {}: {} training + {} validation images (seed {seed}).",
+        condition.map_or_else(|| "all conditions".to_owned(), |c| format!("condition {c}")),
+        train_images.len(),
+        validation_images.len()
+    );
+    Ok((model, note))
+}
+
+/// The report of a simulated data set, as `presrs reproduce` writes it: `evaluations` are keyed by
+/// training gait (the paper's Table II is shown next to `G2`). Trains one model on G2 (13 + 7 images per
+/// terrain, `seed`) for the PCA and validation-curve figures and traces four hops on wood and grass.
+// Called by `reproduce` and `eval` once they write reports.
+#[allow(dead_code)]
+pub fn write_simulation_report(
+    dataset: &Dataset,
+    config: &SimConfig,
+    evaluations: &BTreeMap<String, EvalReport>,
+    seed: u64,
+    out_dir: &Path,
+) -> anyhow::Result<PathBuf> {
+    let params = ValidSegmentParams::default();
+    let mut frames: Vec<(Frame, String, String, String, usize)> = Vec::new();
+    for trial in &dataset.trials {
+        let segmentation = segment_recording(&trial.recording, &params)?;
+        for stance in segmentation.complete() {
+            if let Some(frame) = trial.recording.frame(stance.mid_frame()) {
+                frames.push((
+                    frame.to_frame(),
+                    trial.plan.terrain.clone(),
+                    trial.plan.gait.name.clone(),
+                    trial.plan.name(),
+                    stance.mid_frame(),
+                ));
+            }
+        }
+    }
+    let samples: Vec<ReportSample<'_>> = frames
+        .iter()
+        .map(|(frame, terrain, gait, name, index)| ReportSample {
+            frame: frame.view(),
+            label: Some(terrain),
+            condition: Some(gait),
+            source: name.clone(),
+            frame_index: *index,
+        })
+        .collect();
+    let gaits: BTreeSet<&str> = frames.iter().map(|f| f.2.as_str()).collect();
+    let train_gait = if gaits.contains("G2") {
+        Some("G2")
+    } else {
+        gaits.first().copied()
+    };
+    let train_config = presrs_core::pipeline::TrainConfig::default().check()?;
+    let triples: Vec<(&Frame, &str, Option<&str>)> = frames
+        .iter()
+        .map(|f| (&f.0, f.1.as_str(), Some(f.2.as_str())))
+        .collect();
+    let model = train_report_model(
+        &triples,
+        train_gait,
+        20,
+        ValidationSize::Count(7),
+        seed,
+        &train_config,
+    )
+    .ok();
+    // One recording per terrain, at the training gait.
+    let mut seen = BTreeSet::new();
+    let recordings: Vec<ReportRecording<'_>> = dataset
+        .trials
+        .iter()
+        .filter(|t| train_gait.is_none_or(|g| t.plan.gait.name == g))
+        .filter(|t| seen.insert(t.plan.terrain.clone()))
+        .map(|t| ReportRecording {
+            name: format!("{} (first 3 s)", t.plan.name()),
+            recording: &t.recording,
+        })
+        .collect();
+    let clipped: Vec<Recording> = recordings
+        .iter()
+        .map(|r| first_seconds(r.recording, 3.0))
+        .collect::<anyhow::Result<_>>()?;
+    let recordings: Vec<ReportRecording<'_>> = recordings
+        .iter()
+        .zip(&clipped)
+        .map(|(r, c)| ReportRecording {
+            name: r.name.clone(),
+            recording: c,
+        })
+        .collect();
+    let table = dataset.velocity_table();
+    let traces = simulation_traces(config, &table, train_gait.unwrap_or("G2"));
+    let sensor = dataset.trials.first().map(|t| &t.recording.meta);
+    let mut inputs = ReportInputs::new(
+        "presrs reproduce: the paper's experiment on the simulator",
+        &samples,
+    );
+    inputs.notes = vec![format!(
+        "Simulated hopper on {} terrains x {} gaits, seed {seed}: the mid-stance frame of every \
+         complete stance the segmentation found.",
+        table.terrains.len(),
+        table.gaits.len()
+    )];
+    inputs.sensor = sensor;
+    inputs.model_note = model.as_ref().map(|m| m.1.clone());
+    inputs.model = model.as_ref().map(|m| &m.0);
+    inputs.evaluations = named_evaluations(evaluations);
+    inputs.recordings = recordings;
+    inputs.segment = params;
+    inputs.simulation = Some(SimulationInputs {
+        velocity: &table,
+        traces: &traces,
+    });
+    write_report(&inputs, out_dir)
+}
+
+/// Four hops on the slowest and the fastest terrain of `table` at `gait` (nothing if tracing fails).
+fn simulation_traces(config: &SimConfig, table: &VelocityTable, gait: &str) -> Vec<HopTrace> {
+    let mut terrains: Vec<&str> = Vec::new();
+    for preferred in ["wood", "grass"] {
+        if table.terrains.iter().any(|t| t == preferred) {
+            terrains.push(preferred);
+        }
+    }
+    if terrains.is_empty() {
+        terrains.extend(table.terrains.first().map(String::as_str));
+    }
+    terrains
+        .into_iter()
+        .filter_map(|t| trace_hops(config, t, gait, 4, 1e-3).ok())
+        .collect()
+}
+
+/// The first `seconds` of a recording (all of it when shorter or without a frame period).
+fn first_seconds(recording: &Recording, seconds: f64) -> anyhow::Result<Recording> {
+    let keep = recording
+        .frame_period_s()
+        .map_or(recording.frame_count(), |p| (seconds / p).ceil() as usize)
+        .clamp(1, recording.frame_count().max(1));
+    if keep >= recording.frame_count() {
+        return Ok(recording.clone());
+    }
+    let len = recording.grid().len() * keep;
+    Ok(Recording::new(
+        recording.grid(),
+        recording.frame_period_s(),
+        recording.data()[..len].to_vec(),
+        recording.present().map(<[bool]>::to_vec),
+        recording.meta.clone(),
+    )?)
+}
+
+/// The report of `presrs eval`: the manifest's samples, the evaluation (named `evaluation_name`), a
+/// model trained like one repeat of it (for the PCA and validation-curve figures) and the load curves of
+/// up to four movies.
+// Called by `reproduce` and `eval` once they write reports.
+#[allow(dead_code)]
+pub fn write_eval_report(
+    manifest_path: &Path,
+    loaded: &LoadedSamples,
+    report: &EvalReport,
+    evaluation_name: &str,
+    config: &CheckedTrainConfig,
+    sample_args: &SampleArgs,
+    out_dir: &Path,
+) -> anyhow::Result<PathBuf> {
+    let (condition, per_class, validation) = match &report.protocol {
+        Protocol::TrainCondition {
+            condition,
+            per_class,
+            validation,
+        } => (condition.clone(), *per_class, *validation),
+        Protocol::LeaveOneOut {
+            per_class,
+            validation,
+            ..
+        } => (None, *per_class, *validation),
+    };
+    let seed = report.repeats.first().map_or(1, |r| r.seed);
+    let model = labelled(&loaded.samples).and_then(|triples| {
+        train_report_model(
+            &triples,
+            condition.as_deref(),
+            per_class.unwrap_or(usize::MAX),
+            validation,
+            seed,
+            config,
+        )
+        .ok()
+    });
+    let evaluations = vec![Evaluation {
+        name: evaluation_name.to_owned(),
+        report,
+        reference: BTreeMap::new(),
+    }];
+    write_manifest_report(
+        manifest_path,
+        loaded,
+        model.as_ref().map(|(m, note)| (m, note.clone())),
+        evaluations,
+        sample_args,
+        out_dir,
+    )
+}
+
+/// `(frame, label, condition)` of every sample, when all have a label.
+fn labelled(samples: &[Sample]) -> Option<Vec<(&Frame, &str, Option<&str>)>> {
+    samples
+        .iter()
+        .map(|s| Some((&s.frame, s.label.as_deref()?, s.condition.as_deref())))
+        .collect()
+}
+
+/// The sensor metadata of the manifest's first file and up to four movies (one per label) for load
+/// curves.
+fn manifest_recordings(
+    loaded: &LoadedSamples,
+    sample_args: &SampleArgs,
+    preferred_condition: Option<&str>,
+) -> (Option<SensorMeta>, Vec<(String, Recording)>) {
+    let read = sample_args.read_options();
+    let mut sources: Vec<(&Path, Option<&str>, Option<&str>)> = Vec::new();
+    let mut seen = BTreeSet::new();
+    for s in &loaded.samples {
+        if seen.insert(s.source.as_path()) {
+            sources.push((
+                s.source.as_path(),
+                s.label.as_deref(),
+                s.condition.as_deref(),
+            ));
+        }
+    }
+    let meta = sources
+        .first()
+        .and_then(|(path, ..)| read_recording_with(path, &read).ok())
+        .map(|p| p.recording.meta);
+    let mut labels_done = BTreeSet::new();
+    let mut movies = Vec::new();
+    let preferred: Vec<_> = sources
+        .iter()
+        .filter(|s| preferred_condition.is_none_or(|c| s.2 == Some(c)))
+        .chain(sources.iter())
+        .collect();
+    for &&(path, label, condition) in &preferred {
+        if movies.len() >= 4 {
+            break;
+        }
+        if labels_done.contains(&label) {
+            continue;
+        }
+        let Ok(parsed) = read_recording_with(path, &read) else {
+            continue;
+        };
+        if parsed.recording.frame_count() < 10 {
+            continue;
+        }
+        labels_done.insert(label);
+        let name = format!(
+            "{}{}{}",
+            path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            ),
+            label.map_or(String::new(), |l| format!(" · {l}")),
+            condition.map_or(String::new(), |c| format!(" · {c}")),
+        );
+        let recording = first_seconds(&parsed.recording, 3.0).unwrap_or(parsed.recording);
+        movies.push((name, recording));
+    }
+    (meta, movies)
+}
+
+/// Whether `manifest` sits in a `presrs simulate` output folder.
+fn is_simulate_output(manifest: &Path) -> bool {
+    manifest
+        .parent()
+        .is_some_and(|dir| dir.join("table1.csv").is_file() && dir.join("config.json").is_file())
+}
+
+/// Velocity table and config of a `presrs simulate` folder (its `table1.csv` and `config.json`).
+fn simulate_outputs(dir: &Path) -> Option<(VelocityTable, SimConfig)> {
+    let table_text = std::fs::read_to_string(dir.join("table1.csv")).ok()?;
+    let config =
+        SimConfig::from_json(&std::fs::read_to_string(dir.join("config.json")).ok()?).ok()?;
+    let mut rows: Vec<(String, String, f64, usize)> = Vec::new();
+    for line in table_text.lines().skip(1) {
+        let fields: Vec<&str> = line.split(',').collect();
+        if let [gait, terrain, velocity, _, hops, ..] = fields[..] {
+            rows.push((
+                gait.to_owned(),
+                terrain.to_owned(),
+                velocity.parse().ok()?,
+                hops.parse().ok()?,
+            ));
+        }
+    }
+    let mut gaits: Vec<String> = Vec::new();
+    let mut terrains: Vec<String> = Vec::new();
+    for (g, t, ..) in &rows {
+        if !gaits.contains(g) {
+            gaits.push(g.clone());
+        }
+        if !terrains.contains(t) {
+            terrains.push(t.clone());
+        }
+    }
+    let mut velocity = vec![vec![f64::NAN; terrains.len()]; gaits.len()];
+    let mut hops = vec![vec![0; terrains.len()]; gaits.len()];
+    for (g, t, v, n) in &rows {
+        let gi = gaits.iter().position(|x| x == g)?;
+        let ti = terrains.iter().position(|x| x == t)?;
+        velocity[gi][ti] = *v;
+        hops[gi][ti] = *n;
+    }
+    Some((
+        VelocityTable {
+            gaits,
+            terrains,
+            velocity_m_per_s: velocity,
+            hops,
+        },
+        config,
+    ))
+}
+
+fn write_manifest_report(
+    manifest_path: &Path,
+    loaded: &LoadedSamples,
+    model: Option<(&TrainedModel, String)>,
+    evaluations: Vec<Evaluation<'_>>,
+    sample_args: &SampleArgs,
+    out_dir: &Path,
+) -> anyhow::Result<PathBuf> {
+    let samples = report_samples(&loaded.samples);
+    let conditions: BTreeSet<&str> = loaded
+        .samples
+        .iter()
+        .filter_map(|s| s.condition.as_deref())
+        .collect();
+    let preferred = if conditions.contains("G2") {
+        Some("G2")
+    } else {
+        conditions.first().copied()
+    };
+    let (meta, movies) = manifest_recordings(loaded, sample_args, preferred);
+    let simulated = manifest_path.parent().and_then(|dir| {
+        simulate_outputs(if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        })
+    });
+    let traces = simulated
+        .as_ref()
+        .map(|(table, config)| simulation_traces(config, table, preferred.unwrap_or("G2")))
+        .unwrap_or_default();
+    let title = format!("presrs report: {}", manifest_path.display());
+    let mut inputs = ReportInputs::new(title, &samples);
+    inputs.notes = vec![format!(
+        "{} images from {} ({} stance frame of each complete stance of a movie).",
+        samples.len(),
+        manifest_path.display(),
+        sample_args.stance_frame
+    )];
+    inputs.sensor = meta.as_ref();
+    inputs.model = model.as_ref().map(|m| m.0);
+    inputs.model_note = model.map(|m| m.1);
+    inputs.evaluations = evaluations;
+    inputs.recordings = movies
+        .iter()
+        .map(|(name, recording)| ReportRecording {
+            name: name.clone(),
+            recording,
+        })
+        .collect();
+    inputs.sample_frame = sample_args.stance_frame;
+    inputs.simulation = simulated.as_ref().map(|(table, _)| SimulationInputs {
+        velocity: table,
+        traces: &traces,
+    });
+    write_report(&inputs, out_dir)
+}
+
+/// Tests `model` on every sample (one "repeat"): its confusion matrix and accuracy per condition.
+fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> anyhow::Result<EvalReport> {
+    let frames: Vec<_> = samples.iter().map(|s| s.frame.view()).collect();
+    let started = Instant::now();
+    let results = model.classify_batch(&frames);
+    let elapsed = started.elapsed();
+    let labels: Vec<String> = model.class_names().to_vec();
+    let mut counts = vec![vec![0u64; labels.len()]; labels.len()];
+    let mut by_condition: BTreeMap<String, (u64, u64)> = BTreeMap::new();
+    let (mut correct, mut total) = (0u64, 0u64);
+    for (sample, result) in samples.iter().zip(results) {
+        let predicted = result?.class;
+        let Some(truth) = sample
+            .label
+            .as_deref()
+            .and_then(|l| labels.iter().position(|x| x == l))
+        else {
+            continue;
+        };
+        counts[truth][predicted] += 1;
+        let hit = u64::from(truth == predicted);
+        let entry = by_condition
+            .entry(sample.condition.clone().unwrap_or_else(|| "all".to_owned()))
+            .or_default();
+        entry.0 += hit;
+        entry.1 += 1;
+        correct += hit;
+        total += 1;
+    }
+    anyhow::ensure!(
+        total > 0,
+        "no sample has a label the model knows ({})",
+        labels.join(", ")
+    );
+    let ratio = |c: u64, t: u64| c as f64 / t.max(1) as f64;
+    let per_condition: BTreeMap<String, f64> = by_condition
+        .iter()
+        .map(|(k, &(c, t))| (k.clone(), ratio(c, t)))
+        .collect();
+    Ok(EvalReport {
+        protocol: Protocol::TrainCondition {
+            condition: None,
+            per_class: None,
+            validation: ValidationSize::default(),
+        },
+        repeats: vec![RepeatResult {
+            seed: 0,
+            overall_accuracy: ratio(correct, total),
+            per_condition: per_condition.clone(),
+            sigmas: model.sigma().into_iter().collect(),
+            n_train: 0,
+            n_validation: 0,
+            n_test: total as usize,
+            train_seconds: 0.0,
+        }],
+        overall: MeanStd::of(&[ratio(correct, total)]),
+        per_condition: per_condition
+            .iter()
+            .map(|(k, &v)| (k.clone(), MeanStd::of(&[v])))
+            .collect(),
+        confusion: Confusion { labels, counts },
+        median_classify_ns: (elapsed.as_nanos() / samples.len().max(1) as u128) as u64,
+    })
+}
+
+pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let (_manifest, loaded) = load_manifest(&args.manifest, &args.samples)?;
+    let conditions: BTreeSet<&str> = loaded
+        .samples
+        .iter()
+        .filter_map(|s| s.condition.as_deref())
+        .collect();
+    let train_condition = args
+        .train_condition
+        .clone()
+        .or_else(|| conditions.contains("G2").then(|| "G2".to_owned()));
+    if let Some(c) = &train_condition {
+        anyhow::ensure!(
+            conditions.contains(c.as_str()),
+            "{}: --train-condition {c}: no sample has that condition (conditions: {})",
+            args.manifest.display(),
+            conditions.iter().copied().collect::<Vec<_>>().join(", ")
+        );
+    }
+    let grid = loaded.samples[0].frame.grid();
+    let config = args.pipeline.train_config(grid)?;
+    let triples = labelled(&loaded.samples);
+    let mut reports: Vec<(String, EvalReport)> = Vec::new();
+    let model: Option<(TrainedModel, String)> = match (&args.model, &triples) {
+        (Some(path), _) => {
+            let file = load_model(path)?;
+            if triples.is_some() {
+                let report = model_on_samples(&file.model, &loaded.samples)?;
+                reports.push((format!("model {} on every image", path.display()), report));
+            }
+            Some((file.model, format!("Loaded from {}.", path.display())))
+        }
+        (None, Some(triples)) => {
+            let model = train_report_model(
+                triples,
+                train_condition.as_deref(),
+                args.per_class,
+                args.validation,
+                args.seed,
+                &config,
+            )?;
+            if args.repeats > 0 {
+                let eval_samples: Vec<EvalSample<'_>> = triples
+                    .iter()
+                    .map(|&(frame, label, condition)| EvalSample {
+                        frame: frame.view(),
+                        label,
+                        condition,
+                        group: None,
+                    })
+                    .collect();
+                let per_class = (model.0.summary().train_per_class.iter())
+                    .zip(&model.0.summary().validation_per_class)
+                    .map(|(a, b)| a + b)
+                    .min();
+                let protocol = Protocol::TrainCondition {
+                    condition: train_condition.clone(),
+                    per_class,
+                    validation: args.validation,
+                };
+                let bar = progress_bar(args.repeats as u64, "evaluating");
+                let report = evaluate(
+                    &eval_samples,
+                    &protocol,
+                    &config,
+                    args.repeats,
+                    args.seed,
+                    &|| bar.inc(1),
+                )
+                .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
+                bar.finish_and_clear();
+                let name = format!(
+                    "trained on {}",
+                    train_condition.as_deref().unwrap_or("all conditions")
+                );
+                reports.push((name, report));
+            }
+            Some(model)
+        }
+        (None, None) => None,
+    };
+    let evaluations: Vec<Evaluation<'_>> = reports
+        .iter()
+        .map(|(name, report)| Evaluation {
+            name: name.clone(),
+            report,
+            // The paper's Table II only next to the paper's experiment (a `presrs simulate` folder).
+            reference: if name == "trained on G2" && is_simulate_output(&args.manifest) {
+                PAPER_TABLE2
+                    .iter()
+                    .filter(|(c, _)| *c == "overall" || report.per_condition.contains_key(*c))
+                    .map(|(c, v)| ((*c).to_owned(), *v))
+                    .collect()
+            } else {
+                BTreeMap::new()
+            },
+        })
+        .collect();
+    let index = write_manifest_report(
+        &args.manifest,
+        &loaded,
+        model.as_ref().map(|(m, note)| (m, note.clone())),
+        evaluations,
+        &args.samples,
+        &args.out,
+    )?;
+    writeln!(
+        out,
+        "wrote {} ({:.1} s)",
+        index.display(),
+        started.elapsed().as_secs_f64()
+    )?;
+    Ok(())
+}

@@ -1,0 +1,324 @@
+//! `presrs plot` and `presrs report` end to end: files are written, decode, have the stated size, are not
+//! blank, and the HTML references only files that exist.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn presrs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_presrs"))
+}
+
+fn run_ok(cmd: &mut Command) -> String {
+    let output = cmd.output().unwrap();
+    assert!(
+        output.status.success(),
+        "{:?} failed:\nstdout: {}\nstderr: {}",
+        cmd,
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8(output.stdout).unwrap()
+}
+
+/// A small simulated data set shared by the tests (2 terrains x 2 gaits, a few hops each).
+fn sim_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap().keep();
+        let config = dir.join("small.json");
+        // Only the experiment size is changed; everything else is the simulator's default.
+        let printed = run_ok(presrs().args(["simulate", "--print-config"]));
+        let mut value: serde_json::Value = serde_json::from_str(&printed).unwrap();
+        value["experiment"]["hops_per_gait"] = serde_json::json!(24);
+        value["experiment"]["hops_per_trial"] = serde_json::json!(12);
+        std::fs::write(&config, serde_json::to_string(&value).unwrap()).unwrap();
+        run_ok(presrs().args([
+            "simulate",
+            "--out",
+            dir.to_str().unwrap(),
+            "--config",
+            config.to_str().unwrap(),
+        ]));
+        dir
+    })
+}
+
+/// Decodes a PNG: (width, height, RGB(A) pixels as RGB triples).
+fn decode_png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    let pixels = buf[..info.buffer_size()]
+        .chunks_exact(channels)
+        .map(|p| [p[0], p[1 % channels], p[2 % channels]])
+        .collect();
+    (info.width, info.height, pixels)
+}
+
+/// Not blank: the pixels vary and there are several colours.
+fn assert_not_blank(path: &Path, pixels: &[[u8; 3]]) {
+    let n = pixels.len() as f64;
+    let mean: f64 = pixels
+        .iter()
+        .map(|p| f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2]))
+        .sum::<f64>()
+        / n;
+    let variance: f64 = pixels
+        .iter()
+        .map(|p| (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2]) - mean).powi(2))
+        .sum::<f64>()
+        / n;
+    assert!(
+        variance > 100.0,
+        "{}: pixel variance {variance}",
+        path.display()
+    );
+    let mut colours: Vec<[u8; 3]> = pixels.to_vec();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(
+        colours.len() >= 8,
+        "{}: only {} colours",
+        path.display(),
+        colours.len()
+    );
+    // Some colour that is not grey (a colour map or category colours).
+    assert!(
+        pixels
+            .iter()
+            .any(|p| p.iter().max().unwrap() - p.iter().min().unwrap() > 60),
+        "{}: no coloured pixel",
+        path.display()
+    );
+}
+
+fn first_recording(dir: &Path) -> PathBuf {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir.join("recordings"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    files.into_iter().next().unwrap()
+}
+
+#[test]
+fn plot_png_has_the_sensor_aspect_and_is_not_blank() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.png");
+    let stdout = run_ok(presrs().args([
+        "plot",
+        first_recording(sim_dir()).to_str().unwrap(),
+        "--stance",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    assert!(stdout.contains("wrote"));
+    let (w, h, pixels) = decode_png(&out);
+    assert_eq!(pixels.len(), (w * h) as usize);
+    assert_eq!(h, 600, "the default figure height");
+    assert!(w >= 420 && w < 1200, "width {w}");
+    assert_not_blank(&out, &pixels);
+}
+
+#[test]
+fn plot_svg_and_movie_gif() {
+    let dir = tempfile::tempdir().unwrap();
+    let recording = first_recording(sim_dir());
+    let svg = dir.path().join("frame.svg");
+    run_ok(presrs().args([
+        "plot",
+        recording.to_str().unwrap(),
+        "--frame",
+        "3",
+        "--out",
+        svg.to_str().unwrap(),
+    ]));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"), "{}", &text[..text.len().min(80)]);
+    assert!(text.contains("<rect") && text.contains("frame 3"));
+    assert!(text.trim_end().ends_with("</svg>"));
+
+    let gif = dir.path().join("movie.gif");
+    let stdout = run_ok(presrs().args([
+        "plot",
+        recording.to_str().unwrap(),
+        "--movie",
+        "--max-frames",
+        "12",
+        "--out",
+        gif.to_str().unwrap(),
+    ]));
+    assert!(
+        stdout.contains("12 frames") || stdout.contains("frames)"),
+        "{stdout}"
+    );
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options
+        .read_info(std::fs::File::open(&gif).unwrap())
+        .unwrap();
+    let (w, h) = (u32::from(decoder.width()), u32::from(decoder.height()));
+    let mut frames = 0;
+    let mut first: Option<Vec<u8>> = None;
+    let mut changed = false;
+    while let Some(frame) = decoder.read_next_frame().unwrap() {
+        frames += 1;
+        assert_eq!((u32::from(frame.width), u32::from(frame.height)), (w, h));
+        let pixels: Vec<[u8; 3]> = frame
+            .buffer
+            .chunks_exact(4)
+            .map(|p| [p[0], p[1], p[2]])
+            .collect();
+        assert_not_blank(&gif, &pixels);
+        match &first {
+            None => first = Some(frame.buffer.to_vec()),
+            Some(f) => changed |= *f != frame.buffer.to_vec(),
+        }
+    }
+    assert!((2..=12).contains(&frames), "{frames} frames");
+    assert!(changed, "the movie does not move");
+}
+
+#[test]
+fn plot_rejects_bad_requests() {
+    let dir = tempfile::tempdir().unwrap();
+    let recording = first_recording(sim_dir());
+    let cases: [(&[&str], &str); 3] = [
+        (&["--frame", "100000", "--out", "a.png"], "frame"),
+        (&["--out", "a.jpg"], ".png"),
+        (&["--out", "a.gif"], "--movie"),
+    ];
+    for (args, message) in cases {
+        let output = presrs()
+            .current_dir(dir.path())
+            .arg("plot")
+            .arg(&recording)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!output.status.success(), "{args:?} succeeded");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+    }
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().next().is_none(),
+        "no file is left behind"
+    );
+}
+
+#[test]
+fn report_writes_every_figure_and_only_links_existing_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let manifest = sim_dir().join("manifest.csv");
+    let stdout = run_ok(presrs().args([
+        "report",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--per-class",
+        "10",
+        "--validation",
+        "4",
+        "--repeats",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    assert!(stdout.contains("index.html"), "{stdout}");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let mut referenced = Vec::new();
+    for part in html
+        .split("src=\"")
+        .skip(1)
+        .chain(html.split("href=\"").skip(1))
+    {
+        let target = &part[..part.find('"').unwrap()];
+        if !target.starts_with('#') {
+            referenced.push(target.to_owned());
+        }
+    }
+    assert!(!referenced.is_empty());
+    for target in &referenced {
+        assert!(
+            !target.contains("://"),
+            "{target}: the page must open offline"
+        );
+        assert!(
+            out.join(target).is_file(),
+            "{target} is referenced but missing"
+        );
+    }
+    for figure in [
+        "fig5_pressure_images.png",
+        "fig6_spectra.png",
+        "load_curves.png",
+        "pca.png",
+        "validation.png",
+        "confusion.png",
+        "accuracy.png",
+        "table1_velocity.png",
+        "hopper.png",
+    ] {
+        assert!(
+            referenced.iter().any(|r| r == figure),
+            "{figure} not in the page"
+        );
+        let path = out.join(figure);
+        let (w, h, pixels) = decode_png(&path);
+        // The page states each figure's size.
+        assert!(
+            html.contains(&format!("src=\"{figure}\" width=\"{w}\" height=\"{h}\"")),
+            "{figure}: {w} x {h} not stated"
+        );
+        assert_not_blank(&path, &pixels);
+    }
+    for heading in [
+        "Fig. 5",
+        "Fig. 6",
+        "Table I",
+        "Confusion",
+        "Accuracy per condition",
+    ] {
+        assert!(html.contains(heading), "no {heading} section");
+    }
+    // No temporary files left behind.
+    for entry in std::fs::read_dir(&out).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.ends_with(".tmp"), "{name}");
+    }
+}
+
+#[test]
+fn report_with_a_model_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = sim_dir().join("manifest.csv");
+    let model = dir.path().join("model.json");
+    run_ok(presrs().args([
+        "train",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+    ]));
+    let out = dir.path().join("report");
+    run_ok(presrs().args([
+        "report",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("model "), "the evaluation names the model");
+    for figure in ["validation.png", "confusion.png", "pca.png"] {
+        let (_, _, pixels) = decode_png(&out.join(figure));
+        assert_not_blank(&out.join(figure), &pixels);
+    }
+}
