@@ -121,7 +121,7 @@ fn plot_png_has_the_sensor_aspect_and_is_not_blank() {
     let (w, h, pixels) = decode_png(&out);
     assert_eq!(pixels.len(), (w * h) as usize);
     assert_eq!(h, 600, "the default figure height");
-    assert!(w >= 420 && w < 1200, "width {w}");
+    assert!((420..1200).contains(&w), "width {w}");
     assert_not_blank(&out, &pixels);
 }
 

@@ -157,7 +157,11 @@ where
     let grid = frame.grid();
     let (py, px) = scale.pitches();
     let (width, height) = (grid.cols as f64 * px, grid.rows as f64 * py);
-    let body = area.titled(title, title_font(style.title))?;
+    let body = if title.is_empty() {
+        area.clone()
+    } else {
+        area.titled(title, title_font(style.title))?
+    };
     let (bw, bh) = body.dim_in_pixel();
     let avail_w = f64::from(bw.saturating_sub(style.y_area + 2 * style.margin)).max(10.0);
     let avail_h = f64::from(bh.saturating_sub(style.x_area + 2 * style.margin)).max(10.0);
@@ -360,15 +364,18 @@ impl Figure for PressureFigure<'_> {
         );
         let plot_w = (plot_h * ratio).clamp(200.0, 1600.0);
         let width = plot_w as u32 + LARGE.y_area + 2 * LARGE.margin + Self::colorbar_width();
-        (width.max(420), self.height)
+        // Wide enough for the title (about 0.6 em per character).
+        let title_w = (self.title.chars().count() as f64 * LARGE.title * 0.6) as u32 + 40;
+        (width.max(420).max(title_w), self.height)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static,
     {
-        let (w, _) = root.dim_in_pixel();
-        let (left, right) = root.split_horizontally(w.saturating_sub(Self::colorbar_width()));
+        let body = root.titled(&self.title, title_font(LARGE.title))?;
+        let (w, _) = body.dim_in_pixel();
+        let (left, right) = body.split_horizontally(w.saturating_sub(Self::colorbar_width()));
         let vmax = self
             .vmax
             .unwrap_or_else(|| shown_max(std::iter::once(&self.frame), &self.scale));
@@ -377,7 +384,7 @@ impl Figure for PressureFigure<'_> {
             &self.frame,
             &self.scale,
             vmax,
-            &self.title,
+            "",
             self.outline,
             LARGE,
         )?;
@@ -387,7 +394,7 @@ impl Figure for PressureFigure<'_> {
             &self.scale.unit,
             has_mask(&self.frame),
             LARGE,
-            34 + LARGE.margin,
+            LARGE.margin,
         )
     }
 }
@@ -522,31 +529,24 @@ impl Figure for MovieFrame<'_> {
     where
         DB::ErrorType: 'static,
     {
+        let time = match self.curve.period_s {
+            Some(p) => format!(", t = {:.2} s", self.index as f64 * p),
+            None => String::new(),
+        };
+        let title = format!("{} — frame {}{time}", self.title, self.index);
+        let root = root.titled(&title, title_font(LARGE.title))?;
         let (w, h) = root.dim_in_pixel();
         let (top, bottom) = root.split_vertically(h.saturating_sub(200));
         let (image, bar) =
             top.split_horizontally(w.saturating_sub(PressureFigure::colorbar_width()));
-        let time = match self.curve.period_s {
-            Some(p) => format!("t = {:.2} s", self.index as f64 * p),
-            None => String::new(),
-        };
-        let title = format!("{} — frame {} {time}", self.title, self.index);
-        draw_heatmap(
-            &image,
-            &self.frame,
-            self.scale,
-            self.vmax,
-            &title,
-            None,
-            LARGE,
-        )?;
+        draw_heatmap(&image, &self.frame, self.scale, self.vmax, "", None, LARGE)?;
         draw_colorbar(
             &bar,
             self.vmax,
             &self.scale.unit,
             has_mask(&self.frame),
             LARGE,
-            34 + LARGE.margin,
+            LARGE.margin,
         )?;
         draw_load_curve(&bottom, self.curve, Some(self.index), false)
     }
@@ -561,7 +561,7 @@ pub fn write_movie(recording: &Recording, options: &MovieOptions, path: &Path) -
     }
     let scale = PressureScale::from_meta(Some(&recording.meta));
     let curve = LoadCurveData::from_recording(
-        options.title.clone(),
+        "total load (shaded: detected stances; red: sampled frames)".to_owned(),
         recording,
         &scale,
         &options.segment,
@@ -602,4 +602,78 @@ pub fn write_movie(recording: &Recording, options: &MovieOptions, path: &Path) -
         .clamp(2.0, 100.0) as u16;
     save_gif(path, size.0, size.1, &frames, delay_cs)?;
     Ok(frames.len())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    fn walking_like() -> Recording {
+        let grid = Grid::new(12, 6);
+        let mut data = Vec::new();
+        for f in 0..30 {
+            let load = ((f as f64 - 5.0) * 0.3).sin().max(0.0) * 200.0;
+            data.extend((0..grid.len()).map(|i| load * ((i % 5) as f64 + 1.0) / 5.0));
+        }
+        let present: Vec<bool> = (0..grid.len()).map(|i| i % 6 != 0 || i < 30).collect();
+        let meta = SensorMeta {
+            row_pitch_mm: Some(5.08),
+            col_pitch_mm: Some(5.08),
+            units: PressureUnit::parse("KPa"),
+            ..SensorMeta::default()
+        };
+        Recording::new(grid, Some(0.032), data, Some(present), meta).unwrap()
+    }
+
+    #[test]
+    fn scale_uses_kpa_and_pitch_and_falls_back_to_counts() {
+        let recording = walking_like();
+        let scale = PressureScale::from_meta(Some(&recording.meta));
+        assert_eq!(scale.unit, "kPa");
+        assert!(scale.physical());
+        let (label, factor) = scale.load_axis();
+        assert!(label.contains("(N)"));
+        assert!((factor - 5.08 * 5.08 * 1e-3).abs() < 1e-12);
+        let raw = PressureScale::from_meta(None);
+        assert_eq!(raw.unit, "raw counts");
+        assert_eq!(raw.position_unit(), "sensels");
+        assert_eq!(raw.pitches(), (1.0, 1.0));
+    }
+
+    #[test]
+    fn movie_frames_show_the_image_and_a_moving_cursor() {
+        let recording = walking_like();
+        let scale = PressureScale::from_meta(Some(&recording.meta));
+        let curve = LoadCurveData::from_recording(
+            "test".into(),
+            &recording,
+            &scale,
+            &ValidSegmentParams::default(),
+            SampleFrame::default(),
+        )
+        .unwrap();
+        let render = |index| {
+            let figure = MovieFrame {
+                frame: recording.frame(index).unwrap(),
+                index,
+                scale: &scale,
+                vmax: 200.0,
+                curve: &curve,
+                title: "test",
+                size: (560, 800),
+            };
+            render_rgb(&figure).unwrap()
+        };
+        let (w, h, a) = render(8);
+        let (_, _, b) = render(20);
+        assert_eq!((w, h), (560, 800));
+        assert_eq!(a.len(), 560 * 800 * 3);
+        assert_ne!(a, b);
+        if let Ok(dir) = std::env::var("PRESRS_FIGURE_DIR") {
+            let path = std::path::Path::new(&dir).join("movie_frame.png");
+            presrs_io::write_atomic(&path, |out| crate::render::encode_png(out, w, h, &a)).unwrap();
+        }
+    }
 }
