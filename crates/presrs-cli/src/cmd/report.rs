@@ -717,3 +717,71 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     )?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+
+    use super::*;
+    use presrs_sim::{DatasetSpec, simulate_dataset};
+
+    /// The entry point `reproduce` calls, on a small simulated data set.
+    #[test]
+    fn simulation_report_has_table1_and_the_hopper() {
+        let config = SimConfig::default();
+        let mut spec = DatasetSpec::paper(3);
+        spec.hops_per_gait = Some(30);
+        let dataset = simulate_dataset(&config, &spec).unwrap();
+        let mut frames = Vec::new();
+        for trial in &dataset.trials {
+            let segmentation =
+                segment_recording(&trial.recording, &ValidSegmentParams::default()).unwrap();
+            for stance in segmentation.complete() {
+                frames.push((
+                    trial
+                        .recording
+                        .frame(stance.mid_frame())
+                        .unwrap()
+                        .to_frame(),
+                    trial.plan.terrain.clone(),
+                    trial.plan.gait.name.clone(),
+                ));
+            }
+        }
+        let samples: Vec<EvalSample<'_>> = frames
+            .iter()
+            .map(|(f, t, g)| EvalSample {
+                frame: f.view(),
+                label: t,
+                condition: Some(g),
+                group: None,
+            })
+            .collect();
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(15),
+            validation: ValidationSize::Count(5),
+        };
+        let config_train = presrs_core::pipeline::TrainConfig::default()
+            .check()
+            .unwrap();
+        let report = evaluate(&samples, &protocol, &config_train, 2, 1, &|| {}).unwrap();
+        let evaluations = BTreeMap::from([("G2".to_owned(), report)]);
+        let dir = tempfile::tempdir().unwrap();
+        let index =
+            write_simulation_report(&dataset, &config, &evaluations, 1, dir.path()).unwrap();
+        let html = std::fs::read_to_string(index).unwrap();
+        for needle in [
+            "table1_velocity.png",
+            "hopper.png",
+            "confusion.png",
+            "paper",
+        ] {
+            assert!(html.contains(needle), "{needle}");
+        }
+        for part in html.split("src=\"").skip(1) {
+            let name = &part[..part.find('"').unwrap()];
+            assert!(dir.path().join(name).is_file(), "{name}");
+        }
+    }
+}
