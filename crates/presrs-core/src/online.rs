@@ -714,6 +714,9 @@ impl CausalSegmenter {
         // Seed the quiet ring with the warm-up frames outside stances.
         let warmup = std::mem::take(&mut self.warmup);
         self.apply_calibration(cal);
+        // The warm-up is this stream's own past: its largest load is the running maximum so far.
+        self.max_above = seg.load_range;
+        self.update_levels();
         self.detect_from = self.t;
         for (frame, &value) in warmup.iter().enumerate() {
             let in_stance = seg.stances.iter().any(|s| s.contains(frame));

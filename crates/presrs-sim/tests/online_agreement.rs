@@ -8,9 +8,10 @@ use presrs_core::online::{CausalSegmenter, OnlineParams, OnlineProfile, SegEvent
 use presrs_core::stance::{Segmentation, Stance, ValidSegmentParams, segment};
 use presrs_sim::{DatasetSpec, SimConfig, Simulator, TrialOutput};
 
-fn trials(seed: u64, hops: usize) -> Vec<TrialOutput> {
+fn trials(seed: u64, hops: usize, terrains: &[&str]) -> Vec<TrialOutput> {
     let mut spec = DatasetSpec::paper(seed);
     spec.hops_per_gait = Some(hops);
+    spec.terrains = terrains.iter().map(|t| (*t).to_owned()).collect();
     let sim = Simulator::new(SimConfig::default(), seed, Vec::new()).unwrap();
     sim.for_each_trial(&spec, Ok::<_, presrs_sim::SimError>)
         .unwrap()
@@ -65,14 +66,15 @@ fn online(
 #[test]
 fn causal_detector_agrees_with_offline_segmentation_on_simulated_data() {
     // Train on one seed, test on another (as a deployed robot would).
-    let training = trials(11, 20);
+    let all = ["wood", "carpet", "clay", "grass"];
+    let training = trials(11, 10, &all);
     let segs: Vec<Segmentation> = training.iter().map(offline).collect();
     let profile = OnlineProfile::learn(&segs);
     let typical = profile.typical_stance_frames.unwrap();
     assert!((12..=17).contains(&typical), "typical stance {typical}");
     assert_eq!(profile.params.sample_offset, (typical - 1) / 2);
 
-    let test = trials(12, 20);
+    let test = trials(12, 20, &all);
     let (mut total, mut same_stance, mut typical_count, mut same_sample) = (0, 0, 0, 0);
     let mut mismatches = Vec::new();
     for trial in &test {
@@ -135,7 +137,7 @@ fn causal_detector_agrees_with_offline_segmentation_on_simulated_data() {
 
 #[test]
 fn warm_up_calibration_finds_the_same_stances_after_the_warm_up() {
-    let test = trials(13, 20);
+    let test = trials(13, 20, &["wood", "grass"]);
     let params = OnlineParams::default();
     let profile = OnlineProfile::default();
     let mut compared = 0;
