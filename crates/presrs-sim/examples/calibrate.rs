@@ -16,19 +16,11 @@ fn main() {
             s.split(';')
                 .map(|p| {
                     let v: Vec<f64> = p.split(',').map(|x| x.parse().unwrap()).collect();
-                    GroundParams {
-                        stiffness_n_per_m: Some(v[0]),
-                        damping_n_s_per_m: v[1],
-                    }
+                    GroundParams::uniform(v[0], v[1])
                 })
                 .collect()
         })
-        .unwrap_or_else(|| {
-            vec![GroundParams {
-                stiffness_n_per_m: Some(2e6),
-                damping_n_s_per_m: 200.0,
-            }]
-        });
+        .unwrap_or_else(|| vec![GroundParams::uniform(2e6, 200.0)]);
     let paper = [
         [0.40, 0.43, 0.38, 0.81],
         [0.64, 0.63, 0.61, 1.11],

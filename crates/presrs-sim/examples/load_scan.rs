@@ -38,8 +38,7 @@ fn main() {
     let out: Vec<String> = jobs
         .par_iter()
         .map(|(f, gait, t)| {
-            let mut robot = cfg.robot.clone();
-            robot.body_mass_kg *= f;
+            let robot = cfg.robot.with_load(cfg.robot.body_mass_kg * f);
             let ground = sim.terrain(t).unwrap().ground();
             let mut h = Hopper::new(robot, gait.clone(), ground, cfg.integrator).unwrap();
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);

@@ -299,8 +299,7 @@ impl Simulator {
     fn run_trial_once(&self, plan: &TrialPlan, seed: u64) -> Result<TrialOutput> {
         let cfg = &self.config;
         let terrain = self.terrain(&plan.terrain)?;
-        let mut robot = cfg.robot.clone();
-        robot.body_mass_kg = plan.load_kg;
+        let robot = cfg.robot.with_load(plan.load_kg);
         let mut dyn_rng = ChaCha8Rng::seed_from_u64(seed);
         let mut terrain_rng = ChaCha8Rng::seed_from_u64(splitmix(seed ^ 0x7E44_A100));
         let mut sensor_rng = ChaCha8Rng::seed_from_u64(splitmix(seed ^ 0x5E45_0A00));

@@ -60,6 +60,28 @@ pub struct RobotParams {
     pub initial_speed_m_per_s: Option<f64>,
     /// Hops simulated before recording starts, so that the gait has settled.
     pub warmup_hops: usize,
+    /// When a trial's body mass differs from `body_mass_kg` (a payload, `--load`), scale the leg spring and
+    /// damper with the mass (k ∝ m, c ∝ m), as an engineer re-tunes a hopper's leg for its payload. The
+    /// leg's natural frequency and damping ratio, and so the stance time and the gaits G1-G3, stay those
+    /// the controller was tuned for, while every force scales with the load. Without it the AER energy input
+    /// outgrows the leg damping and the hopper is unstable beyond about 1.0x the nominal mass (see the
+    /// README, "Load robustness").
+    pub retune_leg_for_load: bool,
+}
+
+impl RobotParams {
+    /// The robot carrying a total body mass of `load_kg` instead of `body_mass_kg`: the mass is replaced
+    /// and, with [`retune_leg_for_load`](Self::retune_leg_for_load), the leg spring and damper scale with it.
+    pub fn with_load(&self, load_kg: f64) -> Self {
+        let mut robot = self.clone();
+        let ratio = load_kg / self.body_mass_kg;
+        robot.body_mass_kg = load_kg;
+        if self.retune_leg_for_load {
+            robot.leg_stiffness_n_per_m *= ratio;
+            robot.leg_damping_n_s_per_m *= ratio;
+        }
+        robot
+    }
 }
 
 impl Default for RobotParams {
@@ -79,6 +101,7 @@ impl Default for RobotParams {
             initial_apex_height_m: 0.2,
             initial_speed_m_per_s: None,
             warmup_hops: 40,
+            retune_leg_for_load: true,
         }
     }
 }
@@ -167,6 +190,11 @@ pub struct GroundParams {
     pub stiffness_n_per_m: Option<f64>,
     /// Normal damping, N s/m (must be > 0 for compliant ground: the foot is massless).
     pub damping_n_s_per_m: f64,
+    /// Depth of a soft top layer (thick grass over soil), m: deeper than this the firm layer below adds
+    /// `base_stiffness_n_per_m`. `null`: one uniform layer.
+    pub layer_depth_m: Option<f64>,
+    /// Stiffness the layer below adds once the top layer is compressed through, N/m.
+    pub base_stiffness_n_per_m: f64,
 }
 
 impl Default for GroundParams {
@@ -179,7 +207,31 @@ impl GroundParams {
     pub const RIGID: Self = Self {
         stiffness_n_per_m: None,
         damping_n_s_per_m: 0.0,
+        layer_depth_m: None,
+        base_stiffness_n_per_m: 0.0,
     };
+
+    /// A uniform Kelvin-Voigt ground.
+    pub const fn uniform(stiffness_n_per_m: f64, damping_n_s_per_m: f64) -> Self {
+        Self {
+            stiffness_n_per_m: Some(stiffness_n_per_m),
+            damping_n_s_per_m,
+            layer_depth_m: None,
+            base_stiffness_n_per_m: 0.0,
+        }
+    }
+
+    /// Elastic force of the ground at deflection `zg`, N (the top layer, plus the base once reached).
+    pub fn spring_force_n(&self, zg: f64) -> f64 {
+        let Some(k) = self.stiffness_n_per_m else {
+            return 0.0;
+        };
+        let base = match self.layer_depth_m {
+            Some(depth) if zg > depth => self.base_stiffness_n_per_m * (zg - depth),
+            _ => 0.0,
+        };
+        k * zg + base
+    }
 
     pub fn validate(&self, name: &str) -> Result<()> {
         if let Some(k) = self.stiffness_n_per_m {
@@ -187,6 +239,19 @@ impl GroundParams {
                 return Err(param(
                     &format!("{name}.stiffness_n_per_m"),
                     format!("must be positive, got {k}"),
+                ));
+            }
+            if let Some(depth) = self.layer_depth_m
+                && !(depth.is_finite()
+                    && depth > 0.0
+                    && self.base_stiffness_n_per_m.is_finite()
+                    && self.base_stiffness_n_per_m >= 0.0)
+            {
+                return Err(param(
+                    &format!("{name}.layer_depth_m"),
+                    format!(
+                        "a layer depth must be positive with a non-negative base stiffness, got {depth} m"
+                    ),
                 ));
             }
             if !(self.damping_n_s_per_m.is_finite() && self.damping_n_s_per_m > 0.0) {
@@ -289,7 +354,7 @@ fn stance_forces(
     let f0 = k * (zeta - l) + b * (zeta_dot - ux * vx - uy * vy);
     let zg_dot = match ground.stiffness_n_per_m {
         None => 0.0,
-        Some(kg) => (f0 * uy - kg * zg) / (ground.damping_n_s_per_m + b * uy * uy),
+        Some(_) => (f0 * uy - ground.spring_force_n(zg)) / (ground.damping_n_s_per_m + b * uy * uy),
     };
     let force = f0 - b * uy * zg_dot;
     (force, zg_dot, ux, uy)

@@ -58,10 +58,7 @@ pub struct WoodParams {
 impl Default for WoodParams {
     fn default() -> Self {
         Self {
-            ground: GroundParams {
-                stiffness_n_per_m: Some(2.0e6),
-                damping_n_s_per_m: 500.0,
-            },
+            ground: GroundParams::uniform(2.0e6, 500.0),
             ring_spacing_m: 2.5e-3,
             latewood_fraction: 0.35,
             grain_relief_m: 35e-6,
@@ -102,10 +99,7 @@ pub struct CarpetParams {
 impl Default for CarpetParams {
     fn default() -> Self {
         Self {
-            ground: GroundParams {
-                stiffness_n_per_m: Some(3.0e4),
-                damping_n_s_per_m: 150.0,
-            },
+            ground: GroundParams::uniform(3.0e4, 150.0),
             gauge_m: 2.54e-3,
             stitch_m: 2.8e-3,
             loop_length_m: 2.4e-3,
@@ -144,10 +138,7 @@ pub struct ClayParams {
 impl Default for ClayParams {
     fn default() -> Self {
         Self {
-            ground: GroundParams {
-                stiffness_n_per_m: Some(1.5e4),
-                damping_n_s_per_m: 400.0,
-            },
+            ground: GroundParams::uniform(1.5e4, 400.0),
             undulation_m: 0.25e-3,
             undulation_wavelength_m: 20e-3,
             grit_m: 15e-6,
@@ -191,9 +182,13 @@ pub struct GrassParams {
 impl Default for GrassParams {
     fn default() -> Self {
         Self {
+            // Thick grass is a soft, springy mat (most compliant, least dissipative); 35 mm down the foot
+            // meets the firm soil under it (assumption: soil ~30x stiffer than the mat). Without the soil
+            // the mat bottoms out under a payload and the hopper falls (README, "Load robustness").
             ground: GroundParams {
-                stiffness_n_per_m: Some(3.0e3),
-                damping_n_s_per_m: 1.5,
+                layer_depth_m: Some(0.035),
+                base_stiffness_n_per_m: 1.0e5,
+                ..GroundParams::uniform(3.0e3, 1.5)
             },
             blade_layers: 2.2,
             blade_width_m: [2.5e-3, 5.0e-3],
@@ -225,10 +220,7 @@ pub struct ImageTerrainParams {
 impl Default for ImageTerrainParams {
     fn default() -> Self {
         Self {
-            ground: GroundParams {
-                stiffness_n_per_m: Some(3.0e4),
-                damping_n_s_per_m: 150.0,
-            },
+            ground: GroundParams::uniform(3.0e4, 150.0),
             pixel_size_m: 0.25e-3,
             relief_m: 1.0e-3,
             surface_stiffness_pa_per_m: 8.0e7,
