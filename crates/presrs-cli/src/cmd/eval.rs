@@ -40,6 +40,9 @@ pub struct EvalArgs {
     /// Print one JSON document instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Also write an HTML report with figures in this folder (DIR/index.html).
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -190,6 +193,25 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     )
     .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
     bar.finish_and_clear();
+    if let Some(dir) = &args.report {
+        let name = match &args.leave_one_out {
+            Some(column) => format!("leave one {column} out"),
+            None => args
+                .train_condition
+                .as_ref()
+                .map_or_else(|| "random draw".to_owned(), |c| format!("trained on {c}")),
+        };
+        let path = super::report::write_eval_report(
+            &args.manifest,
+            &loaded,
+            &report,
+            &name,
+            &config,
+            &args.samples,
+            dir,
+        )?;
+        eprintln!("report written to {}", path.display());
+    }
     if args.json {
         return write_json(out, &EvalJson::new(&report));
     }

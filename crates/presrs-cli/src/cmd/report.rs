@@ -99,7 +99,6 @@ pub fn report_samples(samples: &[Sample]) -> Vec<ReportSample<'_>> {
 
 /// The names of `evaluations`' reports: `trained on KEY`.
 // Called by `reproduce` and `eval` once they write reports.
-#[allow(dead_code)]
 fn named_evaluations(evaluations: &BTreeMap<String, EvalReport>) -> Vec<Evaluation<'_>> {
     evaluations
         .iter()
@@ -166,7 +165,6 @@ pub fn train_report_model(
 /// training gait (the paper's Table II is shown next to `G2`). Trains one model on G2 (13 + 7 images per
 /// terrain, `seed`) for the PCA and validation-curve figures and traces four hops on wood and grass.
 // Called by `reproduce` and `eval` once they write reports.
-#[allow(dead_code)]
 pub fn write_simulation_report(
     dataset: &Dataset,
     config: &SimConfig,
@@ -310,7 +308,6 @@ fn first_seconds(recording: &Recording, seconds: f64) -> anyhow::Result<Recordin
 /// model trained like one repeat of it (for the PCA and validation-curve figures) and the load curves of
 /// up to four movies.
 // Called by `reproduce` and `eval` once they write reports.
-#[allow(dead_code)]
 pub fn write_eval_report(
     manifest_path: &Path,
     loaded: &LoadedSamples,

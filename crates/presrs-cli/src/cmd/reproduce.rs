@@ -46,6 +46,9 @@ pub struct ReproduceArgs {
     /// Recorded hops per terrain and gait (default: the simulator's paper-sized experiment).
     #[arg(long)]
     pub hops_per_gait: Option<usize>,
+    /// Skip the HTML report (DIR/report/index.html).
+    #[arg(long)]
+    pub no_report: bool,
     /// Extra load of the load-independence test, as a fraction of the nominal body mass.
     #[arg(long, default_value_t = 0.3)]
     pub extra_load: f64,
@@ -317,15 +320,30 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         serde_json::to_writer_pretty(&mut *w, &results).map_err(std::io::Error::from)?;
         writeln!(w)
     })?;
+    let report_path = if args.no_report {
+        None
+    } else {
+        let spin = spinner("writing the report");
+        let path = super::report::write_simulation_report(
+            &dataset,
+            &SimConfig::default(),
+            &results.evaluations,
+            args.seed,
+            &args.out.join("report"),
+        )?;
+        spin.finish_and_clear();
+        Some(path)
+    };
     let md_path = args.out.join("results.md");
     write_atomic(&md_path, |w| {
         write_markdown(&results, &table.format_with_paper(), w)
     })?;
     writeln!(
         out,
-        "\nwrote {} and {} ({:.1} s in all)",
+        "\nwrote {} and {}{} ({:.1} s in all)",
         json_path.display(),
         md_path.display(),
+        report_path.map_or_else(String::new, |p| format!(" and the report {}", p.display())),
         started.elapsed().as_secs_f64()
     )?;
     Ok(())
