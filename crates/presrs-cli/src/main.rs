@@ -41,7 +41,9 @@ enum Command {
     )]
     Stream(cmd::stream::StreamArgs),
     /// Send a recording to `presrs stream --listen` as a live stream.
-    #[command(after_help = "Example:\n  presrs replay sim/recordings/grass_G2_000.asf --connect 127.0.0.1:7700 --rate 100")]
+    #[command(
+        after_help = "Example:\n  presrs replay sim/recordings/grass_G2_000.asf --connect 127.0.0.1:7700 --rate 100"
+    )]
     Replay(cmd::replay::ReplayArgs),
     /// Draw a pressure image (PNG/SVG heat map in physical units) or a recording's movie (GIF).
     Plot(cmd::plot::PlotArgs),

@@ -347,28 +347,27 @@ fn tekscan_source<R: BufRead>(
 ) -> impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input {
     let mut stream = TekscanStream::new(reader, name);
     let mut failures = 0usize;
-    move |values, present| loop {
-        match stream.next_frame(values, present) {
-            Ok(Some(frame)) => {
-                failures = 0;
-                let Some(header) = stream.header() else {
-                    return Input::Fatal("no header".to_owned());
-                };
-                return Input::Frame {
+    move |values, present| match stream.next_frame(values, present) {
+        Ok(Some(frame)) => {
+            failures = 0;
+            match stream.header() {
+                Some(header) => Input::Frame {
                     grid: header.grid,
                     has_mask: frame.has_absent,
                     timestamp_us: None,
                     arrival: Instant::now(),
-                };
+                },
+                None => Input::Fatal("no header".to_owned()),
             }
-            Ok(None) => return Input::End,
-            Err(err) if stream.header().is_none() => return Input::Fatal(err.to_string()),
-            Err(err) => {
-                failures += 1;
-                if failures > 1000 {
-                    return Input::Fatal(format!("{err} (too many bad frames in a row)"));
-                }
-                return Input::Skipped(err.to_string());
+        }
+        Ok(None) => Input::End,
+        Err(err) if stream.header().is_none() => Input::Fatal(err.to_string()),
+        Err(err) => {
+            failures += 1;
+            if failures > 1000 {
+                Input::Fatal(format!("{err} (too many bad frames in a row)"))
+            } else {
+                Input::Skipped(err.to_string())
             }
         }
     }
