@@ -87,7 +87,9 @@ pub struct CarpetParams {
     pub loop_width_m: f64,
     /// How much a loop's crown drops from its centre to its edge, m.
     pub loop_crown_m: f64,
-    /// Random variation of loop height and position, m.
+    /// Random variation of loop height and position, m. A flooring carpet's loops are tufted by machine
+    /// but not on a perfect lattice; the position spread (a seventh of the stitch) is what keeps its
+    /// spectrum from being a few orientation-dependent spikes (calibrated: workspace README, "Calibration").
     pub loop_height_sd_m: f64,
     pub loop_position_sd_m: f64,
     /// Depth of the gaps between loops below the loop tops, m (beyond the skin's reach).
@@ -105,8 +107,8 @@ impl Default for CarpetParams {
             loop_length_m: 2.4e-3,
             loop_width_m: 1.3e-3,
             loop_crown_m: 0.35e-3,
-            loop_height_sd_m: 0.08e-3,
-            loop_position_sd_m: 0.12e-3,
+            loop_height_sd_m: 0.13e-3,
+            loop_position_sd_m: 0.35e-3,
             pile_depth_m: 3e-3,
             loop_stiffness_pa_per_m: 6.0e7,
         }
