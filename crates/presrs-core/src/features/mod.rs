@@ -5,6 +5,8 @@
 //! grid that owns its plans and buffers, so extracting does not allocate.
 
 pub mod fft1d;
+pub mod fft2d;
+pub mod glcm;
 
 use serde::{Deserialize, Serialize};
 
@@ -12,6 +14,8 @@ use crate::error::{CoreError, Result};
 use crate::frame::Grid;
 
 pub use fft1d::{Fft1dConfig, Fft1dExtractor};
+pub use fft2d::{Fft2dConfig, Fft2dExtractor, Fft2dForm};
+pub use glcm::{GLCM_ATTRIBUTE_NAMES, GlcmConfig, GlcmExtractor};
 
 /// The feature families, by name (as the CLI's `--features` spells them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -19,14 +23,27 @@ pub use fft1d::{Fft1dConfig, Fft1dExtractor};
 pub enum FeatureKind {
     /// Magnitude of the 1-D FFT of the row-major image (the paper's eqs. 3-5).
     Fft1d,
+    /// The non-redundant half of the 2-D |FFT|.
+    Fft2d,
+    /// Ring and wedge sums of the 2-D |FFT| (compact, shift- and rotation-robust).
+    Fft2dPolar,
+    /// Haralick attributes of grey-level co-occurrence matrices.
+    Glcm,
+    /// Several families side by side (not a name of its own: `fft1d+glcm`).
+    Combined,
 }
 
 impl FeatureKind {
-    pub const ALL: [Self; 1] = [Self::Fft1d];
+    /// The single families (what `--features` accepts, alone or joined with `+` or `,`).
+    pub const ALL: [Self; 4] = [Self::Fft1d, Self::Fft2d, Self::Fft2dPolar, Self::Glcm];
 
     pub fn as_str(self) -> &'static str {
         match self {
             Self::Fft1d => "fft1d",
+            Self::Fft2d => "fft2d",
+            Self::Fft2dPolar => "fft2d_polar",
+            Self::Glcm => "glcm",
+            Self::Combined => "combined",
         }
     }
 
@@ -49,8 +66,29 @@ impl FeatureKind {
     pub fn default_config(self) -> FeatureConfig {
         match self {
             Self::Fft1d => FeatureConfig::Fft1d(Fft1dConfig::PAPER),
+            Self::Fft2d => FeatureConfig::Fft2d(Fft2dConfig::HALF),
+            Self::Fft2dPolar => FeatureConfig::Fft2d(Fft2dConfig::POLAR),
+            Self::Glcm => FeatureConfig::Glcm(GlcmConfig::default()),
+            Self::Combined => FeatureConfig::combined(&[Self::Fft1d, Self::Glcm]),
         }
     }
+
+    /// Parses `fft1d`, `glcm`, `fft1d+glcm`, `fft2d_polar,glcm`, ... into the families named.
+    pub fn parse_list(text: &str) -> Result<Vec<Self>> {
+        let kinds = text
+            .split(['+', ','])
+            .map(Self::parse)
+            .collect::<Result<Vec<_>>>()?;
+        Ok(kinds)
+    }
+}
+
+/// Parameters of several feature families side by side. Each part's vector is scaled to unit Euclidean
+/// norm before concatenation, so no family dominates the PCA by its units alone.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CombinedConfig {
+    pub parts: Vec<FeatureConfig>,
 }
 
 impl std::fmt::Display for FeatureKind {
@@ -64,6 +102,9 @@ impl std::fmt::Display for FeatureKind {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum FeatureConfig {
     Fft1d(Fft1dConfig),
+    Fft2d(Fft2dConfig),
+    Glcm(GlcmConfig),
+    Combined(CombinedConfig),
 }
 
 impl Default for FeatureConfig {
@@ -76,6 +117,33 @@ impl FeatureConfig {
     pub fn kind(&self) -> FeatureKind {
         match self {
             Self::Fft1d(_) => FeatureKind::Fft1d,
+            Self::Fft2d(config) if config.form == Fft2dForm::Polar => FeatureKind::Fft2dPolar,
+            Self::Fft2d(_) => FeatureKind::Fft2d,
+            Self::Glcm(_) => FeatureKind::Glcm,
+            Self::Combined(_) => FeatureKind::Combined,
+        }
+    }
+
+    /// The default configuration of `kinds` (one family: itself; several: combined).
+    pub fn combined(kinds: &[FeatureKind]) -> Self {
+        match kinds {
+            [one] if *one != FeatureKind::Combined => one.default_config(),
+            _ => Self::Combined(CombinedConfig {
+                parts: kinds.iter().map(|k| k.default_config()).collect(),
+            }),
+        }
+    }
+
+    /// A short name: the family, or the parts joined with `+`.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Combined(config) => config
+                .parts
+                .iter()
+                .map(Self::name)
+                .collect::<Vec<_>>()
+                .join("+"),
+            other => other.kind().as_str().to_owned(),
         }
     }
 
@@ -87,6 +155,17 @@ impl FeatureConfig {
                 reason: "the transform length must be positive".into(),
             }),
             Self::Fft1d(_) => Ok(()),
+            Self::Fft2d(config) => config.check(),
+            Self::Glcm(config) => config.check(),
+            Self::Combined(config) => {
+                if config.parts.is_empty() {
+                    return Err(CoreError::Param {
+                        name: "features",
+                        reason: "a combination needs at least one part".into(),
+                    });
+                }
+                config.parts.iter().try_for_each(Self::check)
+            }
         }
     }
 
@@ -94,6 +173,9 @@ impl FeatureConfig {
     pub fn output_len(&self, grid: Grid) -> Result<usize> {
         match self {
             Self::Fft1d(config) => config.output_len(grid),
+            Self::Fft2d(config) => config.output_len(grid),
+            Self::Glcm(config) => config.output_len(grid),
+            Self::Combined(config) => config.parts.iter().map(|p| p.output_len(grid)).sum(),
         }
     }
 
@@ -101,6 +183,17 @@ impl FeatureConfig {
     pub fn extractor(&self, grid: Grid) -> Result<FeatureExtractor> {
         match self {
             Self::Fft1d(config) => Fft1dExtractor::new(grid, config).map(FeatureExtractor::Fft1d),
+            Self::Fft2d(config) => Fft2dExtractor::new(grid, config).map(FeatureExtractor::Fft2d),
+            Self::Glcm(config) => GlcmExtractor::new(grid, config).map(FeatureExtractor::Glcm),
+            Self::Combined(config) => {
+                self.check()?;
+                let parts = config
+                    .parts
+                    .iter()
+                    .map(|p| p.extractor(grid))
+                    .collect::<Result<Vec<_>>>()?;
+                Ok(FeatureExtractor::Combined(parts))
+            }
         }
     }
 }
@@ -109,6 +202,9 @@ impl FeatureConfig {
 #[derive(Clone, Debug)]
 pub enum FeatureExtractor {
     Fft1d(Fft1dExtractor),
+    Fft2d(Fft2dExtractor),
+    Glcm(GlcmExtractor),
+    Combined(Vec<FeatureExtractor>),
 }
 
 impl FeatureExtractor {
@@ -116,6 +212,9 @@ impl FeatureExtractor {
     pub fn grid(&self) -> Grid {
         match self {
             Self::Fft1d(extractor) => extractor.grid(),
+            Self::Fft2d(extractor) => extractor.grid(),
+            Self::Glcm(extractor) => extractor.grid(),
+            Self::Combined(parts) => parts.first().map_or(Grid::new(0, 0), Self::grid),
         }
     }
 
@@ -123,6 +222,9 @@ impl FeatureExtractor {
     pub fn output_len(&self) -> usize {
         match self {
             Self::Fft1d(extractor) => extractor.output_len(),
+            Self::Fft2d(extractor) => extractor.output_len(),
+            Self::Glcm(extractor) => extractor.output_len(),
+            Self::Combined(parts) => parts.iter().map(Self::output_len).sum(),
         }
     }
 
@@ -131,6 +233,23 @@ impl FeatureExtractor {
     pub fn extract_into(&mut self, image: &[f64], out: &mut [f64]) -> Result<()> {
         match self {
             Self::Fft1d(extractor) => extractor.extract_into(image, out),
+            Self::Fft2d(extractor) => extractor.extract_into(image, out),
+            Self::Glcm(extractor) => extractor.extract_into(image, out),
+            Self::Combined(parts) => {
+                let expected: usize = parts.iter().map(Self::output_len).sum();
+                fft2d::check_len("feature buffer", expected, out.len())?;
+                let mut rest = out;
+                for part in parts.iter_mut() {
+                    let (head, tail) = rest.split_at_mut(part.output_len());
+                    part.extract_into(image, head)?;
+                    let norm = head.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    if norm > 0.0 {
+                        head.iter_mut().for_each(|v| *v /= norm);
+                    }
+                    rest = tail;
+                }
+                Ok(())
+            }
         }
     }
 
