@@ -16,10 +16,14 @@ use super::common::write_json;
 #[derive(Debug, clap::Args)]
 #[command(after_help = "Example:\n  presrs bench --json\n  presrs bench --model g2.model.json")]
 pub struct BenchArgs {
-    /// A model file; without one, the paper's setting is built on synthetic 44x44 images (crop to 38x41,
-    /// 1-D |FFT| of 1025 values, PCA 51, Parzen over 80 training vectors).
+    /// A model file; without one, the paper's setting is built on simulated 44x44 mid-stance images of
+    /// gait G2 (crop to 38x41, 1-D |FFT| of 1025 values, PCA 51, Parzen over 80 training vectors).
+    /// Test images are simulated mid-stance images either way.
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// Use the synthetic test pattern of presrs-core instead of the simulator (no simulation needed).
+    #[arg(long)]
+    pub synthetic: bool,
     /// Timed single-image classifications.
     #[arg(long, default_value_t = 20_000)]
     pub iterations: usize,
@@ -45,25 +49,53 @@ struct BenchReport {
     batch: usize,
 }
 
+/// The paper's model trained on simulated G2 mid-stance images (13 + 7 per terrain), and 64 other
+/// simulated mid-stance images to classify.
+fn simulated_fixture(seed: u64) -> anyhow::Result<(TrainedModel, Vec<Frame>)> {
+    let mut spec = presrs_sim::DatasetSpec::paper(seed);
+    spec.gaits = vec!["G2".to_owned()];
+    spec.hops_per_gait = Some(40);
+    let dataset = presrs_sim::simulate_dataset(&presrs_sim::SimConfig::default(), &spec)?;
+    let (samples, _) = super::reproduce::stance_samples(&dataset.trials)?;
+    let labels: Vec<&str> = samples.iter().map(|s| s.terrain.as_str()).collect();
+    let split = presrs_core::split::stratified_split(
+        &labels,
+        Some(20),
+        presrs_core::split::ValidationSize::Count(7),
+        seed,
+    )?;
+    let images = |indices: &[usize]| -> Vec<presrs_core::pipeline::LabeledImage<'_>> {
+        indices
+            .iter()
+            .map(|&i| presrs_core::pipeline::LabeledImage::new(samples[i].frame.view(), labels[i]))
+            .collect()
+    };
+    let config = presrs_core::pipeline::TrainConfig::default().check()?;
+    let model =
+        presrs_core::pipeline::train(&images(&split.train), &images(&split.validation), &config)?;
+    let frames = split
+        .rest
+        .iter()
+        .take(64)
+        .map(|&i| samples[i].frame.clone())
+        .collect();
+    Ok((model, frames))
+}
+
 pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.iterations == 0 || args.batch == 0 {
         anyhow::bail!("--iterations and --batch must be positive");
     }
-    let (model, frames, source): (TrainedModel, Vec<Frame>, String) = match &args.model {
-        Some(path) => {
-            let model = load_model(path)?.model;
-            // Test images of the model's input size: synthetic ones need a 44x44 grid before the crop.
-            let (_, frames) = bench_fixture(args.seed, 64)?;
-            (model, frames, path.display().to_string())
-        }
-        None => {
-            let (model, frames) = bench_fixture(args.seed, 64)?;
-            (
-                model,
-                frames,
-                "built-in synthetic (paper settings)".to_owned(),
-            )
-        }
+    let (fixture_model, frames, source) = if args.synthetic {
+        let (model, frames) = bench_fixture(args.seed, 64)?;
+        (model, frames, "synthetic pattern, paper settings")
+    } else {
+        let (model, frames) = simulated_fixture(args.seed)?;
+        (model, frames, "simulated G2 images, paper settings")
+    };
+    let (model, source): (TrainedModel, String) = match &args.model {
+        Some(path) => (load_model(path)?.model, path.display().to_string()),
+        None => (fixture_model, source.to_owned()),
     };
     let mut session = model.session();
     // Warm up caches and check the images fit the model.

@@ -68,7 +68,7 @@ struct LoadCheck {
 }
 
 #[derive(Debug, Serialize)]
-struct SegmentationCheck {
+pub struct SegmentationCheck {
     /// Hops the simulator recorded (with a stance frame) and stances the segmentation found.
     true_hops: usize,
     found_stances: usize,
@@ -422,15 +422,15 @@ fn load_independence(
 }
 
 /// One stance image of the simulated data set.
-struct StanceSample {
-    frame: Frame,
-    terrain: String,
-    gait: String,
+pub struct StanceSample {
+    pub frame: Frame,
+    pub terrain: String,
+    pub gait: String,
 }
 
 /// Segments every trial, takes the mid-stance frame of each complete stance, and checks the stances
 /// against the simulator's ground truth.
-fn stance_samples(
+pub fn stance_samples(
     trials: &[TrialOutput],
 ) -> anyhow::Result<(Vec<StanceSample>, SegmentationCheck)> {
     let params = ValidSegmentParams::default();
