@@ -9,6 +9,7 @@ pub mod skin;
 pub mod slip;
 pub mod terrain;
 pub mod trace;
+pub mod track;
 
 pub use config::{RealismParams, SimConfig};
 pub use dataset::{
