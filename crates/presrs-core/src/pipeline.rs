@@ -442,6 +442,7 @@ impl TrainedModel {
     pub fn sigma(&self) -> Option<f64> {
         match &self.fields.classifier {
             ClassifierModel::Pwe(model) => Some(model.sigma()),
+            _ => None,
         }
     }
 
@@ -449,6 +450,7 @@ impl TrainedModel {
     pub fn validation_curve(&self) -> &[SigmaPoint] {
         match &self.fields.classifier {
             ClassifierModel::Pwe(model) => model.validation_curve(),
+            _ => &[],
         }
     }
 

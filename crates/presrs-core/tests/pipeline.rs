@@ -34,7 +34,9 @@ fn bench_fixture_has_the_paper_shapes_and_learns() {
     assert_eq!(model.class_names(), SYNTHETIC_CLASSES);
     assert_eq!(model.summary().train_per_class, vec![13; 4]);
     assert_eq!(model.summary().validation_per_class, vec![7; 4]);
-    let presrs_core::classifier::ClassifierModel::Pwe(parzen) = model.classifier();
+    let presrs_core::classifier::ClassifierModel::Pwe(parzen) = model.classifier() else {
+        panic!("the default classifier is the Parzen window")
+    };
     assert_eq!(parzen.n_stored(), 80);
     assert!(model.sigma().unwrap() > 0.0);
     assert_eq!(model.validation_curve().len(), 41);

@@ -1,18 +1,26 @@
-//! Classifiers on reduced feature vectors (the paper's Parzen-window estimator, and more).
+//! Classifiers on reduced feature vectors: the paper's Parzen-window estimator, Gaussian maximum likelihood
+//! (MLE) and linear discriminant analysis (LDA), support vector machines and k-nearest neighbours.
 //!
 //! [`ClassifierConfig`] chooses a classifier and its training parameters; training gives a
 //! [`ClassifierModel`] (serde-tagged by `kind`, stored in trained models). Classification writes class
 //! posteriors into a caller buffer and uses a caller-provided [`ClassifierScratch`], so it does not allocate.
 
+mod common;
+pub mod gaussian;
+pub mod knn;
 pub mod parzen;
+pub mod svm;
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
 
+pub use gaussian::{GaussianConfig, GaussianModel, GaussianScratch, Shrinkage, ledoit_wolf};
+pub use knn::{KnnConfig, KnnModel, KnnScratch};
 pub use parzen::{
     LabeledVectors, ParzenConfig, ParzenModel, ParzenScratch, SigmaChoice, SigmaPoint, SigmaSearch,
 };
+pub use svm::{Kernel, KernelKind, SvmCandidate, SvmConfig, SvmModel, SvmScratch};
 
 /// The classifier families, by name (as the CLI's `--classifier` spells them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -20,14 +28,26 @@ pub use parzen::{
 pub enum ClassifierKind {
     /// Parzen-window estimator with a Gaussian kernel (the paper's classifier).
     Pwe,
+    /// Gaussian class densities, one shrunk full covariance per class (maximum likelihood).
+    Mle,
+    /// Gaussian class densities with one shared shrunk covariance (linear discriminant).
+    Lda,
+    /// One-vs-one C-SVC, linear or RBF kernel, chosen on validation.
+    Svm,
+    /// k-nearest neighbours, k chosen on validation.
+    Knn,
 }
 
 impl ClassifierKind {
-    pub const ALL: [Self; 1] = [Self::Pwe];
+    pub const ALL: [Self; 5] = [Self::Pwe, Self::Mle, Self::Lda, Self::Svm, Self::Knn];
 
     pub fn as_str(self) -> &'static str {
         match self {
             Self::Pwe => "pwe",
+            Self::Mle => "mle",
+            Self::Lda => "lda",
+            Self::Svm => "svm",
+            Self::Knn => "knn",
         }
     }
 
@@ -50,6 +70,10 @@ impl ClassifierKind {
     pub fn default_config(self) -> ClassifierConfig {
         match self {
             Self::Pwe => ClassifierConfig::Pwe(ParzenConfig::default()),
+            Self::Mle => ClassifierConfig::Mle(GaussianConfig::default()),
+            Self::Lda => ClassifierConfig::Lda(GaussianConfig::default()),
+            Self::Svm => ClassifierConfig::Svm(SvmConfig::default()),
+            Self::Knn => ClassifierConfig::Knn(KnnConfig::default()),
         }
     }
 }
@@ -65,6 +89,10 @@ impl std::fmt::Display for ClassifierKind {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ClassifierConfig {
     Pwe(ParzenConfig),
+    Mle(GaussianConfig),
+    Lda(GaussianConfig),
+    Svm(SvmConfig),
+    Knn(KnnConfig),
 }
 
 impl Default for ClassifierConfig {
@@ -77,6 +105,10 @@ impl ClassifierConfig {
     pub fn kind(&self) -> ClassifierKind {
         match self {
             Self::Pwe(_) => ClassifierKind::Pwe,
+            Self::Mle(_) => ClassifierKind::Mle,
+            Self::Lda(_) => ClassifierKind::Lda,
+            Self::Svm(_) => ClassifierKind::Svm,
+            Self::Knn(_) => ClassifierKind::Knn,
         }
     }
 
@@ -84,11 +116,15 @@ impl ClassifierConfig {
     pub fn check(&self) -> Result<()> {
         match self {
             Self::Pwe(config) => config.check(),
+            Self::Mle(config) | Self::Lda(config) => config.check(),
+            Self::Svm(config) => config.check(),
+            Self::Knn(config) => config.check(),
         }
     }
 
-    /// Trains on reduced vectors. `validation` is used for model selection (e.g. the Parzen σ); whether it
-    /// is also kept in the model depends on the classifier (the Parzen model keeps it, as in the paper).
+    /// Trains on reduced vectors. `validation` is used for model selection (the Parzen σ, the SVM's C and
+    /// gamma, k, the posterior temperature); every model but the Parzen one is then refitted on training +
+    /// validation vectors (the Parzen model stores both, as in the paper).
     pub fn fit(
         &self,
         train: LabeledVectors<'_>,
@@ -99,6 +135,20 @@ impl ClassifierConfig {
         match self {
             Self::Pwe(config) => ParzenModel::fit(train, validation, n_classes, dims, config)
                 .map(ClassifierModel::Pwe),
+            Self::Mle(config) => {
+                GaussianModel::fit(train, validation, n_classes, dims, false, config)
+                    .map(ClassifierModel::Mle)
+            }
+            Self::Lda(config) => {
+                GaussianModel::fit(train, validation, n_classes, dims, true, config)
+                    .map(ClassifierModel::Lda)
+            }
+            Self::Svm(config) => {
+                SvmModel::fit(train, validation, n_classes, dims, config).map(ClassifierModel::Svm)
+            }
+            Self::Knn(config) => {
+                KnnModel::fit(train, validation, n_classes, dims, config).map(ClassifierModel::Knn)
+            }
         }
     }
 }
@@ -108,12 +158,20 @@ impl ClassifierConfig {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ClassifierModel {
     Pwe(ParzenModel),
+    Mle(GaussianModel),
+    Lda(GaussianModel),
+    Svm(SvmModel),
+    Knn(KnnModel),
 }
 
 impl ClassifierModel {
     pub fn kind(&self) -> ClassifierKind {
         match self {
             Self::Pwe(_) => ClassifierKind::Pwe,
+            Self::Mle(_) => ClassifierKind::Mle,
+            Self::Lda(_) => ClassifierKind::Lda,
+            Self::Svm(_) => ClassifierKind::Svm,
+            Self::Knn(_) => ClassifierKind::Knn,
         }
     }
 
@@ -121,12 +179,44 @@ impl ClassifierModel {
     pub fn dims(&self) -> usize {
         match self {
             Self::Pwe(model) => model.dims(),
+            Self::Mle(model) | Self::Lda(model) => model.dims(),
+            Self::Svm(model) => model.dims(),
+            Self::Knn(model) => model.dims(),
         }
     }
 
     pub fn n_classes(&self) -> usize {
         match self {
             Self::Pwe(model) => model.n_classes(),
+            Self::Mle(model) | Self::Lda(model) => model.n_classes(),
+            Self::Svm(model) => model.n_classes(),
+            Self::Knn(model) => model.n_classes(),
+        }
+    }
+
+    /// The hyper-parameters training chose, in words (for reports).
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Pwe(model) => format!("sigma {:.4e}", model.sigma()),
+            Self::Mle(model) | Self::Lda(model) => {
+                let s = model.shrinkage();
+                let mean = s.iter().sum::<f64>() / s.len().max(1) as f64;
+                format!(
+                    "Ledoit-Wolf shrinkage {mean:.3}, temperature {:.3e}",
+                    model.temperature()
+                )
+            }
+            Self::Svm(model) => match model.kernel() {
+                Kernel::Linear => format!("linear, C {}, {} SVs", model.c(), model.n_support()),
+                Kernel::Rbf { gamma } => {
+                    format!(
+                        "rbf gamma {gamma:.3e}, C {}, {} SVs",
+                        model.c(),
+                        model.n_support()
+                    )
+                }
+            },
+            Self::Knn(model) => format!("k {}", model.k()),
         }
     }
 
@@ -134,21 +224,31 @@ impl ClassifierModel {
     pub fn scratch(&self) -> ClassifierScratch {
         match self {
             Self::Pwe(model) => ClassifierScratch::Pwe(model.scratch()),
+            Self::Mle(model) | Self::Lda(model) => ClassifierScratch::Gaussian(model.scratch()),
+            Self::Svm(model) => ClassifierScratch::Svm(model.scratch()),
+            Self::Knn(model) => ClassifierScratch::Knn(model.scratch()),
         }
     }
 
     /// Classifies `x`: writes class posteriors into `posteriors` (`n_classes` long) and returns the most
     /// likely class. Does not allocate once `scratch` has been sized by [`scratch`](Self::scratch).
+    /// A scratch of another family is replaced by a fresh one (which allocates once).
     pub fn classify_into(
         &self,
         x: &[f64],
         scratch: &mut ClassifierScratch,
         posteriors: &mut [f64],
     ) -> Result<usize> {
-        // When more families exist, a scratch of the wrong family is an error (see `scratch`).
-        match (self, scratch) {
-            (Self::Pwe(model), ClassifierScratch::Pwe(scratch)) => {
-                model.classify_into(x, scratch, posteriors)
+        match (self, &mut *scratch) {
+            (Self::Pwe(model), ClassifierScratch::Pwe(s)) => model.classify_into(x, s, posteriors),
+            (Self::Mle(model) | Self::Lda(model), ClassifierScratch::Gaussian(s)) => {
+                model.classify_into(x, s, posteriors)
+            }
+            (Self::Svm(model), ClassifierScratch::Svm(s)) => model.classify_into(x, s, posteriors),
+            (Self::Knn(model), ClassifierScratch::Knn(s)) => model.classify_into(x, s, posteriors),
+            _ => {
+                *scratch = self.scratch();
+                self.classify_into(x, scratch, posteriors)
             }
         }
     }
@@ -158,4 +258,7 @@ impl ClassifierModel {
 #[derive(Clone, Debug)]
 pub enum ClassifierScratch {
     Pwe(ParzenScratch),
+    Gaussian(GaussianScratch),
+    Svm(SvmScratch),
+    Knn(KnnScratch),
 }

@@ -1,0 +1,150 @@
+//! Helpers shared by the classifiers: input checks and the validation-fitted softmax temperature that turns
+//! scores into calibrated-looking posteriors.
+
+use super::LabeledVectors;
+use crate::error::{CoreError, Result};
+
+/// Checks shapes, class indices and finiteness of `data`.
+pub(crate) fn check_vectors(
+    data: &LabeledVectors<'_>,
+    what: &'static str,
+    dims: usize,
+    n_classes: usize,
+) -> Result<()> {
+    if dims == 0 {
+        return Err(CoreError::Param {
+            name: what,
+            reason: "vectors are empty".into(),
+        });
+    }
+    if data.vectors.len() != data.classes.len() * dims {
+        return Err(CoreError::Shape {
+            what,
+            expected: format!("{} vectors of {dims}", data.classes.len()),
+            got: format!("{} values", data.vectors.len()),
+        });
+    }
+    if let Some(&class) = data.classes.iter().find(|&&c| c >= n_classes) {
+        return Err(CoreError::Param {
+            name: what,
+            reason: format!("class index {class} but only {n_classes} classes"),
+        });
+    }
+    if data.vectors.iter().any(|v| !v.is_finite()) {
+        return Err(CoreError::Param {
+            name: what,
+            reason: "contains NaN or infinite values".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Errors unless every class has at least `min` vectors in `data`.
+pub(crate) fn require_per_class(
+    data: &LabeledVectors<'_>,
+    n_classes: usize,
+    min: usize,
+) -> Result<()> {
+    for class in 0..n_classes {
+        let count = data.classes.iter().filter(|&&c| c == class).count();
+        if count < min {
+            return Err(CoreError::NotEnoughData(format!(
+                "class {class} has {count} training vector(s); at least {min} needed"
+            )));
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(CoreError::Shape {
+            what,
+            expected: expected.to_string(),
+            got: got.to_string(),
+        })
+    }
+}
+
+/// Training and validation vectors together (what final models are fitted on).
+pub(crate) fn merged(
+    train: &LabeledVectors<'_>,
+    validation: &LabeledVectors<'_>,
+) -> (Vec<f64>, Vec<usize>) {
+    (
+        [train.vectors, validation.vectors].concat(),
+        [train.classes, validation.classes].concat(),
+    )
+}
+
+/// Softmax of `scores / temperature` in place; returns the arg-max (first on ties).
+pub(crate) fn softmax_in_place(scores: &mut [f64], temperature: f64) -> usize {
+    for score in scores.iter_mut() {
+        *score /= temperature;
+    }
+    super::parzen::normalise_log_scores(scores)
+}
+
+/// Fraction of rows of `scores` (`n x n_classes`) whose arg-max is the true class.
+pub(crate) fn accuracy_of_scores(scores: &[f64], classes: &[usize], n_classes: usize) -> f64 {
+    if classes.is_empty() {
+        return 0.0;
+    }
+    let correct = scores
+        .chunks_exact(n_classes)
+        .zip(classes)
+        .filter(|(row, class)| argmax(row) == **class)
+        .count();
+    correct as f64 / classes.len() as f64
+}
+
+pub(crate) fn argmax(values: &[f64]) -> usize {
+    let mut best = 0;
+    for (i, &v) in values.iter().enumerate() {
+        if v > values[best] {
+            best = i;
+        }
+    }
+    best
+}
+
+/// The softmax temperature that minimises the mean negative log posterior of the true class over the
+/// validation scores (`n x n_classes`, larger is more likely), on a log grid from 1e-3 to 1e4 times the
+/// median spread of the scores. 1 when there is no validation data.
+pub(crate) fn fit_temperature(scores: &[f64], classes: &[usize], n_classes: usize) -> f64 {
+    if classes.is_empty() || n_classes < 2 {
+        return 1.0;
+    }
+    let mut spreads: Vec<f64> = scores
+        .chunks_exact(n_classes)
+        .map(|row| {
+            let max = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let min = row.iter().copied().fold(f64::INFINITY, f64::min);
+            max - min
+        })
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .collect();
+    if spreads.is_empty() {
+        return 1.0;
+    }
+    spreads.sort_by(f64::total_cmp);
+    let scale = spreads[spreads.len() / 2];
+    let mut row = vec![0.0; n_classes];
+    let mut best = (f64::INFINITY, scale);
+    for step in 0..=70 {
+        let temperature = scale * 10f64.powf(-3.0 + 7.0 * step as f64 / 70.0);
+        let mut nll = 0.0;
+        for (scores, &class) in scores.chunks_exact(n_classes).zip(classes) {
+            row.copy_from_slice(scores);
+            softmax_in_place(&mut row, temperature);
+            nll -= row[class].max(1e-300).ln();
+        }
+        // ties to the larger temperature (the less confident model)
+        if nll <= best.0 {
+            best = (nll, temperature);
+        }
+    }
+    best.1
+}

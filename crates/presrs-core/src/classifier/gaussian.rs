@@ -1,0 +1,358 @@
+//! Gaussian class-conditional densities: maximum likelihood (MLE, one full covariance per class, i.e.
+//! quadratic discriminant) and linear discriminant analysis (LDA, one covariance shared by the classes).
+//!
+//! With 13-20 samples per class and tens of PCA dimensions the sample covariance is singular, so it is
+//! shrunk toward a scaled identity with the Ledoit-Wolf estimate of the shrinkage
+//! (`Σ = (1 - s) S + s μ I`, `μ = tr S / d`, `s` as in scikit-learn's `ledoit_wolf_shrinkage`), or a fixed
+//! `s`. Scores are log densities with equal priors; posteriors are their softmax at a temperature fitted on
+//! the validation set (by a model fitted on the training vectors alone), so the confidence is not the
+//! near-0/1 of a 50-dimensional Gaussian. The final model is fitted on training + validation vectors.
+
+use serde::{Deserialize, Serialize};
+
+use super::LabeledVectors;
+use super::common::{
+    accuracy_of_scores, check_len, check_vectors, fit_temperature, merged, require_per_class,
+    softmax_in_place,
+};
+use crate::error::{CoreError, Result};
+
+/// How the covariances are shrunk.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "mode", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Shrinkage {
+    /// The Ledoit-Wolf estimate (the default).
+    #[default]
+    LedoitWolf,
+    /// A fixed weight in `[0, 1]` on the scaled identity.
+    Fixed { weight: f64 },
+}
+
+/// Parameters of the Gaussian classifiers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaussianConfig {
+    #[serde(default)]
+    pub shrinkage: Shrinkage,
+}
+
+impl GaussianConfig {
+    pub fn check(&self) -> Result<()> {
+        match self.shrinkage {
+            Shrinkage::Fixed { weight } if !(0.0..=1.0).contains(&weight) => {
+                Err(CoreError::Param {
+                    name: "gaussian shrinkage",
+                    reason: format!("a fixed shrinkage weight must be in [0, 1], got {weight}"),
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// The Ledoit-Wolf shrinkage weight of centred data `x` (`n x d`), as scikit-learn computes it, and the
+/// empirical covariance `S = xᵀx / n` (`d x d`).
+pub fn ledoit_wolf(x: &[f64], d: usize) -> (f64, Vec<f64>) {
+    let n = x.len() / d;
+    let mut emp = vec![0.0; d * d];
+    for row in x.chunks_exact(d) {
+        for i in 0..d {
+            for j in 0..=i {
+                emp[i * d + j] += row[i] * row[j];
+            }
+        }
+    }
+    for i in 0..d {
+        for j in 0..=i {
+            emp[i * d + j] /= n as f64;
+            emp[j * d + i] = emp[i * d + j];
+        }
+    }
+    if n == 0 {
+        return (1.0, emp);
+    }
+    let nf = n as f64;
+    let trace: f64 = (0..d).map(|i| emp[i * d + i]).sum();
+    let mu = trace / d as f64;
+    // beta_ = Σ_ij ((x²)ᵀ x²)_ij = Σ_ij Σ_k x_ki² x_kj² = Σ_k (Σ_i x_ki²)²
+    let beta_raw: f64 = x
+        .chunks_exact(d)
+        .map(|row| row.iter().map(|v| v * v).sum::<f64>().powi(2))
+        .sum();
+    // delta_ = Σ_ij (xᵀx)_ij² / n²  = Σ_ij S_ij²
+    let delta_raw: f64 = emp.iter().map(|v| v * v).sum();
+    let beta = (beta_raw / nf - delta_raw) / (d as f64 * nf);
+    let delta = (delta_raw - 2.0 * mu * trace + d as f64 * mu * mu) / d as f64;
+    let beta = beta.min(delta);
+    let shrinkage = if beta == 0.0 || delta <= 0.0 {
+        0.0
+    } else {
+        beta / delta
+    };
+    (shrinkage, emp)
+}
+
+/// Lower Cholesky factor of `a` (`d x d`) in place; false if not positive definite.
+fn cholesky_in_place(a: &mut [f64], d: usize) -> bool {
+    for j in 0..d {
+        let mut diag = a[j * d + j];
+        for k in 0..j {
+            diag -= a[j * d + k] * a[j * d + k];
+        }
+        if !(diag > 0.0 && diag.is_finite()) {
+            return false;
+        }
+        let diag = diag.sqrt();
+        a[j * d + j] = diag;
+        for i in j + 1..d {
+            let mut value = a[i * d + j];
+            for k in 0..j {
+                value -= a[i * d + k] * a[j * d + k];
+            }
+            a[i * d + j] = value / diag;
+        }
+        for k in j + 1..d {
+            a[j * d + k] = 0.0;
+        }
+    }
+    true
+}
+
+/// Shrinks the covariance of centred `x` and factors it; returns (L, log det Σ, shrinkage weight).
+fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>, f64, f64)> {
+    let (lw, mut cov) = ledoit_wolf(x, d);
+    let weight = match shrinkage {
+        Shrinkage::LedoitWolf => lw,
+        Shrinkage::Fixed { weight } => weight,
+    };
+    let mu = (0..d).map(|i| cov[i * d + i]).sum::<f64>() / d as f64;
+    for value in cov.iter_mut() {
+        *value *= 1.0 - weight;
+    }
+    for i in 0..d {
+        cov[i * d + i] += weight * mu;
+    }
+    // A degenerate covariance (e.g. no spread, or no shrinkage with too few samples) gets a small ridge.
+    let mut ridge = 1e-10 * mu.max(1e-300);
+    let original = cov.clone();
+    loop {
+        if cholesky_in_place(&mut cov, d) {
+            break;
+        }
+        if ridge > 1e300 {
+            return Err(CoreError::NotEnoughData(
+                "the class covariance cannot be made positive definite".into(),
+            ));
+        }
+        cov.copy_from_slice(&original);
+        for i in 0..d {
+            cov[i * d + i] += ridge;
+        }
+        ridge *= 100.0;
+    }
+    let log_det = 2.0 * (0..d).map(|i| cov[i * d + i].ln()).sum::<f64>();
+    Ok((cov, log_det, weight))
+}
+
+/// A trained Gaussian classifier (MLE or LDA).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaussianModel {
+    dims: usize,
+    n_classes: usize,
+    /// One covariance shared by the classes (LDA) or one per class (MLE).
+    shared: bool,
+    /// Class means, `n_classes x dims`.
+    means: Vec<f64>,
+    /// Lower Cholesky factors, `dims x dims` each (one, or one per class).
+    factors: Vec<f64>,
+    log_dets: Vec<f64>,
+    /// The shrinkage weight of each covariance.
+    shrinkage: Vec<f64>,
+    /// Softmax temperature of the posteriors (fitted on validation).
+    temperature: f64,
+    /// Accuracy of the training-only model on the validation vectors (None without validation data).
+    validation_accuracy: Option<f64>,
+}
+
+impl GaussianModel {
+    /// Fits class means and shrunk covariances on `data` (every class needs two vectors).
+    fn fit_on(
+        data: &LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        shared: bool,
+        shrinkage: Shrinkage,
+    ) -> Result<Self> {
+        require_per_class(data, n_classes, 2)?;
+        let mut means = vec![0.0; n_classes * dims];
+        let mut counts = vec![0usize; n_classes];
+        for (x, &class) in data.vectors.chunks_exact(dims).zip(data.classes) {
+            counts[class] += 1;
+            for (m, v) in means[class * dims..(class + 1) * dims].iter_mut().zip(x) {
+                *m += v;
+            }
+        }
+        for (class, &count) in counts.iter().enumerate() {
+            for m in &mut means[class * dims..(class + 1) * dims] {
+                *m /= count as f64;
+            }
+        }
+        let centred_of = |wanted: Option<usize>| -> Vec<f64> {
+            let mut out = Vec::new();
+            for (x, &class) in data.vectors.chunks_exact(dims).zip(data.classes) {
+                if wanted.is_none_or(|w| w == class) {
+                    out.extend(x.iter().zip(&means[class * dims..]).map(|(v, m)| v - m));
+                }
+            }
+            out
+        };
+        let mut factors = Vec::new();
+        let mut log_dets = Vec::new();
+        let mut weights = Vec::new();
+        let groups: Vec<Option<usize>> = if shared {
+            vec![None]
+        } else {
+            (0..n_classes).map(Some).collect()
+        };
+        for group in groups {
+            let (factor, log_det, weight) = shrunk_factor(&centred_of(group), dims, shrinkage)?;
+            factors.extend(factor);
+            log_dets.push(log_det);
+            weights.push(weight);
+        }
+        Ok(Self {
+            dims,
+            n_classes,
+            shared,
+            means,
+            factors,
+            log_dets,
+            shrinkage: weights,
+            temperature: 1.0,
+            validation_accuracy: None,
+        })
+    }
+
+    /// Trains (see the module documentation). `shared`: LDA; otherwise MLE.
+    pub fn fit(
+        train: LabeledVectors<'_>,
+        validation: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        shared: bool,
+        config: &GaussianConfig,
+    ) -> Result<Self> {
+        config.check()?;
+        check_vectors(&train, "gaussian training vectors", dims, n_classes)?;
+        check_vectors(&validation, "gaussian validation vectors", dims, n_classes)?;
+        let (temperature, validation_accuracy) = if validation.classes.is_empty() {
+            (1.0, None)
+        } else {
+            let first = Self::fit_on(&train, n_classes, dims, shared, config.shrinkage)?;
+            let scores = first.scores_of(validation.vectors)?;
+            (
+                fit_temperature(&scores, validation.classes, n_classes),
+                Some(accuracy_of_scores(&scores, validation.classes, n_classes)),
+            )
+        };
+        let (vectors, classes) = merged(&train, &validation);
+        let all = LabeledVectors {
+            vectors: &vectors,
+            classes: &classes,
+        };
+        let mut model = Self::fit_on(&all, n_classes, dims, shared, config.shrinkage)?;
+        model.temperature = temperature;
+        model.validation_accuracy = validation_accuracy;
+        Ok(model)
+    }
+
+    fn scores_of(&self, vectors: &[f64]) -> Result<Vec<f64>> {
+        let mut scratch = self.scratch();
+        let mut scores = vec![0.0; vectors.len() / self.dims * self.n_classes];
+        for (x, out) in vectors
+            .chunks_exact(self.dims)
+            .zip(scores.chunks_exact_mut(self.n_classes))
+        {
+            self.log_scores_into(x, &mut scratch, out)?;
+        }
+        Ok(scores)
+    }
+
+    pub fn dims(&self) -> usize {
+        self.dims
+    }
+
+    pub fn n_classes(&self) -> usize {
+        self.n_classes
+    }
+
+    pub fn is_shared(&self) -> bool {
+        self.shared
+    }
+
+    /// The shrinkage weight of each covariance (one for LDA).
+    pub fn shrinkage(&self) -> &[f64] {
+        &self.shrinkage
+    }
+
+    pub fn temperature(&self) -> f64 {
+        self.temperature
+    }
+
+    pub fn validation_accuracy(&self) -> Option<f64> {
+        self.validation_accuracy
+    }
+
+    pub fn scratch(&self) -> GaussianScratch {
+        GaussianScratch {
+            diff: vec![0.0; self.dims],
+        }
+    }
+
+    /// Log density of `x` under each class (up to a common constant) into `out`. Does not allocate.
+    pub fn log_scores_into(
+        &self,
+        x: &[f64],
+        scratch: &mut GaussianScratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let d = self.dims;
+        check_len("gaussian input", d, x.len())?;
+        check_len("gaussian class scores", self.n_classes, out.len())?;
+        scratch.diff.resize(d, 0.0);
+        for (class, score) in out.iter_mut().enumerate() {
+            let group = if self.shared { 0 } else { class };
+            let factor = &self.factors[group * d * d..(group + 1) * d * d];
+            let mean = &self.means[class * d..(class + 1) * d];
+            // z = L⁻¹ (x - μ) by forward substitution; the quadratic form is |z|².
+            let mut quad = 0.0;
+            for i in 0..d {
+                let row = &factor[i * d..i * d + i];
+                let dot: f64 = row.iter().zip(&scratch.diff[..i]).map(|(l, z)| l * z).sum();
+                let z = (x[i] - mean[i] - dot) / factor[i * d + i];
+                scratch.diff[i] = z;
+                quad += z * z;
+            }
+            *score = -0.5 * (quad + self.log_dets[group]);
+        }
+        Ok(())
+    }
+
+    /// Posteriors into `posteriors`; returns the most likely class. Does not allocate.
+    pub fn classify_into(
+        &self,
+        x: &[f64],
+        scratch: &mut GaussianScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        self.log_scores_into(x, scratch, posteriors)?;
+        Ok(softmax_in_place(posteriors, self.temperature))
+    }
+}
+
+/// Reusable buffers of [`GaussianModel::classify_into`].
+#[derive(Clone, Debug, Default)]
+pub struct GaussianScratch {
+    diff: Vec<f64>,
+}

@@ -1,0 +1,625 @@
+//! Support vector machines: C-SVC with linear or RBF kernels, one-vs-one with voting (as libsvm and
+//! scikit-learn's `SVC`).
+//!
+//! Each pair of classes `(i, j)`, `i < j`, is a binary problem with `y = +1` for class `i`, solved exactly
+//! (to the KKT tolerance `tol`) by an SMO solver with libsvm's second-order working-set selection; the bias
+//! is libsvm's `rho`. The decision `f(x) = Σ α_t y_t K(x_t, x) - rho > 0` votes for `i`, otherwise for
+//! `j`; the most votes win, ties to the lower class index (libsvm's rule).
+//!
+//! Hyper-parameters: every kernel of [`SvmConfig::kernels`], every `C` of `c_grid` and (RBF) every
+//! `gamma = factor · gamma_scale` with `gamma_scale = 1 / (d · var(X))` (scikit-learn's `gamma="scale"`)
+//! is fitted on the training vectors and scored on the validation vectors; the best accuracy wins (ties to
+//! the earlier candidate: linear before RBF, smaller C, gamma factors in grid order), and the final model is
+//! fitted on training + validation. Posteriors: softmax of `Σ_{j≠c} ln σ(f_cj)` (the pairwise decisions
+//! read as log-odds) at a temperature fitted on validation; the voted class always holds the top posterior
+//! (in the rare near-ties where the two disagree, their posteriors are swapped).
+
+use serde::{Deserialize, Serialize};
+
+use super::LabeledVectors;
+use super::common::{check_len, check_vectors, fit_temperature, merged, require_per_class};
+use crate::error::{CoreError, Result};
+
+/// A kernel family (what is searched).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KernelKind {
+    Linear,
+    Rbf,
+}
+
+/// A kernel with its parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Kernel {
+    /// `K(a, b) = a·b`.
+    Linear,
+    /// `K(a, b) = exp(-gamma |a - b|²)`.
+    Rbf { gamma: f64 },
+}
+
+impl Kernel {
+    fn eval(&self, a: &[f64], b: &[f64]) -> f64 {
+        match *self {
+            Self::Linear => a.iter().zip(b).map(|(x, y)| x * y).sum(),
+            Self::Rbf { gamma } => {
+                let d2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+                (-gamma * d2).exp()
+            }
+        }
+    }
+}
+
+/// Parameters of the SVM and its hyper-parameter search.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SvmConfig {
+    #[serde(default = "default_kernels")]
+    pub kernels: Vec<KernelKind>,
+    #[serde(default = "default_c_grid")]
+    pub c_grid: Vec<f64>,
+    /// RBF gamma as multiples of `1 / (d · var(X))`.
+    #[serde(default = "default_gamma_factors")]
+    pub gamma_factors: Vec<f64>,
+    /// KKT tolerance of the solver (libsvm's `eps`).
+    #[serde(default = "default_tol")]
+    pub tol: f64,
+}
+
+fn default_kernels() -> Vec<KernelKind> {
+    vec![KernelKind::Linear, KernelKind::Rbf]
+}
+fn default_c_grid() -> Vec<f64> {
+    vec![0.1, 1.0, 10.0, 100.0, 1000.0]
+}
+fn default_gamma_factors() -> Vec<f64> {
+    vec![0.1, 0.3, 1.0, 3.0, 10.0]
+}
+fn default_tol() -> f64 {
+    1e-3
+}
+
+impl Default for SvmConfig {
+    fn default() -> Self {
+        Self {
+            kernels: default_kernels(),
+            c_grid: default_c_grid(),
+            gamma_factors: default_gamma_factors(),
+            tol: default_tol(),
+        }
+    }
+}
+
+impl SvmConfig {
+    pub fn check(&self) -> Result<()> {
+        let bad = |reason: &str| {
+            Err(CoreError::Param {
+                name: "svm",
+                reason: reason.into(),
+            })
+        };
+        let positive = |v: &f64| v.is_finite() && *v > 0.0;
+        if self.kernels.is_empty() {
+            return bad("at least one kernel");
+        }
+        if self.c_grid.is_empty() || !self.c_grid.iter().all(positive) {
+            return bad("C values must be positive and finite");
+        }
+        if self.kernels.contains(&KernelKind::Rbf)
+            && (self.gamma_factors.is_empty() || !self.gamma_factors.iter().all(positive))
+        {
+            return bad("gamma factors must be positive and finite");
+        }
+        if !positive(&self.tol) {
+            return bad("the tolerance must be positive");
+        }
+        Ok(())
+    }
+}
+
+/// One binary machine of the one-vs-one scheme.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PairMachine {
+    /// Indices of the support vectors into the stored vectors.
+    support: Vec<usize>,
+    /// `α_t y_t` of each support vector.
+    coefs: Vec<f64>,
+    rho: f64,
+}
+
+/// One hyper-parameter candidate and its validation accuracy.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SvmCandidate {
+    pub kernel: Kernel,
+    pub c: f64,
+    pub validation_accuracy: f64,
+}
+
+/// A trained one-vs-one SVM.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SvmModel {
+    dims: usize,
+    n_classes: usize,
+    kernel: Kernel,
+    c: f64,
+    /// Stored vectors (every training vector that is a support vector of some pair), `n x dims`.
+    vectors: Vec<f64>,
+    /// Machines for pairs (0,1), (0,2), ..., (1,2), ...
+    machines: Vec<PairMachine>,
+    temperature: f64,
+    /// Every candidate tried, in order (empty when a single one was given).
+    candidates: Vec<SvmCandidate>,
+}
+
+/// Solves the C-SVC dual for labels `y` (±1) with kernel matrix `k` (`n x n`); returns (α, rho).
+fn smo(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64) {
+    let n = y.len();
+    let mut alpha = vec![0.0; n];
+    let mut grad = vec![-1.0; n];
+    let q = |i: usize, j: usize| y[i] * y[j] * k[i * n + j];
+    let max_iter = (100 * n).max(10_000_000);
+    let tau = 1e-12;
+    for _ in 0..max_iter {
+        // select i: max over I_up of -y G
+        let mut gmax = f64::NEG_INFINITY;
+        let mut i_sel = usize::MAX;
+        for t in 0..n {
+            let up = if y[t] > 0.0 {
+                alpha[t] < c
+            } else {
+                alpha[t] > 0.0
+            };
+            if up && -y[t] * grad[t] >= gmax {
+                gmax = -y[t] * grad[t];
+                i_sel = t;
+            }
+        }
+        if i_sel == usize::MAX {
+            break;
+        }
+        let i = i_sel;
+        let mut gmax2 = f64::NEG_INFINITY;
+        let mut j_sel = usize::MAX;
+        let mut obj_min = f64::INFINITY;
+        for t in 0..n {
+            let low = if y[t] > 0.0 {
+                alpha[t] > 0.0
+            } else {
+                alpha[t] < c
+            };
+            if !low {
+                continue;
+            }
+            let yg = y[t] * grad[t];
+            gmax2 = gmax2.max(yg);
+            let b = gmax + yg;
+            if b > 0.0 {
+                let mut a = k[i * n + i] + k[t * n + t] - 2.0 * y[i] * y[t] * q(i, t);
+                if a <= 0.0 {
+                    a = tau;
+                }
+                let obj = -(b * b) / a;
+                if obj <= obj_min {
+                    obj_min = obj;
+                    j_sel = t;
+                }
+            }
+        }
+        if gmax + gmax2 < tol || j_sel == usize::MAX {
+            break;
+        }
+        let j = j_sel;
+        let (old_i, old_j) = (alpha[i], alpha[j]);
+        let qij = q(i, j);
+        if y[i] != y[j] {
+            let mut quad = q(i, i) + q(j, j) + 2.0 * qij;
+            if quad <= 0.0 {
+                quad = tau;
+            }
+            let delta = (-grad[i] - grad[j]) / quad;
+            let diff = alpha[i] - alpha[j];
+            alpha[i] += delta;
+            alpha[j] += delta;
+            if diff > 0.0 {
+                if alpha[j] < 0.0 {
+                    alpha[j] = 0.0;
+                    alpha[i] = diff;
+                }
+            } else if alpha[i] < 0.0 {
+                alpha[i] = 0.0;
+                alpha[j] = -diff;
+            }
+            if diff > 0.0 {
+                if alpha[i] > c {
+                    alpha[i] = c;
+                    alpha[j] = c - diff;
+                }
+            } else if alpha[j] > c {
+                alpha[j] = c;
+                alpha[i] = c + diff;
+            }
+        } else {
+            let mut quad = q(i, i) + q(j, j) - 2.0 * qij;
+            if quad <= 0.0 {
+                quad = tau;
+            }
+            let delta = (grad[i] - grad[j]) / quad;
+            let sum = alpha[i] + alpha[j];
+            alpha[i] -= delta;
+            alpha[j] += delta;
+            if sum > c {
+                if alpha[i] > c {
+                    alpha[i] = c;
+                    alpha[j] = sum - c;
+                }
+            } else if alpha[j] < 0.0 {
+                alpha[j] = 0.0;
+                alpha[i] = sum;
+            }
+            if sum > c {
+                if alpha[j] > c {
+                    alpha[j] = c;
+                    alpha[i] = sum - c;
+                }
+            } else if alpha[i] < 0.0 {
+                alpha[i] = 0.0;
+                alpha[j] = sum;
+            }
+        }
+        let (di, dj) = (alpha[i] - old_i, alpha[j] - old_j);
+        for t in 0..n {
+            grad[t] += q(t, i) * di + q(t, j) * dj;
+        }
+    }
+    // rho (libsvm's calculate_rho)
+    let (mut ub, mut lb, mut sum_free, mut n_free) =
+        (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
+    for t in 0..n {
+        let yg = y[t] * grad[t];
+        if alpha[t] >= c {
+            if y[t] < 0.0 {
+                ub = ub.min(yg);
+            } else {
+                lb = lb.max(yg);
+            }
+        } else if alpha[t] <= 0.0 {
+            if y[t] > 0.0 {
+                ub = ub.min(yg);
+            } else {
+                lb = lb.max(yg);
+            }
+        } else {
+            n_free += 1;
+            sum_free += yg;
+        }
+    }
+    let rho = if n_free > 0 {
+        sum_free / n_free as f64
+    } else {
+        (ub + lb) / 2.0
+    };
+    (alpha, rho)
+}
+
+impl SvmModel {
+    /// Fits one-vs-one machines with a fixed kernel and `C` on `data` (no search, no calibration).
+    pub fn fit_fixed(
+        data: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        kernel: Kernel,
+        c: f64,
+        tol: f64,
+    ) -> Result<Self> {
+        check_vectors(&data, "svm training vectors", dims, n_classes)?;
+        require_per_class(&data, n_classes, 1)?;
+        let n = data.classes.len();
+        let rows: Vec<&[f64]> = data.vectors.chunks_exact(dims).collect();
+        let mut gram = vec![0.0; n * n];
+        for a in 0..n {
+            for b in 0..=a {
+                let value = kernel.eval(rows[a], rows[b]);
+                gram[a * n + b] = value;
+                gram[b * n + a] = value;
+            }
+        }
+        let mut used = vec![usize::MAX; n];
+        let mut stored = Vec::new();
+        let mut machines = Vec::new();
+        for ci in 0..n_classes {
+            for cj in ci + 1..n_classes {
+                let members: Vec<usize> = (0..n)
+                    .filter(|&t| data.classes[t] == ci || data.classes[t] == cj)
+                    .collect();
+                let m = members.len();
+                let y: Vec<f64> = members
+                    .iter()
+                    .map(|&t| if data.classes[t] == ci { 1.0 } else { -1.0 })
+                    .collect();
+                let mut k = vec![0.0; m * m];
+                for (a, &ta) in members.iter().enumerate() {
+                    for (b, &tb) in members.iter().enumerate() {
+                        k[a * m + b] = gram[ta * n + tb];
+                    }
+                }
+                let (alpha, rho) = smo(&k, &y, c, tol);
+                let mut machine = PairMachine {
+                    support: Vec::new(),
+                    coefs: Vec::new(),
+                    rho,
+                };
+                for (a, &t) in members.iter().enumerate() {
+                    if alpha[a] > 0.0 {
+                        if used[t] == usize::MAX {
+                            used[t] = stored.len();
+                            stored.push(t);
+                        }
+                        machine.support.push(used[t]);
+                        machine.coefs.push(alpha[a] * y[a]);
+                    }
+                }
+                machines.push(machine);
+            }
+        }
+        let vectors = stored
+            .iter()
+            .flat_map(|&t| rows[t].iter().copied())
+            .collect();
+        Ok(Self {
+            dims,
+            n_classes,
+            kernel,
+            c,
+            vectors,
+            machines,
+            temperature: 1.0,
+            candidates: Vec::new(),
+        })
+    }
+
+    /// Trains with the hyper-parameter search of the module documentation.
+    pub fn fit(
+        train: LabeledVectors<'_>,
+        validation: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        config: &SvmConfig,
+    ) -> Result<Self> {
+        config.check()?;
+        check_vectors(&train, "svm training vectors", dims, n_classes)?;
+        check_vectors(&validation, "svm validation vectors", dims, n_classes)?;
+        require_per_class(&train, n_classes, 1)?;
+        let count = train.vectors.len() as f64;
+        let mean = train.vectors.iter().sum::<f64>() / count;
+        let variance = train
+            .vectors
+            .iter()
+            .map(|v| (v - mean).powi(2))
+            .sum::<f64>()
+            / count;
+        let gamma_scale = if variance > 0.0 {
+            1.0 / (dims as f64 * variance)
+        } else {
+            1.0
+        };
+        let mut kernels = Vec::new();
+        for kind in &config.kernels {
+            match kind {
+                KernelKind::Linear => kernels.push(Kernel::Linear),
+                KernelKind::Rbf => {
+                    kernels.extend(config.gamma_factors.iter().map(|f| Kernel::Rbf {
+                        gamma: f * gamma_scale,
+                    }))
+                }
+            }
+        }
+        let mut grid = Vec::new();
+        for kernel in &kernels {
+            for &c in &config.c_grid {
+                grid.push((*kernel, c));
+            }
+        }
+        let mut candidates = Vec::new();
+        let mut temperature = 1.0;
+        let (mut kernel, mut c) = grid[0];
+        if !validation.classes.is_empty() {
+            let mut best = (f64::NEG_INFINITY, 1.0);
+            for &(candidate_kernel, candidate_c) in &grid {
+                let model = Self::fit_fixed(
+                    train,
+                    n_classes,
+                    dims,
+                    candidate_kernel,
+                    candidate_c,
+                    config.tol,
+                )?;
+                let scores = model.scores_of(validation.vectors)?;
+                let mut scratch = model.scratch();
+                let mut posteriors = vec![0.0; n_classes];
+                let mut correct = 0;
+                for (x, &class) in validation
+                    .vectors
+                    .chunks_exact(dims)
+                    .zip(validation.classes)
+                {
+                    if model.classify_into(x, &mut scratch, &mut posteriors)? == class {
+                        correct += 1;
+                    }
+                }
+                let accuracy = correct as f64 / validation.classes.len() as f64;
+                candidates.push(SvmCandidate {
+                    kernel: candidate_kernel,
+                    c: candidate_c,
+                    validation_accuracy: accuracy,
+                });
+                if accuracy > best.0 {
+                    best = (
+                        accuracy,
+                        fit_temperature(&scores, validation.classes, n_classes),
+                    );
+                    (kernel, c) = (candidate_kernel, candidate_c);
+                }
+            }
+            temperature = best.1;
+        }
+        let (vectors, classes) = merged(&train, &validation);
+        let mut model = Self::fit_fixed(
+            LabeledVectors {
+                vectors: &vectors,
+                classes: &classes,
+            },
+            n_classes,
+            dims,
+            kernel,
+            c,
+            config.tol,
+        )?;
+        model.temperature = temperature;
+        model.candidates = candidates;
+        Ok(model)
+    }
+
+    fn scores_of(&self, vectors: &[f64]) -> Result<Vec<f64>> {
+        let mut scratch = self.scratch();
+        let mut out = vec![0.0; vectors.len() / self.dims * self.n_classes];
+        for (x, row) in vectors
+            .chunks_exact(self.dims)
+            .zip(out.chunks_exact_mut(self.n_classes))
+        {
+            self.decide(x, &mut scratch)?;
+            row.copy_from_slice(&scratch.scores);
+        }
+        Ok(out)
+    }
+
+    pub fn dims(&self) -> usize {
+        self.dims
+    }
+
+    pub fn n_classes(&self) -> usize {
+        self.n_classes
+    }
+
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    pub fn c(&self) -> f64 {
+        self.c
+    }
+
+    pub fn n_support(&self) -> usize {
+        self.vectors.len() / self.dims.max(1)
+    }
+
+    pub fn temperature(&self) -> f64 {
+        self.temperature
+    }
+
+    pub fn candidates(&self) -> &[SvmCandidate] {
+        &self.candidates
+    }
+
+    pub fn scratch(&self) -> SvmScratch {
+        SvmScratch {
+            kernel: vec![0.0; self.n_support()],
+            decisions: vec![0.0; self.machines.len()],
+            votes: vec![0; self.n_classes],
+            scores: vec![0.0; self.n_classes],
+        }
+    }
+
+    /// The pairwise decision values after [`classify_into`](Self::classify_into) or
+    /// [`decision_values_into`](Self::decision_values_into), pairs (0,1), (0,2), ..., (1,2), ...
+    pub fn decision_values_into<'s>(
+        &self,
+        x: &[f64],
+        scratch: &'s mut SvmScratch,
+    ) -> Result<&'s [f64]> {
+        self.decide(x, scratch)?;
+        Ok(&scratch.decisions)
+    }
+
+    /// Decision values, votes and log-odds scores into `scratch`; returns the voted class.
+    fn decide(&self, x: &[f64], scratch: &mut SvmScratch) -> Result<usize> {
+        check_len("svm input", self.dims, x.len())?;
+        scratch.kernel.resize(self.n_support(), 0.0);
+        scratch.decisions.resize(self.machines.len(), 0.0);
+        scratch.votes.resize(self.n_classes, 0);
+        scratch.scores.resize(self.n_classes, 0.0);
+        for (value, sv) in scratch
+            .kernel
+            .iter_mut()
+            .zip(self.vectors.chunks_exact(self.dims))
+        {
+            *value = self.kernel.eval(sv, x);
+        }
+        scratch.votes.fill(0);
+        scratch.scores.fill(0.0);
+        let mut pair = 0;
+        for ci in 0..self.n_classes {
+            for cj in ci + 1..self.n_classes {
+                let machine = &self.machines[pair];
+                let f: f64 = machine
+                    .support
+                    .iter()
+                    .zip(&machine.coefs)
+                    .map(|(&s, &a)| a * scratch.kernel[s])
+                    .sum::<f64>()
+                    - machine.rho;
+                scratch.decisions[pair] = f;
+                if f > 0.0 {
+                    scratch.votes[ci] += 1;
+                } else {
+                    scratch.votes[cj] += 1;
+                }
+                // ln σ(f) for class i, ln σ(-f) for class j; ln σ(z) = -ln(1 + e^{-z}), stably
+                let log_sigmoid = |z: f64| -> f64 {
+                    if z >= 0.0 {
+                        -(-z).exp().ln_1p()
+                    } else {
+                        z - z.exp().ln_1p()
+                    }
+                };
+                scratch.scores[ci] += log_sigmoid(f);
+                scratch.scores[cj] += log_sigmoid(-f);
+                pair += 1;
+            }
+        }
+        let mut best = 0;
+        for class in 1..self.n_classes {
+            if scratch.votes[class] > scratch.votes[best] {
+                best = class;
+            }
+        }
+        Ok(best)
+    }
+
+    /// Posteriors into `posteriors`; returns the voted class. Does not allocate once `scratch` is sized.
+    pub fn classify_into(
+        &self,
+        x: &[f64],
+        scratch: &mut SvmScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        check_len("svm posteriors", self.n_classes, posteriors.len())?;
+        let class = self.decide(x, scratch)?;
+        posteriors.copy_from_slice(&scratch.scores);
+        let top = super::common::softmax_in_place(posteriors, self.temperature);
+        // The vote decides (libsvm's rule); in the near-ties where the smooth score disagrees, the voted
+        // class takes the top posterior.
+        posteriors.swap(top, class);
+        Ok(class)
+    }
+}
+
+/// Reusable buffers of [`SvmModel::classify_into`].
+#[derive(Clone, Debug, Default)]
+pub struct SvmScratch {
+    kernel: Vec<f64>,
+    decisions: Vec<f64>,
+    votes: Vec<usize>,
+    scores: Vec<f64>,
+}
