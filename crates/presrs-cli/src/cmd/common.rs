@@ -7,7 +7,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs_core::Crop;
 use presrs_core::classifier::ClassifierKind;
-use presrs_core::features::FeatureKind;
+use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::stance::SampleFrame;
 use presrs_io::ReadOptions;
@@ -17,12 +17,16 @@ use presrs_io::manifest::{Manifest, read_manifest};
 /// How the pipeline is built: crop, features, reduction, classifier.
 #[derive(Debug, Clone, clap::Args)]
 pub struct PipelineArgs {
-    /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image).
+    /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
+    /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes); join
+    /// several with + (fft1d+glcm); or auto (chosen by validation inside the training data).
     #[arg(long, default_value = "fft1d", value_parser = parse_features)]
-    pub features: FeatureKind,
-    /// Classifier: pwe (Parzen window, sigma chosen on the validation set).
+    pub features: FeatureChoice,
+    /// Classifier: pwe (Parzen window, the paper's), mle (Gaussian, shrunk full covariance per class),
+    /// lda (shared covariance), svm (one-vs-one, linear or RBF, C and gamma chosen on validation), knn;
+    /// or auto (chosen by validation inside the training data).
     #[arg(long, default_value = "pwe", value_parser = parse_classifier)]
-    pub classifier: ClassifierKind,
+    pub classifier: ClassifierChoice,
     /// Principal components kept (at most the number of training images minus one).
     #[arg(long, default_value_t = 51)]
     pub dims: usize,
@@ -58,16 +62,88 @@ impl CropArg {
     }
 }
 
+/// `--features`: families, or auto.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FeatureChoice {
+    Auto,
+    Kinds(Vec<FeatureKind>),
+}
+
+/// `--classifier`: a family, or auto.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ClassifierChoice {
+    Auto,
+    Kind(ClassifierKind),
+}
+
+/// The feature families an automatic choice or a comparison tries.
+pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
+    &[FeatureKind::Fft1d],
+    &[FeatureKind::Fft2d],
+    &[FeatureKind::Fft2dPolar],
+    &[FeatureKind::Glcm],
+    &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
+];
+
 impl PipelineArgs {
-    /// The checked training configuration these options describe, for images of `grid`.
+    /// Whether features or classifier are to be chosen automatically.
+    pub fn is_auto(&self) -> bool {
+        self.features == FeatureChoice::Auto || self.classifier == ClassifierChoice::Auto
+    }
+
+    /// The checked training configuration these options describe, for images of `grid`. An `auto`
+    /// part is the paper's choice here (fft1d, pwe); [`candidates`](Self::candidates) lists what auto tries.
     pub fn train_config(&self, grid: presrs_core::Grid) -> anyhow::Result<CheckedTrainConfig> {
+        let features = match &self.features {
+            FeatureChoice::Kinds(kinds) => FeatureConfig::combined(kinds),
+            FeatureChoice::Auto => FeatureKind::Fft1d.default_config(),
+        };
+        let classifier = match self.classifier {
+            ClassifierChoice::Kind(kind) => kind.default_config(),
+            ClassifierChoice::Auto => ClassifierKind::Pwe.default_config(),
+        };
         let config = TrainConfig {
             crop: self.crop.resolve(grid),
-            features: self.features.default_config(),
+            features,
             dims: self.dims,
-            classifier: self.classifier.default_config(),
+            classifier,
         };
         Ok(config.check()?)
+    }
+
+    /// Every configuration an automatic choice tries (auto parts run over all candidates, fixed parts
+    /// stay), or, with `all`, every feature x classifier combination (for `--compare`).
+    pub fn candidates(
+        &self,
+        grid: presrs_core::Grid,
+        all: bool,
+    ) -> anyhow::Result<Vec<CheckedTrainConfig>> {
+        let features: Vec<FeatureConfig> = match &self.features {
+            FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
+            _ => CANDIDATE_FEATURES
+                .iter()
+                .map(|kinds| FeatureConfig::combined(kinds))
+                .collect(),
+        };
+        let classifiers: Vec<ClassifierKind> = match self.classifier {
+            ClassifierChoice::Kind(kind) if !all => vec![kind],
+            _ => ClassifierKind::ALL.to_vec(),
+        };
+        let mut out = Vec::new();
+        for feature in &features {
+            for &classifier in &classifiers {
+                out.push(
+                    TrainConfig {
+                        crop: self.crop.resolve(grid),
+                        features: feature.clone(),
+                        dims: self.dims,
+                        classifier: classifier.default_config(),
+                    }
+                    .check()?,
+                );
+            }
+        }
+        Ok(out)
     }
 }
 
@@ -157,12 +233,22 @@ pub fn write_json(
     Ok(())
 }
 
-fn parse_features(text: &str) -> Result<FeatureKind, String> {
-    FeatureKind::parse(text).map_err(|err| err.to_string())
+fn parse_features(text: &str) -> Result<FeatureChoice, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        return Ok(FeatureChoice::Auto);
+    }
+    FeatureKind::parse_list(text)
+        .map(FeatureChoice::Kinds)
+        .map_err(|err| err.to_string())
 }
 
-fn parse_classifier(text: &str) -> Result<ClassifierKind, String> {
-    ClassifierKind::parse(text).map_err(|err| err.to_string())
+fn parse_classifier(text: &str) -> Result<ClassifierChoice, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        return Ok(ClassifierChoice::Auto);
+    }
+    ClassifierKind::parse(text)
+        .map(ClassifierChoice::Kind)
+        .map_err(|err| err.to_string())
 }
 
 fn parse_crop_arg(text: &str) -> Result<CropChoice, String> {

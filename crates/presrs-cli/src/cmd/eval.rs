@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs_core::evaluation::{EvalReport, EvalSample, Protocol, evaluate};
+use presrs_core::evaluation::{ComparisonRow, EvalReport, EvalSample, Protocol, compare, evaluate};
 use presrs_core::split::ValidationSize;
 use serde::Serialize;
 
@@ -40,6 +40,10 @@ pub struct EvalArgs {
     /// Print one JSON document instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Evaluate every feature x classifier combination with the same draws and print the comparison
+    /// (accuracy per tested condition, training time, classification time).
+    #[arg(long)]
+    pub compare: bool,
     /// Also write an HTML report with figures in this folder (DIR/index.html).
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
@@ -172,7 +176,6 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             validation: args.validation,
         },
     };
-    let config = args.pipeline.train_config(samples[0].frame.grid())?;
     let folds = match &protocol {
         Protocol::LeaveOneOut { .. } => {
             let mut values: Vec<_> = samples.iter().filter_map(|s| s.group).collect();
@@ -182,6 +185,25 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
         Protocol::TrainCondition { .. } => 1,
     };
+    if args.compare {
+        let configs = args.pipeline.candidates(samples[0].frame.grid(), true)?;
+        let bar = progress_bar((configs.len() * folds * args.repeats) as u64, "comparing");
+        let rows = compare(
+            &samples,
+            &protocol,
+            &configs,
+            args.repeats,
+            args.seed,
+            &|| bar.inc(1),
+        )
+        .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
+        bar.finish_and_clear();
+        if args.json {
+            return write_json(out, &CompareJson { comparison: &rows });
+        }
+        return print_comparison(&rows, out);
+    }
+    let config = args.pipeline.train_config(samples[0].frame.grid())?;
     let bar = progress_bar((folds * args.repeats) as u64, "training");
     let report = evaluate(
         &samples,
@@ -293,5 +315,68 @@ pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<
         "median classification time: {:.2} us per image (paper: 245 us on a 2.67 GHz Core 2 Duo)",
         report.median_classify_ns as f64 / 1e3
     )?;
+    Ok(())
+}
+
+/// The `--compare --json` document.
+#[derive(Debug, Serialize)]
+pub struct CompareJson<'r> {
+    pub comparison: &'r [ComparisonRow],
+}
+
+/// The comparison table: one row per feature x classifier combination.
+pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::Result<()> {
+    let mut conditions: Vec<&String> = rows
+        .iter()
+        .filter_map(|row| row.report.as_ref().ok())
+        .flat_map(|report| report.per_condition.keys())
+        .collect();
+    conditions.sort();
+    conditions.dedup();
+    if let Some(report) = rows.iter().find_map(|row| row.report.as_ref().ok()) {
+        writeln!(
+            out,
+            "accuracy in % (mean +- std over {} repeat(s)) per tested condition",
+            report.repeats.len()
+        )?;
+    }
+    write!(out, "{:<18} {:<5}", "features", "clf")?;
+    for condition in &conditions {
+        write!(out, " {condition:>14}")?;
+    }
+    writeln!(
+        out,
+        " {:>14} {:>10} {:>10}",
+        "overall", "train ms", "classify us"
+    )?;
+    for row in rows {
+        write!(out, "{:<18} {:<5}", row.features, row.classifier)?;
+        match &row.report {
+            Ok(report) => {
+                for condition in &conditions {
+                    match report.per_condition.get(*condition) {
+                        Some(m) => write!(
+                            out,
+                            " {:>14}",
+                            format!("{:.1} +- {:.1}", 100.0 * m.mean, 100.0 * m.std)
+                        )?,
+                        None => write!(out, " {:>14}", "-")?,
+                    }
+                }
+                writeln!(
+                    out,
+                    " {:>14} {:>10.1} {:>10.1}",
+                    format!(
+                        "{:.1} +- {:.1}",
+                        100.0 * report.overall.mean,
+                        100.0 * report.overall.std
+                    ),
+                    1e3 * row.train_seconds.mean,
+                    report.median_classify_ns as f64 / 1e3
+                )?;
+            }
+            Err(err) => writeln!(out, " failed: {err}")?,
+        }
+    }
     Ok(())
 }
