@@ -8,19 +8,31 @@
 //! - `truth/trials.json`: per trial, per hop, the full ground truth (including per-frame forces).
 //! - `table1.csv`: simulated forward velocity per gait and terrain beside the paper's Table I.
 //! - `config.json`: the complete configuration used (feed it back with `--config` to reproduce).
+//!
+//! With `--track SPEC` it writes no data set: the hopper runs a track of terrain segments (see
+//! [`presrs_sim::track`]) in each fixed gait and, with `--adaptive MODEL`, classifying every stance online
+//! and switching to the model's recommended gait; it prints (and with `--json` writes) the comparison.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
+use presrs_core::stance::ValidSegmentParams;
+use presrs_core::{FrameView, Grid};
+use presrs_io::model_file::load_model;
 use presrs_sim::terrain::HeightMap;
+use presrs_sim::track::{
+    GaitTable, GaitTableParams, HopView, PolicyStep, TrackParams, TrackRun, gait_table,
+    parse_track, run_track,
+};
 use presrs_sim::{DatasetSpec, HopRecord, SimConfig, Simulator, TrialPlan, VelocityTable};
 
 /// Simulate the one-legged hopper with PreSRS on the paper's terrains and gaits.
 #[derive(Debug, clap::Args)]
 pub struct SimulateArgs {
     /// Output folder; receives manifest.csv and one TekScan ASCII movie per trial.
-    #[arg(long, required_unless_present = "print_config")]
+    #[arg(long, required_unless_present_any = ["print_config", "track"])]
     pub out: Option<PathBuf>,
     /// Seed of every random choice; the same seed gives the same bytes.
     #[arg(long, default_value_t = 1)]
@@ -48,6 +60,28 @@ pub struct SimulateArgs {
     /// --terrain-image photo_grass=../shared/data/textures/grass.png
     #[arg(long, value_name = "NAME=PNG")]
     pub terrain_image: Vec<String>,
+    /// Run a track instead of writing a data set: terrain:metres segments in sequence, e.g.
+    /// wood:3,grass:3,clay:3,carpet:3. Each fixed gait runs it (and the adaptive policy with --adaptive).
+    #[arg(long, value_name = "SPEC")]
+    pub track: Option<String>,
+    /// Model file for the adaptive run: every stance is classified online (the model's online profile)
+    /// and the robot switches to the gait its terrain-to-gait table recommends. Without a table in the
+    /// model, the table is measured with the simulator first.
+    #[arg(long, value_name = "MODEL", requires = "track")]
+    pub adaptive: Option<PathBuf>,
+    /// Fixed gaits to compare with, comma separated [default: every gait of the configuration].
+    #[arg(long, value_delimiter = ',', requires = "track")]
+    pub fixed_gait: Vec<String>,
+    /// Gait of the adaptive run at the start line (it knows no terrain yet) [default: the second gait of
+    /// the configuration, G2].
+    #[arg(long, requires = "track")]
+    pub start_gait: Option<String>,
+    /// Runs per policy (seeds --seed, --seed + 1, ...); every policy runs on the same seeds.
+    #[arg(long, default_value_t = 3, requires = "track")]
+    pub repeats: usize,
+    /// Also write the comparison, every run and every hop as JSON to this file.
+    #[arg(long, requires = "track")]
+    pub json: Option<PathBuf>,
 }
 
 /// What [`write_dataset`] wrote.
@@ -291,6 +325,9 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         writeln!(out, "{}", config.to_json_pretty())?;
         return Ok(());
     }
+    if let Some(track) = &args.track {
+        return run_track_comparison(args, &config, track, out);
+    }
     let Some(out_dir) = args.out.as_deref() else {
         anyhow::bail!("--out DIR is required");
     };
@@ -347,5 +384,279 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         summary.reruns
     )?;
     writeln!(out, "manifest: {}", summary.manifest.display())?;
+    Ok(())
+}
+
+/// One policy's runs on the track.
+#[derive(Debug, serde::Serialize)]
+pub struct PolicyRuns {
+    /// `adaptive` or `fixed G1`, ...
+    pub policy: String,
+    pub runs: Vec<TrackRun>,
+}
+
+impl PolicyRuns {
+    fn finished(&self) -> usize {
+        self.runs.iter().filter(|r| r.finished).count()
+    }
+
+    fn mean(&self, f: impl Fn(&TrackRun) -> f64) -> f64 {
+        if self.runs.is_empty() {
+            f64::NAN
+        } else {
+            self.runs.iter().map(f).sum::<f64>() / self.runs.len() as f64
+        }
+    }
+
+    fn total(&self, f: impl Fn(&TrackRun) -> usize) -> usize {
+        self.runs.iter().map(f).sum()
+    }
+}
+
+/// The whole comparison (what `--json` writes).
+#[derive(Debug, serde::Serialize)]
+pub struct TrackComparison {
+    pub track: String,
+    pub length_m: f64,
+    pub seeds: Vec<u64>,
+    /// The terrain-to-gait table the adaptive runs used, and where it came from.
+    pub gait_table: std::collections::BTreeMap<String, String>,
+    pub gait_table_source: Option<String>,
+    /// The measured table, when it was measured here.
+    pub measured_table: Option<GaitTable>,
+    pub policies: Vec<PolicyRuns>,
+}
+
+impl TrackComparison {
+    /// The comparison table as text.
+    pub fn format(&self) -> String {
+        use std::fmt::Write as _;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "Track {} ({:.1} m), {} run(s) per policy (seeds {}); means over runs, counts summed",
+            self.track,
+            self.length_m,
+            self.seeds.len(),
+            self.seeds
+                .iter()
+                .map(u64::to_string)
+                .collect::<Vec<_>>()
+                .join(",")
+        );
+        let _ = writeln!(
+            out,
+            "{:<12}{:>10}{:>10}{:>11}{:>7}{:>22}{:>10}",
+            "policy", "finished", "time s", "speed m/s", "falls", "misclassified", "switches"
+        );
+        for p in &self.policies {
+            let decided = p.total(|r| r.decided);
+            let mis = if p.policy == "adaptive" {
+                format!(
+                    "{}/{} ({:.1} %)",
+                    p.total(|r| r.misclassified),
+                    decided,
+                    100.0 * p.total(|r| r.misclassified) as f64 / decided.max(1) as f64
+                )
+            } else {
+                "-".to_owned()
+            };
+            let _ = writeln!(
+                out,
+                "{:<12}{:>10}{:>10.2}{:>11.3}{:>7}{:>22}{:>10}",
+                p.policy,
+                format!("{}/{}", p.finished(), p.runs.len()),
+                p.mean(|r| r.time_s),
+                p.mean(|r| r.mean_speed_m_per_s),
+                p.total(|r| r.falls),
+                mis,
+                p.total(|r| r.switches)
+            );
+        }
+        if let Some(source) = &self.gait_table_source {
+            let table: Vec<String> = self
+                .gait_table
+                .iter()
+                .map(|(t, g)| format!("{t}={g}"))
+                .collect();
+            let _ = writeln!(out, "gait table ({source}): {}", table.join(","));
+        }
+        let _ = writeln!(out, "{}", self.verdict());
+        out
+    }
+
+    /// Whether the adaptive policy beat every fixed gait, said plainly.
+    pub fn verdict(&self) -> String {
+        let Some(adaptive) = self.policies.iter().find(|p| p.policy == "adaptive") else {
+            return "no adaptive run (give --adaptive MODEL)".to_owned();
+        };
+        let key = |p: &PolicyRuns| (p.finished(), -p.mean(|r| r.time_s));
+        let best_fixed = self
+            .policies
+            .iter()
+            .filter(|p| p.policy != "adaptive")
+            .max_by(|a, b| {
+                let (ka, kb) = (key(a), key(b));
+                ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+            });
+        let Some(best) = best_fixed else {
+            return "no fixed gait to compare with".to_owned();
+        };
+        let (ta, tb) = (adaptive.mean(|r| r.time_s), best.mean(|r| r.time_s));
+        let (fa, fb) = (adaptive.total(|r| r.falls), best.total(|r| r.falls));
+        let better = adaptive.finished() > best.finished()
+            || (adaptive.finished() == best.finished() && ta < tb);
+        format!(
+            "adaptation {}: adaptive {:.2} s ({} falls) vs the best fixed gait, {}, {:.2} s ({} falls), {:+.1} %",
+            if better { "helps" } else { "does NOT help" },
+            ta,
+            fa,
+            best.policy,
+            tb,
+            fb,
+            100.0 * (ta / tb - 1.0)
+        )
+    }
+}
+
+/// The adaptive policy's state: the online classifier and the terrain-to-gait table.
+fn adaptive_policy<'m>(
+    classifier: &mut OnlineClassifier<'m>,
+    class_names: &[String],
+    table: &std::collections::BTreeMap<String, String>,
+    view: &HopView<'_>,
+) -> Result<PolicyStep, String> {
+    let mut step = PolicyStep::default();
+    let grid: Grid = view.grid;
+    for i in 0..view.frame_count() {
+        let Some(values) = view.frame(i) else {
+            break;
+        };
+        let frame = FrameView::new(grid, values, None).map_err(|e| e.to_string())?;
+        let events = classifier.push(&frame).map_err(|e| e.to_string())?;
+        for event in events.events {
+            if let OnlineEvent::Decision(decision) = event
+                && let Some(label) = class_names.get(decision.class)
+            {
+                step.gait = table.get(label).cloned();
+                step.terrain = Some(label.clone());
+            }
+        }
+    }
+    Ok(step)
+}
+
+/// `--track`: fixed gaits and (with `--adaptive`) the adaptive policy on the same seeds.
+fn run_track_comparison(
+    args: &SimulateArgs,
+    config: &SimConfig,
+    spec: &str,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    let track = parse_track(spec)?;
+    let sim = Simulator::new(config.clone(), args.seed, Vec::new())?;
+    let repeats = args.repeats.max(1);
+    let seeds: Vec<u64> = (0..repeats as u64)
+        .map(|i| args.seed.wrapping_add(i))
+        .collect();
+    let fixed: Vec<String> = if args.fixed_gait.is_empty() {
+        config.gaits.iter().map(|g| g.name.clone()).collect()
+    } else {
+        args.fixed_gait
+            .iter()
+            .map(|g| g.trim().to_owned())
+            .collect()
+    };
+    let mut policies = Vec::new();
+    let (mut gait_table_map, mut source, mut measured) = (Default::default(), None, None);
+    if let Some(path) = &args.adaptive {
+        let file = load_model(path)
+            .with_context(|| format!("cannot read the model {}", path.display()))?;
+        let model = &file.model;
+        let class_names = model.class_names().to_vec();
+        let profile = file.online.clone().unwrap_or_else(|| {
+            let _ = writeln!(
+                out,
+                "note: {} has no online profile; warm-up calibration, k = 6 (train with --online-profile)",
+                path.display()
+            );
+            OnlineProfile::default()
+        });
+        if profile.gait_table.is_empty() {
+            let terrains: Vec<String> = class_names
+                .iter()
+                .filter(|t| sim.terrain(t).is_ok())
+                .cloned()
+                .collect();
+            let gaits: Vec<String> = config.gaits.iter().map(|g| g.name.clone()).collect();
+            let table = gait_table(&sim, &terrains, &gaits, &GaitTableParams::default())?;
+            write!(out, "{}", table.format())?;
+            gait_table_map = table.best.clone();
+            source = Some("measured now: the model has none".to_owned());
+            measured = Some(table);
+        } else {
+            gait_table_map = profile.gait_table.clone();
+            source = Some(format!("from {}", path.display()));
+        }
+        let start = match &args.start_gait {
+            Some(g) => g.trim().to_owned(),
+            None => config
+                .gaits
+                .get(1)
+                .or(config.gaits.first())
+                .map(|g| g.name.clone())
+                .context("the configuration has no gait")?,
+        };
+        let mut runs = Vec::new();
+        for &seed in &seeds {
+            let mut classifier = OnlineClassifier::new(
+                model,
+                &ValidSegmentParams::default(),
+                &profile.params,
+                profile.calibration,
+            )?;
+            let params = TrackParams::new(seed, &start);
+            let run = run_track(&sim, &track, &params, |view| {
+                adaptive_policy(&mut classifier, &class_names, &gait_table_map, view)
+            })?;
+            runs.push(run);
+        }
+        policies.push(PolicyRuns {
+            policy: "adaptive".to_owned(),
+            runs,
+        });
+    }
+    for gait in &fixed {
+        let runs = seeds
+            .iter()
+            .map(|&seed| {
+                let mut params = TrackParams::new(seed, gait);
+                params.render = false;
+                run_track(&sim, &track, &params, |_| Ok(PolicyStep::default()))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        policies.push(PolicyRuns {
+            policy: format!("fixed {gait}"),
+            runs,
+        });
+    }
+    let comparison = TrackComparison {
+        track: spec.to_owned(),
+        length_m: track.iter().map(|s| s.length_m).sum(),
+        seeds,
+        gait_table: gait_table_map,
+        gait_table_source: source,
+        measured_table: measured,
+        policies,
+    };
+    write!(out, "{}", comparison.format())?;
+    if let Some(path) = &args.json {
+        presrs_io::write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &comparison).map_err(std::io::Error::from)?;
+            writeln!(w)
+        })
+        .with_context(|| format!("cannot write {}", path.display()))?;
+        writeln!(out, "JSON: {}", path.display())?;
+    }
     Ok(())
 }

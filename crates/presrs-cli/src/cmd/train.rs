@@ -38,6 +38,20 @@ pub struct TrainArgs {
     /// Seed of the random draw.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Also write an online profile into the model file (calibration and sample frame learned from the
+    /// manifest's recordings by offline segmentation), for `presrs stream` and `presrs simulate --adaptive`.
+    /// Off by default: it reads every recording of the manifest once more.
+    #[arg(long)]
+    pub online_profile: bool,
+    /// Terrain-to-gait table for the online profile (implies --online-profile): `sim` measures, with the
+    /// simulator, the fastest gait that never fell on each terrain of the model (steady and exit runs,
+    /// `presrs_sim::track::gait_table`, a few seconds), or give it: TERRAIN=GAIT,...
+    #[arg(long, value_name = "sim|TERRAIN=GAIT,...")]
+    pub gait_table: Option<String>,
+    /// Simulator configuration JSON for `--gait-table sim` (its gaits are the candidates) [default: the
+    /// built-in configuration].
+    #[arg(long, requires = "gait_table")]
+    pub sim_config: Option<PathBuf>,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -87,8 +101,46 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             .collect()
     };
     let (train_images, validation_images) = (images(&split.train), images(&split.validation));
-    let model = train(&train_images, &validation_images, &config)
-        .map_err(|err| anyhow::anyhow!("{}: training failed: {err}", args.manifest.display()))?;
+    let model = if args.pipeline.is_auto() {
+        // validate the candidates inside the training data; across its conditions when it spans several
+        let conditions: Option<Vec<&str>> = split
+            .train
+            .iter()
+            .chain(&split.validation)
+            .map(|&i| pool[i].condition.as_deref())
+            .collect();
+        presrs_core::selection::train_auto(
+            &train_images,
+            &validation_images,
+            conditions.as_deref(),
+            &args.pipeline.candidates(grid, false)?,
+            args.seed,
+        )
+    } else {
+        train(&train_images, &validation_images, &config)
+    }
+    .map_err(|err| anyhow::anyhow!("{}: training failed: {err}", args.manifest.display()))?;
+    if let Some(selection) = model.selection() {
+        writeln!(out, "automatic choice ({}):", selection.method)?;
+        for (i, score) in selection.scores.iter().enumerate() {
+            let mark = if i == selection.chosen { "*" } else { " " };
+            match &score.error {
+                None => writeln!(
+                    out,
+                    "{mark} {:<18} {:<5} {:6.2} % +- {:.2}",
+                    score.features,
+                    score.classifier,
+                    100.0 * score.accuracy.mean,
+                    100.0 * score.accuracy.std
+                )?,
+                Some(err) => writeln!(
+                    out,
+                    "{mark} {:<18} {:<5} failed: {err}",
+                    score.features, score.classifier
+                )?,
+            }
+        }
+    }
     let count = |indices: &[usize]| {
         let mut counts = BTreeMap::new();
         for &i in indices {
@@ -109,7 +161,20 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             .ok()
             .map(|d| d.as_secs()),
     };
-    save_model(&args.out, &ModelFile::new(model.clone(), provenance))?;
+    let mut file = ModelFile::new(model.clone(), provenance);
+    if args.online_profile || args.gait_table.is_some() {
+        let mut profile = super::stream::learn_profile(&args.manifest).with_context(|| {
+            format!(
+                "{}: cannot learn the online profile",
+                args.manifest.display()
+            )
+        })?;
+        if let Some(source) = &args.gait_table {
+            profile.gait_table = terrain_gait_table(source, model.class_names(), args, out)?;
+        }
+        file.online = Some(profile);
+    }
+    save_model(&args.out, &file)?;
     writeln!(
         out,
         "trained {} on {} images ({} training + {} validation) of {} classes: {}",
@@ -131,6 +196,28 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             .sigma()
             .map_or_else(String::new, |s| format!(", sigma {s:.4}"))
     )?;
+    if let Some(profile) = &file.online {
+        let table: Vec<String> = profile
+            .gait_table
+            .iter()
+            .map(|(t, g)| format!("{t}={g}"))
+            .collect();
+        writeln!(
+            out,
+            "online profile: sample frame k = {}, {}, gait table {}",
+            profile.params.sample_offset,
+            if profile.calibration.is_some() {
+                "calibrated"
+            } else {
+                "warm-up calibration"
+            },
+            if table.is_empty() {
+                "empty".to_owned()
+            } else {
+                table.join(",")
+            }
+        )?;
+    }
     writeln!(out, "model written to {}", args.out.display())?;
     Ok(())
 }
@@ -152,4 +239,48 @@ pub fn sample_labels<'s>(
             })
         })
         .collect()
+}
+
+/// The terrain-to-gait table of `--gait-table`: measured with the simulator (`sim`) or given.
+fn terrain_gait_table(
+    source: &str,
+    class_names: &[String],
+    args: &TrainArgs,
+    out: &mut dyn Write,
+) -> anyhow::Result<BTreeMap<String, String>> {
+    if source.trim() != "sim" {
+        let mut table = BTreeMap::new();
+        for entry in source.split(',').filter(|e| !e.trim().is_empty()) {
+            let (terrain, gait) = entry
+                .split_once('=')
+                .filter(|(t, g)| !t.trim().is_empty() && !g.trim().is_empty())
+                .with_context(|| {
+                    format!("--gait-table expects sim or TERRAIN=GAIT,..., got {entry:?}")
+                })?;
+            table.insert(terrain.trim().to_owned(), gait.trim().to_owned());
+        }
+        return Ok(table);
+    }
+    let config = super::simulate::load_config(args.sim_config.as_deref())?;
+    let sim = presrs_sim::Simulator::new(config.clone(), args.seed, Vec::new())?;
+    let (terrains, unknown): (Vec<String>, Vec<String>) = class_names
+        .iter()
+        .cloned()
+        .partition(|t| sim.terrain(t).is_ok());
+    if !unknown.is_empty() {
+        writeln!(
+            out,
+            "gait table: the simulator does not know {} (no gait recommended for them)",
+            unknown.join(", ")
+        )?;
+    }
+    let gaits: Vec<String> = config.gaits.iter().map(|g| g.name.clone()).collect();
+    let table = presrs_sim::track::gait_table(
+        &sim,
+        &terrains,
+        &gaits,
+        &presrs_sim::track::GaitTableParams::default(),
+    )?;
+    write!(out, "{}", table.format())?;
+    Ok(table.best)
 }
