@@ -10,9 +10,8 @@
 
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::matmul::matmul;
 use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
-use faer::{Accum, ColMut, ColRef, Mat, MatRef, Par};
+use faer::{Mat, Par};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
@@ -306,20 +305,12 @@ impl Pca {
     }
 }
 
-/// `out = matrix · x` for a row-major `out.len() x cols` matrix. faer's matrix-vector kernel picks the
-/// widest SIMD the CPU has at run time (this product is most of the classification time), sequentially,
-/// and does not allocate. Lengths are the caller's responsibility.
+/// `out = matrix · x` for a row-major `out.len() x cols` matrix: the safe runtime-dispatched SIMD kernel
+/// of [`crate::simd`] (AVX2 + FMA where available; this product is most of the classification time).
+/// Sequential, deterministic on a given machine, and does not allocate. Lengths are the caller's
+/// responsibility (panics if `x` is not `cols` long or `matrix` is too short).
 pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f64]) {
-    let rows = out.len();
-    let matrix = MatRef::from_row_major_slice(matrix, rows, cols);
-    matmul(
-        ColMut::from_slice_mut(out),
-        Accum::Replace,
-        matrix,
-        ColRef::from_slice(x),
-        1.0,
-        Par::Seq,
-    );
+    crate::simd::matrix_vector(matrix, cols, x, out);
 }
 
 fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {

@@ -1,0 +1,81 @@
+//! The PCA projection stage on its own: the SIMD kernel (`Pca::project_into`) against faer's matmul on
+//! the same row-major 51 x 1025 basis (the previous implementation), and on a 4 x 1025 basis that fits
+//! in L1 (arithmetic bound rather than L2 bound).
+//!
+//! `cargo bench -p presrs-core --bench pca_stage -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, ColMut, ColRef, MatRef, Par};
+use presrs_core::pca::Pca;
+use presrs_core::pipeline::bench_fixture;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn faer_project(basis: &[f64], cols: usize, x: &[f64], out: &mut [f64]) {
+    let rows = out.len();
+    matmul(
+        ColMut::from_slice_mut(out),
+        Accum::Replace,
+        MatRef::from_row_major_slice(basis, rows, cols),
+        ColRef::from_slice(x),
+        1.0,
+        Par::Seq,
+    );
+}
+
+fn pca_stage(c: &mut Criterion) {
+    let Ok((model, frames)) = bench_fixture(2024, 1) else {
+        panic!("the benchmark fixture failed to train");
+    };
+    let Ok(features) = model
+        .session()
+        .features(&frames[0].view())
+        .map(<[f64]>::to_vec)
+    else {
+        panic!("feature extraction failed");
+    };
+    let pca = model.pca();
+    let cols = pca.n_features();
+    let mut out = vec![0.0; pca.n_components()];
+
+    let mut group = c.benchmark_group("pca_stage");
+    group.bench_function("simd_project_51x1025", |b| {
+        b.iter(|| black_box(pca.project_into(black_box(&features), &mut out).ok()))
+    });
+    group.bench_function("faer_matmul_51x1025", |b| {
+        b.iter(|| {
+            faer_project(pca.basis(), cols, black_box(&features), &mut out);
+            black_box(out[0])
+        })
+    });
+
+    // A 4-component PCA of random data: 32 KB of basis, resident in L1.
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let samples: Vec<f64> = (0..8 * cols).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let Ok(small) = Pca::fit(&samples, cols, 4) else {
+        panic!("the small PCA failed to fit");
+    };
+    let mut small_out = vec![0.0; 4];
+    group.bench_function("simd_project_4x1025_l1", |b| {
+        b.iter(|| {
+            black_box(
+                small
+                    .project_into(black_box(&features), &mut small_out)
+                    .ok(),
+            )
+        })
+    });
+    group.bench_function("faer_matmul_4x1025_l1", |b| {
+        b.iter(|| {
+            faer_project(small.basis(), cols, black_box(&features), &mut small_out);
+            black_box(small_out[0])
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, pca_stage);
+criterion_main!(benches);
