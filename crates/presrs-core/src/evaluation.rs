@@ -176,6 +176,76 @@ pub fn evaluate(
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<EvalReport> {
+    evaluate_with(
+        samples,
+        protocol,
+        repeats,
+        seed,
+        progress,
+        &|train_set, validation_set, _| {
+            let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
+            let train_images: Vec<_> = train_set.iter().map(image).collect();
+            let validation_images: Vec<_> = validation_set.iter().map(image).collect();
+            train(&train_images, &validation_images, config)
+        },
+    )
+}
+
+/// [`evaluate`] where every model is chosen automatically among `candidates` by
+/// [`crate::selection::train_auto`] on that fold's training data only (leave-one-condition-out inside it
+/// when it spans several conditions). Also returns every model's selection, in training order.
+pub fn evaluate_auto(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    candidates: &[CheckedTrainConfig],
+    repeats: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Result<(EvalReport, Vec<crate::selection::Selection>)> {
+    let selections = std::sync::Mutex::new(Vec::new());
+    let report = evaluate_with(
+        samples,
+        protocol,
+        repeats,
+        seed,
+        progress,
+        &|train_set, validation_set, fold_seed| {
+            let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
+            let train_images: Vec<_> = train_set.iter().map(image).collect();
+            let validation_images: Vec<_> = validation_set.iter().map(image).collect();
+            let conditions: Option<Vec<&str>> = train_set
+                .iter()
+                .chain(validation_set)
+                .map(|&i| samples[i].condition)
+                .collect();
+            let model = crate::selection::train_auto(
+                &train_images,
+                &validation_images,
+                conditions.as_deref(),
+                candidates,
+                fold_seed,
+            )?;
+            if let (Some(selection), Ok(mut list)) = (model.selection(), selections.lock()) {
+                list.push(selection.clone());
+            }
+            Ok(model)
+        },
+    )?;
+    let selections = selections.into_inner().unwrap_or_default();
+    Ok((report, selections))
+}
+
+/// A function that trains a model from training and validation sample indices (and a seed).
+type Trainer<'f> = dyn Fn(&[usize], &[usize], u64) -> Result<crate::pipeline::TrainedModel> + 'f;
+
+fn evaluate_with(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    repeats: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+    trainer: &Trainer<'_>,
+) -> Result<EvalReport> {
     if repeats == 0 {
         return Err(CoreError::Param {
             name: "repeats",
@@ -206,11 +276,8 @@ pub fn evaluate(
             train_seconds: 0.0,
         };
         for fold in folds {
-            let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
-            let train_images: Vec<_> = fold.train.iter().map(image).collect();
-            let validation_images: Vec<_> = fold.validation.iter().map(image).collect();
             let start = Instant::now();
-            let model = train(&train_images, &validation_images, config)?;
+            let model = trainer(&fold.train, &fold.validation, repeat_seed)?;
             result.train_seconds += start.elapsed().as_secs_f64();
             result.sigmas.extend(model.sigma());
             result.n_train += fold.train.len();

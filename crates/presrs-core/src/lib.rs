@@ -10,6 +10,7 @@ pub mod online;
 pub mod pca;
 pub mod pipeline;
 pub mod recording;
+pub mod selection;
 mod simd;
 pub mod split;
 pub mod stance;

@@ -134,6 +134,9 @@ struct ModelFields {
     classifier: ClassifierModel,
     class_names: Vec<String>,
     summary: TrainingSummary,
+    /// The automatic choice that picked `features` and `classifier`, when there was one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    selection: Option<crate::selection::Selection>,
 }
 
 const FORMAT_VERSION: u32 = 1;
@@ -279,6 +282,7 @@ pub fn train(
         classifier,
         class_names,
         summary,
+        selection: None,
     })
 }
 
@@ -456,6 +460,18 @@ impl TrainedModel {
 
     pub fn summary(&self) -> &TrainingSummary {
         &self.fields.summary
+    }
+
+    /// The automatic choice of features and classifier (with every candidate's validation scores), when
+    /// the model was trained by [`crate::selection::train_auto`].
+    pub fn selection(&self) -> Option<&crate::selection::Selection> {
+        self.fields.selection.as_ref()
+    }
+
+    /// This model with `selection` recorded.
+    pub fn with_selection(mut self, selection: crate::selection::Selection) -> Self {
+        self.fields.selection = Some(selection);
+        self
     }
 }
 

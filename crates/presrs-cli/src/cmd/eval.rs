@@ -65,6 +65,9 @@ pub struct EvalJson<'r> {
     pub per_class: BTreeMap<String, ClassMetrics>,
     pub sigmas: Vec<f64>,
     pub report: &'r EvalReport,
+    /// The automatic choice of every trained model (with `--features auto` or `--classifier auto`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub selections: Vec<presrs_core::selection::Selection>,
 }
 
 #[derive(Debug, Serialize)]
@@ -123,6 +126,7 @@ impl<'r> EvalJson<'r> {
                 .flat_map(|r| r.sigmas.iter().copied())
                 .collect(),
             report,
+            selections: Vec::new(),
         }
     }
 }
@@ -205,14 +209,31 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let config = args.pipeline.train_config(samples[0].frame.grid())?;
     let bar = progress_bar((folds * args.repeats) as u64, "training");
-    let report = evaluate(
-        &samples,
-        &protocol,
-        &config,
-        args.repeats,
-        args.seed,
-        &|| bar.inc(1),
-    )
+    let mut selections = Vec::new();
+    let report = if args.pipeline.is_auto() {
+        let candidates = args.pipeline.candidates(samples[0].frame.grid(), false)?;
+        presrs_core::evaluation::evaluate_auto(
+            &samples,
+            &protocol,
+            &candidates,
+            args.repeats,
+            args.seed,
+            &|| bar.inc(1),
+        )
+        .map(|(report, chosen)| {
+            selections = chosen;
+            report
+        })
+    } else {
+        evaluate(
+            &samples,
+            &protocol,
+            &config,
+            args.repeats,
+            args.seed,
+            &|| bar.inc(1),
+        )
+    }
     .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
     bar.finish_and_clear();
     if let Some(dir) = &args.report {
@@ -235,9 +256,31 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         eprintln!("report written to {}", path.display());
     }
     if args.json {
-        return write_json(out, &EvalJson::new(&report));
+        let mut json = EvalJson::new(&report);
+        json.selections = selections;
+        return write_json(out, &json);
     }
-    print_report(&report, out)
+    print_report(&report, out)?;
+    if !selections.is_empty() {
+        let mut chosen: BTreeMap<String, usize> = BTreeMap::new();
+        for selection in &selections {
+            if let Some(score) = selection.chosen() {
+                *chosen
+                    .entry(format!("{} + {}", score.features, score.classifier))
+                    .or_default() += 1;
+            }
+        }
+        writeln!(
+            out,
+            "\nautomatic choice ({}), over {} trained model(s):",
+            selections[0].method,
+            selections.len()
+        )?;
+        for (name, count) in chosen {
+            writeln!(out, "  {name}: {count}")?;
+        }
+    }
+    Ok(())
 }
 
 /// The human-readable tables of an evaluation.

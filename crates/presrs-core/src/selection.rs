@@ -1,0 +1,219 @@
+//! Automatic choice of the feature family and classifier, by validation inside the training data only.
+//!
+//! Every candidate [`TrainConfig`] is scored on folds made from the training + validation images alone:
+//! - when those images carry conditions (e.g. gaits) with at least two distinct values, **leave one
+//!   condition out**: train on the other conditions (their own 35 % validating the classifier's
+//!   hyper-parameters), test on the held-out one — what users need is accuracy on conditions the model has
+//!   not seen;
+//! - otherwise three seeded stratified splits: 70 % to train (of which 35 % validate), 30 % to test.
+//!
+//! The candidate with the highest mean fold accuracy wins; ties go to the earlier candidate (callers list
+//! the paper's fft1d + Parzen window first). The winner is then trained on the given training and validation
+//! images and the [`Selection`] (every candidate's scores) is stored in the model.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+use crate::evaluation::MeanStd;
+use crate::pipeline::{CheckedTrainConfig, LabeledImage, TrainConfig, TrainedModel, train};
+use crate::split::{ValidationSize, stratified_split};
+
+/// One candidate's validation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    pub features: String,
+    pub classifier: String,
+    pub config: TrainConfig,
+    /// Accuracy over the folds (mean and spread); 0 when the candidate failed.
+    pub accuracy: MeanStd,
+    /// Accuracy of each fold, by held-out condition (or `split k`).
+    pub per_fold: BTreeMap<String, f64>,
+    /// Why the candidate could not be trained, if it could not.
+    pub error: Option<String>,
+}
+
+/// What the automatic choice did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Selection {
+    /// How the candidates were validated (in words).
+    pub method: String,
+    /// Index of the chosen candidate in `scores`.
+    pub chosen: usize,
+    pub scores: Vec<CandidateScore>,
+}
+
+impl Selection {
+    pub fn chosen(&self) -> Option<&CandidateScore> {
+        self.scores.get(self.chosen)
+    }
+}
+
+struct InnerFold {
+    name: String,
+    train: Vec<usize>,
+    validation: Vec<usize>,
+    test: Vec<usize>,
+}
+
+/// Scores `candidates` on folds of `images` (training + validation images together); `conditions` (one per
+/// image) enables leave-one-condition-out. Deterministic in `seed`.
+pub fn select(
+    images: &[LabeledImage<'_>],
+    conditions: Option<&[&str]>,
+    candidates: &[CheckedTrainConfig],
+    seed: u64,
+) -> Result<Selection> {
+    if candidates.is_empty() {
+        return Err(CoreError::Param {
+            name: "candidates",
+            reason: "the automatic choice needs at least one candidate".into(),
+        });
+    }
+    let labels: Vec<&str> = images.iter().map(|i| i.label).collect();
+    let mut distinct: Vec<&str> = conditions.map(<[&str]>::to_vec).unwrap_or_default();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let mut folds = Vec::new();
+    let method;
+    if let (Some(conditions), true) = (conditions, distinct.len() >= 2) {
+        method = format!(
+            "leave one condition out inside the training data ({})",
+            distinct.join(", ")
+        );
+        for (k, held_out) in distinct.iter().enumerate() {
+            let pool: Vec<usize> = (0..images.len())
+                .filter(|&i| conditions[i] != *held_out)
+                .collect();
+            let pool_labels: Vec<&str> = pool.iter().map(|&i| labels[i]).collect();
+            let split = stratified_split(
+                &pool_labels,
+                None,
+                ValidationSize::Fraction(0.35),
+                seed.wrapping_add(k as u64),
+            )?;
+            folds.push(InnerFold {
+                name: (*held_out).to_owned(),
+                train: split.train.iter().map(|&j| pool[j]).collect(),
+                validation: split.validation.iter().map(|&j| pool[j]).collect(),
+                test: (0..images.len())
+                    .filter(|&i| conditions[i] == *held_out)
+                    .collect(),
+            });
+        }
+    } else {
+        method = "three stratified 70/30 splits of the training data".to_owned();
+        for k in 0..3u64 {
+            let outer = stratified_split(
+                &labels,
+                None,
+                ValidationSize::Fraction(0.3),
+                seed.wrapping_add(k),
+            )?;
+            let inner_labels: Vec<&str> = outer.train.iter().map(|&i| labels[i]).collect();
+            let inner = stratified_split(
+                &inner_labels,
+                None,
+                ValidationSize::Fraction(0.35),
+                seed.wrapping_add(1000 + k),
+            )?;
+            folds.push(InnerFold {
+                name: format!("split {k}"),
+                train: inner.train.iter().map(|&j| outer.train[j]).collect(),
+                validation: inner.validation.iter().map(|&j| outer.train[j]).collect(),
+                test: outer.validation.clone(),
+            });
+        }
+    }
+    let mut scores = Vec::with_capacity(candidates.len());
+    for candidate in candidates {
+        let config = candidate.config();
+        let mut per_fold = BTreeMap::new();
+        let mut error = None;
+        for fold in &folds {
+            let pick = |indices: &[usize]| indices.iter().map(|&i| images[i]).collect::<Vec<_>>();
+            match train(&pick(&fold.train), &pick(&fold.validation), candidate) {
+                Ok(model) => {
+                    let mut session = model.session();
+                    let mut correct = 0usize;
+                    for &i in &fold.test {
+                        if session.classify(&images[i].frame)?.label == images[i].label {
+                            correct += 1;
+                        }
+                    }
+                    per_fold.insert(
+                        fold.name.clone(),
+                        correct as f64 / fold.test.len().max(1) as f64,
+                    );
+                }
+                Err(err) => {
+                    error = Some(err.to_string());
+                    break;
+                }
+            }
+        }
+        let accuracy = if error.is_some() {
+            MeanStd::default()
+        } else {
+            MeanStd::of(&per_fold.values().copied().collect::<Vec<_>>())
+        };
+        scores.push(CandidateScore {
+            features: config.features.name(),
+            classifier: config.classifier.kind().as_str().to_owned(),
+            config: config.clone(),
+            accuracy,
+            per_fold,
+            error,
+        });
+    }
+    let mut chosen = 0;
+    for (i, score) in scores.iter().enumerate() {
+        if score.error.is_none()
+            && (scores[chosen].error.is_some()
+                || score.accuracy.mean > scores[chosen].accuracy.mean)
+        {
+            chosen = i;
+        }
+    }
+    if scores[chosen].error.is_some() {
+        return Err(CoreError::NotEnoughData(format!(
+            "no candidate could be trained: {}",
+            scores[chosen].error.as_deref().unwrap_or("")
+        )));
+    }
+    Ok(Selection {
+        method,
+        chosen,
+        scores,
+    })
+}
+
+/// [`select`] on training + validation images, then [`train`] of the winner on them; the model records
+/// the selection. `conditions`: one per training image then one per validation image.
+pub fn train_auto(
+    train_images: &[LabeledImage<'_>],
+    validation_images: &[LabeledImage<'_>],
+    conditions: Option<&[&str]>,
+    candidates: &[CheckedTrainConfig],
+    seed: u64,
+) -> Result<TrainedModel> {
+    let all: Vec<LabeledImage<'_>> = train_images
+        .iter()
+        .chain(validation_images)
+        .copied()
+        .collect();
+    if let Some(conditions) = conditions
+        && conditions.len() != all.len()
+    {
+        return Err(CoreError::Shape {
+            what: "conditions",
+            expected: all.len().to_string(),
+            got: conditions.len().to_string(),
+        });
+    }
+    let selection = select(&all, conditions, candidates, seed)?;
+    let config = candidates[selection.chosen].clone();
+    let model = train(train_images, validation_images, &config)?;
+    Ok(model.with_selection(selection))
+}
