@@ -1,0 +1,131 @@
+//! `presrs eval --compare` and `--features auto --classifier auto` on a small simulated data set.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::process::Command;
+
+fn presrs(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_presrs"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn compare_prints_every_combination_and_auto_records_its_choice() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let sim = presrs(&[
+        "simulate",
+        "--out",
+        out,
+        "--seed",
+        "3",
+        "--hops-per-gait",
+        "12",
+        "--terrains",
+        "wood,grass,clay",
+        "--gaits",
+        "G1,G2",
+    ]);
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+    let manifest = format!("{out}/manifest.csv");
+    let common = [
+        "--manifest",
+        manifest.as_str(),
+        "--train-condition",
+        "G2",
+        "--per-class",
+        "10",
+        "--validation",
+        "4",
+        "--repeats",
+        "1",
+        "--dims",
+        "10",
+    ];
+    let compare = presrs(&[&["eval", "--compare", "--json"][..], &common[..]].concat());
+    assert!(
+        compare.status.success(),
+        "{}",
+        String::from_utf8_lossy(&compare.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&compare.stdout).unwrap();
+    let rows = json["comparison"].as_array().unwrap();
+    assert_eq!(rows.len(), 5 * 5, "every feature x classifier combination");
+    for row in rows {
+        let report = &row["report"]["Ok"];
+        assert!(report.is_object(), "{row}");
+        let overall = report["overall"]["mean"].as_f64().unwrap();
+        assert!(
+            overall > 0.5,
+            "{} + {}: {overall}",
+            row["features"],
+            row["classifier"]
+        );
+        assert!(report["per_condition"]["G1"]["mean"].is_number());
+    }
+    let table = presrs(&[&["eval", "--compare"][..], &common[..]].concat());
+    let text = String::from_utf8_lossy(&table.stdout);
+    assert!(
+        text.contains("fft2d_polar+glcm") && text.contains("svm"),
+        "{text}"
+    );
+
+    let auto = presrs(
+        &[
+            &[
+                "eval",
+                "--features",
+                "auto",
+                "--classifier",
+                "auto",
+                "--json",
+            ][..],
+            &common[..],
+        ]
+        .concat(),
+    );
+    assert!(
+        auto.status.success(),
+        "{}",
+        String::from_utf8_lossy(&auto.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&auto.stdout).unwrap();
+    let selection = &json["selections"][0];
+    assert_eq!(selection["scores"].as_array().unwrap().len(), 25);
+    assert!(selection["chosen"].as_u64().unwrap() < 25);
+
+    let model = format!("{out}/auto.model.json");
+    let train = presrs(&[
+        "train",
+        "--manifest",
+        manifest.as_str(),
+        "--out",
+        model.as_str(),
+        "--per-class",
+        "10",
+        "--dims",
+        "10",
+        "--features",
+        "auto",
+        "--classifier",
+        "auto",
+    ]);
+    assert!(
+        train.status.success(),
+        "{}",
+        String::from_utf8_lossy(&train.stderr)
+    );
+    let text = String::from_utf8_lossy(&train.stdout);
+    assert!(text.contains("leave one condition out"), "{text}");
+    let saved = std::fs::read_to_string(&model).unwrap();
+    assert!(
+        saved.contains("\"selection\""),
+        "the choice is recorded in the model"
+    );
+}
