@@ -9,6 +9,7 @@ pub mod frame;
 pub mod online;
 pub mod pca;
 pub mod pipeline;
+pub mod preprocess;
 pub mod recording;
 pub mod selection;
 mod simd;

@@ -8,8 +8,10 @@
 //! Training follows the paper: features of the training images fit the PCA (`dims` components, at most
 //! `n_train - 1`), the validation images are projected with that PCA and used to choose the classifier's
 //! hyper-parameters (the Parzen σ), and the final classifier stores the reduced training *and* validation
-//! vectors. Absent (masked) sensels are read as 0. Every image, in training and afterwards, must have the
-//! same grid once cropped.
+//! vectors. Absent (masked) sensels are read as 0 unless [`Preprocess::fill_absent`] fills them from their
+//! neighbours; [`Preprocess::normalise_load`] divides each cropped image by its total load. Both are part
+//! of the configuration and the model, so training and classification preprocess alike. Every image, in
+//! training and afterwards, must have the same grid once cropped.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -24,6 +26,7 @@ use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
 use crate::frame::{Frame, FrameView, Grid};
 use crate::pca::Pca;
+use crate::preprocess::{FillScratch, Preprocess, fill_from_neighbours, normalise_load};
 
 /// Everything training needs besides the data. `Default` is the paper's setting.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -35,6 +38,9 @@ pub struct TrainConfig {
     /// Number of principal components kept (capped at `n_train - 1` and at the feature count).
     pub dims: usize,
     pub classifier: ClassifierConfig,
+    /// Steps after the crop (fill absent sensels, normalise the load); none by default (the paper).
+    #[serde(default, skip_serializing_if = "Preprocess::is_none")]
+    pub preprocess: Preprocess,
 }
 
 impl Default for TrainConfig {
@@ -46,6 +52,7 @@ impl Default for TrainConfig {
             features: FeatureConfig::default(),
             dims: 51,
             classifier: ClassifierConfig::default(),
+            preprocess: Preprocess::NONE,
         }
     }
 }
@@ -127,6 +134,9 @@ struct ModelFields {
     /// Bumped when the meaning of a field changes.
     format_version: u32,
     crop: Crop,
+    /// Steps after the crop (absent from files written before they existed: none).
+    #[serde(default, skip_serializing_if = "Preprocess::is_none")]
+    preprocess: Preprocess,
     /// The grid of the images after cropping.
     image_grid: Grid,
     features: FeatureConfig,
@@ -224,12 +234,12 @@ pub fn train(
         .collect::<Result<Vec<_>>>()?;
 
     let image_grid = config.crop.output_grid(first.frame.grid())?;
-    let preprocessor = Preprocessor {
-        crop: config.crop,
+    let preprocessor = Preprocessor::new(
+        config.crop,
+        config.preprocess,
         image_grid,
-        cropped: vec![0.0; image_grid.len()],
-        extractor: config.features.extractor(image_grid)?,
-    };
+        config.features.extractor(image_grid)?,
+    );
     let n_features = preprocessor.extractor.output_len();
     let train_features = features_of(train, &preprocessor)?;
     let validation_features = features_of(validation, &preprocessor)?;
@@ -276,6 +286,7 @@ pub fn train(
     TrainedModel::try_from(ModelFields {
         format_version: FORMAT_VERSION,
         crop: config.crop,
+        preprocess: config.preprocess,
         image_grid,
         features: config.features.clone(),
         pca,
@@ -316,19 +327,67 @@ fn features_of(images: &[LabeledImage<'_>], preprocessor: &Preprocessor) -> Resu
     Ok(features)
 }
 
-/// Crop + features for one image grid, with its buffers.
+/// Crop + preprocessing + features for one image grid, with its buffers.
 #[derive(Clone, Debug)]
 struct Preprocessor {
     crop: Crop,
+    preprocess: Preprocess,
     image_grid: Grid,
     cropped: Vec<f64>,
+    /// The crop of the frame's mask (used when filling absent sensels).
+    cropped_present: Vec<bool>,
+    fill: FillScratch,
     extractor: FeatureExtractor,
 }
 
 impl Preprocessor {
-    /// Crops `frame` (absent sensels read as 0) and writes its features into `out`. Does not allocate.
+    fn new(
+        crop: Crop,
+        preprocess: Preprocess,
+        image_grid: Grid,
+        extractor: FeatureExtractor,
+    ) -> Self {
+        let len = image_grid.len();
+        let fill = preprocess.fill_absent;
+        Self {
+            crop,
+            preprocess,
+            image_grid,
+            cropped: vec![0.0; len],
+            cropped_present: if fill { vec![true; len] } else { Vec::new() },
+            fill: if fill {
+                FillScratch::new(len)
+            } else {
+                FillScratch::default()
+            },
+            extractor,
+        }
+    }
+
+    /// Crops `frame` (absent sensels read as 0, or filled from their neighbours), normalises its load when
+    /// asked, and writes its features into `out`. Does not allocate.
     fn features_into(&mut self, frame: &FrameView<'_>, out: &mut [f64]) -> Result<()> {
         crop_masked_into(&self.crop, self.image_grid, frame, &mut self.cropped)?;
+        if self.preprocess.fill_absent
+            && let Some(mask) = frame.present()
+        {
+            let (row0, col0, grid) = self.crop.window(frame.grid())?;
+            let in_cols = frame.grid().cols;
+            for (r, dst) in self.cropped_present.chunks_exact_mut(grid.cols).enumerate() {
+                let start = (row0 + r) * in_cols + col0;
+                dst.copy_from_slice(&mask[start..start + grid.cols]);
+            }
+            fill_from_neighbours(
+                &mut self.cropped,
+                self.image_grid,
+                Some(&self.cropped_present),
+                None,
+                &mut self.fill,
+            )?;
+        }
+        if self.preprocess.normalise_load {
+            normalise_load(&mut self.cropped);
+        }
         self.extractor.extract_into(&self.cropped, out)
     }
 }
@@ -373,14 +432,24 @@ pub fn extract_features(
     crop: &Crop,
     features: &FeatureConfig,
 ) -> Result<Vec<f64>> {
+    extract_features_with(frame, crop, Preprocess::NONE, features)
+}
+
+/// [`extract_features`] with the preprocessing steps `preprocess` after the crop.
+pub fn extract_features_with(
+    frame: &FrameView<'_>,
+    crop: &Crop,
+    preprocess: Preprocess,
+    features: &FeatureConfig,
+) -> Result<Vec<f64>> {
     features.check()?;
     let image_grid = crop.output_grid(frame.grid())?;
-    let mut preprocessor = Preprocessor {
-        crop: *crop,
+    let mut preprocessor = Preprocessor::new(
+        *crop,
+        preprocess,
         image_grid,
-        cropped: vec![0.0; image_grid.len()],
-        extractor: features.extractor(image_grid)?,
-    };
+        features.extractor(image_grid)?,
+    );
     let mut out = vec![0.0; preprocessor.extractor.output_len()];
     preprocessor.features_into(frame, &mut out)?;
     Ok(out)
@@ -392,12 +461,12 @@ impl TrainedModel {
         let fields = &self.fields;
         Session {
             model: self,
-            preprocessor: Preprocessor {
-                crop: fields.crop,
-                image_grid: fields.image_grid,
-                cropped: vec![0.0; fields.image_grid.len()],
-                extractor: self.extractor.clone(),
-            },
+            preprocessor: Preprocessor::new(
+                fields.crop,
+                fields.preprocess,
+                fields.image_grid,
+                self.extractor.clone(),
+            ),
             features: vec![0.0; fields.pca.n_features()],
             reduced: vec![0.0; fields.pca.n_components()],
             scratch: fields.classifier.scratch(),
@@ -423,6 +492,11 @@ impl TrainedModel {
 
     pub fn crop(&self) -> Crop {
         self.fields.crop
+    }
+
+    /// The preprocessing steps after the crop.
+    pub fn preprocess(&self) -> Preprocess {
+        self.fields.preprocess
     }
 
     /// The grid of the images after cropping.

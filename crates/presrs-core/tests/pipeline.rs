@@ -262,6 +262,7 @@ fn dims_are_capped_by_the_training_set_and_other_settings_work() {
         classifier: ClassifierConfig::Pwe(ParzenConfig {
             sigma: SigmaChoice::Fixed { sigma: 100.0 },
         }),
+        ..TrainConfig::default()
     }
     .check()
     .unwrap();

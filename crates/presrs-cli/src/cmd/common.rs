@@ -9,6 +9,7 @@ use presrs_core::Crop;
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
+use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::SampleFrame;
 use presrs_io::ReadOptions;
 use presrs_io::dataset::{LoadedSamples, SampleOptions, load_samples};
@@ -30,6 +31,14 @@ pub struct PipelineArgs {
     /// Principal components kept (at most the number of training images minus one).
     #[arg(long, default_value_t = 51)]
     pub dims: usize,
+    /// Divide each cropped image by its total load (sum of its values): features that do not depend on
+    /// the robot's load, without knowing it. Stored in the model; off in the paper's method.
+    #[arg(long)]
+    pub normalise_load: bool,
+    /// Fill absent (masked) sensels from their neighbours (mean of the 4-neighbours, relaxed across
+    /// clusters) instead of reading them as 0. Stored in the model.
+    #[arg(long)]
+    pub fill_absent: bool,
     #[command(flatten)]
     pub crop: CropArg,
 }
@@ -86,6 +95,14 @@ pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
 ];
 
 impl PipelineArgs {
+    /// The preprocessing steps these options ask for.
+    pub fn preprocess(&self) -> Preprocess {
+        Preprocess {
+            normalise_load: self.normalise_load,
+            fill_absent: self.fill_absent,
+        }
+    }
+
     /// Whether features or classifier are to be chosen automatically.
     pub fn is_auto(&self) -> bool {
         self.features == FeatureChoice::Auto || self.classifier == ClassifierChoice::Auto
@@ -107,6 +124,7 @@ impl PipelineArgs {
             features,
             dims: self.dims,
             classifier,
+            preprocess: self.preprocess(),
         };
         Ok(config.check()?)
     }
@@ -138,6 +156,7 @@ impl PipelineArgs {
                         features: feature.clone(),
                         dims: self.dims,
                         classifier: classifier.default_config(),
+                        preprocess: self.preprocess(),
                     }
                     .check()?,
                 );

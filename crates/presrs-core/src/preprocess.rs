@@ -1,0 +1,244 @@
+//! Image preprocessing applied after the crop, before the features (training and classification alike):
+//!
+//! - **fill absent sensels** ([`fill_from_neighbours`]): masked sensels (and, optionally, sensels flagged
+//!   dead) take the mean of their 4-neighbours, relaxed until the filled values settle (Gauss-Seidel on
+//!   the discrete Laplace equation), so clusters are filled from their rim and any harmonic field — a
+//!   plane in particular — is reproduced exactly around interior holes;
+//! - **normalise the load** ([`normalise_load`]): divide the image by its total, so that an image scaled
+//!   by the robot's load gives the same features without knowing the load (the paper scales by the known
+//!   load instead).
+//!
+//! Both run in caller-owned buffers ([`FillScratch`]): no allocation per image.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+use crate::frame::Grid;
+
+/// Which preprocessing steps the pipeline applies after the crop. `Default` (both off) is the paper's
+/// method; model files written before these options existed load with the default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Preprocess {
+    /// Divide each cropped image by its total load (sum of its values).
+    pub normalise_load: bool,
+    /// Fill absent (masked) sensels from their neighbours instead of reading them as 0.
+    pub fill_absent: bool,
+}
+
+impl Preprocess {
+    /// The paper's method: absent sensels read as 0, no normalisation.
+    pub const NONE: Self = Self {
+        normalise_load: false,
+        fill_absent: false,
+    };
+
+    /// Whether every step is off.
+    pub fn is_none(&self) -> bool {
+        *self == Self::NONE
+    }
+
+    /// Short description (`none`, `normalise-load`, `fill-absent`, `fill-absent+normalise-load`).
+    pub fn name(&self) -> String {
+        match (self.fill_absent, self.normalise_load) {
+            (false, false) => "none".to_owned(),
+            (false, true) => "normalise-load".to_owned(),
+            (true, false) => "fill-absent".to_owned(),
+            (true, true) => "fill-absent+normalise-load".to_owned(),
+        }
+    }
+}
+
+impl std::fmt::Display for Preprocess {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+/// Buffers of [`fill_from_neighbours`] for one grid size.
+#[derive(Clone, Debug, Default)]
+pub struct FillScratch {
+    /// Whether each sensel has a value (given or already seeded).
+    known: Vec<bool>,
+    /// Indices of the sensels to fill.
+    holes: Vec<usize>,
+    /// Holes seeded in the current onion-peeling pass.
+    seeded: Vec<usize>,
+}
+
+impl FillScratch {
+    /// Buffers for images of `len` sensels (so that filling them does not allocate).
+    pub fn new(len: usize) -> Self {
+        Self {
+            known: Vec::with_capacity(len),
+            holes: Vec::with_capacity(len),
+            seeded: Vec::with_capacity(len),
+        }
+    }
+}
+
+/// Relaxation stops when no filled value moves by more than this fraction of the image's largest
+/// magnitude, or after [`MAX_SWEEPS`] sweeps.
+const TOLERANCE: f64 = 1e-13;
+const MAX_SWEEPS: usize = 20_000;
+
+/// Fills the sensels of `values` (a row-major `grid` image) that are absent — `present[i] == false` — or
+/// flagged `dead[i] == true`, from their present 4-neighbours. First every hole that touches a known
+/// sensel takes the mean of its known neighbours, layer by layer from the rim of each cluster inwards;
+/// then every filled value is relaxed to the mean of all its neighbours until it settles. A hole with no
+/// known sensel anywhere in the image (all absent) becomes 0. Does not allocate once `scratch` has
+/// grown to the grid's size ([`FillScratch::new`]).
+pub fn fill_from_neighbours(
+    values: &mut [f64],
+    grid: Grid,
+    present: Option<&[bool]>,
+    dead: Option<&[bool]>,
+    scratch: &mut FillScratch,
+) -> Result<()> {
+    let len = grid.len();
+    for (what, got) in [
+        ("image", Some(values.len())),
+        ("present mask", present.map(<[bool]>::len)),
+        ("dead mask", dead.map(<[bool]>::len)),
+    ] {
+        if let Some(got) = got
+            && got != len
+        {
+            return Err(CoreError::Shape {
+                what,
+                expected: format!("{len} values ({grid})"),
+                got: got.to_string(),
+            });
+        }
+    }
+    let FillScratch {
+        known,
+        holes,
+        seeded,
+    } = scratch;
+    known.clear();
+    holes.clear();
+    for i in 0..len {
+        let here = present.is_none_or(|p| p[i]) && !dead.is_some_and(|d| d[i]);
+        known.push(here);
+        if !here {
+            holes.push(i);
+        }
+    }
+    if holes.is_empty() {
+        return Ok(());
+    }
+    if holes.len() == len {
+        values.fill(0.0);
+        return Ok(());
+    }
+    let (rows, cols) = (grid.rows, grid.cols);
+    // Sum and count of the neighbours of `i` for which `use_it` holds.
+    let neighbour_mean = |values: &[f64], i: usize, use_it: &dyn Fn(usize) -> bool| {
+        let (r, c) = (i / cols, i % cols);
+        let (mut sum, mut count) = (0.0, 0usize);
+        let mut add = |j: usize| {
+            if use_it(j) {
+                sum += values[j];
+                count += 1;
+            }
+        };
+        if r > 0 {
+            add(i - cols);
+        }
+        if r + 1 < rows {
+            add(i + cols);
+        }
+        if c > 0 {
+            add(i - 1);
+        }
+        if c + 1 < cols {
+            add(i + 1);
+        }
+        (sum, count)
+    };
+    // Seed: onion peeling from the known sensels.
+    let mut remaining = holes.len();
+    while remaining > 0 {
+        seeded.clear();
+        for &i in holes.iter() {
+            if known[i] {
+                continue;
+            }
+            let (sum, count) = neighbour_mean(values, i, &|j| known[j]);
+            if count > 0 {
+                values[i] = sum / count as f64;
+                seeded.push(i);
+            }
+        }
+        if seeded.is_empty() {
+            // unreachable: some sensel is known and the grid is connected
+            break;
+        }
+        for &i in seeded.iter() {
+            known[i] = true;
+        }
+        remaining -= seeded.len();
+    }
+    // Relax: each hole becomes the mean of all its neighbours (Gauss-Seidel), until it settles.
+    let scale = values
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
+    for _ in 0..MAX_SWEEPS {
+        let mut largest_change = 0.0f64;
+        for &i in holes.iter() {
+            let (sum, count) = neighbour_mean(values, i, &|_| true);
+            let new = sum / count as f64;
+            largest_change = largest_change.max((new - values[i]).abs());
+            values[i] = new;
+        }
+        if !(largest_change > TOLERANCE * scale) {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// Divides `values` by their sum (the image's total load) and returns that total. An image whose total
+/// is not positive and finite (empty contact, or bad values that later stages reject) is left unchanged.
+pub fn normalise_load(values: &mut [f64]) -> f64 {
+    let total: f64 = values.iter().sum();
+    if total > 0.0 && total.is_finite() {
+        let inverse = 1.0 / total;
+        values.iter_mut().for_each(|v| *v *= inverse);
+    }
+    total
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names() {
+        assert_eq!(Preprocess::default().name(), "none");
+        assert!(Preprocess::default().is_none());
+        let both = Preprocess {
+            normalise_load: true,
+            fill_absent: true,
+        };
+        assert_eq!(both.to_string(), "fill-absent+normalise-load");
+    }
+
+    #[test]
+    fn zero_total_is_left_alone() {
+        let mut v = [0.0; 4];
+        assert_eq!(normalise_load(&mut v), 0.0);
+        assert_eq!(v, [0.0; 4]);
+    }
+
+    #[test]
+    fn all_absent_becomes_zero() {
+        let grid = Grid::new(2, 3);
+        let mut v = [1.0; 6];
+        let mut scratch = FillScratch::new(6);
+        fill_from_neighbours(&mut v, grid, Some(&[false; 6]), None, &mut scratch).unwrap();
+        assert_eq!(v, [0.0; 6]);
+    }
+}
