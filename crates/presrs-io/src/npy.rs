@@ -31,6 +31,12 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
             "not a NumPy .npy file (it does not start with the \\x93NUMPY magic bytes)",
         ));
     }
+    // npyz multiplies the shape without checking for overflow (a panic in debug builds): reject a
+    // claimed size that does not fit before handing it the header.
+    if let Some(header) = header_text(bytes) {
+        check_header_sizes(&header)
+            .map_err(|why| IoError::format(file, format!("invalid .npy header: {why}")))?;
+    }
     let npy = NpyFile::new(bytes)
         .map_err(|err| IoError::format(file, format!("invalid .npy header: {err}")))?;
     let shape: Vec<u64> = npy.shape().to_vec();
@@ -158,6 +164,57 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
         file: file.to_owned(),
         source,
     })
+}
+
+/// The header dictionary text of a `.npy` file (versions 1 to 3), when it is all there.
+fn header_text(bytes: &[u8]) -> Option<String> {
+    let major = *bytes.get(NPY_MAGIC.len())?;
+    let (len, start): (usize, usize) = if major == 1 {
+        let b = bytes.get(8..10)?;
+        (usize::from(u16::from_le_bytes([b[0], b[1]])), 10)
+    } else {
+        let b = bytes.get(8..12)?;
+        (u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize, 12)
+    };
+    let text = bytes.get(start..start.checked_add(len)?)?;
+    Some(String::from_utf8_lossy(text).into_owned())
+}
+
+/// Checks that the integers of every tuple or list in a header (the shape, and subarray shapes in a
+/// structured dtype) each fit in 64 bits and so does their product.
+fn check_header_sizes(header: &str) -> Result<(), String> {
+    let mut products: Vec<u64> = Vec::new();
+    let mut token = String::new();
+    let flush = |token: &mut String, products: &mut Vec<u64>| -> Result<(), String> {
+        let digits = token.trim().trim_end_matches(['L', 'l']);
+        if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+            let value: u64 = digits
+                .parse()
+                .map_err(|_| format!("dimension {digits} is too large"))?;
+            if let Some(product) = products.last_mut() {
+                *product = product
+                    .checked_mul(value)
+                    .ok_or_else(|| "the shape's size overflows 64 bits".to_owned())?;
+            }
+        }
+        token.clear();
+        Ok(())
+    };
+    for ch in header.chars() {
+        match ch {
+            '(' | '[' => {
+                token.clear();
+                products.push(1);
+            }
+            ')' | ']' => {
+                flush(&mut token, &mut products)?;
+                products.pop();
+            }
+            ',' => flush(&mut token, &mut products)?,
+            _ => token.push(ch),
+        }
+    }
+    Ok(())
 }
 
 fn shape_len(frames: usize, rows: usize, cols: usize) -> Option<usize> {
