@@ -120,7 +120,8 @@ pub fn detect_kind(path: &Path, bytes: &[u8]) -> Result<FileKind, IoError> {
     if ext == "asf" || tekscan::looks_like_tekscan(&textutil::decode_text(head)) {
         return Ok(FileKind::TekScan);
     }
-    if bytes.contains(&0) {
+    // Zero bytes are binary, unless the file is UTF-16 text (decoded, it has none).
+    if bytes.contains(&0) && textutil::decode_text(bytes).contains('\0') {
         return Err(IoError::unsupported(
             &name,
             "binary file of unknown format; expected a TekScan ASCII file (.asf), a NumPy array (.npy), \

@@ -89,7 +89,16 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
             .iter()
             .filter(|&&b| b == b'\n')
             .count();
-        IoError::parse(&file, line, "not UTF-8 text; a manifest is a CSV file")
+        let utf16 = bytes.starts_with(b"\xFF\xFE") || bytes.starts_with(b"\xFE\xFF");
+        if utf16 {
+            IoError::parse(
+                &file,
+                1,
+                "UTF-16 text; a manifest is a UTF-8 CSV file (save it as \"CSV UTF-8\")",
+            )
+        } else {
+            IoError::parse(&file, line, "not UTF-8 text; a manifest is a CSV file")
+        }
     })?;
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut reader = csv::ReaderBuilder::new()

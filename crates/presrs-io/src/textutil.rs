@@ -2,15 +2,59 @@
 
 use std::borrow::Cow;
 
-/// Decodes file bytes as text: UTF-8 (a leading byte-order mark is dropped), or, when the bytes are not
-/// valid UTF-8, Latin-1 (every byte is one character), which is what older Windows exports use. Decoding
-/// never fails, so a stray byte in a comment does not make a file unreadable.
+/// Decodes file bytes as text: UTF-16 (little or big endian) when the file starts with a UTF-16
+/// byte-order mark or looks like UTF-16 ASCII text (every other byte zero), as Windows "Unicode" exports
+/// are; else UTF-8 (a leading byte-order mark is dropped), or, when the bytes are not valid UTF-8,
+/// Latin-1 (every byte is one character), which is what older Windows exports use. Decoding never fails
+/// (invalid UTF-16 becomes U+FFFD), so a stray byte in a comment does not make a file unreadable.
 pub(crate) fn decode_text(bytes: &[u8]) -> Cow<'_, str> {
+    if let Some(big_endian) = utf16_order(bytes) {
+        let body = if bytes.starts_with(b"\xFF\xFE") || bytes.starts_with(b"\xFE\xFF") {
+            &bytes[2..]
+        } else {
+            bytes
+        };
+        let units = body.chunks_exact(2).map(|pair| {
+            if big_endian {
+                u16::from_be_bytes([pair[0], pair[1]])
+            } else {
+                u16::from_le_bytes([pair[0], pair[1]])
+            }
+        });
+        return Cow::Owned(
+            char::decode_utf16(units)
+                .map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER))
+                .collect(),
+        );
+    }
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     match std::str::from_utf8(bytes) {
         Ok(text) => Cow::Borrowed(text),
         Err(_) => Cow::Owned(bytes.iter().map(|&b| char::from(b)).collect()),
     }
+}
+
+/// `Some(big_endian)` when `bytes` are UTF-16: a byte-order mark, or (without one) an even length with
+/// a zero high byte in every code unit of the first 256 bytes and some non-zero low byte.
+fn utf16_order(bytes: &[u8]) -> Option<bool> {
+    if bytes.starts_with(b"\xFF\xFE") {
+        return Some(false);
+    }
+    if bytes.starts_with(b"\xFE\xFF") {
+        return Some(true);
+    }
+    if bytes.len() < 4 || bytes.len() % 2 != 0 {
+        return None;
+    }
+    let head = &bytes[..bytes.len().min(256)];
+    let units = || head.chunks_exact(2);
+    if units().all(|u| u[1] == 0) && units().any(|u| u[0] != 0) {
+        return Some(false);
+    }
+    if units().all(|u| u[0] == 0) && units().any(|u| u[1] != 0) {
+        return Some(true);
+    }
+    None
 }
 
 /// The lines of `text` with their 1-based numbers. Line breaks are `\n`, `\r\n` or a lone `\r`, mixed
@@ -175,6 +219,18 @@ mod tests {
     fn decoding() {
         assert_eq!(decode_text(b"\xEF\xBB\xBFROWS 1"), "ROWS 1");
         assert_eq!(decode_text(b"caf\xE9"), "caf\u{e9}");
+        let utf16le: Vec<u8> = "\u{feff}ROWS 1\r\n"
+            .encode_utf16()
+            .flat_map(u16::to_le_bytes)
+            .collect();
+        assert_eq!(decode_text(&utf16le), "ROWS 1\r\n");
+        assert_eq!(decode_text(&utf16le[2..]), "ROWS 1\r\n");
+        let utf16be: Vec<u8> = "\u{feff}1 2\n"
+            .encode_utf16()
+            .flat_map(u16::to_be_bytes)
+            .collect();
+        assert_eq!(decode_text(&utf16be), "1 2\n");
+        assert_eq!(decode_text(&utf16be[2..]), "1 2\n");
     }
 
     #[test]
