@@ -8,6 +8,7 @@ pub mod features;
 pub mod frame;
 pub mod online;
 pub mod pca;
+pub mod perturb;
 pub mod pipeline;
 pub mod preprocess;
 pub mod recording;

@@ -1,0 +1,417 @@
+//! Fault injection on test images: sensor faults (dead, stuck, gain drift, noise) and changed conditions
+//! (a shifted or rotated foot placement, a different load), to measure how accuracy degrades.
+//!
+//! A [`Perturbation`] is written `KIND=LEVEL` (as `presrs eval --perturb` takes it):
+//!
+//! | kind | level | effect |
+//! |---|---|---|
+//! | `dead` | fraction 0..1 | that fraction of the present sensels read 0 (the same sensels in every image) |
+//! | `stuck` | fraction 0..1 | that fraction read the image's largest value (saturated; same sensels) |
+//! | `gain` | s.d. >= 0 | every sensel's gain is multiplied by `1 + N(0, sd)` (fixed per sensel), floored at 0 |
+//! | `noise` | s.d. >= 0, counts | independent `N(0, sd)` added to every sensel of every image, floored at 0 |
+//! | `shift` | `ROWS` or `ROWS,COLS` | the image moves by whole sensels (vacated sensels read 0) |
+//! | `rotate` | degrees | the image turns about its centre of pressure (bilinear resampling) |
+//! | `load` | factor > 0, or `+50%` / `-50%` | every value is multiplied by the factor |
+//!
+//! Every random choice comes from the seed: sensor faults (`dead`, `stuck`, `gain`) depend on the seed
+//! and the grid only, as a faulty sensor would affect every image alike; `noise` also depends on the
+//! image's index. Absent sensels (outside the sensor's outline) stay absent and 0.
+
+use std::fmt;
+use std::str::FromStr;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::error::{CoreError, Result};
+use crate::frame::{Frame, FrameView, Grid};
+
+/// One fault or condition change; see the module documentation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Perturbation {
+    Dead(f64),
+    Stuck(f64),
+    Gain(f64),
+    Noise(f64),
+    Shift(i64, i64),
+    Rotate(f64),
+    Load(f64),
+}
+
+impl Perturbation {
+    /// The kind's name (`dead`, `stuck`, ...).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Dead(_) => "dead",
+            Self::Stuck(_) => "stuck",
+            Self::Gain(_) => "gain",
+            Self::Noise(_) => "noise",
+            Self::Shift(..) => "shift",
+            Self::Rotate(_) => "rotate",
+            Self::Load(_) => "load",
+        }
+    }
+
+    /// A perturbed copy of `frame`. `seed` fixes the sensor faults; `index` (the image's number) varies
+    /// the noise from image to image.
+    pub fn apply(&self, frame: FrameView<'_>, seed: u64, index: u64) -> Frame {
+        let grid = frame.grid();
+        let present = |i: usize| frame.present().is_none_or(|p| p[i]);
+        let mut values = frame.values().to_vec();
+        // Sensor faults: a stream that depends on the seed and the grid only.
+        let mut sensor_rng = ChaCha8Rng::seed_from_u64(
+            seed ^ (grid.rows as u64).wrapping_mul(0x9e37_79b9) ^ ((grid.cols as u64) << 32),
+        );
+        match *self {
+            Self::Dead(fraction) | Self::Stuck(fraction) => {
+                let mut cells: Vec<usize> = (0..values.len()).filter(|&i| present(i)).collect();
+                let count = ((fraction.clamp(0.0, 1.0) * cells.len() as f64).round() as usize)
+                    .min(cells.len());
+                // A partial Fisher-Yates shuffle picks `count` distinct sensels.
+                for k in 0..count {
+                    let j = sensor_rng.random_range(k..cells.len());
+                    cells.swap(k, j);
+                }
+                let value = match self {
+                    Self::Dead(_) => 0.0,
+                    _ => values.iter().copied().fold(0.0, f64::max),
+                };
+                for &i in &cells[..count] {
+                    values[i] = value;
+                }
+            }
+            Self::Gain(sd) => {
+                for (i, v) in values.iter_mut().enumerate() {
+                    let gain = 1.0 + sd * normal(&mut sensor_rng);
+                    if present(i) {
+                        *v = (*v * gain).max(0.0);
+                    }
+                }
+            }
+            Self::Noise(sd) => {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                rng.set_stream(index);
+                for (i, v) in values.iter_mut().enumerate() {
+                    let noise = sd * normal(&mut rng);
+                    if present(i) {
+                        *v = (*v + noise).max(0.0);
+                    }
+                }
+            }
+            Self::Shift(dr, dc) => {
+                values.iter_mut().for_each(|v| *v = 0.0);
+                for r in 0..grid.rows {
+                    for c in 0..grid.cols {
+                        let (sr, sc) = (r as i64 - dr, c as i64 - dc);
+                        if (0..grid.rows as i64).contains(&sr)
+                            && (0..grid.cols as i64).contains(&sc)
+                        {
+                            values[r * grid.cols + c] = frame.get(sr as usize, sc as usize);
+                        }
+                    }
+                }
+            }
+            Self::Rotate(degrees) => rotate(frame, degrees, &mut values),
+            Self::Load(factor) => values.iter_mut().for_each(|v| *v *= factor),
+        }
+        // Absent sensels stay absent and read 0.
+        if let Some(mask) = frame.present() {
+            for (v, &here) in values.iter_mut().zip(mask) {
+                if !here {
+                    *v = 0.0;
+                }
+            }
+        }
+        let mask = frame.present().map(<[bool]>::to_vec);
+        // The grid and mask are the input's, and every value is finite: this cannot fail.
+        Frame::with_mask(grid, values, mask).unwrap_or_else(|_| Frame::zeros(grid))
+    }
+}
+
+/// A standard normal deviate (Box-Muller).
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2: f64 = rng.random();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// Rotates the image by `degrees` (counter-clockwise with rows growing downwards) about its centre of
+/// pressure, by bilinear interpolation of the source at each output sensel.
+fn rotate(frame: FrameView<'_>, degrees: f64, out: &mut [f64]) {
+    let Grid { rows, cols } = frame.grid();
+    let total = frame.total();
+    let (mut cr, mut cc) = ((rows as f64 - 1.0) / 2.0, (cols as f64 - 1.0) / 2.0);
+    if total > 0.0 {
+        let (mut sr, mut sc) = (0.0, 0.0);
+        for r in 0..rows {
+            for c in 0..cols {
+                let v = frame.get(r, c);
+                sr += v * r as f64;
+                sc += v * c as f64;
+            }
+        }
+        (cr, cc) = (sr / total, sc / total);
+    }
+    let (sin, cos) = degrees.to_radians().sin_cos();
+    let sample = |r: f64, c: f64| -> f64 {
+        if r < 0.0 || c < 0.0 || r > (rows - 1) as f64 || c > (cols - 1) as f64 {
+            return 0.0;
+        }
+        let (r0, c0) = (r.floor() as usize, c.floor() as usize);
+        let (r1, c1) = ((r0 + 1).min(rows - 1), (c0 + 1).min(cols - 1));
+        let (fr, fc) = (r - r0 as f64, c - c0 as f64);
+        let top = frame.get(r0, c0) * (1.0 - fc) + frame.get(r0, c1) * fc;
+        let bottom = frame.get(r1, c0) * (1.0 - fc) + frame.get(r1, c1) * fc;
+        top * (1.0 - fr) + bottom * fr
+    };
+    for r in 0..rows {
+        for c in 0..cols {
+            // The inverse rotation finds where this output sensel comes from.
+            let (dr, dc) = (r as f64 - cr, c as f64 - cc);
+            let sr = cr + cos * dr - sin * dc;
+            let sc = cc + sin * dr + cos * dc;
+            out[r * cols + c] = sample(sr, sc);
+        }
+    }
+}
+
+impl fmt::Display for Perturbation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Dead(x) | Self::Stuck(x) | Self::Gain(x) | Self::Noise(x) | Self::Rotate(x) => {
+                write!(f, "{}={x}", self.kind())
+            }
+            Self::Shift(r, c) => write!(f, "shift={r},{c}"),
+            Self::Load(x) => write!(f, "load={x}"),
+        }
+    }
+}
+
+impl FromStr for Perturbation {
+    type Err = CoreError;
+
+    fn from_str(text: &str) -> Result<Self> {
+        let bad = |reason: String| CoreError::Param {
+            name: "perturbation",
+            reason,
+        };
+        let (kind, level) = text.split_once('=').ok_or_else(|| {
+            bad(format!(
+                "`{text}`: expected KIND=LEVEL with KIND one of dead, stuck, gain, noise, shift, rotate, load"
+            ))
+        })?;
+        let (kind, level) = (kind.trim().to_ascii_lowercase(), level.trim());
+        let number = |s: &str| -> Result<f64> {
+            s.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(format!("`{text}`: `{s}` is not a finite number")))
+        };
+        let fraction = |s: &str| -> Result<f64> {
+            let v = match s.strip_suffix('%') {
+                Some(p) => number(p)? / 100.0,
+                None => number(s)?,
+            };
+            if (0.0..=1.0).contains(&v) {
+                Ok(v)
+            } else {
+                Err(bad(format!(
+                    "`{text}`: the fraction must be between 0 and 1 (or 0% and 100%)"
+                )))
+            }
+        };
+        let non_negative = |s: &str| -> Result<f64> {
+            let v = number(s)?;
+            if v >= 0.0 {
+                Ok(v)
+            } else {
+                Err(bad(format!(
+                    "`{text}`: the standard deviation must not be negative"
+                )))
+            }
+        };
+        let whole = |s: &str| -> Result<i64> {
+            s.trim()
+                .parse::<i64>()
+                .ok()
+                .filter(|v| v.abs() <= 10_000)
+                .ok_or_else(|| bad(format!("`{text}`: `{s}` is not a whole number of sensels")))
+        };
+        Ok(match kind.as_str() {
+            "dead" => Self::Dead(fraction(level)?),
+            "stuck" => Self::Stuck(fraction(level)?),
+            "gain" => Self::Gain(non_negative(level)?),
+            "noise" => Self::Noise(non_negative(level)?),
+            "shift" => match level.split_once(',') {
+                Some((r, c)) => Self::Shift(whole(r)?, whole(c)?),
+                None => Self::Shift(whole(level)?, 0),
+            },
+            "rotate" => Self::Rotate(number(level)?),
+            "load" => {
+                let factor = match level.strip_suffix('%') {
+                    Some(p) => 1.0 + number(p)? / 100.0,
+                    None => number(level)?,
+                };
+                if factor <= 0.0 {
+                    return Err(bad(format!("`{text}`: the load factor must be positive")));
+                }
+                Self::Load(factor)
+            }
+            other => {
+                return Err(bad(format!(
+                    "`{text}`: unknown kind `{other}`; expected dead, stuck, gain, noise, shift, rotate or load"
+                )));
+            }
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(grid: Grid) -> Frame {
+        Frame::new(
+            grid,
+            (0..grid.len()).map(|i| (i % 13) as f64 + 1.0).collect(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn parses_every_kind_and_rejects_nonsense() {
+        let p = |t: &str| t.parse::<Perturbation>();
+        assert_eq!(p("dead=0.05").unwrap(), Perturbation::Dead(0.05));
+        assert_eq!(p("dead=5%").unwrap(), Perturbation::Dead(0.05));
+        assert_eq!(p("Stuck=0.01").unwrap(), Perturbation::Stuck(0.01));
+        assert_eq!(p("gain=0.2").unwrap(), Perturbation::Gain(0.2));
+        assert_eq!(p("noise=3").unwrap(), Perturbation::Noise(3.0));
+        assert_eq!(p("shift=2,-1").unwrap(), Perturbation::Shift(2, -1));
+        assert_eq!(p("shift=3").unwrap(), Perturbation::Shift(3, 0));
+        assert_eq!(p("rotate=-15").unwrap(), Perturbation::Rotate(-15.0));
+        assert_eq!(p("load=1.5").unwrap(), Perturbation::Load(1.5));
+        assert_eq!(p("load=-50%").unwrap(), Perturbation::Load(0.5));
+        assert_eq!(p("load=+50%").unwrap(), Perturbation::Load(1.5));
+        for bad in [
+            "dead",
+            "dead=2",
+            "dead=-0.1",
+            "noise=-1",
+            "noise=nan",
+            "load=0",
+            "load=-200%",
+            "shift=1.5",
+            "rotate=inf",
+            "warp=3",
+            "=",
+        ] {
+            let err = p(bad).unwrap_err().to_string();
+            assert!(err.contains("perturbation"), "{bad}: {err}");
+        }
+        for text in ["dead=0.05", "shift=2,-1", "load=0.5", "rotate=10"] {
+            assert_eq!(p(text).unwrap().to_string(), text);
+        }
+    }
+
+    #[test]
+    fn dead_and_stuck_hit_the_same_sensels_in_every_image() {
+        let grid = Grid::new(10, 8);
+        let frame = ramp(grid);
+        let dead = Perturbation::Dead(0.1);
+        let a = dead.apply(frame.view(), 7, 0);
+        let b = dead.apply(frame.view(), 7, 99);
+        assert_eq!(a, b);
+        let zeros: Vec<usize> = (0..grid.len()).filter(|&i| a.values()[i] == 0.0).collect();
+        assert_eq!(zeros.len(), 8); // 10 % of 80
+        let c = dead.apply(frame.view(), 8, 0);
+        assert_ne!(a, c, "another seed picks other sensels");
+        let stuck = Perturbation::Stuck(0.05).apply(frame.view(), 7, 0);
+        let high = stuck.values().iter().filter(|&&v| v == 13.0).count();
+        let before = frame.values().iter().filter(|&&v| v == 13.0).count();
+        assert!(high > before && high <= before + 4, "{high} vs {before}");
+    }
+
+    #[test]
+    fn level_zero_is_the_identity() {
+        let frame = ramp(Grid::new(6, 5));
+        for p in [
+            Perturbation::Dead(0.0),
+            Perturbation::Stuck(0.0),
+            Perturbation::Gain(0.0),
+            Perturbation::Noise(0.0),
+            Perturbation::Shift(0, 0),
+            Perturbation::Rotate(0.0),
+            Perturbation::Load(1.0),
+        ] {
+            let out = p.apply(frame.view(), 3, 1);
+            for (x, y) in out.values().iter().zip(frame.values()) {
+                assert!((x - y).abs() < 1e-9, "{p}: {x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn noise_varies_per_image_and_is_reproducible() {
+        let frame = ramp(Grid::new(20, 20));
+        let noise = Perturbation::Noise(2.0);
+        let a = noise.apply(frame.view(), 1, 0);
+        assert_eq!(a, noise.apply(frame.view(), 1, 0));
+        assert_ne!(a, noise.apply(frame.view(), 1, 1));
+        let diffs: Vec<f64> = a
+            .values()
+            .iter()
+            .zip(frame.values())
+            .map(|(x, y)| x - y)
+            .collect();
+        let sd = (diffs.iter().map(|d| d * d).sum::<f64>() / diffs.len() as f64).sqrt();
+        assert!((1.6..2.4).contains(&sd), "noise sd {sd}");
+        assert!(a.values().iter().all(|&v| v >= 0.0));
+    }
+
+    #[test]
+    fn shift_rotate_and_load_move_and_scale_the_print() {
+        let grid = Grid::new(9, 9);
+        let mut values = vec![0.0; 81];
+        values[4 * 9 + 4] = 10.0; // the centre
+        values[2 * 9 + 4] = 5.0; // two rows above it
+        let frame = Frame::new(grid, values).unwrap();
+        let shifted = Perturbation::Shift(1, -2).apply(frame.view(), 0, 0);
+        assert_eq!(shifted.view().get(5, 2), 10.0);
+        assert_eq!(shifted.view().get(3, 2), 5.0);
+        assert_eq!(shifted.view().total(), 15.0);
+        // A quarter turn about the centre of pressure (row 4 - 10/15*... = 3.33, col 4).
+        let turned = Perturbation::Rotate(90.0).apply(frame.view(), 0, 0);
+        let t = turned.view();
+        let (mut best, mut at) = (0.0, (0, 0));
+        for r in 0..9 {
+            for c in 0..9 {
+                if t.get(r, c) > best {
+                    (best, at) = (t.get(r, c), (r, c));
+                }
+            }
+        }
+        // The heaviest point stays on the centre row band but moves off the centre column.
+        assert!(at.1 != 4 && at.0.abs_diff(3) <= 1, "{at:?}");
+        assert!((t.total() - 15.0).abs() < 5.0, "{}", t.total());
+        let heavier = Perturbation::Load(1.5).apply(frame.view(), 0, 0);
+        assert_eq!(heavier.view().total(), 22.5);
+    }
+
+    #[test]
+    fn absent_sensels_stay_absent() {
+        let grid = Grid::new(3, 3);
+        let mask = vec![true, true, false, true, true, true, false, true, true];
+        let frame = Frame::with_mask(grid, vec![1.0; 9], Some(mask.clone())).unwrap();
+        for p in [
+            Perturbation::Noise(5.0),
+            Perturbation::Stuck(1.0),
+            Perturbation::Shift(1, 1),
+        ] {
+            let out = p.apply(frame.view(), 2, 0);
+            assert_eq!(out.present(), Some(&mask[..]));
+            assert_eq!(out.values()[2], 0.0);
+            assert_eq!(out.values()[6], 0.0);
+        }
+    }
+}
