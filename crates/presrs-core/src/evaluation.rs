@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
-use crate::frame::FrameView;
+use crate::frame::{Frame, FrameView};
 use crate::pipeline::{CheckedTrainConfig, LabeledImage, train};
 use crate::split::{ValidationSize, stratified_split};
 
@@ -176,12 +176,31 @@ pub fn evaluate(
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<EvalReport> {
+    evaluate_perturbed(samples, protocol, config, repeats, seed, progress, None)
+}
+
+/// Changes a test image before it is classified: `(sample index, image, repeat seed) -> image` (fault
+/// injection, see [`crate::perturb`]). Training and validation images are never changed.
+pub type TestTransform<'f> = dyn Fn(usize, FrameView<'_>, u64) -> Result<Frame> + Sync + 'f;
+
+/// [`evaluate`] with every test image passed through `perturb` first (when given). The draws are those
+/// of [`evaluate`] with the same seed, so the results pair up with an unperturbed run.
+pub fn evaluate_perturbed(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    config: &CheckedTrainConfig,
+    repeats: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+    perturb: Option<&TestTransform<'_>>,
+) -> Result<EvalReport> {
     evaluate_with(
         samples,
         protocol,
         repeats,
         seed,
         progress,
+        perturb,
         &|train_set, validation_set, _| {
             let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
             let train_images: Vec<_> = train_set.iter().map(image).collect();
@@ -202,6 +221,19 @@ pub fn evaluate_auto(
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<(EvalReport, Vec<crate::selection::Selection>)> {
+    evaluate_auto_perturbed(samples, protocol, candidates, repeats, seed, progress, None)
+}
+
+/// [`evaluate_auto`] with every test image passed through `perturb` first (see [`evaluate_perturbed`]).
+pub fn evaluate_auto_perturbed(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    candidates: &[CheckedTrainConfig],
+    repeats: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+    perturb: Option<&TestTransform<'_>>,
+) -> Result<(EvalReport, Vec<crate::selection::Selection>)> {
     let selections = std::sync::Mutex::new(Vec::new());
     let report = evaluate_with(
         samples,
@@ -209,6 +241,7 @@ pub fn evaluate_auto(
         repeats,
         seed,
         progress,
+        perturb,
         &|train_set, validation_set, fold_seed| {
             let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
             let train_images: Vec<_> = train_set.iter().map(image).collect();
@@ -244,6 +277,7 @@ fn evaluate_with(
     repeats: usize,
     seed: u64,
     progress: &(dyn Fn() + Sync),
+    perturb: Option<&TestTransform<'_>>,
     trainer: &Trainer<'_>,
 ) -> Result<EvalReport> {
     if repeats == 0 {
@@ -289,8 +323,12 @@ fn evaluate_with(
                 .map_init(
                     || model.session(),
                     |session, &i| {
+                        let perturbed = perturb
+                            .map(|p| p(i, samples[i].frame, repeat_seed))
+                            .transpose()?;
+                        let frame = perturbed.as_ref().map_or(samples[i].frame, Frame::view);
                         let start = Instant::now();
-                        let class = session.classify(&samples[i].frame)?.class;
+                        let class = session.classify(&frame)?.class;
                         Ok((class, start.elapsed().as_nanos() as u64))
                     },
                 )
@@ -632,6 +670,37 @@ mod tests {
         );
         assert_eq!(report.repeats[0].n_test, samples.len());
         assert_eq!(report.repeats[0].sigmas.len(), 3);
+    }
+
+    #[test]
+    fn perturbing_test_images_only_changes_the_tested_accuracy() {
+        let data = data();
+        let samples = samples(&data);
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(10),
+            validation: ValidationSize::Count(3),
+        };
+        let config = TrainConfig {
+            dims: 20,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap();
+        let plain = evaluate(&samples, &protocol, &config, 1, 5, &|| {}).unwrap();
+        let identity = |_: usize, frame: FrameView<'_>, _: u64| Ok(frame.to_frame());
+        let same = evaluate_perturbed(&samples, &protocol, &config, 1, 5, &|| {}, Some(&identity))
+            .unwrap();
+        assert_eq!(same.confusion, plain.confusion);
+        assert_eq!(same.repeats[0].sigmas, plain.repeats[0].sigmas);
+        // Blank test images (every sensel dead): the same trained models, chance-level answers.
+        let blank = |_: usize, frame: FrameView<'_>, _: u64| Ok(Frame::zeros(frame.grid()));
+        let dead =
+            evaluate_perturbed(&samples, &protocol, &config, 1, 5, &|| {}, Some(&blank)).unwrap();
+        assert_eq!(dead.repeats[0].sigmas, plain.repeats[0].sigmas);
+        assert_eq!(dead.repeats[0].n_test, plain.repeats[0].n_test);
+        assert!(plain.overall.mean > 0.8, "{}", plain.overall.mean);
+        assert!(dead.overall.mean < 0.5, "{}", dead.overall.mean);
     }
 
     #[test]
