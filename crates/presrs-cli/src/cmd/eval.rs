@@ -47,6 +47,12 @@ pub struct EvalArgs {
     /// Also write an HTML report with figures in this folder (DIR/index.html).
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
+    /// Also evaluate with every test image perturbed (repeatable; same draws): dead=FRACTION,
+    /// stuck=FRACTION, gain=SD, noise=SD (counts), shift=ROWS[,COLS], rotate=DEGREES, load=FACTOR or
+    /// load=+-50%. Prints accuracy under each (for the paper's method too with --features/--classifier
+    /// auto).
+    #[arg(long, value_name = "KIND=LEVEL", value_parser = |t: &str| t.parse::<presrs_core::perturb::Perturbation>().map_err(|e| e.to_string()))]
+    pub perturb: Vec<presrs_core::perturb::Perturbation>,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -255,12 +261,23 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
         eprintln!("report written to {}", path.display());
     }
+    let perturbed = perturbation_rows(args, &samples, &protocol, &config, folds, &report)?;
     if args.json {
         let mut json = EvalJson::new(&report);
         json.selections = selections;
+        if !perturbed.is_empty() {
+            return write_json(
+                out,
+                &PerturbedJson {
+                    eval: json,
+                    perturbations: perturbed,
+                },
+            );
+        }
         return write_json(out, &json);
     }
     print_report(&report, out)?;
+    print_perturbations(&perturbed, out)?;
     if !selections.is_empty() {
         let mut chosen: BTreeMap<String, usize> = BTreeMap::new();
         for selection in &selections {
@@ -420,6 +437,153 @@ pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::
             }
             Err(err) => writeln!(out, " failed: {err}")?,
         }
+    }
+    Ok(())
+}
+
+/// Accuracy of one method with the test images perturbed (`--perturb`).
+#[derive(Debug, Serialize)]
+pub struct PerturbationRow {
+    /// `KIND=LEVEL`, or `none` for the unperturbed test images.
+    pub perturbation: String,
+    /// `configured` (what --features/--classifier say) or `paper` (fft1d + pwe, shown next to auto).
+    pub method: &'static str,
+    pub accuracy: f64,
+    pub accuracy_std: f64,
+}
+
+/// The `--json` document with `--perturb`: the usual fields plus the perturbation rows.
+#[derive(Debug, Serialize)]
+pub struct PerturbedJson<'r> {
+    #[serde(flatten)]
+    pub eval: EvalJson<'r>,
+    pub perturbations: Vec<PerturbationRow>,
+}
+
+/// Evaluates every `--perturb` (same seeds, so the same draws and models as the main run). With an
+/// automatic choice, the paper's method is evaluated too, so that both degrade side by side.
+fn perturbation_rows(
+    args: &EvalArgs,
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    paper: &presrs_core::CheckedTrainConfig,
+    folds: usize,
+    report: &EvalReport,
+) -> anyhow::Result<Vec<PerturbationRow>> {
+    use presrs_core::evaluation::{evaluate_auto_perturbed, evaluate_perturbed};
+    if args.perturb.is_empty() {
+        return Ok(Vec::new());
+    }
+    let auto = args.pipeline.is_auto();
+    let candidates = if auto {
+        args.pipeline.candidates(samples[0].frame.grid(), false)?
+    } else {
+        Vec::new()
+    };
+    let methods = 1 + usize::from(auto);
+    let runs = methods * args.perturb.len() + usize::from(auto);
+    let bar = progress_bar((runs * folds * args.repeats) as u64, "perturbing");
+    let tick = || bar.inc(1);
+    let context =
+        |err: presrs_core::CoreError| anyhow::anyhow!("{}: {err}", args.manifest.display());
+    let row = |perturbation: String, method, r: &EvalReport| PerturbationRow {
+        perturbation,
+        method,
+        accuracy: r.overall.mean,
+        accuracy_std: r.overall.std,
+    };
+    let mut rows = vec![row("none".to_owned(), "configured", report)];
+    if auto {
+        let plain = evaluate_perturbed(
+            samples,
+            protocol,
+            paper,
+            args.repeats,
+            args.seed,
+            &tick,
+            None,
+        )
+        .map_err(context)?;
+        rows.push(row("none".to_owned(), "paper", &plain));
+    }
+    for p in &args.perturb {
+        let transform = |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
+            Ok(p.apply(frame, seed, i as u64))
+        };
+        let t: &presrs_core::evaluation::TestTransform<'_> = &transform;
+        let configured = if auto {
+            evaluate_auto_perturbed(
+                samples,
+                protocol,
+                &candidates,
+                args.repeats,
+                args.seed,
+                &tick,
+                Some(t),
+            )
+            .map(|(r, _)| r)
+        } else {
+            evaluate_perturbed(
+                samples,
+                protocol,
+                paper,
+                args.repeats,
+                args.seed,
+                &tick,
+                Some(t),
+            )
+        }
+        .map_err(context)?;
+        rows.push(row(p.to_string(), "configured", &configured));
+        if auto {
+            let r = evaluate_perturbed(
+                samples,
+                protocol,
+                paper,
+                args.repeats,
+                args.seed,
+                &tick,
+                Some(t),
+            )
+            .map_err(context)?;
+            rows.push(row(p.to_string(), "paper", &r));
+        }
+    }
+    bar.finish_and_clear();
+    Ok(rows)
+}
+
+/// The accuracy-against-fault table (one column per method).
+fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow::Result<()> {
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let paper = rows.iter().any(|r| r.method == "paper");
+    write!(
+        out,
+        "\naccuracy with perturbed test images\n{:<20} {:>20}",
+        "perturbation", "this pipeline"
+    )?;
+    if paper {
+        write!(out, " {:>20}", "paper (fft1d+pwe)")?;
+    }
+    writeln!(out)?;
+    let cell = |r: &PerturbationRow| {
+        format!(
+            "{:6.2} % +- {:.2}",
+            100.0 * r.accuracy,
+            100.0 * r.accuracy_std
+        )
+    };
+    for r in rows.iter().filter(|r| r.method == "configured") {
+        write!(out, "{:<20} {:>20}", r.perturbation, cell(r))?;
+        if let Some(p) = rows
+            .iter()
+            .find(|q| q.method == "paper" && q.perturbation == r.perturbation)
+        {
+            write!(out, " {:>20}", cell(p))?;
+        }
+        writeln!(out)?;
     }
     Ok(())
 }
