@@ -2,6 +2,7 @@
 
 pub mod classifier;
 pub mod crop;
+pub mod dead_sensels;
 pub mod error;
 pub mod evaluation;
 pub mod features;

@@ -1,0 +1,201 @@
+//! Dead-sensel detection: a sensel that never responds while its neighbours do.
+//!
+//! A present sensel is reported dead when it reads 0 in every frame of a recording and, in at least
+//! [`DeadSenselConfig::min_frames`] frames, it is *surrounded* by load: at least
+//! [`DeadSenselConfig::neighbour_fraction`] of its present 8-neighbours (and at least three of them) read
+//! more than 0. A sensel on the edge of the contact area has loaded neighbours on one side only and is not
+//! surrounded, and a sensel that is never near the load is never surrounded: neither is reported. A
+//! recording of fewer frames than `min_frames` asks every present neighbour to be loaded in every frame.
+//!
+//! Only detection lives here; filling the reported sensels from their neighbours is
+//! [`crate::preprocess`]'s job (mark them absent and let it fill absent sensels).
+
+use serde::{Deserialize, Serialize};
+
+use crate::recording::Recording;
+
+/// Thresholds of [`detect_dead_sensels`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeadSenselConfig {
+    /// Frames in which the sensel must be surrounded by load.
+    pub min_frames: usize,
+    /// Fraction of the present neighbours that must carry load for the sensel to count as surrounded.
+    pub neighbour_fraction: f64,
+}
+
+impl Default for DeadSenselConfig {
+    fn default() -> Self {
+        Self {
+            min_frames: 3,
+            neighbour_fraction: 0.75,
+        }
+    }
+}
+
+/// A sensel found dead.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DeadSensel {
+    /// 0-based row and column.
+    pub row: usize,
+    pub col: usize,
+    /// Frames in which its neighbours carried load around it while it read 0.
+    pub surrounded_frames: usize,
+}
+
+/// The dead sensels of `recording`, in row-major order (see the module documentation).
+pub fn detect_dead_sensels(recording: &Recording, config: &DeadSenselConfig) -> Vec<DeadSensel> {
+    let grid = recording.grid();
+    let (rows, cols) = (grid.rows, grid.cols);
+    let cells = grid.len();
+    let frames = recording.frame_count();
+    if cells == 0 || frames == 0 {
+        return Vec::new();
+    }
+    let data = recording.data();
+    let present = |i: usize| recording.present().is_none_or(|p| p[i]);
+    // Sensels that read 0 in every frame.
+    let mut silent: Vec<bool> = (0..cells).map(present).collect();
+    for frame in data.chunks_exact(cells) {
+        for (quiet, &v) in silent.iter_mut().zip(frame) {
+            if v != 0.0 {
+                *quiet = false;
+            }
+        }
+    }
+    let (min_frames, fraction) = if frames < config.min_frames {
+        (frames, 1.0)
+    } else {
+        (config.min_frames.max(1), config.neighbour_fraction)
+    };
+    let mut found = Vec::new();
+    for i in (0..cells).filter(|&i| silent[i]) {
+        let (r, c) = (i / cols, i % cols);
+        let neighbours: Vec<usize> = (r.saturating_sub(1)..=(r + 1).min(rows - 1))
+            .flat_map(|nr| {
+                (c.saturating_sub(1)..=(c + 1).min(cols - 1)).map(move |nc| nr * cols + nc)
+            })
+            .filter(|&n| n != i && present(n))
+            .collect();
+        if neighbours.len() < 3 {
+            continue;
+        }
+        let needed = ((fraction * neighbours.len() as f64).ceil() as usize).max(3);
+        let surrounded_frames = data
+            .chunks_exact(cells)
+            .filter(|frame| neighbours.iter().filter(|&&n| frame[n] > 0.0).count() >= needed)
+            .count();
+        if surrounded_frames >= min_frames {
+            found.push(DeadSensel {
+                row: r,
+                col: c,
+                surrounded_frames,
+            });
+        }
+    }
+    found
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::Grid;
+    use crate::recording::SensorMeta;
+
+    /// `frames` frames of a 12 x 12 grid with a loaded disc (radius 3.5 around (5, 5)) in frames 2..,
+    /// frame 0 and 1 unloaded.
+    fn disc_movie(frames: usize) -> Vec<f64> {
+        let mut data = Vec::new();
+        for f in 0..frames {
+            for r in 0..12 {
+                for c in 0..12 {
+                    let d2 = (r as f64 - 5.0).powi(2) + (c as f64 - 5.0).powi(2);
+                    let loaded = f >= 2 && d2 <= 3.5f64.powi(2);
+                    data.push(if loaded { 10.0 + f as f64 } else { 0.0 });
+                }
+            }
+        }
+        data
+    }
+
+    fn movie(data: Vec<f64>, frames: usize, present: Option<Vec<bool>>) -> Recording {
+        assert_eq!(data.len(), frames * 144);
+        Recording::new(
+            Grid::new(12, 12),
+            Some(0.01),
+            data,
+            present,
+            SensorMeta::default(),
+        )
+        .unwrap()
+    }
+
+    fn kill(data: &mut [f64], r: usize, c: usize) {
+        for frame in data.chunks_exact_mut(144) {
+            frame[r * 12 + c] = 0.0;
+        }
+    }
+
+    #[test]
+    fn finds_a_silent_sensel_inside_the_load_only() {
+        let mut data = disc_movie(8);
+        kill(&mut data, 5, 5); // the centre
+        kill(&mut data, 4, 7); // inside, off centre
+        kill(&mut data, 5, 8); // on the rim: neighbours loaded on one side only
+        let rec = movie(data, 8, None);
+        let dead = detect_dead_sensels(&rec, &DeadSenselConfig::default());
+        let at: Vec<(usize, usize)> = dead.iter().map(|d| (d.row, d.col)).collect();
+        assert_eq!(at, [(4, 7), (5, 5)]);
+        assert_eq!(dead[1].surrounded_frames, 6);
+    }
+
+    #[test]
+    fn a_clean_recording_or_too_few_loaded_frames_has_none() {
+        let rec = movie(disc_movie(8), 8, None);
+        assert!(detect_dead_sensels(&rec, &DeadSenselConfig::default()).is_empty());
+        // Loaded in only 2 frames (2 and 3 of 4): fewer than min_frames = 3.
+        let mut data = disc_movie(4);
+        kill(&mut data, 5, 5);
+        let rec = movie(data, 4, None);
+        assert!(detect_dead_sensels(&rec, &DeadSenselConfig::default()).is_empty());
+        let lax = DeadSenselConfig {
+            min_frames: 2,
+            ..DeadSenselConfig::default()
+        };
+        assert_eq!(detect_dead_sensels(&rec, &lax).len(), 1);
+    }
+
+    #[test]
+    fn absent_sensels_are_neither_dead_nor_counted_as_neighbours() {
+        let mut data = disc_movie(6);
+        kill(&mut data, 5, 5);
+        let mut present = vec![true; 144];
+        present[5 * 12 + 5] = false; // the silent sensel is outside the sensor: not dead
+        let rec = movie(data.clone(), 6, Some(present));
+        assert!(detect_dead_sensels(&rec, &DeadSenselConfig::default()).is_empty());
+        // Absent neighbours do not count against a dead sensel.
+        let mut present = vec![true; 144];
+        present[4 * 12 + 4] = false;
+        present[4 * 12 + 5] = false;
+        let rec = movie(data, 6, Some(present));
+        let dead = detect_dead_sensels(&rec, &DeadSenselConfig::default());
+        assert_eq!(dead.len(), 1);
+        assert_eq!((dead[0].row, dead[0].col), (5, 5));
+    }
+
+    #[test]
+    fn a_single_image_needs_every_neighbour_loaded() {
+        let mut data = disc_movie(3)[2 * 144..].to_vec();
+        kill(&mut data, 5, 5);
+        kill(&mut data, 5, 8);
+        let rec = movie(data, 1, None);
+        let dead = detect_dead_sensels(&rec, &DeadSenselConfig::default());
+        assert_eq!(
+            dead,
+            [DeadSensel {
+                row: 5,
+                col: 5,
+                surrounded_frames: 1
+            }]
+        );
+    }
+}
