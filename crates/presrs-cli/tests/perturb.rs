@@ -1,4 +1,5 @@
-//! `presrs eval --perturb KIND=LEVEL`: accuracy with faulty test images, next to the clean run.
+//! Sensor faults: `presrs eval --perturb KIND=LEVEL` (accuracy with faulty test images, next to the clean
+//! run) and the dead sensels `presrs inspect` reports.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
@@ -115,4 +116,57 @@ fn eval_reports_accuracy_under_each_perturbation() {
     ]);
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("between 0 and 1"));
+}
+
+#[test]
+fn inspect_reports_dead_sensels() {
+    // The real F-Scan insole export: three sensels stay at 0 while the load covers them.
+    let real = format!(
+        "{}/../../../shared/data/tekscan/FrasP01L.asf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let out = presrs(&["inspect", "--json", &real]);
+    assert_eq!(out.status.code(), Some(0));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let dead: Vec<(u64, u64)> = json["dead_sensels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| (d["row"].as_u64().unwrap(), d["col"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(dead, [(16, 9), (17, 7), (37, 1)]);
+
+    // A synthetic movie with one sensel killed inside the foot print, in the table form.
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let print = synthetic_frame(0, &mut rng);
+    let grid = print.grid();
+    let (r, c) = (0..grid.len())
+        .map(|i| (i / grid.cols, i % grid.cols))
+        .max_by(|a, b| {
+            let v = |p: &(usize, usize)| print.view().get(p.0, p.1);
+            v(a).total_cmp(&v(b))
+        })
+        .unwrap();
+    let mut data = Vec::new();
+    for k in 0..6 {
+        data.extend(print.values().iter().map(|v| (v * (k + 1) as f64).round()));
+        data[k * grid.len() + r * grid.cols + c] = 0.0;
+    }
+    let rec = Recording::new(grid, Some(0.01), data, None, SensorMeta::default()).unwrap();
+    let path = dir.path().join("dead.asf");
+    presrs_io::tekscan::write_tekscan_file(&rec, &path).unwrap();
+    let out = presrs(&["inspect", path.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains(&format!(
+            "dead sensels   1 at row, col (0-based) ({r}, {c})"
+        )),
+        "{stdout}"
+    );
+    let clean = dir.path().join("clean.asf");
+    let rec = Recording::from_frame(print, SensorMeta::default());
+    presrs_io::tekscan::write_tekscan_file(&rec, &clean).unwrap();
+    let out = presrs(&["inspect", clean.to_str().unwrap()]);
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("dead sensels"));
 }

@@ -44,6 +44,9 @@ struct InspectReport {
     row_pitch_mm: Option<f64>,
     col_pitch_mm: Option<f64>,
     absent_sensels: usize,
+    /// Present sensels that read 0 in every frame while their neighbours carry load
+    /// ([`presrs_core::dead_sensels`]), 0-based.
+    dead_sensels: Vec<presrs_core::dead_sensels::DeadSensel>,
     /// Smallest and largest total load of a frame (sum of sensel values, in `units`).
     load_min: f64,
     load_max: f64,
@@ -87,6 +90,10 @@ pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         absent_sensels: recording
             .present()
             .map_or(0, |mask| mask.iter().filter(|&&here| !here).count()),
+        dead_sensels: presrs_core::dead_sensels::detect_dead_sensels(
+            recording,
+            &presrs_core::dead_sensels::DeadSenselConfig::default(),
+        ),
         load_min: totals.iter().copied().fold(f64::INFINITY, f64::min),
         load_max: totals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         baseline_noise: segmentation.noise,
@@ -113,6 +120,26 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
         _ => "unknown".to_owned(),
     };
     writeln!(out, "pitch          {pitch}")?;
+    if !report.dead_sensels.is_empty() {
+        let at: Vec<String> = report
+            .dead_sensels
+            .iter()
+            .take(20)
+            .map(|d| format!("({}, {})", d.row, d.col))
+            .collect();
+        let more = report.dead_sensels.len().saturating_sub(at.len());
+        writeln!(
+            out,
+            "dead sensels   {} at row, col (0-based) {}{}",
+            report.dead_sensels.len(),
+            at.join(" "),
+            if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            }
+        )?;
+    }
     let period = report
         .frame_period_s
         .map(|p| format!("{p} s ({:.2} Hz)", 1.0 / p));
