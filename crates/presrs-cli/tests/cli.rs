@@ -129,6 +129,8 @@ fn train_then_classify_files_of_every_format() {
         "{}",
         stdout(&out)
     );
+    // without --features/--classifier the method is chosen automatically and the choice is printed
+    assert!(stdout(&out).contains("chosen: "), "{}", stdout(&out));
     let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&model).unwrap()).unwrap();
     assert_eq!(saved["format"], "presrs-model");
     assert_eq!(saved["provenance"]["seed"], 3);

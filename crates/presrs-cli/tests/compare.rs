@@ -76,20 +76,8 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         "{text}"
     );
 
-    let auto = presrs(
-        &[
-            &[
-                "eval",
-                "--features",
-                "auto",
-                "--classifier",
-                "auto",
-                "--json",
-            ][..],
-            &common[..],
-        ]
-        .concat(),
-    );
+    // auto is the default: the cheap feature families (fft1d, fft2d, fft2d_polar) x every classifier
+    let auto = presrs(&[&["eval", "--json"][..], &common[..]].concat());
     assert!(
         auto.status.success(),
         "{}",
@@ -97,8 +85,10 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     );
     let json: serde_json::Value = serde_json::from_slice(&auto.stdout).unwrap();
     let selection = &json["selections"][0];
-    assert_eq!(selection["scores"].as_array().unwrap().len(), 25);
-    assert!(selection["chosen"].as_u64().unwrap() < 25);
+    let scores = selection["scores"].as_array().unwrap();
+    assert_eq!(scores.len(), 15);
+    assert!(selection["chosen"].as_u64().unwrap() < 15);
+    assert!(scores.iter().all(|s| s["features"] != "glcm"));
 
     let model = format!("{out}/auto.model.json");
     let train = presrs(&[
@@ -115,6 +105,7 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         "auto",
         "--classifier",
         "auto",
+        "--full-search",
     ]);
     assert!(
         train.status.success(),
@@ -123,6 +114,9 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     );
     let text = String::from_utf8_lossy(&train.stdout);
     assert!(text.contains("leave one condition out"), "{text}");
+    // --full-search tries the texture families too, and the choice is printed
+    assert!(text.contains("fft2d_polar+glcm"), "{text}");
+    assert!(text.contains("chosen: "), "{text}");
     let saved = std::fs::read_to_string(&model).unwrap();
     assert!(
         saved.contains("\"selection\""),

@@ -15,9 +15,11 @@ use super::common::{PipelineArgs, SampleArgs, load_manifest};
 /// Train a classifier from a dataset manifest (CSV: path,label[,condition,group,frame,load]).
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Example (the paper's protocol: 20 images per terrain from gait G2, 7 of them \
-for choosing sigma):\n  presrs train --manifest sim/manifest.csv --out g2.model.json --train-condition G2 \
---per-class 20 --validation 7 --seed 1"
+    after_help = "By default the feature family and classifier are chosen automatically by validation \
+inside the training data (--features auto --classifier auto; --full-search for every family).\n\n\
+Example (the paper's method and protocol: 1-D |FFT| + Parzen window, 20 images per terrain from gait G2, \
+7 of them for choosing sigma):\n  presrs train --manifest sim/manifest.csv --out g2.model.json \
+--features fft1d --classifier pwe --train-condition G2 --per-class 20 --validation 7 --seed 1"
 )]
 pub struct TrainArgs {
     /// The dataset manifest.
@@ -140,6 +142,13 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 )?,
             }
         }
+        if let Some(chosen) = selection.chosen() {
+            writeln!(
+                out,
+                "chosen: {} + {} (the paper's method: --features fft1d --classifier pwe)",
+                chosen.features, chosen.classifier
+            )?;
+        }
     }
     let count = |indices: &[usize]| {
         let mut counts = BTreeMap::new();
@@ -187,10 +196,12 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "crop {} -> {} image, {} features, PCA {} components{}",
+        "crop {} -> {} image, preprocessing {}, {} features ({}), PCA {} components{}",
         model.crop(),
         model.image_grid(),
+        model.preprocess(),
         model.pca().n_features(),
+        model.features().name(),
         model.pca().n_components(),
         model
             .sigma()
