@@ -358,17 +358,6 @@ fn parser(target: &str) -> Parser {
     }
 }
 
-const TARGETS: [&str; 8] = [
-    "tekscan",
-    "tekscan_stream",
-    "npy",
-    "png",
-    "text",
-    "manifest",
-    "model",
-    "frames",
-];
-
 /// Mutation rounds per seed; a few seconds in all in a debug build.
 fn rounds(target: &str) -> usize {
     match target {
