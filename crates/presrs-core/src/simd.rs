@@ -12,6 +12,11 @@
 //!   per row (over consecutive chunks) so that they are not latency bound either;
 //! * the `cols % lanes` trailing columns are added in scalar after the horizontal sum.
 //!
+//! Measured on the 2-core development VM (AVX-512 Xeon, 2.3 GHz): the 51 x 1025 product takes about 6 us,
+//! which is what merely reading the 418 KB basis once takes there (68-78 GB/s with AVX2 or AVX-512 loads;
+//! a 32 KB basis reads at ~175 GB/s). Wider registers (pulp's `x86-v4`) did not help: halving the bytes
+//! (an f32 copy of the basis) is what would.
+//!
 //! The summation order depends only on the shape and the instruction set chosen at run time, so the
 //! result is deterministic on a given machine. Nothing is allocated.
 
