@@ -13,8 +13,9 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use presrs_core::pipeline::bench_fixture;
+use presrs_core::pipeline::{SYNTHETIC_CLASSES, bench_fixture};
 use presrs_core::{Frame, Grid, Recording, SensorMeta};
+use presrs_core::{LabeledImage, TrainConfig};
 use presrs_io::ReadOptions;
 use presrs_io::frame_protocol::{Dtype, FrameReader, encode_frame};
 use presrs_io::model_file::{ModelFile, Provenance, parse_model};
@@ -291,6 +292,24 @@ fn small_recording() -> Recording {
     .unwrap()
 }
 
+/// A small but complete model file (2 components, 12 training images): quick to parse many times.
+fn small_model() -> Vec<u8> {
+    let (_, frames) = bench_fixture(1, 20).unwrap();
+    let images: Vec<LabeledImage<'_>> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| LabeledImage::new(f.view(), SYNTHETIC_CLASSES[i % 4]))
+        .collect();
+    let config = TrainConfig {
+        dims: 2,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let model = presrs_core::train(&images[..12], &images[12..], &config).unwrap();
+    serde_json::to_vec(&ModelFile::new(model, Provenance::default())).unwrap()
+}
+
 fn seeds(target: &str) -> Vec<Vec<u8>> {
     let rec = small_recording();
     match target {
@@ -324,10 +343,7 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
             "\u{feff}path,label,extra\n\"q,uoted.txt\",x,1\n".as_bytes().to_vec(),
         ]
         }
-        "model" => {
-            let (model, _) = bench_fixture(1, 0).unwrap();
-            vec![serde_json::to_vec(&ModelFile::new(model, Provenance::default())).unwrap()]
-        }
+        "model" => vec![small_model()],
         "frames" => {
             let mut all = Vec::new();
             let mut one = Vec::new();
@@ -361,7 +377,7 @@ fn parser(target: &str) -> Parser {
 /// Mutation rounds per seed; a few seconds in all in a debug build.
 fn rounds(target: &str) -> usize {
     match target {
-        "model" => 60,
+        "model" => 400,
         "tekscan" | "tekscan_stream" => 300,
         _ => 1500,
     }
