@@ -834,6 +834,10 @@ pub struct OnlineClassifier<'m> {
     fusion_sum: Vec<f64>,
     fusion_frames: usize,
     fusion_last: usize,
+    /// The current frame's classification, once made in this push (the sample frame is usually also a
+    /// fusion frame: it is classified once, not twice).
+    current: Option<(usize, f64)>,
+    current_posteriors: Vec<f64>,
     n_classes: usize,
     events: Vec<OnlineEvent>,
     posteriors: Vec<f64>,
@@ -859,6 +863,8 @@ impl<'m> OnlineClassifier<'m> {
             fusion_sum: vec![0.0; n_classes],
             fusion_frames: 0,
             fusion_last: 0,
+            current: None,
+            current_posteriors: vec![0.0; n_classes],
             n_classes,
             events: Vec::with_capacity(MAX_SEG_EVENTS),
             posteriors: Vec::with_capacity(MAX_SEG_EVENTS * n_classes),
@@ -937,7 +943,21 @@ impl<'m> OnlineClassifier<'m> {
         }
     }
 
+    /// Classifies the current frame once per push; later requests reuse the result.
+    fn classify_current(&mut self, frame: &FrameView<'_>) -> Result<(usize, f64)> {
+        if let Some(result) = self.current {
+            return Ok(result);
+        }
+        let prediction = self.session.classify(frame)?;
+        self.current_posteriors
+            .copy_from_slice(prediction.posteriors);
+        let result = (prediction.class, prediction.confidence);
+        self.current = Some(result);
+        Ok(result)
+    }
+
     fn handle(&mut self, events: SegEvents, frame: Option<&FrameView<'_>>, t: usize) -> Result<()> {
+        self.current = None;
         for event in events.iter() {
             match event {
                 SegEvent::Touchdown(touchdown) => {
@@ -962,23 +982,26 @@ impl<'m> OnlineClassifier<'m> {
                     frame: sample_frame,
                     held,
                 } => {
-                    let view = if held {
+                    let (class, confidence) = if held {
                         if !self.held_valid {
                             continue;
                         }
                         self.held_valid = false;
                         let mask = self.held_has_mask.then_some(self.held_present.as_slice());
                         let grid = self.grid.unwrap_or(Grid::new(0, 0));
-                        FrameView::new(grid, &self.held, mask)?
+                        let view = FrameView::new(grid, &self.held, mask)?;
+                        let prediction = self.session.classify(&view)?;
+                        self.posteriors.extend_from_slice(prediction.posteriors);
+                        (prediction.class, prediction.confidence)
                     } else {
-                        match frame {
-                            Some(frame) => *frame,
-                            None => continue,
-                        }
+                        let Some(frame) = frame else {
+                            continue;
+                        };
+                        let result = self.classify_current(frame)?;
+                        self.posteriors.extend_from_slice(&self.current_posteriors);
+                        result
                     };
-                    let prediction = self.session.classify(&view)?;
-                    let slot = self.posteriors.len() / self.n_classes.max(1);
-                    self.posteriors.extend_from_slice(prediction.posteriors);
+                    let slot = (self.posteriors.len() / self.n_classes.max(1)).saturating_sub(1);
                     let decision = Decision {
                         stance_id,
                         kind: DecisionKind::Single,
@@ -986,8 +1009,8 @@ impl<'m> OnlineClassifier<'m> {
                         sample_frame,
                         frame: t,
                         frames_used: 1,
-                        class: prediction.class,
-                        confidence: prediction.confidence,
+                        class,
+                        confidence,
                         slot,
                     };
                     self.stats.decisions += 1;
@@ -995,8 +1018,8 @@ impl<'m> OnlineClassifier<'m> {
                 }
                 SegEvent::FuseCurrent { .. } => {
                     if let Some(frame) = frame {
-                        let prediction = self.session.classify(frame)?;
-                        for (sum, p) in self.fusion_sum.iter_mut().zip(prediction.posteriors) {
+                        self.classify_current(frame)?;
+                        for (sum, p) in self.fusion_sum.iter_mut().zip(&self.current_posteriors) {
                             *sum += p;
                         }
                         self.fusion_frames += 1;
