@@ -6,7 +6,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
-use presrs_core::evaluation::{EvalReport, EvalSample, MeanStd, Protocol, evaluate};
+use presrs_core::classifier::ClassifierKind;
+use presrs_core::evaluation::{
+    ComparisonRow, EvalReport, EvalSample, MeanStd, Protocol, compare, evaluate,
+};
+use presrs_core::features::FeatureConfig;
 use presrs_core::pipeline::TrainConfig;
 use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, train};
 use presrs_core::split::{ValidationSize, stratified_split};
@@ -16,7 +20,7 @@ use presrs_io::atomic::write_atomic;
 use presrs_sim::{DatasetSpec, SimConfig, TrialOutput, simulate_dataset};
 use serde::Serialize;
 
-use super::common::{progress_bar, spinner};
+use super::common::{CANDIDATE_FEATURES, progress_bar, spinner};
 
 /// The paper's Table II: accuracy per tested gait when trained on G2.
 const PAPER_TABLE2: [(&str, f64); 4] = [
@@ -52,6 +56,9 @@ pub struct ReproduceArgs {
     /// Extra load of the load-independence test, as a fraction of the nominal body mass.
     #[arg(long, default_value_t = 0.3)]
     pub extra_load: f64,
+    /// Skip the comparison of every feature family x classifier (same draws as Table II).
+    #[arg(long)]
+    pub no_comparison: bool,
 }
 
 /// Load independence: a model trained at the nominal load tested on images recorded at a higher load,
@@ -65,6 +72,49 @@ struct LoadCheck {
     accuracy_unscaled: MeanStd,
     /// Accuracy after multiplying every test image by nominal / test load.
     accuracy_scaled: MeanStd,
+    /// Accuracy of a model trained with `--normalise-load` (each image divided by its total load) on the
+    /// heavier robot's images as recorded: no knowledge of the load.
+    accuracy_normalised: MeanStd,
+}
+
+/// One feature x classifier combination of the comparison (trained on G2, 20 per terrain, 7 validating).
+#[derive(Debug, Serialize)]
+struct ComparisonSummary {
+    features: String,
+    classifier: String,
+    /// Over every tested image (mean and spread over repeats); `None` when it could not be trained.
+    overall: Option<MeanStd>,
+    per_gait: BTreeMap<String, MeanStd>,
+    /// Training time of one model, ms.
+    train_ms: MeanStd,
+    median_classify_ns: u64,
+    error: Option<String>,
+}
+
+impl ComparisonSummary {
+    fn of(row: &ComparisonRow) -> Self {
+        let (overall, per_gait, median_classify_ns, error) = match &row.report {
+            Ok(report) => (
+                Some(report.overall),
+                report.per_condition.clone(),
+                report.median_classify_ns,
+                None,
+            ),
+            Err(err) => (None, BTreeMap::new(), 0, Some(err.clone())),
+        };
+        Self {
+            features: row.features.clone(),
+            classifier: row.classifier.clone(),
+            overall,
+            per_gait,
+            train_ms: MeanStd {
+                mean: 1e3 * row.train_seconds.mean,
+                std: 1e3 * row.train_seconds.std,
+            },
+            median_classify_ns,
+            error,
+        }
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -98,6 +148,8 @@ struct Results {
     segmentation: SegmentationCheck,
     /// `None` when the heavier hopper could not be simulated (the reason is printed).
     load_independence: Option<LoadCheck>,
+    /// Every feature family x classifier with Table II's protocol and draws (empty with --no-comparison).
+    comparison: Vec<ComparisonSummary>,
     /// Full reports of every training gait.
     evaluations: BTreeMap<String, EvalReport>,
     timings_s: BTreeMap<String, f64>,
@@ -284,12 +336,63 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
         writeln!(
             out,
-            "  as recorded        {:5.1} % +- {:.1}\n  scaled by load     {:5.1} % +- {:.1}",
+            "  as recorded        {:5.1} % +- {:.1}\n  scaled by load     {:5.1} % +- {:.1}  (the paper: \
+             the load is known)\n  normalised         {:5.1} % +- {:.1}  (--normalise-load: trained and \
+             tested on images divided by their total, the load unknown)",
             100.0 * load_check.accuracy_unscaled.mean,
             100.0 * load_check.accuracy_unscaled.std,
             100.0 * load_check.accuracy_scaled.mean,
-            100.0 * load_check.accuracy_scaled.std
+            100.0 * load_check.accuracy_scaled.std,
+            100.0 * load_check.accuracy_normalised.mean,
+            100.0 * load_check.accuracy_normalised.std
         )?;
+    }
+    out.flush()?;
+
+    // 6. Other methods: every feature family x classifier with Table II's protocol and draws.
+    let mut comparison = Vec::new();
+    if !args.no_comparison {
+        let compare_start = Instant::now();
+        let mut configs = Vec::new();
+        for kinds in CANDIDATE_FEATURES {
+            for kind in ClassifierKind::ALL {
+                configs.push(
+                    TrainConfig {
+                        features: FeatureConfig::combined(kinds),
+                        classifier: kind.default_config(),
+                        ..TrainConfig::default()
+                    }
+                    .check()?,
+                );
+            }
+        }
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".to_owned()),
+            per_class: Some(20),
+            validation: ValidationSize::Count(7),
+        };
+        let bar = progress_bar((configs.len() * args.repeats) as u64, "comparing");
+        let rows = compare(
+            &eval_samples,
+            &protocol,
+            &configs,
+            args.repeats,
+            args.seed,
+            &|| bar.inc(1),
+        )
+        .context("the comparison of the other methods failed")?;
+        bar.finish_and_clear();
+        timings.insert(
+            "comparison".to_owned(),
+            compare_start.elapsed().as_secs_f64(),
+        );
+        writeln!(
+            out,
+            "\nOther methods (trained on G2, 20 images per terrain, the same draws as Table II; the paper's \
+             is fft1d + pwe)"
+        )?;
+        super::eval::print_comparison(&rows, out)?;
+        comparison = rows.iter().map(ComparisonSummary::of).collect();
     }
     timings.insert("total".to_owned(), started.elapsed().as_secs_f64());
 
@@ -312,6 +415,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         images_per_gait,
         segmentation,
         load_independence: load_check,
+        comparison,
         evaluations,
         timings_s: timings,
     };
@@ -383,7 +487,11 @@ fn load_independence(
         })
         .collect();
     let labels: Vec<&str> = pool.iter().map(|s| s.terrain.as_str()).collect();
-    let (mut unscaled_acc, mut scaled_acc) = (Vec::new(), Vec::new());
+    let mut normalised_config = config.config().clone();
+    normalised_config.preprocess.normalise_load = true;
+    let normalised_config = normalised_config.check()?;
+    let (mut unscaled_acc, mut scaled_acc, mut normalised_acc) =
+        (Vec::new(), Vec::new(), Vec::new());
     for repeat in 0..repeats {
         let split = stratified_split(
             &labels,
@@ -397,9 +505,12 @@ fn load_independence(
                 .map(|&i| LabeledImage::new(pool[i].frame.view(), labels[i]))
                 .collect()
         };
-        let model = train(&images(&split.train), &images(&split.validation), config)?;
+        let (train_images, validation_images) = (images(&split.train), images(&split.validation));
+        let model = train(&train_images, &validation_images, config)?;
+        let normalised = train(&train_images, &validation_images, &normalised_config)?;
         let mut session = model.session();
-        let (mut right_raw, mut right_scaled) = (0usize, 0usize);
+        let mut normalised_session = normalised.session();
+        let (mut right_raw, mut right_scaled, mut right_normalised) = (0usize, 0usize, 0usize);
         for (sample, scaled_frame) in heavy.iter().zip(&scaled) {
             if session.classify(&sample.frame.view())?.label == sample.terrain {
                 right_raw += 1;
@@ -407,10 +518,14 @@ fn load_independence(
             if session.classify(&scaled_frame.view())?.label == sample.terrain {
                 right_scaled += 1;
             }
+            if normalised_session.classify(&sample.frame.view())?.label == sample.terrain {
+                right_normalised += 1;
+            }
         }
         let n = heavy.len().max(1) as f64;
         unscaled_acc.push(right_raw as f64 / n);
         scaled_acc.push(right_scaled as f64 / n);
+        normalised_acc.push(right_normalised as f64 / n);
     }
     Ok(LoadCheck {
         nominal_load_kg: nominal_kg,
@@ -418,6 +533,7 @@ fn load_independence(
         test_images: heavy.len(),
         accuracy_unscaled: MeanStd::of(&unscaled_acc),
         accuracy_scaled: MeanStd::of(&scaled_acc),
+        accuracy_normalised: MeanStd::of(&normalised_acc),
     })
 }
 
@@ -526,15 +642,22 @@ fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io
         writeln!(
             w,
             "\n## Load independence\n\nTrained on G2 at {:.2} kg; tested on every gait at {:.2} kg ({} images): \
-         {:.1} % ± {:.1} as recorded, {:.1} % ± {:.1} scaled by the load ratio.",
+         {:.1} % ± {:.1} as recorded, {:.1} % ± {:.1} scaled by the load ratio (the load known), {:.1} % ± \
+         {:.1} with `--normalise-load` (trained and tested on images divided by their total load; the load \
+         unknown).",
             l.nominal_load_kg,
             l.test_load_kg,
             l.test_images,
             100.0 * l.accuracy_unscaled.mean,
             100.0 * l.accuracy_unscaled.std,
             100.0 * l.accuracy_scaled.mean,
-            100.0 * l.accuracy_scaled.std
+            100.0 * l.accuracy_scaled.std,
+            100.0 * l.accuracy_normalised.mean,
+            100.0 * l.accuracy_normalised.std
         )?;
+    }
+    if !results.comparison.is_empty() {
+        write_comparison_markdown(&results.comparison, w)?;
     }
     let s = &results.segmentation;
     writeln!(
@@ -543,4 +666,57 @@ fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io
          with the same mid-stance frame.",
         s.matched_within_one_frame, s.true_hops, s.found_stances, s.same_mid_frame
     )
+}
+
+/// The comparison as a Markdown table: accuracy per tested gait and overall, training and classification
+/// time.
+fn write_comparison_markdown(rows: &[ComparisonSummary], w: &mut dyn Write) -> std::io::Result<()> {
+    let mut gaits: Vec<&String> = rows.iter().flat_map(|r| r.per_gait.keys()).collect();
+    gaits.sort();
+    gaits.dedup();
+    writeln!(
+        w,
+        "\n## Other methods\n\nEvery feature family × classifier, trained on G2 (20 images per terrain, 7 of \
+         them validating), tested on every other image, with the same draws as Table II (mean ± std over \
+         the repeats). The paper's method is fft1d + pwe.\n"
+    )?;
+    write!(w, "| features | classifier |")?;
+    for gait in &gaits {
+        write!(w, " {gait} |")?;
+    }
+    writeln!(w, " overall | train ms | classify µs |")?;
+    writeln!(w, "|{}", " --- |".repeat(gaits.len() + 5))?;
+    let cell = |m: &MeanStd| format!("{:.1} ± {:.1}", 100.0 * m.mean, 100.0 * m.std);
+    for row in rows {
+        write!(w, "| {} | {} |", row.features, row.classifier)?;
+        match (&row.overall, &row.error) {
+            (Some(overall), _) => {
+                for gait in &gaits {
+                    write!(
+                        w,
+                        " {} |",
+                        row.per_gait.get(*gait).map_or_else(|| "-".to_owned(), cell)
+                    )?;
+                }
+                writeln!(
+                    w,
+                    " {} | {:.1} | {:.1} |",
+                    cell(overall),
+                    row.train_ms.mean,
+                    row.median_classify_ns as f64 / 1e3
+                )?;
+            }
+            (None, error) => {
+                for _ in &gaits {
+                    write!(w, " - |")?;
+                }
+                writeln!(
+                    w,
+                    " failed: {} | | |",
+                    error.as_deref().unwrap_or("unknown error")
+                )?;
+            }
+        }
+    }
+    Ok(())
 }
