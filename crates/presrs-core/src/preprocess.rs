@@ -193,7 +193,8 @@ pub fn fill_from_neighbours(
             largest_change = largest_change.max((new - values[i]).abs());
             values[i] = new;
         }
-        if !(largest_change > TOLERANCE * scale) {
+        // settled (or non-finite values, which later stages reject)
+        if largest_change <= TOLERANCE * scale || largest_change.is_nan() {
             break;
         }
     }
