@@ -158,3 +158,140 @@ fn the_gait_table_recommends_the_fastest_gait_that_never_fell() {
     }
     assert!(table.format().contains("*"));
 }
+
+/// Issue 7, misclassification on the track: the cause is the hopper's dynamics, not the renderer or the
+/// online frame choice. The data set's stances are recorded in steady state (40 warm-up hops on the same
+/// terrain); the paper's raw-count features separate the simulated terrains mostly by the load level
+/// (G3 mid-stance totals: wood ~118k, carpet ~116k, clay ~90k, grass ~168k counts), which is a property of
+/// the steady hopping on that ground. After a terrain change the hopper needs several hops to settle, and
+/// until then its load is the old terrain's: the first stances on clay after wood look like wood. Once
+/// settled, track stances are classified as the data set's are. The online sample frame is within one
+/// frame of the offline mid-stance frame and both give the same answers.
+#[test]
+fn track_stances_after_a_terrain_change_look_like_the_old_terrain_until_the_dynamics_settle() {
+    use presrs_core::FrameView;
+    use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
+    use presrs_core::pipeline::{LabeledImage, TrainConfig, train};
+    use presrs_core::stance::{ValidSegmentParams, segment};
+    use presrs_sim::DatasetSpec;
+    let sim = Simulator::new(SimConfig::default(), 1, Vec::new()).unwrap();
+    let mut spec = DatasetSpec::paper(1);
+    spec.hops_per_gait = Some(12);
+    spec.gaits = names(&["G3"]);
+    spec.terrains = names(&["wood", "clay"]);
+    let trials = sim
+        .for_each_trial(&spec, Ok::<_, presrs_sim::SimError>)
+        .unwrap();
+    let segs: Vec<_> = trials
+        .iter()
+        .map(|t| {
+            segment(
+                &t.recording.total_per_frame(),
+                &ValidSegmentParams::default(),
+            )
+            .unwrap()
+        })
+        .collect();
+    let profile = OnlineProfile::learn(&segs);
+    let grid = trials[0].recording.grid();
+    let mut images = Vec::new();
+    for t in &trials {
+        for h in &t.hops {
+            if let Some(mid) = h.mid_stance_frame {
+                images.push((
+                    t.plan.terrain.clone(),
+                    t.recording.frame(mid).unwrap().values().to_vec(),
+                ));
+            }
+        }
+    }
+    let (mut tr, mut va) = (Vec::new(), Vec::new());
+    for (i, (label, values)) in images.iter().enumerate() {
+        let image = LabeledImage::new(FrameView::new(grid, values, None).unwrap(), label);
+        if i % 3 == 0 {
+            va.push(image)
+        } else {
+            tr.push(image)
+        }
+    }
+    let model = train(&tr, &va, &TrainConfig::default().check().unwrap()).unwrap();
+    let mut online = OnlineClassifier::new(
+        &model,
+        &ValidSegmentParams::default(),
+        &profile.params,
+        profile.calibration,
+    )
+    .unwrap();
+    let mut offline_session = model.session();
+    let mut per_hop = Vec::new();
+    let track = parse_track("wood:2.5,clay:4").unwrap();
+    let params = TrackParams::new(1, "G3");
+    let run = run_track(&sim, &track, &params, |view| {
+        let mut step = PolicyStep::default();
+        let mut sample = None;
+        let before = online.stats().frames as usize;
+        for i in 0..view.frame_count() {
+            let frame = FrameView::new(view.grid, view.frame(i).unwrap(), None).unwrap();
+            for event in online.push(&frame).unwrap().events {
+                if let OnlineEvent::Decision(d) = event {
+                    step.terrain = Some(model.class_names()[d.class].clone());
+                    sample = Some(d.sample_frame - before);
+                }
+            }
+        }
+        // The offline mid-stance frame of the hop's loaded frames.
+        let loaded: Vec<usize> = (0..view.frame_count())
+            .filter(|&i| view.frame(i).unwrap().iter().sum::<f64>() > 2000.0)
+            .collect();
+        let mid = loaded
+            .first()
+            .zip(loaded.last())
+            .map(|(a, b)| a + (b - a) / 2);
+        let offline = mid.map(|m| {
+            let frame = FrameView::new(view.grid, view.frame(m).unwrap(), None).unwrap();
+            offline_session.classify(&frame).unwrap().label.to_owned()
+        });
+        per_hop.push((sample, mid, offline));
+        Ok(step)
+    })
+    .unwrap();
+    assert!(run.finished && run.falls == 0, "{run:?}");
+    let mut first_clay = None;
+    for (hop, (h, (sample, mid, offline))) in run.hops.iter().zip(&per_hop).enumerate() {
+        let (sample, mid) = (sample.unwrap(), mid.unwrap());
+        assert!(
+            sample.abs_diff(mid) <= 1,
+            "hop {hop}: online frame {sample}, offline mid {mid}"
+        );
+        // The online and offline frames agree on the class except, rarely, at the switching point.
+        if h.terrain == "wood" {
+            assert_eq!(h.believed.as_deref(), Some("wood"), "hop {hop}");
+            assert_eq!(offline.as_deref(), Some("wood"), "hop {hop}");
+        } else {
+            first_clay.get_or_insert(hop);
+        }
+    }
+    let first_clay = first_clay.unwrap();
+    let clay = &run.hops[first_clay..];
+    assert!(clay.len() >= 10, "{} hops on clay", clay.len());
+    // The lag: the first stance on clay is called wood (nothing can know it in advance), and so are a few
+    // more while the hopper slows down to its clay gait...
+    assert_eq!(clay[0].believed.as_deref(), Some("wood"));
+    let wrong = clay
+        .iter()
+        .filter(|h| h.believed.as_deref() != Some("clay"))
+        .count();
+    assert!(
+        (1..=8).contains(&wrong),
+        "{wrong} of {} clay stances wrong",
+        clay.len()
+    );
+    // ...and once settled every stance is right, as on the data set.
+    assert!(
+        clay[clay.len() - 4..]
+            .iter()
+            .all(|h| h.believed.as_deref() == Some("clay")),
+        "{clay:?}"
+    );
+    assert_eq!(run.misclassified, wrong);
+}
