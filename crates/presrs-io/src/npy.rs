@@ -33,10 +33,15 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
     }
     // npyz multiplies the shape without checking for overflow (a panic in debug builds): reject a
     // claimed size that does not fit before handing it the header.
-    if let Some(header) = header_text(bytes) {
-        check_header_sizes(&header)
-            .map_err(|why| IoError::format(file, format!("invalid .npy header: {why}")))?;
-    }
+    // npyz also allocates whatever header length the file claims: check it is all there first.
+    let header = header_text(bytes).ok_or_else(|| {
+        IoError::format(
+            file,
+            "invalid .npy header: truncated (the file ends before the header length it declares)",
+        )
+    })?;
+    check_header_sizes(&header)
+        .map_err(|why| IoError::format(file, format!("invalid .npy header: {why}")))?;
     let npy = NpyFile::new(bytes)
         .map_err(|err| IoError::format(file, format!("invalid .npy header: {err}")))?;
     let shape: Vec<u64> = npy.shape().to_vec();

@@ -52,6 +52,20 @@ pub fn parse_png(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
     let size = reader
         .output_buffer_size()
         .ok_or_else(|| IoError::format(file, "the image is too large"))?;
+    // The header can claim any size: deflate expands at most 1032:1, so a real image's pixels fit in
+    // about 1032 times the file's size. Check before allocating (and cap at 1 GiB in any case).
+    let info = reader.info();
+    if size > bytes.len().saturating_mul(1032).saturating_add(1 << 16) || size > 1 << 30 {
+        return Err(IoError::format(
+            file,
+            format!(
+                "the header claims {} x {} pixels, more than the file's {} bytes of data can hold",
+                info.width,
+                info.height,
+                bytes.len()
+            ),
+        ));
+    }
     let mut buf = vec![0u8; size];
     let out = reader
         .next_frame(&mut buf)

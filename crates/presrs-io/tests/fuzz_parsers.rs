@@ -496,6 +496,55 @@ fn regressions_stay_fixed() {
     eprintln!("replayed {replayed} regression inputs");
 }
 
+/// CRC-32 (IEEE), as PNG chunks use.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// The inputs libFuzzer found allocating gigabytes (`-malloc_limit_mb`) are now errors before any
+/// allocation.
+#[test]
+fn claimed_sizes_are_checked_before_allocating() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
+    let read = |p: &str| std::fs::read(root.join(p)).unwrap();
+    let npy = [
+        presrs_io::npy::NPY_MAGIC,
+        &read("parse_npy/v2-header-length-4gb"),
+    ]
+    .concat();
+    let err = presrs_io::npy::parse_npy(&npy, "h.npy")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("h.npy") && err.contains("truncated"), "{err}");
+    // libFuzzer builds of the png crate skip CRC checks; fix the IHDR CRC so that this build gets as
+    // far as the size check.
+    let mut png = [
+        presrs_io::png::PNG_MAGIC,
+        &read("parse_png/claims-4x1694498819-pixels"),
+    ]
+    .concat();
+    let crc = crc32(&png[12..29]).to_be_bytes();
+    png[29..33].copy_from_slice(&crc);
+    let err = presrs_io::png::parse_png(&png, "h.png")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("h.png") && err.contains("4 x 1694498819"),
+        "{err}"
+    );
+}
+
 /// Writes the seed inputs as libFuzzer corpora when `PRESRS_FUZZ_SEEDS` names a folder (used to start
 /// `cargo fuzz run`; see `fuzz/README.md`). Does nothing otherwise.
 #[test]
