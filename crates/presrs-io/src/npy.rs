@@ -185,6 +185,9 @@ fn header_text(bytes: &[u8]) -> Option<String> {
     Some(String::from_utf8_lossy(text).into_owned())
 }
 
+/// Deepest nesting of brackets accepted in a header.
+const MAX_HEADER_NESTING: usize = 8;
+
 /// Checks that the integers of every tuple or list in a header (the shape, and subarray shapes in a
 /// structured dtype) each fit in 64 bits and so does their product.
 fn check_header_sizes(header: &str) -> Result<(), String> {
@@ -210,6 +213,13 @@ fn check_header_sizes(header: &str) -> Result<(), String> {
             '(' | '[' => {
                 token.clear();
                 products.push(1);
+                // npyz's header parser backtracks exponentially in the nesting depth (a fuzzer found
+                // a header of 120 `[` that takes minutes); real headers nest 4 deep at most.
+                if products.len() > MAX_HEADER_NESTING {
+                    return Err(format!(
+                        "brackets nested more than {MAX_HEADER_NESTING} deep"
+                    ));
+                }
             }
             ')' | ']' => {
                 flush(&mut token, &mut products)?;
