@@ -185,7 +185,7 @@ fn header_text(bytes: &[u8]) -> Option<String> {
     Some(String::from_utf8_lossy(text).into_owned())
 }
 
-/// Deepest nesting of brackets accepted in a header.
+/// Deepest nesting of brackets (`(`, `[`, `{`) accepted in a header.
 const MAX_HEADER_NESTING: usize = 8;
 
 /// Checks that the integers of every tuple or list in a header (the shape, and subarray shapes in a
@@ -210,18 +210,18 @@ fn check_header_sizes(header: &str) -> Result<(), String> {
     };
     for ch in header.chars() {
         match ch {
-            '(' | '[' => {
+            '(' | '[' | '{' => {
                 token.clear();
                 products.push(1);
                 // npyz's header parser backtracks exponentially in the nesting depth (a fuzzer found
-                // a header of 120 `[` that takes minutes); real headers nest 4 deep at most.
+                // headers of 120 `[` or `{` that take minutes); real headers nest 4 deep at most.
                 if products.len() > MAX_HEADER_NESTING {
                     return Err(format!(
                         "brackets nested more than {MAX_HEADER_NESTING} deep"
                     ));
                 }
             }
-            ')' | ']' => {
+            ')' | ']' | '}' => {
                 flush(&mut token, &mut products)?;
                 products.pop();
             }
