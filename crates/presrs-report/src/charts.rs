@@ -17,6 +17,25 @@ const TITLE: f64 = 18.0;
 const LABEL: f64 = 15.0;
 const TICK: f64 = 13.0;
 
+/// The legend of every chart: a translucent white box with a black border, in the tick font.
+fn draw_legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<()>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(font(TICK))
+        .draw()?;
+    Ok(())
+}
+
 /// Soft colour for shaded stance phases.
 const STANCE_SHADE: RGBColor = RGBColor(255, 224, 178);
 
@@ -251,13 +270,7 @@ where
         )))?;
     }
     if legend {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(font(TICK))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     Ok(())
 }
@@ -371,13 +384,7 @@ impl Figure for SpectraFigure {
                         PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3))
                     });
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(font(TICK))
-                .draw()?;
+            draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
         Ok(())
     }
@@ -571,13 +578,7 @@ impl Figure for ValidationFigure {
                     PathElement::new(vec![(x, y), (x + 18, y)], mark.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(font(TICK))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
         // Cumulative explained variance.
         let n = self.explained.len().max(1);
         let mut cumulative = Vec::with_capacity(n);
@@ -632,13 +633,7 @@ impl Figure for ValidationFigure {
                     PathElement::new(vec![(x, y), (x + 18, y)], mark.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(font(TICK))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
         Ok(())
     }
 }
@@ -986,13 +981,7 @@ impl Figure for TraceFigure {
                     .map(|s| PathElement::new(s, color.stroke_width(4))),
             )?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(font(TICK))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
 
         let (t0, t1) = finite_range(points().map(|p| p.t_s)).unwrap_or((0.0, 1.0));
         let (f0, f1) =
@@ -1048,13 +1037,7 @@ impl Figure for TraceFigure {
                     .map(|p| PathElement::new(p, color.stroke_width(2))),
             )?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(font(TICK))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     }
 }
