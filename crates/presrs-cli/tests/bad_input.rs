@@ -5,17 +5,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
+mod common;
+use common::presrs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
-
-fn presrs(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_presrs"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("the presrs binary runs")
-}
 
 /// Asserts a clean failure: exit code 1, an `error:` line mentioning every needle, no panic.
 fn assert_clean_failure(case: &str, out: &Output, needles: &[&str]) {

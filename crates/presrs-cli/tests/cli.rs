@@ -3,28 +3,14 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
+mod common;
+use common::{presrs, stderr, stdout};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
 use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
 use presrs_core::{Frame, Grid, Recording, SensorMeta};
 use rand::SeedableRng;
-
-fn presrs(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_presrs"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("the presrs binary runs")
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
 
 fn shared(name: &str) -> String {
     format!(

@@ -2,14 +2,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::process::Command;
-
-fn presrs(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_presrs"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod common;
+use common::presrs;
 
 #[test]
 fn compare_prints_every_combination_and_auto_records_its_choice() {

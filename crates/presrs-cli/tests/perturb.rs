@@ -3,20 +3,13 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
+mod common;
+use common::presrs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
 
 use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
 use presrs_core::{Recording, SensorMeta};
 use rand::SeedableRng;
-
-fn presrs(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_presrs"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("the presrs binary runs")
-}
 
 /// 72 single-frame NPY files of the four synthetic classes over three conditions, and their manifest.
 fn dataset(dir: &Path) -> PathBuf {
