@@ -1,0 +1,192 @@
+//! Steady state allocates nothing: a [`Session`] classifying frames one at a time and an
+//! [`OnlineClassifier`] fed a 100 Hz stream (after its first frame) make no heap allocation, for every
+//! feature family and classifier, with and without the preprocessing steps.
+//!
+//! The counting allocator is process-wide, so this file holds a single test: nothing else runs in this
+//! test binary while it measures.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::alloc::System;
+use std::f64::consts::PI;
+
+use presrs_core::classifier::ClassifierKind;
+use presrs_core::features::FeatureKind;
+use presrs_core::online::{Calibration, OnlineClassifier, OnlineParams};
+use presrs_core::pipeline::{
+    LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, synthetic_frame, train,
+};
+use presrs_core::preprocess::Preprocess;
+use presrs_core::stance::{ValidSegmentParams, segment};
+use presrs_core::{Frame, Grid};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
+
+#[global_allocator]
+static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
+
+fn labelled(count: usize, rng: &mut ChaCha8Rng) -> Vec<(Frame, &'static str)> {
+    (0..count)
+        .map(|i| (synthetic_frame(i % 4, rng), SYNTHETIC_CLASSES[i % 4]))
+        .collect()
+}
+
+fn images<'a>(set: &'a [(Frame, &'static str)]) -> Vec<LabeledImage<'a>> {
+    set.iter()
+        .map(|(frame, label)| LabeledImage::new(frame.view(), label))
+        .collect()
+}
+
+fn model(
+    features: FeatureKind,
+    classifier: ClassifierKind,
+    preprocess: Preprocess,
+) -> TrainedModel {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let train_set = labelled(4 * 13, &mut rng);
+    let validation_set = labelled(4 * 7, &mut rng);
+    let config = TrainConfig {
+        features: features.default_config(),
+        classifier: classifier.default_config(),
+        preprocess,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    train(&images(&train_set), &images(&validation_set), &config).unwrap()
+}
+
+/// Stances of 14 frames (a half-sine load on a synthetic print) between 20-frame flights.
+fn stream(stances: usize, rng: &mut ChaCha8Rng) -> Vec<Frame> {
+    let mut frames = Vec::new();
+    for i in 0..stances {
+        frames.extend((0..20).map(|_| Frame::zeros(Grid::new(44, 44))));
+        let print = synthetic_frame(i % 4, rng);
+        for j in 0..14 {
+            let scale = (PI * (j as f64 + 0.5) / 14.0).sin();
+            let mut frame = print.clone();
+            for v in frame.values_mut() {
+                *v = (*v * scale).round();
+            }
+            frames.push(frame);
+        }
+    }
+    frames
+}
+
+/// The detector's levels as a trained model's online profile would carry them.
+fn calibration(frames: &[Frame]) -> Calibration {
+    let totals: Vec<f64> = frames.iter().map(|f| f.view().total()).collect();
+    let segmentation = segment(&totals, &ValidSegmentParams::default()).unwrap();
+    Calibration::from_segmentations([&segmentation]).unwrap()
+}
+
+/// Allocations, reallocations and deallocations made while `work` runs.
+fn count(work: impl FnOnce()) -> (usize, usize, usize) {
+    let region = Region::new(GLOBAL);
+    work();
+    let change = region.change();
+    (
+        change.allocations,
+        change.reallocations,
+        change.deallocations,
+    )
+}
+
+#[test]
+fn steady_state_classification_does_not_allocate() {
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let frames: Vec<Frame> = (0..64).map(|i| synthetic_frame(i % 4, &mut rng)).collect();
+    let live = stream(12, &mut rng);
+    let fill = Preprocess {
+        normalise_load: true,
+        fill_absent: true,
+    };
+    let mut cases = Vec::new();
+    for classifier in ClassifierKind::ALL {
+        cases.push((FeatureKind::Fft1d, classifier, Preprocess::NONE));
+    }
+    for features in [
+        FeatureKind::Fft2d,
+        FeatureKind::Fft2dPolar,
+        FeatureKind::Glcm,
+    ] {
+        cases.push((features, ClassifierKind::Pwe, Preprocess::NONE));
+    }
+    cases.push((FeatureKind::Fft1d, ClassifierKind::Pwe, fill));
+
+    for (features, classifier, preprocess) in cases {
+        let name = format!("{features:?} + {classifier:?} ({preprocess:?})");
+        let model = model(features, classifier, preprocess);
+
+        // One image at a time through a session: the first call may size nothing more (buffers are
+        // made with the session), so every call is counted after one warm-up.
+        let mut session = model.session();
+        session.classify(&frames[0].view()).unwrap();
+        let mut correct = 0;
+        let counts = count(|| {
+            for (i, frame) in frames.iter().enumerate() {
+                let prediction = session.classify(&frame.view()).unwrap();
+                correct += usize::from(prediction.class == i % 4);
+            }
+        });
+        assert_eq!(counts, (0, 0, 0), "{name}: session allocations");
+        assert!(
+            correct > 32,
+            "{name}: only {correct}/64 right: not a real run"
+        );
+
+        // The online classifier, calibrated from training data (a model's online profile): its first
+        // frame fixes the grid and sizes the held-frame buffer; every later frame, through touchdowns,
+        // classifications and lift-offs, allocates nothing.
+        let online = OnlineParams {
+            sample_offset: 6,
+            fusion_offsets: vec![4, 5, 6, 7, 8],
+            ..OnlineParams::default()
+        };
+        let mut classifier = OnlineClassifier::new(
+            &model,
+            &ValidSegmentParams::default(),
+            &online,
+            Some(calibration(&live)),
+        )
+        .unwrap();
+        classifier.push(&live[0].view()).unwrap();
+        let mut events = 0;
+        let counts = count(|| {
+            for frame in &live[1..] {
+                events += classifier.push(&frame.view()).unwrap().events.len();
+            }
+        });
+        assert_eq!(counts, (0, 0, 0), "{name}: online allocations");
+        assert!(
+            events >= 3 * 10,
+            "{name}: only {events} events: the stream was not segmented"
+        );
+
+        // Uncalibrated, it calibrates on its warm-up frames (that allocates, once); after them, nothing.
+        let mut classifier =
+            OnlineClassifier::new(&model, &ValidSegmentParams::default(), &online, None).unwrap();
+        let warmup = online.warmup_frames + 1;
+        for frame in &live[..warmup] {
+            classifier.push(&frame.view()).unwrap();
+        }
+        assert!(
+            !classifier.segmenter().warming_up(),
+            "{name}: still warming up"
+        );
+        let mut events = 0;
+        let counts = count(|| {
+            for frame in &live[warmup..] {
+                events += classifier.push(&frame.view()).unwrap().events.len();
+            }
+        });
+        assert_eq!(
+            counts,
+            (0, 0, 0),
+            "{name}: online allocations after warm-up"
+        );
+        assert!(events > 0, "{name}: no events after warm-up");
+    }
+}
