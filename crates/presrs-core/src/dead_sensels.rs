@@ -1,17 +1,24 @@
 //! Dead-sensel detection: a sensel that never responds while its neighbours do.
 //!
 //! A present sensel is reported dead when it reads 0 in every frame of a recording and, in at least
-//! [`DeadSenselConfig::min_frames`] frames, it is *surrounded* by load: at least
-//! [`DeadSenselConfig::neighbour_fraction`] of its present 8-neighbours (and at least three of them) read
-//! more than 0. A sensel on the edge of the contact area has loaded neighbours on one side only and is not
-//! surrounded, and a sensel that is never near the load is never surrounded: neither is reported. A
-//! recording of fewer frames than `min_frames` asks every present neighbour to be loaded in every frame.
+//! [`DeadSenselConfig::min_frames`] frames, it is *surrounded* by load: every present 4-neighbour
+//! (up, down, left, right) and at least [`DeadSenselConfig::neighbour_fraction`] of its present
+//! 8-neighbours (and at least three of them) read more than 0. A sensel on the edge of the contact area
+//! has an unloaded neighbour on its outer side and is not surrounded — on the border of the array too,
+//! where it has only five neighbours — and a sensel that is never near the load is never surrounded:
+//! neither is reported. A recording of fewer frames than `min_frames` asks every present neighbour to
+//! be loaded in every frame.
 //!
-//! Only detection lives here; filling the reported sensels from their neighbours is
-//! [`crate::preprocess`]'s job (mark them absent and let it fill absent sensels).
+//! [`correct_dead_sensels`] detects and fills them (each frame, from the sensel's present, live
+//! neighbours, with [`crate::preprocess::fill_dead_sensels`]); `presrs` does so for every recording it
+//! reads from a file unless told `--keep-dead-sensels`. It corrects recordings of at least
+//! `min_frames` frames only: in one image a sensel reading 0 amid load may just be a gap in the
+//! terrain's texture, whereas a sensel silent through several frames of load is a fault.
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::Result;
+use crate::preprocess::{FillScratch, fill_dead_sensels};
 use crate::recording::Recording;
 
 /// Thresholds of [`detect_dead_sensels`].
@@ -79,10 +86,19 @@ pub fn detect_dead_sensels(recording: &Recording, config: &DeadSenselConfig) -> 
         if neighbours.len() < 3 {
             continue;
         }
+        // The present 4-neighbours: every one of them must be loaded.
+        let sides: Vec<usize> = neighbours
+            .iter()
+            .copied()
+            .filter(|&n| n / cols == r || n % cols == c)
+            .collect();
         let needed = ((fraction * neighbours.len() as f64).ceil() as usize).max(3);
         let surrounded_frames = data
             .chunks_exact(cells)
-            .filter(|frame| neighbours.iter().filter(|&&n| frame[n] > 0.0).count() >= needed)
+            .filter(|frame| {
+                sides.iter().all(|&n| frame[n] > 0.0)
+                    && neighbours.iter().filter(|&&n| frame[n] > 0.0).count() >= needed
+            })
             .count();
         if surrounded_frames >= min_frames {
             found.push(DeadSensel {
@@ -93,6 +109,47 @@ pub fn detect_dead_sensels(recording: &Recording, config: &DeadSenselConfig) -> 
         }
     }
     found
+}
+
+/// Whether [`correct_dead_sensels`] corrects a recording of `frames` frames under `config`: it needs
+/// at least `min_frames` frames (a single image is not evidence enough; see the module documentation).
+pub fn correctable(frames: usize, config: &DeadSenselConfig) -> bool {
+    frames >= config.min_frames.max(1)
+}
+
+/// Detects the dead sensels of `recording` ([`detect_dead_sensels`]) and fills them in every frame from
+/// their present, live neighbours. Returns the recording (unchanged when none is found or when it has
+/// too few frames, see [`correctable`]) and the sensels filled.
+pub fn correct_dead_sensels(
+    recording: Recording,
+    config: &DeadSenselConfig,
+) -> Result<(Recording, Vec<DeadSensel>)> {
+    if !correctable(recording.frame_count(), config) {
+        return Ok((recording, Vec::new()));
+    }
+    let dead = detect_dead_sensels(&recording, config);
+    if dead.is_empty() {
+        return Ok((recording, dead));
+    }
+    let grid = recording.grid();
+    let mut mask = vec![false; grid.len()];
+    for d in &dead {
+        mask[d.row * grid.cols + d.col] = true;
+    }
+    let mut data = recording.data().to_vec();
+    let mut scratch = FillScratch::new(grid.len());
+    for frame in data.chunks_exact_mut(grid.len()) {
+        fill_dead_sensels(frame, grid, recording.present(), &mask, &mut scratch)?;
+    }
+    let corrected = Recording::with_info(
+        grid,
+        recording.frame_period_s(),
+        data,
+        recording.present().map(<[bool]>::to_vec),
+        recording.frame_info().to_vec(),
+        recording.meta.clone(),
+    )?;
+    Ok((corrected, dead))
 }
 
 #[cfg(test)]
@@ -197,5 +254,79 @@ mod tests {
                 surrounded_frames: 1
             }]
         );
+    }
+
+    #[test]
+    fn a_contact_edge_on_the_array_border_is_not_dead() {
+        // Load over rows 0..6, columns 0..=4 + 2 r: a diagonal edge. (0, 5) is silent, on the border
+        // row, with four of its five neighbours loaded ((0, 4), (1, 4), (1, 5), (1, 6)).
+        let mut data = Vec::new();
+        for _ in 0..6 {
+            for r in 0..12 {
+                for c in 0..12 {
+                    data.push(if r < 6 && c <= 4 + 2 * r { 20.0 } else { 0.0 });
+                }
+            }
+        }
+        let rec = movie(data, 6, None);
+        assert!(detect_dead_sensels(&rec, &DeadSenselConfig::default()).is_empty());
+    }
+
+    #[test]
+    fn correction_fills_dead_sensels_from_their_neighbours_only() {
+        // A smooth load (a paraboloid) so that the neighbours' mean is close to the true value.
+        let value = |f: usize, r: usize, c: usize| {
+            let d2 = (r as f64 - 5.0).powi(2) + (c as f64 - 5.0).powi(2);
+            if f >= 2 && d2 <= 12.25 {
+                100.0 - 4.0 * d2
+            } else {
+                0.0
+            }
+        };
+        let mut data = Vec::new();
+        for f in 0..8 {
+            for r in 0..12 {
+                for c in 0..12 {
+                    data.push(value(f, r, c));
+                }
+            }
+        }
+        let clean = data.clone();
+        kill(&mut data, 4, 5); // inside: dead
+        kill(&mut data, 5, 8); // on the rim (5, 8): 100 - 36 = 64 in the clean image, not dead
+        let mut present = vec![true; 144];
+        present[11 * 12 + 11] = false;
+        let rec = movie(data.clone(), 8, Some(present));
+        let (fixed, dead) = correct_dead_sensels(rec, &DeadSenselConfig::default()).unwrap();
+        assert_eq!(
+            dead.iter().map(|d| (d.row, d.col)).collect::<Vec<_>>(),
+            [(4, 5)]
+        );
+        for f in 0..8 {
+            let frame = fixed.frame(f).unwrap();
+            let truth = clean[f * 144 + 4 * 12 + 5];
+            // The mean of the 4-neighbours of a paraboloid: the true value plus its curvature (4).
+            assert!((frame.get(4, 5) - truth).abs() <= 4.0 + 1e-9, "{f}");
+            assert_eq!(frame.get(5, 8), 0.0, "the rim sensel is left alone");
+            for i in (0..144).filter(|&i| i != 4 * 12 + 5) {
+                assert_eq!(frame.values()[i], data[f * 144 + i], "{f} {i}");
+            }
+        }
+        assert_eq!(
+            fixed.present(),
+            Some(
+                &{
+                    let mut p = vec![true; 144];
+                    p[143] = false;
+                    p
+                }[..]
+            )
+        );
+        // A single image is not corrected (a gap in the texture looks the same).
+        let one = movie(data[4 * 144..5 * 144].to_vec(), 1, None);
+        assert!(!detect_dead_sensels(&one, &DeadSenselConfig::default()).is_empty());
+        let (same, none) = correct_dead_sensels(one.clone(), &DeadSenselConfig::default()).unwrap();
+        assert!(none.is_empty());
+        assert_eq!(same.data(), one.data());
     }
 }

@@ -8,7 +8,11 @@
 //!   by the robot's load gives the same features without knowing the load (the paper scales by the known
 //!   load instead).
 //!
-//! Both run in caller-owned buffers ([`FillScratch`]): no allocation per image.
+//! - **fill dead sensels** ([`fill_dead_sensels`]): the same filling for sensels found dead
+//!   ([`crate::dead_sensels`]), leaving absent sensels alone; applied when recordings are read from
+//!   files, before any frame is taken from them.
+//!
+//! All run in caller-owned buffers ([`FillScratch`]): no allocation per image.
 
 use serde::{Deserialize, Serialize};
 
@@ -111,6 +115,56 @@ pub fn fill_from_neighbours(
             });
         }
     }
+    let all = |_: usize| true;
+    let hole = |i: usize| !present.is_none_or(|p| p[i]) || dead.is_some_and(|d| d[i]);
+    fill_holes(values, grid, &all, &hole, scratch);
+    Ok(())
+}
+
+/// Fills the present sensels of `values` flagged `dead[i] == true` from their present, live
+/// neighbours (like [`fill_from_neighbours`]), leaving every other sensel — absent ones included —
+/// as it is. Absent sensels are neither filled nor used: a dead sensel next to the sensor's outline
+/// takes the mean of its neighbours inside. A dead sensel without any live sensel reachable through
+/// present sensels keeps its value. Does not allocate once `scratch` has grown to the grid's size.
+pub fn fill_dead_sensels(
+    values: &mut [f64],
+    grid: Grid,
+    present: Option<&[bool]>,
+    dead: &[bool],
+    scratch: &mut FillScratch,
+) -> Result<()> {
+    let len = grid.len();
+    for (what, got) in [
+        ("image", Some(values.len())),
+        ("present mask", present.map(<[bool]>::len)),
+        ("dead mask", Some(dead.len())),
+    ] {
+        if let Some(got) = got
+            && got != len
+        {
+            return Err(CoreError::Shape {
+                what,
+                expected: format!("{len} values ({grid})"),
+                got: got.to_string(),
+            });
+        }
+    }
+    let exists = |i: usize| present.is_none_or(|p| p[i]);
+    let hole = |i: usize| exists(i) && dead[i];
+    fill_holes(values, grid, &exists, &hole, scratch);
+    Ok(())
+}
+
+/// The filling shared by [`fill_from_neighbours`] and [`fill_dead_sensels`]: sensels for which
+/// `hole` holds are filled from the neighbours for which `exists` holds (holes are a subset of those).
+fn fill_holes(
+    values: &mut [f64],
+    grid: Grid,
+    exists: &dyn Fn(usize) -> bool,
+    hole: &dyn Fn(usize) -> bool,
+    scratch: &mut FillScratch,
+) {
+    let len = grid.len();
     let FillScratch {
         known,
         holes,
@@ -118,19 +172,24 @@ pub fn fill_from_neighbours(
     } = scratch;
     known.clear();
     holes.clear();
+    let mut any_known = false;
     for i in 0..len {
-        let here = present.is_none_or(|p| p[i]) && !dead.is_some_and(|d| d[i]);
+        let is_hole = hole(i);
+        let here = !is_hole && exists(i);
+        any_known |= here;
         known.push(here);
-        if !here {
+        if is_hole {
             holes.push(i);
         }
     }
     if holes.is_empty() {
-        return Ok(());
+        return;
     }
-    if holes.len() == len {
-        values.fill(0.0);
-        return Ok(());
+    if !any_known {
+        for &i in holes.iter() {
+            values[i] = 0.0;
+        }
+        return;
     }
     let (rows, cols) = (grid.rows, grid.cols);
     // Sum and count of the neighbours of `i` for which `use_it` holds.
@@ -172,7 +231,7 @@ pub fn fill_from_neighbours(
             }
         }
         if seeded.is_empty() {
-            // unreachable: some sensel is known and the grid is connected
+            // holes cut off from every known sensel (only possible when absent sensels isolate them)
             break;
         }
         for &i in seeded.iter() {
@@ -180,7 +239,7 @@ pub fn fill_from_neighbours(
         }
         remaining -= seeded.len();
     }
-    // Relax: each hole becomes the mean of all its neighbours (Gauss-Seidel), until it settles.
+    // Relax: each hole becomes the mean of all its existing neighbours (Gauss-Seidel), until it settles.
     let scale = values
         .iter()
         .fold(0.0f64, |m, v| m.max(v.abs()))
@@ -188,7 +247,10 @@ pub fn fill_from_neighbours(
     for _ in 0..MAX_SWEEPS {
         let mut largest_change = 0.0f64;
         for &i in holes.iter() {
-            let (sum, count) = neighbour_mean(values, i, &|_| true);
+            let (sum, count) = neighbour_mean(values, i, exists);
+            if count == 0 {
+                continue;
+            }
             let new = sum / count as f64;
             largest_change = largest_change.max((new - values[i]).abs());
             values[i] = new;
@@ -198,7 +260,6 @@ pub fn fill_from_neighbours(
             break;
         }
     }
-    Ok(())
 }
 
 /// Divides `values` by their sum (the image's total load) and returns that total. An image whose total
