@@ -111,23 +111,65 @@ fn eval_reports_accuracy_under_each_perturbation() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("between 0 and 1"));
 }
 
-#[test]
-fn inspect_reports_dead_sensels() {
-    // The real F-Scan insole export: three sensels stay at 0 while the load covers them.
-    let real = format!(
+/// The real F-Scan insole export (60 x 21, 205 frames, absent sensels outside the insole).
+fn real_file() -> PathBuf {
+    PathBuf::from(format!(
         "{}/../../../shared/data/tekscan/FrasP01L.asf",
         env!("CARGO_MANIFEST_DIR")
-    );
-    let out = presrs(&["inspect", "--json", &real]);
-    assert_eq!(out.status.code(), Some(0));
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let dead: Vec<(u64, u64)> = json["dead_sensels"]
+    ))
+}
+
+fn dead_of(json: &serde_json::Value) -> Vec<(u64, u64)> {
+    json["dead_sensels"]
         .as_array()
         .unwrap()
         .iter()
         .map(|d| (d["row"].as_u64().unwrap(), d["col"].as_u64().unwrap()))
-        .collect();
-    assert_eq!(dead, [(16, 9), (17, 7), (37, 1)]);
+        .collect()
+}
+
+#[test]
+fn inspect_reports_dead_sensels() {
+    // The real file has none: its silent sensels sit on the insole's outline or in the arch, where
+    // their neighbours read zero too in all but a frame or two.
+    let real = real_file();
+    let out = presrs(&["inspect", "--json", real.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(dead_of(&json), []);
+
+    // The same file with its most loaded sensel killed in every frame: found, and filled on reading.
+    let rec = presrs_io::read_recording(&real).unwrap();
+    let grid = rec.grid();
+    let (r, c) = most_loaded(&rec);
+    let mut data = rec.data().to_vec();
+    for frame in data.chunks_exact_mut(grid.len()) {
+        frame[r * grid.cols + c] = 0.0;
+    }
+    let killed = Recording::with_info(
+        grid,
+        rec.frame_period_s(),
+        data,
+        rec.present().map(<[bool]>::to_vec),
+        rec.frame_info().to_vec(),
+        rec.meta.clone(),
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("killed.asf");
+    presrs_io::tekscan::write_tekscan_file(&killed, &path).unwrap();
+    let out = presrs(&["inspect", "--json", path.to_str().unwrap()]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(dead_of(&json), [(r as u64, c as u64)]);
+    assert_eq!(json["dead_sensels_filled"], true);
+    let out = presrs(&[
+        "inspect",
+        "--json",
+        "--keep-dead-sensels",
+        path.to_str().unwrap(),
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["dead_sensels_filled"], false);
 
     // A synthetic movie with one sensel killed inside the foot print, in the table form.
     let dir = tempfile::tempdir().unwrap();
@@ -157,9 +199,145 @@ fn inspect_reports_dead_sensels() {
         )),
         "{stdout}"
     );
+    assert!(stdout.contains("filled from their neighbours"), "{stdout}");
+    // One image of it: reported, but not filled.
+    let single = dir.path().join("single.asf");
+    let rec = presrs_io::read_recording(&path).unwrap();
+    let one = Recording::from_frame(rec.frame(5).unwrap().to_frame(), SensorMeta::default());
+    presrs_io::tekscan::write_tekscan_file(&one, &single).unwrap();
+    let out = presrs(&["inspect", single.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("not filled: 1 frame(s)"), "{stdout}");
     let clean = dir.path().join("clean.asf");
     let rec = Recording::from_frame(print, SensorMeta::default());
     presrs_io::tekscan::write_tekscan_file(&rec, &clean).unwrap();
     let out = presrs(&["inspect", clean.to_str().unwrap()]);
     assert!(!String::from_utf8_lossy(&out.stdout).contains("dead sensels"));
+}
+
+/// The present sensel with the largest total load over a recording (row, column).
+fn most_loaded(rec: &Recording) -> (usize, usize) {
+    let grid = rec.grid();
+    let mut sums = vec![0.0; grid.len()];
+    for frame in rec.data().chunks_exact(grid.len()) {
+        for (s, v) in sums.iter_mut().zip(frame) {
+            *s += v;
+        }
+    }
+    let i = (0..grid.len())
+        .max_by(|&a, &b| sums[a].total_cmp(&sums[b]))
+        .unwrap();
+    (i / grid.cols, i % grid.cols)
+}
+
+/// The feature vector `presrs features` prints for frame `frame` of `file`, and its stderr.
+fn features_of(file: &Path, frame: usize, extra: &[&str]) -> (Vec<f64>, String) {
+    let frame = frame.to_string();
+    let mut args = vec![
+        "features",
+        file.to_str().unwrap(),
+        "--frame",
+        &frame,
+        "--features",
+        "fft1d",
+    ];
+    args.extend_from_slice(extra);
+    let out = presrs(&args);
+    assert_eq!(out.status.code(), Some(0), "{}", common::stderr(&out));
+    let values = common::stdout(&out)
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .filter_map(|v| v.trim().parse::<f64>().ok())
+        .collect();
+    (values, common::stderr(&out))
+}
+
+#[test]
+fn a_dead_sensel_in_a_movie_is_filled_before_classifying() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = dir.path().join("model.json");
+    let out = presrs(&[
+        "train",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+        "--features",
+        "fft1d",
+        "--classifier",
+        "pwe",
+        "--validation",
+        "3",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", common::stderr(&out));
+    // Single images: nothing to fill, no note; the model records that correction was on.
+    assert!(!common::stderr(&out).contains("dead sensel"));
+    let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&model).unwrap()).unwrap();
+    assert_eq!(
+        saved["provenance"]["dead_sensels"],
+        serde_json::json!({"corrected": true, "sensels": 0, "recordings": 0})
+    );
+
+    // A 6-frame movie of one "wood" print, and the same with its most loaded sensel dead.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(99);
+    let print = synthetic_frame(3, &mut rng);
+    let grid = print.grid();
+    let movie = |dead: Option<(usize, usize)>| {
+        let mut data = Vec::new();
+        for _ in 0..6 {
+            let mut frame = print.values().to_vec();
+            if let Some((r, c)) = dead {
+                frame[r * grid.cols + c] = 0.0;
+            }
+            data.extend(frame);
+        }
+        Recording::new(grid, Some(0.01), data, None, SensorMeta::default()).unwrap()
+    };
+    let clean_rec = movie(None);
+    let (r, c) = most_loaded(&clean_rec);
+    let clean = dir.path().join("clean.npy");
+    let faulty = dir.path().join("faulty.npy");
+    presrs_io::npy::write_recording_npy(&clean_rec, &clean).unwrap();
+    presrs_io::npy::write_recording_npy(&movie(Some((r, c))), &faulty).unwrap();
+
+    let out = presrs(&[
+        "classify",
+        "--model",
+        model.to_str().unwrap(),
+        "--frame",
+        "3",
+        "--json",
+        clean.to_str().unwrap(),
+        faulty.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", common::stderr(&out));
+    assert!(
+        common::stderr(&out).contains("note: filled 1 dead sensel in 1 recording"),
+        "{}",
+        common::stderr(&out)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let results = json["results"].as_array().unwrap();
+    assert_eq!(results[0]["label"], SYNTHETIC_CLASSES[3]);
+    assert_eq!(results[1]["label"], SYNTHETIC_CLASSES[3]);
+
+    // What the classifier sees: the filled sensel brings the features back near the clean ones.
+    let (reference, _) = features_of(&clean, 3, &[]);
+    let (filled, note) = features_of(&faulty, 3, &[]);
+    let (kept, kept_note) = features_of(&faulty, 3, &["--keep-dead-sensels"]);
+    assert!(note.contains("filled 1 dead sensel"), "{note}");
+    assert!(!kept_note.contains("dead sensel"), "{kept_note}");
+    let distance = |a: &[f64], b: &[f64]| {
+        assert_eq!(a.len(), b.len());
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let (d_filled, d_kept) = (distance(&filled, &reference), distance(&kept, &reference));
+    assert!(d_filled < 0.25 * d_kept, "{d_filled} vs {d_kept}");
 }

@@ -3,10 +3,16 @@
 //! A manifest row names a file and, optionally, a frame. A row with a frame gives that frame; a row of a
 //! one-frame file gives its frame; a row of a movie without a frame gives one sample per complete stance
 //! phase (the mid-stance frame by default, see [`SampleFrame`]). Files are read once each, in parallel.
+//!
+//! Dead sensels (silent in every frame while their neighbours carry load) are found and filled from
+//! their neighbours in every recording of at least three frames before any frame is taken from it
+//! ([`presrs_core::dead_sensels::correct_dead_sensels`]), unless [`SampleOptions::dead_sensels`] is
+//! `None`; [`LoadedSamples::dead_sensels`] says what was filled.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::PathBuf;
 
+use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sensels};
 use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording};
 use rayon::prelude::*;
@@ -16,7 +22,7 @@ use crate::manifest::{Manifest, ManifestRow};
 use crate::{ReadOptions, read_recording_with};
 
 /// How samples are picked from movies.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct SampleOptions {
     /// Which frame(s) of each stance.
     pub sample: SampleFrame,
@@ -24,6 +30,84 @@ pub struct SampleOptions {
     /// Also sample stances cut by the start or end of a recording.
     pub include_partial: bool,
     pub read: ReadOptions,
+    /// Find dead sensels in each recording and fill them from their neighbours (the default, with
+    /// the default thresholds); `None` keeps the recordings as read.
+    pub dead_sensels: Option<DeadSenselConfig>,
+}
+
+impl Default for SampleOptions {
+    fn default() -> Self {
+        Self {
+            sample: SampleFrame::default(),
+            segment: ValidSegmentParams::default(),
+            include_partial: false,
+            read: ReadOptions::default(),
+            dead_sensels: Some(DeadSenselConfig::default()),
+        }
+    }
+}
+
+/// Reads a recording and, with `dead_sensels`, fills its dead sensels
+/// ([`correct_dead_sensels`]); also returns the sensels filled.
+pub fn read_corrected(
+    path: &std::path::Path,
+    read: &ReadOptions,
+    dead_sensels: Option<&DeadSenselConfig>,
+) -> Result<(crate::Parsed, Vec<DeadSensel>), IoError> {
+    let parsed = read_recording_with(path, read)?;
+    let Some(config) = dead_sensels else {
+        return Ok((parsed, Vec::new()));
+    };
+    let crate::Parsed {
+        recording,
+        warnings,
+    } = parsed;
+    let (recording, filled) = correct_dead_sensels(recording, config).map_err(|err| {
+        IoError::format(
+            &crate::error::display_name(path),
+            format!("cannot fill dead sensels: {err}"),
+        )
+    })?;
+    Ok((
+        crate::Parsed {
+            recording,
+            warnings,
+        },
+        filled,
+    ))
+}
+
+/// Dead sensels filled per recording, and a one-line summary of them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DeadSenselFills {
+    /// The recordings in which some were filled, with the sensels (0-based row, column).
+    pub recordings: Vec<(PathBuf, Vec<DeadSensel>)>,
+}
+
+impl DeadSenselFills {
+    /// Notes what one recording had filled (nothing when `filled` is empty).
+    pub fn add(&mut self, path: PathBuf, filled: Vec<DeadSensel>) {
+        if !filled.is_empty() {
+            self.recordings.push((path, filled));
+        }
+    }
+
+    /// Sensels filled over all recordings.
+    pub fn sensels(&self) -> usize {
+        self.recordings.iter().map(|(_, d)| d.len()).sum()
+    }
+
+    /// `filled 3 dead sensels in 2 recordings`, or `None` when nothing was filled.
+    pub fn summary(&self) -> Option<String> {
+        let (n, m) = (self.sensels(), self.recordings.len());
+        (n > 0).then(|| {
+            format!(
+                "filled {n} dead sensel{} in {m} recording{}",
+                if n == 1 { "" } else { "s" },
+                if m == 1 { "" } else { "s" }
+            )
+        })
+    }
 }
 
 /// One image with everything the manifest says about it.
@@ -60,6 +144,8 @@ impl Sample {
 pub struct LoadedSamples {
     pub samples: Vec<Sample>,
     pub warnings: Vec<String>,
+    /// The dead sensels filled (with [`SampleOptions::dead_sensels`]), by recording.
+    pub dead_sensels: DeadSenselFills,
 }
 
 /// Reads every file of `manifest` (each once, in parallel) and picks samples as described in the module
@@ -71,11 +157,16 @@ pub fn load_samples(
     let mut unique: Vec<&PathBuf> = manifest.rows.iter().map(|row| &row.path).collect();
     unique.sort();
     unique.dedup();
-    let recordings: Vec<(&PathBuf, Result<crate::Parsed, IoError>)> = unique
+    type Read = Result<(crate::Parsed, Vec<DeadSensel>), IoError>;
+    let recordings: Vec<(&PathBuf, Read)> = unique
         .par_iter()
-        .map(|&path| (path, read_recording_with(path, &options.read)))
+        .map(|&path| {
+            let read = read_corrected(path, &options.read, options.dead_sensels.as_ref());
+            (path, read)
+        })
         .collect();
     let mut by_path: HashMap<&PathBuf, crate::Parsed> = HashMap::with_capacity(recordings.len());
+    let mut fills = DeadSenselFills::default();
     for (path, parsed) in recordings {
         let parsed = parsed.map_err(|err| {
             let row = manifest.rows.iter().find(|row| &row.path == path);
@@ -86,9 +177,14 @@ pub fn load_samples(
                 None => err,
             }
         })?;
+        let (parsed, filled) = parsed;
+        fills.add(path.clone(), filled);
         by_path.insert(path, parsed);
     }
-    let mut loaded = LoadedSamples::default();
+    let mut loaded = LoadedSamples {
+        dead_sensels: fills,
+        ..LoadedSamples::default()
+    };
     for parsed in by_path.values() {
         loaded.warnings.extend(parsed.warnings.iter().cloned());
     }
@@ -164,4 +260,75 @@ fn row_frames(
         ));
     }
     Ok(frames)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+
+    use super::*;
+    use presrs_core::{Grid, SensorMeta};
+
+    /// A 10-frame 12 x 12 movie loaded by a smooth dome (radius 4 around (5, 5)) from frame 2 on, with
+    /// sensel (5, 4) dead, written as a 3-D NPY with a manifest naming frame 6.
+    fn movie_manifest(dir: &std::path::Path) -> Manifest {
+        let mut data = Vec::new();
+        for f in 0..10 {
+            for r in 0..12 {
+                for c in 0..12 {
+                    let d2 = (r as f64 - 5.0).powi(2) + (c as f64 - 5.0).powi(2);
+                    let v = if f >= 2 && d2 <= 16.0 && (r, c) != (5, 4) {
+                        80.0 - 3.0 * d2
+                    } else {
+                        0.0
+                    };
+                    data.push(v);
+                }
+            }
+        }
+        let rec = Recording::new(
+            Grid::new(12, 12),
+            Some(0.01),
+            data,
+            None,
+            SensorMeta::default(),
+        )
+        .unwrap();
+        crate::npy::write_recording_npy(&rec, &dir.join("walk.npy")).unwrap();
+        let path = dir.join("manifest.csv");
+        std::fs::write(&path, "path,label,frame\nwalk.npy,wood,6\n").unwrap();
+        crate::manifest::read_manifest(&path).unwrap()
+    }
+
+    #[test]
+    fn dead_sensels_are_filled_by_default_and_kept_on_request() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = movie_manifest(dir.path());
+        let loaded = load_samples(&manifest, &SampleOptions::default()).unwrap();
+        let frame = loaded.samples[0].frame.view();
+        // Close to its neighbours (80 - 3 = 77 the true value; 4-neighbour mean 77 - 3 = 74).
+        assert!(
+            (frame.get(5, 4) - 77.0).abs() <= 3.0 + 1e-9,
+            "{}",
+            frame.get(5, 4)
+        );
+        assert_eq!(loaded.dead_sensels.sensels(), 1);
+        assert_eq!(
+            loaded.dead_sensels.summary().as_deref(),
+            Some("filled 1 dead sensel in 1 recording")
+        );
+        // Edge of the contact area: untouched.
+        assert_eq!(frame.get(5, 10), 0.0);
+        assert_eq!(frame.get(1, 5), 32.0);
+        let kept = load_samples(
+            &manifest,
+            &SampleOptions {
+                dead_sensels: None,
+                ..SampleOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(kept.samples[0].frame.view().get(5, 4), 0.0);
+        assert_eq!(kept.dead_sensels.summary(), None);
+    }
 }

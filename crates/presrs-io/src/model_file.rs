@@ -37,6 +37,20 @@ pub struct Provenance {
     pub command: Option<String>,
     /// Seconds since the Unix epoch when the model was written.
     pub created_unix_s: Option<u64>,
+    /// Whether dead sensels were filled in the training recordings (absent in files written before
+    /// the correction existed, whose recordings were used as read).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dead_sensels: Option<DeadSenselProvenance>,
+}
+
+/// How the training recordings' dead sensels were treated.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DeadSenselProvenance {
+    /// Whether they were found and filled (`false`: `--keep-dead-sensels`).
+    pub corrected: bool,
+    /// Sensels filled, and in how many recordings.
+    pub sensels: usize,
+    pub recordings: usize,
 }
 
 /// A model file's content.
@@ -150,6 +164,25 @@ mod tests {
             let pb = b.classify(&frame.view()).unwrap().to_classification();
             assert_eq!(pa, pb);
         }
+    }
+
+    #[test]
+    fn files_without_dead_sensel_provenance_still_load() {
+        let mut value: serde_json::Value = serde_json::from_slice(&model_bytes()).unwrap();
+        assert!(value["provenance"].get("dead_sensels").is_none());
+        let old = parse_model(&serde_json::to_vec(&value).unwrap(), "m.json").unwrap();
+        assert_eq!(old.provenance.dead_sensels, None);
+        value["provenance"]["dead_sensels"] =
+            serde_json::json!({"corrected": true, "sensels": 3, "recordings": 2});
+        let new = parse_model(&serde_json::to_vec(&value).unwrap(), "m.json").unwrap();
+        assert_eq!(
+            new.provenance.dead_sensels,
+            Some(DeadSenselProvenance {
+                corrected: true,
+                sensels: 3,
+                recordings: 2
+            })
+        );
     }
 
     #[test]

@@ -6,11 +6,11 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
+use presrs_io::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
-use presrs_io::read_recording_with;
 use serde::Serialize;
 
-use super::common::{SampleArgs, write_json};
+use super::common::{SampleArgs, note_dead_sensels, write_json};
 
 /// Classify frames of recording files: one line per sample (file, frame, label, confidence).
 #[derive(Debug, clap::Args)]
@@ -54,6 +54,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let model = &model_file.model;
     let mut session = model.session();
     let mut results = Vec::new();
+    let mut fills = DeadSenselFills::default();
     if !args.json {
         writeln!(
             out,
@@ -63,11 +64,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     for path in &args.files {
         let name = path.display().to_string();
-        let parsed = read_recording_with(path, &args.samples.read_options())?;
-        let recording = &parsed.recording;
-        for warning in &parsed.warnings {
-            eprintln!("warning: {warning}");
-        }
+        let recording = &args.samples.read(path, &mut fills)?;
         let frames = match args.frame {
             Some(frame) if frame >= recording.frame_count() => anyhow::bail!(
                 "{name}: --frame {frame} is past the end ({} frames, numbered from 0)",
@@ -121,6 +118,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             }
         }
     }
+    note_dead_sensels(&fills);
     if args.json {
         write_json(
             out,

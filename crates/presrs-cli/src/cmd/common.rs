@@ -6,13 +6,17 @@ use std::path::Path;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs_core::Crop;
+use presrs_core::Recording;
 use presrs_core::classifier::ClassifierKind;
+use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::SampleFrame;
 use presrs_io::ReadOptions;
-use presrs_io::dataset::{LoadedSamples, SampleOptions, load_samples};
+use presrs_io::dataset::{
+    DeadSenselFills, LoadedSamples, SampleOptions, load_samples, read_corrected,
+};
 use presrs_io::manifest::{Manifest, read_manifest};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
@@ -198,6 +202,12 @@ pub struct SampleArgs {
     /// Accept a TekScan file whose last frame is truncated (the frame is dropped with a warning).
     #[arg(long)]
     pub lenient: bool,
+    /// Use recordings as read. By default a sensel that reads 0 in every frame of a movie while its
+    /// neighbours carry load around it (in 3 frames or more) is taken for dead and filled, in every
+    /// frame, from its live neighbours; single images (PNG, 2-D NPY, text, one-frame files) are never
+    /// corrected, as one image cannot tell a dead sensel from a gap in the terrain.
+    #[arg(long)]
+    pub keep_dead_sensels: bool,
 }
 
 impl SampleArgs {
@@ -208,8 +218,26 @@ impl SampleArgs {
             read: ReadOptions {
                 lenient: self.lenient,
             },
+            dead_sensels: self.dead_sensels(),
             ..SampleOptions::default()
         }
+    }
+
+    /// The dead-sensel correction to apply (`None` with `--keep-dead-sensels`).
+    pub fn dead_sensels(&self) -> Option<DeadSenselConfig> {
+        (!self.keep_dead_sensels).then(DeadSenselConfig::default)
+    }
+
+    /// Reads one recording file, its dead sensels filled unless `--keep-dead-sensels` (noted in
+    /// `fills`); its warnings go to stderr.
+    pub fn read(&self, path: &Path, fills: &mut DeadSenselFills) -> anyhow::Result<Recording> {
+        let (parsed, filled) =
+            read_corrected(path, &self.read_options(), self.dead_sensels().as_ref())?;
+        for warning in &parsed.warnings {
+            eprintln!("warning: {warning}");
+        }
+        fills.add(path.to_path_buf(), filled);
+        Ok(parsed.recording)
     }
 
     pub fn read_options(&self) -> ReadOptions {
@@ -231,10 +259,20 @@ pub fn load_manifest(
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }
+    note_dead_sensels(&loaded.dead_sensels);
     if loaded.samples.is_empty() {
         anyhow::bail!("{}: the manifest gives no samples", path.display());
     }
     Ok((manifest, loaded))
+}
+
+/// The one-line note on stderr of the dead sensels filled, if any.
+pub fn note_dead_sensels(fills: &DeadSenselFills) {
+    if let Some(summary) = fills.summary() {
+        eprintln!(
+            "note: {summary} (from their neighbours; --keep-dead-sensels to use them as read)"
+        );
+    }
 }
 
 /// A progress bar on stderr when it is a terminal; hidden otherwise (pipes, CI, logs).

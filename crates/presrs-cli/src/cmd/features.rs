@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use anyhow::Context;
 use presrs_core::features::FeatureKind;
 use presrs_core::pipeline::extract_features;
-use presrs_io::read_recording_with;
 
 use super::common::{CropArg, SampleArgs};
 
@@ -30,8 +29,9 @@ pub struct FeaturesArgs {
 }
 
 pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let parsed = read_recording_with(&args.file, &args.samples.read_options())?;
-    let recording = &parsed.recording;
+    let mut fills = presrs_io::dataset::DeadSenselFills::default();
+    let recording = &args.samples.read(&args.file, &mut fills)?;
+    super::common::note_dead_sensels(&fills);
     let name = args.file.display();
     let frames = match args.frame {
         Some(frame) if frame >= recording.frame_count() => anyhow::bail!(

@@ -47,6 +47,10 @@ struct InspectReport {
     /// Present sensels that read 0 in every frame while their neighbours carry load
     /// ([`presrs_core::dead_sensels`]), 0-based.
     dead_sensels: Vec<presrs_core::dead_sensels::DeadSensel>,
+    /// Whether train, eval, classify, features and report fill those sensels from their neighbours
+    /// when they read this file: yes unless `--keep-dead-sensels`, and only in a recording of at least
+    /// three frames (one image is not evidence enough).
+    dead_sensels_filled: bool,
     /// Smallest and largest total load of a frame (sum of sensel values, in `units`).
     load_min: f64,
     load_max: f64,
@@ -77,6 +81,11 @@ pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         })
         .collect();
     let grid = recording.grid();
+    let dead_config = presrs_core::dead_sensels::DeadSenselConfig::default();
+    let dead_sensels = presrs_core::dead_sensels::detect_dead_sensels(recording, &dead_config);
+    let dead_sensels_filled = !dead_sensels.is_empty()
+        && !args.samples.keep_dead_sensels
+        && presrs_core::dead_sensels::correctable(recording.frame_count(), &dead_config);
     let report = InspectReport {
         file: args.file.display().to_string(),
         sensor: recording.meta.sensor.clone(),
@@ -90,10 +99,8 @@ pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         absent_sensels: recording
             .present()
             .map_or(0, |mask| mask.iter().filter(|&&here| !here).count()),
-        dead_sensels: presrs_core::dead_sensels::detect_dead_sensels(
-            recording,
-            &presrs_core::dead_sensels::DeadSenselConfig::default(),
-        ),
+        dead_sensels,
+        dead_sensels_filled,
         load_min: totals.iter().copied().fold(f64::INFINITY, f64::min),
         load_max: totals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         baseline_noise: segmentation.noise,
@@ -139,6 +146,21 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
                 String::new()
             }
         )?;
+        let what = if report.dead_sensels_filled {
+            "filled from their neighbours in every frame when train, eval, classify, features or \
+             report read this file (--keep-dead-sensels: as read)"
+                .to_owned()
+        } else if report.frames < presrs_core::dead_sensels::DeadSenselConfig::default().min_frames
+        {
+            format!(
+                "not filled: {} frame(s) cannot tell a dead sensel from a gap in the terrain \
+                 (movies of 3 frames or more are corrected)",
+                report.frames
+            )
+        } else {
+            "kept as read (--keep-dead-sensels)".to_owned()
+        };
+        writeln!(out, "               {what}")?;
     }
     let period = report
         .frame_period_s

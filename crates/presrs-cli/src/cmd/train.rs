@@ -8,7 +8,7 @@ use anyhow::Context;
 use presrs_core::pipeline::{LabeledImage, train};
 use presrs_core::split::{ValidationSize, stratified_split};
 use presrs_io::dataset::Sample;
-use presrs_io::model_file::{ModelFile, Provenance, save_model};
+use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance, save_model};
 
 use super::common::{PipelineArgs, SampleArgs, load_manifest};
 
@@ -169,6 +169,11 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             .duration_since(std::time::UNIX_EPOCH)
             .ok()
             .map(|d| d.as_secs()),
+        dead_sensels: Some(DeadSenselProvenance {
+            corrected: !args.samples.keep_dead_sensels,
+            sensels: loaded.dead_sensels.sensels(),
+            recordings: loaded.dead_sensels.recordings.len(),
+        }),
     };
     let mut file = ModelFile::new(model.clone(), provenance);
     if args.online_profile || args.gait_table.is_some() {
