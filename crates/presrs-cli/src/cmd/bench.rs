@@ -1,20 +1,28 @@
 //! `presrs bench`: in-process latency of one classification and batch throughput.
+//!
+//! `--export DIR` also writes what an outside implementation needs to run the same pipeline on the same
+//! inputs and check its answers (used by `bench/side_by_side.sh`): the model file, the test images as
+//! `.npy`, presrs's features, reduced vectors and predictions of every test image, and the timings.
 
 use std::hint::black_box;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use anyhow::Context;
 use presrs_core::Frame;
 use presrs_core::pipeline::{TrainedModel, bench_fixture};
-use presrs_io::model_file::load_model;
+use presrs_io::model_file::{ModelFile, Provenance, load_model, save_model};
+use presrs_io::npy::write_npy_f64;
 use serde::Serialize;
 
 use super::common::write_json;
 
 /// Time one classification (features + PCA + classifier) and batch throughput, in this process.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Example:\n  presrs bench --json\n  presrs bench --model g2.model.json")]
+#[command(
+    after_help = "Example:\n  presrs bench --json\n  presrs bench --model g2.model.json\n  presrs bench --export bench-inputs/   # model, images and predictions for bench/side_by_side.sh"
+)]
 pub struct BenchArgs {
     /// A model file; without one, the paper's setting is built on simulated 44x44 mid-stance images of
     /// gait G2 (crop to 38x41, 1-D |FFT| of 1025 values, PCA 51, Parzen over 80 training vectors).
@@ -30,8 +38,17 @@ pub struct BenchArgs {
     /// Images in the batch-throughput run.
     #[arg(long, default_value_t = 4096)]
     pub batch: usize,
+    /// Timed batch runs; the median throughput is reported.
+    #[arg(long, default_value_t = 5)]
+    pub batch_runs: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Also write into this folder (created if needed) the model (`model.json`), the test images
+    /// (`images.npy`, n x rows x cols, absent sensels as 0), presrs's features (`features.npy`) and
+    /// PCA-reduced vectors (`reduced.npy`) of each test image, and `presrs.json` with the predictions,
+    /// posteriors and timings, so another implementation can be checked and timed on the same inputs.
+    #[arg(long, value_name = "DIR")]
+    pub export: Option<PathBuf>,
     /// Print one JSON document instead of text.
     #[arg(long)]
     pub json: bool,
@@ -44,22 +61,61 @@ struct BenchReport {
     single_image_p99_ns: u64,
     single_image_min_ns: u64,
     batch_images_per_s: f64,
+    /// Throughput of every timed batch run, in run order.
+    batch_runs_images_per_s: Vec<f64>,
     batch_threads: usize,
     iterations: usize,
     batch: usize,
+    /// Distinct test images (the single-image and batch runs cycle through them).
+    test_images: usize,
 }
 
-/// The paper's model trained on simulated G2 mid-stance images (13 + 7 per terrain), and 64 other
-/// simulated mid-stance images to classify.
-fn simulated_fixture(seed: u64) -> anyhow::Result<(TrainedModel, Vec<Frame>)> {
+/// `presrs.json` of `--export`.
+#[derive(Debug, Serialize)]
+struct Export<'a> {
+    format: &'static str,
+    presrs_version: &'static str,
+    /// The test images' file and shape (n x rows x cols, before the crop).
+    images: &'static str,
+    image_shape: [usize; 3],
+    /// The grid after the model's crop (38 x 41 for the paper's 44 x 44 images).
+    cropped_shape: [usize; 2],
+    features: &'static str,
+    reduced: &'static str,
+    model_file: &'static str,
+    class_names: &'a [String],
+    /// Predicted class index of each test image, and its label.
+    predictions: Vec<usize>,
+    labels: Vec<&'a str>,
+    /// Class posteriors of each test image (equal priors), in class-index order.
+    posteriors: Vec<Vec<f64>>,
+    /// The true terrain of each test image, and the condition (gait) it was recorded at.
+    truth: &'a [String],
+    conditions: &'a [String],
+    timing: &'a BenchReport,
+}
+
+/// Test images with their true terrain and the condition (gait) they were recorded at.
+struct Fixture {
+    model: TrainedModel,
+    frames: Vec<Frame>,
+    truth: Vec<String>,
+    conditions: Vec<String>,
+}
+
+/// The paper's protocol on simulated mid-stance images (40 hops per terrain and gait): the model is trained
+/// on G2 (13 + 7 random images per terrain) and the test images are every other image of G1, G2 and G3.
+fn simulated_fixture(seed: u64) -> anyhow::Result<Fixture> {
     let mut spec = presrs_sim::DatasetSpec::paper(seed);
-    spec.gaits = vec!["G2".to_owned()];
     spec.hops_per_gait = Some(40);
     let dataset = presrs_sim::simulate_dataset(&presrs_sim::SimConfig::default(), &spec)?;
     let (samples, _) = super::reproduce::stance_samples(&dataset.trials)?;
-    let labels: Vec<&str> = samples.iter().map(|s| s.terrain.as_str()).collect();
+    let g2: Vec<usize> = (0..samples.len())
+        .filter(|&i| samples[i].gait == "G2")
+        .collect();
+    let g2_labels: Vec<&str> = g2.iter().map(|&i| samples[i].terrain.as_str()).collect();
     let split = presrs_core::split::stratified_split(
-        &labels,
+        &g2_labels,
         Some(20),
         presrs_core::split::ValidationSize::Count(7),
         seed,
@@ -67,39 +123,97 @@ fn simulated_fixture(seed: u64) -> anyhow::Result<(TrainedModel, Vec<Frame>)> {
     let images = |indices: &[usize]| -> Vec<presrs_core::pipeline::LabeledImage<'_>> {
         indices
             .iter()
-            .map(|&i| presrs_core::pipeline::LabeledImage::new(samples[i].frame.view(), labels[i]))
+            .map(|&k| {
+                let sample = &samples[g2[k]];
+                presrs_core::pipeline::LabeledImage::new(sample.frame.view(), &sample.terrain)
+            })
             .collect()
     };
     let config = presrs_core::pipeline::TrainConfig::default().check()?;
     let model =
         presrs_core::pipeline::train(&images(&split.train), &images(&split.validation), &config)?;
-    let frames = split
-        .rest
+    let trained: std::collections::HashSet<usize> = split
+        .train
         .iter()
-        .take(64)
-        .map(|&i| samples[i].frame.clone())
+        .chain(&split.validation)
+        .map(|&k| g2[k])
         .collect();
-    Ok((model, frames))
+    let test: Vec<&super::reproduce::StanceSample> = (0..samples.len())
+        .filter(|i| !trained.contains(i))
+        .map(|i| &samples[i])
+        .collect();
+    Ok(Fixture {
+        model,
+        frames: test.iter().map(|s| s.frame.clone()).collect(),
+        truth: test.iter().map(|s| s.terrain.clone()).collect(),
+        conditions: test.iter().map(|s| s.gait.clone()).collect(),
+    })
+}
+
+/// [`bench_fixture`]'s synthetic pattern, 64 test images cycling through the four classes.
+fn synthetic_fixture(seed: u64) -> anyhow::Result<Fixture> {
+    let (model, frames) = bench_fixture(seed, 64)?;
+    let n = frames.len();
+    Ok(Fixture {
+        model,
+        frames,
+        truth: (0..n)
+            .map(|i| presrs_core::pipeline::SYNTHETIC_CLASSES[i % 4].to_owned())
+            .collect(),
+        conditions: vec![String::new(); n],
+    })
+}
+
+fn provenance(args: &BenchArgs) -> Provenance {
+    Provenance {
+        seed: Some(args.seed),
+        command: Some(std::env::args().collect::<Vec<_>>().join(" ")),
+        created_unix_s: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .ok()
+            .map(|d| d.as_secs()),
+        ..Provenance::default()
+    }
+}
+
+fn median(values: &[f64]) -> f64 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mid = sorted.len() / 2;
+    if sorted.len() % 2 == 1 {
+        sorted[mid]
+    } else {
+        0.5 * (sorted[mid - 1] + sorted[mid])
+    }
 }
 
 pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    if args.iterations == 0 || args.batch == 0 {
-        anyhow::bail!("--iterations and --batch must be positive");
+    if args.iterations == 0 || args.batch == 0 || args.batch_runs == 0 {
+        anyhow::bail!("--iterations, --batch and --batch-runs must be positive");
     }
-    let (fixture_model, frames, source) = if args.synthetic {
-        let (model, frames) = bench_fixture(args.seed, 64)?;
-        (model, frames, "synthetic pattern, paper settings")
+    let (fixture, source) = if args.synthetic {
+        (
+            synthetic_fixture(args.seed)?,
+            "synthetic pattern, paper settings",
+        )
     } else {
-        let (model, frames) = simulated_fixture(args.seed)?;
-        (model, frames, "simulated G2 images, paper settings")
+        (
+            simulated_fixture(args.seed)?,
+            "simulated images, trained on G2 with the paper's settings",
+        )
     };
-    let (model, source): (TrainedModel, String) = match &args.model {
-        Some(path) => (load_model(path)?.model, path.display().to_string()),
-        None => (fixture_model, source.to_owned()),
+    let frames = &fixture.frames;
+    let (model_file, source) = match &args.model {
+        Some(path) => (load_model(path)?, path.display().to_string()),
+        None => (
+            ModelFile::new(fixture.model.clone(), provenance(args)),
+            source.to_owned(),
+        ),
     };
+    let model = &model_file.model;
     let mut session = model.session();
     // Warm up caches and check the images fit the model.
-    for frame in &frames {
+    for frame in frames {
         session
             .classify(&frame.view())
             .map_err(|err| anyhow::anyhow!("the benchmark images do not fit the model: {err}"))?;
@@ -117,20 +231,31 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let batch: Vec<_> = (0..args.batch)
         .map(|i| frames[i % frames.len()].view())
         .collect();
-    let start = Instant::now();
-    let results = model.classify_batch(&batch);
-    let elapsed = start.elapsed().as_secs_f64();
-    black_box(&results);
+    // One untimed run starts rayon's workers and warms their sessions' caches.
+    black_box(model.classify_batch(&batch[..batch.len().min(frames.len())]));
+    let mut runs = Vec::with_capacity(args.batch_runs);
+    for _ in 0..args.batch_runs {
+        let start = Instant::now();
+        let results = model.classify_batch(&batch);
+        let elapsed = start.elapsed().as_secs_f64();
+        black_box(&results);
+        runs.push(args.batch as f64 / elapsed);
+    }
     let report = BenchReport {
         model: source,
         single_image_median_ns: quantile(0.5),
         single_image_p99_ns: quantile(0.99),
         single_image_min_ns: times_ns[0],
-        batch_images_per_s: args.batch as f64 / elapsed,
+        batch_images_per_s: median(&runs),
+        batch_runs_images_per_s: runs,
         batch_threads: rayon::current_num_threads(),
         iterations: args.iterations,
         batch: args.batch,
+        test_images: frames.len(),
     };
+    if let Some(dir) = &args.export {
+        export(dir, &model_file, &fixture, &report)?;
+    }
     if args.json {
         return write_json(out, &report);
     }
@@ -145,9 +270,97 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "batch throughput           {:.0} images/s on {} threads ({} images)",
-        report.batch_images_per_s, report.batch_threads, report.batch
+        "batch throughput           {:.0} images/s on {} threads ({} images, median of {} runs)",
+        report.batch_images_per_s,
+        report.batch_threads,
+        report.batch,
+        report.batch_runs_images_per_s.len()
     )?;
     writeln!(out, "paper (2.67 GHz Core 2 Duo) 245 us per image")?;
+    if let Some(dir) = &args.export {
+        writeln!(out, "exported to                {}", dir.display())?;
+    }
+    Ok(())
+}
+
+/// Writes the model, the test images, presrs's intermediate results and predictions into `dir`.
+fn export(
+    dir: &Path,
+    model_file: &ModelFile,
+    fixture: &Fixture,
+    report: &BenchReport,
+) -> anyhow::Result<()> {
+    let frames = &fixture.frames;
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create the export folder", dir.display()))?;
+    let model = &model_file.model;
+    let grid = frames
+        .first()
+        .map(Frame::grid)
+        .context("no test images to export")?;
+    if frames.iter().any(|frame| frame.grid() != grid) {
+        anyhow::bail!("the test images do not all have the same grid");
+    }
+    // Absent sensels as 0, which is how the pipeline reads them.
+    let mut images = Vec::with_capacity(frames.len() * grid.len());
+    for frame in frames {
+        match frame.present() {
+            None => images.extend_from_slice(frame.values()),
+            Some(mask) => images.extend(
+                frame
+                    .values()
+                    .iter()
+                    .zip(mask)
+                    .map(|(&value, &here)| if here { value } else { 0.0 }),
+            ),
+        }
+    }
+    let mut session = model.session();
+    let (n_features, n_components) = (model.pca().n_features(), model.pca().n_components());
+    let mut features = Vec::with_capacity(frames.len() * n_features);
+    let mut reduced = Vec::with_capacity(frames.len() * n_components);
+    let mut predictions = Vec::with_capacity(frames.len());
+    let mut labels = Vec::with_capacity(frames.len());
+    let mut posteriors = Vec::with_capacity(frames.len());
+    for frame in frames {
+        features.extend_from_slice(session.features(&frame.view())?);
+        reduced.extend_from_slice(session.reduce(&frame.view())?);
+        let prediction = session.classify(&frame.view())?;
+        predictions.push(prediction.class);
+        labels.push(model.class_names()[prediction.class].as_str());
+        posteriors.push(prediction.posteriors.to_vec());
+    }
+    let write_array = |name: &str, shape: &[usize], data: &[f64]| -> anyhow::Result<()> {
+        let path = dir.join(name);
+        presrs_io::atomic::write_atomic(&path, |w| write_npy_f64(w, shape, data))?;
+        Ok(())
+    };
+    write_array("images.npy", &[frames.len(), grid.rows, grid.cols], &images)?;
+    write_array("features.npy", &[frames.len(), n_features], &features)?;
+    write_array("reduced.npy", &[frames.len(), n_components], &reduced)?;
+    save_model(&dir.join("model.json"), model_file)?;
+    let cropped = model.image_grid();
+    let document = Export {
+        format: "presrs-bench-export",
+        presrs_version: env!("CARGO_PKG_VERSION"),
+        images: "images.npy",
+        image_shape: [frames.len(), grid.rows, grid.cols],
+        cropped_shape: [cropped.rows, cropped.cols],
+        features: "features.npy",
+        reduced: "reduced.npy",
+        model_file: "model.json",
+        class_names: model.class_names(),
+        predictions,
+        labels,
+        posteriors,
+        truth: &fixture.truth,
+        conditions: &fixture.conditions,
+        timing: report,
+    };
+    let path = dir.join("presrs.json");
+    presrs_io::atomic::write_atomic(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &document).map_err(std::io::Error::from)?;
+        writeln!(w)
+    })?;
     Ok(())
 }
