@@ -1,0 +1,104 @@
+//! `presrs bench --export DIR`: the inputs and answers `bench/side_by_side.sh` hands to the Python peer.
+
+mod common;
+use common::{presrs, stderr, stdout};
+
+use presrs_io::model_file::load_model;
+use presrs_io::npy::read_npy;
+
+#[test]
+fn export_writes_a_model_images_and_matching_predictions() {
+    let dir = tempfile::tempdir().unwrap();
+    let export = dir.path().join("inputs");
+    let out = presrs(&[
+        "bench",
+        "--synthetic",
+        "--iterations",
+        "50",
+        "--batch",
+        "16",
+        "--batch-runs",
+        "2",
+        "--export",
+        export.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert!(report["single_image_median_ns"].as_u64().unwrap() > 0);
+    assert_eq!(
+        report["batch_runs_images_per_s"].as_array().unwrap().len(),
+        2
+    );
+
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(export.join("presrs.json")).unwrap())
+            .unwrap();
+    assert_eq!(doc["format"], "presrs-bench-export");
+    assert_eq!(doc["image_shape"], serde_json::json!([64, 44, 44]));
+    assert_eq!(doc["cropped_shape"], serde_json::json!([38, 41]));
+    assert_eq!(doc["timing"]["batch"], 16);
+
+    // The exported model classifies the exported images as presrs.json says.
+    let model = load_model(&export.join("model.json")).unwrap().model;
+    let images = read_npy(&export.join("images.npy")).unwrap();
+    assert_eq!(images.frame_count(), 64);
+    let predictions = doc["predictions"].as_array().unwrap();
+    let posteriors = doc["posteriors"].as_array().unwrap();
+    let truth = doc["truth"].as_array().unwrap();
+    assert_eq!((predictions.len(), truth.len()), (64, 64));
+    let mut session = model.session();
+    let mut correct = 0;
+    for (index, (expected, expected_posteriors)) in predictions.iter().zip(posteriors).enumerate() {
+        let frame = images.frame(index).unwrap();
+        let prediction = session.classify(&frame).unwrap();
+        assert_eq!(prediction.class as u64, expected.as_u64().unwrap());
+        assert_eq!(doc["labels"][index], prediction.label);
+        for (got, want) in prediction
+            .posteriors
+            .iter()
+            .zip(expected_posteriors.as_array().unwrap())
+        {
+            assert!((got - want.as_f64().unwrap()).abs() < 1e-12);
+        }
+        if truth[index] == prediction.label {
+            correct += 1;
+        }
+    }
+    assert!(correct >= 60, "{correct} of 64 synthetic images right");
+
+    // Features and reduced vectors, one row per image, as the session computes them.
+    let features = read_npy(&export.join("features.npy")).unwrap();
+    let reduced = read_npy(&export.join("reduced.npy")).unwrap();
+    assert_eq!(
+        (
+            features.frame_count(),
+            features.grid().rows,
+            features.grid().cols
+        ),
+        (1, 64, 1025)
+    );
+    assert_eq!(
+        (
+            reduced.frame_count(),
+            reduced.grid().rows,
+            reduced.grid().cols
+        ),
+        (1, 64, 51)
+    );
+    let first = images.frame(0).unwrap();
+    let want = session.features(&first).unwrap().to_vec();
+    assert_eq!(
+        &features.frame(0).unwrap().values()[..1025],
+        want.as_slice()
+    );
+    let want = session.reduce(&first).unwrap().to_vec();
+    assert_eq!(&reduced.frame(0).unwrap().values()[..51], want.as_slice());
+}
+
+#[test]
+fn bench_rejects_zero_batch_runs() {
+    let out = presrs(&["bench", "--synthetic", "--batch-runs", "0"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("--batch-runs"), "{}", stderr(&out));
+}
