@@ -1,8 +1,17 @@
 //! `presrs reproduce`: the paper's experiment end to end on the built-in simulator (Tables I and II).
+//!
+//! The data set lives in `DIR/dataset/` (the layout `presrs simulate --out` writes, see
+//! [`super::simulate`]), the heavier hopper's of the load-independence test in `DIR/dataset-load1.30/`
+//! (the factor is 1 + `--extra-load`). A folder whose `stamp.json` says it was made with the same
+//! presrs version, seed, hops per gait, load and simulator configuration, and whose files all match the
+//! stamp, is read back instead of simulated; otherwise the reason is printed and the data set is
+//! simulated afresh and written there (the stamp last, so an interrupted run never leaves a stamp claiming
+//! a complete data set). `--resimulate` always simulates. Both sources give the same trials (the movies
+//! hold integer counts, the truth round-trips through JSON exactly), hence the same results.
 
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -17,10 +26,11 @@ use presrs_core::split::{ValidationSize, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording};
 use presrs_io::atomic::write_atomic;
-use presrs_sim::{DatasetSpec, SimConfig, TrialOutput, simulate_dataset};
+use presrs_sim::{Dataset, DatasetSpec, SimConfig, TrialOutput};
 use serde::Serialize;
 
 use super::common::{CANDIDATE_FEATURES, progress_bar, spinner};
+use super::simulate::{DatasetKey, read_dataset, write_dataset_with};
 
 /// The paper's Table II: accuracy per tested gait when trained on G2.
 const PAPER_TABLE2: [(&str, f64); 4] = [
@@ -35,10 +45,21 @@ const PAPER_CLASSIFY_NS: u64 = 245_000;
 /// Reproduce the paper: simulate the hopper on wood, carpet, clay and grass at gaits G1-G3, print
 /// Table I (forward velocities), train on G2 (20 images per terrain: 13 + 7) and test on all other images
 /// (Table II), repeated with new draws; also train on G1 and G3.
+///
+/// The simulated data set is written to DIR/dataset (TekScan movies, manifest.csv, truth, config.json and
+/// stamp.json, as `presrs simulate --out` writes them), the heavier hopper's to DIR/dataset-load1.30. A
+/// later run with the same seed, hops per gait and presrs version reads them back instead of simulating
+/// (the results are the same), and says so; on any mismatch or missing or changed file it says why and
+/// simulates afresh. `presrs simulate --out DIR/dataset --seed S` makes a data set this reuses.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Example:\n  presrs reproduce --out results --seed 1")]
+#[command(
+    after_help = "Examples:\n  presrs reproduce --out results --seed 1\n  \
+presrs simulate --out results/dataset --seed 1 && presrs reproduce --out results --seed 1   # reuses it\n  \
+presrs reproduce --out results --resimulate"
+)]
 pub struct ReproduceArgs {
-    /// Folder for results.json and results.md.
+    /// Folder for results.json, results.md, the report and the simulated data sets (dataset/,
+    /// dataset-load1.30/).
     #[arg(long, default_value = "results")]
     pub out: PathBuf,
     /// Seed of the simulation and of the training draws.
@@ -47,6 +68,13 @@ pub struct ReproduceArgs {
     /// Repeats of each training draw.
     #[arg(long, default_value_t = 10)]
     pub repeats: usize,
+    /// Training images drawn per terrain (the paper's 20), of which --validation choose the Parzen
+    /// window's sigma; smaller values allow a small --hops-per-gait (at least this many per gait).
+    #[arg(long, default_value_t = 20)]
+    pub per_class: usize,
+    /// Of the --per-class images, how many validate (the paper's 7).
+    #[arg(long, default_value_t = 7)]
+    pub validation: usize,
     /// Recorded hops per terrain and gait (default: the simulator's paper-sized experiment).
     #[arg(long)]
     pub hops_per_gait: Option<usize>,
@@ -59,6 +87,20 @@ pub struct ReproduceArgs {
     /// Skip the comparison of every feature family x classifier (same draws as Table II).
     #[arg(long)]
     pub no_comparison: bool,
+    /// Simulate the data sets afresh (and rewrite them) even when DIR holds matching ones.
+    #[arg(long)]
+    pub resimulate: bool,
+}
+
+/// Where a data set came from.
+#[derive(Debug, Clone, Serialize)]
+struct DatasetOrigin {
+    path: PathBuf,
+    /// Read back from `path` (its stamp matched) rather than simulated.
+    reused: bool,
+    /// Why it was simulated (no data set there, a mismatch, a changed file, `--resimulate`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    simulated_because: Option<String>,
 }
 
 /// Load independence: a model trained at the nominal load tested on images recorded at a higher load,
@@ -128,10 +170,19 @@ pub struct SegmentationCheck {
     same_mid_frame: usize,
 }
 
+/// The training draw: images per terrain, and how many of them validate.
+#[derive(Debug, Clone, Copy, Serialize)]
+struct Draw {
+    per_class: usize,
+    validation: usize,
+}
+
 #[derive(Debug, Serialize)]
 struct Results {
     seed: u64,
     repeats: usize,
+    /// Training images per terrain and how many of them validate (the paper's 20 and 7).
+    draw: Draw,
     presrs_version: &'static str,
     /// Forward velocity per gait and terrain, m/s.
     table1: BTreeMap<String, BTreeMap<String, f64>>,
@@ -146,6 +197,8 @@ struct Results {
     train_test_matrix: BTreeMap<String, BTreeMap<String, f64>>,
     images_per_gait: BTreeMap<String, usize>,
     segmentation: SegmentationCheck,
+    /// Where the data sets came from: `main` and (when measured) `load`.
+    datasets: BTreeMap<String, DatasetOrigin>,
     /// `None` when the heavier hopper could not be simulated (the reason is printed).
     load_independence: Option<LoadCheck>,
     /// Every feature family x classifier with Table II's protocol and draws (empty with --no-comparison).
@@ -158,17 +211,41 @@ struct Results {
 pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
     let mut timings = BTreeMap::new();
+    anyhow::ensure!(
+        args.validation < args.per_class,
+        "--validation ({}) must be smaller than --per-class ({}): some images must train",
+        args.validation,
+        args.per_class
+    );
+    let draw = Draw {
+        per_class: args.per_class,
+        validation: args.validation,
+    };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
 
-    // 1. The data set.
+    // 1. The data set: read back from DIR/dataset when it is the one this run would simulate.
+    let sim_config = SimConfig::default();
     let mut spec = DatasetSpec::paper(args.seed);
     spec.hops_per_gait = args.hops_per_gait;
-    let spin = spinner("simulating the hopper");
-    let dataset =
-        simulate_dataset(&SimConfig::default(), &spec).context("the simulation failed")?;
-    spin.finish_and_clear();
-    timings.insert("simulate".to_owned(), started.elapsed().as_secs_f64());
+    let mut datasets = BTreeMap::new();
+    let (dataset, origin) = obtain_dataset(
+        &sim_config,
+        &spec,
+        &args.out.join("dataset"),
+        args.resimulate,
+        out,
+    )?;
+    timings.insert(
+        if origin.reused {
+            "read_dataset"
+        } else {
+            "simulate"
+        }
+        .to_owned(),
+        started.elapsed().as_secs_f64(),
+    );
+    datasets.insert("main".to_owned(), origin);
 
     // 2. Table I.
     let table = dataset.velocity_table();
@@ -233,8 +310,8 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     for gait in &gaits {
         let protocol = Protocol::TrainCondition {
             condition: Some(gait.clone()),
-            per_class: Some(20),
-            validation: ValidationSize::Count(7),
+            per_class: Some(draw.per_class),
+            validation: ValidationSize::Count(draw.validation),
         };
         let report = evaluate(
             &eval_samples,
@@ -256,8 +333,8 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     table2.insert("overall".to_owned(), main.overall);
     writeln!(
         out,
-        "\nTable II (trained on G2, 20 images per terrain; mean +- std over {} repeats)",
-        args.repeats
+        "\nTable II (trained on G2, {} images per terrain; mean +- std over {} repeats)",
+        draw.per_class, args.repeats
     )?;
     writeln!(out, "{:<10} {:>18} {:>8}", "tested", "simulated", "paper")?;
     for (name, paper) in PAPER_TABLE2 {
@@ -300,11 +377,19 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 
     // 5. Load independence.
     let load_start = Instant::now();
-    let nominal_kg = SimConfig::default().robot.body_mass_kg;
+    let nominal_kg = sim_config.robot.body_mass_kg;
     let mut heavy_spec = spec.clone();
     heavy_spec.load_kg = Some(nominal_kg * (1.0 + args.extra_load));
     heavy_spec.seed = args.seed.wrapping_add(1_000_003);
-    let load_check = match simulate_heavy(&heavy_spec) {
+    let heavy_dir = args
+        .out
+        .join(format!("dataset-load{:.2}", 1.0 + args.extra_load));
+    let heavy = obtain_dataset(&sim_config, &heavy_spec, &heavy_dir, args.resimulate, out)
+        .and_then(|(heavy, origin)| {
+            datasets.insert("load".to_owned(), origin);
+            Ok(stance_samples(&heavy.trials)?.0)
+        });
+    let load_check = match heavy {
         Ok(heavy_samples) => {
             let training_pool: Vec<&StanceSample> =
                 samples.iter().filter(|s| s.gait == "G2").collect();
@@ -314,6 +399,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 nominal_kg,
                 nominal_kg * (1.0 + args.extra_load),
                 &config,
+                draw,
                 args.repeats,
                 args.seed,
             )?)
@@ -368,8 +454,8 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
         let protocol = Protocol::TrainCondition {
             condition: Some("G2".to_owned()),
-            per_class: Some(20),
-            validation: ValidationSize::Count(7),
+            per_class: Some(draw.per_class),
+            validation: ValidationSize::Count(draw.validation),
         };
         let bar = progress_bar((configs.len() * args.repeats) as u64, "comparing");
         let rows = compare(
@@ -388,8 +474,9 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         );
         writeln!(
             out,
-            "\nOther methods (trained on G2, 20 images per terrain, the same draws as Table II; the paper's \
-             is fft1d + pwe)"
+            "\nOther methods (trained on G2, {} images per terrain, the same draws as Table II; the paper's \
+             is fft1d + pwe)",
+            draw.per_class
         )?;
         super::eval::print_comparison(&rows, out)?;
         comparison = rows.iter().map(ComparisonSummary::of).collect();
@@ -400,6 +487,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let results = Results {
         seed: args.seed,
         repeats: args.repeats,
+        draw,
         presrs_version: env!("CARGO_PKG_VERSION"),
         table1,
         table1_paper,
@@ -414,6 +502,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         train_test_matrix: matrix,
         images_per_gait,
         segmentation,
+        datasets,
         load_independence: load_check,
         comparison,
         evaluations,
@@ -430,7 +519,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let spin = spinner("writing the report");
         let path = super::report::write_simulation_report(
             &dataset,
-            &SimConfig::default(),
+            &sim_config,
             &results.evaluations,
             args.seed,
             &args.out.join("report"),
@@ -453,20 +542,75 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The stance images of the data set `spec` describes.
-fn simulate_heavy(spec: &DatasetSpec) -> anyhow::Result<Vec<StanceSample>> {
-    let spin = spinner("simulating the heavier hopper");
-    let heavy = simulate_dataset(&SimConfig::default(), spec).with_context(|| {
-        format!(
-            "the simulation at {:.2} kg failed",
-            spec.load_kg.unwrap_or(f64::NAN)
-        )
-    })?;
-    spin.finish_and_clear();
-    Ok(stance_samples(&heavy.trials)?.0)
+/// The data set `config` and `spec` describe: read back from `dir` when its stamp matches (and every
+/// file is intact), else simulated and written to `dir`. Says which on `out`, and why it simulated.
+fn obtain_dataset(
+    config: &SimConfig,
+    spec: &DatasetSpec,
+    dir: &Path,
+    resimulate: bool,
+    out: &mut dyn Write,
+) -> anyhow::Result<(Dataset, DatasetOrigin)> {
+    let wanted = DatasetKey::new(config, spec);
+    let reason = if resimulate {
+        "--resimulate".to_owned()
+    } else {
+        let spin = spinner(&format!("reading {}", dir.display()));
+        let read = read_dataset(dir, &wanted);
+        spin.finish_and_clear();
+        match read {
+            Ok((dataset, _)) => {
+                writeln!(
+                    out,
+                    "reusing {} (seed {}, presrs {})",
+                    dir.display(),
+                    wanted.seed,
+                    wanted.presrs_version
+                )?;
+                out.flush()?;
+                let origin = DatasetOrigin {
+                    path: dir.to_path_buf(),
+                    reused: true,
+                    simulated_because: None,
+                };
+                return Ok((dataset, origin));
+            }
+            Err(err) => format!("{err:#}"),
+        }
+    };
+    writeln!(
+        out,
+        "simulating {} (seed {}, {} kg): {reason}",
+        dir.display(),
+        wanted.seed,
+        wanted.load_kg
+    )?;
+    out.flush()?;
+    let bar = progress_bar(0, "simulating");
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let (_, dataset) =
+        write_dataset_with(config, spec, dir, true, &progress).with_context(|| {
+            format!(
+                "cannot simulate and write the data set {} (seed {}, {} kg)",
+                dir.display(),
+                wanted.seed,
+                wanted.load_kg
+            )
+        })?;
+    bar.finish_and_clear();
+    let dataset = dataset.context("the simulated trials were not kept")?;
+    let origin = DatasetOrigin {
+        path: dir.to_path_buf(),
+        reused: false,
+        simulated_because: Some(reason),
+    };
+    Ok((dataset, origin))
 }
 
-/// Trains on `pool` (the paper's draw: 20 per terrain, 7 of them for validation) once per repeat and tests
+/// Trains on `pool` (`draw`; the paper's: 20 per terrain, 7 of them for validation) once per repeat and tests
 /// on `heavy`, as recorded and scaled by `nominal_kg / heavy_kg`.
 fn load_independence(
     pool: &[&StanceSample],
@@ -474,6 +618,7 @@ fn load_independence(
     nominal_kg: f64,
     heavy_kg: f64,
     config: &CheckedTrainConfig,
+    draw: Draw,
     repeats: usize,
     seed: u64,
 ) -> anyhow::Result<LoadCheck> {
@@ -495,8 +640,8 @@ fn load_independence(
     for repeat in 0..repeats {
         let split = stratified_split(
             &labels,
-            Some(20),
-            ValidationSize::Count(7),
+            Some(draw.per_class),
+            ValidationSize::Count(draw.validation),
             seed.wrapping_add(repeat as u64),
         )?;
         let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
@@ -598,7 +743,12 @@ fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io
         results.seed, results.repeats
     )?;
     writeln!(w, "## Table I: forward velocity\n\n```\n{table1}```\n")?;
-    writeln!(w, "## Table II: classification accuracy, trained on G2\n")?;
+    writeln!(
+        w,
+        "## Table II: classification accuracy, trained on G2 ({} images per terrain, {} of them \
+         validating)\n",
+        results.draw.per_class, results.draw.validation
+    )?;
     writeln!(
         w,
         "| tested | simulated (mean ± std) | paper |\n| --- | --- | --- |"
@@ -657,7 +807,7 @@ fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io
         )?;
     }
     if !results.comparison.is_empty() {
-        write_comparison_markdown(&results.comparison, w)?;
+        write_comparison_markdown(&results.comparison, results.draw, w)?;
     }
     let s = &results.segmentation;
     writeln!(
@@ -670,15 +820,20 @@ fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io
 
 /// The comparison as a Markdown table: accuracy per tested gait and overall, training and classification
 /// time.
-fn write_comparison_markdown(rows: &[ComparisonSummary], w: &mut dyn Write) -> std::io::Result<()> {
+fn write_comparison_markdown(
+    rows: &[ComparisonSummary],
+    draw: Draw,
+    w: &mut dyn Write,
+) -> std::io::Result<()> {
     let mut gaits: Vec<&String> = rows.iter().flat_map(|r| r.per_gait.keys()).collect();
     gaits.sort();
     gaits.dedup();
     writeln!(
         w,
-        "\n## Other methods\n\nEvery feature family × classifier, trained on G2 (20 images per terrain, 7 of \
+        "\n## Other methods\n\nEvery feature family × classifier, trained on G2 ({} images per terrain, {} of \
          them validating), tested on every other image, with the same draws as Table II (mean ± std over \
-         the repeats). The paper's method is fft1d + pwe.\n"
+         the repeats). The paper's method is fft1d + pwe.\n",
+        draw.per_class, draw.validation
     )?;
     write!(w, "| features | classifier |")?;
     for gait in &gaits {
