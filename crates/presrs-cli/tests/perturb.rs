@@ -56,6 +56,8 @@ fn eval_reports_accuracy_under_each_perturbation() {
         "--perturb",
         "noise=0.5",
         "--json",
+        "--report",
+        dir.path().join("report").to_str().unwrap(),
     ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{stderr}");
@@ -76,6 +78,20 @@ fn eval_reports_accuracy_under_each_perturbation() {
     // Every sensel dead: blank images cannot be told apart.
     assert!(accuracy("dead=1") <= 0.5, "{rows:?}");
     assert!(rows.iter().all(|r| r["method"] == "configured"));
+    // The report charts accuracy against fault level, with the same numbers.
+    let html = std::fs::read_to_string(dir.path().join("report/index.html")).unwrap();
+    assert!(dir.path().join("report/fault_sweep.png").is_file());
+    let row = html.split("<tr><td>noise=0.5</td>").nth(1).unwrap();
+    let noise = rows
+        .iter()
+        .find(|r| r["perturbation"] == "noise=0.5")
+        .unwrap();
+    let expected = format!(
+        "<td>{:.1} % ± {:.1}</td>",
+        100.0 * noise["accuracy"].as_f64().unwrap(),
+        100.0 * noise["accuracy_std"].as_f64().unwrap()
+    );
+    assert!(row.starts_with(&expected), "{expected}");
 
     // The table form, and a bad level is a usage error.
     let text = presrs(&[

@@ -194,13 +194,37 @@ pub fn evaluate_perturbed(
     progress: &(dyn Fn() + Sync),
     perturb: Option<&TestTransform<'_>>,
 ) -> Result<EvalReport> {
+    one(evaluate_perturbed_each(
+        samples,
+        protocol,
+        config,
+        repeats,
+        seed,
+        progress,
+        &[perturb],
+    )?)
+}
+
+/// [`evaluate_perturbed`] for several perturbations at once (`None`: the test images as they are): each
+/// model is trained once and tested under every one of them, so the reports are those of
+/// [`evaluate_perturbed`] called with each, at the cost of one training. One report per entry of
+/// `perturbs`, in order.
+pub fn evaluate_perturbed_each(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    config: &CheckedTrainConfig,
+    repeats: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+    perturbs: &[Option<&TestTransform<'_>>],
+) -> Result<Vec<EvalReport>> {
     evaluate_with(
         samples,
         protocol,
         repeats,
         seed,
         progress,
-        perturb,
+        perturbs,
         &|train_set, validation_set, _| {
             let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
             let train_images: Vec<_> = train_set.iter().map(image).collect();
@@ -208,6 +232,13 @@ pub fn evaluate_perturbed(
             train(&train_images, &validation_images, config)
         },
     )
+}
+
+/// The single report of a one-perturbation run.
+fn one(mut reports: Vec<EvalReport>) -> Result<EvalReport> {
+    reports
+        .pop()
+        .ok_or_else(|| CoreError::NotEnoughData("no evaluation was run".into()))
 }
 
 /// [`evaluate`] where every model is chosen automatically among `candidates` by
@@ -234,14 +265,37 @@ pub fn evaluate_auto_perturbed(
     progress: &(dyn Fn() + Sync),
     perturb: Option<&TestTransform<'_>>,
 ) -> Result<(EvalReport, Vec<crate::selection::Selection>)> {
+    let (reports, selections) = evaluate_auto_perturbed_each(
+        samples,
+        protocol,
+        candidates,
+        repeats,
+        seed,
+        progress,
+        &[perturb],
+    )?;
+    Ok((one(reports)?, selections))
+}
+
+/// [`evaluate_auto_perturbed`] for several perturbations at once, each model chosen and trained once
+/// (see [`evaluate_perturbed_each`]).
+pub fn evaluate_auto_perturbed_each(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+    candidates: &[CheckedTrainConfig],
+    repeats: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+    perturbs: &[Option<&TestTransform<'_>>],
+) -> Result<(Vec<EvalReport>, Vec<crate::selection::Selection>)> {
     let selections = std::sync::Mutex::new(Vec::new());
-    let report = evaluate_with(
+    let reports = evaluate_with(
         samples,
         protocol,
         repeats,
         seed,
         progress,
-        perturb,
+        perturbs,
         &|train_set, validation_set, fold_seed| {
             let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
             let train_images: Vec<_> = train_set.iter().map(image).collect();
@@ -265,7 +319,7 @@ pub fn evaluate_auto_perturbed(
         },
     )?;
     let selections = selections.into_inner().unwrap_or_default();
-    Ok((report, selections))
+    Ok((reports, selections))
 }
 
 /// A function that trains a model from training and validation sample indices (and a seed).
@@ -277,9 +331,9 @@ fn evaluate_with(
     repeats: usize,
     seed: u64,
     progress: &(dyn Fn() + Sync),
-    perturb: Option<&TestTransform<'_>>,
+    perturbs: &[Option<&TestTransform<'_>>],
     trainer: &Trainer<'_>,
-) -> Result<EvalReport> {
+) -> Result<Vec<EvalReport>> {
     if repeats == 0 {
         return Err(CoreError::Param {
             name: "repeats",
@@ -292,13 +346,25 @@ fn evaluate_with(
     let mut labels: Vec<String> = samples.iter().map(|s| s.label.to_owned()).collect();
     labels.sort();
     labels.dedup();
-    let mut confusion = Confusion::new(labels);
-    let mut times_ns = Vec::new();
-    let mut results = Vec::with_capacity(repeats);
+    /// What one perturbation's tests have found so far.
+    struct Tally {
+        confusion: Confusion,
+        times_ns: Vec<u64>,
+        results: Vec<RepeatResult>,
+    }
+    let mut tallies: Vec<Tally> = perturbs
+        .iter()
+        .map(|_| Tally {
+            confusion: Confusion::new(labels.clone()),
+            times_ns: Vec::new(),
+            results: Vec::with_capacity(repeats),
+        })
+        .collect();
     for repeat in 0..repeats {
         let repeat_seed = seed.wrapping_add(repeat as u64);
         let folds = folds(samples, protocol, repeat_seed)?;
-        let mut correct_by_condition: BTreeMap<String, (u64, u64)> = BTreeMap::new();
+        let mut correct_by_condition: Vec<BTreeMap<String, (u64, u64)>> =
+            vec![BTreeMap::new(); perturbs.len()];
         let mut result = RepeatResult {
             seed: repeat_seed,
             overall_accuracy: 0.0,
@@ -317,57 +383,80 @@ fn evaluate_with(
             result.n_train += fold.train.len();
             result.n_validation += fold.validation.len();
             result.n_test += fold.test.len();
-            let outcomes: Vec<Result<(usize, u64)>> = fold
-                .test
-                .par_iter()
-                .map_init(
-                    || model.session(),
-                    |session, &i| {
-                        let perturbed = perturb
-                            .map(|p| p(i, samples[i].frame, repeat_seed))
-                            .transpose()?;
-                        let frame = perturbed.as_ref().map_or(samples[i].frame, Frame::view);
-                        let start = Instant::now();
-                        let class = session.classify(&frame)?.class;
-                        Ok((class, start.elapsed().as_nanos() as u64))
-                    },
-                )
-                .collect();
-            for (&i, outcome) in fold.test.iter().zip(outcomes) {
-                let (predicted, ns) = outcome?;
-                times_ns.push(ns);
-                let predicted_label = &model.class_names()[predicted];
-                let truth = confusion
-                    .labels
-                    .binary_search_by(|l| l.as_str().cmp(samples[i].label));
-                let guess = confusion.labels.binary_search(predicted_label);
-                if let (Ok(t), Ok(g)) = (truth, guess) {
-                    confusion.counts[t][g] += 1;
-                }
-                let key = fold.key_of(&samples[i]);
-                let entry = correct_by_condition.entry(key).or_default();
-                entry.1 += 1;
-                if predicted_label == samples[i].label {
-                    entry.0 += 1;
+            for ((perturb, tally), correct) in perturbs
+                .iter()
+                .zip(tallies.iter_mut())
+                .zip(correct_by_condition.iter_mut())
+            {
+                let outcomes: Vec<Result<(usize, u64)>> = fold
+                    .test
+                    .par_iter()
+                    .map_init(
+                        || model.session(),
+                        |session, &i| {
+                            let perturbed = perturb
+                                .map(|p| p(i, samples[i].frame, repeat_seed))
+                                .transpose()?;
+                            let frame = perturbed.as_ref().map_or(samples[i].frame, Frame::view);
+                            let start = Instant::now();
+                            let class = session.classify(&frame)?.class;
+                            Ok((class, start.elapsed().as_nanos() as u64))
+                        },
+                    )
+                    .collect();
+                let confusion = &mut tally.confusion;
+                for (&i, outcome) in fold.test.iter().zip(outcomes) {
+                    let (predicted, ns) = outcome?;
+                    tally.times_ns.push(ns);
+                    let predicted_label = &model.class_names()[predicted];
+                    let truth = confusion
+                        .labels
+                        .binary_search_by(|l| l.as_str().cmp(samples[i].label));
+                    let guess = confusion.labels.binary_search(predicted_label);
+                    if let (Ok(t), Ok(g)) = (truth, guess) {
+                        confusion.counts[t][g] += 1;
+                    }
+                    let key = fold.key_of(&samples[i]);
+                    let entry = correct.entry(key).or_default();
+                    entry.1 += 1;
+                    if predicted_label == samples[i].label {
+                        entry.0 += 1;
+                    }
                 }
             }
             progress();
         }
-        let (correct, total) = correct_by_condition
-            .values()
-            .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
-        if total == 0 {
-            return Err(CoreError::NotEnoughData(
-                "no sample is left to test on after drawing the training set".into(),
-            ));
+        for (tally, correct) in tallies.iter_mut().zip(correct_by_condition) {
+            let (hits, total) = correct
+                .values()
+                .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
+            if total == 0 {
+                return Err(CoreError::NotEnoughData(
+                    "no sample is left to test on after drawing the training set".into(),
+                ));
+            }
+            let mut result = result.clone();
+            result.overall_accuracy = ratio(hits, total);
+            result.per_condition = correct
+                .into_iter()
+                .map(|(key, (c, t))| (key, ratio(c, t)))
+                .collect();
+            tally.results.push(result);
         }
-        result.overall_accuracy = ratio(correct, total);
-        result.per_condition = correct_by_condition
-            .into_iter()
-            .map(|(key, (c, t))| (key, ratio(c, t)))
-            .collect();
-        results.push(result);
     }
+    Ok(tallies
+        .into_iter()
+        .map(|tally| report_of(protocol, tally.results, tally.confusion, tally.times_ns))
+        .collect())
+}
+
+/// The report of one evaluation's repeats.
+fn report_of(
+    protocol: &Protocol,
+    results: Vec<RepeatResult>,
+    confusion: Confusion,
+    mut times_ns: Vec<u64>,
+) -> EvalReport {
     let overall = MeanStd::of(
         &results
             .iter()
@@ -392,14 +481,14 @@ fn evaluate_with(
         .collect();
     times_ns.sort_unstable();
     let median_classify_ns = times_ns.get(times_ns.len() / 2).copied().unwrap_or(0);
-    Ok(EvalReport {
+    EvalReport {
         protocol: protocol.clone(),
         repeats: results,
         overall,
         per_condition,
         confusion,
         median_classify_ns,
-    })
+    }
 }
 
 /// One combination of a comparison ([`compare`]).
@@ -701,6 +790,47 @@ mod tests {
         assert_eq!(dead.repeats[0].n_test, plain.repeats[0].n_test);
         assert!(plain.overall.mean > 0.8, "{}", plain.overall.mean);
         assert!(dead.overall.mean < 0.5, "{}", dead.overall.mean);
+    }
+
+    #[test]
+    fn several_perturbations_at_once_match_one_at_a_time() {
+        let data = data();
+        let samples = samples(&data);
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(10),
+            validation: ValidationSize::Count(3),
+        };
+        let config = TrainConfig {
+            dims: 20,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap();
+        let noise = crate::perturb::Perturbation::Noise(20.0);
+        let noisy =
+            |i: usize, frame: FrameView<'_>, seed: u64| Ok(noise.apply(frame, seed, i as u64));
+        let blank = |_: usize, frame: FrameView<'_>, _: u64| Ok(Frame::zeros(frame.grid()));
+        let perturbs: [Option<&TestTransform<'_>>; 3] = [None, Some(&noisy), Some(&blank)];
+        let calls = std::sync::atomic::AtomicUsize::new(0);
+        let tick = || {
+            calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        };
+        let each =
+            evaluate_perturbed_each(&samples, &protocol, &config, 2, 5, &tick, &perturbs).unwrap();
+        assert_eq!(
+            calls.into_inner(),
+            2,
+            "one model per repeat, whatever the perturbations"
+        );
+        for (report, perturb) in each.iter().zip(perturbs) {
+            let alone =
+                evaluate_perturbed(&samples, &protocol, &config, 2, 5, &|| {}, perturb).unwrap();
+            assert_eq!(report.confusion, alone.confusion);
+            assert_eq!(report.overall, alone.overall);
+            assert_eq!(report.per_condition, alone.per_condition);
+        }
+        assert!(each[2].overall.mean < each[0].overall.mean);
     }
 
     #[test]

@@ -52,6 +52,69 @@ impl Perturbation {
         }
     }
 
+    /// The kinds, in the order reports show them.
+    pub const KINDS: [&'static str; 7] =
+        ["dead", "stuck", "gain", "noise", "shift", "rotate", "load"];
+
+    /// The fault's size as one number, for plotting accuracy against it: the fraction (`dead`,
+    /// `stuck`), the s.d. (`gain`, `noise`), the distance in sensels (`shift`), the angle (`rotate`) or
+    /// the factor (`load`).
+    pub fn level(&self) -> f64 {
+        match *self {
+            Self::Dead(v) | Self::Stuck(v) | Self::Gain(v) | Self::Noise(v) | Self::Rotate(v) => v,
+            Self::Shift(r, c) => (r as f64).hypot(c as f64),
+            Self::Load(f) => f,
+        }
+    }
+
+    /// The [`level`](Self::level) of this kind that changes nothing (0; 1 for `load`).
+    pub fn clean_level(&self) -> f64 {
+        match self {
+            Self::Load(_) => 1.0,
+            _ => 0.0,
+        }
+    }
+
+    /// What [`level`](Self::level) measures, for an axis label.
+    pub fn level_name(&self) -> &'static str {
+        match self {
+            Self::Dead(_) => "fraction of sensels dead",
+            Self::Stuck(_) => "fraction of sensels stuck at the maximum",
+            Self::Gain(_) => "s.d. of the per-sensel gain",
+            Self::Noise(_) => "noise s.d. (counts)",
+            Self::Shift(..) => "shift (sensels)",
+            Self::Rotate(_) => "rotation (degrees)",
+            Self::Load(_) => "load factor",
+        }
+    }
+
+    /// A sweep of a few levels of every kind (three each, mild to severe), for reports.
+    pub fn default_sweep() -> Vec<Self> {
+        vec![
+            Self::Dead(0.02),
+            Self::Dead(0.05),
+            Self::Dead(0.1),
+            Self::Stuck(0.005),
+            Self::Stuck(0.01),
+            Self::Stuck(0.02),
+            Self::Gain(0.1),
+            Self::Gain(0.2),
+            Self::Gain(0.4),
+            Self::Noise(2.0),
+            Self::Noise(5.0),
+            Self::Noise(10.0),
+            Self::Shift(1, 0),
+            Self::Shift(2, 0),
+            Self::Shift(4, 0),
+            Self::Rotate(5.0),
+            Self::Rotate(10.0),
+            Self::Rotate(20.0),
+            Self::Load(0.7),
+            Self::Load(1.3),
+            Self::Load(1.6),
+        ]
+    }
+
     /// A perturbed copy of `frame`. `seed` fixes the sensor faults; `index` (the image's number) varies
     /// the noise from image to image.
     pub fn apply(&self, frame: FrameView<'_>, seed: u64, index: u64) -> Frame {

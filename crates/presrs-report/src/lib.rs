@@ -1,7 +1,7 @@
 //! Figures and a self-contained HTML report for presrs: pressure heat maps in physical units (the
 //! paper's Fig. 5), feature spectra per terrain with the gaits overlaid (Fig. 6), load curves with the
 //! detected stances, the samples in principal components, the validation curve of the Parzen width,
-//! confusion matrices, accuracy per condition, Table I and the simulated hopper's motion.
+//! confusion matrices, accuracy per condition, accuracy against sensor-fault level, Table I and the simulated hopper's motion.
 //!
 //! The crate takes plain data (frames, models, evaluation reports, simulator outputs) and only writes
 //! its outputs, each atomically. Every figure is drawn with plotters in the bundled DejaVu Sans font
@@ -17,7 +17,8 @@ use plotters::drawing::DrawingAreaErrorKind;
 pub use pressure::{MovieOptions, PressureFigure, PressureGrid, PressureScale, write_movie};
 pub use render::{Figure, Format, render_rgb, render_svg, save_figure};
 pub use report::{
-    Evaluation, ReportInputs, ReportRecording, ReportSample, SimulationInputs, write_report,
+    Evaluation, FaultResult, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
+    write_report,
 };
 
 /// What can go wrong while drawing or writing figures.

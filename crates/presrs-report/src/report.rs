@@ -9,6 +9,7 @@ use presrs_core::Crop;
 use presrs_core::evaluation::{EvalReport, MeanStd};
 use presrs_core::features::FeatureConfig;
 use presrs_core::pca::Pca;
+use presrs_core::perturb::Perturbation;
 use presrs_core::pipeline::{TrainedModel, extract_features};
 use presrs_core::stance::{SampleFrame, ValidSegmentParams};
 use presrs_core::{FrameView, Grid, Recording, SensorMeta};
@@ -17,8 +18,8 @@ use presrs_sim::trace::HopTrace;
 use rayon::prelude::*;
 
 use crate::charts::{
-    BarSeries, BarsFigure, ConfusionFigure, LoadCurveData, LoadCurvesFigure, ScatterFigure,
-    SpectraFigure, SpectrumPanel, TraceFigure, ValidationFigure,
+    BarSeries, BarsFigure, ConfusionFigure, FaultFigure, FaultPanel, LoadCurveData,
+    LoadCurvesFigure, ScatterFigure, SpectraFigure, SpectrumPanel, TraceFigure, ValidationFigure,
 };
 use crate::pressure::{Outline, PressureGrid, PressureScale};
 use crate::render::{Figure, save_figure};
@@ -54,6 +55,17 @@ pub struct Evaluation<'a> {
     pub reference: BTreeMap<String, f64>,
 }
 
+/// Accuracy of one method with every test image perturbed ([`presrs_core::perturb`]): one point of the
+/// accuracy-against-fault chart. `perturbation: None` is the clean run, drawn at the clean level of
+/// every kind.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaultResult {
+    pub perturbation: Option<Perturbation>,
+    /// E.g. `paper: fft1d + pwe`, `automatic choice`.
+    pub method: String,
+    pub accuracy: MeanStd,
+}
+
 /// What only simulated data sets have.
 #[derive(Clone, Debug)]
 pub struct SimulationInputs<'a> {
@@ -83,6 +95,10 @@ pub struct ReportInputs<'a> {
     pub segment: ValidSegmentParams,
     pub sample_frame: SampleFrame,
     pub simulation: Option<SimulationInputs<'a>>,
+    /// Accuracy under sensor faults (a sweep of levels per kind, a line per method); empty for none.
+    pub faults: Vec<FaultResult>,
+    /// How the fault results were obtained (protocol, repeats), shown under the chart.
+    pub fault_note: Option<String>,
 }
 
 impl<'a> ReportInputs<'a> {
@@ -100,6 +116,8 @@ impl<'a> ReportInputs<'a> {
             segment: ValidSegmentParams::default(),
             sample_frame: SampleFrame::default(),
             simulation: None,
+            faults: Vec::new(),
+            fault_note: None,
         }
     }
 }
@@ -114,6 +132,7 @@ enum Job<'a> {
     Confusion(ConfusionFigure),
     Bars(BarsFigure),
     Trace(TraceFigure),
+    Faults(FaultFigure),
 }
 
 impl Job<'_> {
@@ -127,6 +146,7 @@ impl Job<'_> {
             Self::Confusion(f) => save_figure(f, path),
             Self::Bars(f) => save_figure(f, path),
             Self::Trace(f) => save_figure(f, path),
+            Self::Faults(f) => save_figure(f, path),
         }
     }
 
@@ -140,6 +160,7 @@ impl Job<'_> {
             Self::Confusion(f) => f.size(),
             Self::Bars(f) => f.size(),
             Self::Trace(f) => f.size(),
+            Self::Faults(f) => f.size(),
         }
     }
 }
@@ -713,6 +734,11 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
         });
     }
 
+    // 7b. Accuracy against fault level.
+    if let Some(section) = fault_section(&inputs.faults, inputs.fault_note.as_deref()) {
+        sections.push(section);
+    }
+
     // 8. Simulation.
     if let Some(sim) = &inputs.simulation {
         let table = sim.velocity;
@@ -820,6 +846,114 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
     let index = out_dir.join("index.html");
     presrs_io::write_atomic(&index, |w| w.write_all(page.as_bytes()))?;
     Ok(index)
+}
+
+/// The panels of the fault chart: a panel per kind present in `faults` (in [`Perturbation::KINDS`]
+/// order), a line per method, the clean run at the kind's clean level.
+pub fn fault_panels(faults: &[FaultResult]) -> Vec<FaultPanel> {
+    let mut methods: Vec<&str> = Vec::new();
+    for f in faults {
+        if !methods.contains(&f.method.as_str()) {
+            methods.push(&f.method);
+        }
+    }
+    let mut panels = Vec::new();
+    for kind in Perturbation::KINDS {
+        let of_kind: Vec<&FaultResult> = faults
+            .iter()
+            .filter(|f| f.perturbation.is_some_and(|p| p.kind() == kind))
+            .collect();
+        let Some(example) = of_kind.first().and_then(|f| f.perturbation) else {
+            continue;
+        };
+        let lines = methods
+            .iter()
+            .filter_map(|&method| {
+                let clean = faults
+                    .iter()
+                    .filter(|f| f.perturbation.is_none() && f.method == method)
+                    .map(|f| (example.clean_level(), f.accuracy));
+                let perturbed = of_kind
+                    .iter()
+                    .filter(|f| f.method == method)
+                    .filter_map(|f| Some((f.perturbation?.level(), f.accuracy)));
+                let mut points: Vec<(f64, f64, f64)> = clean
+                    .chain(perturbed)
+                    .map(|(level, a)| (level, 100.0 * a.mean, 100.0 * a.std))
+                    .collect();
+                points.sort_by(|a, b| a.0.total_cmp(&b.0));
+                (!points.is_empty()).then(|| (method.to_owned(), points))
+            })
+            .collect();
+        panels.push(FaultPanel {
+            title: kind.to_owned(),
+            x_label: example.level_name().to_owned(),
+            lines,
+        });
+    }
+    panels
+}
+
+/// The section of the accuracy-against-fault chart and its table (`None` without perturbed results).
+fn fault_section<'a>(faults: &[FaultResult], note: Option<&str>) -> Option<Section<'a>> {
+    let panels = fault_panels(faults);
+    if panels.is_empty() {
+        return None;
+    }
+    let mut methods: Vec<&str> = Vec::new();
+    for f in faults {
+        if !methods.contains(&f.method.as_str()) {
+            methods.push(&f.method);
+        }
+    }
+    let mut table = String::from("<table><tr><th>test images</th>");
+    for m in &methods {
+        let _ = write!(table, "<th>{}</th>", esc(m));
+    }
+    table.push_str("</tr>");
+    let mut rows: Vec<Option<Perturbation>> = Vec::new();
+    for f in faults {
+        if !rows.contains(&f.perturbation) {
+            rows.push(f.perturbation);
+        }
+    }
+    for row in rows {
+        let name = row.map_or_else(|| "as recorded".to_owned(), |p| p.to_string());
+        let _ = write!(table, "<tr><td>{}</td>", esc(&name));
+        for m in &methods {
+            let cell = faults
+                .iter()
+                .find(|f| f.perturbation == row && f.method == *m)
+                .map_or("—".to_owned(), |f| pct(&f.accuracy));
+            let _ = write!(table, "<td>{cell}</td>");
+        }
+        table.push_str("</tr>");
+    }
+    table.push_str("</table>");
+    let repeats = note.map_or(String::new(), |n| format!(" {}", esc(n)));
+    Some(Section {
+        id: "faults",
+        heading: "Accuracy against sensor faults".into(),
+        intro: String::new(),
+        figure: Some((
+            "fault_sweep.png".into(),
+            Job::Faults(FaultFigure {
+                title: "Accuracy with faulty test images, per kind of fault".into(),
+                panels,
+                spread_name: Some("±1 std over repeats".into()),
+            }),
+            format!(
+                "Every test image perturbed (training images as recorded; the same training draws \
+                 and models at every level): dead = a fraction of the sensels read 0, stuck = read \
+                 the image's maximum, gain = each sensel's gain drawn around 1, noise = Gaussian \
+                 noise on every reading, shift = the foot print moved by whole sensels, rotate = \
+                 turned about its centre of pressure, load = every value scaled. The leftmost point \
+                 of each panel (the rightmost-but-one for load, at factor 1) is the clean test \
+                 set.{repeats}"
+            ),
+        )),
+        after: table,
+    })
 }
 
 fn scale_unit_short(scale: &PressureScale) -> String {

@@ -242,6 +242,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
     bar.finish_and_clear();
+    let perturbed = perturbation_rows(args, &samples, &protocol, &config, folds, &report)?;
     if let Some(dir) = &args.report {
         let name = match &args.leave_one_out {
             Some(column) => format!("leave one {column} out"),
@@ -253,15 +254,14 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let path = super::report::write_eval_report(
             &args.manifest,
             &loaded,
-            &report,
-            &name,
+            (&report, &name),
             &config,
             &args.samples,
+            &fault_results(&perturbed, args.pipeline.is_auto()),
             dir,
         )?;
         eprintln!("report written to {}", path.display());
     }
-    let perturbed = perturbation_rows(args, &samples, &protocol, &config, folds, &report)?;
     if args.json {
         let mut json = EvalJson::new(&report);
         json.selections = selections;
@@ -460,8 +460,9 @@ pub struct PerturbedJson<'r> {
     pub perturbations: Vec<PerturbationRow>,
 }
 
-/// Evaluates every `--perturb` (same seeds, so the same draws and models as the main run). With an
-/// automatic choice, the paper's method is evaluated too, so that both degrade side by side.
+/// Evaluates every `--perturb` (same seeds, so the same draws and models as the main run; each model is
+/// trained once and tested under every perturbation). With an automatic choice, the paper's method is
+/// evaluated too, so that both degrade side by side.
 fn perturbation_rows(
     args: &EvalArgs,
     samples: &[EvalSample<'_>],
@@ -470,22 +471,29 @@ fn perturbation_rows(
     folds: usize,
     report: &EvalReport,
 ) -> anyhow::Result<Vec<PerturbationRow>> {
-    use presrs_core::evaluation::{evaluate_auto_perturbed, evaluate_perturbed};
+    use presrs_core::evaluation::{
+        TestTransform, evaluate_auto_perturbed_each, evaluate_perturbed_each,
+    };
     if args.perturb.is_empty() {
         return Ok(Vec::new());
     }
     let auto = args.pipeline.is_auto();
-    let candidates = if auto {
-        args.pipeline.candidates(samples[0].frame.grid(), false)?
-    } else {
-        Vec::new()
-    };
     let methods = 1 + usize::from(auto);
-    let runs = methods * args.perturb.len() + usize::from(auto);
-    let bar = progress_bar((runs * folds * args.repeats) as u64, "perturbing");
+    let bar = progress_bar((methods * folds * args.repeats) as u64, "perturbing");
     let tick = || bar.inc(1);
     let context =
         |err: presrs_core::CoreError| anyhow::anyhow!("{}: {err}", args.manifest.display());
+    let transforms: Vec<_> = args
+        .perturb
+        .iter()
+        .map(|p| {
+            move |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
+                Ok(p.apply(frame, seed, i as u64))
+            }
+        })
+        .collect();
+    let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
+    each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
     let row = |perturbation: String, method, r: &EvalReport| PerturbationRow {
         perturbation,
         method,
@@ -493,64 +501,74 @@ fn perturbation_rows(
         accuracy_std: r.overall.std,
     };
     let mut rows = vec![row("none".to_owned(), "configured", report)];
-    if auto {
-        let plain = evaluate_perturbed(
+    let configured = if auto {
+        let candidates = args.pipeline.candidates(samples[0].frame.grid(), false)?;
+        evaluate_auto_perturbed_each(
+            samples,
+            protocol,
+            &candidates,
+            args.repeats,
+            args.seed,
+            &tick,
+            &each[1..],
+        )
+        .map(|(r, _)| r)
+    } else {
+        evaluate_perturbed_each(
             samples,
             protocol,
             paper,
             args.repeats,
             args.seed,
             &tick,
-            None,
+            &each[1..],
         )
-        .map_err(context)?;
-        rows.push(row("none".to_owned(), "paper", &plain));
     }
-    for p in &args.perturb {
-        let transform = |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
-            Ok(p.apply(frame, seed, i as u64))
-        };
-        let t: &presrs_core::evaluation::TestTransform<'_> = &transform;
-        let configured = if auto {
-            evaluate_auto_perturbed(
-                samples,
-                protocol,
-                &candidates,
-                args.repeats,
-                args.seed,
-                &tick,
-                Some(t),
-            )
-            .map(|(r, _)| r)
-        } else {
-            evaluate_perturbed(
-                samples,
-                protocol,
-                paper,
-                args.repeats,
-                args.seed,
-                &tick,
-                Some(t),
-            )
-        }
-        .map_err(context)?;
-        rows.push(row(p.to_string(), "configured", &configured));
-        if auto {
-            let r = evaluate_perturbed(
-                samples,
-                protocol,
-                paper,
-                args.repeats,
-                args.seed,
-                &tick,
-                Some(t),
-            )
-            .map_err(context)?;
-            rows.push(row(p.to_string(), "paper", &r));
+    .map_err(context)?;
+    let paper_reports = if auto {
+        evaluate_perturbed_each(
+            samples,
+            protocol,
+            paper,
+            args.repeats,
+            args.seed,
+            &tick,
+            &each,
+        )
+        .map_err(context)?
+    } else {
+        Vec::new()
+    };
+    if let Some(plain) = paper_reports.first() {
+        rows.push(row("none".to_owned(), "paper", plain));
+    }
+    for (k, p) in args.perturb.iter().enumerate() {
+        rows.push(row(p.to_string(), "configured", &configured[k]));
+        if let Some(r) = paper_reports.get(k + 1) {
+            rows.push(row(p.to_string(), "paper", r));
         }
     }
     bar.finish_and_clear();
     Ok(rows)
+}
+
+/// The perturbation rows as the report's fault results: `configured` is the automatic choice with
+/// `auto`, else this pipeline.
+fn fault_results(rows: &[PerturbationRow], auto: bool) -> Vec<presrs_report::FaultResult> {
+    rows.iter()
+        .map(|r| presrs_report::FaultResult {
+            perturbation: r.perturbation.parse().ok(),
+            method: match (r.method, auto) {
+                ("paper", _) => super::report::PAPER_METHOD.to_owned(),
+                (_, true) => super::report::AUTO_METHOD.to_owned(),
+                _ => "this pipeline".to_owned(),
+            },
+            accuracy: presrs_core::evaluation::MeanStd {
+                mean: r.accuracy,
+                std: r.accuracy_std,
+            },
+        })
+        .collect()
 }
 
 /// The accuracy-against-fault table (one column per method).

@@ -25,7 +25,7 @@ use presrs_sim::trace::{HopTrace, trace_hops};
 use presrs_sim::{Dataset, SimConfig, VelocityTable};
 
 pub use presrs_report::{
-    Evaluation, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
+    Evaluation, FaultResult, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
 };
 
 use super::common::{PipelineArgs, SampleArgs, load_manifest, progress_bar};
@@ -37,6 +37,11 @@ const PAPER_TABLE2: [(&str, f64); 4] = [
     ("G3", 0.986),
     ("overall", 0.990),
 ];
+
+/// The paper's method, as fault results name it.
+pub const PAPER_METHOD: &str = "paper: fft1d + pwe";
+/// The automatic choice of features and classifier, as fault results name it.
+pub const AUTO_METHOD: &str = "automatic choice";
 
 /// Write an HTML report of a data set: pressure images per label and condition (Fig. 5), feature
 /// spectra (Fig. 6), load curves, principal components, validation curve, confusion matrix, accuracy
@@ -69,6 +74,11 @@ pub struct ReportArgs {
     /// Repeats of the evaluation (0: no evaluation).
     #[arg(long, default_value_t = 5)]
     pub repeats: usize,
+    /// Repeats of the sensor-fault sweep (accuracy with the test images perturbed at three levels of
+    /// each of dead, stuck, gain, noise, shift, rotate and load, for the paper's method and the
+    /// automatic choice; each model trained once per repeat); 0 skips it.
+    #[arg(long, default_value_t = 3)]
+    pub fault_repeats: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     #[command(flatten)]
@@ -306,15 +316,15 @@ fn first_seconds(recording: &Recording, seconds: f64) -> anyhow::Result<Recordin
 
 /// The report of `presrs eval`: the manifest's samples, the evaluation (named `evaluation_name`), a
 /// model trained like one repeat of it (for the PCA and validation-curve figures) and the load curves of
-/// up to four movies.
+/// up to four movies; with `faults` (from `--perturb`), accuracy against fault level.
 // Called by `reproduce` and `eval` once they write reports.
 pub fn write_eval_report(
     manifest_path: &Path,
     loaded: &LoadedSamples,
-    report: &EvalReport,
-    evaluation_name: &str,
+    (report, evaluation_name): (&EvalReport, &str),
     config: &CheckedTrainConfig,
     sample_args: &SampleArgs,
+    faults: &[FaultResult],
     out_dir: &Path,
 ) -> anyhow::Result<PathBuf> {
     let (condition, per_class, validation) = match &report.protocol {
@@ -346,12 +356,17 @@ pub fn write_eval_report(
         report,
         reference: BTreeMap::new(),
     }];
+    let fault_note = format!(
+        "{evaluation_name}, {} repeat(s) with the evaluation's draws.",
+        report.repeats.len()
+    );
     write_manifest_report(
         manifest_path,
         loaded,
         model.as_ref().map(|(m, note)| (m, note.clone())),
         evaluations,
         sample_args,
+        (faults, fault_note),
         out_dir,
     )
 }
@@ -482,6 +497,7 @@ fn write_manifest_report(
     model: Option<(&TrainedModel, String)>,
     evaluations: Vec<Evaluation<'_>>,
     sample_args: &SampleArgs,
+    (faults, fault_note): (&[FaultResult], String),
     out_dir: &Path,
 ) -> anyhow::Result<PathBuf> {
     let samples = report_samples(&loaded.samples);
@@ -531,6 +547,8 @@ fn write_manifest_report(
         velocity: table,
         traces: &traces,
     });
+    inputs.faults = faults.to_vec();
+    inputs.fault_note = Some(fault_note);
     write_report(&inputs, out_dir)
 }
 
@@ -681,6 +699,12 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
         (None, None) => None,
     };
+    let (faults, fault_note) = match &triples {
+        Some(triples) if args.fault_repeats > 0 => {
+            fault_sweep(args, triples, train_condition.as_deref(), &config)?
+        }
+        _ => (Vec::new(), String::new()),
+    };
     let evaluations: Vec<Evaluation<'_>> = reports
         .iter()
         .map(|(name, report)| Evaluation {
@@ -704,6 +728,7 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         model.as_ref().map(|(m, note)| (m, note.clone())),
         evaluations,
         &args.samples,
+        (&faults, fault_note),
         &args.out,
     )?;
     writeln!(
@@ -715,11 +740,133 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `presrs report`'s sensor-fault sweep: the paper's protocol (trained on `condition`, `per_class`
+/// images per class or fewer when a class has fewer) with every test image perturbed at each level of
+/// [`Perturbation::default_sweep`], for the paper's method and (with auto options) the automatic choice;
+/// each model is trained once per repeat and tested under every perturbation. Also returns a note on
+/// how it was run.
+pub fn fault_sweep(
+    args: &ReportArgs,
+    triples: &[(&Frame, &str, Option<&str>)],
+    condition: Option<&str>,
+    paper: &CheckedTrainConfig,
+) -> anyhow::Result<(Vec<FaultResult>, String)> {
+    use presrs_core::evaluation::{
+        TestTransform, evaluate_auto_perturbed_each, evaluate_perturbed_each,
+    };
+    use presrs_core::perturb::Perturbation;
+    let started = Instant::now();
+    let samples: Vec<EvalSample<'_>> = triples
+        .iter()
+        .map(|&(frame, label, condition)| EvalSample {
+            frame: frame.view(),
+            label,
+            condition,
+            group: None,
+        })
+        .collect();
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for s in samples
+        .iter()
+        .filter(|s| condition.is_none_or(|c| s.condition == Some(c)))
+    {
+        *counts.entry(s.label).or_default() += 1;
+    }
+    let smallest = counts.values().copied().min().unwrap_or(0);
+    let (per_class, validation) = if smallest >= args.per_class {
+        (args.per_class, args.validation)
+    } else {
+        (smallest, ValidationSize::Fraction(0.35))
+    };
+    let protocol = Protocol::TrainCondition {
+        condition: condition.map(str::to_owned),
+        per_class: Some(per_class),
+        validation,
+    };
+    let sweep = Perturbation::default_sweep();
+    let transforms: Vec<_> = sweep
+        .iter()
+        .map(|p| {
+            move |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
+                Ok(p.apply(frame, seed, i as u64))
+            }
+        })
+        .collect();
+    let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
+    each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
+    let auto = args.pipeline.is_auto();
+    let methods = 1 + usize::from(auto);
+    let bar = progress_bar((methods * args.fault_repeats) as u64, "fault sweep");
+    eprintln!(
+        "fault sweep: {} perturbations x {methods} method(s) x {} repeat(s) (--fault-repeats 0 skips it)",
+        sweep.len(),
+        args.fault_repeats
+    );
+    let context = |err: presrs_core::CoreError| {
+        anyhow::anyhow!("{}: fault sweep: {err}", args.manifest.display())
+    };
+    let mut results = Vec::new();
+    let mut push = |method: &str, reports: Vec<EvalReport>| {
+        for (k, report) in reports.into_iter().enumerate() {
+            results.push(FaultResult {
+                perturbation: k.checked_sub(1).map(|k| sweep[k]),
+                method: method.to_owned(),
+                accuracy: report.overall,
+            });
+        }
+    };
+    let paper_reports = evaluate_perturbed_each(
+        &samples,
+        &protocol,
+        paper,
+        args.fault_repeats,
+        args.seed,
+        &|| bar.inc(1),
+        &each,
+    )
+    .map_err(context)?;
+    let paper_name = if auto {
+        PAPER_METHOD.to_owned()
+    } else {
+        let c = paper.config();
+        format!("{} + {}", c.features.name(), c.classifier.kind().as_str())
+    };
+    push(&paper_name, paper_reports);
+    if auto {
+        let candidates = args.pipeline.candidates(samples[0].frame.grid(), false)?;
+        let (reports, _) = evaluate_auto_perturbed_each(
+            &samples,
+            &protocol,
+            &candidates,
+            args.fault_repeats,
+            args.seed,
+            &|| bar.inc(1),
+            &each,
+        )
+        .map_err(context)?;
+        push(AUTO_METHOD, reports);
+    }
+    bar.finish_and_clear();
+    let seconds = started.elapsed().as_secs_f64();
+    eprintln!("fault sweep: {seconds:.1} s");
+    let note = format!(
+        "Trained on {} ({per_class} images per class), {} repeat(s), seed {}; the sweep took {seconds:.1} s.",
+        condition.map_or_else(
+            || "every condition".to_owned(),
+            |c| format!("condition {c}")
+        ),
+        args.fault_repeats,
+        args.seed
+    );
+    Ok((results, note))
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
 
     use super::*;
+    use presrs_core::Grid;
     use presrs_sim::{DatasetSpec, simulate_dataset};
 
     /// The entry point `reproduce` calls, on a small simulated data set.
@@ -780,5 +927,125 @@ mod tests {
             let name = &part[..part.find('"').unwrap()];
             assert!(dir.path().join(name).is_file(), "{name}");
         }
+    }
+
+    /// The fault chart's numbers are `evaluate_perturbed`'s, and the report shows them.
+    #[test]
+    fn fault_sweep_numbers_come_from_evaluate_perturbed() {
+        use clap::Parser;
+        use presrs_core::evaluation::evaluate_perturbed;
+        use presrs_core::perturb::Perturbation;
+        use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
+        use rand::SeedableRng;
+
+        #[derive(clap::Parser)]
+        struct Wrapper {
+            #[command(flatten)]
+            args: ReportArgs,
+        }
+        let args = Wrapper::parse_from([
+            "report",
+            "--manifest",
+            "m.csv",
+            "--out",
+            "out",
+            "--features",
+            "fft1d",
+            "--classifier",
+            "pwe",
+            "--dims",
+            "20",
+            "--per-class",
+            "10",
+            "--validation",
+            "3",
+            "--fault-repeats",
+            "2",
+        ])
+        .args;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let frames: Vec<(Frame, &str, &str)> = (0..96)
+            .map(|i| {
+                (
+                    synthetic_frame(i % 4, &mut rng),
+                    SYNTHETIC_CLASSES[i % 4],
+                    ["G1", "G2", "G3"][(i / 4) % 3],
+                )
+            })
+            .collect();
+        let triples: Vec<(&Frame, &str, Option<&str>)> =
+            frames.iter().map(|(f, l, c)| (f, *l, Some(*c))).collect();
+        let config = args.pipeline.train_config(Grid::new(44, 44)).unwrap();
+        let (faults, note) = fault_sweep(&args, &triples, Some("G2"), &config).unwrap();
+        assert!(note.contains("2 repeat(s)"), "{note}");
+        let sweep = Perturbation::default_sweep();
+        assert_eq!(
+            faults.len(),
+            1 + sweep.len(),
+            "one method, the clean run and every level"
+        );
+
+        let samples: Vec<EvalSample<'_>> = triples
+            .iter()
+            .map(|&(frame, label, condition)| EvalSample {
+                frame: frame.view(),
+                label,
+                condition,
+                group: None,
+            })
+            .collect();
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(8), // 8 images per class of G2: fewer than --per-class 10
+            validation: ValidationSize::Fraction(0.35),
+        };
+        let dead = Perturbation::Dead(0.1);
+        let transform = |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
+            Ok(dead.apply(frame, seed, i as u64))
+        };
+        let direct =
+            evaluate_perturbed(&samples, &protocol, &config, 2, 1, &|| {}, Some(&transform))
+                .unwrap();
+        let swept = faults
+            .iter()
+            .find(|f| f.perturbation == Some(dead))
+            .unwrap();
+        assert_eq!(swept.accuracy, direct.overall);
+        let clean = evaluate_perturbed(&samples, &protocol, &config, 2, 1, &|| {}, None).unwrap();
+        assert_eq!(
+            faults
+                .iter()
+                .find(|f| f.perturbation.is_none())
+                .unwrap()
+                .accuracy,
+            clean.overall
+        );
+
+        // The report draws them and tabulates the same numbers.
+        let report_samples: Vec<ReportSample<'_>> = frames
+            .iter()
+            .map(|(f, l, c)| ReportSample {
+                frame: f.view(),
+                label: Some(l),
+                condition: Some(c),
+                source: "synthetic".into(),
+                frame_index: 0,
+            })
+            .collect();
+        let mut inputs = ReportInputs::new("faults", &report_samples);
+        inputs.faults = faults.clone();
+        inputs.fault_note = Some(note);
+        let dir = tempfile::tempdir().unwrap();
+        let index = write_report(&inputs, dir.path()).unwrap();
+        let html = std::fs::read_to_string(index).unwrap();
+        assert!(html.contains("src=\"fault_sweep.png\""));
+        assert!(dir.path().join("fault_sweep.png").is_file());
+        let row = html.split("<tr><td>dead=0.1</td>").nth(1).unwrap();
+        let expected = format!(
+            "<td>{:.1} % ± {:.1}</td>",
+            100.0 * direct.overall.mean,
+            100.0 * direct.overall.std
+        );
+        assert!(row.starts_with(&expected), "{expected} vs {}", &row[..60]);
     }
 }
