@@ -4,7 +4,8 @@
 #
 #   bench/side_by_side.sh            # build, export the inputs, run the peer, print the table
 #   bench/side_by_side.sh --record   # also rewrite bench/RESULTS.md with the measured figures
-#   bench/side_by_side.sh --quick    # fewer timed calls (a smoke test, not figures to quote)
+#   bench/side_by_side.sh --quick    # fewer timed calls, one round (a smoke test, not figures to quote)
+#   SEED=2 ROUNDS=5 bench/side_by_side.sh
 #
 # Needs cargo and python3 (3.11 or newer, with the venv module); downloads pinned wheels from PyPI into
 # bench/.venv on the first run. Writes bench/results/ (inputs, latest.json, latest.md). See bench/README.md.
@@ -15,14 +16,15 @@ root=$(dirname "$bench_dir")
 venv=$bench_dir/.venv
 results=$bench_dir/results
 seed=${SEED:-1}
+rounds=${ROUNDS:-3}
 record=0
 iterations=20000
 sklearn_iterations=2000
 for arg in "$@"; do
     case $arg in
         --record) record=1 ;;
-        --quick) iterations=2000; sklearn_iterations=200 ;;
-        -h|--help) sed -n '2,12p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        --quick) iterations=2000; sklearn_iterations=200; rounds=1 ;;
+        -h|--help) sed -n '2,13p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "side_by_side.sh: unknown argument $arg (try --help)" >&2; exit 2 ;;
     esac
 done
@@ -40,15 +42,18 @@ target_dir=$(cargo metadata --format-version 1 --no-deps --manifest-path "$root/
     "$venv/bin/python" -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
 presrs=$target_dir/release/presrs
 
+commit=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
+
 mkdir -p "$results"
 load_before=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || true)
-echo "== presrs: the model, the test images, its predictions and timings (load average $load_before)" >&2
-"$presrs" bench --seed "$seed" --iterations "$iterations" --export "$results/inputs"
+echo "== presrs $commit: the trained model, the test images, presrs's results (load average $load_before)" >&2
+"$presrs" bench --seed "$seed" --iterations 1000 --batch-runs 1 --export "$results/inputs" >/dev/null
 
-echo "== numpy and scikit-learn on the same inputs" >&2
+echo "== presrs, numpy and scikit-learn on the same inputs, $rounds round(s)" >&2
 status=0
-"$venv/bin/python" "$bench_dir/peer.py" --export "$results/inputs" --iterations "$iterations" \
-    --sklearn-iterations "$sklearn_iterations" --load-before "$load_before" \
+"$venv/bin/python" "$bench_dir/peer.py" --export "$results/inputs" --presrs "$presrs" --seed "$seed" \
+    --rounds "$rounds" --iterations "$iterations" --sklearn-iterations "$sklearn_iterations" \
+    --load-before "$load_before" --presrs-commit "$commit" \
     --out "$results/latest.json" --markdown "$results/latest.md" || status=$?
 echo "(written: $results/latest.json, $results/latest.md)" >&2
 if [ "$status" -ne 0 ]; then
