@@ -1,5 +1,7 @@
 //! `presrs bench --export DIR`: the inputs and answers `bench/side_by_side.sh` hands to the Python peer.
 
+#![allow(clippy::expect_used)] // the shared helpers in common/ run the binary outside #[test] functions
+
 mod common;
 use common::{presrs, stderr, stdout};
 
