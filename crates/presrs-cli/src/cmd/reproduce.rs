@@ -3,8 +3,10 @@
 //! The data set lives in `DIR/dataset/` (the layout `presrs simulate --out` writes, see
 //! [`super::simulate`]), the heavier hopper's of the load-independence test in `DIR/dataset-load1.30/`
 //! (the factor is 1 + `--extra-load`). A folder whose `stamp.json` says it was made with the same
-//! presrs version, seed, hops per gait, load and simulator configuration, and whose files all match the
-//! stamp, is read back instead of simulated; otherwise the reason is printed and the data set is
+//! presrs version, seed, hops per gait, load and simulator configuration, whose files all match the
+//! stamp, and whose first trial this build's simulator still makes (it is simulated again: about 2 % of
+//! the simulation time; a development build whose simulator changed without a version change is caught
+//! there) is read back instead of simulated; otherwise the reason is printed and the data set is
 //! simulated afresh and written there (the stamp last, so an interrupted run never leaves a stamp claiming
 //! a complete data set). `--resimulate` always simulates. Both sources give the same trials (the movies
 //! hold integer counts, the truth round-trips through JSON exactly), hence the same results.
@@ -30,7 +32,7 @@ use presrs_sim::{Dataset, DatasetSpec, SimConfig, TrialOutput};
 use serde::Serialize;
 
 use super::common::{CANDIDATE_FEATURES, progress_bar, spinner};
-use super::simulate::{DatasetKey, read_dataset, write_dataset_with};
+use super::simulate::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
 
 /// The paper's Table II: accuracy per tested gait when trained on G2.
 const PAPER_TABLE2: [(&str, f64); 4] = [
@@ -53,9 +55,18 @@ const PAPER_CLASSIFY_NS: u64 = 245_000;
 /// simulates afresh. `presrs simulate --out DIR/dataset --seed S` makes a data set this reuses.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Examples:\n  presrs reproduce --out results --seed 1\n  \
-presrs simulate --out results/dataset --seed 1 && presrs reproduce --out results --seed 1   # reuses it\n  \
-presrs reproduce --out results --resimulate"
+    after_help = "Data sets: the simulated data set is kept in DIR/dataset (the layout of \
+`presrs simulate --out`: recordings/*.asf TekScan movies, manifest.csv, truth/, config.json, and \
+stamp.json, written last), the heavier hopper's of the load test in DIR/dataset-load1.30. A later run \
+with the same seed, hops per gait and presrs version reads them back instead of simulating (the results \
+are the same) and says so; on any mismatch, a missing or changed file, or a simulator that no longer \
+makes its first trial, it says why and simulates afresh.
+
+Examples:
+  presrs reproduce --out results --seed 1
+  presrs reproduce --out results --seed 1 --resimulate
+  presrs simulate --out results/dataset --seed 1   # presrs reproduce --out results reuses it
+  presrs reproduce --out small --hops-per-gait 10 --per-class 8 --validation 3 --repeats 3"
 )]
 pub struct ReproduceArgs {
     /// Folder for results.json, results.md, the report and the simulated data sets (dataset/,
@@ -396,8 +407,7 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             Some(load_independence(
                 &training_pool,
                 &heavy_samples,
-                nominal_kg,
-                nominal_kg * (1.0 + args.extra_load),
+                (nominal_kg, nominal_kg * (1.0 + args.extra_load)),
                 &config,
                 draw,
                 args.repeats,
@@ -556,7 +566,10 @@ fn obtain_dataset(
         "--resimulate".to_owned()
     } else {
         let spin = spinner(&format!("reading {}", dir.display()));
-        let read = read_dataset(dir, &wanted);
+        let read = read_dataset(dir, &wanted).and_then(|(dataset, stamp)| {
+            check_simulator(config, spec, &dataset)?;
+            Ok((dataset, stamp))
+        });
         spin.finish_and_clear();
         match read {
             Ok((dataset, _)) => {
@@ -615,8 +628,7 @@ fn obtain_dataset(
 fn load_independence(
     pool: &[&StanceSample],
     heavy: &[StanceSample],
-    nominal_kg: f64,
-    heavy_kg: f64,
+    (nominal_kg, heavy_kg): (f64, f64),
     config: &CheckedTrainConfig,
     draw: Draw,
     repeats: usize,

@@ -40,7 +40,9 @@ use rayon::prelude::*;
 /// Simulate the one-legged hopper with PreSRS on the paper's terrains and gaits.
 #[derive(Debug, clap::Args)]
 pub struct SimulateArgs {
-    /// Output folder; receives manifest.csv and one TekScan ASCII movie per trial.
+    /// Output folder; receives manifest.csv, one TekScan ASCII movie per trial (recordings/), the ground
+    /// truth (truth/), table1.csv, config.json and, last, stamp.json (what it was made from and a
+    /// fingerprint of every file: `presrs reproduce --out R` reuses R/dataset when it matches).
     #[arg(long, required_unless_present_any = ["print_config", "track"])]
     pub out: Option<PathBuf>,
     /// Seed of every random choice; the same seed gives the same bytes.
@@ -269,7 +271,13 @@ pub fn write_dataset_with(
     let plans: Vec<TrialPlan> = sim.plan(spec)?;
     let total = plans.len();
     // The old stamp goes first: until the new one is written, the folder claims no complete data set.
+    // The files it lists that the new data set does not have (movies of a larger one) go at the end.
     let stamp_path = out_dir.join(STAMP_FILE);
+    let old_files: Vec<String> = std::fs::read_to_string(&stamp_path)
+        .ok()
+        .and_then(|text| serde_json::from_str::<DatasetStamp>(&text).ok())
+        .map(|old| old.files.into_keys().collect())
+        .unwrap_or_default();
     match std::fs::remove_file(&stamp_path) {
         Err(err) if err.kind() != std::io::ErrorKind::NotFound => {
             return Err(err)
@@ -429,6 +437,16 @@ pub fn write_dataset_with(
         serde_json::to_writer_pretty(&mut *w, &stamp).map_err(std::io::Error::from)?;
         writeln!(w)
     })?;
+    for rel in old_files {
+        // Only plain relative paths inside the folder, as this function writes them.
+        let inside = Path::new(&rel)
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        if inside && !stamp.files.contains_key(&rel) {
+            // A file that cannot be removed is only clutter: the new stamp does not list it.
+            let _ = std::fs::remove_file(out_dir.join(&rel));
+        }
+    }
 
     let hops: usize = truths.iter().map(|t| t.hops.len()).sum();
     let stance_sum: f64 = truths
@@ -530,6 +548,33 @@ pub fn read_dataset(dir: &Path, wanted: &DatasetKey) -> anyhow::Result<(Dataset,
         stamp.frames
     );
     Ok((Dataset { trials }, stamp))
+}
+
+/// Checks that this build's simulator still makes `dataset` (read back from a folder): simulates its first
+/// trial again (about 1/50 of the time of the whole data set) and compares the movie and the truth. A
+/// simulator changed without a version change (a development build) is caught here; the error says so.
+pub fn check_simulator(
+    config: &SimConfig,
+    spec: &DatasetSpec,
+    dataset: &Dataset,
+) -> anyhow::Result<()> {
+    let Some(stored) = dataset.trials.first() else {
+        return Ok(());
+    };
+    let sim = Simulator::new(config.clone(), spec.seed, spec.image_terrains.clone())?;
+    let again = sim.run_trial(&stored.plan, spec.seed)?;
+    let same = again.plan == stored.plan
+        && again.hops == stored.hops
+        && again.attempts == stored.attempts
+        && again.recording.grid() == stored.recording.grid()
+        && again.recording.present() == stored.recording.present()
+        && again.recording.data() == stored.recording.data();
+    anyhow::ensure!(
+        same,
+        "this build's simulator no longer makes its trial {} (presrs changed without a version change)",
+        stored.plan.name()
+    );
+    Ok(())
 }
 
 /// The bytes of `dir/rel`, checked against the stamp's size and fingerprint.
@@ -1137,6 +1182,14 @@ mod tests {
             );
         }
         assert_eq!(read.velocity_table(), kept.velocity_table());
+        check_simulator(&config, &spec, &read).unwrap();
+        let mut stale = read.clone();
+        stale.trials[0].hops[0].truth.apex_height_m += 1e-9;
+        let err = check_simulator(&config, &spec, &stale).unwrap_err();
+        assert!(
+            format!("{err:#}").contains("no longer makes its trial carpet_G2_000"),
+            "{err:#}"
+        );
 
         // Another seed, load or configuration is not this data set.
         let mut other = spec.clone();
@@ -1184,6 +1237,14 @@ mod tests {
             format!("{err:#}").contains("trials.json has changed"),
             "{err:#}"
         );
+
+        // A smaller data set in the same folder: the old movies it does not have are removed.
+        let mut smaller = spec.clone();
+        smaller.terrains = vec!["grass".into()];
+        write_dataset_with(&config, &smaller, dir.path(), false, &|_, _| {}).unwrap();
+        assert!(!dir.path().join("recordings/carpet_G2_000.asf").exists());
+        assert!(dir.path().join("recordings/grass_G2_000.asf").exists());
+        read_dataset(dir.path(), &DatasetKey::new(&config, &smaller)).unwrap();
 
         // Rewriting removes the old stamp before anything else: a failure half-way leaves none.
         std::fs::remove_dir_all(dir.path().join("truth")).unwrap();
