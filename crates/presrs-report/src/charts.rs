@@ -1003,9 +1003,15 @@ impl Figure for FaultFigure {
                 .draw()?;
             for (name, points) in &panel.lines {
                 let (color, shape) = style_of(name);
+                // The first method wider, so that coinciding lines both show.
+                let width = if shape == 0 && methods.len() > 1 {
+                    5
+                } else {
+                    2
+                };
                 chart.draw_series(LineSeries::new(
                     points.iter().map(|p| (p.0, p.1)),
-                    color.stroke_width(2),
+                    color.stroke_width(width),
                 ))?;
                 chart.draw_series(points.iter().filter(|p| p.2 > 0.0).map(|&(x, m, sd)| {
                     PathElement::new(

@@ -948,8 +948,8 @@ fn fault_section<'a>(faults: &[FaultResult], note: Option<&str>) -> Option<Secti
                  the image's maximum, gain = each sensel's gain drawn around 1, noise = Gaussian \
                  noise on every reading, shift = the foot print moved by whole sensels, rotate = \
                  turned about its centre of pressure, load = every value scaled. The leftmost point \
-                 of each panel (the rightmost-but-one for load, at factor 1) is the clean test \
-                 set.{repeats}"
+                 of each panel (the one at factor 1 for load) is the clean test set; where the \
+                 lines coincide, the automatic choice picked the paper's method.{repeats}"
             ),
         )),
         after: table,
