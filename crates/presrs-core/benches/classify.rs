@@ -40,12 +40,13 @@ fn classify(c: &mut Criterion) {
         .map(<[f64]>::to_vec)
         .unwrap_or_default();
     let mut reduced = vec![0.0; model.pca().n_components()];
+    let mut projection = model.pca().scratch();
     c.bench_function("pca_project_1025_to_51", |b| {
         b.iter(|| {
             black_box(
                 model
                     .pca()
-                    .project_into(black_box(&features), &mut reduced)
+                    .project_fast_into(black_box(&features), &mut projection, &mut reduced)
                     .ok(),
             )
         })

@@ -1,4 +1,5 @@
-//! The PCA projection stage on its own: the SIMD kernel (`Pca::project_into`) against faer's matmul on
+//! The PCA projection stage on its own: the SIMD kernel in f64 (`Pca::project_into`) and with the f32
+//! basis copy (`Pca::project_fast_into`, the classification path) against faer's matmul on
 //! the same row-major 51 x 1025 basis (the previous implementation), and on a 4 x 1025 basis that fits
 //! in L1 (arithmetic bound rather than L2 bound).
 //!
@@ -44,6 +45,15 @@ fn pca_stage(c: &mut Criterion) {
     let mut group = c.benchmark_group("pca_stage");
     group.bench_function("simd_project_51x1025", |b| {
         b.iter(|| black_box(pca.project_into(black_box(&features), &mut out).ok()))
+    });
+    let mut scratch = pca.scratch();
+    group.bench_function("simd_project_f32_51x1025", |b| {
+        b.iter(|| {
+            black_box(
+                pca.project_fast_into(black_box(&features), &mut scratch, &mut out)
+                    .ok(),
+            )
+        })
     });
     group.bench_function("faer_matmul_51x1025", |b| {
         b.iter(|| {

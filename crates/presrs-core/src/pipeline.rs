@@ -25,7 +25,7 @@ use crate::crop::Crop;
 use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
 use crate::frame::{Frame, FrameView, Grid};
-use crate::pca::Pca;
+use crate::pca::{Pca, ProjectionScratch};
 use crate::preprocess::{FillScratch, Preprocess, fill_from_neighbours, normalise_load};
 
 /// Everything training needs besides the data. `Default` is the paper's setting.
@@ -246,13 +246,15 @@ pub fn train(
 
     let pca = Pca::fit(&train_features, n_features, config.dims)?;
     let dims = pca.n_components();
+    // The same projection as a session's (f32), so training and classification see the same vectors.
     let project_all = |features: &[f64]| -> Result<Vec<f64>> {
         let mut reduced = vec![0.0; features.len() / n_features * dims];
+        let mut scratch = pca.scratch();
         for (x, out) in features
             .chunks_exact(n_features)
             .zip(reduced.chunks_exact_mut(dims))
         {
-            pca.project_into(x, out)?;
+            pca.project_fast_into(x, &mut scratch, out)?;
         }
         Ok(reduced)
     };
@@ -468,6 +470,7 @@ impl TrainedModel {
                 self.extractor.clone(),
             ),
             features: vec![0.0; fields.pca.n_features()],
+            projection: fields.pca.scratch(),
             reduced: vec![0.0; fields.pca.n_components()],
             scratch: fields.classifier.scratch(),
             posteriors: vec![0.0; fields.class_names.len()],
@@ -555,6 +558,7 @@ pub struct Session<'m> {
     model: &'m TrainedModel,
     preprocessor: Preprocessor,
     features: Vec<f64>,
+    projection: ProjectionScratch,
     reduced: Vec<f64>,
     scratch: ClassifierScratch,
     posteriors: Vec<f64>,
@@ -622,10 +626,11 @@ impl<'m> Session<'m> {
     /// The PCA-reduced feature vector of `frame` (what the classifier sees).
     pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
         self.preprocessor.features_into(frame, &mut self.features)?;
-        self.model
-            .fields
-            .pca
-            .project_into(&self.features, &mut self.reduced)?;
+        self.model.fields.pca.project_fast_into(
+            &self.features,
+            &mut self.projection,
+            &mut self.reduced,
+        )?;
         if self.reduced.iter().any(|value| !value.is_finite()) {
             return Err(CoreError::Param {
                 name: "image",

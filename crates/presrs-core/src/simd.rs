@@ -12,10 +12,11 @@
 //!   per row (over consecutive chunks) so that they are not latency bound either;
 //! * the `cols % lanes` trailing columns are added in scalar after the horizontal sum.
 //!
-//! Measured on the 2-core development VM (AVX-512 Xeon, 2.3 GHz): the 51 x 1025 product takes about 6 us,
-//! which is what merely reading the 418 KB basis once takes there (68-78 GB/s with AVX2 or AVX-512 loads;
-//! a 32 KB basis reads at ~175 GB/s). Wider registers (pulp's `x86-v4`) did not help: halving the bytes
-//! (an f32 copy of the basis) is what would.
+//! Measured on the 2-core development VM (AVX-512 Xeon, 2.3 GHz): the 51 x 1025 product in f64 takes about
+//! 6 us, which is what merely reading the 418 KB basis once takes there (68-78 GB/s with AVX2 or AVX-512
+//! loads; a 32 KB basis reads at ~175 GB/s). Wider registers (pulp's `x86-v4`) did not help; halving the
+//! bytes does: the kernel is generic over [`Element`], and the PCA's classification path runs it on an f32
+//! copy of the basis (1.75x faster, median of criterion's `pca_stage` bench under load).
 //!
 //! The summation order depends only on the shape and the instruction set chosen at run time, so the
 //! result is deterministic on a given machine. Nothing is allocated.
@@ -25,12 +26,96 @@ use pulp::{Arch, Simd, WithSimd};
 /// Rows per block in the main loop.
 const ROWS: usize = 8;
 
+/// A floating-point element the kernel runs on: `f64`, or `f32` for a half-size copy of a matrix that is
+/// read faster than it is multiplied. Each maps to pulp's registers and operations of its width; dot
+/// products are reduced in the element's own precision and returned as `f64`.
+pub(crate) trait Element:
+    Copy + core::ops::Mul<Output = Self> + core::ops::AddAssign
+{
+    type Reg<S: Simd>: Copy;
+    const ZERO: Self;
+    fn as_simd<S: Simd>(values: &[Self]) -> (&[Self::Reg<S>], &[Self]);
+    fn lanes<S: Simd>() -> usize;
+    fn splat<S: Simd>(simd: S, value: Self) -> Self::Reg<S>;
+    fn mul_add<S: Simd>(simd: S, a: Self::Reg<S>, b: Self::Reg<S>, c: Self::Reg<S>)
+    -> Self::Reg<S>;
+    fn add<S: Simd>(simd: S, a: Self::Reg<S>, b: Self::Reg<S>) -> Self::Reg<S>;
+    fn reduce_sum<S: Simd>(simd: S, a: Self::Reg<S>) -> Self;
+    fn to_f64(self) -> f64;
+}
+
+impl Element for f64 {
+    type Reg<S: Simd> = S::f64s;
+    const ZERO: Self = 0.0;
+    #[inline(always)]
+    fn as_simd<S: Simd>(values: &[Self]) -> (&[S::f64s], &[Self]) {
+        S::as_simd_f64s(values)
+    }
+    #[inline(always)]
+    fn lanes<S: Simd>() -> usize {
+        S::F64_LANES
+    }
+    #[inline(always)]
+    fn splat<S: Simd>(simd: S, value: Self) -> S::f64s {
+        simd.splat_f64s(value)
+    }
+    #[inline(always)]
+    fn mul_add<S: Simd>(simd: S, a: S::f64s, b: S::f64s, c: S::f64s) -> S::f64s {
+        simd.mul_add_e_f64s(a, b, c)
+    }
+    #[inline(always)]
+    fn add<S: Simd>(simd: S, a: S::f64s, b: S::f64s) -> S::f64s {
+        simd.add_f64s(a, b)
+    }
+    #[inline(always)]
+    fn reduce_sum<S: Simd>(simd: S, a: S::f64s) -> Self {
+        simd.reduce_sum_f64s(a)
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Element for f32 {
+    type Reg<S: Simd> = S::f32s;
+    const ZERO: Self = 0.0;
+    #[inline(always)]
+    fn as_simd<S: Simd>(values: &[Self]) -> (&[S::f32s], &[Self]) {
+        S::as_simd_f32s(values)
+    }
+    #[inline(always)]
+    fn lanes<S: Simd>() -> usize {
+        S::F32_LANES
+    }
+    #[inline(always)]
+    fn splat<S: Simd>(simd: S, value: Self) -> S::f32s {
+        simd.splat_f32s(value)
+    }
+    #[inline(always)]
+    fn mul_add<S: Simd>(simd: S, a: S::f32s, b: S::f32s, c: S::f32s) -> S::f32s {
+        simd.mul_add_e_f32s(a, b, c)
+    }
+    #[inline(always)]
+    fn add<S: Simd>(simd: S, a: S::f32s, b: S::f32s) -> S::f32s {
+        simd.add_f32s(a, b)
+    }
+    #[inline(always)]
+    fn reduce_sum<S: Simd>(simd: S, a: S::f32s) -> Self {
+        simd.reduce_sum_f32s(a)
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
+
 /// `out = matrix · x` for a row-major `out.len() x cols` matrix (`matrix` holds at least
 /// `out.len() * cols` values; any excess is ignored). Does not allocate.
 ///
 /// # Panics
 /// If `x.len() != cols` or `matrix` is shorter than `out.len() * cols`.
-pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f64]) {
+pub(crate) fn matrix_vector<T: Element>(matrix: &[T], cols: usize, x: &[T], out: &mut [f64]) {
     assert_eq!(x.len(), cols, "matrix_vector: x has the wrong length");
     let needed = out.len().checked_mul(cols);
     assert!(
@@ -49,14 +134,14 @@ pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f
     });
 }
 
-struct MatVec<'a> {
-    matrix: &'a [f64],
+struct MatVec<'a, T> {
+    matrix: &'a [T],
     cols: usize,
-    x: &'a [f64],
+    x: &'a [T],
     out: &'a mut [f64],
 }
 
-impl WithSimd for MatVec<'_> {
+impl<T: Element> WithSimd for MatVec<'_, T> {
     type Output = ();
 
     #[inline(always)]
@@ -70,7 +155,7 @@ impl WithSimd for MatVec<'_> {
         let mut blocks = matrix.chunks_exact(ROWS * cols);
         let mut outs = out.chunks_exact_mut(ROWS);
         for (rows, dst) in (&mut blocks).zip(&mut outs) {
-            block::<S, ROWS, 1>(simd, rows, cols, x, dst);
+            block::<S, T, ROWS, 1>(simd, rows, cols, x, dst);
         }
         // The remaining < ROWS rows: 4, 2 then 1 at a time, with more accumulators per row.
         let mut matrix = blocks.remainder();
@@ -78,17 +163,17 @@ impl WithSimd for MatVec<'_> {
         if out.len() >= 4 {
             let (rows, rest) = matrix.split_at(4 * cols);
             let (dst, out_rest) = out.split_at_mut(4);
-            block::<S, 4, 2>(simd, rows, cols, x, dst);
+            block::<S, T, 4, 2>(simd, rows, cols, x, dst);
             (matrix, out) = (rest, out_rest);
         }
         if out.len() >= 2 {
             let (rows, rest) = matrix.split_at(2 * cols);
             let (dst, out_rest) = out.split_at_mut(2);
-            block::<S, 2, 4>(simd, rows, cols, x, dst);
+            block::<S, T, 2, 4>(simd, rows, cols, x, dst);
             (matrix, out) = (rest, out_rest);
         }
         if !out.is_empty() {
-            block::<S, 1, 8>(simd, &matrix[..cols], cols, x, out);
+            block::<S, T, 1, 8>(simd, &matrix[..cols], cols, x, out);
         }
     }
 }
@@ -96,19 +181,19 @@ impl WithSimd for MatVec<'_> {
 /// `dst[r] = rows[r * cols .. (r + 1) * cols] · x` for `r < R`, with `U` accumulators per row (over
 /// consecutive SIMD chunks). `rows` holds exactly `R * cols` values, `dst` `R`, `x` `cols`.
 #[inline(always)]
-fn block<S: Simd, const R: usize, const U: usize>(
+fn block<S: Simd, T: Element, const R: usize, const U: usize>(
     simd: S,
-    rows: &[f64],
+    rows: &[T],
     cols: usize,
-    x: &[f64],
+    x: &[T],
     dst: &mut [f64],
 ) {
-    let (x_head, x_tail) = S::as_simd_f64s(x);
+    let (x_head, x_tail) = T::as_simd::<S>(x);
     let n = x_head.len();
-    let heads: [&[S::f64s]; R] =
-        core::array::from_fn(|r| &S::as_simd_f64s(&rows[r * cols..(r + 1) * cols]).0[..n]);
+    let heads: [&[T::Reg<S>]; R] =
+        core::array::from_fn(|r| &T::as_simd::<S>(&rows[r * cols..(r + 1) * cols]).0[..n]);
 
-    let zero = simd.splat_f64s(0.0);
+    let zero = T::splat(simd, T::ZERO);
     let mut acc = [[zero; R]; U];
     let whole = n - n % U;
     let mut i = 0;
@@ -116,7 +201,7 @@ fn block<S: Simd, const R: usize, const U: usize>(
         for u in 0..U {
             let xv = x_head[i + u];
             for r in 0..R {
-                acc[u][r] = simd.mul_add_e_f64s(heads[r][i + u], xv, acc[u][r]);
+                acc[u][r] = T::mul_add(simd, heads[r][i + u], xv, acc[u][r]);
             }
         }
         i += U;
@@ -124,22 +209,22 @@ fn block<S: Simd, const R: usize, const U: usize>(
     for i in whole..n {
         let xv = x_head[i];
         for r in 0..R {
-            acc[0][r] = simd.mul_add_e_f64s(heads[r][i], xv, acc[0][r]);
+            acc[0][r] = T::mul_add(simd, heads[r][i], xv, acc[0][r]);
         }
     }
 
-    let tail_start = n * S::F64_LANES;
+    let tail_start = n * T::lanes::<S>();
     for r in 0..R {
         let mut sum = acc[0][r];
         for u in 1..U {
-            sum = simd.add_f64s(sum, acc[u][r]);
+            sum = T::add(simd, sum, acc[u][r]);
         }
-        let mut total = simd.reduce_sum_f64s(sum);
+        let mut total = T::reduce_sum(simd, sum);
         let row_tail = &rows[r * cols + tail_start..(r + 1) * cols];
-        for (a, b) in row_tail.iter().zip(x_tail) {
+        for (&a, &b) in row_tail.iter().zip(x_tail) {
             total += a * b;
         }
-        dst[r] = total;
+        dst[r] = total.to_f64();
     }
 }
 
@@ -225,6 +310,64 @@ mod tests {
         check(80, 51, &mut rng); // the paper's Parzen expansion
     }
 
+    /// The f32 kernel (the PCA's compact basis) against the exact f64 product of the same f32 values:
+    /// within `(cols / 4 + 8) · 2⁻²⁴` of the sum of absolute products (each accumulator sums at most
+    /// `cols / lanes` terms, then a few reductions), for every backend.
+    #[test]
+    fn f32_matches_the_exact_product_within_single_precision() {
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        fn with<S: Simd>(simd: S) -> impl Fn(&[f32], usize, &[f32], &mut [f64]) {
+            move |matrix, cols, x, out| {
+                if cols == 0 {
+                    out.fill(0.0);
+                } else {
+                    simd.vectorize(MatVec {
+                        matrix,
+                        cols,
+                        x,
+                        out,
+                    });
+                }
+            }
+        }
+        type KernelF32 = fn(&[f32], usize, &[f32], &mut [f64]);
+        let backends: [(&str, KernelF32); 4] = [
+            ("dispatched", matrix_vector::<f32>),
+            ("scalar", |m, c, x, o| with(pulp::Scalar::new())(m, c, x, o)),
+            ("scalar256", |m, c, x, o| with(pulp::Scalar256b)(m, c, x, o)),
+            ("scalar512", |m, c, x, o| with(pulp::Scalar512b)(m, c, x, o)),
+        ];
+        for (rows, cols) in [(1, 1), (3, 7), (9, 17), (51, 1025), (80, 51), (13, 1024)] {
+            let matrix: Vec<f32> = (0..rows * cols)
+                .map(|_| rng.random_range(-1.0f32..1.0))
+                .collect();
+            let x: Vec<f32> = (0..cols).map(|_| rng.random_range(-1e3f32..1e3)).collect();
+            for (name, kernel) in backends {
+                let mut got = vec![f64::NAN; rows];
+                kernel(&matrix, cols, &x, &mut got);
+                for (r, &value) in got.iter().enumerate() {
+                    let row = &matrix[r * cols..(r + 1) * cols];
+                    let exact: f64 = row
+                        .iter()
+                        .zip(&x)
+                        .map(|(&a, &b)| f64::from(a) * f64::from(b))
+                        .sum();
+                    let magnitude: f64 = row
+                        .iter()
+                        .zip(&x)
+                        .map(|(&a, &b)| (f64::from(a) * f64::from(b)).abs())
+                        .sum();
+                    let tolerance =
+                        (cols as f64 / 4.0 + 8.0) * f64::from(f32::EPSILON) / 2.0 * magnitude;
+                    assert!(
+                        (value - exact).abs() <= tolerance,
+                        "{name}, {rows} x {cols}, row {r}: {value} vs {exact} (tolerance {tolerance:e})"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn exact_on_small_integers_and_ignores_excess_matrix() {
         // 3 x 5 matrix followed by junk that must not be read into the result.
@@ -237,7 +380,7 @@ mod tests {
         let mut empty: [f64; 0] = [];
         matrix_vector(&matrix, 5, &x, &mut empty);
         let mut zero_cols = [1.0; 2];
-        matrix_vector(&[], 0, &[], &mut zero_cols);
+        matrix_vector::<f64>(&[], 0, &[], &mut zero_cols);
         assert_eq!(zero_cols, [0.0, 0.0]);
     }
 

@@ -215,3 +215,75 @@ fn projection_checks_lengths() {
     assert!(pca.project_into(&[0.0; 4], &mut out[..2]).is_err());
     assert!(pca.project_into(&[0.0; 4], &mut out).is_ok());
 }
+
+/// The f32 classification path against the exact f64 projection, on paper-sized data with a large offset
+/// (as |FFT| features have: the DC term is the total load): within `1e-5` of `Σ |basis (x - mean)|` per
+/// component, and the same nearest training vector for every test vector.
+#[test]
+fn fast_projection_matches_the_exact_one_within_single_precision() {
+    let (n_train, d) = (80, 1025);
+    let data = anisotropic_data(n_train + 40, d, 21);
+    let (train, test) = data.split_at(n_train * d);
+    let mut lifted: Vec<f64> = train.to_vec();
+    let mut test_lifted: Vec<f64> = test.to_vec();
+    // A shared offset of 1e5 on the first feature, like the DC bin of a loaded image.
+    for row in lifted
+        .chunks_exact_mut(d)
+        .chain(test_lifted.chunks_exact_mut(d))
+    {
+        row[0] += 1e5;
+    }
+    let pca = Pca::fit(&lifted, d, 51).unwrap();
+    let mut scratch = pca.scratch();
+    let (mut exact, mut fast) = (vec![0.0; 51], vec![0.0; 51]);
+    let project_fast = |x: &[f64], scratch: &mut _, out: &mut [f64]| {
+        pca.project_fast_into(x, scratch, out).unwrap()
+    };
+    let train_fast: Vec<Vec<f64>> = lifted
+        .chunks_exact(d)
+        .map(|x| {
+            let mut out = vec![0.0; 51];
+            project_fast(x, &mut scratch, &mut out);
+            out
+        })
+        .collect();
+    let train_exact: Vec<Vec<f64>> = lifted
+        .chunks_exact(d)
+        .map(|x| pca.project(x).unwrap())
+        .collect();
+    let nearest = |set: &[Vec<f64>], z: &[f64]| {
+        let distance = |v: &Vec<f64>| v.iter().zip(z).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        (0..set.len())
+            .min_by(|&a, &b| distance(&set[a]).total_cmp(&distance(&set[b])))
+            .unwrap()
+    };
+    for x in test_lifted.chunks_exact(d) {
+        pca.project_into(x, &mut exact).unwrap();
+        project_fast(x, &mut scratch, &mut fast);
+        for k in 0..51 {
+            let magnitude: f64 = pca
+                .component(k)
+                .iter()
+                .zip(x)
+                .zip(pca.mean())
+                .map(|((b, v), m)| (b * (v - m)).abs())
+                .sum();
+            assert!(
+                (fast[k] - exact[k]).abs() <= 1e-5 * magnitude,
+                "component {k}: {} vs {} (sum of |terms| {magnitude})",
+                fast[k],
+                exact[k]
+            );
+        }
+        assert_eq!(nearest(&train_fast, &fast), nearest(&train_exact, &exact));
+    }
+    // Lengths are checked as in the exact path.
+    assert!(
+        pca.project_fast_into(&[0.0; 3], &mut scratch, &mut fast)
+            .is_err()
+    );
+    assert!(
+        pca.project_fast_into(&lifted[..d], &mut scratch, &mut fast[..2])
+            .is_err()
+    );
+}

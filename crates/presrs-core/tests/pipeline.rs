@@ -195,8 +195,19 @@ fn session_features_are_the_paper_features_of_the_cropped_image() {
         extract_features(&view, &Crop::PAPER, &FeatureConfig::default()).unwrap(),
         direct
     );
+    // The session projects with the PCA's single-precision path (as training does), bit for bit.
     let reduced = session.reduce(&view).unwrap().to_vec();
-    assert_eq!(reduced, model.pca().project(&direct).unwrap());
+    let pca = model.pca();
+    let mut fast = vec![0.0; pca.n_components()];
+    pca.project_fast_into(&direct, &mut pca.scratch(), &mut fast)
+        .unwrap();
+    assert_eq!(reduced, fast);
+    // ... which is the exact projection to single precision.
+    let exact = pca.project(&direct).unwrap();
+    let scale = exact.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    for (a, b) in reduced.iter().zip(&exact) {
+        assert!((a - b).abs() <= 1e-5 * scale, "{a} vs {b}");
+    }
 }
 
 #[test]
