@@ -99,8 +99,8 @@ class State:
 class NumpyPeer:
     """The pipeline in numpy, written for speed.
 
-    Algebraically the same as presrs: projection `basis @ f - basis @ mean` (the projected mean
-    precomputed), squared distances `|z|^2 + |p|^2 - 2 p.z` with the |z|^2 term dropped (it is the same for
+    Algebraically the same as presrs: projection `basis @ (f - mean)` in float32 as presrs's
+    classification path does it, squared distances `|z|^2 + |p|^2 - 2 p.z` with the |z|^2 term dropped (it is the same for
     every stored vector, so it cancels in the posteriors), and the class densities shifted by the largest
     kernel exponent before exp (log-sum-exp with one shift for all classes: the best class's density is
     at least 1/count, so nothing that matters underflows).
@@ -111,8 +111,10 @@ class NumpyPeer:
     def __init__(self, state: State, image_shape: tuple[int, int]):
         self.rs, self.cs = state.window(*image_shape)
         self.n = state.fft_len
-        self.basis = np.ascontiguousarray(state.basis)  # dims x n_features
-        self.projected_mean = self.basis @ state.mean
+        # presrs classifies with an f32 copy of the PCA axes (the centred features rounded to f32, f32
+        # accumulation: half the bytes to stream); this peer does the same, which is also faster in numpy.
+        self.mean = state.mean
+        self.basis32 = np.ascontiguousarray(state.basis, dtype=np.float32)  # dims x n_features
         inv_two_var = 0.5 / (state.sigma * state.sigma)
         # kernel exponent -|z - p|^2 / (2 sigma^2) + |z|^2 / (2 sigma^2) = a @ z - b
         self.a = np.ascontiguousarray(state.vectors * (2.0 * inv_two_var))
@@ -126,8 +128,8 @@ class NumpyPeer:
         return np.abs(np.fft.rfft(x, n=self.n, axis=-1))
 
     def reduce(self, features: np.ndarray) -> np.ndarray:
-        """PCA: basis . (f - mean), for one vector or a stack of rows."""
-        return features @ self.basis.T - self.projected_mean
+        """PCA: basis . (f - mean) in float32, for one vector or a stack of rows."""
+        return (features - self.mean).astype(np.float32) @ self.basis32.T
 
     def densities(self, z: np.ndarray) -> np.ndarray:
         """Class densities (mean kernel value per class), up to one positive factor per image."""
