@@ -24,7 +24,7 @@ for arg in "$@"; do
     case $arg in
         --record) record=1 ;;
         --quick) iterations=2000; sklearn_iterations=200; rounds=1 ;;
-        -h|--help) sed -n '2,12p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h|--help) sed -n '2,11p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "side_by_side.sh: unknown argument $arg (try --help)" >&2; exit 2 ;;
     esac
 done
