@@ -683,6 +683,25 @@ mod tests {
         out
     }
 
+    /// The paper's protocol on the synthetic data: trained on G2, 10 per class with 3 validating.
+    fn g2_protocol() -> Protocol {
+        Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(10),
+            validation: ValidationSize::Count(3),
+        }
+    }
+
+    /// The paper's pipeline with `dims` principal components.
+    fn paper_config_with_dims(dims: usize) -> CheckedTrainConfig {
+        TrainConfig {
+            dims,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    }
+
     fn samples<'a>(data: &'a [(Frame, &'static str, &'static str)]) -> Vec<EvalSample<'a>> {
         data.iter()
             .map(|(frame, label, condition)| EvalSample {
@@ -698,17 +717,8 @@ mod tests {
     fn paper_protocol_counts_and_reproducibility() {
         let data = data();
         let samples = samples(&data);
-        let protocol = Protocol::TrainCondition {
-            condition: Some("G2".into()),
-            per_class: Some(10),
-            validation: ValidationSize::Count(3),
-        };
-        let config = TrainConfig {
-            dims: 20,
-            ..TrainConfig::default()
-        }
-        .check()
-        .unwrap();
+        let protocol = g2_protocol();
+        let config = paper_config_with_dims(20);
         let a = evaluate(&samples, &protocol, &config, 2, 5, &|| {}).unwrap();
         let b = evaluate(&samples, &protocol, &config, 2, 5, &|| {}).unwrap();
         // everything but the wall times is reproducible
@@ -746,12 +756,7 @@ mod tests {
             per_class: Some(8),
             validation: ValidationSize::Count(3),
         };
-        let config = TrainConfig {
-            dims: 10,
-            ..TrainConfig::default()
-        }
-        .check()
-        .unwrap();
+        let config = paper_config_with_dims(10);
         let report = evaluate(&samples, &protocol, &config, 1, 3, &|| {}).unwrap();
         assert_eq!(
             report.per_condition.keys().collect::<Vec<_>>(),
@@ -765,17 +770,8 @@ mod tests {
     fn perturbing_test_images_only_changes_the_tested_accuracy() {
         let data = data();
         let samples = samples(&data);
-        let protocol = Protocol::TrainCondition {
-            condition: Some("G2".into()),
-            per_class: Some(10),
-            validation: ValidationSize::Count(3),
-        };
-        let config = TrainConfig {
-            dims: 20,
-            ..TrainConfig::default()
-        }
-        .check()
-        .unwrap();
+        let protocol = g2_protocol();
+        let config = paper_config_with_dims(20);
         let plain = evaluate(&samples, &protocol, &config, 1, 5, &|| {}).unwrap();
         let identity = |_: usize, frame: FrameView<'_>, _: u64| Ok(frame.to_frame());
         let same = evaluate_perturbed(&samples, &protocol, &config, 1, 5, &|| {}, Some(&identity))
@@ -796,17 +792,8 @@ mod tests {
     fn several_perturbations_at_once_match_one_at_a_time() {
         let data = data();
         let samples = samples(&data);
-        let protocol = Protocol::TrainCondition {
-            condition: Some("G2".into()),
-            per_class: Some(10),
-            validation: ValidationSize::Count(3),
-        };
-        let config = TrainConfig {
-            dims: 20,
-            ..TrainConfig::default()
-        }
-        .check()
-        .unwrap();
+        let protocol = g2_protocol();
+        let config = paper_config_with_dims(20);
         let noise = crate::perturb::Perturbation::Noise(20.0);
         let noisy =
             |i: usize, frame: FrameView<'_>, seed: u64| Ok(noise.apply(frame, seed, i as u64));

@@ -44,71 +44,64 @@ pub(crate) trait Element:
     fn to_f64(self) -> f64;
 }
 
-impl Element for f64 {
-    type Reg<S: Simd> = S::f64s;
-    const ZERO: Self = 0.0;
-    #[inline(always)]
-    fn as_simd<S: Simd>(values: &[Self]) -> (&[S::f64s], &[Self]) {
-        S::as_simd_f64s(values)
-    }
-    #[inline(always)]
-    fn lanes<S: Simd>() -> usize {
-        S::F64_LANES
-    }
-    #[inline(always)]
-    fn splat<S: Simd>(simd: S, value: Self) -> S::f64s {
-        simd.splat_f64s(value)
-    }
-    #[inline(always)]
-    fn mul_add<S: Simd>(simd: S, a: S::f64s, b: S::f64s, c: S::f64s) -> S::f64s {
-        simd.mul_add_e_f64s(a, b, c)
-    }
-    #[inline(always)]
-    fn add<S: Simd>(simd: S, a: S::f64s, b: S::f64s) -> S::f64s {
-        simd.add_f64s(a, b)
-    }
-    #[inline(always)]
-    fn reduce_sum<S: Simd>(simd: S, a: S::f64s) -> Self {
-        simd.reduce_sum_f64s(a)
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self
-    }
+/// `impl Element` for one float type from the names of its pulp register type and operations.
+macro_rules! impl_element {
+    ($t:ty, $reg:ident, $lanes:ident, $as_simd:ident, $splat:ident, $mul_add:ident, $add:ident, $reduce:ident) => {
+        impl Element for $t {
+            type Reg<S: Simd> = S::$reg;
+            const ZERO: Self = 0.0;
+            #[inline(always)]
+            fn as_simd<S: Simd>(values: &[Self]) -> (&[S::$reg], &[Self]) {
+                S::$as_simd(values)
+            }
+            #[inline(always)]
+            fn lanes<S: Simd>() -> usize {
+                S::$lanes
+            }
+            #[inline(always)]
+            fn splat<S: Simd>(simd: S, value: Self) -> S::$reg {
+                simd.$splat(value)
+            }
+            #[inline(always)]
+            fn mul_add<S: Simd>(simd: S, a: S::$reg, b: S::$reg, c: S::$reg) -> S::$reg {
+                simd.$mul_add(a, b, c)
+            }
+            #[inline(always)]
+            fn add<S: Simd>(simd: S, a: S::$reg, b: S::$reg) -> S::$reg {
+                simd.$add(a, b)
+            }
+            #[inline(always)]
+            fn reduce_sum<S: Simd>(simd: S, a: S::$reg) -> Self {
+                simd.$reduce(a)
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                f64::from(self)
+            }
+        }
+    };
 }
 
-impl Element for f32 {
-    type Reg<S: Simd> = S::f32s;
-    const ZERO: Self = 0.0;
-    #[inline(always)]
-    fn as_simd<S: Simd>(values: &[Self]) -> (&[S::f32s], &[Self]) {
-        S::as_simd_f32s(values)
-    }
-    #[inline(always)]
-    fn lanes<S: Simd>() -> usize {
-        S::F32_LANES
-    }
-    #[inline(always)]
-    fn splat<S: Simd>(simd: S, value: Self) -> S::f32s {
-        simd.splat_f32s(value)
-    }
-    #[inline(always)]
-    fn mul_add<S: Simd>(simd: S, a: S::f32s, b: S::f32s, c: S::f32s) -> S::f32s {
-        simd.mul_add_e_f32s(a, b, c)
-    }
-    #[inline(always)]
-    fn add<S: Simd>(simd: S, a: S::f32s, b: S::f32s) -> S::f32s {
-        simd.add_f32s(a, b)
-    }
-    #[inline(always)]
-    fn reduce_sum<S: Simd>(simd: S, a: S::f32s) -> Self {
-        simd.reduce_sum_f32s(a)
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        f64::from(self)
-    }
-}
+impl_element!(
+    f64,
+    f64s,
+    F64_LANES,
+    as_simd_f64s,
+    splat_f64s,
+    mul_add_e_f64s,
+    add_f64s,
+    reduce_sum_f64s
+);
+impl_element!(
+    f32,
+    f32s,
+    F32_LANES,
+    as_simd_f32s,
+    splat_f32s,
+    mul_add_e_f32s,
+    add_f32s,
+    reduce_sum_f32s
+);
 
 /// `out = matrix · x` for a row-major `out.len() x cols` matrix (`matrix` holds at least
 /// `out.len() * cols` values; any excess is ignored). Does not allocate.
