@@ -1,8 +1,10 @@
 //! Prints steady-state hopping observables per gait and terrain ground (used to choose the defaults).
 //! Usage: cargo run --release -p presrs-sim --example calibrate -- '{"robot": {...}}' 'kg,cg;kg,cg;kg,cg;kg,cg'
+//! (a ground may also be a built-in terrain's default ground by name: 'wood;carpet;clay;grass').
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 use presrs_sim::ode::IntegratorParams;
 use presrs_sim::slip::{Gait, GroundParams, Hopper, RobotParams};
+use presrs_sim::terrain::{CarpetParams, ClayParams, GrassParams, WoodParams};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -14,9 +16,15 @@ fn main() {
         .get(2)
         .map(|s| {
             s.split(';')
-                .map(|p| {
-                    let v: Vec<f64> = p.split(',').map(|x| x.parse().unwrap()).collect();
-                    GroundParams::uniform(v[0], v[1])
+                .map(|p| match p {
+                    "wood" => WoodParams::default().ground,
+                    "carpet" => CarpetParams::default().ground,
+                    "clay" => ClayParams::default().ground,
+                    "grass" => GrassParams::default().ground,
+                    _ => {
+                        let v: Vec<f64> = p.split(',').map(|x| x.parse().unwrap()).collect();
+                        GroundParams::uniform(v[0], v[1])
+                    }
                 })
                 .collect()
         })
@@ -89,13 +97,19 @@ fn main() {
             let lo = last.iter().map(|h| h.liftoff_angle_rad).sum::<f64>() / n;
             let fz = last.iter().map(|h| h.peak_normal_force_n).sum::<f64>() / n;
             let zg = last.iter().map(|h| h.max_ground_deflection_m).sum::<f64>() / n;
+            let zlo = last
+                .iter()
+                .map(|h| h.liftoff_ground_deflection_m)
+                .sum::<f64>()
+                / n;
             let paper_v = paper[gi].get(ti).copied().unwrap_or(f64::NAN);
             println!(
-                "{} t{ti}: v={v:.3} ({vmin:.3}..{vmax:.3}) paper {paper_v:.2} ratio {:.2} stance={:.1}ms apex={ap:.3} td={td:.3} lo={lo:.3} Fpk={fz:.1} zg={:.2}mm",
+                "{} t{ti}: v={v:.3} ({vmin:.3}..{vmax:.3}) paper {paper_v:.2} ratio {:.2} stance={:.1}ms apex={ap:.3} td={td:.3} lo={lo:.3} Fpk={fz:.1} zg={:.2}mm footprint={:.2}mm",
                 gait.name,
                 v / paper_v,
                 st * 1e3,
-                zg * 1e3
+                zg * 1e3,
+                zlo * 1e3
             );
         }
     }

@@ -195,6 +195,10 @@ pub struct GroundParams {
     pub layer_depth_m: Option<f64>,
     /// Stiffness the layer below adds once the top layer is compressed through, N/m.
     pub base_stiffness_n_per_m: f64,
+    /// Exponent `n` of a stiffening top layer (a fibrous mat such as a grass canopy): with a layer depth
+    /// `d`, the top layer's force is `k z (z / d)^(n - 1)` (secant stiffness `k` at `z = d`, tangent
+    /// stiffness `n k z^(n-1) / d^(n-1)`, vanishing at the surface). 1: linear (Kelvin-Voigt).
+    pub stiffening_exponent: f64,
 }
 
 impl Default for GroundParams {
@@ -209,6 +213,7 @@ impl GroundParams {
         damping_n_s_per_m: 0.0,
         layer_depth_m: None,
         base_stiffness_n_per_m: 0.0,
+        stiffening_exponent: 1.0,
     };
 
     /// A uniform Kelvin-Voigt ground.
@@ -218,6 +223,7 @@ impl GroundParams {
             damping_n_s_per_m,
             layer_depth_m: None,
             base_stiffness_n_per_m: 0.0,
+            stiffening_exponent: 1.0,
         }
     }
 
@@ -226,11 +232,24 @@ impl GroundParams {
         let Some(k) = self.stiffness_n_per_m else {
             return 0.0;
         };
-        let base = match self.layer_depth_m {
-            Some(depth) if zg > depth => self.base_stiffness_n_per_m * (zg - depth),
-            _ => 0.0,
+        let (top, base) = match self.layer_depth_m {
+            Some(depth) => {
+                let z = zg.max(0.0);
+                let top = if self.stiffening_exponent == 1.0 {
+                    k * zg
+                } else {
+                    k * z * (z / depth).powf(self.stiffening_exponent - 1.0)
+                };
+                let base = if zg > depth {
+                    self.base_stiffness_n_per_m * (zg - depth)
+                } else {
+                    0.0
+                };
+                (top, base)
+            }
+            None => (k * zg, 0.0),
         };
-        k * zg + base
+        top + base
     }
 
     pub fn validate(&self, name: &str) -> Result<()> {
@@ -252,6 +271,20 @@ impl GroundParams {
                     format!(
                         "a layer depth must be positive with a non-negative base stiffness, got {depth} m"
                     ),
+                ));
+            }
+            if !(self.stiffening_exponent.is_finite()
+                && (1.0..=4.0).contains(&self.stiffening_exponent))
+            {
+                return Err(param(
+                    &format!("{name}.stiffening_exponent"),
+                    format!("must be in [1, 4], got {}", self.stiffening_exponent),
+                ));
+            }
+            if self.stiffening_exponent != 1.0 && self.layer_depth_m.is_none() {
+                return Err(param(
+                    &format!("{name}.stiffening_exponent"),
+                    "a stiffening top layer needs its depth (layer_depth_m)",
                 ));
             }
             if !(self.damping_n_s_per_m.is_finite() && self.damping_n_s_per_m > 0.0) {
@@ -304,6 +337,9 @@ pub struct HopTruth {
     pub peak_tangential_force_n: f64,
     /// Largest ground deflection under the foot, m.
     pub max_ground_deflection_m: f64,
+    /// Ground deflection under the foot at lift-off, m: the footprint the foot leaves (a stiffening grass
+    /// canopy is still pressed down when the foot comes off it).
+    pub liftoff_ground_deflection_m: f64,
     /// Mechanical energy at the apex after the hop, J (kinetic + potential, ground level 0).
     pub apex_energy_j: f64,
 }
@@ -542,6 +578,7 @@ impl Hopper {
         let t_lo = self.t_s;
         let beta_lo = (self.state[0] - foot_x).atan2(self.state[1] + self.state[4]);
         let v_lo = self.state[2];
+        let liftoff_zg = self.state[4];
         // The foot leaves the ground; the body is at height y (the ground relaxes behind it).
         self.state[4] = 0.0;
         if self.state[3] <= 0.0 {
@@ -597,6 +634,7 @@ impl Hopper {
             peak_normal_force_n: peak_n,
             peak_tangential_force_n: peak_t,
             max_ground_deflection_m: max_zg,
+            liftoff_ground_deflection_m: liftoff_zg,
             apex_energy_j: self.flight_energy_j(),
         })
     }

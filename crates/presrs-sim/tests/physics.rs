@@ -185,10 +185,9 @@ fn velocity_trends_stance_time_and_image_force_match_the_paper_and_the_dynamics(
     for (g, row) in v.iter().enumerate() {
         for (t, &x) in row.iter().enumerate() {
             let paper = presrs_sim::PAPER_TABLE1[g][t];
-            // Grass at G1 is the known weak cell of the model (about -30 %); see the README.
-            let tol = if (g, t) == (0, 3) { 0.40 } else { 0.25 };
+            // Every cell within +-25 % of Table I (grass included: its stiffening canopy, README).
             assert!(
-                (x / paper - 1.0).abs() < tol,
+                (x / paper - 1.0).abs() < 0.25,
                 "G{} terrain {t}: {x} vs {paper}",
                 g + 1
             );
