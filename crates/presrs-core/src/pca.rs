@@ -323,13 +323,45 @@ impl Pca {
         check_len("pca input", self.n_features, x.len())?;
         check_len("pca output", self.n_components(), out.len())?;
         scratch.centred.resize(self.n_features, 0.0);
-        for ((dst, &value), &mean) in scratch.centred.iter_mut().zip(x).zip(&self.mean) {
-            // Rounding to f32 is the point of this path.
-            #[allow(clippy::cast_possible_truncation)]
-            let centred = (value - mean) as f32;
-            *dst = centred;
-        }
+        centre_to_f32(x, &self.mean, &mut scratch.centred);
         crate::simd::matrix_vector(&self.basis_f32, self.n_features, &scratch.centred, out);
+        Ok(())
+    }
+
+    /// [`project_fast_into`](Self::project_fast_into) for many inputs at once: `xs` holds whole input
+    /// vectors (row-major), `out` receives `n_components` values per input. Each result is bit for bit the
+    /// one-at-a-time result; the basis is read once per block of its rows for all inputs instead of once
+    /// per input (what makes batches faster). Allocates only to grow `scratch`.
+    pub fn project_fast_many(
+        &self,
+        xs: &[f64],
+        scratch: &mut ProjectionScratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        if xs.len() % self.n_features != 0 {
+            return Err(CoreError::Shape {
+                what: "pca inputs",
+                expected: format!("whole vectors of {} features", self.n_features),
+                got: format!("{} values", xs.len()),
+            });
+        }
+        let n = xs.len() / self.n_features;
+        check_len("pca outputs", n * self.n_components(), out.len())?;
+        scratch.centred.resize(xs.len(), 0.0);
+        for (centred_row, x) in scratch
+            .centred
+            .chunks_exact_mut(self.n_features)
+            .zip(xs.chunks_exact(self.n_features))
+        {
+            centre_to_f32(x, &self.mean, centred_row);
+        }
+        crate::simd::matrix_vectors(
+            &self.basis_f32,
+            self.n_features,
+            &scratch.centred,
+            self.n_components(),
+            out,
+        );
         Ok(())
     }
 
@@ -361,6 +393,15 @@ impl Pca {
 /// responsibility (panics if `x` is not `cols` long or `matrix` is too short).
 pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f64]) {
     crate::simd::matrix_vector(matrix, cols, x, out);
+}
+
+/// `out = x - mean`, formed in f64 and rounded to f32 (the point of the fast path).
+fn centre_to_f32(x: &[f64], mean: &[f64], out: &mut [f32]) {
+    for ((dst, &value), &mean) in out.iter_mut().zip(x).zip(mean) {
+        #[allow(clippy::cast_possible_truncation)]
+        let centred = (value - mean) as f32;
+        *dst = centred;
+    }
 }
 
 fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {

@@ -477,14 +477,18 @@ impl TrainedModel {
         }
     }
 
-    /// Classifies many frames in parallel (one session per rayon worker); results in input order.
+    /// Classifies many frames in parallel; results in input order, each equal (bit for bit) to what a
+    /// [`Session`] gives for that frame. Frames go in blocks of [`BATCH_BLOCK`] per rayon task: the
+    /// features of a block are projected together, so the PCA basis is read once per block rather than
+    /// once per frame.
     pub fn classify_batch(&self, frames: &[FrameView<'_>]) -> Vec<Result<Classification>> {
         frames
-            .par_iter()
+            .par_chunks(BATCH_BLOCK)
             .map_init(
-                || self.session(),
-                |session, frame| session.classify(frame).map(|p| p.to_classification()),
+                || BatchSession::new(self),
+                |session, block| session.classify_block(block),
             )
+            .flatten()
             .collect()
     }
 
@@ -604,7 +608,8 @@ impl<'m> Session<'m> {
     pub fn classify(&mut self, frame: &FrameView<'_>) -> Result<Prediction<'_>> {
         self.reduce(frame)?;
         let model = self.model;
-        let class = model.fields.classifier.classify_into(
+        let class = classify_reduced(
+            model,
             &self.reduced,
             &mut self.scratch,
             &mut self.posteriors,
@@ -631,13 +636,120 @@ impl<'m> Session<'m> {
             &mut self.projection,
             &mut self.reduced,
         )?;
-        if self.reduced.iter().any(|value| !value.is_finite()) {
-            return Err(CoreError::Param {
-                name: "image",
-                reason: "contains NaN or infinite values".into(),
-            });
-        }
         Ok(&self.reduced)
+    }
+}
+
+/// Frames per block of [`TrainedModel::classify_batch`]: their features (64 x 1025 x 8 B = 512 KB) and
+/// centred f32 copies stay in L2 while the basis is streamed through once.
+pub const BATCH_BLOCK: usize = 64;
+
+/// The classifier step shared by [`Session`] and [`BatchSession`]: refuses a non-finite reduced vector
+/// (the image held NaN or infinite values), then writes the posteriors and returns the class.
+fn classify_reduced(
+    model: &TrainedModel,
+    reduced: &[f64],
+    scratch: &mut ClassifierScratch,
+    posteriors: &mut [f64],
+) -> Result<usize> {
+    if reduced.iter().any(|value| !value.is_finite()) {
+        return Err(CoreError::Param {
+            name: "image",
+            reason: "contains NaN or infinite values".into(),
+        });
+    }
+    model
+        .fields
+        .classifier
+        .classify_into(reduced, scratch, posteriors)
+}
+
+/// Buffers for classifying a block of frames together (one per rayon worker in
+/// [`TrainedModel::classify_batch`]).
+#[derive(Debug)]
+struct BatchSession<'m> {
+    model: &'m TrainedModel,
+    preprocessor: Preprocessor,
+    /// Row-major `block x n_features`.
+    features: Vec<f64>,
+    projection: ProjectionScratch,
+    /// Row-major `block x n_components`.
+    reduced: Vec<f64>,
+    scratch: ClassifierScratch,
+    posteriors: Vec<f64>,
+}
+
+impl<'m> BatchSession<'m> {
+    fn new(model: &'m TrainedModel) -> Self {
+        let fields = &model.fields;
+        Self {
+            model,
+            preprocessor: Preprocessor::new(
+                fields.crop,
+                fields.preprocess,
+                fields.image_grid,
+                model.extractor.clone(),
+            ),
+            features: Vec::new(),
+            projection: fields.pca.scratch(),
+            reduced: Vec::new(),
+            scratch: fields.classifier.scratch(),
+            posteriors: vec![0.0; fields.class_names.len()],
+        }
+    }
+
+    fn classify_block(&mut self, frames: &[FrameView<'_>]) -> Vec<Result<Classification>> {
+        let pca = &self.model.fields.pca;
+        let (n_features, dims) = (pca.n_features(), pca.n_components());
+        self.features.resize(frames.len() * n_features, 0.0);
+        self.reduced.resize(frames.len() * dims, 0.0);
+        // A frame whose features fail keeps its error; its row is zeroed and its projection ignored.
+        let mut failed: Vec<Option<CoreError>> = Vec::with_capacity(frames.len());
+        for (frame, row) in frames
+            .iter()
+            .zip(self.features.chunks_exact_mut(n_features))
+        {
+            let error = self.preprocessor.features_into(frame, row).err();
+            if error.is_some() {
+                row.fill(0.0);
+            }
+            failed.push(error);
+        }
+        if let Err(err) =
+            pca.project_fast_many(&self.features, &mut self.projection, &mut self.reduced)
+        {
+            // Cannot happen (the buffers are sized above); every frame gets the reason all the same.
+            let reason = err.to_string();
+            return frames
+                .iter()
+                .map(|_| {
+                    Err(CoreError::Param {
+                        name: "pca",
+                        reason: reason.clone(),
+                    })
+                })
+                .collect();
+        }
+        failed
+            .into_iter()
+            .zip(self.reduced.chunks_exact(dims))
+            .map(|(error, reduced)| match error {
+                Some(err) => Err(err),
+                None => {
+                    let class = classify_reduced(
+                        self.model,
+                        reduced,
+                        &mut self.scratch,
+                        &mut self.posteriors,
+                    )?;
+                    Ok(Classification {
+                        class,
+                        confidence: self.posteriors[class],
+                        posteriors: self.posteriors.clone(),
+                    })
+                }
+            })
+            .collect()
     }
 }
 

@@ -5,8 +5,8 @@
 use presrs_core::classifier::{ClassifierConfig, ParzenConfig, SigmaChoice};
 use presrs_core::features::{FeatureConfig, Fft1dConfig, Fft1dExtractor};
 use presrs_core::pipeline::{
-    LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, bench_fixture, extract_features,
-    synthetic_frame, train,
+    BATCH_BLOCK, LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, bench_fixture,
+    extract_features, synthetic_frame, train,
 };
 use presrs_core::{CoreError, Crop, Frame, FrameView, Grid};
 use rand::SeedableRng;
@@ -101,11 +101,14 @@ fn loading_checks_that_the_parts_fit() {
 
 #[test]
 fn batch_matches_one_at_a_time() {
-    let (model, frames) = bench_fixture(14, 33).unwrap();
+    // Three blocks of BATCH_BLOCK frames (the last one partial), with bad frames in two of them.
+    let (model, mut frames) = bench_fixture(14, 2 * BATCH_BLOCK + 20).unwrap();
+    frames[BATCH_BLOCK + 3].values_mut()[100] = f64::NAN;
     let mut views: Vec<FrameView<'_>> = frames.iter().map(Frame::view).collect();
     let odd = Frame::zeros(Grid::new(20, 20));
     views.insert(5, odd.view());
     let batch = model.classify_batch(&views);
+    assert!(batch[BATCH_BLOCK + 4].is_err(), "the NaN frame is refused");
     assert_eq!(batch.len(), views.len());
     let mut session = model.session();
     for (view, result) in views.iter().zip(&batch) {
