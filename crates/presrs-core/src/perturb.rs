@@ -115,6 +115,12 @@ impl Perturbation {
         ]
     }
 
+    /// This perturbation as an evaluation test transform ([`crate::evaluation::TestTransform`]): the
+    /// test image's number varies the noise from image to image.
+    pub fn transform(&self) -> impl Fn(usize, FrameView<'_>, u64) -> Result<Frame> + Sync + '_ {
+        move |index, frame, seed| Ok(self.apply(frame, seed, index as u64))
+    }
+
     /// A perturbed copy of `frame`. `seed` fixes the sensor faults; `index` (the image's number) varies
     /// the noise from image to image.
     pub fn apply(&self, frame: FrameView<'_>, seed: u64, index: u64) -> Frame {

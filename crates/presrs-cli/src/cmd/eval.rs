@@ -486,11 +486,7 @@ fn perturbation_rows(
     let transforms: Vec<_> = args
         .perturb
         .iter()
-        .map(|p| {
-            move |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
-                Ok(p.apply(frame, seed, i as u64))
-            }
-        })
+        .map(presrs_core::perturb::Perturbation::transform)
         .collect();
     let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
     each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));

@@ -784,14 +784,7 @@ pub fn fault_sweep(
         validation,
     };
     let sweep = Perturbation::default_sweep();
-    let transforms: Vec<_> = sweep
-        .iter()
-        .map(|p| {
-            move |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
-                Ok(p.apply(frame, seed, i as u64))
-            }
-        })
-        .collect();
+    let transforms: Vec<_> = sweep.iter().map(Perturbation::transform).collect();
     let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
     each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
     let auto = args.pipeline.is_auto();
