@@ -7,14 +7,13 @@
 //! Before the criterion runs it prints the whole-stream throughput (frames/s) and the decision latency
 //! percentiles (time of the `push` of a frame that produced a decision), measured with `Instant`.
 
-use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use presrs_core::Frame;
 use presrs_core::online::{Calibration, OnlineClassifier, OnlineEvent, OnlineParams};
-use presrs_core::pipeline::{TrainedModel, bench_fixture, synthetic_frame};
+use presrs_core::pipeline::{TrainedModel, bench_fixture, synthetic_stream};
 use presrs_core::stance::{ValidSegmentParams, segment};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -22,24 +21,7 @@ use rand_chacha::ChaCha8Rng;
 const STANCES: usize = 100;
 
 fn stream() -> Vec<Frame> {
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let grid = presrs_core::Grid::new(44, 44);
-    let mut frames = Vec::new();
-    for i in 0..STANCES {
-        for _ in 0..20 {
-            frames.push(Frame::zeros(grid));
-        }
-        let print = synthetic_frame(i % 4, &mut rng);
-        for j in 0..14 {
-            let scale = (PI * (j as f64 + 0.5) / 14.0).sin();
-            let mut f = print.clone();
-            for v in f.values_mut() {
-                *v = (*v * scale).round();
-            }
-            frames.push(f);
-        }
-    }
-    frames
+    synthetic_stream(STANCES, &mut ChaCha8Rng::seed_from_u64(7))
 }
 
 fn classifier<'m>(model: &'m TrainedModel, frames: &[Frame], fuse: bool) -> OnlineClassifier<'m> {

@@ -753,6 +753,28 @@ impl<'m> BatchSession<'m> {
     }
 }
 
+/// A synthetic 100 Hz movie for benchmarks and tests of the online path: `stances` times, 20 empty flight
+/// frames then a 14-frame stance whose load follows a half sine over the print of [`synthetic_frame`]
+/// (class `i % 4` for the `i`-th stance).
+pub fn synthetic_stream(stances: usize, rng: &mut impl Rng) -> Vec<Frame> {
+    const FLIGHT_FRAMES: usize = 20;
+    const STANCE_FRAMES: usize = 14;
+    let mut frames = Vec::with_capacity(stances * (FLIGHT_FRAMES + STANCE_FRAMES));
+    for i in 0..stances {
+        let print = synthetic_frame(i % 4, rng);
+        frames.extend((0..FLIGHT_FRAMES).map(|_| Frame::zeros(print.grid())));
+        for j in 0..STANCE_FRAMES {
+            let scale = (std::f64::consts::PI * (j as f64 + 0.5) / STANCE_FRAMES as f64).sin();
+            let mut frame = print.clone();
+            for v in frame.values_mut() {
+                *v = (*v * scale).round();
+            }
+            frames.push(frame);
+        }
+    }
+    frames
+}
+
 /// Class names of [`synthetic_frame`]'s four classes, in class-index order (sorted, as [`train`] orders them).
 pub const SYNTHETIC_CLASSES: [&str; 4] = ["carpet", "clay", "grass", "wood"];
 

@@ -8,17 +8,17 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::alloc::System;
-use std::f64::consts::PI;
 
+use presrs_core::Frame;
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::FeatureKind;
 use presrs_core::online::{Calibration, OnlineClassifier, OnlineParams};
 use presrs_core::pipeline::{
-    LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, synthetic_frame, train,
+    LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, synthetic_frame, synthetic_stream,
+    train,
 };
 use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::{ValidSegmentParams, segment};
-use presrs_core::{Frame, Grid};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
@@ -57,24 +57,6 @@ fn model(
     train(&images(&train_set), &images(&validation_set), &config).unwrap()
 }
 
-/// Stances of 14 frames (a half-sine load on a synthetic print) between 20-frame flights.
-fn stream(stances: usize, rng: &mut ChaCha8Rng) -> Vec<Frame> {
-    let mut frames = Vec::new();
-    for i in 0..stances {
-        frames.extend((0..20).map(|_| Frame::zeros(Grid::new(44, 44))));
-        let print = synthetic_frame(i % 4, rng);
-        for j in 0..14 {
-            let scale = (PI * (j as f64 + 0.5) / 14.0).sin();
-            let mut frame = print.clone();
-            for v in frame.values_mut() {
-                *v = (*v * scale).round();
-            }
-            frames.push(frame);
-        }
-    }
-    frames
-}
-
 /// The detector's levels as a trained model's online profile would carry them.
 fn calibration(frames: &[Frame]) -> Calibration {
     let totals: Vec<f64> = frames.iter().map(|f| f.view().total()).collect();
@@ -98,7 +80,7 @@ fn count(work: impl FnOnce()) -> (usize, usize, usize) {
 fn steady_state_classification_does_not_allocate() {
     let mut rng = ChaCha8Rng::seed_from_u64(9);
     let frames: Vec<Frame> = (0..64).map(|i| synthetic_frame(i % 4, &mut rng)).collect();
-    let live = stream(12, &mut rng);
+    let live = synthetic_stream(12, &mut rng);
     let fill = Preprocess {
         normalise_load: true,
         fill_absent: true,
