@@ -665,41 +665,29 @@ fn classify_reduced(
 }
 
 /// Buffers for classifying a block of frames together (one per rayon worker in
-/// [`TrainedModel::classify_batch`]).
+/// [`TrainedModel::classify_batch`]): a session's, plus the block's features and reduced vectors.
 #[derive(Debug)]
 struct BatchSession<'m> {
-    model: &'m TrainedModel,
-    preprocessor: Preprocessor,
+    session: Session<'m>,
     /// Row-major `block x n_features`.
     features: Vec<f64>,
-    projection: ProjectionScratch,
     /// Row-major `block x n_components`.
     reduced: Vec<f64>,
-    scratch: ClassifierScratch,
-    posteriors: Vec<f64>,
 }
 
 impl<'m> BatchSession<'m> {
     fn new(model: &'m TrainedModel) -> Self {
-        let fields = &model.fields;
         Self {
-            model,
-            preprocessor: Preprocessor::new(
-                fields.crop,
-                fields.preprocess,
-                fields.image_grid,
-                model.extractor.clone(),
-            ),
+            session: model.session(),
             features: Vec::new(),
-            projection: fields.pca.scratch(),
             reduced: Vec::new(),
-            scratch: fields.classifier.scratch(),
-            posteriors: vec![0.0; fields.class_names.len()],
         }
     }
 
     fn classify_block(&mut self, frames: &[FrameView<'_>]) -> Vec<Result<Classification>> {
-        let pca = &self.model.fields.pca;
+        let session = &mut self.session;
+        let model = session.model;
+        let pca = &model.fields.pca;
         let (n_features, dims) = (pca.n_features(), pca.n_components());
         self.features.resize(frames.len() * n_features, 0.0);
         self.reduced.resize(frames.len() * dims, 0.0);
@@ -709,14 +697,14 @@ impl<'m> BatchSession<'m> {
             .iter()
             .zip(self.features.chunks_exact_mut(n_features))
         {
-            let error = self.preprocessor.features_into(frame, row).err();
+            let error = session.preprocessor.features_into(frame, row).err();
             if error.is_some() {
                 row.fill(0.0);
             }
             failed.push(error);
         }
         if let Err(err) =
-            pca.project_fast_many(&self.features, &mut self.projection, &mut self.reduced)
+            pca.project_fast_many(&self.features, &mut session.projection, &mut self.reduced)
         {
             // Cannot happen (the buffers are sized above); every frame gets the reason all the same.
             let reason = err.to_string();
@@ -737,15 +725,15 @@ impl<'m> BatchSession<'m> {
                 Some(err) => Err(err),
                 None => {
                     let class = classify_reduced(
-                        self.model,
+                        model,
                         reduced,
-                        &mut self.scratch,
-                        &mut self.posteriors,
+                        &mut session.scratch,
+                        &mut session.posteriors,
                     )?;
                     Ok(Classification {
                         class,
-                        confidence: self.posteriors[class],
-                        posteriors: self.posteriors.clone(),
+                        confidence: session.posteriors[class],
+                        posteriors: session.posteriors.clone(),
                     })
                 }
             })

@@ -282,24 +282,26 @@ mod tests {
 
     type Kernel = fn(&[f64], usize, &[f64], &mut [f64]);
 
+    /// The kernel on one given instruction set (pulp's portable emulations included), bypassing dispatch.
+    fn with<S: Simd, T: Element>(simd: S) -> impl Fn(&[T], usize, &[T], &mut [f64]) {
+        move |matrix, cols, x, out| {
+            if cols == 0 {
+                out.fill(0.0);
+            } else {
+                simd.vectorize(MatVecs {
+                    matrix,
+                    cols,
+                    rows: out.len(),
+                    xs: x,
+                    outs: out,
+                });
+            }
+        }
+    }
+
     /// Every backend: the one dispatched at run time, plus pulp's portable emulations with 1, 2, 4 and 8
     /// lanes (so every lane count and tail length runs whatever the test machine has).
     fn backends() -> Vec<(&'static str, Kernel)> {
-        fn with<S: Simd>(simd: S) -> impl Fn(&[f64], usize, &[f64], &mut [f64]) {
-            move |matrix, cols, x, out| {
-                if cols == 0 {
-                    out.fill(0.0);
-                } else {
-                    simd.vectorize(MatVecs {
-                        matrix,
-                        cols,
-                        rows: out.len(),
-                        xs: x,
-                        outs: out,
-                    });
-                }
-            }
-        }
         vec![
             ("dispatched", matrix_vector),
             ("scalar", |m, c, x, o| with(pulp::Scalar::new())(m, c, x, o)),
@@ -356,21 +358,6 @@ mod tests {
     #[test]
     fn f32_matches_the_exact_product_within_single_precision() {
         let mut rng = ChaCha8Rng::seed_from_u64(12);
-        fn with<S: Simd>(simd: S) -> impl Fn(&[f32], usize, &[f32], &mut [f64]) {
-            move |matrix, cols, x, out| {
-                if cols == 0 {
-                    out.fill(0.0);
-                } else {
-                    simd.vectorize(MatVecs {
-                        matrix,
-                        cols,
-                        rows: out.len(),
-                        xs: x,
-                        outs: out,
-                    });
-                }
-            }
-        }
         type KernelF32 = fn(&[f32], usize, &[f32], &mut [f64]);
         let backends: [(&str, KernelF32); 4] = [
             ("dispatched", matrix_vector::<f32>),
