@@ -1,7 +1,9 @@
 //! The report's charts: load curves, feature spectra, principal components, validation curve, confusion
 //! matrices, grouped bars (accuracy, Table I) and the hopper's motion.
 
+use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use presrs_core::Recording;
@@ -34,6 +36,30 @@ where
         .label_font(font(TICK))
         .draw()?;
     Ok(())
+}
+
+/// The axes of a chart with numeric f64 coordinates on both axes: white light grid lines, the axis
+/// descriptions, and ticks labelled with [`num`]. Callers chain what differs (tick counts, a larger
+/// description font) before `.draw()`.
+fn numeric_axes<'a, 'b, DB: DrawingBackend>(
+    chart: &'b mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    x_desc: &str,
+    y_desc: &str,
+) -> MeshStyle<'a, 'b, RangedCoordf64, RangedCoordf64, DB> {
+    let mut mesh = chart.configure_mesh();
+    mesh.light_line_style(WHITE)
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .axis_desc_style(font(LABEL - 1.0))
+        .label_style(font(TICK))
+        .x_label_formatter(&num_label)
+        .y_label_formatter(&num_label);
+    mesh
+}
+
+/// [`num`] as a tick formatter.
+fn num_label(v: &f64) -> String {
+    num(*v)
 }
 
 /// Soft colour for shaded stance phases.
@@ -190,15 +216,7 @@ where
         .x_label_area_size(40)
         .y_label_area_size(70)
         .build_cartesian_2d(x_range, y_range.clone())?;
-    chart
-        .configure_mesh()
-        .light_line_style(WHITE)
-        .x_desc(data.time_label())
-        .y_desc(&data.load_label)
-        .axis_desc_style(font(LABEL - 1.0))
-        .label_style(font(TICK))
-        .x_label_formatter(&|v| num(*v))
-        .y_label_formatter(&|v| num(*v))
+    numeric_axes(&mut chart, data.time_label(), &data.load_label)
         .y_labels(5)
         .draw()?;
     let shade = |spans: &[(usize, usize)], color: RGBAColor| {
@@ -438,15 +456,8 @@ impl Figure for ScatterFigure {
             .x_label_area_size(48)
             .y_label_area_size(70)
             .build_cartesian_2d(padded(x0, x1, 0.06), padded(y0, y1, 0.06))?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE)
-            .x_desc(&self.x_label)
-            .y_desc(&self.y_label)
+        numeric_axes(&mut chart, &self.x_label, &self.y_label)
             .axis_desc_style(font(LABEL))
-            .label_style(font(TICK))
-            .x_label_formatter(&|v| num(*v))
-            .y_label_formatter(&|v| num(*v))
             .draw()?;
         for &(x, y, l, c) in &self.points {
             let color = category_color(l);
@@ -597,16 +608,12 @@ impl Figure for ValidationFigure {
             .x_label_area_size(44)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..(n as f64 + 1.0), 0.0..101.0)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE)
-            .x_desc("principal components kept")
-            .y_desc("cumulative explained variance (%)")
-            .axis_desc_style(font(LABEL - 1.0))
-            .label_style(font(TICK))
-            .x_label_formatter(&|v| num(*v))
-            .y_label_formatter(&|v| num(*v))
-            .draw()?;
+        numeric_axes(
+            &mut chart,
+            "principal components kept",
+            "cumulative explained variance (%)",
+        )
+        .draw()?;
         let line = category_color(2);
         chart
             .draw_series(LineSeries::new(
@@ -989,15 +996,8 @@ impl Figure for FaultFigure {
                 .x_label_area_size(44)
                 .y_label_area_size(56)
                 .build_cartesian_2d(padded(x0, x1, 0.06), y0..101.0)?;
-            chart
-                .configure_mesh()
-                .light_line_style(WHITE)
-                .x_desc(&panel.x_label)
-                .y_desc("accuracy (%)")
+            numeric_axes(&mut chart, &panel.x_label, "accuracy (%)")
                 .axis_desc_style(font(LABEL - 2.0))
-                .label_style(font(TICK))
-                .x_label_formatter(&|v| num(*v))
-                .y_label_formatter(&|v| num(*v))
                 .x_labels(5)
                 .y_labels(6)
                 .draw()?;
@@ -1106,16 +1106,7 @@ impl Figure for TraceFigure {
             .x_label_area_size(44)
             .y_label_area_size(70)
             .build_cartesian_2d(padded(x0, x1, 0.02), padded(y0, y1, 0.12))?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE)
-            .x_desc("forward distance (m)")
-            .y_desc("body height (m)")
-            .axis_desc_style(font(LABEL - 1.0))
-            .label_style(font(TICK))
-            .x_label_formatter(&|v| num(*v))
-            .y_label_formatter(&|v| num(*v))
-            .draw()?;
+        numeric_axes(&mut chart, "forward distance (m)", "body height (m)").draw()?;
         for (i, trace) in self.traces.iter().enumerate() {
             let color = category_color(i);
             chart
@@ -1162,16 +1153,7 @@ impl Figure for TraceFigure {
             .x_label_area_size(44)
             .y_label_area_size(70)
             .build_cartesian_2d(t0..t1, padded(f0.min(0.0), f1, 0.06))?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE)
-            .x_desc("time (s)")
-            .y_desc("force on the foot (N)")
-            .axis_desc_style(font(LABEL - 1.0))
-            .label_style(font(TICK))
-            .x_label_formatter(&|v| num(*v))
-            .y_label_formatter(&|v| num(*v))
-            .draw()?;
+        numeric_axes(&mut chart, "time (s)", "force on the foot (N)").draw()?;
         for (i, trace) in self.traces.iter().enumerate() {
             let color = category_color(i);
             chart
