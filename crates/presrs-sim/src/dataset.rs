@@ -215,19 +215,57 @@ impl Simulator {
         Ok(terrain)
     }
 
+    /// A configured gait by name, or a variant `BASE@BETA` (the configured gait BASE with `beta_des`
+    /// = BETA rad, within the robot's touchdown-angle limits).
     pub fn gait(&self, name: &str) -> Result<Gait> {
-        self.config
+        if let Some(gait) = self.config.gaits.iter().find(|g| g.name == name) {
+            return Ok(gait.clone());
+        }
+        let known = || {
+            let names: Vec<&str> = self.config.gaits.iter().map(|g| g.name.as_str()).collect();
+            names.join(", ")
+        };
+        let Some((base, beta)) = name.split_once(Gait::VARIANT_SEPARATOR) else {
+            return Err(param(
+                "gaits",
+                format!(
+                    "unknown gait {name:?}; known: {} (or a variant such as G3@0.62: G3 with beta_des \
+                     0.62 rad)",
+                    known()
+                ),
+            ));
+        };
+        let base_gait = self
+            .config
             .gaits
             .iter()
-            .find(|g| g.name == name)
-            .cloned()
+            .find(|g| g.name == base)
             .ok_or_else(|| {
-                let known: Vec<&str> = self.config.gaits.iter().map(|g| g.name.as_str()).collect();
                 param(
                     "gaits",
-                    format!("unknown gait {name:?}; known: {}", known.join(", ")),
+                    format!("{name:?}: unknown base gait {base:?}; known: {}", known()),
                 )
+            })?;
+        let robot = &self.config.robot;
+        let beta_des_rad: f64 = beta
+            .trim()
+            .parse()
+            .ok()
+            .filter(|b: &f64| {
+                b.is_finite()
+                    && *b >= robot.min_touchdown_angle_rad
+                    && *b <= robot.max_touchdown_angle_rad
             })
+            .ok_or_else(|| {
+                param(
+                    "gaits",
+                    format!(
+                        "{name:?}: beta_des {beta:?} must be a number of radians in [{}, {}]",
+                        robot.min_touchdown_angle_rad, robot.max_touchdown_angle_rad
+                    ),
+                )
+            })?;
+        Ok(Gait::new(name, base_gait.omega_rad_per_s, beta_des_rad))
     }
 
     /// The trials of a data set, in a fixed order (terrain, gait, index).

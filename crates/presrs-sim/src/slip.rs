@@ -163,12 +163,29 @@ pub struct Gait {
 }
 
 impl Gait {
+    /// Separates a gait variant's base gait from its `beta_des`: `G3@0.74` is G3's `omega` with
+    /// `beta_des` = 0.74 rad (what [`crate::track::gait_candidates`] searches and
+    /// [`crate::Simulator::gait`] resolves).
+    pub const VARIANT_SEPARATOR: char = '@';
+
     pub fn new(name: &str, omega_rad_per_s: f64, beta_des_rad: f64) -> Self {
         Self {
             name: name.to_owned(),
             omega_rad_per_s,
             beta_des_rad,
         }
+    }
+
+    /// The name of the variant of `base` with `beta_des_rad` (two decimals, the resolution of a search).
+    pub fn variant_name(base: &str, beta_des_rad: f64) -> String {
+        format!("{base}{}{beta_des_rad:.2}", Self::VARIANT_SEPARATOR)
+    }
+
+    /// The configured gait a variant derives from (the name itself for a configured gait).
+    pub fn base_name(&self) -> &str {
+        self.name
+            .split_once(Self::VARIANT_SEPARATOR)
+            .map_or(self.name.as_str(), |(base, _)| base)
     }
 
     /// The paper's three gaits (section IV).

@@ -474,6 +474,9 @@ impl Default for GaitTableParams {
 pub struct GaitCell {
     pub terrain: String,
     pub gait: String,
+    /// The gait's `omega` of eq. (1), rad/s, and `beta_des` of eq. (2), rad.
+    pub omega_rad_per_s: f64,
+    pub beta_des_rad: f64,
     /// Steady runs and those that ended in a fall.
     pub runs: usize,
     pub falls: usize,
@@ -505,27 +508,36 @@ impl GaitCell {
 pub struct GaitTable {
     pub params: GaitTableParams,
     pub cells: Vec<GaitCell>,
-    /// Terrain -> recommended gait: the fastest stable one (no fall in steady or exit runs); where no gait
-    /// is stable, the one with the fewest falls (steady + exit), ties to the faster.
+    /// Terrain -> recommended gait: the fastest *robustly* stable one (no fall in steady or exit runs, nor
+    /// in its nearest `beta_des` neighbours of the same `omega`, when the candidates are a sweep); else
+    /// the fastest stable one; where no gait is stable, the one with the fewest falls (steady + exit),
+    /// ties to the faster.
     pub best: BTreeMap<String, String>,
     /// Terrain -> whether its recommended gait is stable.
     pub best_is_stable: BTreeMap<String, bool>,
+    /// Terrain -> whether its recommended gait's `beta_des` neighbours are stable too.
+    #[serde(default)]
+    pub best_is_robust: BTreeMap<String, bool>,
 }
 
 impl GaitTable {
-    /// A text table: speed (steady falls/runs, exit falls/runs) per terrain and gait, the choice marked.
+    /// A text table: speed (steady falls/runs, exit falls/runs) per terrain and configured gait, the
+    /// choice marked; with a `beta_des` search, per terrain and `omega` the stable `beta_des` windows and
+    /// the recommended variant.
     pub fn format(&self) -> String {
         use std::fmt::Write as _;
+        let is_variant = |g: &str| g.contains(Gait::VARIANT_SEPARATOR);
         let mut terrains: Vec<&str> = Vec::new();
         let mut gaits: Vec<&str> = Vec::new();
         for c in &self.cells {
             if !terrains.contains(&c.terrain.as_str()) {
                 terrains.push(&c.terrain);
             }
-            if !gaits.contains(&c.gait.as_str()) {
+            if !is_variant(&c.gait) && !gaits.contains(&c.gait.as_str()) {
                 gaits.push(&c.gait);
             }
         }
+        let searched = self.cells.iter().any(|c| is_variant(&c.gait));
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -562,14 +574,34 @@ impl GaitTable {
                 let _ = write!(out, "{text:>22}");
             }
             let best = self.best.get(*t).map_or("-", String::as_str);
-            let note = if self.best_is_stable.get(*t).copied().unwrap_or(false) {
-                ""
-            } else {
+            let speed = self
+                .cells
+                .iter()
+                .find(|c| c.terrain == *t && c.gait == best)
+                .map_or(f64::NAN, |c| c.mean_speed_m_per_s);
+            let note = if !self.best_is_stable.get(*t).copied().unwrap_or(false) {
                 " (none stable: fewest falls)"
+            } else if searched && !self.best_is_robust.get(*t).copied().unwrap_or(false) {
+                " (stable, but a neighbour is not)"
+            } else {
+                ""
             };
-            let _ = writeln!(out, "  {best}{note}");
+            let _ = writeln!(out, "  {best} {speed:.2} m/s{note}");
         }
-        for c in self.cells.iter().filter(|c| c.total_exit_falls() > 0) {
+        if searched {
+            let _ = writeln!(
+                out,
+                "Stable beta_des windows (rad; no fall in any steady or exit run) per terrain and omega:"
+            );
+            for t in &terrains {
+                let _ = writeln!(out, "  {t:<8}{}", self.stable_windows(t));
+            }
+        }
+        for c in self
+            .cells
+            .iter()
+            .filter(|c| !is_variant(&c.gait) && c.total_exit_falls() > 0)
+        {
             let list: Vec<String> = c
                 .exit_falls
                 .iter()
@@ -585,6 +617,58 @@ impl GaitTable {
             );
         }
         out
+    }
+
+    /// `omega 7.0: 0.20-0.58, 0.62` for one terrain: runs of consecutive stable `beta_des` per `omega`.
+    pub fn stable_windows(&self, terrain: &str) -> String {
+        let mut omegas: Vec<f64> = self
+            .cells
+            .iter()
+            .filter(|c| c.terrain == terrain)
+            .map(|c| c.omega_rad_per_s)
+            .collect();
+        omegas.sort_by(f64::total_cmp);
+        omegas.dedup();
+        let mut parts = Vec::new();
+        for omega in omegas {
+            let mut cells: Vec<&GaitCell> = self
+                .cells
+                .iter()
+                .filter(|c| c.terrain == terrain && c.omega_rad_per_s == omega)
+                .collect();
+            cells.sort_by(|a, b| a.beta_des_rad.total_cmp(&b.beta_des_rad));
+            let mut windows: Vec<String> = Vec::new();
+            let mut run: Option<(f64, f64)> = None;
+            for c in &cells {
+                match (c.stable(), run) {
+                    (true, Some((lo, _))) => run = Some((lo, c.beta_des_rad)),
+                    (true, None) => run = Some((c.beta_des_rad, c.beta_des_rad)),
+                    (false, Some(r)) => {
+                        windows.push(window_text(r));
+                        run = None;
+                    }
+                    (false, None) => {}
+                }
+            }
+            if let Some(r) = run {
+                windows.push(window_text(r));
+            }
+            let text = if windows.is_empty() {
+                "none".to_owned()
+            } else {
+                windows.join(", ")
+            };
+            parts.push(format!("omega {omega:.1}: {text}"));
+        }
+        parts.join("; ")
+    }
+}
+
+fn window_text((lo, hi): (f64, f64)) -> String {
+    if lo == hi {
+        format!("{lo:.2}")
+    } else {
+        format!("{lo:.2}-{hi:.2}")
     }
 }
 
@@ -672,12 +756,23 @@ fn measure_run(
 }
 
 /// Measures every gait on every terrain (steady runs, and exit runs onto every other terrain; all in
-/// parallel) and recommends, per terrain, the fastest gait that never fell.
+/// parallel) and recommends, per terrain, the fastest gait that never fell (see [`GaitTable::best`]).
 pub fn gait_table(
     sim: &Simulator,
     terrains: &[String],
     gaits: &[String],
     params: &GaitTableParams,
+) -> Result<GaitTable> {
+    gait_table_with_progress(sim, terrains, gaits, params, &|_, _| {})
+}
+
+/// [`gait_table`], calling `progress(runs done, runs in all)` as the runs finish (from worker threads).
+pub fn gait_table_with_progress(
+    sim: &Simulator,
+    terrains: &[String],
+    gaits: &[String],
+    params: &GaitTableParams,
+    progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<GaitTable> {
     if params.seeds.is_empty() || params.hops == 0 {
         return Err(param("gait_table", "need at least one seed and one hop"));
@@ -705,11 +800,15 @@ pub fn gait_table(
             }
         }
     }
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<RunResult> = jobs
         .par_iter()
         .map(|(ti, gait, exit, seed)| {
             let exit = exit.map(|(ei, at)| (&resolved[ei].1, at));
-            measure_run(sim, &resolved[*ti].1, gait, exit, params, *seed)
+            let result = measure_run(sim, &resolved[*ti].1, gait, exit, params, *seed);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(n, jobs.len());
+            result
         })
         .collect::<Result<_>>()?;
     let mut cells: Vec<GaitCell> = Vec::new();
@@ -724,6 +823,8 @@ pub fn gait_table(
                 cells.push(GaitCell {
                     terrain: terrain.clone(),
                     gait: gait.name.clone(),
+                    omega_rad_per_s: gait.omega_rad_per_s,
+                    beta_des_rad: gait.beta_des_rad,
                     runs: 0,
                     falls: 0,
                     hops: 0,
@@ -763,21 +864,13 @@ pub fn gait_table(
     }
     let mut best = BTreeMap::new();
     let mut best_is_stable = BTreeMap::new();
+    let mut best_is_robust = BTreeMap::new();
     for (t, _) in &resolved {
-        let choice = cells.iter().filter(|c| c.terrain == *t).min_by(|a, b| {
-            let falls = |c: &GaitCell| c.falls + c.total_exit_falls();
-            let speed = |c: &GaitCell| {
-                if c.mean_speed_m_per_s.is_nan() {
-                    f64::NEG_INFINITY
-                } else {
-                    c.mean_speed_m_per_s
-                }
-            };
-            falls(a).cmp(&falls(b)).then(speed(b).total_cmp(&speed(a)))
-        });
-        if let Some(c) = choice {
+        let here: Vec<&GaitCell> = cells.iter().filter(|c| c.terrain == *t).collect();
+        if let Some((c, robust)) = recommend(&here) {
             best.insert(t.clone(), c.gait.clone());
             best_is_stable.insert(t.clone(), c.stable());
+            best_is_robust.insert(t.clone(), robust);
         }
     }
     Ok(GaitTable {
@@ -785,5 +878,200 @@ pub fn gait_table(
         cells,
         best,
         best_is_stable,
+        best_is_robust,
     })
+}
+
+/// The recommended gait among one terrain's cells (see [`GaitTable::best`]) and whether it is robustly
+/// stable.
+fn recommend<'c>(here: &[&'c GaitCell]) -> Option<(&'c GaitCell, bool)> {
+    let speed = |c: &GaitCell| {
+        if c.mean_speed_m_per_s.is_nan() {
+            f64::NEG_INFINITY
+        } else {
+            c.mean_speed_m_per_s
+        }
+    };
+    let robust = |c: &GaitCell| c.stable() && neighbours_stable(here, c);
+    let fastest = |keep: &dyn Fn(&GaitCell) -> bool| {
+        here.iter()
+            .copied()
+            .filter(|c| keep(c))
+            .max_by(|a, b| speed(a).total_cmp(&speed(b)))
+    };
+    let choice = fastest(&robust)
+        .or_else(|| fastest(&GaitCell::stable))
+        .or_else(|| {
+            let falls = |c: &GaitCell| c.falls + c.total_exit_falls();
+            here.iter()
+                .copied()
+                .min_by(|a, b| falls(a).cmp(&falls(b)).then(speed(b).total_cmp(&speed(a))))
+        })?;
+    Some((choice, robust(choice)))
+}
+
+/// Whether the cells next to `cell` in `beta_des` (same terrain and `omega`, the nearest below and
+/// above, if measured) are stable: a margin against the actuator noise and model error that a finite
+/// number of runs cannot rule out.
+fn neighbours_stable(cells: &[&GaitCell], cell: &GaitCell) -> bool {
+    let same_omega = cells
+        .iter()
+        .filter(|c| c.omega_rad_per_s == cell.omega_rad_per_s && c.gait != cell.gait);
+    let below = same_omega
+        .clone()
+        .filter(|c| c.beta_des_rad < cell.beta_des_rad)
+        .max_by(|a, b| a.beta_des_rad.total_cmp(&b.beta_des_rad));
+    let above = same_omega
+        .filter(|c| c.beta_des_rad > cell.beta_des_rad)
+        .min_by(|a, b| a.beta_des_rad.total_cmp(&b.beta_des_rad));
+    below.is_none_or(|c| c.stable()) && above.is_none_or(|c| c.stable())
+}
+
+/// A grid of `beta_des` values for [`gait_candidates`], rad.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BetaSweep {
+    pub from_rad: f64,
+    pub to_rad: f64,
+    pub step_rad: f64,
+}
+
+impl Default for BetaSweep {
+    /// 0.20 to 0.80 rad in steps of 0.02: past the paper's gaits (0.27-0.57) on both sides, and the
+    /// finest step the variant names (two decimals) resolve.
+    fn default() -> Self {
+        Self {
+            from_rad: 0.20,
+            to_rad: 0.80,
+            step_rad: 0.02,
+        }
+    }
+}
+
+impl BetaSweep {
+    /// The grid's values, `from_rad` to `to_rad` inclusive.
+    pub fn values(&self) -> Result<Vec<f64>> {
+        let ok = self.from_rad.is_finite()
+            && self.to_rad.is_finite()
+            && self.step_rad.is_finite()
+            && self.step_rad >= 0.005
+            && self.from_rad <= self.to_rad;
+        if !ok {
+            return Err(param(
+                "beta_sweep",
+                format!(
+                    "need from <= to and a step of at least 0.005 rad, got {} to {} step {}",
+                    self.from_rad, self.to_rad, self.step_rad
+                ),
+            ));
+        }
+        let n = ((self.to_rad - self.from_rad) / self.step_rad + 1e-9).floor() as usize;
+        Ok((0..=n)
+            .map(|i| self.from_rad + i as f64 * self.step_rad)
+            .collect())
+    }
+}
+
+/// The gaits a terrain-to-gait search measures: each of `bases` (configured gaits) and, with a sweep,
+/// its variants `BASE@BETA` over the sweep's `beta_des` grid (same `omega`).
+pub fn gait_candidates(
+    sim: &Simulator,
+    bases: &[String],
+    sweep: Option<&BetaSweep>,
+) -> Result<Vec<String>> {
+    let mut names = Vec::new();
+    for base in bases {
+        let gait = sim.gait(base)?;
+        names.push(gait.name.clone());
+        if let Some(sweep) = sweep {
+            for beta in sweep.values()? {
+                let name = Gait::variant_name(base, beta);
+                // Resolving checks the angle limits; a variant equal to its base is not measured twice.
+                if sim.gait(&name)?.beta_des_rad != gait.beta_des_rad {
+                    names.push(name);
+                }
+            }
+        }
+    }
+    Ok(names)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cell(
+        gait: &str,
+        omega: f64,
+        beta: f64,
+        speed: f64,
+        falls: usize,
+        exit_falls: usize,
+    ) -> GaitCell {
+        GaitCell {
+            terrain: "grass".to_owned(),
+            gait: gait.to_owned(),
+            omega_rad_per_s: omega,
+            beta_des_rad: beta,
+            runs: 5,
+            falls,
+            hops: 500,
+            mean_speed_m_per_s: speed,
+            min_apex_clearance_m: 0.01,
+            exit_runs: 15,
+            exit_falls: BTreeMap::from([("wood".to_owned(), exit_falls)]),
+        }
+    }
+
+    #[test]
+    fn the_recommendation_keeps_a_margin_in_beta_des() {
+        // A window 0.68-0.72 between exit falls (below) and steady falls (above).
+        let cells = [
+            cell("G@0.66", 6.5, 0.66, 1.58, 0, 3),
+            cell("G@0.68", 6.5, 0.68, 1.62, 0, 0),
+            cell("G@0.70", 6.5, 0.70, 1.66, 0, 0),
+            cell("G@0.72", 6.5, 0.72, 1.70, 0, 0),
+            cell("G@0.74", 6.5, 0.74, 1.74, 2, 0),
+            // Another omega: fastest of all, stable, but its neighbour fell.
+            cell("H@0.74", 7.0, 0.74, 1.80, 0, 0),
+            cell("H@0.76", 7.0, 0.76, f64::NAN, 5, 0),
+        ];
+        let here: Vec<&GaitCell> = cells.iter().collect();
+        let (best, robust) = recommend(&here).unwrap();
+        assert_eq!(best.gait, "G@0.70");
+        assert!(robust && best.stable());
+        // Without the robust middle, the fastest stable cell is taken and said not to be robust.
+        let here: Vec<&GaitCell> = cells.iter().filter(|c| c.gait != "G@0.70").collect();
+        let (best, robust) = recommend(&here).unwrap();
+        assert_eq!(best.gait, "H@0.74");
+        assert!(!robust && best.stable());
+        // Nothing stable: the fewest falls, ties to the faster.
+        let here: Vec<&GaitCell> = [&cells[0], &cells[4], &cells[6]].into_iter().collect();
+        let (best, robust) = recommend(&here).unwrap();
+        assert_eq!(best.gait, "G@0.74");
+        assert!(!robust && !best.stable());
+        assert!(recommend(&[]).is_none());
+    }
+
+    #[test]
+    fn beta_sweeps_include_both_ends_and_refuse_nonsense() {
+        let sweep = BetaSweep {
+            from_rad: 0.5,
+            to_rad: 0.6,
+            step_rad: 0.02,
+        };
+        let values = sweep.values().unwrap();
+        assert_eq!(values.len(), 6);
+        assert!((values[5] - 0.6).abs() < 1e-12);
+        for (from_rad, to_rad, step_rad) in
+            [(0.6, 0.5, 0.02), (0.5, 0.6, 0.0), (f64::NAN, 0.6, 0.02)]
+        {
+            let bad = BetaSweep {
+                from_rad,
+                to_rad,
+                step_rad,
+            };
+            assert!(bad.values().is_err(), "{bad:?}");
+        }
+        assert_eq!(BetaSweep::default().values().unwrap().len(), 31);
+    }
 }

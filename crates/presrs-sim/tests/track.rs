@@ -2,7 +2,8 @@
 //! The track runner and the gait table (module `presrs_sim::track`).
 
 use presrs_sim::track::{
-    GaitTableParams, PolicyStep, TrackParams, gait_table, parse_track, run_track,
+    BetaSweep, GaitTableParams, PolicyStep, TrackParams, gait_candidates, gait_table, parse_track,
+    run_track,
 };
 use presrs_sim::{Gait, SimConfig, Simulator};
 
@@ -157,6 +158,83 @@ fn the_gait_table_recommends_the_fastest_gait_that_never_fell() {
         assert!(table.best_is_stable[t]);
     }
     assert!(table.format().contains("*"));
+}
+
+#[test]
+fn gait_variants_resolve_to_their_base_omega_and_bad_ones_are_refused() {
+    let sim = sim_with(&[]);
+    let g = sim.gait("G3@0.62").unwrap();
+    assert_eq!(g.name, "G3@0.62");
+    assert_eq!(g.omega_rad_per_s, 7.0);
+    assert_eq!(g.beta_des_rad, 0.62);
+    assert_eq!(g.base_name(), "G3");
+    assert_eq!(Gait::variant_name("G3", 0.62), "G3@0.62");
+    for bad in ["G9@0.5", "G3@abc", "G3@2.0", "G3@-0.1", "G3@NaN", "G4"] {
+        let err = sim.gait(bad).unwrap_err().to_string();
+        assert!(err.contains(bad.split('@').next().unwrap()), "{bad}: {err}");
+    }
+    let sweep = BetaSweep {
+        from_rad: 0.53,
+        to_rad: 0.61,
+        step_rad: 0.02,
+    };
+    // G3's own beta_des (0.57) is not measured twice.
+    let candidates = gait_candidates(&sim, &names(&["G3"]), Some(&sweep)).unwrap();
+    assert_eq!(
+        candidates,
+        ["G3", "G3@0.53", "G3@0.55", "G3@0.59", "G3@0.61"]
+    );
+    assert_eq!(
+        gait_candidates(&sim, &names(&["G1", "G2"]), None).unwrap(),
+        ["G1", "G2"]
+    );
+    assert!(gait_candidates(&sim, &names(&["G7"]), None).is_err());
+}
+
+/// Issue 7, why the terrain-to-gait table needs more than the paper's gaits: with eq. (2) settled on
+/// grass, a paper gait's first stance on wood bounces back, while a steeper `beta_des` on grass settles
+/// at a state that steps onto wood safely (the scan of `examples/gait_scan.rs`: grass windows 0.66-0.70
+/// at omega 6.0, 0.68-0.72 at 6.5), and the same steep gait on wood falls stepping onto grass.
+#[test]
+fn stepping_off_grass_needs_a_steeper_gait_than_stepping_onto_it() {
+    let sim = sim_with(&[]);
+    let params = GaitTableParams {
+        hops: 40,
+        settle_hops: 20,
+        seeds: vec![1, 2],
+        exit_hops: 3,
+    };
+    let table = gait_table(
+        &sim,
+        &names(&["grass", "wood"]),
+        &names(&["G2", "G2@0.70"]),
+        &params,
+    )
+    .unwrap();
+    let cell = |t: &str, g: &str| {
+        table
+            .cells
+            .iter()
+            .find(|c| c.terrain == t && c.gait == g)
+            .unwrap()
+    };
+    assert_eq!(
+        cell("grass", "G2").exit_falls["wood"],
+        2,
+        "{:?}",
+        cell("grass", "G2")
+    );
+    assert!(
+        cell("grass", "G2@0.70").stable(),
+        "{:?}",
+        cell("grass", "G2@0.70")
+    );
+    assert!(cell("wood", "G2").stable());
+    assert_eq!(cell("wood", "G2@0.70").exit_falls["grass"], 2);
+    assert_eq!(table.best["grass"], "G2@0.70");
+    assert_eq!(table.best["wood"], "G2");
+    // And grass is the fastest terrain in its gait, as in the paper's Table I.
+    assert!(cell("grass", "G2@0.70").mean_speed_m_per_s > cell("wood", "G2").mean_speed_m_per_s);
 }
 
 /// Issue 7, misclassification on the track: the cause is the hopper's dynamics, not the renderer or the
