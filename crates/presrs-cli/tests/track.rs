@@ -46,12 +46,15 @@ fn a_trained_model_carries_its_gait_table_and_runs_a_track_against_the_fixed_gai
         "--validation",
         "4",
         "--gait-table",
-        "wood=G3,clay=G2,carpet=G3,grass=G3",
+        "wood=G3,clay=G2@0.50,carpet=G3,grass=G3",
     ]);
-    assert!(stdout.contains("gait table carpet=G3,clay=G2"), "{stdout}");
+    assert!(
+        stdout.contains("gait table carpet=G3,clay=G2@0.50"),
+        "{stdout}"
+    );
     let file: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(model).unwrap()).unwrap();
-    assert_eq!(file["online"]["gait_table"]["clay"], "G2");
+    assert_eq!(file["online"]["gait_table"]["clay"], "G2@0.50");
     assert!(file["online"]["calibration"].is_object());
 
     let json = dir.path().join("track.json");
@@ -73,6 +76,7 @@ fn a_trained_model_carries_its_gait_table_and_runs_a_track_against_the_fixed_gai
         "fixed G1",
         "fixed G2",
         "fixed G3",
+        "fixed G2@0.50",
         "misclassified",
     ] {
         assert!(stdout.contains(needle), "{needle}: {stdout}");
@@ -81,7 +85,8 @@ fn a_trained_model_carries_its_gait_table_and_runs_a_track_against_the_fixed_gai
     let cmp: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let policies = cmp["policies"].as_array().unwrap();
-    assert_eq!(policies.len(), 4);
+    // The configured gaits and the table's variant, each fixed.
+    assert_eq!(policies.len(), 5);
     let adaptive = &policies[0];
     assert_eq!(adaptive["policy"], "adaptive");
     for run in adaptive["runs"].as_array().unwrap() {
@@ -93,7 +98,7 @@ fn a_trained_model_carries_its_gait_table_and_runs_a_track_against_the_fixed_gai
         assert!(run["decided"].as_u64().unwrap() as usize >= hops.len() / 2);
         for pair in hops.windows(2) {
             if let Some(believed) = pair[0]["believed"].as_str() {
-                let want = if believed == "clay" { "G2" } else { "G3" };
+                let want = if believed == "clay" { "G2@0.50" } else { "G3" };
                 assert_eq!(pair[1]["gait"], want, "{pair:?}");
             }
         }

@@ -14,24 +14,14 @@
 //!   every file above. `presrs reproduce` reuses a folder whose stamp matches what it would simulate
 //!   ([`read_dataset`]); a folder without a stamp is an unfinished (or older) data set.
 //!
-//! With `--track SPEC` it writes no data set: the hopper runs a track of terrain segments (see
-//! [`presrs_sim::track`]) in each fixed gait and, with `--adaptive MODEL`, classifying every stance online
-//! and switching to the model's recommended gait; it prints (and with `--json` writes) the comparison.
+//! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`super::track`]).
 
 use std::collections::BTreeMap;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
-use presrs_core::stance::ValidSegmentParams;
-use presrs_core::{FrameView, Grid};
-use presrs_io::model_file::load_model;
 use presrs_sim::terrain::HeightMap;
-use presrs_sim::track::{
-    GaitTable, GaitTableParams, HopView, PolicyStep, TrackParams, TrackRun, gait_table,
-    parse_track, run_track,
-};
 use presrs_sim::{
     Dataset, DatasetSpec, HopRecord, SimConfig, Simulator, TrialOutput, TrialPlan, VelocityTable,
 };
@@ -80,7 +70,19 @@ pub struct SimulateArgs {
     /// model, the table is measured with the simulator first.
     #[arg(long, value_name = "MODEL", requires = "track")]
     pub adaptive: Option<PathBuf>,
-    /// Fixed gaits to compare with, comma separated [default: every gait of the configuration].
+    /// With --adaptive and a model without a terrain-to-gait table: the `beta_des` grid searched around
+    /// each configured gait when measuring it, FROM:TO:STEP in radians, or none (the configured gaits
+    /// only). Variants are named BASE@BETA, e.g. G3@0.62.
+    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = super::track::GaitSweep::DEFAULT_TEXT,
+          value_parser = super::track::parse_gait_sweep)]
+    pub gait_sweep: super::track::GaitSweep,
+    /// The adaptive run switches gait only after this many consecutive stances classified as the same
+    /// terrain (1: on every decision, the default: on 3 m segments a delay costs more than the wrong
+    /// switches it saves).
+    #[arg(long, default_value_t = 1, requires = "adaptive")]
+    pub confirm: usize,
+    /// Fixed gaits to compare with, comma separated (configured gaits or variants such as G3@0.62)
+    /// [default: every gait of the configuration and every gait the terrain-to-gait table recommends].
     #[arg(long, value_delimiter = ',', requires = "track")]
     pub fixed_gait: Vec<String>,
     /// Gait of the adaptive run at the start line (it knows no terrain yet) [default: the second gait of
@@ -791,7 +793,7 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         return Ok(());
     }
     if let Some(track) = &args.track {
-        return run_track_comparison(args, &config, track, out);
+        return super::track::run_track_comparison(args, &config, track, out);
     }
     let Some(out_dir) = args.out.as_deref() else {
         anyhow::bail!("--out DIR is required");
@@ -849,280 +851,6 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         summary.reruns
     )?;
     writeln!(out, "manifest: {}", summary.manifest.display())?;
-    Ok(())
-}
-
-/// One policy's runs on the track.
-#[derive(Debug, serde::Serialize)]
-pub struct PolicyRuns {
-    /// `adaptive` or `fixed G1`, ...
-    pub policy: String,
-    pub runs: Vec<TrackRun>,
-}
-
-impl PolicyRuns {
-    fn finished(&self) -> usize {
-        self.runs.iter().filter(|r| r.finished).count()
-    }
-
-    fn mean(&self, f: impl Fn(&TrackRun) -> f64) -> f64 {
-        if self.runs.is_empty() {
-            f64::NAN
-        } else {
-            self.runs.iter().map(f).sum::<f64>() / self.runs.len() as f64
-        }
-    }
-
-    fn total(&self, f: impl Fn(&TrackRun) -> usize) -> usize {
-        self.runs.iter().map(f).sum()
-    }
-}
-
-/// The whole comparison (what `--json` writes).
-#[derive(Debug, serde::Serialize)]
-pub struct TrackComparison {
-    pub track: String,
-    pub length_m: f64,
-    pub seeds: Vec<u64>,
-    /// The terrain-to-gait table the adaptive runs used, and where it came from.
-    pub gait_table: std::collections::BTreeMap<String, String>,
-    pub gait_table_source: Option<String>,
-    /// The measured table, when it was measured here.
-    pub measured_table: Option<GaitTable>,
-    pub policies: Vec<PolicyRuns>,
-}
-
-impl TrackComparison {
-    /// The comparison table as text.
-    pub fn format(&self) -> String {
-        use std::fmt::Write as _;
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "Track {} ({:.1} m), {} run(s) per policy (seeds {}); means over runs, counts summed",
-            self.track,
-            self.length_m,
-            self.seeds.len(),
-            self.seeds
-                .iter()
-                .map(u64::to_string)
-                .collect::<Vec<_>>()
-                .join(",")
-        );
-        let _ = writeln!(
-            out,
-            "{:<12}{:>10}{:>10}{:>11}{:>7}{:>22}{:>10}",
-            "policy", "finished", "time s", "speed m/s", "falls", "misclassified", "switches"
-        );
-        for p in &self.policies {
-            let decided = p.total(|r| r.decided);
-            let mis = if p.policy == "adaptive" {
-                format!(
-                    "{}/{} ({:.1} %)",
-                    p.total(|r| r.misclassified),
-                    decided,
-                    100.0 * p.total(|r| r.misclassified) as f64 / decided.max(1) as f64
-                )
-            } else {
-                "-".to_owned()
-            };
-            let _ = writeln!(
-                out,
-                "{:<12}{:>10}{:>10.2}{:>11.3}{:>7}{:>22}{:>10}",
-                p.policy,
-                format!("{}/{}", p.finished(), p.runs.len()),
-                p.mean(|r| r.time_s),
-                p.mean(|r| r.mean_speed_m_per_s),
-                p.total(|r| r.falls),
-                mis,
-                p.total(|r| r.switches)
-            );
-        }
-        if let Some(source) = &self.gait_table_source {
-            let table: Vec<String> = self
-                .gait_table
-                .iter()
-                .map(|(t, g)| format!("{t}={g}"))
-                .collect();
-            let _ = writeln!(out, "gait table ({source}): {}", table.join(","));
-        }
-        let _ = writeln!(out, "{}", self.verdict());
-        out
-    }
-
-    /// Whether the adaptive policy beat every fixed gait, said plainly.
-    pub fn verdict(&self) -> String {
-        let Some(adaptive) = self.policies.iter().find(|p| p.policy == "adaptive") else {
-            return "no adaptive run (give --adaptive MODEL)".to_owned();
-        };
-        let key = |p: &PolicyRuns| (p.finished(), -p.mean(|r| r.time_s));
-        let best_fixed = self
-            .policies
-            .iter()
-            .filter(|p| p.policy != "adaptive")
-            .max_by(|a, b| {
-                let (ka, kb) = (key(a), key(b));
-                ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
-            });
-        let Some(best) = best_fixed else {
-            return "no fixed gait to compare with".to_owned();
-        };
-        let (ta, tb) = (adaptive.mean(|r| r.time_s), best.mean(|r| r.time_s));
-        let (fa, fb) = (adaptive.total(|r| r.falls), best.total(|r| r.falls));
-        let better = adaptive.finished() > best.finished()
-            || (adaptive.finished() == best.finished() && ta < tb);
-        format!(
-            "adaptation {}: adaptive {:.2} s ({} falls) vs the best fixed gait, {}, {:.2} s ({} falls), {:+.1} %",
-            if better { "helps" } else { "does NOT help" },
-            ta,
-            fa,
-            best.policy,
-            tb,
-            fb,
-            100.0 * (ta / tb - 1.0)
-        )
-    }
-}
-
-/// The adaptive policy's state: the online classifier and the terrain-to-gait table.
-fn adaptive_policy<'m>(
-    classifier: &mut OnlineClassifier<'m>,
-    class_names: &[String],
-    table: &std::collections::BTreeMap<String, String>,
-    view: &HopView<'_>,
-) -> Result<PolicyStep, String> {
-    let mut step = PolicyStep::default();
-    let grid: Grid = view.grid;
-    for i in 0..view.frame_count() {
-        let Some(values) = view.frame(i) else {
-            break;
-        };
-        let frame = FrameView::new(grid, values, None).map_err(|e| e.to_string())?;
-        let events = classifier.push(&frame).map_err(|e| e.to_string())?;
-        for event in events.events {
-            if let OnlineEvent::Decision(decision) = event
-                && let Some(label) = class_names.get(decision.class)
-            {
-                step.gait = table.get(label).cloned();
-                step.terrain = Some(label.clone());
-            }
-        }
-    }
-    Ok(step)
-}
-
-/// `--track`: fixed gaits and (with `--adaptive`) the adaptive policy on the same seeds.
-fn run_track_comparison(
-    args: &SimulateArgs,
-    config: &SimConfig,
-    spec: &str,
-    out: &mut dyn Write,
-) -> anyhow::Result<()> {
-    let track = parse_track(spec)?;
-    let sim = Simulator::new(config.clone(), args.seed, Vec::new())?;
-    let repeats = args.repeats.max(1);
-    let seeds: Vec<u64> = (0..repeats as u64)
-        .map(|i| args.seed.wrapping_add(i))
-        .collect();
-    let fixed: Vec<String> = if args.fixed_gait.is_empty() {
-        config.gaits.iter().map(|g| g.name.clone()).collect()
-    } else {
-        args.fixed_gait
-            .iter()
-            .map(|g| g.trim().to_owned())
-            .collect()
-    };
-    let mut policies = Vec::new();
-    let (mut gait_table_map, mut source, mut measured) = (Default::default(), None, None);
-    if let Some(path) = &args.adaptive {
-        let file = load_model(path)
-            .with_context(|| format!("cannot read the model {}", path.display()))?;
-        let model = &file.model;
-        let class_names = model.class_names().to_vec();
-        let profile = file.online.clone().unwrap_or_else(|| {
-            let _ = writeln!(
-                out,
-                "note: {} has no online profile; warm-up calibration, k = 6 (train with --online-profile)",
-                path.display()
-            );
-            OnlineProfile::default()
-        });
-        if profile.gait_table.is_empty() {
-            let terrains: Vec<String> = class_names
-                .iter()
-                .filter(|t| sim.terrain(t).is_ok())
-                .cloned()
-                .collect();
-            let gaits: Vec<String> = config.gaits.iter().map(|g| g.name.clone()).collect();
-            let table = gait_table(&sim, &terrains, &gaits, &GaitTableParams::default())?;
-            write!(out, "{}", table.format())?;
-            gait_table_map = table.best.clone();
-            source = Some("measured now: the model has none".to_owned());
-            measured = Some(table);
-        } else {
-            gait_table_map = profile.gait_table.clone();
-            source = Some(format!("from {}", path.display()));
-        }
-        let start = match &args.start_gait {
-            Some(g) => g.trim().to_owned(),
-            None => config
-                .gaits
-                .get(1)
-                .or(config.gaits.first())
-                .map(|g| g.name.clone())
-                .context("the configuration has no gait")?,
-        };
-        let mut runs = Vec::new();
-        for &seed in &seeds {
-            let mut classifier = OnlineClassifier::new(
-                model,
-                &ValidSegmentParams::default(),
-                &profile.params,
-                profile.calibration,
-            )?;
-            let params = TrackParams::new(seed, &start);
-            let run = run_track(&sim, &track, &params, |view| {
-                adaptive_policy(&mut classifier, &class_names, &gait_table_map, view)
-            })?;
-            runs.push(run);
-        }
-        policies.push(PolicyRuns {
-            policy: "adaptive".to_owned(),
-            runs,
-        });
-    }
-    for gait in &fixed {
-        let runs = seeds
-            .iter()
-            .map(|&seed| {
-                let mut params = TrackParams::new(seed, gait);
-                params.render = false;
-                run_track(&sim, &track, &params, |_| Ok(PolicyStep::default()))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        policies.push(PolicyRuns {
-            policy: format!("fixed {gait}"),
-            runs,
-        });
-    }
-    let comparison = TrackComparison {
-        track: spec.to_owned(),
-        length_m: track.iter().map(|s| s.length_m).sum(),
-        seeds,
-        gait_table: gait_table_map,
-        gait_table_source: source,
-        measured_table: measured,
-        policies,
-    };
-    write!(out, "{}", comparison.format())?;
-    if let Some(path) = &args.json {
-        presrs_io::write_atomic(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, &comparison).map_err(std::io::Error::from)?;
-            writeln!(w)
-        })
-        .with_context(|| format!("cannot write {}", path.display()))?;
-        writeln!(out, "JSON: {}", path.display())?;
-    }
     Ok(())
 }
 

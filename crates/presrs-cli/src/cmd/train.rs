@@ -46,14 +46,21 @@ pub struct TrainArgs {
     #[arg(long)]
     pub online_profile: bool,
     /// Terrain-to-gait table for the online profile (implies --online-profile): `sim` measures, with the
-    /// simulator, the fastest gait that never fell on each terrain of the model (steady and exit runs,
-    /// `presrs_sim::track::gait_table`, a few seconds), or give it: TERRAIN=GAIT,...
+    /// simulator, the fastest gait that never fell on each terrain of the model, in steady runs or
+    /// stepping onto another terrain, with a margin in `beta_des` (`presrs_sim::track::gait_table`, over
+    /// the configured gaits and their --gait-sweep variants; ~30 s on 2 cores), or give it:
+    /// TERRAIN=GAIT,... (configured gaits or variants such as G3@0.62).
     #[arg(long, value_name = "sim|TERRAIN=GAIT,...")]
     pub gait_table: Option<String>,
     /// Simulator configuration JSON for `--gait-table sim` (its gaits are the candidates) [default: the
     /// built-in configuration].
     #[arg(long, requires = "gait_table")]
     pub sim_config: Option<PathBuf>,
+    /// For `--gait-table sim`: the `beta_des` grid searched around each configured gait, FROM:TO:STEP in
+    /// radians, or none (the configured gaits only). Variants are named BASE@BETA, e.g. G3@0.62.
+    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = super::track::GaitSweep::DEFAULT_TEXT,
+          value_parser = super::track::parse_gait_sweep)]
+    pub gait_sweep: super::track::GaitSweep,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -278,25 +285,7 @@ fn terrain_gait_table(
         return Ok(table);
     }
     let config = super::simulate::load_config(args.sim_config.as_deref())?;
-    let sim = presrs_sim::Simulator::new(config.clone(), args.seed, Vec::new())?;
-    let (terrains, unknown): (Vec<String>, Vec<String>) = class_names
-        .iter()
-        .cloned()
-        .partition(|t| sim.terrain(t).is_ok());
-    if !unknown.is_empty() {
-        writeln!(
-            out,
-            "gait table: the simulator does not know {} (no gait recommended for them)",
-            unknown.join(", ")
-        )?;
-    }
-    let gaits: Vec<String> = config.gaits.iter().map(|g| g.name.clone()).collect();
-    let table = presrs_sim::track::gait_table(
-        &sim,
-        &terrains,
-        &gaits,
-        &presrs_sim::track::GaitTableParams::default(),
-    )?;
-    write!(out, "{}", table.format())?;
+    let table =
+        super::track::measure_gait_table(&config, args.seed, class_names, args.gait_sweep, out)?;
     Ok(table.best)
 }
