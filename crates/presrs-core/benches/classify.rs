@@ -8,6 +8,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use presrs_core::FrameView;
+use presrs_core::features::{Fft1dConfig, Fft1dExtractor};
 use presrs_core::pipeline::bench_fixture;
 
 const SEED: u64 = 2024;
@@ -31,9 +32,25 @@ fn classify(c: &mut Criterion) {
     });
 
     let mut stages = model.session();
+    // Exact features (what training computes).
     c.bench_function("features_only_38x41", |b| {
         b.iter(|| black_box(stages.features(black_box(&views[0])).map(|f| f[0]).ok()))
     });
+    // The classifier's path: the 1-D |FFT| in single precision.
+    let cropped = model.crop().apply(&views[0]).map(|c| c.values().to_vec());
+    let mut fast_extractor = Fft1dExtractor::new(model.image_grid(), &Fft1dConfig::PAPER);
+    let mut fast_features = vec![0.0; model.pca().n_features()];
+    if let (Ok(cropped), Ok(extractor)) = (&cropped, &mut fast_extractor) {
+        c.bench_function("features_fast_38x41", |b| {
+            b.iter(|| {
+                black_box(
+                    extractor
+                        .extract_fast_into(black_box(cropped), &mut fast_features)
+                        .ok(),
+                )
+            })
+        });
+    }
     let features = model
         .session()
         .features(&views[0])

@@ -23,7 +23,7 @@ use crate::classifier::{
 };
 use crate::crop::Crop;
 use crate::error::{CoreError, Result};
-use crate::features::{FeatureConfig, FeatureExtractor};
+use crate::features::{FeatureConfig, FeatureExtractor, Precision};
 use crate::frame::{Frame, FrameView, Grid};
 use crate::pca::{Pca, ProjectionScratch};
 use crate::preprocess::{FillScratch, Preprocess, fill_from_neighbours, normalise_load};
@@ -311,7 +311,7 @@ fn features_of(images: &[LabeledImage<'_>], preprocessor: &Preprocessor) -> Resu
             || preprocessor.clone(),
             |preprocessor, (index, (out, image))| {
                 preprocessor
-                    .features_into(&image.frame, out)
+                    .features_into(&image.frame, out, Precision::Exact)
                     .map_err(|err| match err {
                         CoreError::Shape {
                             what,
@@ -368,7 +368,12 @@ impl Preprocessor {
 
     /// Crops `frame` (absent sensels read as 0, or filled from their neighbours), normalises its load when
     /// asked, and writes its features into `out`. Does not allocate.
-    fn features_into(&mut self, frame: &FrameView<'_>, out: &mut [f64]) -> Result<()> {
+    fn features_into(
+        &mut self,
+        frame: &FrameView<'_>,
+        out: &mut [f64],
+        precision: Precision,
+    ) -> Result<()> {
         crop_masked_into(&self.crop, self.image_grid, frame, &mut self.cropped)?;
         if self.preprocess.fill_absent
             && let Some(mask) = frame.present()
@@ -390,7 +395,10 @@ impl Preprocessor {
         if self.preprocess.normalise_load {
             normalise_load(&mut self.cropped);
         }
-        self.extractor.extract_into(&self.cropped, out)
+        match precision {
+            Precision::Exact => self.extractor.extract_into(&self.cropped, out),
+            Precision::Fast => self.extractor.extract_fast_into(&self.cropped, out),
+        }
     }
 }
 
@@ -453,7 +461,7 @@ pub fn extract_features_with(
         features.extractor(image_grid)?,
     );
     let mut out = vec![0.0; preprocessor.extractor.output_len()];
-    preprocessor.features_into(frame, &mut out)?;
+    preprocessor.features_into(frame, &mut out, Precision::Exact)?;
     Ok(out)
 }
 
@@ -622,15 +630,18 @@ impl<'m> Session<'m> {
         })
     }
 
-    /// The feature vector of `frame` (before PCA).
+    /// The feature vector of `frame` (before PCA), exact: as training computes it.
     pub fn features(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
-        self.preprocessor.features_into(frame, &mut self.features)?;
+        self.preprocessor
+            .features_into(frame, &mut self.features, Precision::Exact)?;
         Ok(&self.features)
     }
 
-    /// The PCA-reduced feature vector of `frame` (what the classifier sees).
+    /// The PCA-reduced feature vector of `frame` (what the classifier sees): features on the fast path
+    /// (the 1-D |FFT| in single precision) and the PCA's single-precision projection.
     pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
-        self.preprocessor.features_into(frame, &mut self.features)?;
+        self.preprocessor
+            .features_into(frame, &mut self.features, Precision::Fast)?;
         self.model.fields.pca.project_fast_into(
             &self.features,
             &mut self.projection,
@@ -697,7 +708,10 @@ impl<'m> BatchSession<'m> {
             .iter()
             .zip(self.features.chunks_exact_mut(n_features))
         {
-            let error = session.preprocessor.features_into(frame, row).err();
+            let error = session
+                .preprocessor
+                .features_into(frame, row, Precision::Fast)
+                .err();
             if error.is_some() {
                 row.fill(0.0);
             }

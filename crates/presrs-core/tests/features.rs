@@ -35,16 +35,24 @@ fn assert_close_to_naive(grid: Grid, fft_len: Option<usize>, seed: u64) {
     let image = random_image(grid, &mut rng);
     let config = Fft1dConfig { fft_len };
     let mut extractor = Fft1dExtractor::new(grid, &config).unwrap();
-    let fast = extractor.extract(&image).unwrap();
+    let exact = extractor.extract(&image).unwrap();
+    let mut single = vec![f64::NAN; exact.len()];
+    extractor.extract_fast_into(&image, &mut single).unwrap();
     let naive = naive_dft_magnitudes(&image, extractor.fft_len());
-    assert_eq!(fast.len(), naive.len());
+    assert_eq!(exact.len(), naive.len());
     // Rounding of both sums grows with the sum of |x|; 1e-12 of it is far above f64 noise for n <= 4096
-    // and far below any real difference.
+    // and far below any real difference. The single-precision path (f32: 6e-8 per operation, log2 N
+    // stages) is held to 1e-6 of it.
     let scale: f64 = image.iter().map(|v| v.abs()).sum::<f64>().max(1.0);
-    for (k, (f, n)) in fast.iter().zip(&naive).enumerate() {
+    for (k, ((f, s), n)) in exact.iter().zip(&single).zip(&naive).enumerate() {
         assert!(
             (f - n).abs() <= 1e-12 * scale,
             "grid {grid}, N {}: bin {k}: fft {f} vs naive {n}",
+            extractor.fft_len()
+        );
+        assert!(
+            (s - n).abs() <= 1e-6 * scale,
+            "grid {grid}, N {}: bin {k}: single-precision fft {s} vs naive {n}",
             extractor.fft_len()
         );
     }
@@ -62,6 +70,9 @@ fn matches_naive_dft_with_non_power_of_two_lengths() {
     assert_close_to_naive(Grid::new(5, 5), Some(97), 4); // prime N
     assert_close_to_naive(Grid::new(38, 41), Some(1558), 5); // no padding at all
     assert_close_to_naive(Grid::new(1, 1), None, 6); // N = 1: the one value
+    assert_close_to_naive(Grid::new(1, 2), None, 7); // N = 2: M = 1, no pair
+    assert_close_to_naive(Grid::new(2, 2), None, 8); // N = 4: M = 2, only the middle bin
+    assert_close_to_naive(Grid::new(7, 9), Some(70), 9); // N = 2 x odd: M odd, no middle bin
 }
 
 proptest! {

@@ -198,14 +198,20 @@ fn session_features_are_the_paper_features_of_the_cropped_image() {
         extract_features(&view, &Crop::PAPER, &FeatureConfig::default()).unwrap(),
         direct
     );
-    // The session projects with the PCA's single-precision path (as training does), bit for bit.
+    // To classify, the session takes the single-precision |FFT| and the PCA's single-precision
+    // projection, bit for bit.
     let reduced = session.reduce(&view).unwrap().to_vec();
+    let mut single = vec![0.0; direct.len()];
+    Fft1dExtractor::new(Grid::new(38, 41), &Fft1dConfig::PAPER)
+        .unwrap()
+        .extract_fast_into(cropped.values(), &mut single)
+        .unwrap();
     let pca = model.pca();
     let mut fast = vec![0.0; pca.n_components()];
-    pca.project_fast_into(&direct, &mut pca.scratch(), &mut fast)
+    pca.project_fast_into(&single, &mut pca.scratch(), &mut fast)
         .unwrap();
     assert_eq!(reduced, fast);
-    // ... which is the exact projection to single precision.
+    // ... which is the exact projection of the exact features to single precision.
     let exact = pca.project(&direct).unwrap();
     let scale = exact.iter().map(|v| v.abs()).fold(0.0, f64::max);
     for (a, b) in reduced.iter().zip(&exact) {

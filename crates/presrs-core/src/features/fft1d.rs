@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
+use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
@@ -60,8 +61,9 @@ impl Fft1dConfig {
     }
 }
 
-/// Computes 1-D |FFT| features of images of one grid. Holds the FFT plan and every buffer, so
-/// [`extract_into`](Self::extract_into) does not allocate. Cloning shares the (immutable) plan.
+/// Computes 1-D |FFT| features of images of one grid. Holds the FFT plans and every buffer, so
+/// [`extract_into`](Self::extract_into) and [`extract_fast_into`](Self::extract_fast_into) do not
+/// allocate. Cloning shares the (immutable) plans.
 #[derive(Clone)]
 pub struct Fft1dExtractor {
     grid: Grid,
@@ -70,6 +72,8 @@ pub struct Fft1dExtractor {
     signal: Vec<f64>,
     spectrum: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
+    /// The single-precision transform of the classification path (even `N` only).
+    fast: Option<HalfLengthF32>,
 }
 
 impl std::fmt::Debug for Fft1dExtractor {
@@ -97,6 +101,7 @@ impl Fft1dExtractor {
             spectrum: plan.make_output_vec(),
             scratch: plan.make_scratch_vec(),
             plan,
+            fast: (fft_len % 2 == 0).then(|| HalfLengthF32::new(fft_len)),
         }
     }
 
@@ -140,11 +145,220 @@ impl Fft1dExtractor {
         Ok(())
     }
 
+    /// [`extract_into`](Self::extract_into) in single precision, for classification: the transform
+    /// runs in f32 (a complex FFT of length `N/2` on the even/odd samples, then the split into the real
+    /// spectrum), about 2.5x faster than the f64 path; each feature is within ~1e-6 of the largest one
+    /// of the exact features (tested against the naive DFT). The classifier's PCA already runs on
+    /// f32-rounded centred features, so this adds no new kind of error. Odd `N` falls back to the exact
+    /// path.
+    pub fn extract_fast_into(&mut self, image: &[f64], out: &mut [f64]) -> Result<()> {
+        check_len("fft1d image", self.grid.len(), image.len())?;
+        check_len("fft1d feature buffer", self.output_len(), out.len())?;
+        match self.fast.as_mut() {
+            Some(fast) => fast.magnitudes(image, out),
+            None => return self.extract_into(image, out),
+        }
+        Ok(())
+    }
+
     /// The features of `image` in a new vector.
     pub fn extract(&mut self, image: &[f64]) -> Result<Vec<f64>> {
         let mut out = vec![0.0; self.output_len()];
         self.extract_into(image, &mut out)?;
         Ok(out)
+    }
+}
+
+/// `|DFT_N(x)|[0 ..= N/2]` of a real signal (zero-padded to an even `N`) in single precision, through a
+/// complex FFT of length `M = N/2`: with `z[n] = x[2n] + i x[2n+1]` and `Z = FFT_M(z)`,
+/// `X[k] = E[k] + W^k O[k]` where `E[k] = (Z[k] + conj Z[M-k]) / 2`, `O[k] = (Z[k] - conj Z[M-k]) / 2i`
+/// and `W = exp(-2 pi i / N)`; the pair `(k, M-k)` shares `E` and `O` (`X[M-k] = conj(E - W^k O)`).
+/// realfft does the same in f64, but its split step runs scalar; here it runs on whole SIMD registers
+/// (structure-of-arrays buffers, a loop compiled for the CPU's instruction set).
+#[derive(Clone)]
+struct HalfLengthF32 {
+    fft: Arc<dyn Fft<f32>>,
+    z: Vec<Complex<f32>>,
+    scratch: Vec<Complex<f32>>,
+    /// `W^k` for `k = 0 .. pairs` (index 0 unused).
+    twiddle_re: Vec<f32>,
+    twiddle_im: Vec<f32>,
+    /// `Z[k]` and `Z[M-k]` for the pairs, then `|X[k]|` and `|X[M-k]|`.
+    a_re: Vec<f32>,
+    a_im: Vec<f32>,
+    c_re: Vec<f32>,
+    c_im: Vec<f32>,
+    low: Vec<f32>,
+    high: Vec<f32>,
+}
+
+impl HalfLengthF32 {
+    /// `n` even and positive.
+    fn new(n: usize) -> Self {
+        let m = n / 2;
+        let fft = FftPlanner::<f32>::new().plan_fft_forward(m);
+        // Pairs (k, M-k) with 0 < k < M-k.
+        let pairs = m.saturating_sub(1) / 2 + 1;
+        let angle = |k: usize| -2.0 * std::f64::consts::PI * k as f64 / n as f64;
+        #[allow(clippy::cast_possible_truncation)]
+        let twiddle = |f: fn(f64) -> f64| (0..pairs).map(|k| f(angle(k)) as f32).collect();
+        Self {
+            scratch: vec![Complex::default(); fft.get_inplace_scratch_len()],
+            fft,
+            z: vec![Complex::default(); m],
+            twiddle_re: twiddle(f64::cos),
+            twiddle_im: twiddle(f64::sin),
+            a_re: vec![0.0; pairs],
+            a_im: vec![0.0; pairs],
+            c_re: vec![0.0; pairs],
+            c_im: vec![0.0; pairs],
+            low: vec![0.0; pairs],
+            high: vec![0.0; pairs],
+        }
+    }
+
+    /// `out[k] = |X[k]|` for `k = 0 ..= M`; `x` at most `N` long, `out` `M + 1` long.
+    fn magnitudes(&mut self, x: &[f64], out: &mut [f64]) {
+        let m = self.z.len();
+        pulp::Arch::new().dispatch(Pack { x, z: &mut self.z });
+        self.fft
+            .process_with_scratch(&mut self.z, &mut self.scratch);
+        let Self {
+            z,
+            twiddle_re,
+            twiddle_im,
+            a_re,
+            a_im,
+            c_re,
+            c_im,
+            low,
+            high,
+            ..
+        } = self;
+        pulp::Arch::new().dispatch(SplitSpectrum {
+            z,
+            twiddle_re,
+            twiddle_im,
+            a_re,
+            a_im,
+            c_re,
+            c_im,
+            low,
+            high,
+            out,
+        });
+        if m % 2 == 0 && m > 0 {
+            // k = M/2 pairs with itself: W^{M/2} = -i, so X = E - i O = (Re Z, -Im Z).
+            out[m / 2] = f64::from(z[m / 2].norm());
+        }
+    }
+}
+
+/// `z[n] = x[2n] + i x[2n+1]` in f32, zero beyond `x`.
+struct Pack<'a> {
+    x: &'a [f64],
+    z: &'a mut [Complex<f32>],
+}
+
+impl pulp::WithSimd for Pack<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Self { x, z } = self;
+        let whole = x.len() / 2;
+        #[allow(clippy::cast_possible_truncation)]
+        for (dst, pair) in z.iter_mut().zip(x.chunks_exact(2)) {
+            *dst = Complex::new(pair[0] as f32, pair[1] as f32);
+        }
+        let mut filled = whole;
+        if x.len() % 2 == 1 {
+            #[allow(clippy::cast_possible_truncation)]
+            let last = x[x.len() - 1] as f32;
+            z[whole] = Complex::new(last, 0.0);
+            filled += 1;
+        }
+        z[filled..].fill(Complex::default());
+    }
+}
+
+/// The split step of [`HalfLengthF32`] on the pairs `(k, M-k)`, `0 < k < M-k`, and the output.
+struct SplitSpectrum<'a> {
+    z: &'a [Complex<f32>],
+    twiddle_re: &'a [f32],
+    twiddle_im: &'a [f32],
+    a_re: &'a mut [f32],
+    a_im: &'a mut [f32],
+    c_re: &'a mut [f32],
+    c_im: &'a mut [f32],
+    low: &'a mut [f32],
+    high: &'a mut [f32],
+    /// `M + 1` magnitudes; the middle bin of an even `M` is left to the caller.
+    out: &'a mut [f64],
+}
+
+impl pulp::WithSimd for SplitSpectrum<'_> {
+    type Output = ();
+
+    /// Plain loops, compiled with the instruction set `S` enables (pulp's dispatch), which the compiler
+    /// vectorises; structure-of-arrays buffers so that it can.
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Self {
+            z,
+            twiddle_re,
+            twiddle_im,
+            a_re,
+            a_im,
+            c_re,
+            c_im,
+            low,
+            high,
+            out,
+        } = self;
+        let pairs = low.len();
+        let m = z.len();
+        // Z[k] and Z[M-k] for k = 1 .. pairs, as separate real and imaginary arrays.
+        for ((re, im), value) in a_re[1..]
+            .iter_mut()
+            .zip(a_im[1..].iter_mut())
+            .zip(&z[1..pairs])
+        {
+            *re = value.re;
+            *im = value.im;
+        }
+        for ((re, im), value) in c_re[1..]
+            .iter_mut()
+            .zip(c_im[1..].iter_mut())
+            .zip(z[m + 1 - pairs..].iter().rev())
+        {
+            *re = value.re;
+            *im = value.im;
+        }
+        let inputs = a_re
+            .iter()
+            .zip(a_im.iter())
+            .zip(c_re.iter().zip(c_im.iter()))
+            .zip(twiddle_re.iter().zip(twiddle_im.iter()));
+        for ((((&ar, &ai), (&cr, &ci)), (&wr, &wi)), (lo, hi)) in
+            inputs.zip(low.iter_mut().zip(high.iter_mut())).take(pairs)
+        {
+            let (even_re, even_im) = (0.5 * (ar + cr), 0.5 * (ai - ci));
+            let (odd_re, odd_im) = (0.5 * (ai + ci), 0.5 * (cr - ar));
+            let (t_re, t_im) = (wr * odd_re - wi * odd_im, wr * odd_im + wi * odd_re);
+            let (p_re, p_im) = (even_re + t_re, even_im + t_im);
+            let (q_re, q_im) = (even_re - t_re, even_im - t_im);
+            *lo = (p_re * p_re + p_im * p_im).sqrt();
+            *hi = (q_re * q_re + q_im * q_im).sqrt();
+        }
+        out[0] = f64::from((z[0].re + z[0].im).abs());
+        out[m] = f64::from((z[0].re - z[0].im).abs());
+        for (dst, &v) in out[1..pairs].iter_mut().zip(&low[1..]) {
+            *dst = f64::from(v);
+        }
+        for (dst, &v) in out[m + 1 - pairs..m].iter_mut().zip(high[1..].iter().rev()) {
+            *dst = f64::from(v);
+        }
     }
 }
 

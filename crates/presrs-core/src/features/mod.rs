@@ -198,6 +198,13 @@ impl FeatureConfig {
     }
 }
 
+/// How features are computed: exactly (training, exported features) or as the classifier's fast path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    Exact,
+    Fast,
+}
+
 /// A feature extractor bound to one image grid; owns its buffers.
 #[derive(Clone, Debug)]
 pub enum FeatureExtractor {
@@ -231,8 +238,21 @@ impl FeatureExtractor {
     /// Writes the features of `image` (row-major, `grid` sized) into `out` (`output_len` long).
     /// Does not allocate.
     pub fn extract_into(&mut self, image: &[f64], out: &mut [f64]) -> Result<()> {
+        self.extract_with(image, out, Precision::Exact)
+    }
+
+    /// [`extract_into`](Self::extract_into) for classification: the 1-D |FFT| in single precision
+    /// ([`Fft1dExtractor::extract_fast_into`]), every other family exact. Does not allocate.
+    pub fn extract_fast_into(&mut self, image: &[f64], out: &mut [f64]) -> Result<()> {
+        self.extract_with(image, out, Precision::Fast)
+    }
+
+    fn extract_with(&mut self, image: &[f64], out: &mut [f64], precision: Precision) -> Result<()> {
         match self {
-            Self::Fft1d(extractor) => extractor.extract_into(image, out),
+            Self::Fft1d(extractor) => match precision {
+                Precision::Exact => extractor.extract_into(image, out),
+                Precision::Fast => extractor.extract_fast_into(image, out),
+            },
             Self::Fft2d(extractor) => extractor.extract_into(image, out),
             Self::Glcm(extractor) => extractor.extract_into(image, out),
             Self::Combined(parts) => {
@@ -241,7 +261,7 @@ impl FeatureExtractor {
                 let mut rest = out;
                 for part in parts.iter_mut() {
                     let (head, tail) = rest.split_at_mut(part.output_len());
-                    part.extract_into(image, head)?;
+                    part.extract_with(image, head, precision)?;
                     let norm = head.iter().map(|v| v * v).sum::<f64>().sqrt();
                     if norm > 0.0 {
                         head.iter_mut().for_each(|v| *v /= norm);
