@@ -99,11 +99,30 @@ pub fn fill_from_neighbours(
     dead: Option<&[bool]>,
     scratch: &mut FillScratch,
 ) -> Result<()> {
+    check_mask_lengths(
+        grid,
+        values.len(),
+        present.map(<[bool]>::len),
+        dead.map(<[bool]>::len),
+    )?;
+    let all = |_: usize| true;
+    let hole = |i: usize| !present.is_none_or(|p| p[i]) || dead.is_some_and(|d| d[i]);
+    fill_holes(values, grid, &all, &hole, scratch);
+    Ok(())
+}
+
+/// The image and its masks (when given) must all hold one value per sensel of `grid`.
+fn check_mask_lengths(
+    grid: Grid,
+    image: usize,
+    present: Option<usize>,
+    dead: Option<usize>,
+) -> Result<()> {
     let len = grid.len();
     for (what, got) in [
-        ("image", Some(values.len())),
-        ("present mask", present.map(<[bool]>::len)),
-        ("dead mask", dead.map(<[bool]>::len)),
+        ("image", Some(image)),
+        ("present mask", present),
+        ("dead mask", dead),
     ] {
         if let Some(got) = got
             && got != len
@@ -115,9 +134,6 @@ pub fn fill_from_neighbours(
             });
         }
     }
-    let all = |_: usize| true;
-    let hole = |i: usize| !present.is_none_or(|p| p[i]) || dead.is_some_and(|d| d[i]);
-    fill_holes(values, grid, &all, &hole, scratch);
     Ok(())
 }
 
@@ -133,22 +149,12 @@ pub fn fill_dead_sensels(
     dead: &[bool],
     scratch: &mut FillScratch,
 ) -> Result<()> {
-    let len = grid.len();
-    for (what, got) in [
-        ("image", Some(values.len())),
-        ("present mask", present.map(<[bool]>::len)),
-        ("dead mask", Some(dead.len())),
-    ] {
-        if let Some(got) = got
-            && got != len
-        {
-            return Err(CoreError::Shape {
-                what,
-                expected: format!("{len} values ({grid})"),
-                got: got.to_string(),
-            });
-        }
-    }
+    check_mask_lengths(
+        grid,
+        values.len(),
+        present.map(<[bool]>::len),
+        Some(dead.len()),
+    )?;
     let exists = |i: usize| present.is_none_or(|p| p[i]);
     let hole = |i: usize| exists(i) && dead[i];
     fill_holes(values, grid, &exists, &hole, scratch);
