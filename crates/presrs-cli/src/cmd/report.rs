@@ -660,15 +660,7 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 &config,
             )?;
             if args.repeats > 0 {
-                let eval_samples: Vec<EvalSample<'_>> = triples
-                    .iter()
-                    .map(|&(frame, label, condition)| EvalSample {
-                        frame: frame.view(),
-                        label,
-                        condition,
-                        group: None,
-                    })
-                    .collect();
+                let eval_samples = eval_samples(triples);
                 let per_class = (model.0.summary().train_per_class.iter())
                     .zip(&model.0.summary().validation_per_class)
                     .map(|(a, b)| a + b)
@@ -740,6 +732,19 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Evaluation samples (no group) of labelled frames.
+fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<EvalSample<'a>> {
+    triples
+        .iter()
+        .map(|&(frame, label, condition)| EvalSample {
+            frame: frame.view(),
+            label,
+            condition,
+            group: None,
+        })
+        .collect()
+}
+
 /// `presrs report`'s sensor-fault sweep: the paper's protocol (trained on `condition`, `per_class`
 /// images per class or fewer when a class has fewer) with every test image perturbed at each level of
 /// [`Perturbation::default_sweep`], for the paper's method and (with auto options) the automatic choice;
@@ -756,15 +761,7 @@ pub fn fault_sweep(
     };
     use presrs_core::perturb::Perturbation;
     let started = Instant::now();
-    let samples: Vec<EvalSample<'_>> = triples
-        .iter()
-        .map(|&(frame, label, condition)| EvalSample {
-            frame: frame.view(),
-            label,
-            condition,
-            group: None,
-        })
-        .collect();
+    let samples = eval_samples(triples);
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     for s in samples
         .iter()
@@ -978,15 +975,7 @@ mod tests {
             "one method, the clean run and every level"
         );
 
-        let samples: Vec<EvalSample<'_>> = triples
-            .iter()
-            .map(|&(frame, label, condition)| EvalSample {
-                frame: frame.view(),
-                label,
-                condition,
-                group: None,
-            })
-            .collect();
+        let samples = eval_samples(&triples);
         let protocol = Protocol::TrainCondition {
             condition: Some("G2".into()),
             per_class: Some(8), // 8 images per class of G2: fewer than --per-class 10
