@@ -1,4 +1,5 @@
-//! Safe, runtime-dispatched SIMD kernels (`pulp`: AVX2 + FMA where the CPU has them, scalar otherwise).
+//! Safe, runtime-dispatched SIMD kernels (`pulp`: AVX-512 or AVX2 + FMA where the CPU has them, scalar
+//! otherwise).
 //!
 //! [`matrix_vector`] is the PCA projection (51 x 1025): `out = matrix · x` for a row-major matrix;
 //! [`columns_times_vector`] the Parzen distance expansion (80 x 51) on the matrix stored by columns.
@@ -16,8 +17,8 @@
 //!
 //! Measured on the 2-core development VM (AVX-512 Xeon, 2.3 GHz): the 51 x 1025 product in f64 takes about
 //! 6 us, which is what merely reading the 418 KB basis once takes there (68-78 GB/s with AVX2 or AVX-512
-//! loads; a 32 KB basis reads at ~175 GB/s). Wider registers (pulp's `x86-v4`) did not help; halving the
-//! bytes does: the kernel is generic over [`Element`], and the PCA's classification path runs it on an f32
+//! loads; a 32 KB basis reads at ~175 GB/s). AVX-512 (pulp's `x86-v4`, enabled in the workspace, chosen at
+//! run time where the CPU has it) barely helps this product (about 10 %); halving the bytes does: the kernel is generic over [`Element`], and the PCA's classification path runs it on an f32
 //! copy of the basis (1.75x faster, median of criterion's `pca_stage` bench under load).
 //!
 //! The summation order depends only on the shape and the instruction set chosen at run time, so the
