@@ -14,7 +14,7 @@ use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
 use faer::{Mat, Par};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, Result, check_len};
 
 /// A fitted PCA: `project(x) = basis · (x - mean)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -401,18 +401,6 @@ fn centre_to_f32(x: &[f64], mean: &[f64], out: &mut [f32]) {
         #[allow(clippy::cast_possible_truncation)]
         let centred = (value - mean) as f32;
         *dst = centred;
-    }
-}
-
-fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(CoreError::Shape {
-            what,
-            expected: expected.to_string(),
-            got: got.to_string(),
-        })
     }
 }
 

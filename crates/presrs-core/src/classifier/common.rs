@@ -56,18 +56,6 @@ pub(crate) fn require_per_class(
     Ok(())
 }
 
-pub(crate) fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(CoreError::Shape {
-            what,
-            expected: expected.to_string(),
-            got: got.to_string(),
-        })
-    }
-}
-
 /// Training and validation vectors together (what final models are fitted on).
 pub(crate) fn merged(
     train: &LabeledVectors<'_>,

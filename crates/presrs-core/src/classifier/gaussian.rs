@@ -12,10 +12,9 @@ use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
 use super::common::{
-    accuracy_of_scores, check_len, check_vectors, fit_temperature, merged, require_per_class,
-    softmax_in_place,
+    accuracy_of_scores, check_vectors, fit_temperature, merged, require_per_class, softmax_in_place,
 };
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, Result, check_len};
 
 /// How the covariances are shrunk.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]

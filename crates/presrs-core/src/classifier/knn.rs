@@ -8,8 +8,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::common::{check_len, check_vectors, merged, require_per_class};
-use crate::error::{CoreError, Result};
+use super::common::{check_vectors, merged, require_per_class};
+use crate::error::{CoreError, Result, check_len};
 
 /// Parameters of the k-NN classifier.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -13,7 +13,7 @@ pub mod svm;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{CoreError, Result};
+use crate::error::Result;
 
 pub use gaussian::{GaussianConfig, GaussianModel, GaussianScratch, Shrinkage, ledoit_wolf};
 pub use knn::{KnnConfig, KnnModel, KnnScratch};
@@ -53,17 +53,7 @@ impl ClassifierKind {
 
     /// Parses a name (case-insensitive).
     pub fn parse(text: &str) -> Result<Self> {
-        let wanted = text.trim().to_ascii_lowercase();
-        Self::ALL
-            .into_iter()
-            .find(|kind| kind.as_str() == wanted)
-            .ok_or_else(|| CoreError::Param {
-                name: "classifier",
-                reason: format!(
-                    "unknown classifier {text:?}; known: {}",
-                    Self::ALL.map(Self::as_str).join(", ")
-                ),
-            })
+        crate::error::parse_name(text, Self::ALL, Self::as_str, "classifier", "classifier")
     }
 
     /// The default training parameters of this family.

@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, Result, check_len};
 use crate::simd::{columns_times_vector, exp_neg_in_place};
 
 /// How σ is chosen.
@@ -582,18 +582,6 @@ fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
         }
     }
     partial.iter().sum::<f64>() + tail
-}
-
-fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(CoreError::Shape {
-            what,
-            expected: expected.to_string(),
-            got: got.to_string(),
-        })
-    }
 }
 
 #[cfg(test)]

@@ -17,8 +17,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::common::{check_len, check_vectors, fit_temperature, merged, require_per_class};
-use crate::error::{CoreError, Result};
+use super::common::{check_vectors, fit_temperature, merged, require_per_class};
+use crate::error::{CoreError, Result, check_len};
 
 /// A kernel family (what is searched).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

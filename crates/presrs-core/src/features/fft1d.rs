@@ -11,7 +11,7 @@ use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, Result, check_len};
 use crate::frame::Grid;
 
 /// Parameters of the 1-D |FFT| features.
@@ -359,18 +359,6 @@ impl pulp::WithSimd for SplitSpectrum<'_> {
         for (dst, &v) in out[m + 1 - pairs..m].iter_mut().zip(high[1..].iter().rev()) {
             *dst = f64::from(v);
         }
-    }
-}
-
-fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(CoreError::Shape {
-            what,
-            expected: expected.to_string(),
-            got: got.to_string(),
-        })
     }
 }
 

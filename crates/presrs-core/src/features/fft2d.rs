@@ -23,7 +23,7 @@ use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, Result, check_len};
 use crate::frame::Grid;
 
 /// What is kept of the 2-D magnitude spectrum.
@@ -307,18 +307,6 @@ impl Fft2dExtractor {
             }
         }
         Ok(())
-    }
-}
-
-pub(crate) fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(CoreError::Shape {
-            what,
-            expected: expected.to_string(),
-            got: got.to_string(),
-        })
     }
 }
 

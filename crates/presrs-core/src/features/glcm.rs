@@ -16,8 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::fft2d::check_len;
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, Result, check_len};
 use crate::frame::Grid;
 
 /// Number of attributes per co-occurrence matrix.

@@ -49,17 +49,7 @@ impl FeatureKind {
 
     /// Parses a name (case-insensitive).
     pub fn parse(text: &str) -> Result<Self> {
-        let wanted = text.trim().to_ascii_lowercase();
-        Self::ALL
-            .into_iter()
-            .find(|kind| kind.as_str() == wanted)
-            .ok_or_else(|| CoreError::Param {
-                name: "features",
-                reason: format!(
-                    "unknown feature kind {text:?}; known: {}",
-                    Self::ALL.map(Self::as_str).join(", ")
-                ),
-            })
+        crate::error::parse_name(text, Self::ALL, Self::as_str, "features", "feature kind")
     }
 
     /// The default parameters of this family.
@@ -257,7 +247,7 @@ impl FeatureExtractor {
             Self::Glcm(extractor) => extractor.extract_into(image, out),
             Self::Combined(parts) => {
                 let expected: usize = parts.iter().map(Self::output_len).sum();
-                fft2d::check_len("feature buffer", expected, out.len())?;
+                crate::error::check_len("feature buffer", expected, out.len())?;
                 let mut rest = out;
                 for part in parts.iter_mut() {
                     let (head, tail) = rest.split_at_mut(part.output_len());
