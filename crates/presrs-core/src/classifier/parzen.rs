@@ -17,6 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::common::{check_vectors, require_per_class};
 use crate::error::{CoreError, Result, check_len};
 use crate::simd::{columns_times_vector, exp_neg_in_place};
 
@@ -217,35 +218,6 @@ pub struct LabeledVectors<'a> {
     pub classes: &'a [usize],
 }
 
-impl LabeledVectors<'_> {
-    fn check(&self, what: &'static str, dims: usize, n_classes: usize) -> Result<()> {
-        if self.vectors.len() != self.classes.len() * dims {
-            return Err(CoreError::Shape {
-                what,
-                expected: format!(
-                    "{} values ({} vectors of {dims})",
-                    self.classes.len() * dims,
-                    self.classes.len()
-                ),
-                got: self.vectors.len().to_string(),
-            });
-        }
-        if let Some(&class) = self.classes.iter().find(|&&class| class >= n_classes) {
-            return Err(CoreError::Param {
-                name: what,
-                reason: format!("class index {class} but only {n_classes} classes"),
-            });
-        }
-        if self.vectors.iter().any(|value| !value.is_finite()) {
-            return Err(CoreError::Param {
-                name: what,
-                reason: "contains NaN or infinite values".into(),
-            });
-        }
-        Ok(())
-    }
-}
-
 impl ParzenModel {
     /// Trains on `train`, choosing σ with `validation` as described in the module documentation; the
     /// returned model stores both sets. Every class in `0..n_classes` needs a training vector.
@@ -257,19 +229,9 @@ impl ParzenModel {
         config: &ParzenConfig,
     ) -> Result<Self> {
         config.check()?;
-        if dims == 0 {
-            return Err(CoreError::Param {
-                name: "pwe dims",
-                reason: "vectors are empty".into(),
-            });
-        }
-        train.check("pwe training vectors", dims, n_classes)?;
-        validation.check("pwe validation vectors", dims, n_classes)?;
-        if let Some(missing) = (0..n_classes).find(|c| !train.classes.contains(c)) {
-            return Err(CoreError::NotEnoughData(format!(
-                "class {missing} has no training vector"
-            )));
-        }
+        check_vectors(&train, "pwe training vectors", dims, n_classes)?;
+        check_vectors(&validation, "pwe validation vectors", dims, n_classes)?;
+        require_per_class(&train, n_classes, 1)?;
 
         let (sigma, scale, validation_curve) = match &config.sigma {
             SigmaChoice::Fixed { sigma } => (*sigma, None, Vec::new()),
