@@ -39,6 +39,25 @@ pub(crate) fn check_vectors(
     Ok(())
 }
 
+/// The fraction of the vectors of `validation` (`dims` each) whose class `classify` returns; 0 for none.
+pub(crate) fn validation_accuracy(
+    validation: &LabeledVectors<'_>,
+    dims: usize,
+    mut classify: impl FnMut(&[f64]) -> Result<usize>,
+) -> Result<f64> {
+    let mut correct = 0usize;
+    for (x, &class) in validation
+        .vectors
+        .chunks_exact(dims)
+        .zip(validation.classes)
+    {
+        if classify(x)? == class {
+            correct += 1;
+        }
+    }
+    Ok(correct as f64 / validation.classes.len().max(1) as f64)
+}
+
 /// Errors unless every class has at least `min` vectors in `data`.
 pub(crate) fn require_per_class(
     data: &LabeledVectors<'_>,

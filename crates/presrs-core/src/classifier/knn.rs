@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::common::{check_vectors, merged, require_per_class};
+use super::common::{check_vectors, merged, require_per_class, validation_accuracy};
 use crate::error::{CoreError, Result, check_len};
 
 /// Parameters of the k-NN classifier.
@@ -80,17 +80,9 @@ impl KnnModel {
                 let model = Self::store(&train, n_classes, dims, candidate);
                 let mut scratch = model.scratch();
                 let mut posteriors = vec![0.0; n_classes];
-                let mut correct = 0;
-                for (x, &class) in validation
-                    .vectors
-                    .chunks_exact(dims)
-                    .zip(validation.classes)
-                {
-                    if model.classify_into(x, &mut scratch, &mut posteriors)? == class {
-                        correct += 1;
-                    }
-                }
-                let accuracy = correct as f64 / validation.classes.len() as f64;
+                let accuracy = validation_accuracy(&validation, dims, |x| {
+                    model.classify_into(x, &mut scratch, &mut posteriors)
+                })?;
                 curve.push((candidate, accuracy));
                 if accuracy >= best {
                     best = accuracy;

@@ -17,7 +17,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::common::{check_vectors, fit_temperature, merged, require_per_class};
+use super::common::{
+    check_vectors, fit_temperature, merged, require_per_class, validation_accuracy,
+};
 use crate::error::{CoreError, Result, check_len};
 
 /// A kernel family (what is searched).
@@ -438,17 +440,9 @@ impl SvmModel {
                 let scores = model.scores_of(validation.vectors)?;
                 let mut scratch = model.scratch();
                 let mut posteriors = vec![0.0; n_classes];
-                let mut correct = 0;
-                for (x, &class) in validation
-                    .vectors
-                    .chunks_exact(dims)
-                    .zip(validation.classes)
-                {
-                    if model.classify_into(x, &mut scratch, &mut posteriors)? == class {
-                        correct += 1;
-                    }
-                }
-                let accuracy = correct as f64 / validation.classes.len() as f64;
+                let accuracy = validation_accuracy(&validation, dims, |x| {
+                    model.classify_into(x, &mut scratch, &mut posteriors)
+                })?;
                 candidates.push(SvmCandidate {
                     kernel: candidate_kernel,
                     c: candidate_c,
