@@ -361,6 +361,25 @@ pub struct HopTruth {
     pub apex_energy_j: f64,
 }
 
+/// The frame sample times of a hop: every `period_s`, from `record_from_s` on.
+#[derive(Clone, Copy, Debug)]
+struct SampleClock {
+    record_from_s: f64,
+    period_s: f64,
+}
+
+impl SampleClock {
+    /// The first sample time at or after `t`.
+    fn next_at_or_after(self, t: f64) -> f64 {
+        let k = ((t - self.record_from_s) / self.period_s).ceil().max(0.0);
+        let mut ts = self.record_from_s + k * self.period_s;
+        if ts < t - 1e-12 {
+            ts += self.period_s;
+        }
+        ts
+    }
+}
+
 /// The continuous-time SLIP with its controller.
 #[derive(Clone, Debug)]
 pub struct Hopper {
@@ -464,6 +483,48 @@ impl Hopper {
         self.integ.steps
     }
 
+    /// Ballistic flight until `event` crosses zero, pushing a flight sample (no ground force, the leg held
+    /// at `leg_angle_rad`) onto `samples` at every time of `clock` on the way. With `limit = (start_s,
+    /// max_s, reason)`, a flight that lasts more than `max_s` after `start_s` is a fall for `reason`.
+    fn fly(
+        &mut self,
+        event: &impl Fn(f64, &[f64; 5]) -> f64,
+        clock: SampleClock,
+        leg_angle_rad: f64,
+        samples: &mut Vec<Sample>,
+        limit: Option<(f64, f64, &str)>,
+    ) -> Result<()> {
+        let g = GRAVITY_M_PER_S2;
+        let flight = |_t: f64, s: &[f64; 5]| [s[2], s[3], 0.0, -g, 0.0];
+        let mut sample_t = clock.next_at_or_after(self.t_s);
+        loop {
+            let stop =
+                self.integ
+                    .advance(&flight, event, &mut self.t_s, &mut self.state, sample_t)?;
+            if stop == Stop::Event {
+                return Ok(());
+            }
+            if self.t_s >= clock.record_from_s - 1e-12 {
+                samples.push(Sample {
+                    t_s: self.t_s,
+                    stance_of_hop: None,
+                    normal_force_n: 0.0,
+                    tangential_force_n: 0.0,
+                    leg_angle_rad,
+                });
+            }
+            sample_t += clock.period_s;
+            if let Some((start_s, max_s, reason)) = limit
+                && self.t_s - start_s > max_s
+            {
+                return Err(SimError::Fell {
+                    hop: self.hops_done,
+                    reason: reason.to_owned(),
+                });
+            }
+        }
+    }
+
     /// Simulates one hop from the current apex to the next apex. Frame samples at times `k * period`
     /// (`k` integer, times after `record_from_s`) are pushed onto `samples`. `angle_noise_rad` is added
     /// to the commanded touchdown angle of the *next* hop (actuator error).
@@ -481,53 +542,29 @@ impl Hopper {
         let leg_td = self.touchdown_leg_length_m();
         let apex_x = self.state[0];
         let apex_t = self.t_s;
+        let hop_number = self.hops_done;
         let fell = |reason: &str| SimError::Fell {
-            hop: self.hops_done,
+            hop: hop_number,
             reason: reason.to_owned(),
         };
         if self.state[1] <= leg_td * beta_td.cos() {
             return Err(fell("apex below the touchdown height of the leg"));
         }
-        // The sample clock: the next sample time at or after `t`.
-        let next_sample = |t: f64| -> f64 {
-            let k = ((t - record_from_s) / sample_period_s).ceil().max(0.0);
-            let mut ts = record_from_s + k * sample_period_s;
-            if ts < t - 1e-12 {
-                ts += sample_period_s;
-            }
-            ts
-        };
 
         // ---- Flight (descent): ballistic until the foot reaches the ground.
-        let flight = |_t: f64, s: &[f64; 5]| [s[2], s[3], 0.0, -g, 0.0];
         let td_height = leg_td * beta_td.cos();
         let touchdown_event = |_t: f64, s: &[f64; 5]| td_height - s[1];
-        let mut sample_t = next_sample(self.t_s);
-        loop {
-            let stop = self.integ.advance(
-                &flight,
-                &touchdown_event,
-                &mut self.t_s,
-                &mut self.state,
-                sample_t,
-            )?;
-            if stop == Stop::Event {
-                break;
-            }
-            if self.t_s >= record_from_s - 1e-12 {
-                samples.push(Sample {
-                    t_s: self.t_s,
-                    stance_of_hop: None,
-                    normal_force_n: 0.0,
-                    tangential_force_n: 0.0,
-                    leg_angle_rad: beta_td,
-                });
-            }
-            sample_t += sample_period_s;
-            if self.t_s - apex_t > 10.0 {
-                return Err(fell("no touchdown within 10 s"));
-            }
-        }
+        let clock = SampleClock {
+            record_from_s,
+            period_s: sample_period_s,
+        };
+        self.fly(
+            &touchdown_event,
+            clock,
+            beta_td,
+            samples,
+            Some((apex_t, 10.0, "no touchdown within 10 s")),
+        )?;
         let t_td = self.t_s;
         let v_td = self.state[2];
         let foot_x = self.state[0] + leg_td * beta_td.sin();
@@ -547,7 +584,7 @@ impl Hopper {
         let mut peak_n = 0.0_f64;
         let mut peak_t = 0.0_f64;
         let mut max_zg = 0.0_f64;
-        let mut sample_t = next_sample(self.t_s);
+        let mut sample_t = clock.next_at_or_after(self.t_s);
         loop {
             // Stop at every frame sample, and at least every PEAK_SCAN_S to track force peaks.
             let target = sample_t.min(self.t_s + PEAK_SCAN_S);
@@ -604,29 +641,7 @@ impl Hopper {
 
         // ---- Flight (ascent) to the apex: the apex event is vy crossing zero downwards.
         let apex_event = |_t: f64, s: &[f64; 5]| -s[3];
-        let mut sample_t = next_sample(self.t_s);
-        loop {
-            let stop = self.integ.advance(
-                &flight,
-                &apex_event,
-                &mut self.t_s,
-                &mut self.state,
-                sample_t,
-            )?;
-            if stop == Stop::Event {
-                break;
-            }
-            if self.t_s >= record_from_s - 1e-12 {
-                samples.push(Sample {
-                    t_s: self.t_s,
-                    stance_of_hop: None,
-                    normal_force_n: 0.0,
-                    tangential_force_n: 0.0,
-                    leg_angle_rad: -beta_lo,
-                });
-            }
-            sample_t += sample_period_s;
-        }
+        self.fly(&apex_event, clock, -beta_lo, samples, None)?;
 
         // ---- Eq. (2): the next touchdown angle.
         let commanded = beta_lo
