@@ -174,7 +174,9 @@ impl Fft1dExtractor {
 /// `X[k] = E[k] + W^k O[k]` where `E[k] = (Z[k] + conj Z[M-k]) / 2`, `O[k] = (Z[k] - conj Z[M-k]) / 2i`
 /// and `W = exp(-2 pi i / N)`; the pair `(k, M-k)` shares `E` and `O` (`X[M-k] = conj(E - W^k O)`).
 /// realfft does the same in f64, but its split step runs scalar; here it runs on whole SIMD registers
-/// (structure-of-arrays buffers, a loop compiled for the CPU's instruction set).
+/// (a loop compiled for the CPU's instruction set, reading `Z[k]` and `Z[M-k]` straight from the
+/// spectrum: copying them into separate real and imaginary arrays first cost more than the arithmetic,
+/// the copy stalling on the FFT's just-written output).
 #[derive(Clone)]
 struct HalfLengthF32 {
     fft: Arc<dyn Fft<f32>>,
@@ -183,11 +185,7 @@ struct HalfLengthF32 {
     /// `W^k` for `k = 0 .. pairs` (index 0 unused).
     twiddle_re: Vec<f32>,
     twiddle_im: Vec<f32>,
-    /// `Z[k]` and `Z[M-k]` for the pairs, then `|X[k]|` and `|X[M-k]|`.
-    a_re: Vec<f32>,
-    a_im: Vec<f32>,
-    c_re: Vec<f32>,
-    c_im: Vec<f32>,
+    /// `|X[k]|` and `|X[M-k]|` for the pairs (index 0 unused).
     low: Vec<f32>,
     high: Vec<f32>,
 }
@@ -208,10 +206,6 @@ impl HalfLengthF32 {
             z: vec![Complex::default(); m],
             twiddle_re: twiddle(f64::cos),
             twiddle_im: twiddle(f64::sin),
-            a_re: vec![0.0; pairs],
-            a_im: vec![0.0; pairs],
-            c_re: vec![0.0; pairs],
-            c_im: vec![0.0; pairs],
             low: vec![0.0; pairs],
             high: vec![0.0; pairs],
         }
@@ -227,10 +221,6 @@ impl HalfLengthF32 {
             z,
             twiddle_re,
             twiddle_im,
-            a_re,
-            a_im,
-            c_re,
-            c_im,
             low,
             high,
             ..
@@ -239,10 +229,6 @@ impl HalfLengthF32 {
             z,
             twiddle_re,
             twiddle_im,
-            a_re,
-            a_im,
-            c_re,
-            c_im,
             low,
             high,
             out,
@@ -287,10 +273,6 @@ struct SplitSpectrum<'a> {
     z: &'a [Complex<f32>],
     twiddle_re: &'a [f32],
     twiddle_im: &'a [f32],
-    a_re: &'a mut [f32],
-    a_im: &'a mut [f32],
-    c_re: &'a mut [f32],
-    c_im: &'a mut [f32],
     low: &'a mut [f32],
     high: &'a mut [f32],
     /// `M + 1` magnitudes; the middle bin of an even `M` is left to the caller.
@@ -301,48 +283,28 @@ impl pulp::WithSimd for SplitSpectrum<'_> {
     type Output = ();
 
     /// Plain loops, compiled with the instruction set `S` enables (pulp's dispatch), which the compiler
-    /// vectorises; structure-of-arrays buffers so that it can.
+    /// vectorises (the magnitudes into `low`/`high` as f32, then widened into `out`).
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
         let Self {
             z,
             twiddle_re,
             twiddle_im,
-            a_re,
-            a_im,
-            c_re,
-            c_im,
             low,
             high,
             out,
         } = self;
         let pairs = low.len();
         let m = z.len();
-        // Z[k] and Z[M-k] for k = 1 .. pairs, as separate real and imaginary arrays.
-        for ((re, im), value) in a_re[1..]
-            .iter_mut()
-            .zip(a_im[1..].iter_mut())
-            .zip(&z[1..pairs])
-        {
-            *re = value.re;
-            *im = value.im;
-        }
-        for ((re, im), value) in c_re[1..]
-            .iter_mut()
-            .zip(c_im[1..].iter_mut())
-            .zip(z[m + 1 - pairs..].iter().rev())
-        {
-            *re = value.re;
-            *im = value.im;
-        }
-        let inputs = a_re
+        // Z[k] and Z[M-k] for k = 1 .. pairs, read straight from the spectrum.
+        let inputs = z[1..pairs]
             .iter()
-            .zip(a_im.iter())
-            .zip(c_re.iter().zip(c_im.iter()))
-            .zip(twiddle_re.iter().zip(twiddle_im.iter()));
-        for ((((&ar, &ai), (&cr, &ci)), (&wr, &wi)), (lo, hi)) in
-            inputs.zip(low.iter_mut().zip(high.iter_mut())).take(pairs)
+            .zip(z[m + 1 - pairs..m].iter().rev())
+            .zip(twiddle_re[1..].iter().zip(&twiddle_im[1..]));
+        for (((a, c), (&wr, &wi)), (lo, hi)) in
+            inputs.zip(low[1..].iter_mut().zip(high[1..].iter_mut()))
         {
+            let (ar, ai, cr, ci) = (a.re, a.im, c.re, c.im);
             let (even_re, even_im) = (0.5 * (ar + cr), 0.5 * (ai - ci));
             let (odd_re, odd_im) = (0.5 * (ai + ci), 0.5 * (cr - ar));
             let (t_re, t_im) = (wr * odd_re - wi * odd_im, wr * odd_im + wi * odd_re);
