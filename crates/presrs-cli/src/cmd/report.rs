@@ -171,33 +171,79 @@ pub fn train_report_model(
     Ok((model, note))
 }
 
-/// The report of a simulated data set, as `presrs reproduce` writes it: `evaluations` are keyed by
-/// training gait (the paper's Table II is shown next to `G2`). Trains one model on G2 (13 + 7 images per
-/// terrain, `seed`) for the PCA and validation-curve figures and traces four hops on wood and grass.
-// Called by `reproduce` and `eval` once they write reports.
+/// What the report of a simulated data set takes from it: the mid-stance frame of every complete stance
+/// (with its terrain, gait, trial and frame index), the first 3 s of one recording per terrain at the
+/// training gait, the velocity table and the sensor. A few MB where the data set's movies are hundreds:
+/// `reproduce` keeps this and drops the movies before it simulates the heavier hopper.
+pub struct SimulationReportData {
+    frames: Vec<(Frame, String, String, String, usize)>,
+    train_gait: Option<String>,
+    recordings: Vec<(String, Recording)>,
+    table: VelocityTable,
+    sensor: Option<SensorMeta>,
+    segment: ValidSegmentParams,
+}
+
+impl SimulationReportData {
+    pub fn from_dataset(dataset: &Dataset) -> anyhow::Result<Self> {
+        let segment = ValidSegmentParams::default();
+        let mut frames = Vec::new();
+        for trial in &dataset.trials {
+            let segmentation = segment_recording(&trial.recording, &segment)?;
+            for stance in segmentation.complete() {
+                if let Some(frame) = trial.recording.frame(stance.mid_frame()) {
+                    frames.push((
+                        frame.to_frame(),
+                        trial.plan.terrain.clone(),
+                        trial.plan.gait.name.clone(),
+                        trial.plan.name(),
+                        stance.mid_frame(),
+                    ));
+                }
+            }
+        }
+        let gaits: BTreeSet<&str> = frames.iter().map(|f| f.2.as_str()).collect();
+        let train_gait = if gaits.contains("G2") {
+            Some("G2")
+        } else {
+            gaits.first().copied()
+        }
+        .map(str::to_owned);
+        // One recording per terrain, at the training gait.
+        let mut seen = BTreeSet::new();
+        let recordings = dataset
+            .trials
+            .iter()
+            .filter(|t| train_gait.as_ref().is_none_or(|g| &t.plan.gait.name == g))
+            .filter(|t| seen.insert(t.plan.terrain.clone()))
+            .map(|t| {
+                let name = format!("{} (first 3 s)", t.plan.name());
+                first_seconds(&t.recording, 3.0).map(|clipped| (name, clipped))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        Ok(Self {
+            frames,
+            train_gait,
+            recordings,
+            table: dataset.velocity_table(),
+            sensor: dataset.trials.first().map(|t| t.recording.meta.clone()),
+            segment,
+        })
+    }
+}
+
+/// The report of a simulated data set (from [`SimulationReportData::from_dataset`]), as `presrs
+/// reproduce` writes it: `evaluations` are keyed by training gait (the paper's Table II is shown next to
+/// `G2`). Trains one model on G2 (13 + 7 images per terrain, `seed`) for the PCA and validation-curve
+/// figures and traces four hops on wood and grass.
 pub fn write_simulation_report(
-    dataset: &Dataset,
+    data: &SimulationReportData,
     config: &SimConfig,
     evaluations: &BTreeMap<String, EvalReport>,
     seed: u64,
     out_dir: &Path,
 ) -> anyhow::Result<PathBuf> {
-    let params = ValidSegmentParams::default();
-    let mut frames: Vec<(Frame, String, String, String, usize)> = Vec::new();
-    for trial in &dataset.trials {
-        let segmentation = segment_recording(&trial.recording, &params)?;
-        for stance in segmentation.complete() {
-            if let Some(frame) = trial.recording.frame(stance.mid_frame()) {
-                frames.push((
-                    frame.to_frame(),
-                    trial.plan.terrain.clone(),
-                    trial.plan.gait.name.clone(),
-                    trial.plan.name(),
-                    stance.mid_frame(),
-                ));
-            }
-        }
-    }
+    let frames = &data.frames;
     let samples: Vec<ReportSample<'_>> = frames
         .iter()
         .map(|(frame, terrain, gait, name, index)| ReportSample {
@@ -208,12 +254,7 @@ pub fn write_simulation_report(
             frame_index: *index,
         })
         .collect();
-    let gaits: BTreeSet<&str> = frames.iter().map(|f| f.2.as_str()).collect();
-    let train_gait = if gaits.contains("G2") {
-        Some("G2")
-    } else {
-        gaits.first().copied()
-    };
+    let train_gait = data.train_gait.as_deref();
     let train_config = presrs_core::pipeline::TrainConfig::default().check()?;
     let triples: Vec<(&Frame, &str, Option<&str>)> = frames
         .iter()
@@ -228,33 +269,16 @@ pub fn write_simulation_report(
         &train_config,
     )
     .ok();
-    // One recording per terrain, at the training gait.
-    let mut seen = BTreeSet::new();
-    let recordings: Vec<ReportRecording<'_>> = dataset
-        .trials
+    let recordings: Vec<ReportRecording<'_>> = data
+        .recordings
         .iter()
-        .filter(|t| train_gait.is_none_or(|g| t.plan.gait.name == g))
-        .filter(|t| seen.insert(t.plan.terrain.clone()))
-        .map(|t| ReportRecording {
-            name: format!("{} (first 3 s)", t.plan.name()),
-            recording: &t.recording,
+        .map(|(name, recording)| ReportRecording {
+            name: name.clone(),
+            recording,
         })
         .collect();
-    let clipped: Vec<Recording> = recordings
-        .iter()
-        .map(|r| first_seconds(r.recording, 3.0))
-        .collect::<anyhow::Result<_>>()?;
-    let recordings: Vec<ReportRecording<'_>> = recordings
-        .iter()
-        .zip(&clipped)
-        .map(|(r, c)| ReportRecording {
-            name: r.name.clone(),
-            recording: c,
-        })
-        .collect();
-    let table = dataset.velocity_table();
-    let traces = simulation_traces(config, &table, train_gait.unwrap_or("G2"));
-    let sensor = dataset.trials.first().map(|t| &t.recording.meta);
+    let table = &data.table;
+    let traces = simulation_traces(config, table, train_gait.unwrap_or("G2"));
     let mut inputs = ReportInputs::new(
         "presrs reproduce: the paper's experiment on the simulator",
         &samples,
@@ -265,14 +289,14 @@ pub fn write_simulation_report(
         table.terrains.len(),
         table.gaits.len()
     )];
-    inputs.sensor = sensor;
+    inputs.sensor = data.sensor.as_ref();
     inputs.model_note = model.as_ref().map(|m| m.1.clone());
     inputs.model = model.as_ref().map(|m| &m.0);
     inputs.evaluations = named_evaluations(evaluations);
     inputs.recordings = recordings;
-    inputs.segment = params;
+    inputs.segment = data.segment.clone();
     inputs.simulation = Some(SimulationInputs {
-        velocity: &table,
+        velocity: table,
         traces: &traces,
     });
     write_report(&inputs, out_dir)
@@ -902,8 +926,14 @@ mod tests {
         let report = evaluate(&samples, &protocol, &config_train, 2, 1, &|| {}).unwrap();
         let evaluations = BTreeMap::from([("G2".to_owned(), report)]);
         let dir = tempfile::tempdir().unwrap();
-        let index =
-            write_simulation_report(&dataset, &config, &evaluations, 1, dir.path()).unwrap();
+        let index = write_simulation_report(
+            &SimulationReportData::from_dataset(&dataset).unwrap(),
+            &config,
+            &evaluations,
+            1,
+            dir.path(),
+        )
+        .unwrap();
         let html = std::fs::read_to_string(index).unwrap();
         for needle in [
             "table1_velocity.png",

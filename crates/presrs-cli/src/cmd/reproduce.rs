@@ -32,6 +32,7 @@ use presrs_sim::{Dataset, DatasetSpec, SimConfig, TrialOutput};
 use serde::Serialize;
 
 use super::common::{CANDIDATE_FEATURES, progress_bar, spinner};
+use super::report::SimulationReportData;
 use super::simulate::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
 
 /// The paper's Table II: accuracy per tested gait when trained on G2.
@@ -284,6 +285,14 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let segment_start = Instant::now();
     let (samples, segmentation) = stance_samples(&dataset.trials)?;
     timings.insert("segment".to_owned(), segment_start.elapsed().as_secs_f64());
+    // What the report needs from the data set, then the movies go (hundreds of MB; the heavier hopper's
+    // data set below would otherwise be held next to them).
+    let report_data = if args.no_report {
+        None
+    } else {
+        Some(SimulationReportData::from_dataset(&dataset)?)
+    };
+    drop(dataset);
     let mut images_per_gait = BTreeMap::new();
     for sample in &samples {
         *images_per_gait.entry(sample.gait.clone()).or_insert(0) += 1;
@@ -523,12 +532,10 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         serde_json::to_writer_pretty(&mut *w, &results).map_err(std::io::Error::from)?;
         writeln!(w)
     })?;
-    let report_path = if args.no_report {
-        None
-    } else {
+    let report_path = if let Some(report_data) = &report_data {
         let spin = spinner("writing the report");
         let path = super::report::write_simulation_report(
-            &dataset,
+            report_data,
             &sim_config,
             &results.evaluations,
             args.seed,
@@ -536,6 +543,8 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
         spin.finish_and_clear();
         Some(path)
+    } else {
+        None
     };
     let md_path = args.out.join("results.md");
     write_atomic(&md_path, |w| {
