@@ -28,6 +28,13 @@ fn export_writes_a_model_images_and_matching_predictions() {
     assert!(out.status.success(), "{}", stderr(&out));
     let report: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert!(report["single_image_median_ns"].as_u64().unwrap() > 0);
+    // Each stage timed alone; together about one classification (not asserted: timings are noisy).
+    for stage in ["features", "pca", "classifier"] {
+        assert!(
+            report["stages_median_ns"][stage].as_u64().unwrap() > 0,
+            "{stage}"
+        );
+    }
     assert_eq!(
         report["batch_runs_images_per_s"].as_array().unwrap().len(),
         2

@@ -637,11 +637,18 @@ impl<'m> Session<'m> {
         Ok(&self.features)
     }
 
-    /// The PCA-reduced feature vector of `frame` (what the classifier sees): features on the fast path
-    /// (the 1-D |FFT| in single precision) and the PCA's single-precision projection.
-    pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
+    /// The feature vector of `frame` as classification computes it (before PCA): the fast path, with the
+    /// 1-D |FFT| in single precision (within ~1e-6 of the largest exact feature).
+    pub fn fast_features(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
         self.preprocessor
             .features_into(frame, &mut self.features, Precision::Fast)?;
+        Ok(&self.features)
+    }
+
+    /// The PCA-reduced feature vector of `frame` (what the classifier sees): the
+    /// [`fast_features`](Self::fast_features) and the PCA's single-precision projection.
+    pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
+        self.fast_features(frame)?;
         self.model.fields.pca.project_fast_into(
             &self.features,
             &mut self.projection,

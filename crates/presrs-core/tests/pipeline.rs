@@ -206,6 +206,7 @@ fn session_features_are_the_paper_features_of_the_cropped_image() {
         .unwrap()
         .extract_fast_into(cropped.values(), &mut single)
         .unwrap();
+    assert_eq!(session.fast_features(&view).unwrap(), single.as_slice());
     let pca = model.pca();
     let mut fast = vec![0.0; pca.n_components()];
     pca.project_fast_into(&single, &mut pca.scratch(), &mut fast)

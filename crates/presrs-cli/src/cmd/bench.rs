@@ -68,6 +68,81 @@ struct BenchReport {
     batch: usize,
     /// Distinct test images (the single-image and batch runs cycle through them).
     test_images: usize,
+    /// Where a single image's time goes: each stage timed alone over the same images (medians).
+    stages_median_ns: StageTimes,
+}
+
+/// Median time of each stage of one classification, each timed alone over the test images: the crop,
+/// preprocessing and features (`Session::fast_features`), the PCA projection, and the classifier on the
+/// reduced vector.
+#[derive(Debug, Serialize)]
+struct StageTimes {
+    features: u64,
+    pca: u64,
+    classifier: u64,
+}
+
+/// The median of `iterations` timings of `step(i)` in nanoseconds.
+fn median_ns(iterations: usize, mut step: impl FnMut(usize)) -> u64 {
+    let mut times_ns: Vec<u64> = (0..iterations)
+        .map(|i| {
+            let start = Instant::now();
+            step(i);
+            start.elapsed().as_nanos() as u64
+        })
+        .collect();
+    times_ns.sort_unstable();
+    times_ns[times_ns.len() / 2]
+}
+
+/// Times the stages of one classification (see [`StageTimes`]).
+fn stage_times(
+    model: &TrainedModel,
+    frames: &[Frame],
+    iterations: usize,
+) -> anyhow::Result<StageTimes> {
+    let mut session = model.session();
+    let mut features = Vec::with_capacity(frames.len());
+    let mut reduced = Vec::with_capacity(frames.len());
+    for frame in frames {
+        features.push(session.features(&frame.view())?.to_vec());
+        reduced.push(session.reduce(&frame.view())?.to_vec());
+    }
+    let features_ns = median_ns(iterations, |i| {
+        black_box(
+            session
+                .fast_features(&frames[i % frames.len()].view())
+                .is_ok(),
+        );
+    });
+    let pca = model.pca();
+    let mut scratch = pca.scratch();
+    let mut projected = vec![0.0; pca.n_components()];
+    let pca_ns = median_ns(iterations, |i| {
+        black_box(
+            pca.project_fast_into(&features[i % frames.len()], &mut scratch, &mut projected)
+                .is_ok(),
+        );
+    });
+    let classifier = model.classifier();
+    let mut classifier_scratch = classifier.scratch();
+    let mut posteriors = vec![0.0; classifier.n_classes()];
+    let classifier_ns = median_ns(iterations, |i| {
+        black_box(
+            classifier
+                .classify_into(
+                    &reduced[i % frames.len()],
+                    &mut classifier_scratch,
+                    &mut posteriors,
+                )
+                .is_ok(),
+        );
+    });
+    Ok(StageTimes {
+        features: features_ns,
+        pca: pca_ns,
+        classifier: classifier_ns,
+    })
 }
 
 /// `presrs.json` of `--export`.
@@ -241,6 +316,7 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         black_box(&results);
         runs.push(args.batch as f64 / elapsed);
     }
+    let stages = stage_times(model, frames, args.iterations)?;
     let report = BenchReport {
         model: source,
         single_image_median_ns: quantile(0.5),
@@ -252,6 +328,7 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         iterations: args.iterations,
         batch: args.batch,
         test_images: frames.len(),
+        stages_median_ns: stages,
     };
     if let Some(dir) = &args.export {
         export(dir, &model_file, &fixture, &report)?;
@@ -267,6 +344,13 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         report.single_image_p99_ns as f64 / 1e3,
         report.single_image_min_ns as f64 / 1e3,
         report.iterations
+    )?;
+    writeln!(
+        out,
+        "  of which (medians)       crop + features {:.2} us, PCA {:.2} us, classifier {:.2} us (each timed alone)",
+        report.stages_median_ns.features as f64 / 1e3,
+        report.stages_median_ns.pca as f64 / 1e3,
+        report.stages_median_ns.classifier as f64 / 1e3,
     )?;
     writeln!(
         out,
