@@ -111,3 +111,58 @@ fn bench_rejects_zero_batch_runs() {
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr(&out).contains("--batch-runs"), "{}", stderr(&out));
 }
+
+#[test]
+fn bench_times_a_model_on_the_images_of_a_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let export = dir.path().join("inputs");
+    let out = presrs(&[
+        "bench",
+        "--synthetic",
+        "--iterations",
+        "10",
+        "--batch",
+        "4",
+        "--batch-runs",
+        "1",
+        "--export",
+        export.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // The exported images as a manifest of single frames.
+    let manifest = export.join("manifest.csv");
+    let mut rows = String::from("path,label,frame\n");
+    for frame in 0..6 {
+        rows.push_str(&format!("images.npy,,{frame}\n"));
+    }
+    std::fs::write(&manifest, rows).unwrap();
+    let model = export.join("model.json");
+    let out = presrs(&[
+        "bench",
+        "--model",
+        model.to_str().unwrap(),
+        "--images",
+        manifest.to_str().unwrap(),
+        "--iterations",
+        "20",
+        "--batch",
+        "8",
+        "--batch-runs",
+        "1",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(report["test_images"], 6);
+    assert!(
+        report["model"]
+            .as_str()
+            .unwrap()
+            .contains("on the images of"),
+        "{report}"
+    );
+    // --images needs the model it is to time.
+    let out = presrs(&["bench", "--images", manifest.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--model"), "{}", stderr(&out));
+}

@@ -16,19 +16,30 @@ use presrs_io::model_file::{ModelFile, Provenance, load_model, save_model};
 use presrs_io::npy::write_npy_f64;
 use serde::Serialize;
 
-use super::common::write_json;
+use super::common::{SampleArgs, load_manifest, write_json};
 
 /// Time one classification (features + PCA + classifier) and batch throughput, in this process.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Example:\n  presrs bench --json\n  presrs bench --model g2.model.json\n  presrs bench --export bench-inputs/   # model, images and predictions for bench/side_by_side.sh"
+    after_help = "Example:\n  presrs bench --json\n  presrs bench --model g2.model.json\n  presrs bench --model my.model.json --images my-data/manifest.csv   # your model on your images\n  presrs bench --export bench-inputs/   # model, images and predictions for bench/side_by_side.sh"
 )]
 pub struct BenchArgs {
     /// A model file; without one, the paper's setting is built on simulated 44x44 mid-stance images of
     /// gait G2 (crop to 38x41, 1-D |FFT| of 1025 values, PCA 51, Parzen over 80 training vectors).
-    /// Test images are simulated mid-stance images either way.
+    /// Test images are simulated mid-stance images unless --images gives others.
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// Time the model on these images instead of simulated ones: a manifest (the samples `presrs eval`
+    /// would take from it; labels optional). Needs --model.
+    #[arg(
+        long,
+        value_name = "MANIFEST",
+        requires = "model",
+        conflicts_with = "synthetic"
+    )]
+    pub images: Option<PathBuf>,
+    #[command(flatten)]
+    pub samples: SampleArgs,
     /// Use the synthetic test pattern of presrs-core instead of the simulator (no simulation needed).
     #[arg(long)]
     pub synthetic: bool,
@@ -225,6 +236,28 @@ fn simulated_fixture(seed: u64) -> anyhow::Result<Fixture> {
     })
 }
 
+/// The samples of a manifest as test images for `model` (their labels and conditions, if given).
+fn manifest_fixture(
+    model: TrainedModel,
+    manifest: &Path,
+    samples: &SampleArgs,
+) -> anyhow::Result<Fixture> {
+    let (_, loaded) = load_manifest(manifest, samples)?;
+    let samples = loaded.samples;
+    Ok(Fixture {
+        model,
+        truth: samples
+            .iter()
+            .map(|s| s.label.clone().unwrap_or_default())
+            .collect(),
+        conditions: samples
+            .iter()
+            .map(|s| s.condition.clone().unwrap_or_default())
+            .collect(),
+        frames: samples.into_iter().map(|s| s.frame).collect(),
+    })
+}
+
 /// [`bench_fixture`]'s synthetic pattern, 64 test images cycling through the four classes.
 fn synthetic_fixture(seed: u64) -> anyhow::Result<Fixture> {
     let (model, frames) = bench_fixture(seed, 64)?;
@@ -266,25 +299,35 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.iterations == 0 || args.batch == 0 || args.batch_runs == 0 {
         anyhow::bail!("--iterations, --batch and --batch-runs must be positive");
     }
-    let (fixture, source) = if args.synthetic {
-        (
-            synthetic_fixture(args.seed)?,
-            "synthetic pattern, paper settings",
-        )
-    } else {
-        (
-            simulated_fixture(args.seed)?,
-            "simulated images, trained on G2 with the paper's settings",
-        )
+    let (fixture, model_file, source) = match (&args.images, &args.model) {
+        (Some(manifest), Some(path)) => {
+            let model_file = load_model(path)?;
+            let fixture = manifest_fixture(model_file.model.clone(), manifest, &args.samples)?;
+            let source = format!("{} on the images of {}", path.display(), manifest.display());
+            (fixture, model_file, source)
+        }
+        _ => {
+            let (fixture, source) = if args.synthetic {
+                (
+                    synthetic_fixture(args.seed)?,
+                    "synthetic pattern, paper settings",
+                )
+            } else {
+                (
+                    simulated_fixture(args.seed)?,
+                    "simulated images, trained on G2 with the paper's settings",
+                )
+            };
+            match &args.model {
+                Some(path) => (fixture, load_model(path)?, path.display().to_string()),
+                None => {
+                    let model_file = ModelFile::new(fixture.model.clone(), provenance(args));
+                    (fixture, model_file, source.to_owned())
+                }
+            }
+        }
     };
     let frames = &fixture.frames;
-    let (model_file, source) = match &args.model {
-        Some(path) => (load_model(path)?, path.display().to_string()),
-        None => (
-            ModelFile::new(fixture.model.clone(), provenance(args)),
-            source.to_owned(),
-        ),
-    };
     let model = &model_file.model;
     let mut session = model.session();
     // Warm up caches and check the images fit the model.
