@@ -48,7 +48,7 @@ pub struct EvalArgs {
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
     /// Also evaluate with every test image perturbed (repeatable; same draws): dead=FRACTION,
-    /// stuck=FRACTION, gain=SD, noise=SD (counts), shift=ROWS[,COLS], rotate=DEGREES, load=FACTOR or
+    /// stuck=FRACTION, gain=SD, noise=SD (counts), shift=ROWS or ROWS,COLS, rotate=DEGREES, load=FACTOR or
     /// load=+-50%. Prints accuracy under each (for the paper's method too with --features/--classifier
     /// auto).
     #[arg(long, value_name = "KIND=LEVEL", value_parser = |t: &str| t.parse::<presrs_core::perturb::Perturbation>().map_err(|e| e.to_string()))]

@@ -771,9 +771,9 @@ fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<Ev
 
 /// `presrs report`'s sensor-fault sweep: the paper's protocol (trained on `condition`, `per_class`
 /// images per class or fewer when a class has fewer) with every test image perturbed at each level of
-/// [`Perturbation::default_sweep`], for the paper's method and (with auto options) the automatic choice;
-/// each model is trained once per repeat and tested under every perturbation. Also returns a note on
-/// how it was run.
+/// [`Perturbation::default_sweep`](presrs_core::perturb::Perturbation::default_sweep), for the paper's
+/// method and (with auto options) the automatic choice; each model is trained once per repeat and
+/// tested under every perturbation. Also returns a note on how it was run.
 pub fn fault_sweep(
     args: &ReportArgs,
     triples: &[(&Frame, &str, Option<&str>)],

@@ -12,7 +12,7 @@ use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance, save_mo
 
 use super::common::{PipelineArgs, SampleArgs, load_manifest};
 
-/// Train a classifier from a dataset manifest (CSV: path,label[,condition,group,frame,load]).
+/// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
 #[command(
     after_help = "By default the feature family and classifier are chosen automatically by validation \
