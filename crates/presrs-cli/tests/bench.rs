@@ -161,6 +161,23 @@ fn bench_times_a_model_on_the_images_of_a_manifest() {
             .contains("on the images of"),
         "{report}"
     );
+    // Images the model cannot take: a clear error naming the sample and the manifest.
+    std::fs::write(export.join("small.txt"), "1 2\n3 4\n").unwrap();
+    let small = export.join("small.csv");
+    std::fs::write(&small, "path,label\nsmall.txt,wood\n").unwrap();
+    let out = presrs(&[
+        "bench",
+        "--model",
+        model.to_str().unwrap(),
+        "--images",
+        small.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("sample 1 of") && stderr(&out).contains("does not fit"),
+        "{}",
+        stderr(&out)
+    );
     // --images needs the model it is to time.
     let out = presrs(&["bench", "--images", manifest.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));

@@ -331,10 +331,18 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let model = &model_file.model;
     let mut session = model.session();
     // Warm up caches and check the images fit the model.
-    for frame in frames {
-        session
-            .classify(&frame.view())
-            .map_err(|err| anyhow::anyhow!("the benchmark images do not fit the model: {err}"))?;
+    for (index, frame) in frames.iter().enumerate() {
+        session.classify(&frame.view()).map_err(|err| {
+            let which = match &args.images {
+                Some(manifest) => format!("sample {} of {}", index + 1, manifest.display()),
+                None => "the benchmark images".to_owned(),
+            };
+            let model = args.model.as_ref().map_or_else(
+                || "the built-in model".to_owned(),
+                |p| p.display().to_string(),
+            );
+            anyhow::anyhow!("{which} ({}) does not fit {model}: {err}", frame.grid())
+        })?;
     }
     let mut times_ns = Vec::with_capacity(args.iterations);
     for i in 0..args.iterations {
