@@ -8,24 +8,29 @@ use common::{presrs, stderr, stdout};
 use presrs_io::model_file::load_model;
 use presrs_io::npy::read_npy;
 
+/// `presrs bench --synthetic --export DIR --json` with `timing` options; asserts that it succeeds.
+fn export_synthetic(dir: &std::path::Path, timing: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "bench",
+        "--synthetic",
+        "--json",
+        "--export",
+        dir.to_str().expect("a UTF-8 temporary path"),
+    ];
+    args.extend_from_slice(timing);
+    let out = presrs(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    out
+}
+
 #[test]
 fn export_writes_a_model_images_and_matching_predictions() {
     let dir = tempfile::tempdir().unwrap();
     let export = dir.path().join("inputs");
-    let out = presrs(&[
-        "bench",
-        "--synthetic",
-        "--iterations",
-        "50",
-        "--batch",
-        "16",
-        "--batch-runs",
-        "2",
-        "--export",
-        export.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    let out = export_synthetic(
+        &export,
+        &["--iterations", "50", "--batch", "16", "--batch-runs", "2"],
+    );
     let report: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert!(report["single_image_median_ns"].as_u64().unwrap() > 0);
     // Each stage timed alone; together about one classification (not asserted: timings are noisy).
@@ -116,19 +121,10 @@ fn bench_rejects_zero_batch_runs() {
 fn bench_times_a_model_on_the_images_of_a_manifest() {
     let dir = tempfile::tempdir().unwrap();
     let export = dir.path().join("inputs");
-    let out = presrs(&[
-        "bench",
-        "--synthetic",
-        "--iterations",
-        "10",
-        "--batch",
-        "4",
-        "--batch-runs",
-        "1",
-        "--export",
-        export.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    export_synthetic(
+        &export,
+        &["--iterations", "10", "--batch", "4", "--batch-runs", "1"],
+    );
     // The exported images as a manifest of single frames.
     let manifest = export.join("manifest.csv");
     let mut rows = String::from("path,label,frame\n");

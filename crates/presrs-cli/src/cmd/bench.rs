@@ -116,7 +116,7 @@ fn stage_times(
     let mut features = Vec::with_capacity(frames.len());
     let mut reduced = Vec::with_capacity(frames.len());
     for frame in frames {
-        features.push(session.features(&frame.view())?.to_vec());
+        features.push(session.fast_features(&frame.view())?.to_vec());
         reduced.push(session.reduce(&frame.view())?.to_vec());
     }
     let features_ns = median_ns(iterations, |i| {
