@@ -6,6 +6,7 @@ pub mod dead_sensels;
 pub mod error;
 pub mod evaluation;
 pub mod features;
+mod fixed_matrix;
 pub mod frame;
 pub mod online;
 pub mod pca;

@@ -15,6 +15,7 @@ use faer::{Mat, Par};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result, check_len};
+use crate::fixed_matrix::{FixedMatrix, FixedVector};
 
 /// A fitted PCA: `project(x) = basis · (x - mean)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -31,15 +32,16 @@ pub struct Pca {
     /// `basis · mean`, derived (not serialised): projecting is then `basis · x - projected_mean`, one
     /// matrix-vector product with no centred copy of `x`.
     projected_mean: Vec<f64>,
-    /// `basis` rounded to `f32`, derived (not serialised): [`Pca::project_fast_into`] streams half the
-    /// bytes of the f64 basis, which is what bounds the projection's time.
-    basis_f32: Vec<f32>,
+    /// `basis` in 16-bit fixed point, derived (not serialised): [`Pca::project_fast_into`] streams a
+    /// quarter of the bytes of the f64 basis, which is what bounds the projection's time.
+    basis_fixed: FixedMatrix,
 }
 
-/// The buffer of [`Pca::project_fast_into`] (the centred input in `f32`), made once per session.
+/// The buffers of [`Pca::project_fast_into`] and [`Pca::project_fast_many`] (the centred inputs in
+/// fixed point), made once per session.
 #[derive(Clone, Debug, Default)]
 pub struct ProjectionScratch {
-    centred: Vec<f32>,
+    centred: Vec<FixedVector>,
 }
 
 /// The serialised form of [`Pca`]; checked on the way in.
@@ -227,9 +229,7 @@ impl Pca {
     ) -> Self {
         let mut projected_mean = vec![0.0; explained_variance.len()];
         matrix_vector(&basis, n_features, &mean, &mut projected_mean);
-        // Rounding to the nearest f32 is the intent (the basis is orthonormal: no value is out of range).
-        #[allow(clippy::cast_possible_truncation)]
-        let basis_f32 = basis.iter().map(|&value| value as f32).collect();
+        let basis_fixed = FixedMatrix::from_f64(&basis, explained_variance.len(), n_features);
         Self {
             n_features,
             mean,
@@ -237,7 +237,7 @@ impl Pca {
             explained_variance,
             total_variance,
             projected_mean,
-            basis_f32,
+            basis_fixed,
         }
     }
 
@@ -299,21 +299,22 @@ impl Pca {
     /// Buffers for [`project_fast_into`](Self::project_fast_into).
     pub fn scratch(&self) -> ProjectionScratch {
         ProjectionScratch {
-            centred: vec![0.0; self.n_features],
+            centred: vec![FixedVector::with_chunks(self.basis_fixed.chunks_per_row())],
         }
     }
 
-    /// Writes `basis · (x - mean)` into `out` in single precision: `x - mean` is formed in f64 and
-    /// rounded to f32, then multiplied by the f32 copy of the basis with f32 accumulators. This is the
-    /// classification path (training and classifying both use it, so they agree): the product is bound by
-    /// reading the basis, and f32 halves the bytes read.
+    /// Writes `basis · (x - mean)` into `out` the fast way, in 16-bit fixed point: `x - mean` is formed in
+    /// f64 and rounded to multiples of `max |x - mean| / 32767`, each axis to multiples of its largest
+    /// loading / 32767, and the integer products are summed exactly in pairs, then in f32. This is the
+    /// classification path (training and classifying both use it, so they agree): the product is bound
+    /// by moving the basis through the core, and 16-bit integers are a quarter of the f64 basis's bytes.
     ///
-    /// Error: each output is within about `(cols / lanes + 2) · 2⁻²⁴ · Σᵢ |basisₖᵢ (xᵢ - meanᵢ)|` of the
-    /// exact value (for 1025 features, below `1e-5` of that sum; tested against [`project_into`]). Centring
-    /// first keeps the error relative to the image's deviation from the training mean, not to its total
-    /// load. Does not allocate.
-    ///
-    /// [`project_into`]: Self::project_into
+    /// Error: each output is within `2⁻¹⁶ (maxᵢ |basisₖᵢ| Σᵢ |xᵢ - meanᵢ| + maxᵢ |xᵢ - meanᵢ| Σᵢ |basisₖᵢ|)`
+    /// (half a step of each rounding), plus a few f32 roundings, of the exact value (tested against
+    /// [`project_into`]). Rounding the axes by `2⁻¹⁶` of their largest loading is far below how well tens
+    /// of training images determine them, and rounding the centred features by `2⁻¹⁶` of the largest one
+    /// below what one count of an 8-bit sensel changes them by. Centring first keeps the error relative to
+    /// the image's deviation from the training mean, not to its total load. Does not allocate.
     pub fn project_fast_into(
         &self,
         x: &[f64],
@@ -322,9 +323,10 @@ impl Pca {
     ) -> Result<()> {
         check_len("pca input", self.n_features, x.len())?;
         check_len("pca output", self.n_components(), out.len())?;
-        scratch.centred.resize(self.n_features, 0.0);
-        centre_to_f32(x, &self.mean, &mut scratch.centred);
-        crate::simd::matrix_vector(&self.basis_f32, self.n_features, &scratch.centred, out);
+        scratch.centred.resize_with(1, FixedVector::default);
+        let centred = &mut scratch.centred[..1];
+        centred[0].quantize_difference(x, &self.mean, self.basis_fixed.chunks_per_row());
+        self.basis_fixed.times_vectors(centred, out);
         Ok(())
     }
 
@@ -347,21 +349,15 @@ impl Pca {
         }
         let n = xs.len() / self.n_features;
         check_len("pca outputs", n * self.n_components(), out.len())?;
-        scratch.centred.resize(xs.len(), 0.0);
-        for (centred_row, x) in scratch
-            .centred
-            .chunks_exact_mut(self.n_features)
-            .zip(xs.chunks_exact(self.n_features))
-        {
-            centre_to_f32(x, &self.mean, centred_row);
+        let chunks = self.basis_fixed.chunks_per_row();
+        if scratch.centred.len() < n {
+            scratch.centred.resize_with(n, FixedVector::default);
         }
-        crate::simd::matrix_vectors(
-            &self.basis_f32,
-            self.n_features,
-            &scratch.centred,
-            self.n_components(),
-            out,
-        );
+        let centred = &mut scratch.centred[..n];
+        for (vector, x) in centred.iter_mut().zip(xs.chunks_exact(self.n_features)) {
+            vector.quantize_difference(x, &self.mean, chunks);
+        }
+        self.basis_fixed.times_vectors(centred, out);
         Ok(())
     }
 
@@ -393,15 +389,6 @@ impl Pca {
 /// responsibility (panics if `x` is not `cols` long or `matrix` is too short).
 pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f64]) {
     crate::simd::matrix_vector(matrix, cols, x, out);
-}
-
-/// `out = x - mean`, formed in f64 and rounded to f32 (the point of the fast path).
-fn centre_to_f32(x: &[f64], mean: &[f64], out: &mut [f32]) {
-    for ((dst, &value), &mean) in out.iter_mut().zip(x).zip(mean) {
-        #[allow(clippy::cast_possible_truncation)]
-        let centred = (value - mean) as f32;
-        *dst = centred;
-    }
 }
 
 #[cfg(test)]

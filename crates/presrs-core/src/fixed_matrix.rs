@@ -1,0 +1,836 @@
+//! Matrix-vector products in 16-bit fixed point: the PCA projection of the classification path.
+//!
+//! Why: the 51 x 1025 projection is bound by moving the basis through the core, not by the arithmetic
+//! of one image. As 16-bit integers the basis is 105 KB instead of 209 KB in f32, and one integer
+//! multiply-add instruction (`pmaddwd`) takes 32 (AVX-512) or 16 (AVX2) products of 16-bit values and
+//! sums them in exact pairs, where a half-precision basis would need a conversion per value first.
+//!
+//! Representation: row `r` of the matrix is `s_r · q_r` with integers `|q_rc| ≤ 32767` and
+//! `s_r = max_c |w_rc| / 32767` (the rows are principal axes: their loadings share one scale well). A
+//! vector `d` is quantized when it is multiplied ([`FixedVector`]), in block floating point: each chunk
+//! `k` of [`CHUNK`] values has its own scale `t_k = max_{c∈k} |d_c| / 32767`, because the values of a
+//! feature vector span orders of magnitude (the DC bin of an image's spectrum is far above its high
+//! frequencies), and one scale for all would round the small ones away. Each rounding moves a value by
+//! at most half a step, so
+//!
+//! `|Σ_c w_rc d_c − s_r Σ_k t_k Σ_{c∈k} q_rc p_c| ≤ ½ s_r Σ_c |d_c| + ½ Σ_k t_k Σ_{c∈k} |w_rc| + ¼ s_r Σ_k t_k · CHUNK`
+//!
+//! plus the f32 arithmetic on the exact integer pair sums (a few `2⁻²⁴` of `Σ_c |w_rc d_c|` for
+//! 1025 columns): about `2⁻¹⁶` of the largest loading and of each chunk's largest value. Tested against
+//! the f64 product.
+//!
+//! Layout: row-major, each row padded with zeros to whole chunks; a quantized vector has the same chunks,
+//! its padding zero.
+//!
+//! Kernels (chosen at run time): AVX-512BW, AVX2, or a scalar loop with the same pair sums. The order of
+//! summation depends only on the shape and the kernel, so results are deterministic on a given machine.
+
+/// Values per chunk: one AVX-512 register of 16-bit integers, two AVX2 registers.
+pub(crate) const CHUNK: usize = 32;
+
+/// The largest integer of the representation (symmetric, so a pair sum `2 · 32767²` fits in an i32).
+const LIMIT: f64 = 32767.0;
+
+/// Rows per block in the main loop: each chunk of a vector is loaded once for this many rows, and each
+/// row has its own accumulator (independent dependency chains).
+const ROWS: usize = 8;
+
+/// A `rows x cols` matrix in 16-bit fixed point with one scale per row, each row padded to whole
+/// [`CHUNK`]s.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct FixedMatrix {
+    rows: usize,
+    cols: usize,
+    chunks_per_row: usize,
+    /// `scale_r`: row `r` is `scale_r · q_r`.
+    scales: Vec<f64>,
+    /// `q`, `rows * chunks_per_row` chunks.
+    chunks: Vec<[i16; CHUNK]>,
+}
+
+/// A vector quantized for products with a [`FixedMatrix`]: chunk `k` is `scales[k] · chunks[k]`.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FixedVector {
+    scales: Vec<f32>,
+    chunks: Vec<[i16; CHUNK]>,
+    /// Scratch: each chunk's largest magnitude, then its reciprocal scale.
+    inverses: Vec<f64>,
+}
+
+/// The scale of a matrix row of largest magnitude `max` (finite), and its reciprocal (0 for a zero row).
+fn row_scale(max: f64) -> (f64, f64) {
+    if max == 0.0 {
+        (0.0, 0.0)
+    } else {
+        (max / LIMIT, LIMIT / max)
+    }
+}
+
+/// The scale of a vector chunk of largest magnitude `max`, as the f32 the product multiplies by, and the
+/// reciprocal to quantize with (computed from that f32, so `|d| · inverse ≤ 32767` up to rounding).
+/// A chunk of zeros gets 0; a non-finite `max` (a NaN or infinite value, or a scale beyond f32) gets NaN,
+/// so the product comes out NaN rather than silently finite; a scale below f32's normal range is raised
+/// to its smallest normal (the steps are then finer than needed, never too coarse).
+fn chunk_scale(max: f64) -> (f32, f64) {
+    if max == 0.0 {
+        return (0.0, 0.0);
+    }
+    #[allow(clippy::cast_possible_truncation)]
+    let scale = ((max / LIMIT) as f32).max(f32::MIN_POSITIVE);
+    if max.is_finite() && scale.is_finite() {
+        (scale, 1.0 / f64::from(scale))
+    } else {
+        (f32::NAN, 0.0)
+    }
+}
+
+/// Adding `1.5 · 2⁵²` to `v` with `|v| ≤ 2⁵¹` rounds it to an integer (to nearest, ties to even), which
+/// then sits in the low bits of the sum's bit pattern: no conversion instruction, so loops vectorize.
+const ROUNDER: f64 = 6_755_399_441_055_744.0;
+
+/// The integer in the low bits of `(v + ROUNDER).to_bits()`, for `|v| ≤ 32767.5` (anything else, NaN
+/// included, gives an unspecified value; the chunk's scale is NaN then).
+#[inline(always)]
+fn low_bits(bits: u64) -> i16 {
+    // Two's complement in the low 16 bits: truncating is the intent.
+    #[allow(clippy::cast_possible_truncation)]
+    let q = bits as i16;
+    q
+}
+
+impl FixedMatrix {
+    /// Quantizes the row-major `rows x cols` matrix `values` (finite values).
+    ///
+    /// # Panics
+    /// If `values` does not hold `rows * cols` values.
+    pub(crate) fn from_f64(values: &[f64], rows: usize, cols: usize) -> Self {
+        assert_eq!(
+            Some(values.len()),
+            rows.checked_mul(cols),
+            "FixedMatrix: wrong number of values"
+        );
+        let chunks_per_row = cols.div_ceil(CHUNK);
+        let mut chunks = vec![[0i16; CHUNK]; rows * chunks_per_row];
+        let mut scales = vec![0.0; rows];
+        if cols > 0 {
+            for ((row_chunks, row), scale) in chunks
+                .chunks_exact_mut(chunks_per_row)
+                .zip(values.chunks_exact(cols))
+                .zip(&mut scales)
+            {
+                let max = row.iter().fold(0.0f64, |max, value| max.max(value.abs()));
+                let (row_scale, inverse) = row_scale(max);
+                *scale = row_scale;
+                for (dst, &value) in row_chunks.as_flattened_mut().iter_mut().zip(row) {
+                    *dst = low_bits((value * inverse + ROUNDER).to_bits());
+                }
+            }
+        }
+        Self {
+            rows,
+            cols,
+            chunks_per_row,
+            scales,
+            chunks,
+        }
+    }
+
+    #[cfg(test)]
+    pub(crate) fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Chunks per (padded) row, and per quantized vector.
+    pub(crate) fn chunks_per_row(&self) -> usize {
+        self.chunks_per_row
+    }
+
+    /// The element at `(row, col)` as represented, `scale_r · q_rc`.
+    ///
+    /// # Panics
+    /// If `(row, col)` is outside the matrix.
+    #[cfg(test)]
+    pub(crate) fn get(&self, row: usize, col: usize) -> f64 {
+        assert!(
+            row < self.rows && col < self.cols,
+            "FixedMatrix: out of range"
+        );
+        let chunk = &self.chunks[row * self.chunks_per_row + col / CHUNK];
+        self.scales[row] * f64::from(chunk[col % CHUNK])
+    }
+
+    /// `outs[i] = self · xs[i]` for each quantized vector (`chunks_per_row` chunks each) into row-major
+    /// `outs` (`rows` values per vector). A block of [`ROWS`] rows (8 x 1056 x 2 B = 17 KB: L1) is read
+    /// once for all the vectors. Does not allocate.
+    ///
+    /// # Panics
+    /// If a vector does not have `chunks_per_row` chunks or `outs` does not hold `rows` values per vector.
+    pub(crate) fn times_vectors(&self, xs: &[FixedVector], outs: &mut [f64]) {
+        assert_eq!(
+            outs.len(),
+            xs.len() * self.rows,
+            "FixedMatrix: outs has the wrong length"
+        );
+        assert!(
+            xs.iter().all(|x| x.chunks.len() == self.chunks_per_row),
+            "FixedMatrix: a vector has the wrong length"
+        );
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        {
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                return simd.vectorize(Product {
+                    kernel: simd,
+                    matrix: self,
+                    xs,
+                    outs,
+                });
+            }
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                return simd.vectorize(Product {
+                    kernel: simd,
+                    matrix: self,
+                    xs,
+                    outs,
+                });
+            }
+        }
+        self.times_vectors_with(ScalarKernel, xs, outs);
+    }
+
+    /// [`times_vectors`](Self::times_vectors) on the given kernel (the tests run every kernel the CPU
+    /// has). Inlined into pulp's `vectorize`, so it is compiled for the kernel's instruction set.
+    #[inline(always)]
+    fn times_vectors_with<K: PairDot>(&self, kernel: K, xs: &[FixedVector], outs: &mut [f64]) {
+        let rows = self.rows;
+        let mut first = 0;
+        while first + ROWS <= rows {
+            self.rows_for_all::<K, ROWS, 1>(kernel, first, xs, outs);
+            first += ROWS;
+        }
+        // The remaining < ROWS rows: 4, 2 then 1 at a time, with more accumulators per row.
+        if rows - first >= 4 {
+            self.rows_for_all::<K, 4, 2>(kernel, first, xs, outs);
+            first += 4;
+        }
+        if rows - first >= 2 {
+            self.rows_for_all::<K, 2, 4>(kernel, first, xs, outs);
+            first += 2;
+        }
+        if rows - first == 1 {
+            self.rows_for_all::<K, 1, 8>(kernel, first, xs, outs);
+        }
+    }
+
+    /// Rows `first .. first + R` of the product for every vector, with `U` accumulators per row (over
+    /// consecutive chunks).
+    #[inline(always)]
+    fn rows_for_all<K: PairDot, const R: usize, const U: usize>(
+        &self,
+        kernel: K,
+        first: usize,
+        xs: &[FixedVector],
+        outs: &mut [f64],
+    ) {
+        let n = self.chunks_per_row;
+        let block = &self.chunks[first * n..(first + R) * n];
+        let rows: [&[[i16; CHUNK]]; R] = core::array::from_fn(|r| &block[r * n..(r + 1) * n]);
+        for (x, out) in xs.iter().zip(outs.chunks_exact_mut(self.rows)) {
+            let (x_chunks, x_scales) = (&x.chunks[..n], &x.scales[..n]);
+            let zero = kernel.zero();
+            let mut acc = [[zero; R]; U];
+            let whole = n - n % U;
+            let mut i = 0;
+            while i < whole {
+                for u in 0..U {
+                    let (xv, scale) = (&x_chunks[i + u], kernel.splat(x_scales[i + u]));
+                    for r in 0..R {
+                        acc[u][r] = kernel.add_products(acc[u][r], &rows[r][i + u], xv, scale);
+                    }
+                }
+                i += U;
+            }
+            for i in whole..n {
+                let (xv, scale) = (&x_chunks[i], kernel.splat(x_scales[i]));
+                for r in 0..R {
+                    acc[0][r] = kernel.add_products(acc[0][r], &rows[r][i], xv, scale);
+                }
+            }
+            for r in 0..R {
+                let mut sum = acc[0][r];
+                for u in 1..U {
+                    sum = kernel.add(sum, acc[u][r]);
+                }
+                out[first + r] = self.scales[first + r] * f64::from(kernel.sum(sum));
+            }
+        }
+    }
+}
+
+impl FixedVector {
+    /// A zero vector of `chunks` chunks, to be set by [`quantize_difference`](Self::quantize_difference)
+    /// (which allocates only if it needs more chunks).
+    pub(crate) fn with_chunks(chunks: usize) -> Self {
+        Self {
+            scales: vec![0.0; chunks],
+            chunks: vec![[0; CHUNK]; chunks],
+            inverses: vec![0.0; chunks],
+        }
+    }
+
+    /// Sets this vector to `x - mean` (formed in f64) quantized into `chunks` chunks (at least
+    /// `x.len()` values; the padding is zero). A non-finite difference makes every product NaN.
+    ///
+    /// # Panics
+    /// If `mean` is not as long as `x` or `x` does not fit in `chunks`.
+    pub(crate) fn quantize_difference(&mut self, x: &[f64], mean: &[f64], chunks: usize) {
+        assert_eq!(
+            x.len(),
+            mean.len(),
+            "FixedVector: mean has the wrong length"
+        );
+        assert!(x.len() <= chunks * CHUNK, "FixedVector: too few chunks");
+        // Compiled for the CPU's instruction set: the baseline x86-64 target has no rounding instruction,
+        // and `round_ties_even` would be a library call per value.
+        pulp::Arch::new().dispatch(Quantize {
+            vector: self,
+            x,
+            mean,
+            chunks,
+        });
+    }
+}
+
+/// [`FixedVector::quantize_difference`] inside pulp's dispatch.
+struct Quantize<'a> {
+    vector: &'a mut FixedVector,
+    x: &'a [f64],
+    mean: &'a [f64],
+    chunks: usize,
+}
+
+impl pulp::WithSimd for Quantize<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
+        let Self {
+            vector,
+            x,
+            mean,
+            chunks,
+        } = self;
+        vector.scales.resize(chunks, 0.0);
+        vector.chunks.resize(chunks, [0; CHUNK]);
+        vector.inverses.resize(chunks, 0.0);
+        let whole = x.len() / CHUNK;
+        let (x_whole, x_rest) = x.split_at(whole * CHUNK);
+        let (mean_whole, mean_rest) = mean.split_at(whole * CHUNK);
+        let chunk_pairs = || {
+            x_whole
+                .chunks_exact(CHUNK)
+                .zip(mean_whole.chunks_exact(CHUNK))
+                // Whole registers: CHUNK is a multiple of every register width.
+                .map(|(x, mean)| (S::as_simd_f64s(x).0, S::as_simd_f64s(mean).0))
+        };
+        // Three passes, so that no chunk waits on the previous one's reduction and division: the
+        // maxima, the scales, the integers.
+        //
+        // Sums of |x - mean| over every value, lane-wise, are kept as well: finite when every difference
+        // is (x86 `max` ignores NaN, so the maxima alone would not tell; only values near f64's range,
+        // which no image gives, overflow the sum).
+        let mut sum = simd.splat_f64s(0.0);
+        for ((x, mean), max_out) in chunk_pairs().zip(&mut vector.inverses) {
+            let mut max = simd.splat_f64s(0.0);
+            for (&x, &mean) in x.iter().zip(mean) {
+                let d = simd.abs_f64s(simd.sub_f64s(x, mean));
+                max = simd.max_f64s(max, d);
+                sum = simd.add_f64s(sum, d);
+            }
+            *max_out = simd.reduce_max_f64s(max);
+        }
+        let mut rest_sum = 0.0;
+        if let Some(max_out) = vector.inverses.get_mut(whole) {
+            let mut max = 0.0f64;
+            for (&x, &mean) in x_rest.iter().zip(mean_rest) {
+                let d = (x - mean).abs();
+                max = max.max(d);
+                rest_sum += d;
+            }
+            *max_out = max;
+        }
+        if let Some(tail) = vector.inverses.get_mut(whole + 1..) {
+            tail.fill(0.0);
+        }
+        for (scale, max_then_inverse) in vector.scales.iter_mut().zip(&mut vector.inverses) {
+            (*scale, *max_then_inverse) = chunk_scale(*max_then_inverse);
+        }
+        let rounder = simd.splat_f64s(ROUNDER);
+        for (((x, mean), &inverse), dst) in
+            chunk_pairs().zip(&vector.inverses).zip(&mut vector.chunks)
+        {
+            let inverse = simd.splat_f64s(inverse);
+            let mut bits = [0u64; CHUNK];
+            for ((&x, &mean), bits) in x.iter().zip(mean).zip(S::as_mut_simd_u64s(&mut bits).0) {
+                let scaled = simd.mul_add_e_f64s(simd.sub_f64s(x, mean), inverse, rounder);
+                *bits = simd.transmute_u64s_f64s(scaled);
+            }
+            for (dst, &bits) in dst.iter_mut().zip(&bits) {
+                *dst = low_bits(bits);
+            }
+        }
+        for (k, dst) in vector.chunks.iter_mut().enumerate().skip(whole) {
+            *dst = [0; CHUNK];
+            if k == whole {
+                let inverse = vector.inverses[k];
+                for ((dst, &x), &mean) in dst.iter_mut().zip(x_rest).zip(mean_rest) {
+                    *dst = low_bits(((x - mean) * inverse + ROUNDER).to_bits());
+                }
+            }
+        }
+        if !(simd.reduce_sum_f64s(sum) + rest_sum).is_finite() {
+            vector.scales.fill(f32::NAN);
+        }
+    }
+}
+
+/// One way of multiplying chunks of 16-bit integers into f32 accumulators.
+trait PairDot: Copy {
+    /// Lane-wise f32 sums.
+    type Acc: Copy;
+    /// A chunk's scale in every lane.
+    type Scale: Copy;
+    fn zero(self) -> Self::Acc;
+    fn splat(self, scale: f32) -> Self::Scale;
+    /// `acc + scale · (w[2i] x[2i] + w[2i+1] x[2i+1])` for each lane `i`: the pair sum is exact in i32
+    /// (at most `2 · 32767²`), then converted to f32 and multiplied by the chunk's scale (one FMA).
+    fn add_products(
+        self,
+        acc: Self::Acc,
+        w: &[i16; CHUNK],
+        x: &[i16; CHUNK],
+        scale: Self::Scale,
+    ) -> Self::Acc;
+    fn add(self, a: Self::Acc, b: Self::Acc) -> Self::Acc;
+    /// The sum of the lanes.
+    fn sum(self, acc: Self::Acc) -> f32;
+}
+
+/// Runs a product inside pulp's `vectorize`, so the kernel is compiled for its instruction set.
+struct Product<'a, K> {
+    kernel: K,
+    matrix: &'a FixedMatrix,
+    xs: &'a [FixedVector],
+    outs: &'a mut [f64],
+}
+
+impl<K: PairDot> pulp::NullaryFnOnce for Product<'_, K> {
+    type Output = ();
+
+    #[inline(always)]
+    fn call(self) {
+        self.matrix
+            .times_vectors_with(self.kernel, self.xs, self.outs);
+    }
+}
+
+#[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+mod x86 {
+    use super::{CHUNK, PairDot};
+    use pulp::Simd;
+    use pulp::x86::{V3, V4};
+
+    #[cfg(target_arch = "x86")]
+    use core::arch::x86::{__m256i, __m512i};
+    #[cfg(target_arch = "x86_64")]
+    use core::arch::x86_64::{__m256i, __m512i};
+
+    /// AVX-512: a chunk is one register (`vpmaddwd`, `vcvtdq2ps`, `vfmadd`).
+    impl PairDot for V4 {
+        type Acc = pulp::f32x16;
+        type Scale = pulp::f32x16;
+
+        #[inline(always)]
+        fn zero(self) -> Self::Acc {
+            self.splat_f32s(0.0)
+        }
+
+        #[inline(always)]
+        fn splat(self, scale: f32) -> Self::Scale {
+            self.splat_f32s(scale)
+        }
+
+        #[inline(always)]
+        fn add_products(
+            self,
+            acc: Self::Acc,
+            w: &[i16; CHUNK],
+            x: &[i16; CHUNK],
+            scale: Self::Scale,
+        ) -> Self::Acc {
+            let w: __m512i = pulp::cast(*w);
+            let x: __m512i = pulp::cast(*x);
+            let pairs = self.avx512bw._mm512_madd_epi16(w, x);
+            let pairs: pulp::f32x16 = pulp::cast(self.avx512f._mm512_cvtepi32_ps(pairs));
+            self.mul_add_e_f32s(pairs, scale, acc)
+        }
+
+        #[inline(always)]
+        fn add(self, a: Self::Acc, b: Self::Acc) -> Self::Acc {
+            self.add_f32s(a, b)
+        }
+
+        #[inline(always)]
+        fn sum(self, acc: Self::Acc) -> f32 {
+            self.reduce_sum_f32s(acc)
+        }
+    }
+
+    /// AVX2: a chunk is two registers.
+    impl PairDot for V3 {
+        type Acc = [pulp::f32x8; 2];
+        type Scale = pulp::f32x8;
+
+        #[inline(always)]
+        fn zero(self) -> Self::Acc {
+            [self.splat_f32x8(0.0); 2]
+        }
+
+        #[inline(always)]
+        fn splat(self, scale: f32) -> Self::Scale {
+            self.splat_f32x8(scale)
+        }
+
+        #[inline(always)]
+        fn add_products(
+            self,
+            acc: Self::Acc,
+            w: &[i16; CHUNK],
+            x: &[i16; CHUNK],
+            scale: Self::Scale,
+        ) -> Self::Acc {
+            let w: [__m256i; 2] = pulp::cast(*w);
+            let x: [__m256i; 2] = pulp::cast(*x);
+            core::array::from_fn(|h| {
+                let pairs = self.avx2._mm256_madd_epi16(w[h], x[h]);
+                let pairs: pulp::f32x8 = pulp::cast(self.avx._mm256_cvtepi32_ps(pairs));
+                self.mul_add_f32x8(pairs, scale, acc[h])
+            })
+        }
+
+        #[inline(always)]
+        fn add(self, a: Self::Acc, b: Self::Acc) -> Self::Acc {
+            [self.add_f32x8(a[0], b[0]), self.add_f32x8(a[1], b[1])]
+        }
+
+        #[inline(always)]
+        fn sum(self, acc: Self::Acc) -> f32 {
+            self.reduce_sum_f32s(self.add_f32x8(acc[0], acc[1]))
+        }
+    }
+}
+
+/// Any CPU: the same pair sums, lane by lane.
+#[derive(Clone, Copy, Debug)]
+struct ScalarKernel;
+
+impl PairDot for ScalarKernel {
+    type Acc = [f32; CHUNK / 2];
+    type Scale = f32;
+
+    #[inline(always)]
+    fn zero(self) -> Self::Acc {
+        [0.0; CHUNK / 2]
+    }
+
+    #[inline(always)]
+    fn splat(self, scale: f32) -> Self::Scale {
+        scale
+    }
+
+    #[inline(always)]
+    fn add_products(
+        self,
+        acc: Self::Acc,
+        w: &[i16; CHUNK],
+        x: &[i16; CHUNK],
+        scale: Self::Scale,
+    ) -> Self::Acc {
+        core::array::from_fn(|i| {
+            let pair = i32::from(w[2 * i]) * i32::from(x[2 * i])
+                + i32::from(w[2 * i + 1]) * i32::from(x[2 * i + 1]);
+            // The conversion of the exact pair sum to f32 is the rounding the SIMD kernels make.
+            #[allow(clippy::cast_precision_loss)]
+            let pair = pair as f32;
+            pair.mul_add(scale, acc[i])
+        })
+    }
+
+    #[inline(always)]
+    fn add(self, a: Self::Acc, b: Self::Acc) -> Self::Acc {
+        core::array::from_fn(|i| a[i] + b[i])
+    }
+
+    #[inline(always)]
+    fn sum(self, acc: Self::Acc) -> f32 {
+        acc.iter().sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    type Run = Box<dyn Fn(&FixedMatrix, &[FixedVector], &mut [f64])>;
+
+    /// Every kernel this CPU can run, and the dispatching entry point.
+    fn kernels() -> Vec<(&'static str, Run)> {
+        let mut all: Vec<(&'static str, Run)> = vec![
+            (
+                "dispatch",
+                Box::new(|m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
+                    m.times_vectors(xs, outs)
+                }),
+            ),
+            (
+                "scalar",
+                Box::new(|m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
+                    m.times_vectors_with(ScalarKernel, xs, outs)
+                }),
+            ),
+        ];
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        {
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                all.push((
+                    "avx2",
+                    Box::new(
+                        move |m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
+                            simd.vectorize(Product {
+                                kernel: simd,
+                                matrix: m,
+                                xs,
+                                outs,
+                            })
+                        },
+                    ),
+                ));
+            }
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                all.push((
+                    "avx512",
+                    Box::new(
+                        move |m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
+                            simd.vectorize(Product {
+                                kernel: simd,
+                                matrix: m,
+                                xs,
+                                outs,
+                            })
+                        },
+                    ),
+                ));
+            }
+        }
+        all
+    }
+
+    fn quantized(d: &[f64], chunks: usize) -> FixedVector {
+        let mut v = FixedVector::default();
+        v.quantize_difference(d, &vec![0.0; d.len()], chunks);
+        v
+    }
+
+    #[test]
+    fn each_value_is_within_half_a_step() {
+        let values = [1.0, -0.333_333_333, 1e-7, -3e-5, 0.099_975, -0.5, 0.0];
+        let m = FixedMatrix::from_f64(&values, 1, values.len());
+        let step = 1.0 / LIMIT;
+        for (col, &value) in values.iter().enumerate() {
+            assert!((m.get(0, col) - value).abs() <= step / 2.0, "{value}");
+        }
+        // The largest magnitude is represented exactly, with the largest integer.
+        assert_eq!(m.get(0, 0), 1.0);
+        // Each chunk of a vector has its own scale: here 6 / 32767 and 1e-3 / 32767 (as f32).
+        let mut d = vec![0.0; 2 * CHUNK];
+        d[..3].copy_from_slice(&[3.0, -6.0, 0.5]);
+        d[CHUNK] = 1e-3;
+        d[CHUNK + 1] = -2.5e-4;
+        let v = quantized(&d, 2);
+        let scales = [(6.0 / LIMIT) as f32, (1e-3 / LIMIT) as f32];
+        assert_eq!(v.scales, scales);
+        let expected = |value: f64, k: usize| (value / f64::from(scales[k])).round() as i16;
+        assert_eq!(
+            v.chunks[0][..4],
+            [expected(3.0, 0), -32767, expected(0.5, 0), 0]
+        );
+        assert_eq!(v.chunks[1][..3], [32767, expected(-2.5e-4, 1), 0]);
+        // A chunk of zeros has scale 0; the padding of a short vector is zero.
+        let v = quantized(&[0.0, 0.0, 1.0], 1);
+        assert_eq!(v.chunks[0][..4], [0, 0, 32767, 0]);
+    }
+
+    /// Against the f64 product of the unquantized values, within the stated bound.
+    #[test]
+    fn matches_the_exact_product_within_the_stated_bound() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for &(rows, cols) in &[
+            (1, 1),
+            (3, 5),
+            (8, 32),
+            (9, 33),
+            (15, 63),
+            (51, 1025),
+            (2, 100),
+            (7, 65),
+        ] {
+            let values: Vec<f64> = (0..rows * cols)
+                .map(|_| rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-4..1)))
+                .collect();
+            let m = FixedMatrix::from_f64(&values, rows, cols);
+            let ds: Vec<Vec<f64>> = (0..3)
+                .map(|_| {
+                    (0..cols)
+                        .map(|_| rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-2..5)))
+                        .collect()
+                })
+                .collect();
+            let xs: Vec<FixedVector> = ds
+                .iter()
+                .map(|d| quantized(d, m.chunks_per_row()))
+                .collect();
+            for (name, run) in kernels() {
+                let mut outs = vec![f64::NAN; xs.len() * rows];
+                run(&m, &xs, &mut outs);
+                for (v, (d, x)) in ds.iter().zip(&xs).enumerate() {
+                    for r in 0..rows {
+                        let w = &values[r * cols..(r + 1) * cols];
+                        let exact: f64 = w.iter().zip(d).map(|(a, b)| a * b).sum();
+                        let sum_abs_d: f64 = d.iter().map(|v| v.abs()).sum();
+                        // The stated bound, chunk by chunk, and the f32 arithmetic: a few
+                        // roundings of the sum of the magnitudes of the represented terms.
+                        let s_r = m.scales[r];
+                        let mut bound = 0.5 * s_r * sum_abs_d;
+                        let mut represented = 0.0;
+                        for (k, &t) in x.scales.iter().enumerate() {
+                            let t = f64::from(t);
+                            let columns = k * CHUNK..((k + 1) * CHUNK).min(cols);
+                            let w_k: f64 = w[columns.clone()].iter().map(|v| v.abs()).sum();
+                            bound += 0.5 * t * w_k + 0.25 * s_r * t * CHUNK as f64;
+                            represented += columns
+                                .map(|c| {
+                                    (m.get(r, c) * t * f64::from(x.chunks[k][c % CHUNK])).abs()
+                                })
+                                .sum::<f64>();
+                        }
+                        bound += 4e-6 * represented;
+                        let got = outs[v * rows + r];
+                        assert!(
+                            (got - exact).abs() <= bound,
+                            "{name} {rows}x{cols} vector {v} row {r}: {got} vs {exact} (bound {bound})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_kernel_gives_the_pair_sums_exactly_on_small_integers() {
+        // Integer matrix and vector whose largest values are the limit: everything is exact.
+        let cols = 70;
+        let w: Vec<f64> = (0..3 * cols)
+            .map(|i| {
+                if i % cols == 0 {
+                    LIMIT
+                } else {
+                    (i % 7) as f64 - 3.0
+                }
+            })
+            .collect();
+        let m = FixedMatrix::from_f64(&w, 3, cols);
+        let d: Vec<f64> = (0..cols)
+            .map(|i| {
+                if i % CHUNK == 1 {
+                    -LIMIT
+                } else {
+                    (i % 5) as f64
+                }
+            })
+            .collect();
+        let x = quantized(&d, m.chunks_per_row());
+        for (name, run) in kernels() {
+            let mut outs = vec![0.0; 3];
+            run(&m, std::slice::from_ref(&x), &mut outs);
+            for r in 0..3 {
+                let exact: f64 = (0..cols).map(|c| w[r * cols + c] * d[c]).sum();
+                assert_eq!(outs[r], exact, "{name} row {r}");
+            }
+        }
+    }
+
+    #[test]
+    fn batching_does_not_change_a_result() {
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let (rows, cols) = (51, 1025);
+        let values: Vec<f64> = (0..rows * cols)
+            .map(|_| rng.random_range(-0.2..0.2))
+            .collect();
+        let m = FixedMatrix::from_f64(&values, rows, cols);
+        let d: Vec<f64> = (0..cols).map(|_| rng.random_range(-1e4..1e4)).collect();
+        let one = quantized(&d, m.chunks_per_row());
+        let two = [one.clone(), quantized(&vec![1.0; cols], m.chunks_per_row())];
+        for (name, run) in kernels() {
+            let mut single = vec![0.0; rows];
+            run(&m, std::slice::from_ref(&one), &mut single);
+            let mut pair = vec![0.0; 2 * rows];
+            run(&m, &two, &mut pair);
+            assert_eq!(
+                single[..],
+                pair[..rows],
+                "{name}: batching changed a result"
+            );
+        }
+    }
+
+    #[test]
+    fn non_finite_vectors_give_nan_and_zero_vectors_zero() {
+        let m = FixedMatrix::from_f64(&[1.0, 2.0, 3.0, 4.0], 2, 2);
+        for bad in [f64::NAN, f64::INFINITY] {
+            let x = quantized(&[1.0, bad], 1);
+            let mut outs = [0.0; 2];
+            m.times_vectors(std::slice::from_ref(&x), &mut outs);
+            assert!(outs.iter().all(|v| v.is_nan()), "{bad}: {outs:?}");
+        }
+        let x = quantized(&[0.0, 0.0], 1);
+        let mut outs = [1.0; 2];
+        m.times_vectors(std::slice::from_ref(&x), &mut outs);
+        assert_eq!(outs, [0.0; 2]);
+        // In a whole chunk (the SIMD path) as in the last, partial one.
+        let cols = CHUNK + 8;
+        let m = FixedMatrix::from_f64(&vec![0.5; cols], 1, cols);
+        for at in [3, CHUNK + 2] {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let mut d = vec![1.0; cols];
+                d[at] = bad;
+                let x = quantized(&d, m.chunks_per_row());
+                let mut outs = [0.0];
+                m.times_vectors(std::slice::from_ref(&x), &mut outs);
+                assert!(outs[0].is_nan(), "{bad} at {at}: {outs:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn empty_shapes() {
+        let m = FixedMatrix::from_f64(&[], 3, 0);
+        let x = quantized(&[], m.chunks_per_row());
+        let mut outs = vec![1.0; 3];
+        m.times_vectors(std::slice::from_ref(&x), &mut outs);
+        assert_eq!(outs, [0.0; 3]);
+        let m = FixedMatrix::from_f64(&[], 0, 4);
+        m.times_vectors(std::slice::from_ref(&quantized(&[1.0; 4], 1)), &mut []);
+        assert_eq!(m.rows(), 0);
+    }
+}
