@@ -374,6 +374,20 @@ impl Preprocessor {
         out: &mut [f64],
         precision: Precision,
     ) -> Result<()> {
+        // The common case of classification: the 1-D |FFT| reads the crop straight from the frame.
+        if let (Precision::Fast, FeatureExtractor::Fft1d(extractor)) =
+            (precision, &mut self.extractor)
+            && frame.present().is_none()
+            && !self.preprocess.normalise_load
+        {
+            let start = crop_start(&self.crop, self.image_grid, frame)?;
+            return extractor.extract_fast_window_into(
+                frame.values(),
+                start,
+                frame.grid().cols,
+                out,
+            );
+        }
         crop_masked_into(&self.crop, self.image_grid, frame, &mut self.cropped)?;
         if self.preprocess.fill_absent
             && let Some(mask) = frame.present()
@@ -402,13 +416,8 @@ impl Preprocessor {
     }
 }
 
-/// Copies the crop of `frame` into `out`, zeroing absent sensels; the crop must give `expected`.
-fn crop_masked_into(
-    crop: &Crop,
-    expected: Grid,
-    frame: &FrameView<'_>,
-    out: &mut [f64],
-) -> Result<()> {
+/// Where the crop of `frame` starts in its row-major values; the crop must give `expected`.
+fn crop_start(crop: &Crop, expected: Grid, frame: &FrameView<'_>) -> Result<usize> {
     let (row0, col0, grid) = crop.window(frame.grid())?;
     if grid != expected {
         return Err(CoreError::Shape {
@@ -417,11 +426,23 @@ fn crop_masked_into(
             got: format!("{grid} (from a {} image)", frame.grid()),
         });
     }
+    Ok(row0 * frame.grid().cols + col0)
+}
+
+/// Copies the crop of `frame` into `out`, zeroing absent sensels; the crop must give `expected`.
+fn crop_masked_into(
+    crop: &Crop,
+    expected: Grid,
+    frame: &FrameView<'_>,
+    out: &mut [f64],
+) -> Result<()> {
+    let start = crop_start(crop, expected, frame)?;
     let in_cols = frame.grid().cols;
+    let grid = expected;
     let values = frame.values();
     let mask = frame.present();
     for (r, dst) in out.chunks_exact_mut(grid.cols).enumerate() {
-        let start = (row0 + r) * in_cols + col0;
+        let start = start + r * in_cols;
         let src = &values[start..start + grid.cols];
         match mask {
             None => dst.copy_from_slice(src),

@@ -74,6 +74,9 @@ pub struct Fft1dExtractor {
     scratch: Vec<Complex<f64>>,
     /// The single-precision transform of the classification path (even `N` only).
     fast: Option<HalfLengthF32>,
+    /// For odd `N`, where the window of [`extract_fast_window_into`](Self::extract_fast_window_into) is
+    /// copied for the exact path (empty otherwise).
+    window_copy: Vec<f64>,
 }
 
 impl std::fmt::Debug for Fft1dExtractor {
@@ -102,6 +105,11 @@ impl Fft1dExtractor {
             scratch: plan.make_scratch_vec(),
             plan,
             fast: (fft_len % 2 == 0).then(|| HalfLengthF32::new(fft_len)),
+            window_copy: if fft_len % 2 == 0 {
+                Vec::new()
+            } else {
+                vec![0.0; grid.len()]
+            },
         }
     }
 
@@ -153,10 +161,53 @@ impl Fft1dExtractor {
     /// path.
     pub fn extract_fast_into(&mut self, image: &[f64], out: &mut [f64]) -> Result<()> {
         check_len("fft1d image", self.grid.len(), image.len())?;
+        let cols = self.grid.cols;
+        self.extract_fast_window_into(image, 0, cols, out)
+    }
+
+    /// [`extract_fast_into`](Self::extract_fast_into) on an image that is a window of a larger row-major
+    /// array: its row `r` is `values[first + r * stride ..][.. cols]`. Classification reads the crop of
+    /// a frame this way, straight into the transform's buffer (no cropped copy: copying 38 short rows
+    /// cost more than the rest of the packing).
+    pub fn extract_fast_window_into(
+        &mut self,
+        values: &[f64],
+        first: usize,
+        stride: usize,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let Grid { rows, cols } = self.grid;
+        let end = (rows - 1)
+            .checked_mul(stride)
+            .and_then(|offset| offset.checked_add(first))
+            .and_then(|start| start.checked_add(cols));
+        if stride < cols || end.is_none_or(|end| end > values.len()) {
+            return Err(CoreError::Shape {
+                what: "fft1d image window",
+                expected: format!("{rows} rows of {cols} values, {stride} apart from {first}"),
+                got: format!("{} values", values.len()),
+            });
+        }
         check_len("fft1d feature buffer", self.output_len(), out.len())?;
+        let window = Window {
+            values,
+            first,
+            stride,
+            rows,
+            cols,
+        };
         match self.fast.as_mut() {
-            Some(fast) => fast.magnitudes(image, out),
-            None => return self.extract_into(image, out),
+            Some(fast) => fast.magnitudes(window, out),
+            None => {
+                // Odd N: the exact path on a copy of the window.
+                let mut image = std::mem::take(&mut self.window_copy);
+                for (r, dst) in image.chunks_exact_mut(cols).enumerate() {
+                    dst.copy_from_slice(window.row(r));
+                }
+                let result = self.extract_into(&image, out);
+                self.window_copy = image;
+                return result;
+            }
         }
         Ok(())
     }
@@ -166,6 +217,23 @@ impl Fft1dExtractor {
         let mut out = vec![0.0; self.output_len()];
         self.extract_into(image, &mut out)?;
         Ok(out)
+    }
+}
+
+/// An image inside a larger row-major array (checked by its maker to lie inside `values`).
+#[derive(Clone, Copy)]
+struct Window<'a> {
+    values: &'a [f64],
+    first: usize,
+    stride: usize,
+    rows: usize,
+    cols: usize,
+}
+
+impl<'a> Window<'a> {
+    fn row(&self, r: usize) -> &'a [f64] {
+        let start = self.first + r * self.stride;
+        &self.values[start..start + self.cols]
     }
 }
 
@@ -211,10 +279,14 @@ impl HalfLengthF32 {
         }
     }
 
-    /// `out[k] = |X[k]|` for `k = 0 ..= M`; `x` at most `N` long, `out` `M + 1` long.
-    fn magnitudes(&mut self, x: &[f64], out: &mut [f64]) {
+    /// `out[k] = |X[k]|` for `k = 0 ..= M` of the image in `window` (row after row, at most `N` values),
+    /// `out` `M + 1` long.
+    fn magnitudes(&mut self, window: Window<'_>, out: &mut [f64]) {
         let m = self.z.len();
-        pulp::Arch::new().dispatch(Pack { x, z: &mut self.z });
+        pulp::Arch::new().dispatch(Pack {
+            window,
+            z: &mut self.z,
+        });
         self.fft
             .process_with_scratch(&mut self.z, &mut self.scratch);
         let Self {
@@ -240,9 +312,11 @@ impl HalfLengthF32 {
     }
 }
 
-/// `z[n] = x[2n] + i x[2n+1]` in f32, zero beyond `x`.
+/// `z[n] = x[2n] + i x[2n+1]` in f32 for the image `x` read row after row from its window, zero beyond.
+/// `z` is written as the flat array of its real and imaginary parts, which is `x` itself: each row is one
+/// contiguous conversion, whatever the parity of its start.
 struct Pack<'a> {
-    x: &'a [f64],
+    window: Window<'a>,
     z: &'a mut [Complex<f32>],
 }
 
@@ -251,20 +325,16 @@ impl pulp::WithSimd for Pack<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        let Self { x, z } = self;
-        let whole = x.len() / 2;
-        #[allow(clippy::cast_possible_truncation)]
-        for (dst, pair) in z.iter_mut().zip(x.chunks_exact(2)) {
-            *dst = Complex::new(pair[0] as f32, pair[1] as f32);
-        }
-        let mut filled = whole;
-        if x.len() % 2 == 1 {
+        let Self { window, z } = self;
+        let flat: &mut [f32] = pulp::bytemuck::cast_slice_mut(z);
+        let (image, padding) = flat.split_at_mut(window.rows * window.cols);
+        for (r, dst) in image.chunks_exact_mut(window.cols).enumerate() {
             #[allow(clippy::cast_possible_truncation)]
-            let last = x[x.len() - 1] as f32;
-            z[whole] = Complex::new(last, 0.0);
-            filled += 1;
+            for (dst, &value) in dst.iter_mut().zip(window.row(r)) {
+                *dst = value as f32;
+            }
         }
-        z[filled..].fill(Complex::default());
+        padding.fill(0.0);
     }
 }
 
@@ -351,6 +421,47 @@ mod tests {
         let features = extractor.extract(&[1.0; 6]).unwrap();
         assert_eq!(features.len(), 5);
         assert!((features[0] - 6.0).abs() < 1e-12);
+    }
+
+    /// A window of a larger array gives bit for bit the features of the same image copied out, for even
+    /// (fast path) and odd (exact fallback) transform lengths; windows that do not fit are errors.
+    #[test]
+    fn a_window_is_the_image_it_frames() {
+        let (in_rows, in_cols) = (9, 11);
+        let values: Vec<f64> = (0..in_rows * in_cols)
+            .map(|i| ((i * 37) % 101) as f64 * 0.25)
+            .collect();
+        let grid = Grid::new(5, 7);
+        let (row0, col0) = (3, 2);
+        let image: Vec<f64> = (0..grid.rows)
+            .flat_map(|r| {
+                let start = (row0 + r) * in_cols + col0;
+                values[start..start + grid.cols].to_vec()
+            })
+            .collect();
+        for fft_len in [None, Some(64), Some(35), Some(41)] {
+            let config = Fft1dConfig { fft_len };
+            let mut extractor = Fft1dExtractor::new(grid, &config).unwrap();
+            let n = extractor.output_len();
+            let (mut copied, mut framed) = (vec![0.0; n], vec![f64::NAN; n]);
+            extractor.extract_fast_into(&image, &mut copied).unwrap();
+            extractor
+                .extract_fast_window_into(&values, row0 * in_cols + col0, in_cols, &mut framed)
+                .unwrap();
+            assert_eq!(copied, framed, "{fft_len:?}");
+            // The last row would run past the end; a stride shorter than a row overlaps rows.
+            let last_start = (in_rows - grid.rows + 1) * in_cols;
+            assert!(
+                extractor
+                    .extract_fast_window_into(&values, last_start, in_cols, &mut framed)
+                    .is_err()
+            );
+            assert!(
+                extractor
+                    .extract_fast_window_into(&values, 0, grid.cols - 1, &mut framed)
+                    .is_err()
+            );
+        }
     }
 
     #[test]
