@@ -1,7 +1,8 @@
 //! Safe, runtime-dispatched SIMD kernels (`pulp`: AVX-512 or AVX2 + FMA where the CPU has them, scalar
 //! otherwise).
 //!
-//! [`matrix_vector`] is the PCA projection (51 x 1025): `out = matrix · x` for a row-major matrix;
+//! [`matrix_vector`] is the exact PCA projection (51 x 1025; `Pca::project_into`; classification uses the
+//! fixed-point product of `crate::fixed_matrix`): `out = matrix · x` for a row-major matrix;
 //! [`columns_times_vector`] the Parzen distance expansion (80 x 51) on the matrix stored by columns.
 //!
 //! The PCA product is limited by streaming the matrix (418 KB for the f64 PCA basis, from L2), not by
@@ -18,8 +19,8 @@
 //! Measured on the 2-core development VM (AVX-512 Xeon, 2.3 GHz): the 51 x 1025 product in f64 takes about
 //! 6 us, which is what merely reading the 418 KB basis once takes there (68-78 GB/s with AVX2 or AVX-512
 //! loads; a 32 KB basis reads at ~175 GB/s). AVX-512 (pulp's `x86-v4`, enabled in the workspace, chosen at
-//! run time where the CPU has it) barely helps this product (about 10 %); halving the bytes does: the kernel is generic over [`Element`], and the PCA's classification path runs it on an f32
-//! copy of the basis (1.75x faster, median of criterion's `pca_stage` bench under load).
+//! run time where the CPU has it) barely helps this product (about 10 %); fewer bytes do: an f32 copy of
+//! the basis was 1.75x faster, and the 16-bit fixed-point basis classification now uses is faster again.
 //!
 //! The summation order depends only on the shape and the instruction set chosen at run time, so the
 //! result is deterministic on a given machine. Nothing is allocated.
@@ -29,9 +30,10 @@ use pulp::{Arch, Simd, WithSimd};
 /// Rows per block in the main loop.
 const ROWS: usize = 8;
 
-/// A floating-point element the kernel runs on: `f64`, or `f32` for a half-size copy of a matrix that is
-/// read faster than it is multiplied. Each maps to pulp's registers and operations of its width; dot
-/// products are reduced in the element's own precision and returned as `f64`.
+/// A floating-point element the kernel runs on (`f64`; the trait keeps the kernel independent of the
+/// width, as it was when the PCA's classification path ran it on an f32 copy of its basis). It maps to
+/// pulp's registers and operations of its width; dot products are reduced in the element's own
+/// precision and returned as `f64`.
 pub(crate) trait Element:
     Copy + core::ops::Mul<Output = Self> + core::ops::AddAssign
 {
@@ -95,16 +97,6 @@ impl_element!(
     add_f64s,
     reduce_sum_f64s
 );
-impl_element!(
-    f32,
-    f32s,
-    F32_LANES,
-    as_simd_f32s,
-    splat_f32s,
-    mul_add_e_f32s,
-    add_f32s,
-    reduce_sum_f32s
-);
 
 /// `out = matrix · x` for a row-major `out.len() x cols` matrix (`matrix` holds at least
 /// `out.len() * cols` values; any excess is ignored). Does not allocate.
@@ -119,7 +111,7 @@ pub(crate) fn matrix_vector<T: Element>(matrix: &[T], cols: usize, x: &[T], out:
 /// `outs[i] = matrix · xs[i]` for every `cols`-long vector `xs[i]` of `xs` (row-major `n x cols`), into
 /// row-major `outs` (`n x rows`), for a row-major `rows x cols` matrix. Each output is bit for bit what
 /// [`matrix_vector`] gives for its vector (the same blocks, accumulators and order); the loops are
-/// swapped so that a block of matrix rows (8 x 1025 f32 = 32 KB: L1) is read once for all the vectors
+/// swapped so that a block of matrix rows (8 x 1025 f64 = 64 KB) is read once for all the vectors
 /// instead of once per vector. Does not allocate.
 ///
 /// # Panics
@@ -513,50 +505,6 @@ mod tests {
         check(80, 51, &mut rng); // the paper's Parzen expansion
     }
 
-    /// The f32 kernel (the PCA's compact basis) against the exact f64 product of the same f32 values:
-    /// within `(cols / 4 + 8) · 2⁻²⁴` of the sum of absolute products (each accumulator sums at most
-    /// `cols / lanes` terms, then a few reductions), for every backend.
-    #[test]
-    fn f32_matches_the_exact_product_within_single_precision() {
-        let mut rng = ChaCha8Rng::seed_from_u64(12);
-        type KernelF32 = fn(&[f32], usize, &[f32], &mut [f64]);
-        let backends: [(&str, KernelF32); 4] = [
-            ("dispatched", matrix_vector::<f32>),
-            ("scalar", |m, c, x, o| with(pulp::Scalar::new())(m, c, x, o)),
-            ("scalar256", |m, c, x, o| with(pulp::Scalar256b)(m, c, x, o)),
-            ("scalar512", |m, c, x, o| with(pulp::Scalar512b)(m, c, x, o)),
-        ];
-        for (rows, cols) in [(1, 1), (3, 7), (9, 17), (51, 1025), (80, 51), (13, 1024)] {
-            let matrix: Vec<f32> = (0..rows * cols)
-                .map(|_| rng.random_range(-1.0f32..1.0))
-                .collect();
-            let x: Vec<f32> = (0..cols).map(|_| rng.random_range(-1e3f32..1e3)).collect();
-            for (name, kernel) in backends {
-                let mut got = vec![f64::NAN; rows];
-                kernel(&matrix, cols, &x, &mut got);
-                for (r, &value) in got.iter().enumerate() {
-                    let row = &matrix[r * cols..(r + 1) * cols];
-                    let exact: f64 = row
-                        .iter()
-                        .zip(&x)
-                        .map(|(&a, &b)| f64::from(a) * f64::from(b))
-                        .sum();
-                    let magnitude: f64 = row
-                        .iter()
-                        .zip(&x)
-                        .map(|(&a, &b)| (f64::from(a) * f64::from(b)).abs())
-                        .sum();
-                    let tolerance =
-                        (cols as f64 / 4.0 + 8.0) * f64::from(f32::EPSILON) / 2.0 * magnitude;
-                    assert!(
-                        (value - exact).abs() <= tolerance,
-                        "{name}, {rows} x {cols}, row {r}: {value} vs {exact} (tolerance {tolerance:e})"
-                    );
-                }
-            }
-        }
-    }
-
     /// Many vectors at once give, bit for bit, what one vector at a time gives (every row remainder).
     #[test]
     fn many_vectors_equal_one_at_a_time_bit_for_bit() {
@@ -569,12 +517,10 @@ mod tests {
             (0, 5, 2),
             (6, 1, 2),
         ] {
-            let matrix: Vec<f32> = (0..rows * cols)
-                .map(|_| rng.random_range(-1.0f32..1.0))
+            let matrix: Vec<f64> = (0..rows * cols)
+                .map(|_| rng.random_range(-1.0..1.0))
                 .collect();
-            let xs: Vec<f32> = (0..n * cols)
-                .map(|_| rng.random_range(-9.0f32..9.0))
-                .collect();
+            let xs: Vec<f64> = (0..n * cols).map(|_| rng.random_range(-9.0..9.0)).collect();
             let mut many = vec![f64::NAN; n * rows];
             matrix_vectors(&matrix, cols, &xs, rows, &mut many);
             if rows == 0 {
@@ -584,14 +530,6 @@ mod tests {
                 let mut one = vec![f64::NAN; rows];
                 matrix_vector(&matrix, cols, x, &mut one);
                 assert_eq!(got, one.as_slice(), "{rows} x {cols}");
-            }
-            let matrix64: Vec<f64> = matrix.iter().map(|&v| f64::from(v)).collect();
-            let xs64: Vec<f64> = xs.iter().map(|&v| f64::from(v)).collect();
-            matrix_vectors(&matrix64, cols, &xs64, rows, &mut many);
-            for (x, got) in xs64.chunks_exact(cols).zip(many.chunks_exact(rows)) {
-                let mut one = vec![f64::NAN; rows];
-                matrix_vector(&matrix64, cols, x, &mut one);
-                assert_eq!(got, one.as_slice(), "f64 {rows} x {cols}");
             }
         }
     }
