@@ -1,35 +1,42 @@
 //! Matrix-vector products in 16-bit fixed point: the PCA projection of the classification path.
 //!
 //! Why: the 51 x 1025 projection is bound by moving the basis through the core, not by the arithmetic
-//! of one image. As 16-bit integers the basis is 105 KB instead of 209 KB in f32, and one integer
-//! multiply-add instruction (`pmaddwd`) takes 32 (AVX-512) or 16 (AVX2) products of 16-bit values and
-//! sums them in exact pairs, where a half-precision basis would need a conversion per value first.
+//! of one image. As 16-bit integers the basis is 111 KB (with padding) instead of 209 KB in f32, and one
+//! integer multiply-add instruction (`pmaddwd`) takes 32 (AVX-512) or 16 (AVX2) products of 16-bit
+//! values and sums them in exact pairs, where a half-precision basis would need a conversion per value.
 //!
 //! Representation: row `r` of the matrix is `s_r · q_r` with integers `|q_rc| ≤ 32767` and
 //! `s_r = max_c |w_rc| / 32767` (the rows are principal axes: their loadings share one scale well). A
 //! vector `d` is quantized when it is multiplied ([`FixedVector`]), in block floating point: each chunk
-//! `k` of [`CHUNK`] values has its own scale `t_k = max_{c∈k} |d_c| / 32767`, because the values of a
+//! `k` of [`CHUNK`] values has its own scale `t_k = max_{c∈k} |d_c| / 16383`, because the values of a
 //! feature vector span orders of magnitude (the DC bin of an image's spectrum is far above its high
-//! frequencies), and one scale for all would round the small ones away. Each rounding moves a value by
-//! at most half a step, so
+//! frequencies), and one scale for all would round the small ones away. The vector's integers have 15
+//! bits so that a lane's integer sum over a whole chunk (two pair sums, at most `4 · 32767 · 16383 <
+//! 2³¹`) is exact in an i32: one conversion to f32 and one multiply-add by `t_k` per chunk. Each rounding
+//! moves a value by at most half a step, so
 //!
 //! `|Σ_c w_rc d_c − s_r Σ_k t_k Σ_{c∈k} q_rc p_c| ≤ ½ s_r Σ_c |d_c| + ½ Σ_k t_k Σ_{c∈k} |w_rc| + ¼ s_r Σ_k t_k · CHUNK`
 //!
-//! plus the f32 arithmetic on the exact integer pair sums (a few `2⁻²⁴` of `Σ_c |w_rc d_c|` for
-//! 1025 columns): about `2⁻¹⁶` of the largest loading and of each chunk's largest value. Tested against
-//! the f64 product.
+//! plus the f32 arithmetic on the exact integer sums (a few `2⁻²⁴` of the sum of the represented terms'
+//! magnitudes): about `2⁻¹⁶` of the largest loading and `2⁻¹⁵` of each chunk's largest value. Tested
+//! against the f64 product.
 //!
 //! Layout: row-major, each row padded with zeros to whole chunks; a quantized vector has the same chunks,
 //! its padding zero.
 //!
-//! Kernels (chosen at run time): AVX-512BW, AVX2, or a scalar loop with the same pair sums. The order of
-//! summation depends only on the shape and the kernel, so results are deterministic on a given machine.
+//! Kernels (chosen at run time): AVX-512BW, AVX2, or a scalar loop with the same integer sums. The order
+//! of summation depends only on the shape and the kernel, so results are deterministic on a given
+//! machine.
 
-/// Values per chunk: one AVX-512 register of 16-bit integers, two AVX2 registers.
-pub(crate) const CHUNK: usize = 32;
+/// Values per chunk: two AVX-512 registers of 16-bit integers, four AVX2 registers.
+pub(crate) const CHUNK: usize = 64;
 
-/// The largest integer of the representation (symmetric, so a pair sum `2 · 32767²` fits in an i32).
+/// The largest integer of a matrix row (symmetric: -32768 is never used).
 const LIMIT: f64 = 32767.0;
+
+/// The largest integer of a vector: 15 bits, so that the integer sum of a lane over a whole chunk, two
+/// pair sums of at most `2 · 32767 · 16383` each, fits in an i32 and one conversion to f32 serves it.
+const VECTOR_LIMIT: f64 = 16383.0;
 
 /// Rows per block in the main loop: each chunk of a vector is loaded once for this many rows, and each
 /// row has its own accumulator (independent dependency chains).
@@ -76,7 +83,7 @@ fn chunk_scale(max: f64) -> (f32, f64) {
         return (0.0, 0.0);
     }
     #[allow(clippy::cast_possible_truncation)]
-    let scale = ((max / LIMIT) as f32).max(f32::MIN_POSITIVE);
+    let scale = ((max / VECTOR_LIMIT) as f32).max(f32::MIN_POSITIVE);
     if max.is_finite() && scale.is_finite() {
         (scale, 1.0 / f64::from(scale))
     } else {
@@ -160,7 +167,7 @@ impl FixedMatrix {
     }
 
     /// `outs[i] = self · xs[i]` for each quantized vector (`chunks_per_row` chunks each) into row-major
-    /// `outs` (`rows` values per vector). A block of [`ROWS`] rows (8 x 1056 x 2 B = 17 KB: L1) is read
+    /// `outs` (`rows` values per vector). A block of [`ROWS`] rows (8 x 1088 x 2 B = 17 KB: L1) is read
     /// once for all the vectors. Does not allocate.
     ///
     /// # Panics
@@ -401,8 +408,9 @@ trait PairDot: Copy {
     type Scale: Copy;
     fn zero(self) -> Self::Acc;
     fn splat(self, scale: f32) -> Self::Scale;
-    /// `acc + scale · (w[2i] x[2i] + w[2i+1] x[2i+1])` for each lane `i`: the pair sum is exact in i32
-    /// (at most `2 · 32767²`), then converted to f32 and multiplied by the chunk's scale (one FMA).
+    /// `acc + scale · (the products w[j] x[j] of lane i)` for each lane: two pairs per lane (one from
+    /// each half of the chunk), summed exactly in i32 (at most `4 · 32767 · 16383 < 2³¹`), converted to
+    /// f32 and multiplied by the chunk's scale (one FMA).
     fn add_products(
         self,
         acc: Self::Acc,
@@ -444,7 +452,7 @@ mod x86 {
     #[cfg(target_arch = "x86_64")]
     use core::arch::x86_64::{__m256i, __m512i};
 
-    /// AVX-512: a chunk is one register (`vpmaddwd`, `vcvtdq2ps`, `vfmadd`).
+    /// AVX-512: a chunk is two registers (`vpmaddwd` each, `vpaddd`, `vcvtdq2ps`, `vfmadd`).
     impl PairDot for V4 {
         type Acc = pulp::f32x16;
         type Scale = pulp::f32x16;
@@ -467,9 +475,12 @@ mod x86 {
             x: &[i16; CHUNK],
             scale: Self::Scale,
         ) -> Self::Acc {
-            let w: __m512i = pulp::cast(*w);
-            let x: __m512i = pulp::cast(*x);
-            let pairs = self.avx512bw._mm512_madd_epi16(w, x);
+            let w: [__m512i; 2] = pulp::cast(*w);
+            let x: [__m512i; 2] = pulp::cast(*x);
+            let pairs = self.avx512f._mm512_add_epi32(
+                self.avx512bw._mm512_madd_epi16(w[0], x[0]),
+                self.avx512bw._mm512_madd_epi16(w[1], x[1]),
+            );
             let pairs: pulp::f32x16 = pulp::cast(self.avx512f._mm512_cvtepi32_ps(pairs));
             self.mul_add_e_f32s(pairs, scale, acc)
         }
@@ -485,7 +496,7 @@ mod x86 {
         }
     }
 
-    /// AVX2: a chunk is two registers.
+    /// AVX2: a chunk is four registers, summed in two accumulators.
     impl PairDot for V3 {
         type Acc = [pulp::f32x8; 2];
         type Scale = pulp::f32x8;
@@ -508,10 +519,13 @@ mod x86 {
             x: &[i16; CHUNK],
             scale: Self::Scale,
         ) -> Self::Acc {
-            let w: [__m256i; 2] = pulp::cast(*w);
-            let x: [__m256i; 2] = pulp::cast(*x);
+            let w: [__m256i; 4] = pulp::cast(*w);
+            let x: [__m256i; 4] = pulp::cast(*x);
             core::array::from_fn(|h| {
-                let pairs = self.avx2._mm256_madd_epi16(w[h], x[h]);
+                let pairs = self.avx2._mm256_add_epi32(
+                    self.avx2._mm256_madd_epi16(w[h], x[h]),
+                    self.avx2._mm256_madd_epi16(w[h + 2], x[h + 2]),
+                );
                 let pairs: pulp::f32x8 = pulp::cast(self.avx._mm256_cvtepi32_ps(pairs));
                 self.mul_add_f32x8(pairs, scale, acc[h])
             })
@@ -534,12 +548,12 @@ mod x86 {
 struct ScalarKernel;
 
 impl PairDot for ScalarKernel {
-    type Acc = [f32; CHUNK / 2];
+    type Acc = [f32; CHUNK / 4];
     type Scale = f32;
 
     #[inline(always)]
     fn zero(self) -> Self::Acc {
-        [0.0; CHUNK / 2]
+        [0.0; CHUNK / 4]
     }
 
     #[inline(always)]
@@ -555,13 +569,16 @@ impl PairDot for ScalarKernel {
         x: &[i16; CHUNK],
         scale: Self::Scale,
     ) -> Self::Acc {
+        // Lane i sums the pairs at 2i and CHUNK/2 + 2i, as the AVX-512 kernel does.
         core::array::from_fn(|i| {
-            let pair = i32::from(w[2 * i]) * i32::from(x[2 * i])
-                + i32::from(w[2 * i + 1]) * i32::from(x[2 * i + 1]);
-            // The conversion of the exact pair sum to f32 is the rounding the SIMD kernels make.
+            let sum: i32 = [2 * i, 2 * i + 1, CHUNK / 2 + 2 * i, CHUNK / 2 + 2 * i + 1]
+                .iter()
+                .map(|&j| i32::from(w[j]) * i32::from(x[j]))
+                .sum();
+            // The conversion of the exact integer sum to f32 is the rounding the SIMD kernels make.
             #[allow(clippy::cast_precision_loss)]
-            let pair = pair as f32;
-            pair.mul_add(scale, acc[i])
+            let sum = sum as f32;
+            sum.mul_add(scale, acc[i])
         })
     }
 
@@ -652,23 +669,23 @@ mod tests {
         }
         // The largest magnitude is represented exactly, with the largest integer.
         assert_eq!(m.get(0, 0), 1.0);
-        // Each chunk of a vector has its own scale: here 6 / 32767 and 1e-3 / 32767 (as f32).
+        // Each chunk of a vector has its own scale: here 6 / 16383 and 1e-3 / 16383 (as f32).
         let mut d = vec![0.0; 2 * CHUNK];
         d[..3].copy_from_slice(&[3.0, -6.0, 0.5]);
         d[CHUNK] = 1e-3;
         d[CHUNK + 1] = -2.5e-4;
         let v = quantized(&d, 2);
-        let scales = [(6.0 / LIMIT) as f32, (1e-3 / LIMIT) as f32];
+        let scales = [(6.0 / VECTOR_LIMIT) as f32, (1e-3 / VECTOR_LIMIT) as f32];
         assert_eq!(v.scales, scales);
         let expected = |value: f64, k: usize| (value / f64::from(scales[k])).round() as i16;
         assert_eq!(
             v.chunks[0][..4],
-            [expected(3.0, 0), -32767, expected(0.5, 0), 0]
+            [expected(3.0, 0), -16383, expected(0.5, 0), 0]
         );
-        assert_eq!(v.chunks[1][..3], [32767, expected(-2.5e-4, 1), 0]);
+        assert_eq!(v.chunks[1][..3], [16383, expected(-2.5e-4, 1), 0]);
         // A chunk of zeros has scale 0; the padding of a short vector is zero.
         let v = quantized(&[0.0, 0.0, 1.0], 1);
-        assert_eq!(v.chunks[0][..4], [0, 0, 32767, 0]);
+        assert_eq!(v.chunks[0][..4], [0, 0, 16383, 0]);
     }
 
     /// Against the f64 product of the unquantized values, within the stated bound.
@@ -753,7 +770,7 @@ mod tests {
         let d: Vec<f64> = (0..cols)
             .map(|i| {
                 if i % CHUNK == 1 {
-                    -LIMIT
+                    -VECTOR_LIMIT
                 } else {
                     (i % 5) as f64
                 }
@@ -766,6 +783,26 @@ mod tests {
             for r in 0..3 {
                 let exact: f64 = (0..cols).map(|c| w[r * cols + c] * d[c]).sum();
                 assert_eq!(outs[r], exact, "{name} row {r}");
+            }
+        }
+    }
+
+    /// The largest integers of both sides, signs aligned: each lane's integer sum over a chunk is
+    /// `4 · 32767 · 16383`, just below 2³¹, and must not wrap.
+    #[test]
+    fn the_largest_products_do_not_overflow() {
+        let cols = 3 * CHUNK;
+        let m = FixedMatrix::from_f64(&vec![0.25; cols], 1, cols);
+        for sign in [1.0, -1.0] {
+            let x = quantized(&vec![sign * 7.0; cols], m.chunks_per_row());
+            for (name, run) in kernels() {
+                let mut outs = [0.0];
+                run(&m, std::slice::from_ref(&x), &mut outs);
+                let exact = sign * 0.25 * 7.0 * cols as f64;
+                assert!(
+                    (outs[0] - exact).abs() <= 1e-6 * exact.abs(),
+                    "{name}: {outs:?}"
+                );
             }
         }
     }

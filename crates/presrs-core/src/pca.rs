@@ -32,9 +32,15 @@ pub struct Pca {
     /// `basis · mean`, derived (not serialised): projecting is then `basis · x - projected_mean`, one
     /// matrix-vector product with no centred copy of `x`.
     projected_mean: Vec<f64>,
-    /// `basis` in 16-bit fixed point, derived (not serialised): [`Pca::project_fast_into`] streams a
-    /// quarter of the bytes of the f64 basis, which is what bounds the projection's time.
+    /// `basis` without its first column, in 16-bit fixed point, derived (not serialised):
+    /// [`Pca::project_fast_into`] streams a quarter of the bytes of the f64 basis, which is what bounds
+    /// the projection's time.
     basis_fixed: FixedMatrix,
+    /// The first column of `basis` (derived), multiplied exactly: the first feature of the 1-D |FFT| is
+    /// the DC bin, the image's total load, far above the others; kept out of the fixed-point chunks, it
+    /// does not coarsen the steps of the low frequencies it would share a chunk with (and 1025 features
+    /// leave 1024, whole chunks).
+    basis_first: Vec<f64>,
 }
 
 /// The buffers of [`Pca::project_fast_into`] and [`Pca::project_fast_many`] (the centred inputs in
@@ -229,7 +235,13 @@ impl Pca {
     ) -> Self {
         let mut projected_mean = vec![0.0; explained_variance.len()];
         matrix_vector(&basis, n_features, &mean, &mut projected_mean);
-        let basis_fixed = FixedMatrix::from_f64(&basis, explained_variance.len(), n_features);
+        let rest: Vec<f64> = basis
+            .chunks_exact(n_features)
+            .flat_map(|row| &row[1..])
+            .copied()
+            .collect();
+        let basis_fixed = FixedMatrix::from_f64(&rest, explained_variance.len(), n_features - 1);
+        let basis_first = basis.iter().step_by(n_features).copied().collect();
         Self {
             n_features,
             mean,
@@ -238,6 +250,7 @@ impl Pca {
             total_variance,
             projected_mean,
             basis_fixed,
+            basis_first,
         }
     }
 
@@ -303,18 +316,20 @@ impl Pca {
         }
     }
 
-    /// Writes `basis · (x - mean)` into `out` the fast way, in 16-bit fixed point: `x - mean` is formed in
-    /// f64 and rounded to multiples of `max |x - mean| / 32767`, each axis to multiples of its largest
-    /// loading / 32767, and the integer products are summed exactly in pairs, then in f32. This is the
+    /// Writes `basis · (x - mean)` into `out` the fast way, in fixed point (`crate::fixed_matrix`): each
+    /// axis in 16-bit integers with one scale (its largest loading / 32767), `x - mean` formed in f64 and
+    /// rounded in blocks of 64 features, each block to 15-bit integers with its own scale (its largest
+    /// value / 16383), the integer products summed exactly in i32, then scaled and summed in f32. The
+    /// first feature (the DC bin of the 1-D |FFT|, far above the rest) is multiplied exactly. This is the
     /// classification path (training and classifying both use it, so they agree): the product is bound
     /// by moving the basis through the core, and 16-bit integers are a quarter of the f64 basis's bytes.
     ///
-    /// Error: each output is within `2⁻¹⁶ (maxᵢ |basisₖᵢ| Σᵢ |xᵢ - meanᵢ| + maxᵢ |xᵢ - meanᵢ| Σᵢ |basisₖᵢ|)`
-    /// (half a step of each rounding), plus a few f32 roundings, of the exact value (tested against
-    /// [`project_into`]). Rounding the axes by `2⁻¹⁶` of their largest loading is far below how well tens
-    /// of training images determine them, and rounding the centred features by `2⁻¹⁶` of the largest one
-    /// below what one count of an 8-bit sensel changes them by. Centring first keeps the error relative to
-    /// the image's deviation from the training mean, not to its total load. Does not allocate.
+    /// Error: each output is within `2⁻¹⁶ maxᵢ |basisₖᵢ| Σᵢ |xᵢ - meanᵢ| + 2⁻¹⁵ Σ_blocks (max_block |x - mean|)
+    /// Σ_block |basisₖᵢ|` (half a step of each rounding), plus a few f32 roundings, of the exact value
+    /// (about `1e-5` of the largest output; tested against [`project_into`]). Rounding the axes by `2⁻¹⁶`
+    /// of their largest loading is far below how well tens of training images determine them, and
+    /// rounding the centred features by `2⁻¹⁵` of their block's largest one below what one count of an
+    /// 8-bit sensel changes them by. Does not allocate.
     pub fn project_fast_into(
         &self,
         x: &[f64],
@@ -325,8 +340,9 @@ impl Pca {
         check_len("pca output", self.n_components(), out.len())?;
         scratch.centred.resize_with(1, FixedVector::default);
         let centred = &mut scratch.centred[..1];
-        centred[0].quantize_difference(x, &self.mean, self.basis_fixed.chunks_per_row());
+        centred[0].quantize_difference(&x[1..], &self.mean[1..], self.basis_fixed.chunks_per_row());
         self.basis_fixed.times_vectors(centred, out);
+        self.add_first_column(x, out);
         Ok(())
     }
 
@@ -355,10 +371,24 @@ impl Pca {
         }
         let centred = &mut scratch.centred[..n];
         for (vector, x) in centred.iter_mut().zip(xs.chunks_exact(self.n_features)) {
-            vector.quantize_difference(x, &self.mean, chunks);
+            vector.quantize_difference(&x[1..], &self.mean[1..], chunks);
         }
         self.basis_fixed.times_vectors(centred, out);
+        for (x, out) in xs
+            .chunks_exact(self.n_features)
+            .zip(out.chunks_exact_mut(self.n_components()))
+        {
+            self.add_first_column(x, out);
+        }
         Ok(())
+    }
+
+    /// `out += basis[.., 0] · (x[0] - mean[0])`: the fast path's first column, exact.
+    fn add_first_column(&self, x: &[f64], out: &mut [f64]) {
+        let centred = x[0] - self.mean[0];
+        for (value, &loading) in out.iter_mut().zip(&self.basis_first) {
+            *value += loading * centred;
+        }
     }
 
     /// `basis · (x - mean)` in a new vector.

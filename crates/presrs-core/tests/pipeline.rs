@@ -198,8 +198,8 @@ fn session_features_are_the_paper_features_of_the_cropped_image() {
         extract_features(&view, &Crop::PAPER, &FeatureConfig::default()).unwrap(),
         direct
     );
-    // To classify, the session takes the single-precision |FFT| and the PCA's single-precision
-    // projection, bit for bit.
+    // To classify, the session takes the single-precision |FFT| and the PCA's fixed-point projection,
+    // bit for bit.
     let reduced = session.reduce(&view).unwrap().to_vec();
     let mut single = vec![0.0; direct.len()];
     Fft1dExtractor::new(Grid::new(38, 41), &Fft1dConfig::PAPER)
@@ -212,11 +212,12 @@ fn session_features_are_the_paper_features_of_the_cropped_image() {
     pca.project_fast_into(&single, &mut pca.scratch(), &mut fast)
         .unwrap();
     assert_eq!(reduced, fast);
-    // ... which is the exact projection of the exact features to single precision.
+    // ... which is the exact projection of the exact features within about 1e-5 of the largest value
+    // (the fixed-point roundings; `Pca::project_fast_into`).
     let exact = pca.project(&direct).unwrap();
     let scale = exact.iter().map(|v| v.abs()).fold(0.0, f64::max);
     for (a, b) in reduced.iter().zip(&exact) {
-        assert!((a - b).abs() <= 1e-5 * scale, "{a} vs {b}");
+        assert!((a - b).abs() <= 3e-5 * scale, "{a} vs {b}");
     }
 }
 
