@@ -1,7 +1,7 @@
-//! The PCA projection stage on its own: the SIMD kernel in f64 (`Pca::project_into`) and with the f32
-//! basis copy (`Pca::project_fast_into`, the classification path) against faer's matmul on
-//! the same row-major 51 x 1025 basis (the previous implementation), and on a 4 x 1025 basis that fits
-//! in L1 (arithmetic bound rather than L2 bound).
+//! The PCA projection stage on its own: the SIMD kernel in f64 (`Pca::project_into`) and in fixed
+//! point (`Pca::project_fast_into`, the classification path: 16-bit basis, 15-bit input blocks) against
+//! faer's matmul on the same row-major 51 x 1025 basis (the previous implementation), and on a 4 x 1025
+//! basis that fits in L1 (arithmetic bound rather than L2 bound).
 //!
 //! `cargo bench -p presrs-core --bench pca_stage -- --warm-up-time 1 --measurement-time 3`
 
@@ -47,7 +47,7 @@ fn pca_stage(c: &mut Criterion) {
         b.iter(|| black_box(pca.project_into(black_box(&features), &mut out).ok()))
     });
     let mut scratch = pca.scratch();
-    group.bench_function("simd_project_f32_51x1025", |b| {
+    group.bench_function("fixed_point_project_51x1025", |b| {
         b.iter(|| {
             black_box(
                 pca.project_fast_into(black_box(&features), &mut scratch, &mut out)

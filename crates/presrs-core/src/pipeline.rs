@@ -667,7 +667,7 @@ impl<'m> Session<'m> {
     }
 
     /// The PCA-reduced feature vector of `frame` (what the classifier sees): the
-    /// [`fast_features`](Self::fast_features) and the PCA's single-precision projection.
+    /// [`fast_features`](Self::fast_features) and the PCA's fixed-point projection.
     pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
         self.fast_features(frame)?;
         self.model.fields.pca.project_fast_into(

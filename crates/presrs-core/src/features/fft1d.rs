@@ -156,9 +156,9 @@ impl Fft1dExtractor {
     /// [`extract_into`](Self::extract_into) in single precision, for classification: the transform
     /// runs in f32 (a complex FFT of length `N/2` on the even/odd samples, then the split into the real
     /// spectrum), about 2.5x faster than the f64 path; each feature is within ~1e-6 of the largest one
-    /// of the exact features (tested against the naive DFT). The classifier's PCA already runs on
-    /// f32-rounded centred features, so this adds no new kind of error. Odd `N` falls back to the exact
-    /// path.
+    /// of the exact features (tested against the naive DFT). The classifier's PCA rounds the centred
+    /// features more coarsely still (to 15 bits per block of 64, `Pca::project_fast_into`), so this adds
+    /// no new kind of error. Odd `N` falls back to the exact path.
     pub fn extract_fast_into(&mut self, image: &[f64], out: &mut [f64]) -> Result<()> {
         check_len("fft1d image", self.grid.len(), image.len())?;
         let cols = self.grid.cols;
