@@ -324,9 +324,10 @@ impl Pca {
     /// classification path (training and classifying both use it, so they agree): the product is bound
     /// by moving the basis through the core, and 16-bit integers are a quarter of the f64 basis's bytes.
     ///
-    /// Error: each output is within `2⁻¹⁶ maxᵢ |basisₖᵢ| Σᵢ |xᵢ - meanᵢ| + 2⁻¹⁵ Σ_blocks (max_block |x - mean|)
-    /// Σ_block |basisₖᵢ|` (half a step of each rounding), plus a few f32 roundings, of the exact value
-    /// (about `1e-5` of the largest output; tested against [`project_into`]). Rounding the axes by `2⁻¹⁶`
+    /// Error: each output is within
+    /// `2⁻¹⁶ maxᵢ |basisₖᵢ| Σᵢ |xᵢ - meanᵢ| + 2⁻¹⁵ Σ_blocks (max_block |x - mean|) Σ_block |basisₖᵢ|`
+    /// (half a step of each rounding), plus a few f32 roundings, of the exact value (about `1e-5` of the
+    /// largest output; tested against [`project_into`](Self::project_into)). Rounding the axes by `2⁻¹⁶`
     /// of their largest loading is far below how well tens of training images determine them, and
     /// rounding the centred features by `2⁻¹⁵` of their block's largest one below what one count of an
     /// 8-bit sensel changes them by. Does not allocate.
