@@ -74,7 +74,7 @@ fn row_scale(max: f64) -> (f64, f64) {
 }
 
 /// The scale of a vector chunk of largest magnitude `max`, as the f32 the product multiplies by, and the
-/// reciprocal to quantize with (computed from that f32, so `|d| · inverse ≤ 32767` up to rounding).
+/// reciprocal to quantize with (computed from that f32, so `|d| · inverse ≤ 16383` up to rounding).
 /// A chunk of zeros gets 0; a non-finite `max` (a NaN or infinite value, or a scale beyond f32) gets NaN,
 /// so the product comes out NaN rather than silently finite; a scale below f32's normal range is raised
 /// to its smallest normal (the steps are then finer than needed, never too coarse).
@@ -95,8 +95,9 @@ fn chunk_scale(max: f64) -> (f32, f64) {
 /// then sits in the low bits of the sum's bit pattern: no conversion instruction, so loops vectorize.
 const ROUNDER: f64 = 6_755_399_441_055_744.0;
 
-/// The integer in the low bits of `(v + ROUNDER).to_bits()`, for `|v| ≤ 32767.5` (anything else, NaN
-/// included, gives an unspecified value; the chunk's scale is NaN then).
+/// The integer in the low bits of `(v + ROUNDER).to_bits()`, for `|v| ≤ 32767.5` (matrix values stay
+/// within 32767.5, vector values within 16383.5; anything else, NaN included, gives an unspecified
+/// value, and the chunk's scale is NaN then).
 #[inline(always)]
 fn low_bits(bits: u64) -> i16 {
     // Two's complement in the low 16 bits: truncating is the intent.
