@@ -386,13 +386,15 @@ impl pulp::WithSimd for Quantize<'_> {
                 *dst = low_bits(bits);
             }
         }
-        for (k, dst) in vector.chunks.iter_mut().enumerate().skip(whole) {
-            *dst = [0; CHUNK];
-            if k == whole {
-                let inverse = vector.inverses[k];
-                for ((dst, &x), &mean) in dst.iter_mut().zip(x_rest).zip(mean_rest) {
-                    *dst = low_bits(((x - mean) * inverse + ROUNDER).to_bits());
-                }
+        // The partial chunk (if any) and the padding chunks after it.
+        if let Some(tail) = vector.chunks.get_mut(whole..) {
+            tail.fill([0; CHUNK]);
+        }
+        if let (Some(dst), Some(&inverse)) =
+            (vector.chunks.get_mut(whole), vector.inverses.get(whole))
+        {
+            for ((dst, &x), &mean) in dst.iter_mut().zip(x_rest).zip(mean_rest) {
+                *dst = low_bits(((x - mean) * inverse + ROUNDER).to_bits());
             }
         }
         if !(simd.reduce_sum_f64s(sum) + rest_sum).is_finite() {
