@@ -11,6 +11,7 @@ use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
+use super::radix4::Radix4Fft;
 use crate::error::{CoreError, Result, check_len};
 use crate::frame::Grid;
 
@@ -248,7 +249,11 @@ impl<'a> Window<'a> {
 #[derive(Clone)]
 struct HalfLengthF32 {
     fft: Arc<dyn Fft<f32>>,
+    /// The AVX-512 transform, used instead of `fft` when the CPU has it and `M` is a power of four
+    /// (`M = 1024` for the paper's images).
+    radix4: Option<Radix4Fft>,
     z: Vec<Complex<f32>>,
+    /// rustfft's scratch, or the radix-4 transform's second buffer (`M` long).
     scratch: Vec<Complex<f32>>,
     /// `W^k` for `k = 0 .. pairs` (index 0 unused).
     twiddle_re: Vec<f32>,
@@ -263,14 +268,21 @@ impl HalfLengthF32 {
     fn new(n: usize) -> Self {
         let m = n / 2;
         let fft = FftPlanner::<f32>::new().plan_fft_forward(m);
+        let radix4 = Radix4Fft::new(m);
+        let scratch_len = if radix4.is_some() {
+            m
+        } else {
+            fft.get_inplace_scratch_len()
+        };
         // Pairs (k, M-k) with 0 < k < M-k.
         let pairs = m.saturating_sub(1) / 2 + 1;
         let angle = |k: usize| -2.0 * std::f64::consts::PI * k as f64 / n as f64;
         #[allow(clippy::cast_possible_truncation)]
         let twiddle = |f: fn(f64) -> f64| (0..pairs).map(|k| f(angle(k)) as f32).collect();
         Self {
-            scratch: vec![Complex::default(); fft.get_inplace_scratch_len()],
+            scratch: vec![Complex::default(); scratch_len],
             fft,
+            radix4,
             z: vec![Complex::default(); m],
             twiddle_re: twiddle(f64::cos),
             twiddle_im: twiddle(f64::sin),
@@ -287,16 +299,23 @@ impl HalfLengthF32 {
             window,
             z: &mut self.z,
         });
-        self.fft
-            .process_with_scratch(&mut self.z, &mut self.scratch);
         let Self {
+            fft,
+            radix4,
             z,
+            scratch,
             twiddle_re,
             twiddle_im,
             low,
             high,
-            ..
         } = self;
+        let z: &[Complex<f32>] = match radix4 {
+            Some(radix4) => radix4.process(z, scratch),
+            None => {
+                fft.process_with_scratch(z, scratch);
+                z
+            }
+        };
         pulp::Arch::new().dispatch(SplitSpectrum {
             z,
             twiddle_re,
