@@ -245,7 +245,9 @@ impl<'a> Window<'a> {
 /// realfft does the same in f64, but its split step runs scalar; here it runs on whole SIMD registers
 /// (a loop compiled for the CPU's instruction set, reading `Z[k]` and `Z[M-k]` straight from the
 /// spectrum: copying them into separate real and imaginary arrays first cost more than the arithmetic,
-/// the copy stalling on the FFT's just-written output).
+/// the copy stalling on the FFT's just-written output). On AVX-512 CPUs the transform is presrs's
+/// [`Radix4Fft`] when `M` is a power of four, and the split step is written out in registers
+/// (`split_avx512`).
 #[derive(Clone)]
 struct HalfLengthF32 {
     fft: Arc<dyn Fft<f32>>,

@@ -465,11 +465,13 @@ mod tests {
     }
 
     #[test]
-    #[should_panic(expected = "wrong length")]
     fn wrong_buffers_panic() {
         let Some(fft) = Radix4Fft::new(64) else {
-            panic!("wrong length (no AVX-512: nothing else to check)");
+            return;
         };
-        fft.process(&mut [Complex::default(); 64], &mut [Complex::default(); 32]);
+        let result = std::panic::catch_unwind(|| {
+            fft.process(&mut [Complex::default(); 64], &mut [Complex::default(); 32]);
+        });
+        assert!(result.is_err(), "a short scratch buffer was accepted");
     }
 }
