@@ -659,6 +659,40 @@ mod tests {
         }
     }
 
+    /// The whole single-precision path as this CPU runs it (on AVX-512: presrs's radix-4 FFT and the
+    /// split step in registers) against the path every other CPU runs (rustfft and the compiled loop),
+    /// on the paper's sizes and a random image.
+    #[test]
+    fn every_cpu_path_gives_the_same_magnitudes() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
+        let (rows, cols) = (38, 41);
+        let values: Vec<f64> = (0..rows * cols)
+            .map(|_| f64::from(rng.random_range(0u8..=255)))
+            .collect();
+        let window = Window {
+            values: &values,
+            first: 0,
+            stride: cols,
+            rows,
+            cols,
+        };
+        let mut here = HalfLengthF32::new(2048);
+        let mut elsewhere = HalfLengthF32 {
+            radix4: None,
+            #[cfg(target_arch = "x86_64")]
+            split_avx512: None,
+            ..HalfLengthF32::new(2048)
+        };
+        let (mut a, mut b) = (vec![f64::NAN; 1025], vec![f64::NAN; 1025]);
+        here.magnitudes(window, &mut a);
+        elsewhere.magnitudes(window, &mut b);
+        let sum: f64 = values.iter().sum();
+        for (k, (a, b)) in a.iter().zip(&b).enumerate() {
+            assert!((a - b).abs() <= 1e-6 * sum, "bin {k}: {a} vs {b}");
+        }
+    }
+
     /// The AVX-512 split step against the compiled loop, on random spectra of lengths with no whole
     /// block, whole blocks only, and blocks and a scalar tail (odd and even `M`).
     #[cfg(target_arch = "x86_64")]
