@@ -325,11 +325,20 @@ impl HalfLengthF32 {
                 z
             }
         };
-        #[cfg(target_arch = "x86_64")]
-        let explicit = split_avx512.as_ref().map(|split| split.run(z, out));
-        #[cfg(not(target_arch = "x86_64"))]
-        let explicit: Option<()> = None;
-        if explicit.is_none() {
+        let split_in_registers = {
+            #[cfg(target_arch = "x86_64")]
+            {
+                if let Some(split) = split_avx512 {
+                    split.run(z, out);
+                }
+                split_avx512.is_some()
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            {
+                false
+            }
+        };
+        if !split_in_registers {
             pulp::Arch::new().dispatch(SplitSpectrum {
                 z,
                 twiddle_re,
