@@ -73,6 +73,7 @@ impl Radix4Fft {
 }
 
 /// `exp(-2πi · j p / n)` in f32.
+#[cfg(target_arch = "x86_64")]
 fn twiddle(j: usize, p: usize, n: usize) -> Complex<f32> {
     let angle = -2.0 * std::f64::consts::PI * ((j * p) % n) as f64 / n as f64;
     #[allow(clippy::cast_possible_truncation)]
