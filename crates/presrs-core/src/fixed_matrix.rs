@@ -346,16 +346,26 @@ impl pulp::WithSimd for Quantize<'_> {
         // Sums of |x - mean| over every value, lane-wise, are kept as well: finite when every difference
         // is (x86 `max` ignores NaN, so the maxima alone would not tell; only values near f64's range,
         // which no image gives, overflow the sum).
-        let mut sum = simd.splat_f64s(0.0);
+        //
+        // Four sums, each register of a chunk's group of four into its own: one sum would chain every
+        // addition of the vector behind the previous one (its latency, not the arithmetic, was the cost).
+        let mut sums = [simd.splat_f64s(0.0); 4];
         for ((x, mean), max_out) in chunk_pairs().zip(&mut vector.inverses) {
             let mut max = simd.splat_f64s(0.0);
-            for (&x, &mean) in x.iter().zip(mean) {
-                let d = simd.abs_f64s(simd.sub_f64s(x, mean));
-                max = simd.max_f64s(max, d);
-                sum = simd.add_f64s(sum, d);
+            // Whole groups of four: a chunk is 64 values, a multiple of four registers of any width.
+            for (x, mean) in x.chunks_exact(4).zip(mean.chunks_exact(4)) {
+                for ((&x, &mean), sum) in x.iter().zip(mean).zip(&mut sums) {
+                    let d = simd.abs_f64s(simd.sub_f64s(x, mean));
+                    max = simd.max_f64s(max, d);
+                    *sum = simd.add_f64s(*sum, d);
+                }
             }
             *max_out = simd.reduce_max_f64s(max);
         }
+        let sum = simd.add_f64s(
+            simd.add_f64s(sums[0], sums[1]),
+            simd.add_f64s(sums[2], sums[3]),
+        );
         let mut rest_sum = 0.0;
         if let Some(max_out) = vector.inverses.get_mut(whole) {
             let mut max = 0.0f64;
