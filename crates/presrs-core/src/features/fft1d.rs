@@ -283,18 +283,20 @@ impl HalfLengthF32 {
         let pairs = m.saturating_sub(1) / 2 + 1;
         let angle = |k: usize| -2.0 * std::f64::consts::PI * k as f64 / n as f64;
         #[allow(clippy::cast_possible_truncation)]
-        let twiddle = |f: fn(f64) -> f64| (0..pairs).map(|k| f(angle(k)) as f32).collect();
+        let twiddle =
+            |f: fn(f64) -> f64| (0..pairs).map(|k| f(angle(k)) as f32).collect::<Vec<_>>();
+        let (twiddle_re, twiddle_im) = (twiddle(f64::cos), twiddle(f64::sin));
         Self {
             scratch: vec![Complex::default(); scratch_len],
             fft,
             radix4,
             z: vec![Complex::default(); m],
-            twiddle_re: twiddle(f64::cos),
-            twiddle_im: twiddle(f64::sin),
             low: vec![0.0; pairs],
             high: vec![0.0; pairs],
             #[cfg(target_arch = "x86_64")]
-            split_avx512: split_avx512::Split::new(n),
+            split_avx512: split_avx512::Split::new(&twiddle_re, &twiddle_im, m),
+            twiddle_re,
+            twiddle_im,
         }
     }
 
@@ -456,45 +458,36 @@ fn split_pair(a: Complex<f32>, c: Complex<f32>, wr: f32, wi: f32) -> (f32, f32) 
 /// 16 magnitudes, widened to f64 and stored.
 #[cfg(target_arch = "x86_64")]
 mod split_avx512 {
-    use core::arch::x86_64::{__m512, __m512d};
+    use core::arch::x86_64::__m512d;
 
     use pulp::x86::V4;
-    use pulp::{Simd, f32x16, f64x8};
+    use pulp::{Simd, f64x8};
     use realfft::num_complex::Complex;
 
     use super::split_pair;
+    use crate::features::radix4::avx512::{from_ps, ps, times};
 
     #[derive(Clone, Debug)]
     pub(super) struct Split {
         simd: V4,
-        /// `V = -i W^k = (wi, -wr)` for `k = 0 .. pairs`: real parts, each twice, then imaginary parts.
+        /// `V = -i W^k = (wi, -wr)` for `k = 0 .. pairs`, each value twice: the (re, re) and (im, im)
+        /// registers of [`times`]. The scalar tail reads `W^k` back from them.
         v_re: Vec<f32>,
         v_im: Vec<f32>,
-        /// `W^k` for the pairs after the last whole block (scalar).
-        w: Vec<Complex<f32>>,
         m: usize,
     }
 
     impl Split {
-        /// For the real transform of length `n` (even); `None` without AVX-512.
-        pub(super) fn new(n: usize) -> Option<Self> {
+        /// For the real transform whose pairs have the twiddles `W^k = (twiddle_re[k], twiddle_im[k])`
+        /// and whose complex FFT has length `m`; `None` without AVX-512.
+        pub(super) fn new(twiddle_re: &[f32], twiddle_im: &[f32], m: usize) -> Option<Self> {
             let simd = V4::try_new()?;
-            let m = n / 2;
-            let pairs = m.saturating_sub(1) / 2 + 1;
-            let w: Vec<Complex<f32>> = (0..pairs)
-                .map(|k| {
-                    let angle = -2.0 * std::f64::consts::PI * k as f64 / n as f64;
-                    #[allow(clippy::cast_possible_truncation)]
-                    Complex::new(angle.cos() as f32, angle.sin() as f32)
-                })
-                .collect();
-            let v_re = w.iter().flat_map(|w| [w.im, w.im]).collect();
-            let v_im = w.iter().flat_map(|w| [-w.re, -w.re]).collect();
+            let v_re = twiddle_im.iter().flat_map(|&wi| [wi, wi]).collect();
+            let v_im = twiddle_re.iter().flat_map(|&wr| [-wr, -wr]).collect();
             Some(Self {
                 simd,
                 v_re,
                 v_im,
-                w,
                 m,
             })
         }
@@ -523,11 +516,6 @@ mod split_avx512 {
     }
 
     #[inline(always)]
-    fn ps(x: f32x16) -> __m512 {
-        pulp::cast(x)
-    }
-
-    #[inline(always)]
     fn pd(x: __m512d) -> f64x8 {
         pulp::cast(x)
     }
@@ -540,7 +528,7 @@ mod split_avx512 {
             let Self { split, z, out } = self;
             let (simd, m) = (split.simd, split.m);
             let f = simd.avx512f;
-            let pairs = split.w.len();
+            let pairs = split.v_re.len() / 2;
             out[0] = f64::from((z[0].re + z[0].im).abs());
             out[m] = f64::from((z[0].re - z[0].im).abs());
             // Blocks of 8 pairs from k = 1.
@@ -573,8 +561,7 @@ mod split_avx512 {
                 let c_conj = simd.avx512dq._mm512_xor_ps(c, conjugate);
                 let s = f._mm512_add_ps(ps(a), c_conj);
                 let d = f._mm512_sub_ps(ps(a), c_conj);
-                let d_swapped = f._mm512_permute_ps::<0b1011_0001>(d);
-                let t = f._mm512_fmaddsub_ps(d, ps(vr), f._mm512_mul_ps(d_swapped, ps(vi)));
+                let t = ps(times(simd, from_ps(d), vr, vi));
                 let p = f._mm512_add_ps(s, t);
                 let q = f._mm512_sub_ps(s, t);
                 let (p2, q2) = (f._mm512_mul_ps(p, p), f._mm512_mul_ps(q, q));
@@ -589,8 +576,8 @@ mod split_avx512 {
             }
             // The pairs after the last whole block.
             for k in 1 + 8 * blocks..pairs {
-                let w = split.w[k];
-                let (lo, hi) = split_pair(z[k], z[m - k], w.re, w.im);
+                let (wr, wi) = (-split.v_im[2 * k], split.v_re[2 * k]);
+                let (lo, hi) = split_pair(z[k], z[m - k], wr, wi);
                 out[k] = f64::from(lo);
                 out[m - k] = f64::from(hi);
             }
@@ -708,10 +695,10 @@ mod tests {
     #[test]
     fn the_avx512_split_matches_the_plain_loop() {
         use rand::{Rng, SeedableRng};
-        let Some(_) = split_avx512::Split::new(4) else {
+        if pulp::x86::V4::try_new().is_none() {
             eprintln!("no AVX-512 on this CPU: the explicit split step is not used here");
             return;
-        };
+        }
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         for n in [2, 4, 6, 16, 34, 36, 66, 130, 1000, 2048, 2050] {
             let m = n / 2;
@@ -719,7 +706,8 @@ mod tests {
                 split_avx512: None,
                 ..HalfLengthF32::new(n)
             };
-            let explicit = split_avx512::Split::new(n).unwrap();
+            let explicit =
+                split_avx512::Split::new(&plain.twiddle_re, &plain.twiddle_im, m).unwrap();
             let z: Vec<Complex<f32>> = (0..m)
                 .map(|_| Complex::new(rng.random_range(-1e4..1e4), rng.random_range(-1e4..1e4)))
                 .collect();

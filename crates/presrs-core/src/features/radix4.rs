@@ -81,7 +81,7 @@ fn twiddle(j: usize, p: usize, n: usize) -> Complex<f32> {
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx512 {
+pub(super) mod avx512 {
     use core::arch::x86_64::{__m512, __m512d};
 
     use pulp::Simd;
@@ -211,12 +211,12 @@ mod avx512 {
     }
 
     #[inline(always)]
-    fn ps(x: f32x16) -> __m512 {
+    pub(in crate::features) fn ps(x: f32x16) -> __m512 {
         pulp::cast(x)
     }
 
     #[inline(always)]
-    fn from_ps(x: __m512) -> f32x16 {
+    pub(in crate::features) fn from_ps(x: __m512) -> f32x16 {
         pulp::cast(x)
     }
 
@@ -230,9 +230,10 @@ mod avx512 {
         pulp::cast(x)
     }
 
-    /// `a · w` for `w` given as its (re, re) and (im, im) registers.
+    /// `a · w` for `w` given as its (re, re) and (im, im) registers (also the real-FFT split step's
+    /// product, in `fft1d`).
     #[inline(always)]
-    fn times(simd: V4, a: f32x16, w_re: f32x16, w_im: f32x16) -> f32x16 {
+    pub(in crate::features) fn times(simd: V4, a: f32x16, w_re: f32x16, w_im: f32x16) -> f32x16 {
         let f = simd.avx512f;
         let swapped = f._mm512_permute_ps::<0b1011_0001>(ps(a));
         from_ps(f._mm512_fmaddsub_ps(ps(a), ps(w_re), f._mm512_mul_ps(swapped, ps(w_im))))
