@@ -1,7 +1,8 @@
 //! The PCA projection stage on its own: the SIMD kernel in f64 (`Pca::project_into`) and in fixed
 //! point (`Pca::project_fast_into`, the classification path: 16-bit basis, 15-bit input blocks) against
-//! faer's matmul on the same row-major 51 x 1025 basis (the previous implementation), and on a 4 x 1025
-//! basis that fits in L1 (arithmetic bound rather than L2 bound).
+//! faer's matmul on the same row-major 51 x 1025 basis (the previous implementation), and on 4 x 1025
+//! (f64) and 16 x 1025 (fixed point) bases that fit in L1: where the time per row is the same as for the
+//! 51 rows read from L2, the kernel is bound by its arithmetic, not by L2.
 //!
 //! `cargo bench -p presrs-core --bench pca_stage -- --warm-up-time 1 --measurement-time 3`
 
@@ -82,6 +83,25 @@ fn pca_stage(c: &mut Criterion) {
         b.iter(|| {
             faer_project(small.basis(), cols, black_box(&features), &mut small_out);
             black_box(small_out[0])
+        })
+    });
+    // A 16-component PCA (16 x 1024 x 2 B = 32 KB of 16-bit basis, resident in L1): the fixed-point
+    // kernel's arithmetic cost per row, to compare with the 51-row basis streamed from L2.
+    let samples: Vec<f64> = (0..24 * cols)
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect();
+    let Ok(l1_fixed) = Pca::fit(&samples, cols, 16) else {
+        panic!("the 16-component PCA failed to fit");
+    };
+    let mut l1_scratch = l1_fixed.scratch();
+    let mut l1_out = vec![0.0; 16];
+    group.bench_function("fixed_point_project_16x1025_l1", |b| {
+        b.iter(|| {
+            black_box(
+                l1_fixed
+                    .project_fast_into(black_box(&features), &mut l1_scratch, &mut l1_out)
+                    .ok(),
+            )
         })
     });
     group.finish();

@@ -1,9 +1,11 @@
 //! Matrix-vector products in 16-bit fixed point: the PCA projection of the classification path.
 //!
-//! Why: the 51 x 1025 projection is bound by moving the basis through the core, not by the arithmetic
-//! of one image. As 16-bit integers the basis is 111 KB (with padding) instead of 209 KB in f32, and one
-//! integer multiply-add instruction (`pmaddwd`) takes 32 (AVX-512) or 16 (AVX2) products of 16-bit
-//! values and sums them in exact pairs, where a half-precision basis would need a conversion per value.
+//! Why: in f64 or f32 the 51 x 1025 projection is bound by moving the basis (418 or 209 KB) through the
+//! core, not by the arithmetic of one image. As 16-bit integers the basis is a quarter of the f64 bytes,
+//! and one integer multiply-add instruction (`pmaddwd`) takes 32 (AVX-512) or 16 (AVX2) products of
+//! 16-bit values and sums them in exact pairs, where a half-precision basis would need a conversion per
+//! value. At that size the product is bound by those instructions instead: an L1-resident basis costs
+//! the same per row as the full one read from L2 (`benches/pca_stage.rs`).
 //!
 //! Representation: row `r` of the matrix is `s_r · q_r` with integers `|q_rc| ≤ 32767` and
 //! `s_r = max_c |w_rc| / 32767` (the rows are principal axes: their loadings share one scale well). A

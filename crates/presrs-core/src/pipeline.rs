@@ -680,7 +680,7 @@ impl<'m> Session<'m> {
 }
 
 /// Frames per block of [`TrainedModel::classify_batch`]: their features (64 x 1025 x 8 B = 512 KB) and
-/// centred f32 copies stay in L2 while the basis is streamed through once.
+/// quantized copies (64 x 2 KB) stay in L2 while the basis is streamed through once.
 pub const BATCH_BLOCK: usize = 64;
 
 /// The classifier step shared by [`Session`] and [`BatchSession`]: refuses a non-finite reduced vector
