@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result};
 use crate::frame::{Frame, FrameView};
 use crate::pipeline::{CheckedTrainConfig, LabeledImage, train};
+use crate::selection::Selection;
 use crate::split::{ValidationSize, stratified_split};
 
 /// One sample to evaluate on.
@@ -153,7 +154,7 @@ pub struct RepeatResult {
     pub train_seconds: f64,
 }
 
-/// The result of [`evaluate`].
+/// The result of an evaluation ([`Evaluation::run`]): every repeat, and their summary.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvalReport {
     pub protocol: Protocol,
@@ -166,288 +167,291 @@ pub struct EvalReport {
     pub median_classify_ns: u64,
 }
 
-/// Runs `protocol` `repeats` times (seeds `seed`, `seed + 1`, ...). `progress` is called after each
-/// trained model (for a progress bar).
-pub fn evaluate(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    config: &CheckedTrainConfig,
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-) -> Result<EvalReport> {
-    evaluate_perturbed(samples, protocol, config, repeats, seed, progress, None)
-}
+/// A function that trains a model from training and validation sample indices (and a seed).
+type Trainer<'f> = dyn Fn(&[usize], &[usize], u64) -> Result<crate::pipeline::TrainedModel> + 'f;
 
 /// Changes a test image before it is classified: `(sample index, image, repeat seed) -> image` (fault
 /// injection, see [`crate::perturb`]). Training and validation images are never changed.
 pub type TestTransform<'f> = dyn Fn(usize, FrameView<'_>, u64) -> Result<Frame> + Sync + 'f;
 
-/// [`evaluate`] with every test image passed through `perturb` first (when given). The draws are those
-/// of [`evaluate`] with the same seed, so the results pair up with an unperturbed run.
-pub fn evaluate_perturbed(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    config: &CheckedTrainConfig,
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-    perturb: Option<&TestTransform<'_>>,
-) -> Result<EvalReport> {
-    one(evaluate_perturbed_each(
-        samples,
-        protocol,
-        config,
-        repeats,
-        seed,
-        progress,
-        &[perturb],
-    )?)
+/// How each fold's model is trained.
+#[derive(Clone, Copy, Debug)]
+pub enum Models<'c> {
+    /// With this configuration (the paper's method, or any other).
+    Config(&'c CheckedTrainConfig),
+    /// Chosen among these candidates by [`crate::selection::train_auto`] on the fold's training data
+    /// only (leave-one-condition-out inside it when it spans several conditions).
+    Auto(&'c [CheckedTrainConfig]),
 }
 
-/// [`evaluate_perturbed`] for several perturbations at once (`None`: the test images as they are): each
-/// model is trained once and tested under every one of them, so the reports are those of
-/// [`evaluate_perturbed`] called with each, at the cost of one training. One report per entry of
-/// `perturbs`, in order.
-pub fn evaluate_perturbed_each(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    config: &CheckedTrainConfig,
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-    perturbs: &[Option<&TestTransform<'_>>],
-) -> Result<Vec<EvalReport>> {
-    evaluate_with(
-        samples,
-        protocol,
-        repeats,
-        seed,
-        progress,
-        perturbs,
-        &|train_set, validation_set, _| {
-            let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
-            let train_images: Vec<_> = train_set.iter().map(image).collect();
-            let validation_images: Vec<_> = validation_set.iter().map(image).collect();
-            train(&train_images, &validation_images, config)
-        },
-    )
+/// What [`Evaluation::run_each`] found.
+#[derive(Clone, Debug)]
+pub struct Evaluated {
+    /// One report per perturbation, in the order given.
+    pub reports: Vec<EvalReport>,
+    /// The selection of every automatically chosen model, in training order (empty for
+    /// [`Models::Config`]).
+    pub selections: Vec<Selection>,
 }
 
-/// The single report of a one-perturbation run.
-fn one(mut reports: Vec<EvalReport>) -> Result<EvalReport> {
-    reports
-        .pop()
-        .ok_or_else(|| CoreError::NotEnoughData("no evaluation was run".into()))
+/// An evaluation: `protocol` on `samples`, run `repeats` times with the seeds `seed`, `seed + 1`, ...;
+/// `progress` is called after each trained model (for a progress bar). The runs differ in how each
+/// fold's model is trained ([`Models`]) and in what the test images go through; the draws depend only on
+/// the samples, the protocol and the seed, so runs with the same ones pair up.
+#[derive(Clone, Copy)]
+pub struct Evaluation<'e, 's> {
+    pub samples: &'e [EvalSample<'s>],
+    pub protocol: &'e Protocol,
+    pub repeats: usize,
+    pub seed: u64,
+    pub progress: &'e (dyn Fn() + Sync),
 }
 
-/// [`evaluate`] where every model is chosen automatically among `candidates` by
-/// [`crate::selection::train_auto`] on that fold's training data only (leave-one-condition-out inside it
-/// when it spans several conditions). Also returns every model's selection, in training order.
-pub fn evaluate_auto(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    candidates: &[CheckedTrainConfig],
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-) -> Result<(EvalReport, Vec<crate::selection::Selection>)> {
-    evaluate_auto_perturbed(samples, protocol, candidates, repeats, seed, progress, None)
-}
-
-/// [`evaluate_auto`] with every test image passed through `perturb` first (see [`evaluate_perturbed`]).
-pub fn evaluate_auto_perturbed(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    candidates: &[CheckedTrainConfig],
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-    perturb: Option<&TestTransform<'_>>,
-) -> Result<(EvalReport, Vec<crate::selection::Selection>)> {
-    let (reports, selections) = evaluate_auto_perturbed_each(
-        samples,
-        protocol,
-        candidates,
-        repeats,
-        seed,
-        progress,
-        &[perturb],
-    )?;
-    Ok((one(reports)?, selections))
-}
-
-/// [`evaluate_auto_perturbed`] for several perturbations at once, each model chosen and trained once
-/// (see [`evaluate_perturbed_each`]).
-pub fn evaluate_auto_perturbed_each(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    candidates: &[CheckedTrainConfig],
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-    perturbs: &[Option<&TestTransform<'_>>],
-) -> Result<(Vec<EvalReport>, Vec<crate::selection::Selection>)> {
-    let selections = std::sync::Mutex::new(Vec::new());
-    let reports = evaluate_with(
-        samples,
-        protocol,
-        repeats,
-        seed,
-        progress,
-        perturbs,
-        &|train_set, validation_set, fold_seed| {
-            let image = |&i: &usize| LabeledImage::new(samples[i].frame, samples[i].label);
-            let train_images: Vec<_> = train_set.iter().map(image).collect();
-            let validation_images: Vec<_> = validation_set.iter().map(image).collect();
-            let conditions: Option<Vec<&str>> = train_set
-                .iter()
-                .chain(validation_set)
-                .map(|&i| samples[i].condition)
-                .collect();
-            let model = crate::selection::train_auto(
-                &train_images,
-                &validation_images,
-                conditions.as_deref(),
-                candidates,
-                fold_seed,
-            )?;
-            if let (Some(selection), Ok(mut list)) = (model.selection(), selections.lock()) {
-                list.push(selection.clone());
-            }
-            Ok(model)
-        },
-    )?;
-    let selections = selections.into_inner().unwrap_or_default();
-    Ok((reports, selections))
-}
-
-/// A function that trains a model from training and validation sample indices (and a seed).
-type Trainer<'f> = dyn Fn(&[usize], &[usize], u64) -> Result<crate::pipeline::TrainedModel> + 'f;
-
-fn evaluate_with(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-    perturbs: &[Option<&TestTransform<'_>>],
-    trainer: &Trainer<'_>,
-) -> Result<Vec<EvalReport>> {
-    if repeats == 0 {
-        return Err(CoreError::Param {
-            name: "repeats",
-            reason: "at least one repeat is needed".into(),
-        });
+impl std::fmt::Debug for Evaluation<'_, '_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Evaluation")
+            .field("samples", &self.samples.len())
+            .field("protocol", self.protocol)
+            .field("repeats", &self.repeats)
+            .field("seed", &self.seed)
+            .finish_non_exhaustive()
     }
-    if samples.is_empty() {
-        return Err(CoreError::NotEnoughData("no samples to evaluate on".into()));
+}
+
+impl Evaluation<'_, '_> {
+    /// Trains every fold's model with `models` and tests it on the images as they are.
+    pub fn run(&self, models: Models<'_>) -> Result<EvalReport> {
+        self.run_each(models, &[None])?
+            .reports
+            .pop()
+            .ok_or_else(|| CoreError::NotEnoughData("no evaluation was run".into()))
     }
-    let mut labels: Vec<String> = samples.iter().map(|s| s.label.to_owned()).collect();
-    labels.sort();
-    labels.dedup();
-    /// What one perturbation's tests have found so far.
-    struct Tally {
-        confusion: Confusion,
-        times_ns: Vec<u64>,
-        results: Vec<RepeatResult>,
-    }
-    let mut tallies: Vec<Tally> = perturbs
-        .iter()
-        .map(|_| Tally {
-            confusion: Confusion::new(labels.clone()),
-            times_ns: Vec::new(),
-            results: Vec::with_capacity(repeats),
-        })
-        .collect();
-    for repeat in 0..repeats {
-        let repeat_seed = seed.wrapping_add(repeat as u64);
-        let folds = folds(samples, protocol, repeat_seed)?;
-        let mut correct_by_condition: Vec<BTreeMap<String, (u64, u64)>> =
-            vec![BTreeMap::new(); perturbs.len()];
-        let mut result = RepeatResult {
-            seed: repeat_seed,
-            overall_accuracy: 0.0,
-            per_condition: BTreeMap::new(),
-            sigmas: Vec::new(),
-            n_train: 0,
-            n_validation: 0,
-            n_test: 0,
-            train_seconds: 0.0,
+
+    /// Trains every fold's model once with `models` and tests it under each of `perturbs` (`None`: the
+    /// test images as they are), so each report is what [`run`](Self::run) would give with the test images
+    /// passed through that perturbation first, at the cost of one training.
+    pub fn run_each(
+        &self,
+        models: Models<'_>,
+        perturbs: &[Option<&TestTransform<'_>>],
+    ) -> Result<Evaluated> {
+        let samples = self.samples;
+        let images = |set: &[usize]| -> Vec<LabeledImage<'_>> {
+            set.iter()
+                .map(|&i| LabeledImage::new(samples[i].frame, samples[i].label))
+                .collect()
         };
-        for fold in folds {
-            let start = Instant::now();
-            let model = trainer(&fold.train, &fold.validation, repeat_seed)?;
-            result.train_seconds += start.elapsed().as_secs_f64();
-            result.sigmas.extend(model.sigma());
-            result.n_train += fold.train.len();
-            result.n_validation += fold.validation.len();
-            result.n_test += fold.test.len();
-            for ((perturb, tally), correct) in perturbs
-                .iter()
-                .zip(tallies.iter_mut())
-                .zip(correct_by_condition.iter_mut())
-            {
-                let outcomes: Vec<Result<(usize, u64)>> = fold
-                    .test
-                    .par_iter()
-                    .map_init(
-                        || model.session(),
-                        |session, &i| {
-                            let perturbed = perturb
-                                .map(|p| p(i, samples[i].frame, repeat_seed))
-                                .transpose()?;
-                            let frame = perturbed.as_ref().map_or(samples[i].frame, Frame::view);
-                            let start = Instant::now();
-                            let class = session.classify(&frame)?.class;
-                            Ok((class, start.elapsed().as_nanos() as u64))
-                        },
-                    )
-                    .collect();
-                let confusion = &mut tally.confusion;
-                for (&i, outcome) in fold.test.iter().zip(outcomes) {
-                    let (predicted, ns) = outcome?;
-                    tally.times_ns.push(ns);
-                    let predicted_label = &model.class_names()[predicted];
-                    let truth = confusion
-                        .labels
-                        .binary_search_by(|l| l.as_str().cmp(samples[i].label));
-                    let guess = confusion.labels.binary_search(predicted_label);
-                    if let (Ok(t), Ok(g)) = (truth, guess) {
-                        confusion.counts[t][g] += 1;
-                    }
-                    let key = fold.key_of(&samples[i]);
-                    let entry = correct.entry(key).or_default();
-                    entry.1 += 1;
-                    if predicted_label == samples[i].label {
-                        entry.0 += 1;
+        match models {
+            Models::Config(config) => {
+                let reports = self.run_with(perturbs, &|train_set, validation_set, _| {
+                    train(&images(train_set), &images(validation_set), config)
+                })?;
+                Ok(Evaluated {
+                    reports,
+                    selections: Vec::new(),
+                })
+            }
+            Models::Auto(candidates) => {
+                let selections = std::sync::Mutex::new(Vec::new());
+                let reports =
+                    self.run_with(perturbs, &|train_set, validation_set, fold_seed| {
+                        let conditions: Option<Vec<&str>> = train_set
+                            .iter()
+                            .chain(validation_set)
+                            .map(|&i| samples[i].condition)
+                            .collect();
+                        let model = crate::selection::train_auto(
+                            &images(train_set),
+                            &images(validation_set),
+                            conditions.as_deref(),
+                            candidates,
+                            fold_seed,
+                        )?;
+                        if let (Some(selection), Ok(mut list)) =
+                            (model.selection(), selections.lock())
+                        {
+                            list.push(selection.clone());
+                        }
+                        Ok(model)
+                    })?;
+                Ok(Evaluated {
+                    reports,
+                    selections: selections.into_inner().unwrap_or_default(),
+                })
+            }
+        }
+    }
+
+    /// Evaluates every configuration of `configs` with the same draws (so every combination sees the same
+    /// training sets). A combination that cannot be trained (e.g. too few samples per class for its
+    /// classifier) is reported with its error instead of stopping the comparison.
+    pub fn compare(&self, configs: &[CheckedTrainConfig]) -> Result<Vec<ComparisonRow>> {
+        let mut rows = Vec::with_capacity(configs.len());
+        for config in configs {
+            let inner = config.config();
+            let report = match self.run(Models::Config(config)) {
+                // a parameter error is the caller's mistake, not this combination's limitation
+                Err(err @ CoreError::Param { .. }) => return Err(err),
+                other => other,
+            };
+            let train_seconds = match &report {
+                Ok(report) => {
+                    let per_model: Vec<f64> = report
+                        .repeats
+                        .iter()
+                        .map(|r| {
+                            let models = match self.protocol {
+                                Protocol::TrainCondition { .. } => 1,
+                                Protocol::LeaveOneOut { .. } => r.per_condition.len().max(1),
+                            };
+                            r.train_seconds / models as f64
+                        })
+                        .collect();
+                    MeanStd::of(&per_model)
+                }
+                Err(_) => MeanStd::default(),
+            };
+            rows.push(ComparisonRow {
+                features: inner.features.name(),
+                classifier: inner.classifier.kind().as_str().to_owned(),
+                config: inner.clone(),
+                report: report.map_err(|err| err.to_string()),
+                train_seconds,
+            });
+        }
+        Ok(rows)
+    }
+
+    /// The engine behind every run: the folds of each repeat, each fold's model from `trainer`, its
+    /// test images classified under each of `perturbs`.
+    fn run_with(
+        &self,
+        perturbs: &[Option<&TestTransform<'_>>],
+        trainer: &Trainer<'_>,
+    ) -> Result<Vec<EvalReport>> {
+        let Self {
+            samples,
+            protocol,
+            repeats,
+            seed,
+            progress,
+        } = *self;
+        if repeats == 0 {
+            return Err(CoreError::Param {
+                name: "repeats",
+                reason: "at least one repeat is needed".into(),
+            });
+        }
+        if samples.is_empty() {
+            return Err(CoreError::NotEnoughData("no samples to evaluate on".into()));
+        }
+        let mut labels: Vec<String> = samples.iter().map(|s| s.label.to_owned()).collect();
+        labels.sort();
+        labels.dedup();
+        /// What one perturbation's tests have found so far.
+        struct Tally {
+            confusion: Confusion,
+            times_ns: Vec<u64>,
+            results: Vec<RepeatResult>,
+        }
+        let mut tallies: Vec<Tally> = perturbs
+            .iter()
+            .map(|_| Tally {
+                confusion: Confusion::new(labels.clone()),
+                times_ns: Vec::new(),
+                results: Vec::with_capacity(repeats),
+            })
+            .collect();
+        for repeat in 0..repeats {
+            let repeat_seed = seed.wrapping_add(repeat as u64);
+            let folds = folds(samples, protocol, repeat_seed)?;
+            let mut correct_by_condition: Vec<BTreeMap<String, (u64, u64)>> =
+                vec![BTreeMap::new(); perturbs.len()];
+            let mut result = RepeatResult {
+                seed: repeat_seed,
+                overall_accuracy: 0.0,
+                per_condition: BTreeMap::new(),
+                sigmas: Vec::new(),
+                n_train: 0,
+                n_validation: 0,
+                n_test: 0,
+                train_seconds: 0.0,
+            };
+            for fold in folds {
+                let start = Instant::now();
+                let model = trainer(&fold.train, &fold.validation, repeat_seed)?;
+                result.train_seconds += start.elapsed().as_secs_f64();
+                result.sigmas.extend(model.sigma());
+                result.n_train += fold.train.len();
+                result.n_validation += fold.validation.len();
+                result.n_test += fold.test.len();
+                for ((perturb, tally), correct) in perturbs
+                    .iter()
+                    .zip(tallies.iter_mut())
+                    .zip(correct_by_condition.iter_mut())
+                {
+                    let outcomes: Vec<Result<(usize, u64)>> = fold
+                        .test
+                        .par_iter()
+                        .map_init(
+                            || model.session(),
+                            |session, &i| {
+                                let perturbed = perturb
+                                    .map(|p| p(i, samples[i].frame, repeat_seed))
+                                    .transpose()?;
+                                let frame =
+                                    perturbed.as_ref().map_or(samples[i].frame, Frame::view);
+                                let start = Instant::now();
+                                let class = session.classify(&frame)?.class;
+                                Ok((class, start.elapsed().as_nanos() as u64))
+                            },
+                        )
+                        .collect();
+                    let confusion = &mut tally.confusion;
+                    for (&i, outcome) in fold.test.iter().zip(outcomes) {
+                        let (predicted, ns) = outcome?;
+                        tally.times_ns.push(ns);
+                        let predicted_label = &model.class_names()[predicted];
+                        let truth = confusion
+                            .labels
+                            .binary_search_by(|l| l.as_str().cmp(samples[i].label));
+                        let guess = confusion.labels.binary_search(predicted_label);
+                        if let (Ok(t), Ok(g)) = (truth, guess) {
+                            confusion.counts[t][g] += 1;
+                        }
+                        let key = fold.key_of(&samples[i]);
+                        let entry = correct.entry(key).or_default();
+                        entry.1 += 1;
+                        if predicted_label == samples[i].label {
+                            entry.0 += 1;
+                        }
                     }
                 }
+                progress();
             }
-            progress();
-        }
-        for (tally, correct) in tallies.iter_mut().zip(correct_by_condition) {
-            let (hits, total) = correct
-                .values()
-                .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
-            if total == 0 {
-                return Err(CoreError::NotEnoughData(
-                    "no sample is left to test on after drawing the training set".into(),
-                ));
+            for (tally, correct) in tallies.iter_mut().zip(correct_by_condition) {
+                let (hits, total) = correct
+                    .values()
+                    .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
+                if total == 0 {
+                    return Err(CoreError::NotEnoughData(
+                        "no sample is left to test on after drawing the training set".into(),
+                    ));
+                }
+                let mut result = result.clone();
+                result.overall_accuracy = ratio(hits, total);
+                result.per_condition = correct
+                    .into_iter()
+                    .map(|(key, (c, t))| (key, ratio(c, t)))
+                    .collect();
+                tally.results.push(result);
             }
-            let mut result = result.clone();
-            result.overall_accuracy = ratio(hits, total);
-            result.per_condition = correct
-                .into_iter()
-                .map(|(key, (c, t))| (key, ratio(c, t)))
-                .collect();
-            tally.results.push(result);
         }
+        Ok(tallies
+            .into_iter()
+            .map(|tally| report_of(protocol, tally.results, tally.confusion, tally.times_ns))
+            .collect())
     }
-    Ok(tallies
-        .into_iter()
-        .map(|tally| report_of(protocol, tally.results, tally.confusion, tally.times_ns))
-        .collect())
 }
 
 /// The report of one evaluation's repeats.
@@ -491,7 +495,7 @@ fn report_of(
     }
 }
 
-/// One combination of a comparison ([`compare`]).
+/// One combination of a comparison ([`Evaluation::compare`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ComparisonRow {
     /// The feature family (or `a+b` for a combination).
@@ -502,53 +506,6 @@ pub struct ComparisonRow {
     pub report: std::result::Result<EvalReport, String>,
     /// Training time per trained model, seconds (mean and spread over repeats).
     pub train_seconds: MeanStd,
-}
-
-/// Evaluates every configuration of `configs` with the same protocol, repeats and seeds (so every
-/// combination sees the same training draws). A combination that cannot be trained (e.g. too few samples
-/// per class for its classifier) is reported with its error instead of stopping the comparison.
-pub fn compare(
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
-    configs: &[CheckedTrainConfig],
-    repeats: usize,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-) -> Result<Vec<ComparisonRow>> {
-    let mut rows = Vec::with_capacity(configs.len());
-    for config in configs {
-        let inner = config.config();
-        let report = match evaluate(samples, protocol, config, repeats, seed, progress) {
-            // a parameter error is the caller's mistake, not this combination's limitation
-            Err(err @ CoreError::Param { .. }) => return Err(err),
-            other => other,
-        };
-        let train_seconds = match &report {
-            Ok(report) => {
-                let per_model: Vec<f64> = report
-                    .repeats
-                    .iter()
-                    .map(|r| {
-                        let models = match protocol {
-                            Protocol::TrainCondition { .. } => 1,
-                            Protocol::LeaveOneOut { .. } => r.per_condition.len().max(1),
-                        };
-                        r.train_seconds / models as f64
-                    })
-                    .collect();
-                MeanStd::of(&per_model)
-            }
-            Err(_) => MeanStd::default(),
-        };
-        rows.push(ComparisonRow {
-            features: inner.features.name(),
-            classifier: inner.classifier.kind().as_str().to_owned(),
-            config: inner.clone(),
-            report: report.map_err(|err| err.to_string()),
-            train_seconds,
-        });
-    }
-    Ok(rows)
 }
 
 /// One train/test partition.
@@ -702,6 +659,22 @@ mod tests {
         .unwrap()
     }
 
+    /// `protocol` on `samples`, `repeats` times from `seed`, without a progress callback.
+    fn evaluation<'e, 's>(
+        samples: &'e [EvalSample<'s>],
+        protocol: &'e Protocol,
+        repeats: usize,
+        seed: u64,
+    ) -> Evaluation<'e, 's> {
+        Evaluation {
+            samples,
+            protocol,
+            repeats,
+            seed,
+            progress: &|| {},
+        }
+    }
+
     fn samples<'a>(data: &'a [(Frame, &'static str, &'static str)]) -> Vec<EvalSample<'a>> {
         data.iter()
             .map(|(frame, label, condition)| EvalSample {
@@ -719,8 +692,12 @@ mod tests {
         let samples = samples(&data);
         let protocol = g2_protocol();
         let config = paper_config_with_dims(20);
-        let a = evaluate(&samples, &protocol, &config, 2, 5, &|| {}).unwrap();
-        let b = evaluate(&samples, &protocol, &config, 2, 5, &|| {}).unwrap();
+        let a = evaluation(&samples, &protocol, 2, 5)
+            .run(Models::Config(&config))
+            .unwrap();
+        let b = evaluation(&samples, &protocol, 2, 5)
+            .run(Models::Config(&config))
+            .unwrap();
         // everything but the wall times is reproducible
         let strip = |report: &EvalReport| {
             report
@@ -757,7 +734,9 @@ mod tests {
             validation: ValidationSize::Count(3),
         };
         let config = paper_config_with_dims(10);
-        let report = evaluate(&samples, &protocol, &config, 1, 3, &|| {}).unwrap();
+        let report = evaluation(&samples, &protocol, 1, 3)
+            .run(Models::Config(&config))
+            .unwrap();
         assert_eq!(
             report.per_condition.keys().collect::<Vec<_>>(),
             ["G1", "G2", "G3"]
@@ -772,16 +751,24 @@ mod tests {
         let samples = samples(&data);
         let protocol = g2_protocol();
         let config = paper_config_with_dims(20);
-        let plain = evaluate(&samples, &protocol, &config, 1, 5, &|| {}).unwrap();
-        let identity = |_: usize, frame: FrameView<'_>, _: u64| Ok(frame.to_frame());
-        let same = evaluate_perturbed(&samples, &protocol, &config, 1, 5, &|| {}, Some(&identity))
+        let plain = evaluation(&samples, &protocol, 1, 5)
+            .run(Models::Config(&config))
             .unwrap();
+        let identity = |_: usize, frame: FrameView<'_>, _: u64| Ok(frame.to_frame());
+        let same = evaluation(&samples, &protocol, 1, 5)
+            .run_each(Models::Config(&config), &[Some(&identity)])
+            .unwrap()
+            .reports
+            .remove(0);
         assert_eq!(same.confusion, plain.confusion);
         assert_eq!(same.repeats[0].sigmas, plain.repeats[0].sigmas);
         // Blank test images (every sensel dead): the same trained models, chance-level answers.
         let blank = |_: usize, frame: FrameView<'_>, _: u64| Ok(Frame::zeros(frame.grid()));
-        let dead =
-            evaluate_perturbed(&samples, &protocol, &config, 1, 5, &|| {}, Some(&blank)).unwrap();
+        let dead = evaluation(&samples, &protocol, 1, 5)
+            .run_each(Models::Config(&config), &[Some(&blank)])
+            .unwrap()
+            .reports
+            .remove(0);
         assert_eq!(dead.repeats[0].sigmas, plain.repeats[0].sigmas);
         assert_eq!(dead.repeats[0].n_test, plain.repeats[0].n_test);
         assert!(plain.overall.mean > 0.8, "{}", plain.overall.mean);
@@ -803,21 +790,61 @@ mod tests {
         let tick = || {
             calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         };
-        let each =
-            evaluate_perturbed_each(&samples, &protocol, &config, 2, 5, &tick, &perturbs).unwrap();
+        let each = Evaluation {
+            progress: &tick,
+            ..evaluation(&samples, &protocol, 2, 5)
+        }
+        .run_each(Models::Config(&config), &perturbs)
+        .unwrap()
+        .reports;
         assert_eq!(
             calls.into_inner(),
             2,
             "one model per repeat, whatever the perturbations"
         );
         for (report, perturb) in each.iter().zip(perturbs) {
-            let alone =
-                evaluate_perturbed(&samples, &protocol, &config, 2, 5, &|| {}, perturb).unwrap();
+            let alone = evaluation(&samples, &protocol, 2, 5)
+                .run_each(Models::Config(&config), &[perturb])
+                .unwrap()
+                .reports
+                .remove(0);
             assert_eq!(report.confusion, alone.confusion);
             assert_eq!(report.overall, alone.overall);
             assert_eq!(report.per_condition, alone.per_condition);
         }
         assert!(each[2].overall.mean < each[0].overall.mean);
+    }
+
+    #[test]
+    fn automatic_choice_trains_every_fold_on_its_own_and_records_each_selection() {
+        let data = data();
+        let samples = samples(&data);
+        let protocol = Protocol::LeaveOneOut {
+            column: "condition".into(),
+            per_class: Some(8),
+            validation: ValidationSize::Count(3),
+        };
+        let candidates = [paper_config_with_dims(5), paper_config_with_dims(10)];
+        let run = evaluation(&samples, &protocol, 2, 7)
+            .run_each(Models::Auto(&candidates), &[None])
+            .unwrap();
+        // one model per held-out value and repeat, each with its selection
+        assert_eq!(run.selections.len(), 3 * 2);
+        for selection in &run.selections {
+            assert_eq!(selection.scores.len(), candidates.len());
+            assert!(selection.chosen().is_some());
+        }
+        // the same draws as a fixed configuration: every sample tested once per repeat
+        let report = &run.reports[0];
+        assert_eq!(report.repeats[0].n_test, samples.len());
+        let total: u64 = report.confusion.counts.iter().flatten().sum();
+        assert_eq!(total as usize, 2 * samples.len());
+        // `run` is `run_each` on the images as they are
+        let alone = evaluation(&samples, &protocol, 2, 7)
+            .run(Models::Auto(&candidates))
+            .unwrap();
+        assert_eq!(alone.confusion, report.confusion);
+        assert_eq!(alone.per_condition, report.per_condition);
     }
 
     #[test]

@@ -4,7 +4,9 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs_core::evaluation::{ComparisonRow, EvalReport, EvalSample, Protocol, compare, evaluate};
+use presrs_core::evaluation::{
+    ComparisonRow, EvalReport, EvalSample, Evaluation, Models, Protocol, TestTransform,
+};
 use presrs_core::split::ValidationSize;
 use serde::Serialize;
 
@@ -198,15 +200,16 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.compare {
         let configs = args.pipeline.candidates(samples[0].frame.grid(), true)?;
         let bar = progress_bar((configs.len() * folds * args.repeats) as u64, "comparing");
-        let rows = compare(
-            &samples,
-            &protocol,
-            &configs,
-            args.repeats,
-            args.seed,
-            &|| bar.inc(1),
-        )
-        .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
+        let evaluation = Evaluation {
+            samples: &samples,
+            protocol: &protocol,
+            repeats: args.repeats,
+            seed: args.seed,
+            progress: &|| bar.inc(1),
+        };
+        let rows = evaluation
+            .compare(&configs)
+            .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
         bar.finish_and_clear();
         if args.json {
             return write_json(out, &CompareJson { comparison: &rows });
@@ -215,34 +218,35 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let config = args.pipeline.train_config(samples[0].frame.grid())?;
     let bar = progress_bar((folds * args.repeats) as u64, "training");
-    let mut selections = Vec::new();
-    let report = if args.pipeline.is_auto() {
-        let candidates = args.pipeline.candidates(samples[0].frame.grid(), false)?;
-        presrs_core::evaluation::evaluate_auto(
-            &samples,
-            &protocol,
-            &candidates,
-            args.repeats,
-            args.seed,
-            &|| bar.inc(1),
-        )
-        .map(|(report, chosen)| {
-            selections = chosen;
-            report
-        })
+    let candidates = if args.pipeline.is_auto() {
+        args.pipeline.candidates(samples[0].frame.grid(), false)?
     } else {
-        evaluate(
-            &samples,
-            &protocol,
-            &config,
-            args.repeats,
-            args.seed,
-            &|| bar.inc(1),
-        )
-    }
-    .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
+        Vec::new()
+    };
+    let models = if args.pipeline.is_auto() {
+        Models::Auto(&candidates)
+    } else {
+        Models::Config(&config)
+    };
+    let evaluation = Evaluation {
+        samples: &samples,
+        protocol: &protocol,
+        repeats: args.repeats,
+        seed: args.seed,
+        progress: &|| bar.inc(1),
+    };
+    let context =
+        |err: presrs_core::CoreError| anyhow::anyhow!("{}: {err}", args.manifest.display());
+    let presrs_core::evaluation::Evaluated {
+        reports,
+        selections,
+    } = evaluation.run_each(models, &[None]).map_err(context)?;
+    let report = reports
+        .into_iter()
+        .next()
+        .ok_or_else(|| anyhow::anyhow!("{}: no evaluation was run", args.manifest.display()))?;
     bar.finish_and_clear();
-    let perturbed = perturbation_rows(args, &samples, &protocol, &config, folds, &report)?;
+    let perturbed = perturbation_rows(args, evaluation, models, &config, folds, &report)?;
     if let Some(dir) = &args.report {
         let name = match &args.leave_one_out {
             Some(column) => format!("leave one {column} out"),
@@ -465,22 +469,22 @@ pub struct PerturbedJson<'r> {
 /// evaluated too, so that both degrade side by side.
 fn perturbation_rows(
     args: &EvalArgs,
-    samples: &[EvalSample<'_>],
-    protocol: &Protocol,
+    evaluation: Evaluation<'_, '_>,
+    models: Models<'_>,
     paper: &presrs_core::CheckedTrainConfig,
     folds: usize,
     report: &EvalReport,
 ) -> anyhow::Result<Vec<PerturbationRow>> {
-    use presrs_core::evaluation::{
-        TestTransform, evaluate_auto_perturbed_each, evaluate_perturbed_each,
-    };
     if args.perturb.is_empty() {
         return Ok(Vec::new());
     }
-    let auto = args.pipeline.is_auto();
+    let auto = matches!(models, Models::Auto(_));
     let methods = 1 + usize::from(auto);
     let bar = progress_bar((methods * folds * args.repeats) as u64, "perturbing");
-    let tick = || bar.inc(1);
+    let evaluation = Evaluation {
+        progress: &|| bar.inc(1),
+        ..evaluation
+    };
     let context =
         |err: presrs_core::CoreError| anyhow::anyhow!("{}: {err}", args.manifest.display());
     let transforms: Vec<_> = args
@@ -497,41 +501,15 @@ fn perturbation_rows(
         accuracy_std: r.overall.std,
     };
     let mut rows = vec![row("none".to_owned(), "configured", report)];
-    let configured = if auto {
-        let candidates = args.pipeline.candidates(samples[0].frame.grid(), false)?;
-        evaluate_auto_perturbed_each(
-            samples,
-            protocol,
-            &candidates,
-            args.repeats,
-            args.seed,
-            &tick,
-            &each[1..],
-        )
-        .map(|(r, _)| r)
-    } else {
-        evaluate_perturbed_each(
-            samples,
-            protocol,
-            paper,
-            args.repeats,
-            args.seed,
-            &tick,
-            &each[1..],
-        )
-    }
-    .map_err(context)?;
-    let paper_reports = if auto {
-        evaluate_perturbed_each(
-            samples,
-            protocol,
-            paper,
-            args.repeats,
-            args.seed,
-            &tick,
-            &each,
-        )
+    let configured = evaluation
+        .run_each(models, &each[1..])
         .map_err(context)?
+        .reports;
+    let paper_reports = if auto {
+        evaluation
+            .run_each(Models::Config(paper), &each)
+            .map_err(context)?
+            .reports
     } else {
         Vec::new()
     };

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use presrs_core::evaluation::{
-    Confusion, EvalReport, EvalSample, MeanStd, Protocol, RepeatResult, evaluate,
+    Confusion, EvalReport, EvalSample, MeanStd, Models, Protocol, RepeatResult,
 };
 use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
 use presrs_core::split::{ValidationSize, stratified_split};
@@ -695,14 +695,14 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                     validation: args.validation,
                 };
                 let bar = progress_bar(args.repeats as u64, "evaluating");
-                let report = evaluate(
-                    &eval_samples,
-                    &protocol,
-                    &config,
-                    args.repeats,
-                    args.seed,
-                    &|| bar.inc(1),
-                )
+                let report = presrs_core::evaluation::Evaluation {
+                    samples: &eval_samples,
+                    protocol: &protocol,
+                    repeats: args.repeats,
+                    seed: args.seed,
+                    progress: &|| bar.inc(1),
+                }
+                .run(Models::Config(&config))
                 .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
                 bar.finish_and_clear();
                 let name = format!(
@@ -780,9 +780,7 @@ pub fn fault_sweep(
     condition: Option<&str>,
     paper: &CheckedTrainConfig,
 ) -> anyhow::Result<(Vec<FaultResult>, String)> {
-    use presrs_core::evaluation::{
-        TestTransform, evaluate_auto_perturbed_each, evaluate_perturbed_each,
-    };
+    use presrs_core::evaluation::TestTransform;
     use presrs_core::perturb::Perturbation;
     let started = Instant::now();
     let samples = eval_samples(triples);
@@ -829,16 +827,17 @@ pub fn fault_sweep(
             });
         }
     };
-    let paper_reports = evaluate_perturbed_each(
-        &samples,
-        &protocol,
-        paper,
-        args.fault_repeats,
-        args.seed,
-        &|| bar.inc(1),
-        &each,
-    )
-    .map_err(context)?;
+    let evaluation = presrs_core::evaluation::Evaluation {
+        samples: &samples,
+        protocol: &protocol,
+        repeats: args.fault_repeats,
+        seed: args.seed,
+        progress: &|| bar.inc(1),
+    };
+    let paper_reports = evaluation
+        .run_each(Models::Config(paper), &each)
+        .map_err(context)?
+        .reports;
     let paper_name = if auto {
         PAPER_METHOD.to_owned()
     } else {
@@ -848,16 +847,10 @@ pub fn fault_sweep(
     push(&paper_name, paper_reports);
     if auto {
         let candidates = args.pipeline.candidates(samples[0].frame.grid(), false)?;
-        let (reports, _) = evaluate_auto_perturbed_each(
-            &samples,
-            &protocol,
-            &candidates,
-            args.fault_repeats,
-            args.seed,
-            &|| bar.inc(1),
-            &each,
-        )
-        .map_err(context)?;
+        let reports = evaluation
+            .run_each(Models::Auto(&candidates), &each)
+            .map_err(context)?
+            .reports;
         push(AUTO_METHOD, reports);
     }
     bar.finish_and_clear();
@@ -923,7 +916,15 @@ mod tests {
         let config_train = presrs_core::pipeline::TrainConfig::default()
             .check()
             .unwrap();
-        let report = evaluate(&samples, &protocol, &config_train, 2, 1, &|| {}).unwrap();
+        let report = presrs_core::evaluation::Evaluation {
+            samples: &samples,
+            protocol: &protocol,
+            repeats: 2,
+            seed: 1,
+            progress: &|| {},
+        }
+        .run(Models::Config(&config_train))
+        .unwrap();
         let evaluations = BTreeMap::from([("G2".to_owned(), report)]);
         let dir = tempfile::tempdir().unwrap();
         let index = write_simulation_report(
@@ -949,11 +950,10 @@ mod tests {
         }
     }
 
-    /// The fault chart's numbers are `evaluate_perturbed`'s, and the report shows them.
+    /// The fault chart's numbers are those of `Evaluation::run_each`, and the report shows them.
     #[test]
-    fn fault_sweep_numbers_come_from_evaluate_perturbed() {
+    fn fault_sweep_numbers_come_from_the_evaluation_engine() {
         use clap::Parser;
-        use presrs_core::evaluation::evaluate_perturbed;
         use presrs_core::perturb::Perturbation;
         use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
         use rand::SeedableRng;
@@ -1015,15 +1015,24 @@ mod tests {
         let transform = |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
             Ok(dead.apply(frame, seed, i as u64))
         };
-        let direct =
-            evaluate_perturbed(&samples, &protocol, &config, 2, 1, &|| {}, Some(&transform))
-                .unwrap();
+        let evaluation = presrs_core::evaluation::Evaluation {
+            samples: &samples,
+            protocol: &protocol,
+            repeats: 2,
+            seed: 1,
+            progress: &|| {},
+        };
+        let direct = evaluation
+            .run_each(Models::Config(&config), &[Some(&transform)])
+            .unwrap()
+            .reports
+            .remove(0);
         let swept = faults
             .iter()
             .find(|f| f.perturbation == Some(dead))
             .unwrap();
         assert_eq!(swept.accuracy, direct.overall);
-        let clean = evaluate_perturbed(&samples, &protocol, &config, 2, 1, &|| {}, None).unwrap();
+        let clean = evaluation.run(Models::Config(&config)).unwrap();
         assert_eq!(
             faults
                 .iter()

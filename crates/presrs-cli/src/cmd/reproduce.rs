@@ -19,7 +19,7 @@ use std::time::Instant;
 use anyhow::Context;
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::evaluation::{
-    ComparisonRow, EvalReport, EvalSample, MeanStd, Protocol, compare, evaluate,
+    ComparisonRow, EvalReport, EvalSample, Evaluation, MeanStd, Models, Protocol,
 };
 use presrs_core::features::FeatureConfig;
 use presrs_core::pipeline::TrainConfig;
@@ -333,14 +333,14 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             per_class: Some(draw.per_class),
             validation: ValidationSize::Count(draw.validation),
         };
-        let report = evaluate(
-            &eval_samples,
-            &protocol,
-            &config,
-            args.repeats,
-            args.seed,
-            &|| bar.inc(1),
-        )
+        let report = Evaluation {
+            samples: &eval_samples,
+            protocol: &protocol,
+            repeats: args.repeats,
+            seed: args.seed,
+            progress: &|| bar.inc(1),
+        }
+        .run(Models::Config(&config))
         .with_context(|| format!("evaluation trained on {gait} failed"))?;
         evaluations.insert(gait.clone(), report);
     }
@@ -477,14 +477,14 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             validation: ValidationSize::Count(draw.validation),
         };
         let bar = progress_bar((configs.len() * args.repeats) as u64, "comparing");
-        let rows = compare(
-            &eval_samples,
-            &protocol,
-            &configs,
-            args.repeats,
-            args.seed,
-            &|| bar.inc(1),
-        )
+        let rows = Evaluation {
+            samples: &eval_samples,
+            protocol: &protocol,
+            repeats: args.repeats,
+            seed: args.seed,
+            progress: &|| bar.inc(1),
+        }
+        .compare(&configs)
         .context("the comparison of the other methods failed")?;
         bar.finish_and_clear();
         timings.insert(
