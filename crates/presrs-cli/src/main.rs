@@ -1,5 +1,14 @@
 //! The `presrs` command line: thin — parse, call the libraries, print.
 
+/// `eprintln!` that ignores a failed write: a closed or full stderr (`presrs ... 2>&1 | head -1`) must not
+/// turn a run into a panic, and there is nowhere left to report it.
+macro_rules! stderr_line {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 mod cmd;
 
 use std::io::Write;
@@ -9,7 +18,7 @@ use clap::{Parser, Subcommand};
 
 /// Terrain identification from high-resolution pressure images (PreSRS).
 #[derive(Debug, Parser)]
-#[command(name = "presrs", version, about, long_about = None)]
+#[command(name = "presrs", bin_name = "presrs", version, about, long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -77,7 +86,7 @@ fn main() -> ExitCode {
         Err(err) => {
             // What was printed before the failure comes first, then the reason.
             let _ = out.flush();
-            eprintln!("error: {}", error_message(&err));
+            stderr_line!("error: {}", error_message(&err));
             ExitCode::from(1)
         }
     }

@@ -266,6 +266,22 @@ fn features_prints_the_paper_vector_and_survives_a_closed_pipe() {
 }
 
 #[test]
+fn a_closed_stderr_does_not_turn_messages_into_a_panic() {
+    // `presrs ... 2>&1 | head -1` where the reader has gone: the error message (a missing file) goes
+    // nowhere, and the exit code stays that of the run (1), not a panic's 101.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_presrs"))
+        .args(["inspect", "/nonexistent/presrs-test.asf"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stderr.take());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(1), "{status:?}");
+}
+
+#[test]
 fn bad_input_gets_a_clear_error_and_exit_code() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = dir.path().join("m.csv");

@@ -79,7 +79,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                     .samples(args.samples.stance_frame, args.samples.include_partial)
                     .with_context(|| name.clone())?;
                 if frames.is_empty() {
-                    eprintln!(
+                    stderr_line!(
                         "warning: {name}: {} frames but no complete stance phase; nothing classified \
                          (choose a frame with --frame K)",
                         recording.frame_count()

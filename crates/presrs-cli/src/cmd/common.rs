@@ -234,7 +234,7 @@ impl SampleArgs {
         let (parsed, filled) =
             read_corrected(path, &self.read_options(), self.dead_sensels().as_ref())?;
         for warning in &parsed.warnings {
-            eprintln!("warning: {warning}");
+            stderr_line!("warning: {warning}");
         }
         fills.add(path.to_path_buf(), filled);
         Ok(parsed.recording)
@@ -257,7 +257,7 @@ pub fn load_manifest(
     let loaded = load_samples(&manifest, &samples.options())?;
     spinner.finish_and_clear();
     for warning in &loaded.warnings {
-        eprintln!("warning: {warning}");
+        stderr_line!("warning: {warning}");
     }
     note_dead_sensels(&loaded.dead_sensels);
     if loaded.samples.is_empty() {
@@ -269,7 +269,7 @@ pub fn load_manifest(
 /// The one-line note on stderr of the dead sensels filled, if any.
 pub fn note_dead_sensels(fills: &DeadSenselFills) {
     if let Some(summary) = fills.summary() {
-        eprintln!(
+        stderr_line!(
             "note: {summary} (from their neighbours; --keep-dead-sensels to use them as read)"
         );
     }

@@ -264,7 +264,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             &fault_results(&perturbed, args.pipeline.is_auto()),
             dir,
         )?;
-        eprintln!("report written to {}", path.display());
+        stderr_line!("report written to {}", path.display());
     }
     if args.json {
         let mut json = EvalJson::new(&report);

@@ -58,7 +58,7 @@ pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     let parsed = read_recording_with(&args.file, &read)?;
     for warning in &parsed.warnings {
-        eprintln!("warning: {warning}");
+        stderr_line!("warning: {warning}");
     }
     let recording = parsed.recording;
     anyhow::ensure!(

@@ -127,7 +127,7 @@ pub fn run(args: &ReplayArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         Ok(Err(err)) => anyhow::bail!("reading the server's answers from {addr}: {err}"),
         Err(_) => anyhow::bail!("the reader thread failed"),
     }
-    eprintln!(
+    stderr_line!(
         "presrs replay: sent {} frames ({grid}, {dtype:?}) in {sent_s:.3} s ({:.0} frames/s); {printed} lines received",
         recording.frame_count(),
         recording.frame_count() as f64 / sent_s.max(1e-9),

@@ -809,7 +809,7 @@ pub fn fault_sweep(
     let auto = args.pipeline.is_auto();
     let methods = 1 + usize::from(auto);
     let bar = progress_bar((methods * args.fault_repeats) as u64, "fault sweep");
-    eprintln!(
+    stderr_line!(
         "fault sweep: {} perturbations x {methods} method(s) x {} repeat(s) (--fault-repeats 0 skips it)",
         sweep.len(),
         args.fault_repeats
@@ -855,7 +855,7 @@ pub fn fault_sweep(
     }
     bar.finish_and_clear();
     let seconds = started.elapsed().as_secs_f64();
-    eprintln!("fault sweep: {seconds:.1} s");
+    stderr_line!("fault sweep: {seconds:.1} s");
     let note = format!(
         "Trained on {} ({per_class} images per class), {} repeat(s), seed {}; the sweep took {seconds:.1} s.",
         condition.map_or_else(

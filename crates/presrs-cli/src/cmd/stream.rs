@@ -377,7 +377,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let file = load_model(&args.model)?;
     let profile = resolve_profile(args, &file)?;
     let model = &file.model;
-    let log = |message: &str| eprintln!("presrs stream: {message}");
+    let log = |message: &str| stderr_line!("presrs stream: {message}");
     match &args.listen {
         None => {
             let stdin = std::io::stdin();
@@ -448,7 +448,7 @@ fn serve(
         json!({"event": "listening", "addr": local.to_string()})
     )?;
     out.flush()?;
-    eprintln!("presrs stream: listening on {local}");
+    stderr_line!("presrs stream: listening on {local}");
     let active = AtomicUsize::new(0);
     let ended = AtomicUsize::new(0);
     let idle = Duration::from_secs_f64(args.idle_timeout.max(0.001));
@@ -467,13 +467,13 @@ fn serve(
                     continue;
                 }
                 Err(err) => {
-                    eprintln!("presrs stream: accept failed: {err}");
+                    stderr_line!("presrs stream: accept failed: {err}");
                     std::thread::sleep(Duration::from_millis(50));
                     continue;
                 }
             };
             if active.load(Ordering::SeqCst) >= args.max_clients {
-                eprintln!(
+                stderr_line!(
                     "presrs stream: {peer}: refused, {} clients already connected",
                     args.max_clients
                 );
@@ -490,8 +490,8 @@ fn serve(
             scope.spawn(move || {
                 let name = peer.to_string();
                 match handle_client(stream, &name, args, model, profile, idle) {
-                    Ok(summary) => eprintln!("presrs stream: {}", summary_text(&name, &summary)),
-                    Err(err) => eprintln!("presrs stream: {name}: {err:#}"),
+                    Ok(summary) => stderr_line!("presrs stream: {}", summary_text(&name, &summary)),
+                    Err(err) => stderr_line!("presrs stream: {name}: {err:#}"),
                 }
                 active.fetch_sub(1, Ordering::SeqCst);
                 ended.fetch_add(1, Ordering::SeqCst);
@@ -592,10 +592,10 @@ fn handle_client(
     stream.set_read_timeout(Some(idle))?;
     stream.set_write_timeout(Some(idle))?;
     let _ = stream.set_nodelay(true);
-    eprintln!("presrs stream: {name}: connected");
+    stderr_line!("presrs stream: {name}: connected");
     let (mut output, writer) = BoundedOutput::start(stream.try_clone()?, args.queue);
     let reader = std::io::BufReader::with_capacity(64 * 1024, stream.try_clone()?);
-    let log = |message: &str| eprintln!("presrs stream: {message}");
+    let log = |message: &str| stderr_line!("presrs stream: {message}");
     let mut emit = |line: String| output.send(line);
     let result = run_connection(
         model,
