@@ -81,8 +81,7 @@ impl Manifest {
     }
 
     /// An error unless the header has column `name`, for callers that need it (`label` for training
-    /// and evaluation): `m.csv line 1: the header has no `label` column (columns: path,condition);
-    /// {why}`.
+    /// and evaluation). It names line 1, the missing column, the columns there are, and `why`.
     pub fn require_column(&self, name: &str, why: &str) -> Result<(), IoError> {
         if self.has_column(name) {
             return Ok(());
