@@ -119,21 +119,32 @@ pub struct Sample {
     pub frame_index: usize,
     /// The manifest line that produced it.
     pub manifest_line: usize,
+    /// The manifest's `path` field as written (`source` is it resolved).
+    pub path_text: String,
     pub label: Option<String>,
     pub condition: Option<String>,
     pub group: Option<String>,
+    /// The manifest's `frame` field as written (empty when the sample was picked from a stance).
+    pub frame_text: Option<String>,
     pub load: Option<f64>,
+    /// The manifest's `load` field as written.
+    pub load_text: Option<String>,
     /// Other manifest columns (for `--leave-one-out COLUMN`).
     pub extra: BTreeMap<String, String>,
 }
 
 impl Sample {
-    /// The value of a manifest column for this sample (`label`, `condition`, `group`, or an extra column).
+    /// The value of a manifest column for this sample, as written in its manifest row (`path`, `label`,
+    /// `condition`, `group`, `frame`, `load`, or an extra column); `None` when the field is empty. So
+    /// `--leave-one-out path` holds out one recording at a time.
     pub fn column(&self, name: &str) -> Option<&str> {
         match name {
+            "path" => Some(&self.path_text),
             "label" => self.label.as_deref(),
             "condition" => self.condition.as_deref(),
             "group" => self.group.as_deref(),
+            "frame" => self.frame_text.as_deref(),
+            "load" => self.load_text.as_deref(),
             _ => self.extra.get(name).map(String::as_str),
         }
     }
@@ -209,10 +220,13 @@ pub fn load_samples(
                 source: row.path.clone(),
                 frame_index,
                 manifest_line: row.line,
+                path_text: row.path_text.clone(),
                 label: row.label.clone(),
                 condition: row.condition.clone(),
                 group: row.group.clone(),
+                frame_text: row.frame_text.clone(),
                 load: row.load,
+                load_text: row.load_text.clone(),
                 extra: row.extra.clone(),
             });
         }
@@ -298,6 +312,39 @@ mod tests {
         let path = dir.join("manifest.csv");
         std::fs::write(&path, "path,label,frame\nwalk.npy,wood,6\n").unwrap();
         crate::manifest::read_manifest(&path).unwrap()
+    }
+
+    #[test]
+    fn sample_column_gives_path_frame_and_load_too() {
+        // `--leave-one-out path|frame|load` asks Sample::column for these: they used to be `None`
+        // on every row ("field `load` is empty").
+        let dir = tempfile::tempdir().unwrap();
+        movie_manifest(dir.path());
+        let path = dir.path().join("loads.csv");
+        std::fs::write(
+            &path,
+            "path,label,frame,load,subject\nwalk.npy,wood,6,12.5,s1\nwalk.npy,wood,7,,\n",
+        )
+        .unwrap();
+        let manifest = crate::manifest::read_manifest(&path).unwrap();
+        let loaded = load_samples(&manifest, &SampleOptions::default()).unwrap();
+        let [first, second] = loaded.samples.as_slice() else {
+            panic!("{} samples", loaded.samples.len());
+        };
+        for (name, value) in [
+            ("path", Some("walk.npy")),
+            ("label", Some("wood")),
+            ("frame", Some("6")),
+            ("load", Some("12.5")),
+            ("subject", Some("s1")),
+            ("condition", None),
+        ] {
+            assert_eq!(first.column(name), value, "{name}");
+        }
+        assert_eq!(second.column("path"), Some("walk.npy"));
+        assert_eq!(second.column("frame"), Some("7"));
+        assert_eq!(second.column("load"), None);
+        assert_eq!(second.frame_index, 7);
     }
 
     #[test]

@@ -25,7 +25,8 @@ pub use tekscan::{parse_tekscan, read_tekscan, write_tekscan, write_tekscan_file
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ReadOptions {
     /// Accept a TekScan file whose last frame is truncated (or that ends before `END_FRAME`): the
-    /// incomplete frame is dropped and reported in [`Parsed::warnings`] instead of being an error.
+    /// incomplete frame is dropped and reported in [`Parsed::warnings`] instead of being an error. Also
+    /// accept `Frame` numbers that repeat or go back (reported in the warnings, the frames kept).
     pub lenient: bool,
 }
 
@@ -42,7 +43,7 @@ pub struct Parsed {
     pub recording: Recording,
     /// Problems that did not stop reading, each naming the file and line (a dropped truncated frame, a
     /// header value that was not understood and was kept verbatim, a frame count that disagrees with
-    /// `START_FRAME`/`END_FRAME`, ...). Empty for a clean file.
+    /// `START_FRAME`/`END_FRAME`, a jump in the frame numbers, ...). Empty for a clean file.
     pub warnings: Vec<String>,
 }
 

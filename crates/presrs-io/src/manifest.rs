@@ -6,6 +6,12 @@
 //! ```
 //! `path` is required; `label`, `condition`, `group`, `frame` (0-based) and `load` are optional; any other
 //! column is kept (it can be named by `--leave-one-out`). Paths are relative to the manifest's folder.
+//!
+//! The known column names are matched whatever their case (`Path,Label` reads as `path,label`); other
+//! column names are kept as written. Every row has as many fields as the header (empty fields are
+//! written as nothing between commas: `a.png,wood,,,,`); a row with fewer or more is an error naming its
+//! line, as is a `"` that does not open and close a whole quoted field (an unterminated quote would
+//! otherwise swallow the rest of the file into one field).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -31,19 +37,26 @@ pub struct ManifestRow {
     pub group: Option<String>,
     /// 0-based frame index inside a movie.
     pub frame: Option<usize>,
+    /// The `frame` field as written (for [`Self::column`]).
+    pub frame_text: Option<String>,
     pub load: Option<f64>,
+    /// The `load` field as written (for [`Self::column`]).
+    pub load_text: Option<String>,
     /// Every other column, by header name (empty cells omitted).
     pub extra: BTreeMap<String, String>,
 }
 
 impl ManifestRow {
-    /// The value of any column by its header name (`label`, `condition`, `group`, or an extra column).
+    /// The value of any column by its header name, as written in the manifest (`path`, `label`,
+    /// `condition`, `group`, `frame`, `load`, or an extra column); `None` when the field is empty.
     pub fn column(&self, name: &str) -> Option<&str> {
         match name {
             "path" => Some(&self.path_text),
             "label" => self.label.as_deref(),
             "condition" => self.condition.as_deref(),
             "group" => self.group.as_deref(),
+            "frame" => self.frame_text.as_deref(),
+            "load" => self.load_text.as_deref(),
             _ => self.extra.get(name).map(String::as_str),
         }
     }
@@ -65,6 +78,22 @@ impl Manifest {
     /// Whether the header has this column.
     pub fn has_column(&self, name: &str) -> bool {
         self.columns.iter().any(|column| column == name)
+    }
+
+    /// An error unless the header has column `name`, for callers that need it (`label` for training
+    /// and evaluation). It names line 1, the missing column, the columns there are, and `why`.
+    pub fn require_column(&self, name: &str, why: &str) -> Result<(), IoError> {
+        if self.has_column(name) {
+            return Ok(());
+        }
+        Err(IoError::parse(
+            &self.source.display().to_string(),
+            1,
+            format!(
+                "the header has no `{name}` column (columns: {}); {why}",
+                self.columns.join(",")
+            ),
+        ))
     }
 
     /// An error naming a manifest line, for callers that find a problem with a row later (e.g. its file).
@@ -101,9 +130,10 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
         }
     })?;
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    check_quotes(text).map_err(|(line, message)| IoError::parse(&file, line, message))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
-        // Short rows are fine (missing trailing cells are empty); long rows are an error below.
+        // Rows of the wrong length are errors below, with a message naming the line.
         .flexible(true)
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
@@ -127,11 +157,19 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
         };
         IoError::parse(&file, line, message)
     };
+    // The known names in any case (`Path` is `path`); other names as written.
     let columns: Vec<String> = reader
         .headers()
         .map_err(csv_error)?
         .iter()
-        .map(str::to_owned)
+        .map(|name| {
+            let lower = name.to_ascii_lowercase();
+            if KNOWN_COLUMNS.contains(&lower.as_str()) {
+                lower
+            } else {
+                name.to_owned()
+            }
+        })
         .collect();
     if columns.iter().all(String::is_empty) {
         return Err(IoError::parse(
@@ -169,14 +207,20 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
         if record.iter().all(str::is_empty) {
             continue;
         }
-        if record.len() > columns.len() {
+        if record.len() != columns.len() {
             return Err(IoError::parse(
                 &file,
                 line,
                 format!(
-                    "{} fields, expected {} (as many as the header)",
+                    "{} fields, expected {} (as many as the header: {}){}",
                     record.len(),
-                    columns.len()
+                    columns.len(),
+                    columns.join(","),
+                    if record.len() < columns.len() {
+                        "; write an empty field as nothing between commas (`a.png,wood,,`)"
+                    } else {
+                        ""
+                    }
                 ),
             ));
         }
@@ -188,7 +232,8 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
         };
         let path_text = cell(Some(path_index))
             .ok_or_else(|| IoError::parse(&file, line, "field `path` is empty"))?;
-        let frame = match cell(frame_i) {
+        let frame_text = cell(frame_i);
+        let frame = match &frame_text {
             Some(text) => Some(text.parse::<usize>().map_err(|_| {
                 IoError::parse(
                     &file,
@@ -198,7 +243,8 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
             })?),
             None => None,
         };
-        let load = match cell(load_i) {
+        let load_text = cell(load_i);
+        let load = match &load_text {
             Some(text) => {
                 let value = text
                     .parse::<f64>()
@@ -236,7 +282,9 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
             condition: cell(condition_i),
             group: cell(group_i),
             frame,
+            frame_text,
             load,
+            load_text,
             extra,
         });
     }
@@ -252,6 +300,89 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
         rows,
         sha256,
     })
+}
+
+/// Checks that every `"` opens or closes a quoted field (CSV as RFC 4180 writes it: a quoted field
+/// starts with `"`, doubles the `"` it holds and ends with `"`). The csv reader takes a quote that is
+/// never closed as the start of one field running to the end of the file, and a `"` inside an
+/// unquoted field as text: both are errors here, at the 1-based line and column of the quote.
+fn check_quotes(text: &str) -> Result<(), (usize, String)> {
+    let (mut line, mut col) = (1, 0);
+    // Where the open quoted field started, if in one.
+    let mut open: Option<(usize, usize)> = None;
+    let mut field_start = true;
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        col += 1;
+        if let Some((open_line, open_col)) = open {
+            match c {
+                '"' if chars.peek() == Some(&'"') => {
+                    chars.next();
+                    col += 1;
+                }
+                '"' => {
+                    open = None;
+                    // Only blanks may follow the closing quote before the next field or line.
+                    while let Some(&next) = chars.peek() {
+                        if next == ',' || next == '\n' || next == '\r' {
+                            break;
+                        }
+                        col += 1;
+                        if !next.is_whitespace() {
+                            return Err((
+                                line,
+                                format!(
+                                    "column {col}: `{next}` after the quoted field that starts at \
+                                     line {open_line} column {open_col}; expected `,` or the end of \
+                                     the line (write a `\"` inside a quoted field as `\"\"`)"
+                                ),
+                            ));
+                        }
+                        chars.next();
+                    }
+                }
+                '\n' => {
+                    line += 1;
+                    col = 0;
+                }
+                _ => {}
+            }
+            continue;
+        }
+        match c {
+            '"' if field_start => {
+                open = Some((line, col));
+                field_start = false;
+            }
+            '"' => {
+                return Err((
+                    line,
+                    format!(
+                        "column {col}: a `\"` inside an unquoted field; a quoted field starts with \
+                         `\"` right after the comma (no blanks before it) and doubles the quotes it \
+                         holds (`\"a\"\"b\"`)"
+                    ),
+                ));
+            }
+            ',' | '\r' => field_start = true,
+            '\n' => {
+                line += 1;
+                col = 0;
+                field_start = true;
+            }
+            _ => field_start = false,
+        }
+    }
+    match open {
+        Some((open_line, open_col)) => Err((
+            open_line,
+            format!(
+                "column {open_col}: this `\"` opens a quoted field that is never closed (the rest of \
+                 the file would be one field); close it with `\"`"
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// Lower-case hex of bytes.
@@ -278,7 +409,7 @@ mod tests {
         let m = parse(
             "path,label,condition,group,frame,load,subject\n\
              recordings/wood_G1_000.asf,wood,G1,trial0,,,s1\n\
-             images/carpet_17.png,carpet,G2,,,\n\
+             images/carpet_17.png,carpet,G2,,,,\n\
              /abs/S3_air_B1.txt,Air,,S3,4,12.5,\n",
         )
         .unwrap();
@@ -328,6 +459,103 @@ mod tests {
         assert!(err.contains("`load`"), "{err}");
         assert!(parse("").is_err());
         assert!(parse("path,label\n").is_err());
+    }
+
+    #[test]
+    fn column_gives_every_field_as_written() {
+        let m =
+            parse("path,label,frame,load,subject\nr/a.asf,wood,3,12.50,s1\nb.png,,,,\n").unwrap();
+        let row = &m.rows[0];
+        for (name, value) in [
+            ("path", "r/a.asf"),
+            ("label", "wood"),
+            ("frame", "3"),
+            ("load", "12.50"),
+            ("subject", "s1"),
+        ] {
+            assert_eq!(row.column(name), Some(value), "{name}");
+        }
+        assert_eq!((row.frame, row.load), (Some(3), Some(12.5)));
+        let row = &m.rows[1];
+        assert_eq!(row.column("path"), Some("b.png"));
+        for name in ["label", "frame", "load", "subject", "nope"] {
+            assert_eq!(row.column(name), None, "{name}");
+        }
+    }
+
+    #[test]
+    fn rows_must_have_as_many_fields_as_the_header() {
+        let err = parse("path,label,condition\na.png,wood,G1\nb.png,wood\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("m.csv line 3: 2 fields, expected 3 (as many as the header: path,label,condition); write an empty field"),
+            "{err}"
+        );
+        let err = parse("path,label\na.png\n").unwrap_err().to_string();
+        assert!(err.contains("line 2: 1 fields, expected 2"), "{err}");
+        // Empty trailing fields written out are fine; a line of commas only is a blank line.
+        let m = parse("path,label,condition\na.png,wood,\n,,\nb.png,,\n").unwrap();
+        assert_eq!(m.rows.len(), 2);
+    }
+
+    #[test]
+    fn unbalanced_quotes_are_errors_naming_line_and_column() {
+        let err = parse("path,label\na.png,wood\n\"b.png,clay\nc.png,wood\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with(
+                "m.csv line 3: column 1: this `\"` opens a quoted field that is never closed"
+            ),
+            "{err}"
+        );
+        let err = parse("path,label\na\"b.png,wood\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("m.csv line 2: column 2: a `\"` inside an unquoted field"),
+            "{err}"
+        );
+        let err = parse("path,label\n\"a.png\"x,wood\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with(
+                "m.csv line 2: column 8: `x` after the quoted field that starts at line 2 column 1"
+            ),
+            "{err}"
+        );
+        let err = parse("path,label\na.png, \"wood\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("line 2: column 8"), "{err}");
+        // Well-formed quoting: commas, doubled quotes and line breaks inside quotes.
+        let m = parse("path,label\n\"q,uoted \"\"x\"\".png\",\"wo\nod\"\r\nb.png,clay\n").unwrap();
+        assert_eq!(m.rows[0].path_text, "q,uoted \"x\".png");
+        assert_eq!(m.rows[0].label.as_deref(), Some("wo\nod"));
+        assert_eq!(m.rows[1].line, 4);
+    }
+
+    #[test]
+    fn known_column_names_in_any_case_and_required_columns() {
+        let m = parse("Path,LABEL,Condition,Subject\na.png,wood,G1,s1\n").unwrap();
+        assert_eq!(m.columns, ["path", "label", "condition", "Subject"]);
+        assert_eq!(m.rows[0].label.as_deref(), Some("wood"));
+        assert_eq!(m.rows[0].column("Subject"), Some("s1"));
+        assert!(m.require_column("label", "evaluation needs labels").is_ok());
+        let err = parse("path,Path\na.png,b.png\n").unwrap_err().to_string();
+        assert!(err.contains("column `path` appears twice"), "{err}");
+        let m = parse("path,condition\na.png,G1\n").unwrap();
+        let err = m
+            .require_column("label", "evaluation needs a label for every sample")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "m.csv line 1: the header has no `label` column (columns: path,condition); evaluation \
+             needs a label for every sample"
+        );
     }
 
     #[test]

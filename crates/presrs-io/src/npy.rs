@@ -1,7 +1,7 @@
 //! NumPy `.npy` arrays: 2-D (one frame, `rows x cols`) or 3-D (`frames x rows x cols`).
 //!
-//! Any integer or float dtype is read (`u1`..`u8`, `i1`..`i8`, `f4`, `f8`; little or big endian; `bool`
-//! as 0/1) and converted to `f64` (64-bit integers beyond 2^53 are rounded to the nearest `f64`). C and
+//! Any integer or float dtype is read (`u1`..`u8`, `i1`..`i8`, `f2` (half), `f4`, `f8`; little or big
+//! endian; `bool` as 0/1) and converted to `f64` (exactly, except as said next) (64-bit integers beyond 2^53 are rounded to the nearest `f64`). C and
 //! Fortran order are both read (Fortran-order arrays are transposed into the row-major layout). NaN and
 //! infinities are rejected, naming the element. The writers produce C-order little-endian `f8` or `u1`.
 
@@ -82,7 +82,7 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
         IoError::unsupported(
             file,
             format!(
-                "unsupported dtype {}; expected an integer, float or bool dtype (u1..u8, i1..i8, f4, f8)",
+                "unsupported dtype {}; expected an integer, float or bool dtype (u1..u8, i1..i8, f2, f4, f8)",
                 dtype.descr()
             ),
         )
@@ -248,6 +248,8 @@ enum Kind {
     I16,
     I32,
     I64,
+    /// IEEE half precision; `true` when stored big-endian.
+    F16(bool),
     F32,
     F64,
 }
@@ -266,6 +268,7 @@ fn scalar_kind(dtype: &DType) -> Option<Kind> {
         (TypeChar::Int, 2) => Kind::I16,
         (TypeChar::Int, 4) => Kind::I32,
         (TypeChar::Int, 8) => Kind::I64,
+        (TypeChar::Float, 2) => Kind::F16(ty.endianness() == npyz::Endianness::Big),
         (TypeChar::Float, 4) => Kind::F32,
         (TypeChar::Float, 8) => Kind::F64,
         _ => return None,
@@ -276,7 +279,7 @@ impl Kind {
     fn size(self) -> usize {
         match self {
             Self::Bool | Self::U8 | Self::I8 => 1,
-            Self::U16 | Self::I16 => 2,
+            Self::U16 | Self::I16 | Self::F16(_) => 2,
             Self::U32 | Self::I32 | Self::F32 => 4,
             Self::U64 | Self::I64 | Self::F64 => 8,
         }
@@ -308,10 +311,43 @@ impl Kind {
             Self::I16 => all::<i16>(npy, f64::from),
             Self::I32 => all::<i32>(npy, f64::from),
             Self::I64 => all::<i64>(npy, |v| v as f64),
+            // npyz reads half floats only with its `half` feature: convert the bytes here.
+            Self::F16(big) => {
+                let len = usize::try_from(npy.len()).unwrap_or(0);
+                let bytes = npy.into_inner();
+                Ok(bytes
+                    .chunks_exact(2)
+                    .take(len)
+                    .map(|b| {
+                        let pair = [b[0], b[1]];
+                        f16_to_f64(if big {
+                            u16::from_be_bytes(pair)
+                        } else {
+                            u16::from_le_bytes(pair)
+                        })
+                    })
+                    .collect())
+            }
             Self::F32 => all::<f32>(npy, f64::from),
             Self::F64 => all::<f64>(npy, |v| v),
         }
     }
+}
+
+/// The value of an IEEE 754 half-precision number (1 sign bit, 5 exponent bits biased by 15, 10
+/// fraction bits), exactly: every half is an `f64`.
+fn f16_to_f64(bits: u16) -> f64 {
+    let sign = if bits & 0x8000 == 0 { 1.0 } else { -1.0 };
+    let exponent = i32::from((bits >> 10) & 0x1f);
+    let fraction = bits & 0x3ff;
+    let magnitude = match (exponent, fraction) {
+        // Zero and subnormals: fraction x 2^-24.
+        (0, _) => f64::from(fraction) * 2f64.powi(-24),
+        (0x1f, 0) => f64::INFINITY,
+        (0x1f, _) => f64::NAN,
+        _ => (1.0 + f64::from(fraction) / 1024.0) * 2f64.powi(exponent - 15),
+    };
+    sign * magnitude
 }
 
 fn check_shape(shape: &[usize], len: usize) -> std::io::Result<Vec<u64>> {
@@ -444,6 +480,71 @@ mod tests {
             let rec = parse_npy(&bytes, "t.npy").unwrap_or_else(|e| panic!("{descr}: {e}"));
             assert_eq!(rec.data(), &expected(descr), "{descr}");
         }
+    }
+
+    #[test]
+    fn half_precision_bit_patterns() {
+        let cases: [(u16, f64); 10] = [
+            (0x3C00, 1.0),
+            (0xC000, -2.0),
+            (0x7BFF, 65504.0),
+            (0x0001, 2f64.powi(-24)),
+            (0x03FF, 1023.0 * 2f64.powi(-24)),
+            (0x0400, 2f64.powi(-14)),
+            (0x3555, 0.333_251_953_125),
+            (0x0000, 0.0),
+            (0x7C00, f64::INFINITY),
+            (0xFC00, f64::NEG_INFINITY),
+        ];
+        for (bits, value) in cases {
+            assert_eq!(f16_to_f64(bits), value, "{bits:#06x}");
+        }
+        assert!(f16_to_f64(0x8000).is_sign_negative() && f16_to_f64(0x8000) == 0.0);
+        assert!(f16_to_f64(0x7E00).is_nan() && f16_to_f64(0x7C01).is_nan());
+    }
+
+    #[test]
+    fn half_precision_arrays_both_endians_and_fortran_order() {
+        // [[1, -2, 65504], [2^-24, 0.5, 0]] as numpy's float16.
+        let bits: [u16; 6] = [0x3C00, 0xC000, 0x7BFF, 0x0001, 0x3800, 0x0000];
+        let expected = [1.0, -2.0, 65504.0, 2f64.powi(-24), 0.5, 0.0];
+        let le: Vec<u8> = bits.iter().flat_map(|b| b.to_le_bytes()).collect();
+        let be: Vec<u8> = bits.iter().flat_map(|b| b.to_be_bytes()).collect();
+        for (descr, data) in [("<f2", &le), (">f2", &be)] {
+            let rec = parse_npy(&raw_npy(descr, false, "(2, 3)", data), "h.npy")
+                .unwrap_or_else(|e| panic!("{descr}: {e}"));
+            assert_eq!(rec.data(), &expected, "{descr}");
+        }
+        // Fortran order: columns first.
+        let stored: Vec<u8> = [0, 3, 1, 4, 2, 5]
+            .iter()
+            .flat_map(|&i| bits[i].to_le_bytes())
+            .collect();
+        let rec = parse_npy(&raw_npy("<f2", true, "(2, 3)", &stored), "h.npy").unwrap();
+        assert_eq!(rec.data(), &expected);
+        // 3-D, and faults: truncated data, infinities and NaN are errors naming the element.
+        let rec = parse_npy(&raw_npy("<f2", false, "(3, 1, 2)", &le), "h.npy").unwrap();
+        assert_eq!(rec.frame_count(), 3);
+        let m = parse_npy(&raw_npy("<f2", false, "(2, 3)", &le[..11]), "h.npy")
+            .unwrap_err()
+            .to_string();
+        assert!(m.contains("truncated") && m.contains("12 bytes"), "{m}");
+        let inf: Vec<u8> = [0x3C00u16, 0x7C00]
+            .iter()
+            .flat_map(|b| b.to_le_bytes())
+            .collect();
+        let m = parse_npy(&raw_npy("<f2", false, "(1, 2)", &inf), "h.npy")
+            .unwrap_err()
+            .to_string();
+        assert!(m.contains("[0, 1]") && m.contains("inf"), "{m}");
+        let nan: Vec<u8> = [0x7E00u16, 0]
+            .iter()
+            .flat_map(|b| b.to_le_bytes())
+            .collect();
+        let m = parse_npy(&raw_npy("<f2", false, "(1, 2)", &nan), "h.npy")
+            .unwrap_err()
+            .to_string();
+        assert!(m.contains("[0, 0]") && m.contains("NaN"), "{m}");
     }
 
     #[test]

@@ -23,7 +23,13 @@
 //!   without `Frame` lines (snapshots) are cut into frames of `ROWS` rows, numbered from `START_FRAME`
 //!   (default 1). Blank and comma-only lines are skipped anywhere; `@@` ends the data and must be followed
 //!   only by blank lines. `B` cells must be at the same positions in every frame.
-//! * **Frame count.** `START_FRAME`/`END_FRAME` announce `END - START + 1` frames. Fewer frames in a file
+//! * **Frame numbers.** `Frame` numbers must increase: a repeated number or one that goes back (time
+//!   repeating or running backwards) is an error (a warning when reading leniently, the frames kept). A
+//!   jump (`Frame 49` then `Frame 150`) means frames are missing and time is not contiguous there: it is
+//!   reported as a warning naming the line. Numbers too large to count on from `START_FRAME` in a file
+//!   without `Frame` lines are an error.
+//! * **Frame count.** `START_FRAME`/`END_FRAME` announce `END - START + 1` frames (without `START_FRAME`,
+//!   START is the first frame's number). Fewer frames in a file
 //!   without the `@@` terminator means the file was cut at a frame boundary: an error (a warning when
 //!   reading leniently). Any other disagreement (more frames, or fewer before an `@@`) is a warning: the
 //!   frames in the file are the truth.
@@ -427,8 +433,9 @@ fn saturation_in_units(value: &str, units: &PressureUnit) -> Option<f64> {
 }
 
 /// `Frame 12, timestamp 728` -> `(12, Some(", timestamp 728"))`; `None` if the line is not a frame line.
-/// `Some(Err(..))` if it starts with `Frame ` but the number is malformed.
-fn frame_line(line: &str) -> Option<Result<(i64, Option<&str>), String>> {
+/// `Some(Err(..))` if it starts with `Frame ` but the number is malformed. Shared with the stream reader
+/// ([`crate::tekscan_stream`]) so that both read `Frame` lines alike.
+pub(crate) fn frame_line(line: &str) -> Option<Result<(i64, Option<&str>), String>> {
     let head = line.get(..5)?;
     if !head.eq_ignore_ascii_case("frame") {
         return None;
@@ -482,8 +489,11 @@ fn parse_frames(
     let Grid { rows, cols } = header.grid;
     let grid_len = header.grid.len();
     // Reserve for the announced frames, but never more than the input could hold (>= 2 bytes per value).
+    // In i128: `END_FRAME - START_FRAME + 1` overflows i64 for extreme (crafted) values.
     let announced = match (header.start_frame, header.end_frame) {
-        (Some((_, s)), Some((_, e))) if e >= s => usize::try_from(e - s + 1).unwrap_or(1),
+        (Some((_, s)), Some((_, e))) if e >= s => {
+            usize::try_from(i128::from(e) - i128::from(s) + 1).unwrap_or(usize::MAX)
+        }
         _ => 1,
     };
     let cap = announced.saturating_mul(grid_len).min(input_len / 2 + 1);
@@ -496,8 +506,32 @@ fn parse_frames(
     let mut terminator: Option<usize> = None;
     let mut dropped_truncated = false;
     let mut cells: Vec<&str> = Vec::new();
-    let next_snapshot_number =
-        |info: &Vec<FrameInfo>| header.start_frame.map_or(1, |(_, s)| s) + info.len() as i64;
+    // Jumps in the frame numbers: (line, previous number, number, numbers missing).
+    let mut gaps: Vec<(usize, i64, i64, i128)> = Vec::new();
+    // Frames without `Frame` lines are numbered from START_FRAME; a crafted START_FRAME near i64::MAX
+    // leaves no room for the next number.
+    let next_snapshot_number = |info: &Vec<FrameInfo>, line_no: usize| {
+        let start = header.start_frame.map_or(1, |(_, s)| s);
+        i64::try_from(info.len())
+            .ok()
+            .and_then(|n| start.checked_add(n))
+            .ok_or_else(|| {
+                let from = header
+                    .start_frame
+                    .map_or_else(String::new, |(at, _)| format!(" (line {at})"));
+                IoError::parse(
+                    file,
+                    line_no,
+                    format!(
+                        "frame {} of the file cannot be numbered: START_FRAME {start}{from} + {} is \
+                         beyond the largest frame number ({})",
+                        info.len() + 1,
+                        info.len(),
+                        i64::MAX
+                    ),
+                )
+            })
+    };
     let last_nonblank = lines
         .iter()
         .rposition(|(_, line)| !is_blank(line))
@@ -558,6 +592,29 @@ fn parse_frames(
                     ),
                 ));
             }
+            // `current` is now the complete frame before this one.
+            if let Some(prev) = &current {
+                let step = i128::from(number) - i128::from(prev.number);
+                if step <= 0 {
+                    let message = format!(
+                        "frame {number} {} frame {} (line {}): expected increasing frame numbers \
+                         (time runs backwards or repeats here)",
+                        if step == 0 { "repeats" } else { "comes after" },
+                        prev.number,
+                        prev.first_line
+                    );
+                    if !options.lenient {
+                        return Err(IoError::parse(
+                            file,
+                            line_no,
+                            format!("{message}; read leniently to keep the frames anyway"),
+                        ));
+                    }
+                    warnings.push(format!("{file} line {line_no}: {message}; frames kept"));
+                } else if step > 1 {
+                    gaps.push((line_no, prev.number, number, step - 1));
+                }
+            }
             current = Some(Current {
                 number,
                 suffix: suffix.map(str::to_owned),
@@ -588,7 +645,7 @@ fn parse_frames(
         };
         if need_new {
             current = Some(Current {
-                number: next_snapshot_number(&info),
+                number: next_snapshot_number(&info, line_no)?,
                 suffix: None,
                 first_line: line_no,
                 rows_done: 0,
@@ -720,6 +777,7 @@ fn parse_frames(
             ));
         }
     }
+    report_gaps(&gaps, file, warnings);
     if info.is_empty() {
         let line_no = lines.last().map_or(header.end_line, |&(n, _)| n);
         return Err(IoError::parse(
@@ -745,6 +803,31 @@ fn parse_frames(
     })
 }
 
+/// Gap warnings given one by one; more are summed up in one warning.
+const MAX_GAP_WARNINGS: usize = 5;
+
+/// Warns of jumps in the frame numbers (`Frame 49` then `Frame 150`): frames are missing there, so time
+/// is not contiguous across the jump.
+fn report_gaps(gaps: &[(usize, i64, i64, i128)], file: &str, warnings: &mut Vec<String>) {
+    for &(line_no, prev, number, missing) in gaps.iter().take(MAX_GAP_WARNINGS) {
+        warnings.push(format!(
+            "{file} line {line_no}: frame {number} follows frame {prev}: {missing} frame number{} \
+             missing, so time is not contiguous here",
+            if missing == 1 { "" } else { "s" }
+        ));
+    }
+    if gaps.len() > MAX_GAP_WARNINGS {
+        let more = &gaps[MAX_GAP_WARNINGS..];
+        let missing: i128 = more.iter().map(|g| g.3).sum();
+        warnings.push(format!(
+            "{file}: {} more jumps in the frame numbers (from line {}), {missing} frame numbers missing \
+             in them, so time is not contiguous there either",
+            more.len(),
+            more[0].0
+        ));
+    }
+}
+
 fn check_frame_count(
     header: &Header,
     body: &Body,
@@ -752,8 +835,18 @@ fn check_frame_count(
     options: &ReadOptions,
     warnings: &mut Vec<String>,
 ) -> Result<(), IoError> {
-    let (Some((start_line, start)), Some((_, end))) = (header.start_frame, header.end_frame) else {
+    let Some((end_line, end)) = header.end_frame else {
         return Ok(());
+    };
+    // Without START_FRAME, the count runs from the first frame's number.
+    let (start_line, start, start_text) = match (header.start_frame, body.info.first()) {
+        (Some((line, start)), _) => (line, start, format!("START_FRAME {start}")),
+        (None, Some(first)) => (
+            end_line,
+            first.number,
+            format!("the first frame ({}, no START_FRAME)", first.number),
+        ),
+        (None, None) => return Ok(()),
     };
     let announced = i128::from(end) - i128::from(start) + 1;
     let found = body.info.len() as i128 + i128::from(body.dropped_truncated);
@@ -762,12 +855,12 @@ fn check_frame_count(
     }
     if announced <= 0 {
         warnings.push(format!(
-            "{file} line {start_line}: END_FRAME {end} is before START_FRAME {start}; keeping the frames found"
+            "{file} line {start_line}: END_FRAME {end} is before {start_text}; keeping the frames found"
         ));
         return Ok(());
     }
     let message = format!(
-        "START_FRAME {start} and END_FRAME {end} announce {announced} frames, the file holds {found}"
+        "{start_text} and END_FRAME {end} announce {announced} frames, the file holds {found}"
     );
     if found < announced && body.terminator.is_none() && !body.dropped_truncated {
         if options.lenient {
@@ -813,8 +906,8 @@ fn clip(text: &str) -> String {
 /// they read back bit-exactly. Reading the output with [`parse_tekscan`] gives back an equal recording.
 ///
 /// Fails (`InvalidInput`) without writing anything when the recording cannot be represented: no frames,
-/// non-finite values, or header text / frame suffixes with line breaks or that would be read back as
-/// something else.
+/// non-finite values, frame numbers that do not increase, or header text / frame suffixes with line
+/// breaks or that would be read back as something else.
 pub fn write_tekscan<W: Write + ?Sized>(recording: &Recording, w: &mut W) -> std::io::Result<()> {
     validate_for_tekscan(recording)?;
     let mut out = BufWriter::with_capacity(1 << 16, w);
@@ -996,6 +1089,15 @@ fn validate_for_tekscan(recording: &Recording) -> std::io::Result<()> {
         if is_ascii_data(token) {
             return Err(invalid(format!(
                 "header entry {key:?} would end the header early"
+            )));
+        }
+    }
+    for pair in recording.frame_info().windows(2) {
+        if pair[1].number <= pair[0].number {
+            return Err(invalid(format!(
+                "frame number {} follows frame number {}; frame numbers must increase (the reader \
+                 rejects a file whose time repeats or runs backwards)",
+                pair[1].number, pair[0].number
             )));
         }
     }
@@ -1453,6 +1555,160 @@ mod tests {
             msg.contains("expected a frame number after `Frame`, found `x`"),
             "{msg}"
         );
+    }
+
+    #[test]
+    fn extreme_start_and_end_frame_do_not_overflow() {
+        // END - START + 1 overflows i64: no panic, the (absurd) count is compared in i128.
+        let text = "ROWS 1\nCOLS 1\nSTART_FRAME -9000000000000000000\nEND_FRAME 9000000000000000000\n\
+            ASCII_DATA @@\nFrame 1\n5\n";
+        let (line, msg) = fails(text);
+        assert_eq!(line, Some(3));
+        assert!(
+            msg.contains("announce 18000000000000000001 frames, the file holds 1"),
+            "{msg}"
+        );
+        let parsed = strict(&format!("{text}@@\n")).unwrap();
+        assert_eq!(parsed.recording.data(), &[5.0]);
+        // Frames without `Frame` lines are numbered from START_FRAME: no room after i64::MAX.
+        let text = "ROWS 1\nCOLS 1\nSTART_FRAME 9223372036854775807\nASCII_DATA @@\n5\n6\n";
+        let (line, msg) = fails(text);
+        assert_eq!(line, Some(6));
+        assert!(
+            msg.contains("frame 2 of the file cannot be numbered: START_FRAME 9223372036854775807 (line 3) + 1"),
+            "{msg}"
+        );
+        let parsed =
+            strict("ROWS 1\nCOLS 1\nSTART_FRAME 9223372036854775807\nASCII_DATA @@\n5\n").unwrap();
+        assert_eq!(parsed.recording.frame_info()[0].number, i64::MAX);
+        // The same near the bottom: a jump between extreme `Frame` numbers is counted in i128.
+        let text = format!(
+            "ROWS 1\nCOLS 1\nASCII_DATA @@\nFrame {}\n1\nFrame {}\n2\n",
+            i64::MIN,
+            i64::MAX
+        );
+        let parsed = strict(&text).unwrap();
+        assert!(
+            parsed.warnings[0].contains("18446744073709551614 frame numbers missing"),
+            "{:?}",
+            parsed.warnings
+        );
+    }
+
+    #[test]
+    fn repeated_or_decreasing_frame_numbers_are_errors_gaps_are_warnings() {
+        let frames = |numbers: &[i64]| {
+            let mut text = "ROWS 1\nCOLS 2\nASCII_DATA @@\n".to_owned();
+            for n in numbers {
+                text.push_str(&format!("Frame {n}\n{n},0\n"));
+            }
+            text + "@@\n"
+        };
+        let (line, msg) = fails(&frames(&[1, 2, 2, 3]));
+        assert_eq!(line, Some(8));
+        assert!(
+            msg.contains("frame 2 repeats frame 2 (line 6): expected increasing frame numbers"),
+            "{msg}"
+        );
+        let (line, msg) = fails(&frames(&[1, 2, 3, 1]));
+        assert_eq!(line, Some(10));
+        assert!(
+            msg.contains("frame 1 comes after frame 3 (line 8)"),
+            "{msg}"
+        );
+        assert!(msg.contains("read leniently"), "{msg}");
+        // Leniently: kept, with a warning.
+        let parsed = lenient(&frames(&[1, 2, 2, 3])).unwrap();
+        assert_eq!(parsed.recording.frame_count(), 4);
+        assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
+        assert!(parsed.warnings[0].starts_with("t.asf line 8: frame 2 repeats frame 2"));
+        // A jump (49 -> 150): read, with a warning naming the line and the numbers missing.
+        let parsed = strict(&frames(&[48, 49, 150, 151])).unwrap();
+        assert_eq!(parsed.recording.frame_count(), 4);
+        assert_eq!(
+            parsed.warnings,
+            vec![
+                "t.asf line 8: frame 150 follows frame 49: 100 frame numbers missing, so time is \
+                 not contiguous here"
+                    .to_owned()
+            ]
+        );
+        let parsed = strict(&frames(&[1, 3])).unwrap();
+        assert!(
+            parsed.warnings[0].contains("1 frame number missing"),
+            "{:?}",
+            parsed.warnings
+        );
+        // Many jumps: the first few one by one, the rest summed up.
+        let numbers: Vec<i64> = (0..20).map(|i| i * 3).collect();
+        let parsed = strict(&frames(&numbers)).unwrap();
+        assert_eq!(
+            parsed.warnings.len(),
+            MAX_GAP_WARNINGS + 1,
+            "{:?}",
+            parsed.warnings
+        );
+        assert!(
+            parsed.warnings[MAX_GAP_WARNINGS].starts_with(
+                "t.asf: 14 more jumps in the frame numbers (from line 16), 28 frame numbers missing"
+            ),
+            "{:?}",
+            parsed.warnings
+        );
+        // START/END disagreeing with a complete file (`@@`): reported too, also without START_FRAME.
+        let text =
+            frames(&[1, 2]).replace("ASCII_DATA", "START_FRAME 1\nEND_FRAME 5000\nASCII_DATA");
+        let parsed = strict(&text).unwrap();
+        assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
+        assert!(parsed.warnings[0].contains("announce 5000 frames, the file holds 2"));
+        let text = frames(&[1, 2]).replace("ASCII_DATA", "END_FRAME 5000\nASCII_DATA");
+        let parsed = strict(&text).unwrap();
+        assert_eq!(
+            parsed.warnings,
+            vec![
+                "t.asf line 3: the first frame (1, no START_FRAME) and END_FRAME 5000 announce 5000 \
+                 frames, the file holds 2; keeping the frames found"
+                    .to_owned()
+            ]
+        );
+        // Without `@@`, fewer frames than announced means a cut file, as with START_FRAME.
+        let (line, msg) = fails(text.trim_end_matches("@@\n"));
+        assert_eq!(line, Some(3));
+        assert!(msg.contains("looks truncated"), "{msg}");
+    }
+
+    #[test]
+    fn the_writer_refuses_frame_numbers_that_would_not_read_back() {
+        let grid = Grid::new(1, 1);
+        let info = |numbers: [i64; 2]| {
+            numbers
+                .map(|number| FrameInfo {
+                    number,
+                    suffix: None,
+                })
+                .to_vec()
+        };
+        let rec = |numbers| {
+            Recording::with_info(
+                grid,
+                None,
+                vec![1.0, 2.0],
+                None,
+                info(numbers),
+                SensorMeta::default(),
+            )
+            .unwrap()
+        };
+        let err = write_tekscan(&rec([3, 3]), &mut Vec::new()).unwrap_err();
+        assert!(
+            err.to_string().contains("frame numbers must increase"),
+            "{err}"
+        );
+        assert!(write_tekscan(&rec([3, 2]), &mut Vec::new()).is_err());
+        let mut out = Vec::new();
+        write_tekscan(&rec([3, 7]), &mut out).unwrap();
+        let back = strict(std::str::from_utf8(&out).unwrap()).unwrap();
+        assert_eq!(back.recording, rec([3, 7]));
     }
 
     fn sample_recording() -> Recording {

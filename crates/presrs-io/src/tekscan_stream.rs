@@ -4,19 +4,33 @@
 //! The header is read up to `ASCII_DATA`; only `ROWS`, `COLS` (required) and `SECONDS_PER_FRAME` are
 //! interpreted (the whole-file reader [`crate::tekscan`] keeps everything else; a live stream does not
 //! need it). Then frames: a `Frame N` line followed by `ROWS` data lines of `COLS` cells (numbers or `B`
-//! for no sensel), or, in files without `Frame` lines, every `ROWS` data lines. Blank and comma-only lines
-//! are skipped; `@@` ends the stream.
+//! for no sensel), or, in files without `Frame` lines, every `ROWS` data lines. `Frame` lines are read
+//! as the whole-file reader reads them (`Frame 12, timestamp 728`, `Frame -2`, `Frame +3`; `Frame12` is
+//! not a `Frame` line). Blank and comma-only lines are skipped; `@@` ends the stream.
 //!
-//! **Faults.** Lines are capped in length (a line without end cannot eat memory). A bad row (wrong cell
-//! count, a cell that is not a number or `B`) is an error naming the line, frame, row and column; the
-//! reader then skips to the next `Frame` line, so the stream can go on ([`TekscanStream::next_frame`]
-//! can be called again). The end of the input inside a frame is an error too.
+//! **Faults.** Lines are capped in length (a line without end cannot eat memory). Each fault is an error
+//! naming the line (and the frame, row and column when there are some), after which the stream can go
+//! on ([`TekscanStream::next_frame`] can be called again):
+//!
+//! * a bad row (wrong cell count, a cell that is not a number or `B`, a line too long or not UTF-8)
+//!   drops its frame. With `Frame` lines the reader then skips to the next `Frame` line; without them
+//!   it skips the remaining rows of that frame, so that the next frame starts where it should;
+//! * a frame with fewer than `ROWS` rows (none at all included) before the next `Frame` line, `@@` or
+//!   the end of the input is an error, as in the whole-file reader; the next `Frame` line starts the
+//!   next frame;
+//! * a malformed `Frame` line (`Frame x`) is an error, and its rows are skipped;
+//! * in a stream with `Frame` lines, a data row after a complete frame and before the next `Frame`
+//!   line is an error, and the reader skips to the next `Frame` line.
+//!
+//! A `Frame` line is always taken as the start of a frame, even in a stream that had none so far.
+//! Frame numbers are reported as written ([`StreamFrame::number`]); gaps are not checked here.
 
 use std::io::{BufRead, Read};
 
 use presrs_core::Grid;
 
 use crate::error::IoError;
+use crate::tekscan::frame_line;
 use crate::textutil::{Cell, is_blank, parse_cell};
 
 /// Longest header line accepted, bytes.
@@ -38,10 +52,20 @@ pub struct StreamHeader {
 pub struct StreamFrame {
     /// The number on its `Frame` line (or counted from 1 without `Frame` lines).
     pub number: i64,
-    /// Line of its first row.
+    /// Line of its `Frame` line (of its first row without `Frame` lines).
     pub line: usize,
     /// Whether some sensel is `B` (absent): the mask is meaningful.
     pub has_absent: bool,
+}
+
+/// What [`TekscanStream::next_line`] read.
+enum Line {
+    /// The end of the input.
+    End,
+    /// A line of text, in `self.line`.
+    Text,
+    /// A line that cannot be read as text (too long, not UTF-8): why. It counts as a line.
+    Bad(String),
 }
 
 /// Reads a TekScan ASCII movie frame by frame (see the module docs).
@@ -52,9 +76,18 @@ pub struct TekscanStream<R> {
     line_no: usize,
     line: Vec<u8>,
     header: Option<StreamHeader>,
+    /// A `Frame` line read while the frame before it was reported short: (number, line).
     pending_frame: Option<(i64, usize)>,
+    /// Frames counted in a stream without `Frame` lines.
     counted: i64,
+    /// Whether frames start with `Frame` lines (known from the first `Frame` line or data row).
+    framed: Option<bool>,
+    /// After a fault in a stream with `Frame` lines: skip data rows until the next `Frame` line.
     resync: bool,
+    /// After a fault in a stream without `Frame` lines: rows of the broken frame still to skip.
+    skip_rows: usize,
+    /// The rest of an over-long line is still to be read and dropped.
+    discard_line: bool,
     ended: bool,
 }
 
@@ -68,7 +101,10 @@ impl<R: BufRead> TekscanStream<R> {
             header: None,
             pending_frame: None,
             counted: 0,
+            framed: None,
             resync: false,
+            skip_rows: 0,
+            discard_line: false,
             ended: false,
         }
     }
@@ -77,36 +113,58 @@ impl<R: BufRead> TekscanStream<R> {
         self.header
     }
 
-    /// Reads the next line (without its end) into `self.line`; false at the end of the input. Capped at
-    /// `limit` bytes; must be UTF-8.
-    fn next_line(&mut self, limit: usize) -> Result<bool, IoError> {
+    fn read_error(&self, err: &std::io::Error) -> IoError {
+        IoError::format(&self.source_name, format!("cannot read: {err}"))
+    }
+
+    /// Reads the next line (without its end) into `self.line`. Capped at `limit` bytes (the rest of a
+    /// longer line is dropped before the next line is read); must be UTF-8. An error only when the
+    /// input cannot be read.
+    fn next_line(&mut self, limit: usize) -> Result<Line, IoError> {
+        if self.discard_line {
+            self.discard_rest_of_line()?;
+        }
         self.line.clear();
         let mut take = Read::take(&mut self.reader, limit as u64 + 1);
         let n = take
             .read_until(b'\n', &mut self.line)
-            .map_err(|err| IoError::format(&self.source_name, format!("cannot read: {err}")))?;
+            .map_err(|err| self.read_error(&err))?;
         if n == 0 {
-            return Ok(false);
+            return Ok(Line::End);
         }
         self.line_no += 1;
         if self.line.len() > limit && self.line.last() != Some(&b'\n') {
-            return Err(IoError::parse(
-                &self.source_name,
-                self.line_no,
-                format!("line longer than {limit} bytes"),
-            ));
+            self.discard_line = true;
+            return Ok(Line::Bad(format!("line longer than {limit} bytes")));
         }
         while matches!(self.line.last(), Some(b'\n' | b'\r')) {
             self.line.pop();
         }
         if std::str::from_utf8(&self.line).is_err() {
-            return Err(IoError::parse(
-                &self.source_name,
-                self.line_no,
-                "not UTF-8 / ASCII text",
-            ));
+            return Ok(Line::Bad("not UTF-8 / ASCII text".to_owned()));
         }
-        Ok(true)
+        Ok(Line::Text)
+    }
+
+    /// Reads and drops input up to and including the next line end (or to the end of the input).
+    fn discard_rest_of_line(&mut self) -> Result<(), IoError> {
+        loop {
+            let (used, done) = match self.reader.fill_buf() {
+                Ok([]) => (0, true),
+                Ok(buf) => match buf.iter().position(|&b| b == b'\n') {
+                    Some(at) => (at + 1, true),
+                    None => (buf.len(), false),
+                },
+                Err(err) if err.kind() == std::io::ErrorKind::Interrupted => (0, false),
+                Err(err) => return Err(self.read_error(&err)),
+            };
+            self.reader.consume(used);
+            if done {
+                break;
+            }
+        }
+        self.discard_line = false;
+        Ok(())
     }
 
     /// Reads the header (up to `ASCII_DATA`). Called by [`Self::next_frame`] if needed.
@@ -118,14 +176,16 @@ impl<R: BufRead> TekscanStream<R> {
         let name = self.source_name.clone();
         for _ in 0..MAX_HEADER_LINES {
             let line_no = self.line_no + 1;
-            let line = if self.next_line(MAX_HEADER_LINE)? {
-                std::str::from_utf8(&self.line).unwrap_or("")
-            } else {
-                return Err(IoError::parse(
-                    &name,
-                    line_no,
-                    "the stream ended before `ASCII_DATA` (no TekScan header)",
-                ));
+            let line = match self.next_line(MAX_HEADER_LINE)? {
+                Line::Text => std::str::from_utf8(&self.line).unwrap_or(""),
+                Line::Bad(message) => return Err(IoError::parse(&name, line_no, message)),
+                Line::End => {
+                    return Err(IoError::parse(
+                        &name,
+                        line_no,
+                        "the stream ended before `ASCII_DATA` (no TekScan header)",
+                    ));
+                }
             };
             let mut tokens = line.split_whitespace();
             let key = tokens
@@ -192,7 +252,8 @@ impl<R: BufRead> TekscanStream<R> {
 
     /// Reads the next frame into `values` and `present` (resized to the grid, allocations reused).
     /// `Ok(None)` at the end of the stream (`@@` or end of input between frames). After an error the
-    /// reader skips to the next `Frame` line; calling again continues from there.
+    /// reader skips what is left of the broken frame (see the module docs); calling again continues
+    /// with the next frame.
     pub fn next_frame(
         &mut self,
         values: &mut Vec<f64>,
@@ -209,112 +270,116 @@ impl<R: BufRead> TekscanStream<R> {
         present.clear();
         let mut has_absent = false;
         let mut row = 0;
+        // The frame being read, once its `Frame` line or first row is read: (number, line).
         let mut current = self.pending_frame.take();
         loop {
-            if !self.next_line(limit)? {
-                self.ended = true;
-                if row == 0 {
-                    return Ok(None);
-                }
-                let (number, _) = current.unwrap_or((self.counted, 0));
-                return Err(IoError::parse(
-                    &name,
-                    self.line_no,
-                    format!("the stream ended inside frame {number} ({row} of {rows} rows)"),
-                ));
-            }
-            let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
-            if is_blank(line) {
-                continue;
-            }
-            if line == "@@" {
-                self.ended = true;
-                if row == 0 {
-                    return Ok(None);
-                }
-                return Err(IoError::parse(
-                    &name,
-                    self.line_no,
-                    format!("`@@` inside a frame ({row} of {rows} rows)"),
-                ));
-            }
-            if let Some(number) = frame_number(line) {
-                self.resync = false;
-                let line_no = self.line_no;
-                if row > 0 {
-                    // The previous frame was short; this line starts the next one.
-                    self.pending_frame = Some((number, line_no));
-                    let (prev, _) = current.unwrap_or((self.counted, 0));
+            let unreadable = match self.next_line(limit)? {
+                Line::End => {
+                    self.ended = true;
+                    let Some((number, _)) = current else {
+                        return Ok(None);
+                    };
                     return Err(IoError::parse(
                         &name,
-                        line_no,
-                        format!("frame {prev} has {row} rows, expected {rows} (ROWS)"),
+                        self.line_no,
+                        format!("the stream ended inside frame {number} ({row} of {rows} rows)"),
                     ));
                 }
-                current = Some((number, line_no));
-                continue;
+                Line::Text => None,
+                Line::Bad(message) => Some(message),
+            };
+            if unreadable.is_none() {
+                let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
+                if is_blank(line) {
+                    continue;
+                }
+                if line == "@@" {
+                    self.ended = true;
+                    let Some((number, _)) = current else {
+                        return Ok(None);
+                    };
+                    return Err(IoError::parse(
+                        &name,
+                        self.line_no,
+                        format!("`@@` inside frame {number} ({row} of {rows} rows)"),
+                    ));
+                }
+                if let Some(parsed) = frame_line(line) {
+                    let line_no = self.line_no;
+                    self.framed = Some(true);
+                    self.resync = false;
+                    self.skip_rows = 0;
+                    let unfinished = current.map(|(prev, _)| {
+                        format!("frame {prev} has {row} rows, expected {rows} (ROWS)")
+                    });
+                    match (parsed, unfinished) {
+                        (Ok((number, _)), None) => {
+                            current = Some((number, line_no));
+                            continue;
+                        }
+                        // The previous frame is short (or empty); this line starts the next one.
+                        (Ok((number, _)), Some(unfinished)) => {
+                            self.pending_frame = Some((number, line_no));
+                            return Err(IoError::parse(&name, line_no, unfinished));
+                        }
+                        (Err(message), unfinished) => {
+                            self.resync = true;
+                            let message = match unfinished {
+                                Some(unfinished) => format!("{message}; and {unfinished}"),
+                                None => format!("{message}; its rows are skipped"),
+                            };
+                            return Err(IoError::parse(&name, line_no, message));
+                        }
+                    }
+                }
             }
+            // A data row, or a line that cannot be one.
             if self.resync {
                 continue;
             }
-            // A data row. Lines borrowed from self.line: parse it now.
-            let line_no = self.line_no;
-            if row == 0 && current.is_none() {
-                self.counted += 1;
-                current = Some((self.counted, line_no));
+            if self.skip_rows > 0 {
+                self.skip_rows -= 1;
+                continue;
             }
-            let number = current.map_or(self.counted, |c| c.0);
-            let bad = |message: String| IoError::parse(&name, line_no, message);
-            let start_len = values.len();
-            let mut cell_error = None;
-            let split = for_each_cell(line, |c, cell| {
-                if c >= cols {
-                    return false;
+            let line_no = self.line_no;
+            let (number, first) = match current {
+                Some(frame) => frame,
+                None if self.framed == Some(true) => {
+                    self.resync = true;
+                    return Err(IoError::parse(
+                        &name,
+                        line_no,
+                        format!(
+                            "a row of data after a complete frame ({rows} rows, ROWS); expected a \
+                             `Frame` line or `@@`. Skipping to the next `Frame` line"
+                        ),
+                    ));
                 }
-                match parse_cell(cell) {
-                    Ok(Cell::Value(v)) => {
-                        values.push(v);
-                        present.push(true);
-                    }
-                    Ok(Cell::Absent) => {
-                        values.push(0.0);
-                        present.push(false);
-                        has_absent = true;
-                    }
-                    Err(err) => {
-                        cell_error = Some(format!(
-                            "frame {number} row {} column {}: `{cell}`: {}",
-                            row + 1,
-                            c + 1,
-                            err.expected(true)
-                        ));
-                        return false;
-                    }
+                None => {
+                    self.framed = Some(false);
+                    self.counted += 1;
+                    let frame = (self.counted, line_no);
+                    current = Some(frame);
+                    frame
                 }
-                true
-            });
-            let result = match (split, cell_error) {
-                (_, Some(message)) => Err(bad(message)),
-                (Err(at), None) => Err(bad(format!(
-                    "frame {number} row {} column {} is empty",
-                    row + 1,
-                    at + 1
-                ))),
-                (Ok(count), None) if count != cols => Err(bad(format!(
-                    "frame {number} row {} has {count} values, expected {cols} (COLS)",
-                    row + 1
-                ))),
-                (Ok(_), None) => Ok(()),
             };
-            if let Err(err) = result {
-                values.truncate(start_len);
-                present.truncate(start_len);
-                self.resync = true;
-                return Err(err);
+            let result = match unreadable {
+                Some(message) => Err(format!("frame {number} row {}: {message}", row + 1)),
+                None => {
+                    let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
+                    parse_row(line, number, row, cols, values, present, &mut has_absent)
+                }
+            };
+            if let Err(message) = result {
+                if self.framed == Some(true) {
+                    self.resync = true;
+                } else {
+                    self.skip_rows = rows - row - 1;
+                }
+                return Err(IoError::parse(&name, line_no, message));
             }
             row += 1;
             if row == rows {
-                let (number, first) = current.unwrap_or((self.counted, line_no));
                 return Ok(Some(StreamFrame {
                     number,
                     line: first,
@@ -323,6 +388,68 @@ impl<R: BufRead> TekscanStream<R> {
             }
         }
     }
+}
+
+/// Appends the cells of data row `row` (0-based) of frame `number` to `values` and `present`; on a bad
+/// row, appends nothing and says what is wrong.
+fn parse_row(
+    line: &str,
+    number: i64,
+    row: usize,
+    cols: usize,
+    values: &mut Vec<f64>,
+    present: &mut Vec<bool>,
+    has_absent: &mut bool,
+) -> Result<(), String> {
+    let start_len = values.len();
+    let mut cell_error = None;
+    let mut absent = false;
+    let split = for_each_cell(line, |c, cell| {
+        if c >= cols {
+            return false;
+        }
+        match parse_cell(cell) {
+            Ok(Cell::Value(v)) => {
+                values.push(v);
+                present.push(true);
+            }
+            Ok(Cell::Absent) => {
+                values.push(0.0);
+                present.push(false);
+                absent = true;
+            }
+            Err(err) => {
+                cell_error = Some(format!(
+                    "frame {number} row {} column {}: `{cell}`: {}",
+                    row + 1,
+                    c + 1,
+                    err.expected(true)
+                ));
+                return false;
+            }
+        }
+        true
+    });
+    let result = match (split, cell_error) {
+        (_, Some(message)) => Err(message),
+        (Err(at), None) => Err(format!(
+            "frame {number} row {} column {} is empty",
+            row + 1,
+            at + 1
+        )),
+        (Ok(count), None) if count != cols => Err(format!(
+            "frame {number} row {} has {count} values, expected {cols} (COLS)",
+            row + 1
+        )),
+        (Ok(_), None) => Ok(()),
+    };
+    if result.is_err() {
+        values.truncate(start_len);
+        present.truncate(start_len);
+    } else {
+        *has_absent |= absent;
+    }
+    result
 }
 
 /// Calls `visit(index, cell)` for each cell of a data line, split as [`crate::textutil`] splits them
@@ -355,20 +482,6 @@ fn for_each_cell(line: &str, mut visit: impl FnMut(usize, &str) -> bool) -> Resu
         }
     }
     Ok(count)
-}
-
-/// `Frame 12...` -> 12.
-fn frame_number(line: &str) -> Option<i64> {
-    let head = line.get(..5)?;
-    if !head.eq_ignore_ascii_case("frame") {
-        return None;
-    }
-    let rest = line[5..].trim_start();
-    let end = rest
-        .char_indices()
-        .find(|&(i, c)| !(c.is_ascii_digit() || (i == 0 && c == '-')))
-        .map_or(rest.len(), |(i, _)| i);
-    rest[..end].parse().ok()
 }
 
 #[cfg(test)]
@@ -444,6 +557,170 @@ mod tests {
                 .unwrap()
                 .is_none()
         );
+    }
+
+    /// Every `next_frame` result until the end: `Ok(number, values)` or `Err(message)`.
+    fn drain(text: &str) -> Vec<Result<(i64, Vec<f64>), String>> {
+        let mut stream = TekscanStream::new(text.as_bytes(), "s");
+        let (mut values, mut present) = (Vec::new(), Vec::new());
+        let mut out = Vec::new();
+        loop {
+            match stream.next_frame(&mut values, &mut present) {
+                Ok(Some(frame)) => out.push(Ok((frame.number, values.clone()))),
+                Ok(None) => return out,
+                Err(err) => out.push(Err(err.to_string())),
+            }
+            assert!(out.len() < 100, "no end: {out:?}");
+        }
+    }
+
+    fn frame(number: i64, values: &[f64]) -> Result<(i64, Vec<f64>), String> {
+        Ok((number, values.to_vec()))
+    }
+
+    const HEAD: &str = "ROWS 2\nCOLS 3\nASCII_DATA @@\n";
+
+    #[test]
+    fn without_frame_lines_a_bad_row_drops_only_its_frame() {
+        // A bad second row: the frame is dropped and the next one read (it used to skip everything
+        // after the error, waiting for a `Frame` line that never comes, and end as if clean).
+        let got = drain(&format!(
+            "{HEAD}1,2,3\n4,x,6\n7,8,9\n10,11,12\n13,14,15\n16,17,18\n"
+        ));
+        assert_eq!(
+            got,
+            vec![
+                Err(
+                    "s line 5: frame 1 row 2 column 2: `x`: expected a number or `B` (no sensel)"
+                        .to_owned()
+                ),
+                frame(2, &[7.0, 8.0, 9.0, 10.0, 11.0, 12.0]),
+                frame(3, &[13.0, 14.0, 15.0, 16.0, 17.0, 18.0]),
+            ]
+        );
+        // A bad first row: the rest of its frame is skipped, so the frames after it stay aligned.
+        let got = drain(&format!(
+            "{HEAD}1,2,3\n4,5,6\n7,8\n10,11,12\n\n13,14,15\n16,17,18\n@@\n"
+        ));
+        assert_eq!(got.len(), 3, "{got:?}");
+        assert_eq!(got[0], frame(1, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
+        assert!(
+            got[1]
+                .as_ref()
+                .is_err_and(|e| e == "s line 6: frame 2 row 1 has 2 values, expected 3 (COLS)"),
+            "{got:?}"
+        );
+        assert_eq!(got[2], frame(3, &[13.0, 14.0, 15.0, 16.0, 17.0, 18.0]));
+    }
+
+    #[test]
+    fn an_over_long_line_is_one_error_and_the_stream_goes_on() {
+        let long = "1,".repeat(1000);
+        // Without `Frame` lines: the long line is row 2 of frame 1.
+        let got = drain(&format!("{HEAD}1,2,3\n{long}\n7,8,9\n10,11,12\n"));
+        assert_eq!(
+            got,
+            vec![
+                Err("s line 5: frame 1 row 2: line longer than 1024 bytes".to_owned()),
+                frame(2, &[7.0, 8.0, 9.0, 10.0, 11.0, 12.0]),
+            ]
+        );
+        // With `Frame` lines, and a line that is not UTF-8.
+        let got = drain(&format!(
+            "{HEAD}Frame 1\n1,2,3\n{long}\nFrame 2\n1,\u{fffd}\n0,0,0\nFrame 3\n7,8,9\n10,11,12\n"
+        ));
+        assert_eq!(got.len(), 3, "{got:?}");
+        assert_eq!(
+            got[0],
+            Err("s line 6: frame 1 row 2: line longer than 1024 bytes".to_owned())
+        );
+        assert!(
+            got[1].as_ref().is_err_and(|e| e.contains("line 8")),
+            "{got:?}"
+        );
+        assert_eq!(got[2], frame(3, &[7.0, 8.0, 9.0, 10.0, 11.0, 12.0]));
+        let mut bytes = format!("{HEAD}1,2,3\n").into_bytes();
+        bytes.extend_from_slice(b"4,\xff,6\n7,8,9\n1,1,1\n");
+        let mut stream = TekscanStream::new(bytes.as_slice(), "s");
+        let (mut values, mut present) = (Vec::new(), Vec::new());
+        let err = stream.next_frame(&mut values, &mut present).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "s line 5: frame 1 row 2: not UTF-8 / ASCII text"
+        );
+        let f = stream
+            .next_frame(&mut values, &mut present)
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            (f.number, values.as_slice()),
+            (2, &[7.0, 8.0, 9.0, 1.0, 1.0, 1.0][..])
+        );
+    }
+
+    #[test]
+    fn empty_frames_are_errors_as_in_the_whole_file_reader() {
+        let got = drain(&format!("{HEAD}Frame 1\nFrame 2\n1,2,3\n4,5,6\n@@\n"));
+        assert_eq!(
+            got,
+            vec![
+                Err("s line 5: frame 1 has 0 rows, expected 2 (ROWS)".to_owned()),
+                frame(2, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
+            ]
+        );
+        let got = drain(&format!("{HEAD}Frame 1\n1,2,3\n4,5,6\nFrame 2\n@@\n"));
+        assert_eq!(
+            got[1],
+            Err("s line 8: `@@` inside frame 2 (0 of 2 rows)".to_owned())
+        );
+        let got = drain(&format!("{HEAD}Frame 1\n1,2,3\n4,5,6\nFrame 2\n"));
+        assert_eq!(
+            got[1],
+            Err("s line 7: the stream ended inside frame 2 (0 of 2 rows)".to_owned())
+        );
+        // The whole-file reader agrees.
+        let whole = crate::parse_tekscan(
+            &format!("{HEAD}Frame 1\nFrame 2\n1,2,3\n4,5,6\n@@\n"),
+            "s",
+            &crate::ReadOptions::default(),
+        );
+        assert!(whole.is_err());
+    }
+
+    #[test]
+    fn frame_lines_are_read_as_the_whole_file_reader_reads_them() {
+        let got = drain(&format!("{HEAD}Frame +12, timestamp 5\n1,2,3\n4,5,6\n"));
+        assert_eq!(got, vec![frame(12, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0])]);
+        // `Frame12` is not a `Frame` line (nor for the whole-file reader): a bad data row.
+        let got = drain(&format!("{HEAD}Frame12\n1,2,3\n"));
+        assert!(
+            got[0].as_ref().is_err_and(|e| e.contains("`Frame12`")),
+            "{got:?}"
+        );
+        // A malformed number: an error, its rows skipped, the next frame read.
+        let got = drain(&format!(
+            "{HEAD}Frame x\n1,2,3\n4,5,6\nFrame 2\n1,2,3\n4,5,6\n@@\n"
+        ));
+        assert_eq!(got.len(), 2, "{got:?}");
+        assert!(
+            got[0].as_ref().is_err_and(
+                |e| e.starts_with("s line 4: expected a frame number after `Frame`, found `x`")
+            ),
+            "{got:?}"
+        );
+        assert_eq!(got[1], frame(2, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
+        // A row too many after a frame: an error, then the next `Frame` line.
+        let got = drain(&format!(
+            "{HEAD}Frame 1\n1,2,3\n4,5,6\n7,8,9\nFrame 2\n1,2,3\n4,5,6\n"
+        ));
+        assert_eq!(got.len(), 3, "{got:?}");
+        assert!(
+            got[1]
+                .as_ref()
+                .is_err_and(|e| e.starts_with("s line 7: a row of data after a complete frame")),
+            "{got:?}"
+        );
+        assert_eq!(got[2], frame(2, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
     }
 
     #[test]

@@ -377,9 +377,11 @@ fn recording_strategy() -> impl Strategy<Value = Recording> {
                 Just(Grid::new(rows, cols)),
                 prop::collection::vec(value_strategy(), len * frames),
                 prop::option::of(prop::collection::vec(prop::bool::weighted(0.8), len)),
+                -100i64..100_000,
                 prop::collection::vec(
                     (
-                        -100i64..100_000,
+                        // Steps between frame numbers: increasing, with gaps.
+                        1i64..1000,
                         prop::option::of("[,;:a-zA-Z]|[,;: a-zA-Z][ -~]{0,15}[!-~]"),
                     ),
                     frames,
@@ -388,10 +390,17 @@ fn recording_strategy() -> impl Strategy<Value = Recording> {
                 meta_strategy(),
             )
         })
-        .prop_map(|(grid, data, mask, info, period, meta)| {
+        .prop_map(|(grid, data, mask, first, info, period, meta)| {
+            let mut number = first;
             let info = info
                 .into_iter()
-                .map(|(number, suffix)| FrameInfo { number, suffix })
+                .enumerate()
+                .map(|(i, (step, suffix))| {
+                    if i > 0 {
+                        number += step;
+                    }
+                    FrameInfo { number, suffix }
+                })
                 .collect();
             Recording::with_info(grid, period, data, mask, info, meta).unwrap()
         })
@@ -411,9 +420,14 @@ proptest! {
         let text = String::from_utf8(bytes).unwrap();
         let parsed = parse_tekscan(&text, "prop.asf", &ReadOptions::default())
             .unwrap_or_else(|err| panic!("{err}\n{text}"));
-        // Non-consecutive frame numbers give a START/END warning; nothing else may be reported.
+        // Non-consecutive frame numbers give a START/END warning and a warning of each jump (or a
+        // summary of them); nothing else may be reported.
         for warning in &parsed.warnings {
-            prop_assert!(warning.contains("START_FRAME"), "{}", warning);
+            prop_assert!(
+                warning.contains("START_FRAME") || warning.contains("time is not contiguous"),
+                "{}",
+                warning
+            );
         }
         let back = parsed.recording;
         prop_assert_eq!(&back, &rec);

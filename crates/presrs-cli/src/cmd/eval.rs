@@ -141,6 +141,7 @@ impl<'r> EvalJson<'r> {
 
 pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let (manifest, loaded) = load_manifest(&args.manifest, &args.samples)?;
+    manifest.require_column("label", "evaluation needs a label for every sample")?;
     if let Some(column) = &args.leave_one_out
         && !manifest.has_column(column)
     {

@@ -69,6 +69,7 @@ pub struct TrainArgs {
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let (manifest, loaded) = load_manifest(&args.manifest, &args.samples)?;
+    manifest.require_column("label", "training needs a label for every sample")?;
     let pool: Vec<&Sample> = match &args.train_condition {
         Some(condition) => {
             let pool: Vec<&Sample> = loaded
