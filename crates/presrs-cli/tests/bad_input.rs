@@ -370,6 +370,14 @@ fn bad_model_files_stop_classify() {
         ),
         ("null.json", b"null".to_vec(), "not a presrs model"),
         ("array.json", b"[1, 2]".to_vec(), "not a presrs model"),
+        // what is wrong in words, not Rust's Debug text (`Some("other")`, `None`)
+        (
+            "other.json",
+            b"{\"format\": \"other\"}".to_vec(),
+            "(its format is \"other\", expected \"presrs-model\")",
+        ),
+        ("no_format.json", b"{}".to_vec(), "(it has no format field)"),
+        ("list.json", b"[1, 2]".to_vec(), "(it has no format field)"),
         ("nan.json", b"{\"format\": NaN}".to_vec(), "corrupted"),
         ("garbage.json", garbage(300, 4), "corrupted"),
         (

@@ -340,3 +340,284 @@ fn bad_input_gets_a_clear_error_and_exit_code() {
     let out = presrs(&["train", "--no-such-option"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// Trains the paper's method quickly on `dataset` (fft1d + pwe, 10 per class, 10 components).
+fn quick_model(dir: &Path, manifest: &Path) -> PathBuf {
+    let model = dir.join("quick.model.json");
+    let out = presrs(&[
+        "train",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+        "--features",
+        "fft1d",
+        "--classifier",
+        "pwe",
+        "--per-class",
+        "10",
+        "--validation",
+        "3",
+        "--dims",
+        "10",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    model
+}
+
+#[test]
+fn classify_reports_a_bad_file_at_the_end_and_classifies_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    let file = |name: &str| dir.path().join(name).display().to_string();
+    let (png, missing, movie) = (
+        file("img0.png"),
+        file("missing.png"),
+        file("movie_grass.asf"),
+    );
+    let base = ["classify", "--model", model.to_str().unwrap()];
+
+    // table: every readable file is classified, the missing one (second) is reported, exit 1
+    let out = presrs(&[&base[..], &[png.as_str(), missing.as_str(), movie.as_str()]].concat());
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert_eq!(text.lines().count(), 1 + 1 + 6, "{text}");
+    assert!(
+        text.contains("img0.png") && text.contains("movie_grass.asf"),
+        "{text}"
+    );
+    let err = stderr(&out);
+    assert!(err.contains("missing.png"), "{err}");
+    assert!(
+        err.lines()
+            .last()
+            .unwrap()
+            .contains("1 of 3 file(s) could not be classified"),
+        "{err}"
+    );
+
+    // --json: the document is still written, with the failure under `errors`
+    let out = presrs(
+        &[
+            &base[..],
+            &["--json", png.as_str(), missing.as_str(), movie.as_str()],
+        ]
+        .concat(),
+    );
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["results"].as_array().unwrap().len(), 1 + 6);
+    let errors = doc["errors"].as_array().unwrap();
+    assert_eq!(errors.len(), 1);
+    assert_eq!(errors[0]["file"], missing.as_str());
+    assert!(errors[0]["error"].as_str().unwrap().contains("missing.png"));
+}
+
+#[test]
+fn classify_warns_when_the_frame_is_no_foot_contact() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    let movie = dir.path().join("movie_grass.asf").display().to_string();
+    let base = ["classify", "--model", model.to_str().unwrap(), "--json"];
+
+    // frames 0-9 are unloaded (before the first stance), 16 is the first mid-stance frame
+    let out = presrs(&[&base[..], &[movie.as_str(), "--frame", "5"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let warning = doc["results"][0]["warning"].as_str().unwrap();
+    assert!(
+        warning.contains("frame 5 lies outside every stance phase")
+            && warning.contains("total load 0"),
+        "{warning}"
+    );
+    assert!(stderr(&out).contains("warning: "), "{}", stderr(&out));
+
+    let out = presrs(&[&base[..], &[movie.as_str(), "--frame", "16"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(doc["results"][0].get("warning").is_none(), "{doc}");
+    assert!(!stderr(&out).contains("warning"), "{}", stderr(&out));
+
+    // an image without load
+    let empty = dir.path().join("empty.txt");
+    let row = vec!["0"; 44].join(" ") + "\n";
+    std::fs::write(&empty, row.repeat(44)).unwrap();
+    let out = presrs(&[&base[..], &[empty.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(
+        doc["results"][0]["warning"]
+            .as_str()
+            .unwrap()
+            .contains("carries no load"),
+        "{doc}"
+    );
+}
+
+#[test]
+fn bad_option_values_are_usage_errors_that_list_the_choices() {
+    let usage = |args: &[&str], needles: &[&str]| {
+        let out = presrs(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        for needle in needles {
+            assert!(
+                stderr(&out).contains(needle),
+                "{args:?}: {needle}: {}",
+                stderr(&out)
+            );
+        }
+    };
+    let train = ["train", "--manifest", "m.csv", "--out", "model.json"];
+    let eval = ["eval", "--manifest", "m.csv"];
+    usage(
+        &[&train[..], &["--dims", "0"]].concat(),
+        &["--dims", "at least 1"],
+    );
+    usage(
+        &[&train[..], &["--per-class", "0"]].concat(),
+        &["at least 1"],
+    );
+    usage(
+        &[&eval[..], &["--per-class", "0"]].concat(),
+        &["at least 1"],
+    );
+    usage(
+        &[&eval[..], &["--repeats", "0"]].concat(),
+        &["--repeats", "at least 1"],
+    );
+    usage(
+        &[&eval[..], &["--leave-one-out", "label"]].concat(),
+        &["cannot hold out `label`"],
+    );
+    usage(
+        &[&train[..], &["--classifier", "foo"]].concat(),
+        &["known: auto, pwe, mle, lda, svm, knn"],
+    );
+    usage(
+        &[&train[..], &["--features", "fft1d+foo"]].concat(),
+        &["\"foo\"", "known: auto, fft1d, fft2d, fft2d_polar, glcm"],
+    );
+    usage(
+        &[&train[..], &["--crop", "foo"]].concat(),
+        &["expected auto, none, paper"],
+    );
+    usage(&["features", "x.asf", "--crop", ""], &["the crop is empty"]);
+    usage(
+        &["features", "x.asf", "--crop", "  "],
+        &["the crop is empty"],
+    );
+    usage(
+        &["features", "x.asf", "--features", "auto"],
+        &["name the families"],
+    );
+}
+
+#[test]
+fn train_says_when_dims_is_capped_and_what_pwe_needs_to_train() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = dir.path().join("m.json");
+    let train = [
+        "train",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+        "--features",
+        "fft1d",
+        "--classifier",
+        "pwe",
+        "--per-class",
+        "10",
+    ];
+    let out = presrs(&[&train[..], &["--validation", "3", "--dims", "100000"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    // 4 classes x 7 training images = 28: at most 27 components
+    assert!(
+        stderr(&out).contains("warning: --dims 100000: kept 27 principal components")
+            && stdout(&out).contains("PCA 27 components"),
+        "{}\n{}",
+        stderr(&out),
+        stdout(&out)
+    );
+    // without --dims, the default is lowered quietly
+    let out = presrs(&[&train[..], &["--validation", "3"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("--dims"), "{}", stderr(&out));
+
+    std::fs::remove_file(&model).unwrap();
+    let out = presrs(&[&train[..], &["--validation", "0"]].concat());
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("--validation 0 leaves no validation images")
+            && err.contains("pwe")
+            && !err.contains("fixed sigma"),
+        "{err}"
+    );
+    assert!(!model.exists());
+}
+
+#[test]
+fn features_takes_every_family_train_takes() {
+    let file = shared("example3.asf");
+    let count = |features: &str| {
+        let out = presrs(&["features", &file, "--frame", "3", "--features", features]);
+        assert!(out.status.success(), "{features}: {}", stderr(&out));
+        let text = stdout(&out);
+        let header = text.lines().next().unwrap().to_owned();
+        header.split(',').count() - 1
+    };
+    let (fft1d, glcm) = (count("fft1d"), count("glcm"));
+    assert_eq!(fft1d, 129);
+    assert!(count("fft2d") > 0 && count("fft2d_polar") > 0 && glcm > 0);
+    assert_eq!(count("fft1d+glcm"), fft1d + glcm);
+    let help = stdout(&presrs(&["features", "--help"]));
+    for name in ["fft2d_polar", "glcm", "fft1d+glcm"] {
+        assert!(help.contains(name), "{name}: {help}");
+    }
+}
+
+#[test]
+fn eval_json_has_no_rust_enum_tags() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let out = presrs(&[
+        "eval",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--train-condition",
+        "G2",
+        "--per-class",
+        "6",
+        "--validation",
+        "2",
+        "--repeats",
+        "1",
+        "--dims",
+        "10",
+        "--features",
+        "fft1d",
+        "--classifier",
+        "pwe",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let protocol = &doc["report"]["protocol"];
+    assert_eq!(protocol["validation"], 2, "{protocol}");
+    // the document reads back, and so does the tagged form earlier versions wrote
+    let read: presrs_core::evaluation::Protocol = serde_json::from_value(protocol.clone()).unwrap();
+    let mut old = protocol.clone();
+    old["validation"] = serde_json::json!({"Count": 2});
+    let read_old: presrs_core::evaluation::Protocol = serde_json::from_value(old).unwrap();
+    assert_eq!(read, read_old);
+    let fraction: presrs_core::split::ValidationSize =
+        serde_json::from_value(serde_json::json!(0.35)).unwrap();
+    assert_eq!(fraction, presrs_core::split::ValidationSize::Fraction(0.35));
+    let old_fraction: presrs_core::split::ValidationSize =
+        serde_json::from_value(serde_json::json!({"Fraction": 0.35})).unwrap();
+    assert_eq!(old_fraction, fraction);
+}

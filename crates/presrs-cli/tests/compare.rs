@@ -48,21 +48,71 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         "{}",
         String::from_utf8_lossy(&compare.stderr)
     );
+    let text = String::from_utf8_lossy(&compare.stdout);
+    // user-facing shapes, no serialised Rust enums
+    assert!(
+        !text.contains("\"Ok\"") && !text.contains("\"Err\"") && !text.contains("\"Count\""),
+        "{text}"
+    );
     let json: serde_json::Value = serde_json::from_slice(&compare.stdout).unwrap();
     let rows = json["comparison"].as_array().unwrap();
     assert_eq!(rows.len(), 5 * 5, "every feature x classifier combination");
+    let mut best = 0.0_f64;
     for row in rows {
-        let report = &row["report"]["Ok"];
+        let report = &row["report"];
         assert!(report.is_object(), "{row}");
-        let overall = report["overall"]["mean"].as_f64().unwrap();
+        assert!(row.get("error").is_none(), "{row}");
+        let overall = row["overall_accuracy"].as_f64().unwrap();
+        assert_eq!(report["overall"]["mean"].as_f64().unwrap(), overall);
         assert!(
             overall > 0.5,
             "{} + {}: {overall}",
             row["features"],
             row["classifier"]
         );
+        assert!(row["per_condition"]["G1"].is_number());
         assert!(report["per_condition"]["G1"]["mean"].is_number());
+        assert_eq!(report["protocol"]["validation"], 4);
+        best = best.max(overall);
     }
+    // the contract's fields, of the best combination (no --features/--classifier given)
+    assert_eq!(
+        json["summary_of"]["reason"], "best",
+        "{}",
+        json["summary_of"]
+    );
+    assert_eq!(json["overall_accuracy"].as_f64().unwrap(), best);
+    assert!(json["per_condition"]["G1"].is_number());
+    assert!(json["median_classify_ns"].as_u64().unwrap() > 0);
+    assert!(json["confusion"]["labels"].is_array());
+
+    // with both given, the configured combination's
+    let configured = presrs(
+        &[
+            &[
+                "eval",
+                "--compare",
+                "--json",
+                "--features",
+                "fft2d",
+                "--classifier",
+                "lda",
+            ][..],
+            &common[..],
+        ]
+        .concat(),
+    );
+    assert!(configured.status.success());
+    let configured: serde_json::Value = serde_json::from_slice(&configured.stdout).unwrap();
+    assert_eq!(
+        configured["summary_of"],
+        serde_json::json!({"features": "fft2d", "classifier": "lda", "reason": "configured"})
+    );
+    let row = rows
+        .iter()
+        .find(|r| r["features"] == "fft2d" && r["classifier"] == "lda")
+        .unwrap();
+    assert_eq!(configured["overall_accuracy"], row["overall_accuracy"]);
     let table = presrs(&[&["eval", "--compare"][..], &common[..]].concat());
     let text = String::from_utf8_lossy(&table.stdout);
     assert!(

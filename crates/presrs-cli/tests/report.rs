@@ -322,3 +322,46 @@ fn report_with_a_model_file() {
         assert_not_blank(&out.join(figure), &pixels);
     }
 }
+
+/// With the default options (20 per class, 7 validating) on a data set with fewer images per class,
+/// the draw shrinks as a whole: the validation count becomes the same fraction of what is drawn.
+#[test]
+fn report_with_default_options_on_a_small_data_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    run_ok(presrs().args([
+        "simulate",
+        "--out",
+        sim.to_str().unwrap(),
+        "--seed",
+        "7",
+        "--hops-per-gait",
+        "6",
+        "--terrains",
+        "wood,carpet",
+        "--gaits",
+        "G1,G2",
+    ]));
+    let out_dir = dir.path().join("report");
+    let output = presrs()
+        .args([
+            "report",
+            "--manifest",
+            sim.join("manifest.csv").to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--repeats",
+            "1",
+            "--fault-repeats",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{err}");
+    assert!(
+        err.contains("fewer than --per-class 20") && err.contains("a fraction 0.35"),
+        "{err}"
+    );
+    assert!(out_dir.join("index.html").is_file());
+}

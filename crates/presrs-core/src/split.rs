@@ -11,14 +11,45 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
 
-/// How many of each class's picked samples go to validation.
+/// How many of each class's picked samples go to validation. In JSON a plain number: a count (`7`) or a
+/// fraction (`0.35`); the tagged form of earlier versions (`{"Count": 7}`) is still read.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, from = "ValidationSizeJson")]
 pub enum ValidationSize {
     /// Exactly this many per class.
     Count(usize),
     /// This fraction of each class's picked samples, rounded to nearest, at least 1 and leaving at least 2
     /// for training (when the class has at least 3).
     Fraction(f64),
+}
+
+/// What a [`ValidationSize`] is read from: a number, or the tagged form of earlier versions.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ValidationSizeJson {
+    Count(usize),
+    Fraction(f64),
+    Tagged(TaggedValidationSize),
+}
+
+/// `{"Count": 7}` or `{"Fraction": 0.35}`.
+#[derive(Deserialize)]
+enum TaggedValidationSize {
+    Count(usize),
+    Fraction(f64),
+}
+
+impl From<ValidationSizeJson> for ValidationSize {
+    fn from(json: ValidationSizeJson) -> Self {
+        match json {
+            ValidationSizeJson::Count(count)
+            | ValidationSizeJson::Tagged(TaggedValidationSize::Count(count)) => Self::Count(count),
+            ValidationSizeJson::Fraction(fraction)
+            | ValidationSizeJson::Tagged(TaggedValidationSize::Fraction(fraction)) => {
+                Self::Fraction(fraction)
+            }
+        }
+    }
 }
 
 impl Default for ValidationSize {

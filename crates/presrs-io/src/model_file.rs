@@ -105,11 +105,14 @@ pub fn parse_model(bytes: &[u8], file: &str) -> Result<ModelFile, IoError> {
     };
     let value: serde_json::Value = serde_json::from_slice(bytes)
         .map_err(|err| IoError::parse(file, err.line(), format!("corrupted model file: {err}")))?;
-    let format = value.get("format").and_then(serde_json::Value::as_str);
-    if format != Some(MODEL_FORMAT) {
-        return Err(not_model(format!(
-            "its `format` is {format:?}, expected {MODEL_FORMAT:?}"
-        )));
+    match value.get("format") {
+        Some(serde_json::Value::String(format)) if format == MODEL_FORMAT => {}
+        Some(format) => {
+            return Err(not_model(format!(
+                "its format is {format}, expected \"{MODEL_FORMAT}\""
+            )));
+        }
+        None => return Err(not_model("it has no format field".to_owned())),
     }
     let version = value
         .get("format_version")

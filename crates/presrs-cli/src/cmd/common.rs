@@ -12,6 +12,7 @@ use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::Preprocess;
+use presrs_core::split::ValidationSize;
 use presrs_core::stance::SampleFrame;
 use presrs_io::ReadOptions;
 use presrs_io::dataset::{
@@ -38,9 +39,10 @@ pub struct PipelineArgs {
     /// twice the time of the default search; they did not win on the simulated data).
     #[arg(long)]
     pub full_search: bool,
-    /// Principal components kept (at most the number of training images minus one).
-    #[arg(long, default_value_t = 51)]
-    pub dims: usize,
+    /// Principal components kept, at least 1 (at most the number of training images minus one, and the
+    /// number of features: a larger value is lowered to that, with a warning when given) [default: 51].
+    #[arg(long, value_name = "DIMS", value_parser = parse_positive)]
+    pub dims: Option<usize>,
     /// Divide each cropped image by its total load (sum of its values): features that do not depend on
     /// the robot's load, without knowing it. Stored in the model; off in the paper's method.
     #[arg(long)]
@@ -62,6 +64,9 @@ pub struct CropArg {
     #[arg(long = "crop", default_value = "auto", value_parser = parse_crop_arg)]
     pub crop: CropChoice,
 }
+
+/// Principal components kept without `--dims` (the paper's 51).
+pub const DEFAULT_DIMS: usize = 51;
 
 /// A crop, or `auto`: decided from the image size.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -121,6 +126,11 @@ impl PipelineArgs {
         }
     }
 
+    /// Principal components to keep: `--dims`, or the paper's 51.
+    pub fn dims(&self) -> usize {
+        self.dims.unwrap_or(DEFAULT_DIMS)
+    }
+
     /// Whether features or classifier are to be chosen automatically.
     pub fn is_auto(&self) -> bool {
         self.features == FeatureChoice::Auto || self.classifier == ClassifierChoice::Auto
@@ -140,7 +150,7 @@ impl PipelineArgs {
         let config = TrainConfig {
             crop: self.crop.resolve(grid),
             features,
-            dims: self.dims,
+            dims: self.dims(),
             classifier,
             preprocess: self.preprocess(),
         };
@@ -177,7 +187,7 @@ impl PipelineArgs {
                     TrainConfig {
                         crop: self.crop.resolve(grid),
                         features: feature.clone(),
-                        dims: self.dims,
+                        dims: self.dims(),
                         classifier: classifier.default_config(),
                         preprocess: self.preprocess(),
                     }
@@ -187,6 +197,29 @@ impl PipelineArgs {
         }
         Ok(out)
     }
+}
+
+/// Refuses a draw that leaves no validation images when the classifier needs them: the Parzen window
+/// (pwe) chooses its sigma on them, and no option fixes sigma. `picked` describes the draw for the
+/// message.
+pub fn check_validation_set(
+    pipeline: &PipelineArgs,
+    validation: ValidationSize,
+    validation_images: usize,
+) -> anyhow::Result<()> {
+    if validation_images == 0 && pipeline.classifier == ClassifierChoice::Kind(ClassifierKind::Pwe)
+    {
+        let given = match validation {
+            ValidationSize::Count(count) => count.to_string(),
+            ValidationSize::Fraction(fraction) => fraction.to_string(),
+        };
+        anyhow::bail!(
+            "--validation {given} leaves no validation images, and the Parzen window (pwe) chooses its \
+             sigma on them: give --validation a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) \
+             with at least 3 images per class, or another --classifier"
+        );
+    }
+    Ok(())
 }
 
 /// How samples are taken from movies.
@@ -309,13 +342,40 @@ pub fn write_json(
     Ok(())
 }
 
+/// A whole number of at least 1 (`--dims`, `--per-class`, `--repeats`).
+pub fn parse_positive(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(0) => Err("must be at least 1".to_owned()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!(
+            "expected a whole number of at least 1, got {text:?}"
+        )),
+    }
+}
+
+/// Feature families joined with `+` or `,` (`fft1d`, `fft2d_polar+glcm`); the error lists the names.
+pub fn parse_feature_kinds(text: &str) -> Result<Vec<FeatureKind>, String> {
+    text.split(['+', ','])
+        .map(|part| {
+            FeatureKind::parse(part).map_err(|_| {
+                format!(
+                    "unknown feature family {:?} in {text:?}; known: {}, or several joined with + \
+                     (fft1d+glcm)",
+                    part.trim(),
+                    FeatureKind::ALL.map(FeatureKind::as_str).join(", ")
+                )
+            })
+        })
+        .collect()
+}
+
 fn parse_features(text: &str) -> Result<FeatureChoice, String> {
     if text.trim().eq_ignore_ascii_case("auto") {
         return Ok(FeatureChoice::Auto);
     }
-    FeatureKind::parse_list(text)
+    parse_feature_kinds(text)
         .map(FeatureChoice::Kinds)
-        .map_err(|err| err.to_string())
+        .map_err(|err| err.replacen("; known: ", "; known: auto, ", 1))
 }
 
 fn parse_classifier(text: &str) -> Result<ClassifierChoice, String> {
@@ -324,16 +384,33 @@ fn parse_classifier(text: &str) -> Result<ClassifierChoice, String> {
     }
     ClassifierKind::parse(text)
         .map(ClassifierChoice::Kind)
-        .map_err(|err| err.to_string())
+        .map_err(|_| {
+            format!(
+                "unknown classifier {text:?}; known: auto, {}",
+                ClassifierKind::ALL.map(ClassifierKind::as_str).join(", ")
+            )
+        })
 }
 
-fn parse_crop_arg(text: &str) -> Result<CropChoice, String> {
+/// `--crop`: auto, or what [`Crop::parse`] reads; an empty value is refused (it is not `none`).
+pub fn parse_crop_arg(text: &str) -> Result<CropChoice, String> {
+    const FORMS: &str =
+        "auto, none, paper, margins top,bottom,left,right or a window row0:col0:rows:cols";
+    if text.trim().is_empty() {
+        return Err(format!("the crop is empty; expected {FORMS}"));
+    }
     if text.trim().eq_ignore_ascii_case("auto") {
         return Ok(CropChoice::Auto);
     }
     Crop::parse(text)
         .map(CropChoice::Fixed)
-        .map_err(|err| err.to_string())
+        .map_err(|err| match err {
+            presrs_core::CoreError::Param { reason, .. } => match reason.split_once("; expected") {
+                Some((why, _)) => format!("{why}; expected {FORMS}"),
+                None => reason,
+            },
+            other => other.to_string(),
+        })
 }
 
 fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {

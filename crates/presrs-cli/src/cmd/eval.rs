@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
+use anyhow::Context;
 use presrs_core::evaluation::{
     ComparisonRow, EvalReport, EvalSample, Evaluation, Models, Protocol, TestTransform,
 };
@@ -25,17 +26,18 @@ pub struct EvalArgs {
     /// Train on samples of this condition only; test on every other sample (the paper's protocol).
     #[arg(long, conflicts_with = "leave_one_out")]
     pub train_condition: Option<String>,
-    /// Hold out each value of this manifest column in turn (e.g. condition, group, or an extra column).
-    #[arg(long)]
+    /// Hold out each value of this manifest column in turn (e.g. condition, group, or an extra column;
+    /// not label: a held-out class could never be recognised).
+    #[arg(long, value_parser = parse_leave_one_out)]
     pub leave_one_out: Option<String>,
-    /// Random samples drawn per class for training + validation (default: all available).
-    #[arg(long)]
+    /// Random samples drawn per class for training + validation, at least 1 (default: all available).
+    #[arg(long, value_parser = super::common::parse_positive)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).
     #[arg(long, default_value = "0.35", value_parser = |t: &str| t.parse::<ValidationSize>().map_err(|e| e.to_string()))]
     pub validation: ValidationSize,
-    /// Repeats with seeds seed, seed+1, ...; results are mean +- std.
-    #[arg(long, default_value_t = 10)]
+    /// Repeats with seeds seed, seed+1, ...; results are mean +- std (at least 1).
+    #[arg(long, default_value_t = 10, value_parser = super::common::parse_positive)]
     pub repeats: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -43,7 +45,11 @@ pub struct EvalArgs {
     #[arg(long)]
     pub json: bool,
     /// Evaluate every feature x classifier combination with the same draws and print the comparison
-    /// (accuracy per tested condition, training time, classification time).
+    /// (accuracy per tested condition, training time, classification time). With --json the document
+    /// holds every combination under `comparison`, and the usual fields (overall_accuracy,
+    /// per_condition, confusion, median_classify_ns, ...) of one of them, named in `summary_of`: the
+    /// combination given by --features and --classifier when both are given and compared, else the one
+    /// with the highest overall accuracy.
     #[arg(long)]
     pub compare: bool,
     /// Also write an HTML report with figures in this folder (DIR/index.html).
@@ -213,9 +219,15 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
         bar.finish_and_clear();
         if args.json {
-            return write_json(out, &CompareJson { comparison: &rows });
+            let json = CompareJson::new(&rows, &args.pipeline)
+                .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
+            return write_json(out, &json);
         }
         return print_comparison(&rows, out);
+    }
+    if args.validation == ValidationSize::Count(0) {
+        super::common::check_validation_set(&args.pipeline, args.validation, 0)
+            .with_context(|| format!("{}: cannot evaluate", args.manifest.display()))?;
     }
     let config = args.pipeline.train_config(samples[0].frame.grid())?;
     let bar = progress_bar((folds * args.repeats) as u64, "training");
@@ -247,6 +259,18 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         .next()
         .ok_or_else(|| anyhow::anyhow!("{}: no evaluation was run", args.manifest.display()))?;
     bar.finish_and_clear();
+    // (one fold per repeat: with leave-one-out, n_train sums the folds)
+    if let Some(n_train) = report.repeats.iter().map(|r| r.n_train).min()
+        && let Some(dims) = args.pipeline.dims
+        && folds == 1
+        && dims >= n_train
+    {
+        stderr_line!(
+            "warning: --dims {dims}: models trained on {n_train} images keep at most {} principal \
+             components (one fewer than the training images)",
+            n_train.saturating_sub(1)
+        );
+    }
     let perturbed = perturbation_rows(args, evaluation, models, &config, folds, &report)?;
     if let Some(dir) = &args.report {
         let name = match &args.leave_one_out {
@@ -383,10 +407,141 @@ pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<
     Ok(())
 }
 
-/// The `--compare --json` document.
+/// The `--compare --json` document: the usual `--json` fields of one combination (named in
+/// `summary_of`), and every combination under `comparison`.
 #[derive(Debug, Serialize)]
 pub struct CompareJson<'r> {
-    pub comparison: &'r [ComparisonRow],
+    pub summary_of: SummaryOf<'r>,
+    #[serde(flatten)]
+    pub eval: EvalJson<'r>,
+    pub comparison: Vec<CompareRowJson<'r>>,
+}
+
+/// Which combination the top-level fields of the `--compare --json` document describe, and why.
+#[derive(Debug, Serialize)]
+pub struct SummaryOf<'r> {
+    pub features: &'r str,
+    pub classifier: &'r str,
+    /// `configured` (the --features and --classifier given) or `best` (highest overall accuracy).
+    pub reason: &'static str,
+}
+
+/// One combination of the comparison: its accuracies, timings and full report, or why it failed.
+#[derive(Debug, Serialize)]
+pub struct CompareRowJson<'r> {
+    pub features: &'r str,
+    pub classifier: &'r str,
+    pub config: &'r presrs_core::pipeline::TrainConfig,
+    /// `null` when the combination could not be trained (see `error`).
+    pub overall_accuracy: Option<f64>,
+    pub overall_accuracy_std: Option<f64>,
+    pub per_condition: BTreeMap<String, f64>,
+    pub median_classify_ns: Option<u64>,
+    /// Training time per trained model, seconds (mean and spread over repeats).
+    pub train_seconds: presrs_core::evaluation::MeanStd,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub report: Option<&'r EvalReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<&'r str>,
+}
+
+impl<'r> CompareJson<'r> {
+    /// The document of `rows`; fails when no combination could be evaluated.
+    pub fn new(
+        rows: &'r [ComparisonRow],
+        pipeline: &super::common::PipelineArgs,
+    ) -> anyhow::Result<Self> {
+        let configured = match (&pipeline.features, pipeline.classifier) {
+            (
+                super::common::FeatureChoice::Kinds(kinds),
+                super::common::ClassifierChoice::Kind(kind),
+            ) => {
+                let features = presrs_core::features::FeatureConfig::combined(kinds).name();
+                rows.iter().position(|row| {
+                    row.report.is_ok()
+                        && row.features == features
+                        && row.classifier == kind.as_str()
+                })
+            }
+            _ => None,
+        };
+        let best = || {
+            let mut best: Option<(usize, f64)> = None;
+            for (i, row) in rows.iter().enumerate() {
+                if let Ok(report) = &row.report
+                    && best.is_none_or(|(_, accuracy)| report.overall.mean > accuracy)
+                {
+                    best = Some((i, report.overall.mean));
+                }
+            }
+            best.map(|(i, _)| i)
+        };
+        let (chosen, reason) = match configured {
+            Some(i) => (i, "configured"),
+            None => match best() {
+                Some(i) => (i, "best"),
+                None => anyhow::bail!(
+                    "no feature x classifier combination could be evaluated (the first: {} + {}: {})",
+                    rows.first().map_or("-", |r| r.features.as_str()),
+                    rows.first().map_or("-", |r| r.classifier.as_str()),
+                    rows.first()
+                        .and_then(|r| r.report.as_ref().err())
+                        .map_or("no combination", String::as_str)
+                ),
+            },
+        };
+        let row = &rows[chosen];
+        let report = row
+            .report
+            .as_ref()
+            .map_err(|err| anyhow::anyhow!("{err}"))?;
+        Ok(Self {
+            summary_of: SummaryOf {
+                features: &row.features,
+                classifier: &row.classifier,
+                reason,
+            },
+            eval: EvalJson::new(report),
+            comparison: rows
+                .iter()
+                .map(|row| {
+                    let report = row.report.as_ref().ok();
+                    CompareRowJson {
+                        features: &row.features,
+                        classifier: &row.classifier,
+                        config: &row.config,
+                        overall_accuracy: report.map(|r| r.overall.mean),
+                        overall_accuracy_std: report.map(|r| r.overall.std),
+                        per_condition: report
+                            .map(|r| {
+                                r.per_condition
+                                    .iter()
+                                    .map(|(k, v)| (k.clone(), v.mean))
+                                    .collect()
+                            })
+                            .unwrap_or_default(),
+                        median_classify_ns: report.map(|r| r.median_classify_ns),
+                        train_seconds: row.train_seconds,
+                        report,
+                        error: row.report.as_ref().err().map(String::as_str),
+                    }
+                })
+                .collect(),
+        })
+    }
+}
+
+/// `--leave-one-out`: any column but `label` (holding out a class leaves none of its samples to train on).
+fn parse_leave_one_out(text: &str) -> Result<String, String> {
+    if text.trim() == "label" {
+        return Err(
+            "cannot hold out `label`: the held-out class would have no training samples, so none of \
+             its test samples could be recognised; hold out another column (condition, group, path \
+             or an extra one)"
+                .to_owned(),
+        );
+    }
+    Ok(text.to_owned())
 }
 
 /// The comparison table: one row per feature x classifier combination.

@@ -4,14 +4,17 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs_core::features::FeatureKind;
+use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::extract_features;
 
 use super::common::{CropArg, SampleArgs};
 
 /// Print feature vectors as CSV: a header `frame,f0,f1,...`, then one row per frame.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Example:\n  presrs features walk.asf --frame 40 --features fft1d > f.csv")]
+#[command(
+    after_help = "Examples:\n  presrs features walk.asf --frame 40 --features fft1d > f.csv\n  presrs features \
+walk.asf --features fft2d_polar+glcm > f.csv"
+)]
 pub struct FeaturesArgs {
     /// A recording file (TekScan ASCII, .npy, greyscale .png, text matrix).
     pub file: PathBuf,
@@ -19,9 +22,13 @@ pub struct FeaturesArgs {
     /// frame of a one-frame file.
     #[arg(long)]
     pub frame: Option<usize>,
-    /// Feature family: fft1d (|FFT| of the row-major, zero-padded image: 1025 values for 38x41).
-    #[arg(long, default_value = "fft1d", value_parser = |t: &str| FeatureKind::parse(t).map_err(|e| e.to_string()))]
-    pub features: FeatureKind,
+    /// Feature family, as train takes it (auto aside: there is nothing to choose from here): fft1d
+    /// (the paper's |FFT| of the row-major, zero-padded image: 1025 values for 38x41), fft2d (half 2-D
+    /// |FFT|), fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture
+    /// attributes); join several with + (fft1d+glcm): each part scaled to unit norm, as in a model.
+    // `std::vec::Vec`: one value holding several families, not a repeatable option
+    #[arg(long, default_value = "fft1d", value_parser = parse_features)]
+    pub features: std::vec::Vec<FeatureKind>,
     #[command(flatten)]
     pub crop: CropArg,
     #[command(flatten)]
@@ -59,7 +66,7 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
     };
     let crop = args.crop.resolve(recording.grid());
-    let config = args.features.default_config();
+    let config = FeatureConfig::combined(&args.features);
     let mut header_written = false;
     for index in frames {
         let Some(frame) = recording.frame(index) else {
@@ -82,4 +89,16 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         writeln!(out)?;
     }
     Ok(())
+}
+
+/// `--features`: what train takes, but `auto`, which chooses while training.
+fn parse_features(text: &str) -> Result<Vec<FeatureKind>, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        return Err(format!(
+            "auto chooses the features while training a model; here name the families to print ({}, \
+             or several joined with +)",
+            FeatureKind::ALL.map(FeatureKind::as_str).join(", ")
+        ));
+    }
+    super::common::parse_feature_kinds(text)
 }

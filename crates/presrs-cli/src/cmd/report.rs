@@ -65,10 +65,11 @@ pub struct ReportArgs {
     /// Train on this condition (default: G2 when present, else every condition).
     #[arg(long)]
     pub train_condition: Option<String>,
-    /// Images drawn per class for training + validation (fewer if a class has fewer).
-    #[arg(long, default_value_t = 20)]
+    /// Images drawn per class for training + validation, at least 1 (fewer if a class has fewer).
+    #[arg(long, default_value_t = 20, value_parser = super::common::parse_positive)]
     pub per_class: usize,
-    /// Of those, how many per class validate sigma: a count (7) or a fraction (0.35).
+    /// Of those, how many per class validate sigma: a count (7) or a fraction (0.35). When a class has
+    /// fewer images than --per-class, a count becomes the same fraction of what is drawn (7 of 20: 0.35).
     #[arg(long, default_value = "7", value_parser = |t: &str| t.parse::<ValidationSize>().map_err(|e| e.to_string()))]
     pub validation: ValidationSize,
     /// Repeats of the evaluation (0: no evaluation).
@@ -149,11 +150,7 @@ pub fn train_report_model(
         .map(|l| labels.iter().filter(|x| x == l).count())
         .min()
         .unwrap_or(0);
-    let (per_class, validation) = if smallest >= per_class {
-        (per_class, validation)
-    } else {
-        (smallest, ValidationSize::Fraction(0.35))
-    };
+    let (per_class, validation) = shrink_draw(smallest, per_class, validation);
     let split = stratified_split(&labels, Some(per_class), validation, seed)?;
     let image = |&k: &usize| {
         let (frame, label, _) = samples[pool[k]];
@@ -169,6 +166,30 @@ pub fn train_report_model(
         validation_images.len()
     );
     Ok((model, note))
+}
+
+/// The draw per class when the smallest class has `smallest` images and `per_class` (with `validation`
+/// of them) were asked for: as asked when every class has enough; else `smallest` per class, with a
+/// count for validation turned into the same fraction of `per_class` (7 of 20 -> 0.35 of what is
+/// drawn), so that the draw shrinks as a whole. A fraction stays. (`per_class: usize::MAX` is "every
+/// image": a count then stays a count.)
+pub fn shrink_draw(
+    smallest: usize,
+    per_class: usize,
+    validation: ValidationSize,
+) -> (usize, ValidationSize) {
+    if smallest >= per_class {
+        return (per_class, validation);
+    }
+    let validation = match validation {
+        ValidationSize::Count(count)
+            if count > 0 && count < per_class && per_class != usize::MAX =>
+        {
+            ValidationSize::Fraction(count as f64 / per_class as f64)
+        }
+        other => other,
+    };
+    (smallest, validation)
 }
 
 /// What the report of a simulated data set takes from it: the mid-stance frame of every complete stance
@@ -675,6 +696,23 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             Some((file.model, format!("Loaded from {}.", path.display())))
         }
         (None, Some(triples)) => {
+            let smallest = smallest_class(&eval_samples(triples), train_condition.as_deref());
+            if smallest < args.per_class {
+                let (per_class, validation) =
+                    shrink_draw(smallest, args.per_class, args.validation);
+                stderr_line!(
+                    "note: a class has only {smallest} image(s){}, fewer than --per-class {}: drawing \
+                     {per_class} per class, {} of them for validation",
+                    train_condition
+                        .as_deref()
+                        .map_or_else(String::new, |c| format!(" of condition {c}")),
+                    args.per_class,
+                    match validation {
+                        ValidationSize::Count(count) => count.to_string(),
+                        ValidationSize::Fraction(f) => format!("a fraction {f}"),
+                    }
+                );
+            }
             let model = train_report_model(
                 triples,
                 train_condition.as_deref(),
@@ -685,14 +723,15 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             )?;
             if args.repeats > 0 {
                 let eval_samples = eval_samples(triples);
-                let per_class = (model.0.summary().train_per_class.iter())
-                    .zip(&model.0.summary().validation_per_class)
-                    .map(|(a, b)| a + b)
-                    .min();
+                let (per_class, validation) = shrink_draw(
+                    smallest_class(&eval_samples, train_condition.as_deref()),
+                    args.per_class,
+                    args.validation,
+                );
                 let protocol = Protocol::TrainCondition {
                     condition: train_condition.clone(),
-                    per_class,
-                    validation: args.validation,
+                    per_class: Some(per_class),
+                    validation,
                 };
                 let bar = progress_bar(args.repeats as u64, "evaluating");
                 let report = presrs_core::evaluation::Evaluation {
@@ -756,6 +795,18 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The number of images of the smallest class among `samples` of `condition` (all when `None`).
+fn smallest_class(samples: &[EvalSample<'_>], condition: Option<&str>) -> usize {
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for s in samples
+        .iter()
+        .filter(|s| condition.is_none_or(|c| s.condition == Some(c)))
+    {
+        *counts.entry(s.label).or_default() += 1;
+    }
+    counts.values().copied().min().unwrap_or(0)
+}
+
 /// Evaluation samples (no group) of labelled frames.
 fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<EvalSample<'a>> {
     triples
@@ -784,19 +835,8 @@ pub fn fault_sweep(
     use presrs_core::perturb::Perturbation;
     let started = Instant::now();
     let samples = eval_samples(triples);
-    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
-    for s in samples
-        .iter()
-        .filter(|s| condition.is_none_or(|c| s.condition == Some(c)))
-    {
-        *counts.entry(s.label).or_default() += 1;
-    }
-    let smallest = counts.values().copied().min().unwrap_or(0);
-    let (per_class, validation) = if smallest >= args.per_class {
-        (args.per_class, args.validation)
-    } else {
-        (smallest, ValidationSize::Fraction(0.35))
-    };
+    let smallest = smallest_class(&samples, condition);
+    let (per_class, validation) = shrink_draw(smallest, args.per_class, args.validation);
     let protocol = Protocol::TrainCondition {
         condition: condition.map(str::to_owned),
         per_class: Some(per_class),
@@ -875,6 +915,22 @@ mod tests {
     use super::*;
     use presrs_core::Grid;
     use presrs_sim::{DatasetSpec, simulate_dataset};
+
+    #[test]
+    fn a_short_class_shrinks_the_whole_draw() {
+        use ValidationSize::{Count, Fraction};
+        assert_eq!(shrink_draw(30, 20, Count(7)), (20, Count(7)));
+        assert_eq!(shrink_draw(6, 20, Count(7)), (6, Fraction(0.35)));
+        assert_eq!(shrink_draw(6, 20, Count(5)), (6, Fraction(0.25)));
+        assert_eq!(shrink_draw(6, 20, Fraction(0.3)), (6, Fraction(0.3)));
+        // every image asked for: a count stays a count
+        assert_eq!(shrink_draw(6, usize::MAX, Count(2)), (6, Count(2)));
+        // the scaled draw splits: 6 picked give 2 for validation, 4 for training
+        let labels = [["carpet"; 6], ["wood"; 6]].concat();
+        let (per_class, validation) = shrink_draw(6, 20, Count(7));
+        let split = stratified_split(&labels, Some(per_class), validation, 1).unwrap();
+        assert_eq!((split.train.len(), split.validation.len()), (8, 4));
+    }
 
     /// The entry point `reproduce` calls, on a small simulated data set.
     #[test]
@@ -1009,7 +1065,7 @@ mod tests {
         let protocol = Protocol::TrainCondition {
             condition: Some("G2".into()),
             per_class: Some(8), // 8 images per class of G2: fewer than --per-class 10
-            validation: ValidationSize::Fraction(0.35),
+            validation: ValidationSize::Fraction(0.3), // --validation 3 of 10, scaled
         };
         let dead = Perturbation::Dead(0.1);
         let transform = |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {

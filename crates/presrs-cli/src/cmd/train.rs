@@ -31,8 +31,8 @@ pub struct TrainArgs {
     /// Train only on samples of this condition (the manifest's `condition` column, e.g. a gait).
     #[arg(long)]
     pub train_condition: Option<String>,
-    /// Random samples drawn per class (default: every sample).
-    #[arg(long)]
+    /// Random samples drawn per class, at least 1 (default: every sample).
+    #[arg(long, value_parser = super::common::parse_positive)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).
     #[arg(long, default_value = "0.35", value_parser = |t: &str| t.parse::<ValidationSize>().map_err(|e| e.to_string()))]
@@ -102,6 +102,8 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let labels = sample_labels(&manifest.source, &pool)?;
     let split = stratified_split(&labels, args.per_class, args.validation, args.seed)
         .with_context(|| format!("{}: cannot draw the training set", args.manifest.display()))?;
+    super::common::check_validation_set(&args.pipeline, args.validation, split.validation.len())
+        .with_context(|| format!("{}: cannot train", args.manifest.display()))?;
     let grid = pool[0].frame.grid();
     let config = args.pipeline.train_config(grid)?;
     let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
@@ -130,6 +132,18 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         train(&train_images, &validation_images, &config)
     }
     .map_err(|err| anyhow::anyhow!("{}: training failed: {err}", args.manifest.display()))?;
+    let kept = model.pca().n_components();
+    if let Some(dims) = args.pipeline.dims
+        && kept < dims
+    {
+        stderr_line!(
+            "warning: --dims {dims}: kept {kept} principal components, the most that {} training images \
+             of {} features allow (at most one fewer than the training images, and no more than the \
+             features)",
+            split.train.len(),
+            model.pca().n_features()
+        );
+    }
     if let Some(selection) = model.selection() {
         writeln!(out, "automatic choice ({}):", selection.method)?;
         for (i, score) in selection.scores.iter().enumerate() {
