@@ -232,7 +232,8 @@ pub struct SampleArgs {
     /// Also use stances cut by the start or end of a recording.
     #[arg(long)]
     pub include_partial: bool,
-    /// Accept a TekScan file whose last frame is truncated (the frame is dropped with a warning).
+    /// Accept a TekScan file whose last frame is truncated (the frame is dropped with a warning) or whose
+    /// frame numbers repeat or go back (the frames are kept, with a warning).
     #[arg(long)]
     pub lenient: bool,
     /// Use recordings as read. By default a sensel that reads 0 in every frame of a movie while its
