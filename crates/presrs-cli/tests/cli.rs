@@ -54,7 +54,7 @@ fn dataset(dir: &Path) -> PathBuf {
             }
             1 => {
                 let name = format!("img{i}.npy");
-                let rec = Recording::from_frame(frame, SensorMeta::default());
+                let rec = Recording::from_frame(frame, SensorMeta::default()).unwrap();
                 presrs_io::npy::write_recording_npy(&rec, &dir.join(&name)).unwrap();
                 name
             }

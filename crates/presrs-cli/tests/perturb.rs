@@ -18,7 +18,8 @@ fn dataset(dir: &Path) -> PathBuf {
     for i in 0..72 {
         let class = i % 4;
         let name = format!("f{i}.npy");
-        let rec = Recording::from_frame(synthetic_frame(class, &mut rng), SensorMeta::default());
+        let rec =
+            Recording::from_frame(synthetic_frame(class, &mut rng), SensorMeta::default()).unwrap();
         presrs_io::npy::write_recording_npy(&rec, &dir.join(&name)).unwrap();
         let condition = ["G1", "G2", "G3"][(i / 4) % 3];
         manifest.push_str(&format!(
@@ -219,13 +220,14 @@ fn inspect_reports_dead_sensels() {
     // One image of it: reported, but not filled.
     let single = dir.path().join("single.asf");
     let rec = presrs_io::read_recording(&path).unwrap();
-    let one = Recording::from_frame(rec.frame(5).unwrap().to_frame(), SensorMeta::default());
+    let one =
+        Recording::from_frame(rec.frame(5).unwrap().to_frame(), SensorMeta::default()).unwrap();
     presrs_io::tekscan::write_tekscan_file(&one, &single).unwrap();
     let out = presrs(&["inspect", single.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("not filled: 1 frame(s)"), "{stdout}");
     let clean = dir.path().join("clean.asf");
-    let rec = Recording::from_frame(print, SensorMeta::default());
+    let rec = Recording::from_frame(print, SensorMeta::default()).unwrap();
     presrs_io::tekscan::write_tekscan_file(&rec, &clean).unwrap();
     let out = presrs(&["inspect", clean.to_str().unwrap()]);
     assert!(!String::from_utf8_lossy(&out.stdout).contains("dead sensels"));

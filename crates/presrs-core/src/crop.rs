@@ -100,18 +100,29 @@ impl Crop {
 
     /// The window `(row0, col0, rows, cols)` this crop selects on `grid`, or an error if it does not fit.
     pub fn window(&self, grid: Grid) -> Result<(usize, usize, Grid)> {
+        let does_not_fit = || CoreError::Shape {
+            what: "crop",
+            expected: format!("a crop that fits inside the {grid} grid"),
+            got: self.to_string(),
+        };
+        // Every sum is checked: the numbers come from the command line or a model file, and a wrapped sum
+        // would pass the fit test and send a later slice out of bounds.
         let (row0, col0, rows, cols) = match *self {
             Self::Margins {
                 top,
                 bottom,
                 left,
                 right,
-            } => (
-                top,
-                left,
-                grid.rows.saturating_sub(top + bottom),
-                grid.cols.saturating_sub(left + right),
-            ),
+            } => {
+                let vertical = top.checked_add(bottom).ok_or_else(does_not_fit)?;
+                let horizontal = left.checked_add(right).ok_or_else(does_not_fit)?;
+                (
+                    top,
+                    left,
+                    grid.rows.saturating_sub(vertical),
+                    grid.cols.saturating_sub(horizontal),
+                )
+            }
             Self::Window {
                 row0,
                 col0,
@@ -119,12 +130,10 @@ impl Crop {
                 cols,
             } => (row0, col0, rows, cols),
         };
-        if rows == 0 || cols == 0 || row0 + rows > grid.rows || col0 + cols > grid.cols {
-            return Err(CoreError::Shape {
-                what: "crop",
-                expected: format!("a crop that fits inside the {grid} grid"),
-                got: self.to_string(),
-            });
+        let row_end = row0.checked_add(rows).ok_or_else(does_not_fit)?;
+        let col_end = col0.checked_add(cols).ok_or_else(does_not_fit)?;
+        if rows == 0 || cols == 0 || row_end > grid.rows || col_end > grid.cols {
+            return Err(does_not_fit());
         }
         Ok((row0, col0, Grid::new(rows, cols)))
     }
@@ -231,5 +240,29 @@ mod tests {
                 .output_grid(Grid::new(16, 16))
                 .is_err()
         );
+    }
+
+    #[test]
+    fn crop_numbers_near_usize_max_are_an_error_not_a_wrap() {
+        let grid = Grid::new(44, 44);
+        let values = vec![1.0; grid.len()];
+        let frame = FrameView::new(grid, &values, None).unwrap();
+        let max = usize::MAX;
+        for text in [
+            format!("{max}:0:2:2"),
+            format!("0:{max}:2:2"),
+            format!("1:0:{max}:2"),
+            format!("0:1:2:{max}"),
+            format!("{max},1,0,0"),
+            format!("0,0,1,{max}"),
+        ] {
+            let crop = Crop::parse(&text).unwrap();
+            let err = crop.apply(&frame).unwrap_err();
+            assert!(
+                matches!(err, CoreError::Shape { what: "crop", ref got, .. } if *got == crop.to_string()),
+                "{text}: {err}"
+            );
+            assert!(err.to_string().contains(&text), "{err}");
+        }
     }
 }

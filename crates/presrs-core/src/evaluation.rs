@@ -165,13 +165,21 @@ pub struct EvalReport {
     pub confusion: Confusion,
     /// Median wall time of one classification (crop + features + PCA + classifier), nanoseconds.
     pub median_classify_ns: u64,
+    /// Perturbed test images the model could not classify (e.g. values beyond what its features can
+    /// represent), over all repeats. Each counts as a wrong answer in the accuracies and is missing from
+    /// the confusion matrix (it has no predicted class). An unperturbed image that cannot be classified
+    /// is an error instead: that is bad data, not a fault the evaluation injected.
+    #[serde(default)]
+    pub unclassified: u64,
 }
 
 /// A function that trains a model from training and validation sample indices (and a seed).
 type Trainer<'f> = dyn Fn(&[usize], &[usize], u64) -> Result<crate::pipeline::TrainedModel> + 'f;
 
 /// Changes a test image before it is classified: `(sample index, image, repeat seed) -> image` (fault
-/// injection, see [`crate::perturb`]). Training and validation images are never changed.
+/// injection, see [`crate::perturb`]). Training and validation images are never changed. A changed image
+/// the model cannot classify counts as a wrong answer ([`EvalReport::unclassified`]); an error of the
+/// transform itself stops the evaluation.
 pub type TestTransform<'f> = dyn Fn(usize, FrameView<'_>, u64) -> Result<Frame> + Sync + 'f;
 
 /// How each fold's model is trained.
@@ -353,6 +361,7 @@ impl Evaluation<'_, '_> {
             confusion: Confusion,
             times_ns: Vec<u64>,
             results: Vec<RepeatResult>,
+            unclassified: u64,
         }
         let mut tallies: Vec<Tally> = perturbs
             .iter()
@@ -360,6 +369,7 @@ impl Evaluation<'_, '_> {
                 confusion: Confusion::new(labels.clone()),
                 times_ns: Vec::new(),
                 results: Vec::with_capacity(repeats),
+                unclassified: 0,
             })
             .collect();
         for repeat in 0..repeats {
@@ -390,7 +400,8 @@ impl Evaluation<'_, '_> {
                     .zip(tallies.iter_mut())
                     .zip(correct_by_condition.iter_mut())
                 {
-                    let outcomes: Vec<Result<(usize, u64)>> = fold
+                    // `Ok(None)`: a perturbed image the model could not classify.
+                    let outcomes: Vec<Result<Option<(usize, u64)>>> = fold
                         .test
                         .par_iter()
                         .map_init(
@@ -402,14 +413,25 @@ impl Evaluation<'_, '_> {
                                 let frame =
                                     perturbed.as_ref().map_or(samples[i].frame, Frame::view);
                                 let start = Instant::now();
-                                let class = session.classify(&frame)?.class;
-                                Ok((class, start.elapsed().as_nanos() as u64))
+                                match session.classify(&frame) {
+                                    Ok(prediction) => Ok(Some((
+                                        prediction.class,
+                                        start.elapsed().as_nanos() as u64,
+                                    ))),
+                                    Err(_) if perturbed.is_some() => Ok(None),
+                                    Err(err) => Err(err),
+                                }
                             },
                         )
                         .collect();
                     let confusion = &mut tally.confusion;
                     for (&i, outcome) in fold.test.iter().zip(outcomes) {
-                        let (predicted, ns) = outcome?;
+                        let Some((predicted, ns)) = outcome? else {
+                            // A wrong answer, with no predicted class for the confusion matrix.
+                            tally.unclassified += 1;
+                            correct.entry(fold.key_of(&samples[i])).or_default().1 += 1;
+                            continue;
+                        };
                         tally.times_ns.push(ns);
                         let predicted_label = &model.class_names()[predicted];
                         let truth = confusion
@@ -449,7 +471,12 @@ impl Evaluation<'_, '_> {
         }
         Ok(tallies
             .into_iter()
-            .map(|tally| report_of(protocol, tally.results, tally.confusion, tally.times_ns))
+            .map(|tally| {
+                let mut report =
+                    report_of(protocol, tally.results, tally.confusion, tally.times_ns);
+                report.unclassified = tally.unclassified;
+                report
+            })
             .collect())
     }
 }
@@ -492,6 +519,7 @@ fn report_of(
         per_condition,
         confusion,
         median_classify_ns,
+        unclassified: 0,
     }
 }
 
@@ -813,6 +841,48 @@ mod tests {
             assert_eq!(report.per_condition, alone.per_condition);
         }
         assert!(each[2].overall.mean < each[0].overall.mean);
+    }
+
+    #[test]
+    fn a_perturbed_image_that_cannot_be_classified_is_a_wrong_answer_not_an_abort() {
+        let data = data();
+        let samples = samples(&data);
+        let protocol = g2_protocol();
+        let config = paper_config_with_dims(20);
+        let huge = crate::perturb::Perturbation::Load(1e308);
+        let heavy =
+            |i: usize, frame: FrameView<'_>, seed: u64| Ok(huge.apply(frame, seed, i as u64));
+        // Every other test image is made unclassifiable (values saturated at f64::MAX); the rest stay.
+        let half = |i: usize, frame: FrameView<'_>, seed: u64| {
+            Ok(if i % 2 == 0 {
+                huge.apply(frame, seed, i as u64)
+            } else {
+                frame.to_frame()
+            })
+        };
+        let perturbs: [Option<&TestTransform<'_>>; 3] = [None, Some(&heavy), Some(&half)];
+        let reports = evaluation(&samples, &protocol, 1, 5)
+            .run_each(Models::Config(&config), &perturbs)
+            .unwrap()
+            .reports;
+        let (plain, heavy, half) = (&reports[0], &reports[1], &reports[2]);
+        let n_test = plain.repeats[0].n_test as u64;
+        let counted = |r: &EvalReport| r.confusion.counts.iter().flatten().sum::<u64>();
+        let hits = |r: &EvalReport| (0..4).map(|i| r.confusion.counts[i][i]).sum::<u64>();
+        assert_eq!(plain.unclassified, 0);
+        assert_eq!(
+            heavy.unclassified, n_test,
+            "no image that large can be classified"
+        );
+        assert_eq!(counted(heavy), 0);
+        assert_eq!(heavy.overall.mean, 0.0);
+        let even = samples.len() as u64 / 2;
+        assert!(half.unclassified > 0 && half.unclassified <= even);
+        assert_eq!(counted(half) + half.unclassified, n_test);
+        // The unclassified images count as wrong answers: accuracy over every tested image.
+        let accuracy = hits(half) as f64 / n_test as f64;
+        assert!((half.overall.mean - accuracy).abs() < 1e-12);
+        assert!(half.overall.mean < plain.overall.mean);
     }
 
     #[test]

@@ -124,7 +124,9 @@ impl Frame {
     }
 }
 
-/// A borrowed pressure image (a frame of a recording, or an owned [`Frame`]).
+/// A borrowed pressure image (a frame of a recording, or an owned [`Frame`]). Unlike a [`Frame`], a view
+/// built with [`FrameView::new`] does not zero its absent sensels (it cannot: it borrows); what it holds
+/// there is not a reading, and [`total`](Self::total) ignores it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameView<'a> {
     grid: Grid,
@@ -167,9 +169,20 @@ impl<'a> FrameView<'a> {
             .is_none_or(|mask| mask[self.grid.index(row, col)])
     }
 
-    /// Sum of all present values: the frame's total load in value units per sensel.
+    /// Sum of the present values (absent sensels count 0, whatever the view holds there): the frame's
+    /// total load in value units per sensel.
     pub fn total(&self) -> f64 {
-        self.values.iter().sum()
+        match self.present {
+            // The common case, and the online classifier's per-frame path: a plain sum.
+            None => self.values.iter().sum(),
+            Some(mask) => self
+                .values
+                .iter()
+                .zip(mask)
+                .filter(|&(_, &here)| here)
+                .map(|(&value, _)| value)
+                .sum(),
+        }
     }
 
     pub fn to_frame(&self) -> Frame {
@@ -201,6 +214,16 @@ mod tests {
     fn rejects_wrong_length() {
         assert!(Frame::new(Grid::new(2, 3), vec![0.0; 5]).is_err());
         assert!(FrameView::new(Grid::new(2, 3), &[0.0; 6], Some(&[true; 5])).is_err());
+    }
+
+    #[test]
+    fn total_counts_present_sensels_only() {
+        let values = [1.0, 100.0, 3.0, f64::NAN];
+        let mask = [true, false, true, false];
+        let view = FrameView::new(Grid::new(2, 2), &values, Some(&mask)).unwrap();
+        assert_eq!(view.total(), 4.0);
+        let all = FrameView::new(Grid::new(1, 3), &values[..3], None).unwrap();
+        assert_eq!(all.total(), 104.0);
     }
 
     #[test]

@@ -25,8 +25,9 @@
 //!   `on` (a short weak run is dropped when it ends); kept runs at most `max_gap_frames` apart form one
 //!   stance; a stance is *confirmed* once it is `min_stance_frames` long and has exceeded `on` (it can
 //!   only grow after that). Touchdown is reported at confirmation (normally 2 frames after contact),
-//!   lift-off once `max_gap_frames` unloaded frames have followed the last loaded one (no later run can
-//!   join it any more).
+//!   lift-off at the `max_gap_frames + 1`-th unloaded frame after the last loaded one: a run that starts
+//!   after a gap of `max_gap_frames` unloaded frames still joins the stance, so only then can no later
+//!   run join it.
 //! * **Partial stances.** A stance already under way at the first frame the detector judges (frame 0, or
 //!   the end of the warm-up) is partial: reported, never sampled. One still open when the stream ends
 //!   ([`CausalSegmenter::finish`]) is partial if it reached the last frame, as offline.
@@ -66,6 +67,9 @@ pub const RANGE_PRIOR_FRACTION: f64 = 0.5;
 pub const MAX_FUSION_FRAMES: usize = 32;
 /// The paper's sample: the 7th frame of a stance (0-based offset 6), the default `k`.
 pub const PAPER_SAMPLE_OFFSET: usize = 6;
+/// Largest sample or fusion offset accepted, frames (1000 s at 100 Hz; a stance lasts well under a
+/// second).
+pub const MAX_OFFSET_FRAMES: usize = 100_000;
 
 /// Baseline, noise and load range of the total load, as the offline segmentation measures them.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -141,10 +145,11 @@ pub fn typical_stance_frames(stance_lengths: &[usize]) -> Option<usize> {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OnlineParams {
-    /// `k`: the frame classified is the `k`-th after touchdown (0 = touchdown). Default 6, the paper's 7th
-    /// frame; learn it with [`sample_offset_for`].
+    /// `k`: the frame classified is the `k`-th after touchdown (0 = touchdown), at most
+    /// [`MAX_OFFSET_FRAMES`]. Default 6, the paper's 7th frame; learn it with [`sample_offset_for`].
     pub sample_offset: usize,
-    /// Offsets after touchdown whose posteriors are averaged into a second, fused decision (empty: none).
+    /// Offsets after touchdown whose posteriors are averaged into a second, fused decision (empty: none;
+    /// at most [`MAX_FUSION_FRAMES`] of them, each at most [`MAX_OFFSET_FRAMES`]).
     pub fusion_offsets: Vec<usize>,
     /// Without a calibration, the first frames are used to calibrate (default 128; at least 8).
     pub warmup_frames: usize,
@@ -162,6 +167,27 @@ impl Default for OnlineParams {
 
 impl OnlineParams {
     fn check(&self) -> Result<()> {
+        if self.sample_offset > MAX_OFFSET_FRAMES {
+            return Err(CoreError::Param {
+                name: "sample_offset",
+                reason: format!(
+                    "must be at most {MAX_OFFSET_FRAMES} frames after touchdown, got {}",
+                    self.sample_offset
+                ),
+            });
+        }
+        if let Some(&offset) = self
+            .fusion_offsets
+            .iter()
+            .find(|&&offset| offset > MAX_OFFSET_FRAMES)
+        {
+            return Err(CoreError::Param {
+                name: "fusion_offsets",
+                reason: format!(
+                    "each must be at most {MAX_OFFSET_FRAMES} frames after touchdown, got {offset}"
+                ),
+            });
+        }
         if self.fusion_offsets.len() > MAX_FUSION_FRAMES {
             return Err(CoreError::Param {
                 name: "fusion_offsets",
@@ -233,10 +259,12 @@ pub struct Liftoff {
     pub stance_id: u64,
     /// The stance, as [`crate::stance::segment`] reports it.
     pub stance: Stance,
-    /// Frame at which the end was decided (`max_gap_frames` after the last loaded frame, or the last frame
-    /// of the stream).
+    /// Frame at which the end was decided (`max_gap_frames + 1` frames after the last loaded frame, or
+    /// the last frame of the stream).
     pub frame: usize,
-    /// Whether the stance got its (single-frame) decision.
+    /// Whether the stance got its (single-frame) decision. From [`CausalSegmenter`], whether it asked
+    /// for one; from [`OnlineClassifier`], whether a decision was made (false when the sample frame
+    /// could not be classified, see [`OnlineEvent::Failed`]).
     pub sampled: bool,
 }
 
@@ -567,10 +595,11 @@ impl CausalSegmenter {
         // A copy of the sample frame is kept in case it cannot be decided now (stance not yet confirmed,
         // or a dropout frame); the candidate stance may still be a run that is not yet kept.
         let hold_for = match (&self.group, &self.run) {
-            (Some(g), _) => (!g.partial && !g.sample_done && t == g.start + k).then_some(g.id),
-            (None, Some(r)) => {
-                (r.start != self.detect_from && t == r.start + k).then_some(self.next_id)
+            (Some(g), _) => {
+                (!g.partial && !g.sample_done && g.start.checked_add(k) == Some(t)).then_some(g.id)
             }
+            (None, Some(r)) => (r.start != self.detect_from && r.start.checked_add(k) == Some(t))
+                .then_some(self.next_id),
             (None, None) => None,
         };
         if let Some(stance_id) = hold_for {
@@ -587,8 +616,11 @@ impl CausalSegmenter {
                 }));
             }
             if !group.partial {
-                let sample = group.start + k;
-                if !group.sample_done && group.confirmed && sample < group.end {
+                if let Some(sample) = group.start.checked_add(k)
+                    && !group.sample_done
+                    && group.confirmed
+                    && sample < group.end
+                {
                     group.sample_done = true;
                     events.push(SegEvent::ClassifySample {
                         stance_id: group.id,
@@ -784,11 +816,29 @@ pub struct Decision {
     slot: usize,
 }
 
+/// A frame the classifier was asked for but could not classify (e.g. its values are so large that its
+/// features overflow). The reason is in [`Step::error`]; the stance goes on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Failure {
+    pub stance_id: u64,
+    /// The decision the frame was for: the single sample (which the stance then does not get), or one
+    /// frame of the fusion (which goes on without it).
+    pub kind: DecisionKind,
+    /// The frame that could not be classified.
+    pub sample_frame: usize,
+    /// Frame whose arrival triggered the attempt.
+    pub frame: usize,
+    /// Index of the error in the step's error buffer.
+    slot: usize,
+}
+
 /// One output of [`OnlineClassifier::push`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OnlineEvent {
     Touchdown(Touchdown),
     Decision(Decision),
+    /// A frame to classify could not be: no decision from it (see [`Failure`]).
+    Failed(Failure),
     Liftoff(Liftoff),
 }
 
@@ -797,6 +847,7 @@ pub enum OnlineEvent {
 pub struct Step<'a> {
     pub events: &'a [OnlineEvent],
     posteriors: &'a [f64],
+    errors: &'a [CoreError],
     n_classes: usize,
 }
 
@@ -807,6 +858,11 @@ impl<'a> Step<'a> {
         self.posteriors
             .get(start..start + self.n_classes)
             .unwrap_or(&[])
+    }
+
+    /// Why the frame of `failure` could not be classified.
+    pub fn error(&self, failure: &Failure) -> Option<&'a CoreError> {
+        self.errors.get(failure.slot)
     }
 }
 
@@ -835,12 +891,16 @@ pub struct OnlineClassifier<'m> {
     fusion_frames: usize,
     fusion_last: usize,
     /// The current frame's classification, once made in this push (the sample frame is usually also a
-    /// fusion frame: it is classified once, not twice).
-    current: Option<(usize, f64)>,
+    /// fusion frame: it is classified once, not twice); `Err` holds the index of its error in `errors`.
+    current: Option<std::result::Result<(usize, f64), usize>>,
     current_posteriors: Vec<f64>,
+    /// The last stance that got its single decision (for [`Liftoff::sampled`]).
+    decided_stance: Option<u64>,
     n_classes: usize,
     events: Vec<OnlineEvent>,
     posteriors: Vec<f64>,
+    /// Why the frames of this step's [`Failure`]s could not be classified (empty unless one failed).
+    errors: Vec<CoreError>,
     stats: OnlineStats,
 }
 
@@ -865,9 +925,11 @@ impl<'m> OnlineClassifier<'m> {
             fusion_last: 0,
             current: None,
             current_posteriors: vec![0.0; n_classes],
+            decided_stance: None,
             n_classes,
             events: Vec::with_capacity(MAX_SEG_EVENTS),
             posteriors: Vec::with_capacity(MAX_SEG_EVENTS * n_classes),
+            errors: Vec::new(),
             stats: OnlineStats::default(),
         })
     }
@@ -889,14 +951,31 @@ impl<'m> OnlineClassifier<'m> {
         self.grid
     }
 
-    /// Judges the next frame. A frame of another grid than the first one, or with non-finite values, is
-    /// an error and is not counted; the stream can go on.
+    /// Judges the next frame. A frame of another grid than the first one, a first frame whose grid the
+    /// model cannot classify (its crop does not give the model's image), or a frame with a non-finite
+    /// total load is an error and is not counted; the stream can go on. A counted frame whose
+    /// classification fails (its values overflow the features) still gives its touchdown and lift-off
+    /// events, with an [`OnlineEvent::Failed`] in place of the decision.
     pub fn push(&mut self, frame: &FrameView<'_>) -> Result<Step<'_>> {
         self.events.clear();
         self.posteriors.clear();
+        self.errors.clear();
         let grid = frame.grid();
         match self.grid {
             None => {
+                let model = self.session.model();
+                if model.crop().output_grid(grid).ok() != Some(model.image_grid()) {
+                    self.stats.rejected_frames += 1;
+                    return Err(CoreError::Shape {
+                        what: "stream frame",
+                        expected: format!(
+                            "a grid that the model's crop {} turns into its {} image",
+                            model.crop(),
+                            model.image_grid()
+                        ),
+                        got: grid.to_string(),
+                    });
+                }
                 self.grid = Some(grid);
                 self.held = vec![0.0; grid.len()];
                 self.held_present = vec![true; grid.len()];
@@ -921,7 +1000,7 @@ impl<'m> OnlineClassifier<'m> {
         };
         self.stats.frames += 1;
         let t = self.segmenter.frames_seen() - 1;
-        self.handle(seg_events, Some(frame), t)?;
+        self.handle(seg_events, Some(frame), t);
         Ok(self.step())
     }
 
@@ -929,9 +1008,10 @@ impl<'m> OnlineClassifier<'m> {
     pub fn finish(&mut self) -> Result<Step<'_>> {
         self.events.clear();
         self.posteriors.clear();
+        self.errors.clear();
         let seg_events = self.segmenter.finish()?;
         let t = self.segmenter.frames_seen().saturating_sub(1);
-        self.handle(seg_events, None, t)?;
+        self.handle(seg_events, None, t);
         Ok(self.step())
     }
 
@@ -939,24 +1019,64 @@ impl<'m> OnlineClassifier<'m> {
         Step {
             events: &self.events,
             posteriors: &self.posteriors,
+            errors: &self.errors,
             n_classes: self.n_classes,
         }
     }
 
-    /// Classifies the current frame once per push; later requests reuse the result.
-    fn classify_current(&mut self, frame: &FrameView<'_>) -> Result<(usize, f64)> {
-        if let Some(result) = self.current {
-            return Ok(result);
-        }
-        let prediction = self.session.classify(frame)?;
-        self.current_posteriors
-            .copy_from_slice(prediction.posteriors);
-        let result = (prediction.class, prediction.confidence);
-        self.current = Some(result);
-        Ok(result)
+    /// Keeps `err` for this step; its index in the error buffer.
+    fn keep_error(&mut self, err: CoreError) -> usize {
+        self.errors.push(err);
+        self.errors.len() - 1
     }
 
-    fn handle(&mut self, events: SegEvents, frame: Option<&FrameView<'_>>, t: usize) -> Result<()> {
+    /// Classifies the current frame once per push; later requests reuse the result (or the failure:
+    /// the index of its error).
+    fn classify_current(
+        &mut self,
+        frame: &FrameView<'_>,
+    ) -> std::result::Result<(usize, f64), usize> {
+        if let Some(result) = self.current {
+            return result;
+        }
+        let result = match self.session.classify(frame) {
+            Ok(prediction) => {
+                self.current_posteriors
+                    .copy_from_slice(prediction.posteriors);
+                Ok((prediction.class, prediction.confidence))
+            }
+            Err(err) => Err(self.keep_error(err)),
+        };
+        self.current = Some(result);
+        result
+    }
+
+    /// Classifies the held copy of the sample frame (once: the copy is then released).
+    fn classify_held(
+        &mut self,
+        stance_id: u64,
+        sample_frame: usize,
+    ) -> std::result::Result<(usize, f64), usize> {
+        if !self.held_valid {
+            return Err(self.keep_error(CoreError::NotEnoughData(format!(
+                "stance {stance_id}: no copy of its sample frame {sample_frame} was kept"
+            ))));
+        }
+        self.held_valid = false;
+        let mask = self.held_has_mask.then_some(self.held_present.as_slice());
+        let grid = self.grid.unwrap_or(Grid::new(0, 0));
+        let outcome = FrameView::new(grid, &self.held, mask).and_then(|view| {
+            self.session.classify(&view).map(|prediction| {
+                self.posteriors.extend_from_slice(prediction.posteriors);
+                (prediction.class, prediction.confidence)
+            })
+        });
+        outcome.map_err(|err| self.keep_error(err))
+    }
+
+    /// Turns the segmenter's requests for one frame into events. Never fails: a frame that cannot be
+    /// classified gives an [`OnlineEvent::Failed`], and the other events of the frame are kept.
+    fn handle(&mut self, events: SegEvents, frame: Option<&FrameView<'_>>, t: usize) {
         self.current = None;
         for event in events.iter() {
             match event {
@@ -982,24 +1102,30 @@ impl<'m> OnlineClassifier<'m> {
                     frame: sample_frame,
                     held,
                 } => {
-                    let (class, confidence) = if held {
-                        if !self.held_valid {
-                            continue;
-                        }
-                        self.held_valid = false;
-                        let mask = self.held_has_mask.then_some(self.held_present.as_slice());
-                        let grid = self.grid.unwrap_or(Grid::new(0, 0));
-                        let view = FrameView::new(grid, &self.held, mask)?;
-                        let prediction = self.session.classify(&view)?;
-                        self.posteriors.extend_from_slice(prediction.posteriors);
-                        (prediction.class, prediction.confidence)
+                    let outcome = if held {
+                        self.classify_held(stance_id, sample_frame)
                     } else {
                         let Some(frame) = frame else {
                             continue;
                         };
-                        let result = self.classify_current(frame)?;
-                        self.posteriors.extend_from_slice(&self.current_posteriors);
-                        result
+                        let outcome = self.classify_current(frame);
+                        if outcome.is_ok() {
+                            self.posteriors.extend_from_slice(&self.current_posteriors);
+                        }
+                        outcome
+                    };
+                    let (class, confidence) = match outcome {
+                        Ok(result) => result,
+                        Err(slot) => {
+                            self.events.push(OnlineEvent::Failed(Failure {
+                                stance_id,
+                                kind: DecisionKind::Single,
+                                sample_frame,
+                                frame: t,
+                                slot,
+                            }));
+                            continue;
+                        }
                     };
                     let slot = (self.posteriors.len() / self.n_classes.max(1)).saturating_sub(1);
                     let decision = Decision {
@@ -1014,16 +1140,29 @@ impl<'m> OnlineClassifier<'m> {
                         slot,
                     };
                     self.stats.decisions += 1;
+                    self.decided_stance = Some(stance_id);
                     self.events.push(OnlineEvent::Decision(decision));
                 }
-                SegEvent::FuseCurrent { .. } => {
+                SegEvent::FuseCurrent { stance_id } => {
                     if let Some(frame) = frame {
-                        self.classify_current(frame)?;
-                        for (sum, p) in self.fusion_sum.iter_mut().zip(&self.current_posteriors) {
-                            *sum += p;
+                        match self.classify_current(frame) {
+                            Ok(_) => {
+                                for (sum, p) in
+                                    self.fusion_sum.iter_mut().zip(&self.current_posteriors)
+                                {
+                                    *sum += p;
+                                }
+                                self.fusion_frames += 1;
+                                self.fusion_last = t;
+                            }
+                            Err(slot) => self.events.push(OnlineEvent::Failed(Failure {
+                                stance_id,
+                                kind: DecisionKind::Fused,
+                                sample_frame: t,
+                                frame: t,
+                                slot,
+                            })),
                         }
-                        self.fusion_frames += 1;
-                        self.fusion_last = t;
                     }
                 }
                 SegEvent::FusionReady {
@@ -1060,13 +1199,13 @@ impl<'m> OnlineClassifier<'m> {
                     self.fusion_sum.fill(0.0);
                     self.fusion_frames = 0;
                 }
-                SegEvent::Liftoff(liftoff) => {
+                SegEvent::Liftoff(mut liftoff) => {
                     self.held_valid = false;
+                    liftoff.sampled &= self.decided_stance == Some(liftoff.stance_id);
                     self.events.push(OnlineEvent::Liftoff(liftoff));
                 }
             }
         }
-        Ok(())
     }
 }
 

@@ -15,7 +15,11 @@
 //!
 //! Every random choice comes from the seed: sensor faults (`dead`, `stuck`, `gain`) depend on the seed
 //! and the grid only, as a faulty sensor would affect every image alike; `noise` also depends on the
-//! image's index. Absent sensels (outside the sensor's outline) stay absent and 0.
+//! image's index. Absent sensels (outside the sensor's outline) read 0 to every perturbation (whatever a
+//! borrowed view holds there) and stay absent and 0. Values stay finite: a result beyond the range of
+//! `f64` (e.g. `load=1e308`) saturates at `±f64::MAX`; an image that large may still be beyond what a
+//! model's features can represent, which an evaluation counts as a wrong answer
+//! ([`crate::evaluation::EvalReport::unclassified`]).
 
 use std::fmt;
 use std::str::FromStr;
@@ -122,9 +126,20 @@ impl Perturbation {
     }
 
     /// A perturbed copy of `frame`. `seed` fixes the sensor faults; `index` (the image's number) varies
-    /// the noise from image to image.
+    /// the noise from image to image. Finite values stay finite (saturated at `±f64::MAX`).
     pub fn apply(&self, frame: FrameView<'_>, seed: u64, index: u64) -> Frame {
         let grid = frame.grid();
+        // A view may hold anything at its absent sensels: every perturbation reads them as 0 (the centre
+        // of pressure of `rotate`, the maximum of `stuck`, the sensels `shift` moves).
+        let zeroed = frame.present().map(|mask| {
+            let values = frame.values().iter().zip(mask);
+            let values = values
+                .map(|(&v, &here)| if here { v } else { 0.0 })
+                .collect();
+            Frame::with_mask(grid, values, Some(mask.to_vec()))
+                .unwrap_or_else(|_| Frame::zeros(grid))
+        });
+        let frame = zeroed.as_ref().map_or(frame, Frame::view);
         let present = |i: usize| frame.present().is_none_or(|p| p[i]);
         let mut values = frame.values().to_vec();
         // Sensor faults: a stream that depends on the seed and the grid only.
@@ -183,17 +198,18 @@ impl Perturbation {
             Self::Rotate(degrees) => rotate(frame, degrees, &mut values),
             Self::Load(factor) => values.iter_mut().for_each(|v| *v *= factor),
         }
-        // Absent sensels stay absent and read 0.
-        if let Some(mask) = frame.present() {
-            for (v, &here) in values.iter_mut().zip(mask) {
-                if !here {
-                    *v = 0.0;
-                }
+        // Absent sensels stay absent and read 0; an overflow saturates instead of becoming infinite.
+        let mask = frame.present();
+        for (i, v) in values.iter_mut().enumerate() {
+            if mask.is_some_and(|mask| !mask[i]) {
+                *v = 0.0;
+            } else {
+                *v = v.clamp(-f64::MAX, f64::MAX);
             }
         }
-        let mask = frame.present().map(<[bool]>::to_vec);
-        // The grid and mask are the input's, and every value is finite: this cannot fail.
-        Frame::with_mask(grid, values, mask).unwrap_or_else(|_| Frame::zeros(grid))
+        // The grid and mask are the input's: this cannot fail.
+        Frame::with_mask(grid, values, mask.map(<[bool]>::to_vec))
+            .unwrap_or_else(|_| Frame::zeros(grid))
     }
 }
 
@@ -205,7 +221,8 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Rotates the image by `degrees` (counter-clockwise with rows growing downwards) about its centre of
-/// pressure, by bilinear interpolation of the source at each output sensel.
+/// pressure (the grid's centre for an empty image, or one whose moments overflow), by bilinear
+/// interpolation of the source at each output sensel.
 fn rotate(frame: FrameView<'_>, degrees: f64, out: &mut [f64]) {
     let Grid { rows, cols } = frame.grid();
     let total = frame.total();
@@ -219,7 +236,10 @@ fn rotate(frame: FrameView<'_>, degrees: f64, out: &mut [f64]) {
                 sc += v * c as f64;
             }
         }
-        (cr, cc) = (sr / total, sc / total);
+        let (r, c) = (sr / total, sc / total);
+        if r.is_finite() && c.is_finite() {
+            (cr, cc) = (r, c);
+        }
     }
     let (sin, cos) = degrees.to_radians().sin_cos();
     let sample = |r: f64, c: f64| -> f64 {
@@ -465,6 +485,51 @@ mod tests {
         assert!((t.total() - 15.0).abs() < 5.0, "{}", t.total());
         let heavier = Perturbation::Load(1.5).apply(frame.view(), 0, 0);
         assert_eq!(heavier.view().total(), 22.5);
+    }
+
+    #[test]
+    fn values_stay_finite() {
+        let frame = ramp(Grid::new(6, 5));
+        for p in [
+            Perturbation::Load(1e308),
+            Perturbation::Gain(1e308),
+            Perturbation::Noise(1e308),
+        ] {
+            let out = p.apply(frame.view(), 3, 1);
+            assert!(out.values().iter().all(|v| v.is_finite()), "{p}: {out:?}");
+        }
+        let out = Perturbation::Load(1e308).apply(frame.view(), 0, 0);
+        for (&v, &x) in out.values().iter().zip(frame.values()) {
+            // 1 x 1e308 fits; 2 x 1e308 and more saturate.
+            assert_eq!(v, if x < 1.5 { 1e308 } else { f64::MAX });
+        }
+        let big = Frame::new(Grid::new(3, 3), vec![f64::MAX; 9]).unwrap();
+        for p in [Perturbation::Rotate(30.0), Perturbation::Stuck(0.5)] {
+            let out = p.apply(big.view(), 0, 0);
+            assert!(out.values().iter().all(|v| v.is_finite()), "{p}: {out:?}");
+        }
+    }
+
+    #[test]
+    fn what_a_view_holds_at_absent_sensels_is_read_as_zero() {
+        let grid = Grid::new(5, 5);
+        let mask: Vec<bool> = (0..25).map(|i| i % 5 != 4).collect();
+        let clean: Vec<f64> = (0..25)
+            .map(|i| if i % 5 == 4 { 0.0 } else { (i % 7) as f64 })
+            .collect();
+        let mut dirty = clean.clone();
+        for i in (4..25).step_by(5) {
+            dirty[i] = 1000.0;
+        }
+        let clean = FrameView::new(grid, &clean, Some(&mask)).unwrap();
+        let dirty = FrameView::new(grid, &dirty, Some(&mask)).unwrap();
+        for p in [
+            Perturbation::Rotate(20.0),
+            Perturbation::Stuck(0.2),
+            Perturbation::Shift(0, -1),
+        ] {
+            assert_eq!(p.apply(dirty, 1, 0), p.apply(clean, 1, 0), "{p}");
+        }
     }
 
     #[test]

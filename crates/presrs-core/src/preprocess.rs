@@ -107,7 +107,7 @@ pub fn fill_from_neighbours(
     )?;
     let all = |_: usize| true;
     let hole = |i: usize| !present.is_none_or(|p| p[i]) || dead.is_some_and(|d| d[i]);
-    fill_holes(values, grid, &all, &hole, scratch);
+    fill_holes(values, grid, &all, &hole, Unreachable::Zero, scratch);
     Ok(())
 }
 
@@ -157,17 +157,30 @@ pub fn fill_dead_sensels(
     )?;
     let exists = |i: usize| present.is_none_or(|p| p[i]);
     let hole = |i: usize| exists(i) && dead[i];
-    fill_holes(values, grid, &exists, &hole, scratch);
+    fill_holes(values, grid, &exists, &hole, Unreachable::Keep, scratch);
     Ok(())
 }
 
+/// What becomes of holes that no known sensel can be reached from.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Unreachable {
+    /// They read 0 (an image with nothing known: [`fill_from_neighbours`]).
+    Zero,
+    /// They keep their values ([`fill_dead_sensels`]).
+    Keep,
+}
+
 /// The filling shared by [`fill_from_neighbours`] and [`fill_dead_sensels`]: sensels for which
-/// `hole` holds are filled from the neighbours for which `exists` holds (holes are a subset of those).
+/// `hole` holds are filled from the neighbours for which `exists` holds (holes are a subset of those),
+/// starting from the known ones (existing, not holes). Only holes reachable from a known sensel through
+/// existing sensels are filled, and only from known or already filled neighbours; the others are left
+/// to `unreachable`.
 fn fill_holes(
     values: &mut [f64],
     grid: Grid,
     exists: &dyn Fn(usize) -> bool,
     hole: &dyn Fn(usize) -> bool,
+    unreachable: Unreachable,
     scratch: &mut FillScratch,
 ) {
     let len = grid.len();
@@ -192,8 +205,10 @@ fn fill_holes(
         return;
     }
     if !any_known {
-        for &i in holes.iter() {
-            values[i] = 0.0;
+        if unreachable == Unreachable::Zero {
+            for &i in holes.iter() {
+                values[i] = 0.0;
+            }
         }
         return;
     }
@@ -244,6 +259,16 @@ fn fill_holes(
             known[i] = true;
         }
         remaining -= seeded.len();
+    }
+    // Holes left unseeded are cut off: none of them touches a known or seeded sensel, so relaxing the
+    // seeded ones never reads them, and they keep their values.
+    if remaining > 0 {
+        if unreachable == Unreachable::Zero {
+            for &i in holes.iter().filter(|&&i| !known[i]) {
+                values[i] = 0.0;
+            }
+        }
+        holes.retain(|&i| known[i]);
     }
     // Relax: each hole becomes the mean of all its existing neighbours (Gauss-Seidel), until it settles.
     let scale = values
@@ -299,6 +324,53 @@ mod tests {
         let mut v = [0.0; 4];
         assert_eq!(normalise_load(&mut v), 0.0);
         assert_eq!(v, [0.0; 4]);
+    }
+
+    #[test]
+    fn dead_sensels_without_a_live_sensel_keep_their_values() {
+        // Every present sensel is dead (the absent one holds 0): nothing to fill from.
+        let grid = Grid::new(1, 3);
+        let mut v = [5.0, 7.0, 0.0];
+        let mut scratch = FillScratch::new(3);
+        let present = [true, true, false];
+        let dead = [true, true, false];
+        fill_dead_sensels(&mut v, grid, Some(&present), &dead, &mut scratch).unwrap();
+        assert_eq!(v, [5.0, 7.0, 0.0]);
+        // No mask and every sensel dead.
+        let mut v = [5.0, 7.0, 9.0];
+        fill_dead_sensels(&mut v, grid, None, &[true; 3], &mut scratch).unwrap();
+        assert_eq!(v, [5.0, 7.0, 9.0]);
+    }
+
+    #[test]
+    fn a_dead_cluster_cut_off_by_absent_sensels_keeps_its_values() {
+        // Row: live 1, absent, dead 4, dead 8, absent, dead 20 next to live 10 and 30.
+        let grid = Grid::new(1, 8);
+        let present = [true, false, true, true, false, true, true, true];
+        let dead = [false, false, true, true, false, false, true, false];
+        let mut v = [1.0, 0.0, 4.0, 8.0, 0.0, 10.0, 20.0, 30.0];
+        let mut scratch = FillScratch::new(8);
+        fill_dead_sensels(&mut v, grid, Some(&present), &dead, &mut scratch).unwrap();
+        assert_eq!(
+            v[..6],
+            [1.0, 0.0, 4.0, 8.0, 0.0, 10.0],
+            "the cut-off pair is untouched"
+        );
+        assert!((v[6] - 20.0).abs() < 1e-9, "{v:?}");
+        assert_eq!(v[7], 30.0);
+        // The same cut-off pair beside a reachable dead pair: only the reachable one is filled.
+        let grid = Grid::new(2, 4);
+        let present = [true, false, true, true, true, true, false, false];
+        let dead = [false, false, true, true, true, true, false, false];
+        let mut v = [2.0, 0.0, 4.0, 8.0, 3.0, 5.0, 0.0, 0.0];
+        fill_dead_sensels(&mut v, grid, Some(&present), &dead, &mut scratch).unwrap();
+        // The dead (0,2), (0,3) touch only each other and absent sensels: cut off. The dead (1,0), (1,1)
+        // are reachable from the live (0,0) = 2 and take its value.
+        assert_eq!(v[2..4], [4.0, 8.0]);
+        assert!(
+            (v[4] - 2.0).abs() < 1e-9 && (v[5] - 2.0).abs() < 1e-9,
+            "{v:?}"
+        );
     }
 
     #[test]

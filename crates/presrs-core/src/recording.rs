@@ -187,21 +187,16 @@ impl Recording {
         })
     }
 
-    /// A one-frame recording.
-    pub fn from_frame(frame: Frame, meta: SensorMeta) -> Self {
+    /// A one-frame recording. Fails, as [`with_info`](Self::with_info) does, for a frame without any
+    /// sensel.
+    pub fn from_frame(frame: Frame, meta: SensorMeta) -> Result<Self> {
         let grid = frame.grid();
         let present = frame.present().map(<[bool]>::to_vec);
-        Self {
-            grid,
-            frame_period_s: None,
-            present,
-            data: frame.into_values(),
-            info: vec![FrameInfo {
-                number: 1,
-                suffix: None,
-            }],
-            meta,
-        }
+        let info = vec![FrameInfo {
+            number: 1,
+            suffix: None,
+        }];
+        Self::with_info(grid, None, frame.into_values(), present, info, meta)
     }
 
     pub fn grid(&self) -> Grid {
@@ -232,7 +227,8 @@ impl Recording {
     /// Frame `index` (0-based), or `None` past the end.
     pub fn frame(&self, index: usize) -> Option<FrameView<'_>> {
         let len = self.grid.len();
-        let values = self.data.get(index * len..(index + 1) * len)?;
+        let start = index.checked_mul(len)?;
+        let values = self.data.get(start..start.checked_add(len)?)?;
         FrameView::new(self.grid, values, self.present.as_deref()).ok()
     }
 
@@ -282,6 +278,22 @@ mod tests {
         assert!(
             Recording::new(grid, Some(0.0), vec![0.0; 8], None, SensorMeta::default()).is_err()
         );
+    }
+
+    #[test]
+    fn a_recording_needs_a_sensel_and_far_indices_are_none() {
+        for grid in [Grid::new(0, 3), Grid::new(3, 0)] {
+            let err = Recording::from_frame(Frame::zeros(grid), SensorMeta::default()).unwrap_err();
+            assert!(err.to_string().contains("at least one sensel"), "{err}");
+        }
+        let frame = Frame::new(Grid::new(1, 2), vec![4.0, 5.0]).unwrap();
+        let rec = Recording::from_frame(frame, SensorMeta::default()).unwrap();
+        assert_eq!(rec.frame_count(), 1);
+        assert_eq!(rec.total_per_frame(), vec![9.0]);
+        assert_eq!(rec.frame(0).unwrap().values(), &[4.0, 5.0]);
+        // index * len overflows: past the end, not a panic or a wrapped slice.
+        assert!(rec.frame(usize::MAX).is_none());
+        assert!(rec.frame(usize::MAX / 2 + 1).is_none());
     }
 
     #[test]

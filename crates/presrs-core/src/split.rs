@@ -125,7 +125,8 @@ pub fn stratified_split(
                 }
             }
         };
-        if picked < n_validation + 1 {
+        // Not `picked < n_validation + 1`: the count comes from the command line and may be usize::MAX.
+        if n_validation >= picked {
             return Err(CoreError::NotEnoughData(format!(
                 "class {class:?}: {picked} picked samples cannot give {n_validation} for validation and \
                  at least one for training"
@@ -197,6 +198,14 @@ mod tests {
         let labels = labels();
         assert!(stratified_split(&labels, Some(31), ValidationSize::Count(7), 1).is_err());
         assert!(stratified_split(&labels, Some(5), ValidationSize::Count(5), 1).is_err());
+        assert!(matches!(
+            stratified_split(&labels, Some(5), ValidationSize::Count(usize::MAX), 1),
+            Err(CoreError::NotEnoughData(_))
+        ));
+        assert!(matches!(
+            stratified_split(&labels, None, ValidationSize::Count(usize::MAX), 1),
+            Err(CoreError::NotEnoughData(_))
+        ));
         assert!("1.5".parse::<ValidationSize>().is_err());
         assert_eq!(
             "7".parse::<ValidationSize>().unwrap(),

@@ -7,8 +7,8 @@
 use std::f64::consts::PI;
 
 use presrs_core::online::{
-    Calibration, CausalSegmenter, DecisionKind, OnlineClassifier, OnlineEvent, OnlineParams,
-    SegEvent,
+    Calibration, CausalSegmenter, DecisionKind, MAX_OFFSET_FRAMES, OnlineClassifier, OnlineEvent,
+    OnlineParams, SegEvent,
 };
 use presrs_core::pipeline::{bench_fixture, synthetic_frame};
 use presrs_core::stance::{ValidSegmentParams, segment};
@@ -288,4 +288,194 @@ fn causal_and_offline_agree_on_noisy_drifting_series() {
         );
         assert_eq!(online.len(), complete.len(), "trial {trial}: same count");
     }
+}
+
+#[test]
+fn sample_and_fusion_offsets_are_bounded() {
+    let params = ValidSegmentParams::default();
+    for online in [
+        OnlineParams {
+            sample_offset: usize::MAX,
+            ..OnlineParams::default()
+        },
+        OnlineParams {
+            sample_offset: MAX_OFFSET_FRAMES + 1,
+            ..OnlineParams::default()
+        },
+        OnlineParams {
+            fusion_offsets: vec![4, usize::MAX],
+            ..OnlineParams::default()
+        },
+    ] {
+        let err = CausalSegmenter::new(&params, &online, None).unwrap_err();
+        let text = err.to_string();
+        assert!(
+            text.contains("sample_offset") || text.contains("fusion_offsets"),
+            "{text}"
+        );
+    }
+    // The largest offset allowed runs: the stance ends long before its sample frame, so it is reported
+    // and not sampled.
+    let (frames, truth) = stream(&[14], 5, 4);
+    let online = OnlineParams {
+        sample_offset: MAX_OFFSET_FRAMES,
+        ..OnlineParams::default()
+    };
+    let mut seg = CausalSegmenter::new(&params, &online, Some(calibration(&frames))).unwrap();
+    let mut liftoffs = Vec::new();
+    for frame in &frames {
+        for e in seg.push(frame.view().total()).unwrap().iter() {
+            assert!(!matches!(e, SegEvent::ClassifySample { .. }), "{e:?}");
+            if let SegEvent::Liftoff(l) = e {
+                liftoffs.push(l);
+            }
+        }
+    }
+    assert_eq!(liftoffs.len(), 1);
+    assert_eq!(liftoffs[0].stance.start, truth[0].0);
+    assert!(!liftoffs[0].sampled);
+}
+
+#[test]
+fn a_first_frame_the_model_cannot_classify_is_rejected_up_front() {
+    let (model, _) = bench_fixture(3, 0).unwrap();
+    let (frames, _) = stream(&[14], 5, 5);
+    let mut classifier = OnlineClassifier::new(
+        &model,
+        &ValidSegmentParams::default(),
+        &OnlineParams::default(),
+        Some(calibration(&frames)),
+    )
+    .unwrap();
+    // The paper's crop (drop 6 rows, 3 columns) does not give the model's 38x41 image from 16x16.
+    let err = classifier
+        .push(&Frame::zeros(Grid::new(16, 16)).view())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("16x16") && err.contains("38x41") && err.contains("crop"),
+        "{err}"
+    );
+    assert_eq!(classifier.grid(), None, "the rejected frame sets no grid");
+    // The stream goes on with frames the model can classify.
+    let mut decisions = 0;
+    for frame in &frames {
+        let step = classifier.push(&frame.view()).unwrap();
+        decisions += step
+            .events
+            .iter()
+            .filter(|e| matches!(e, OnlineEvent::Decision(_)))
+            .count();
+    }
+    assert_eq!(decisions, 1);
+    assert_eq!(classifier.stats().rejected_frames, 1);
+    assert_eq!(classifier.stats().frames, frames.len() as u64);
+}
+
+/// `frame` with `+1e308` and `-1e308` at two neighbouring sensels inside the paper's crop: its total load
+/// is unchanged (the pair cancels) but its features overflow, so the model cannot classify it.
+fn unclassifiable(frame: &Frame) -> Frame {
+    let mut bad = frame.clone();
+    bad.values_mut()[3] = 1e308;
+    bad.values_mut()[4] = -1e308;
+    bad
+}
+
+#[test]
+fn a_frame_that_cannot_be_classified_keeps_the_events_of_its_frame() {
+    let (model, _) = bench_fixture(3, 0).unwrap();
+    let (mut frames, truth) = stream(&[14, 14, 14], 10, 6);
+    let cal = calibration(&frames);
+    // k = 0: the sample is the touchdown frame, held and classified at confirmation, the frame whose
+    // events include the touchdown. The second stance's first frames cannot be classified.
+    let (start, _, _) = truth[1];
+    assert!(frames[start - 1].view().total() < 100.0);
+    for frame in &mut frames[start..start + 3] {
+        *frame = unclassifiable(frame);
+    }
+    assert!(model.session().classify(&frames[start].view()).is_err());
+    let online = OnlineParams {
+        sample_offset: 0,
+        fusion_offsets: vec![2, 5],
+        ..OnlineParams::default()
+    };
+    let mut classifier =
+        OnlineClassifier::new(&model, &ValidSegmentParams::default(), &online, Some(cal)).unwrap();
+    let mut events = Vec::new();
+    let mut messages = Vec::new();
+    for frame in &frames {
+        let step = classifier.push(&frame.view()).unwrap();
+        for e in step.events {
+            if let OnlineEvent::Failed(f) = e {
+                messages.push(step.error(f).unwrap().to_string());
+            }
+        }
+        events.extend_from_slice(step.events);
+    }
+    events.extend_from_slice(classifier.finish().unwrap().events);
+    let of = |id: u64| -> Vec<OnlineEvent> {
+        events
+            .iter()
+            .copied()
+            .filter(|e| match e {
+                OnlineEvent::Touchdown(td) => td.stance_id == id,
+                OnlineEvent::Decision(d) => d.stance_id == id,
+                OnlineEvent::Failed(f) => f.stance_id == id,
+                OnlineEvent::Liftoff(l) => l.stance_id == id,
+            })
+            .collect()
+    };
+    for id in [0, 2] {
+        let evs = of(id);
+        assert!(matches!(evs[0], OnlineEvent::Touchdown(_)), "{evs:?}");
+        assert!(
+            matches!(evs.last(), Some(OnlineEvent::Liftoff(l)) if l.sampled),
+            "{evs:?}"
+        );
+        assert!(!evs.iter().any(|e| matches!(e, OnlineEvent::Failed(_))));
+    }
+    let evs = of(1);
+    assert!(
+        matches!(evs[0], OnlineEvent::Touchdown(_)),
+        "touchdown kept: {evs:?}"
+    );
+    let single = evs
+        .iter()
+        .find_map(|e| match e {
+            OnlineEvent::Failed(f) if f.kind == DecisionKind::Single => Some(*f),
+            _ => None,
+        })
+        .unwrap();
+    assert_eq!(single.sample_frame, start);
+    // Fusion frame 2 (the confirmation frame) failed too; frame 5 is fine, so the fused decision comes
+    // from it alone.
+    assert!(evs.iter().any(
+        |e| matches!(e, OnlineEvent::Failed(f) if f.kind == DecisionKind::Fused && f.sample_frame == start + 2)
+    ));
+    let fused: Vec<_> = evs
+        .iter()
+        .filter_map(|e| match e {
+            OnlineEvent::Decision(d) => Some(*d),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(fused.len(), 1, "{evs:?}");
+    assert_eq!(
+        (fused[0].kind, fused[0].frames_used, fused[0].sample_frame),
+        (DecisionKind::Fused, 1, start + 5)
+    );
+    let Some(OnlineEvent::Liftoff(liftoff)) = evs.last() else {
+        panic!("no lift-off: {evs:?}");
+    };
+    assert!(!liftoff.sampled, "no single decision was made");
+    assert!(
+        messages.iter().all(|m| m.contains("NaN or infinite")),
+        "{messages:?}"
+    );
+    let stats = classifier.stats();
+    assert_eq!(
+        (stats.stances, stats.decisions, stats.fused_decisions),
+        (3, 2, 3)
+    );
+    assert_eq!(stats.rejected_frames, 0);
 }

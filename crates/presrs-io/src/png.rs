@@ -113,7 +113,10 @@ pub fn parse_png(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
         file: file.to_owned(),
         source,
     })?;
-    Ok(Recording::from_frame(frame, SensorMeta::default()))
+    Recording::from_frame(frame, SensorMeta::default()).map_err(|source| IoError::Model {
+        file: file.to_owned(),
+        source,
+    })
 }
 
 /// Writes `pixels` (row-major, `grid.rows x grid.cols`) as an 8-bit greyscale PNG.

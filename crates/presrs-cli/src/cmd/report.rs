@@ -659,6 +659,7 @@ fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> anyhow::Result<
             .collect(),
         confusion: Confusion { labels, counts },
         median_classify_ns: (elapsed.as_nanos() / samples.len().max(1) as u128) as u64,
+        unclassified: 0,
     })
 }
 

@@ -199,6 +199,12 @@ fn run_connection(
                     .and_then(|view| classifier.push(&view).map(|step| (step, Instant::now())));
                 match pushed {
                     Ok((step, decided)) => {
+                        let failed = step
+                            .events
+                            .iter()
+                            .filter(|event| matches!(event, OnlineEvent::Failed(_)))
+                            .count();
+                        summary.errors += failed as u64;
                         let latency_us = decided.duration_since(arrival).as_secs_f64() * 1e6;
                         for line in event_lines(&step, model, profile, latency_us, timestamp_us) {
                             if !emit(line) {
@@ -303,6 +309,19 @@ fn event_lines(
                     "gait": profile.gait_table.get(label),
                 })
             }
+            OnlineEvent::Failed(f) => json!({
+                "event": "error",
+                "message": format!(
+                    "stance {}: frame {} could not be classified ({} decision): {}",
+                    f.stance_id,
+                    f.sample_frame,
+                    match f.kind { DecisionKind::Single => "single", DecisionKind::Fused => "fused" },
+                    step.error(f).map_or_else(|| "unknown error".to_owned(), ToString::to_string)
+                ),
+                "fatal": false,
+                "stance": f.stance_id,
+                "frame": f.frame,
+            }),
             OnlineEvent::Liftoff(lo) => json!({
                 "event": "liftoff",
                 "stance": lo.stance_id,
