@@ -44,6 +44,18 @@ pub fn socket_addr(text: &str) -> Result<SocketAddr, String> {
         .map_err(|_| format!("expected IP:PORT (e.g. 127.0.0.1:7700), got {text:?}"))
 }
 
+/// A loopback `IP:PORT` (what `stream --listen` serves on).
+pub fn loopback_addr(text: &str) -> Result<SocketAddr, String> {
+    let addr = socket_addr(text)?;
+    if addr.ip().is_loopback() {
+        Ok(addr)
+    } else {
+        Err(format!(
+            "{text}: only loopback addresses are served (127.0.0.1 or [::1])"
+        ))
+    }
+}
+
 /// `NAME=VALUE` with neither side empty (both trimmed); `what` names the form in the message.
 pub fn name_value(text: &str, what: &str) -> Result<(String, String), String> {
     text.split_once('=')
@@ -70,6 +82,10 @@ mod tests {
             assert!(positive_number(bad).is_err(), "{bad}");
         }
         assert!(socket_addr("nonsense").is_err());
+        assert!(loopback_addr("127.0.0.1:0").is_ok());
+        assert!(loopback_addr("[::1]:7700").is_ok());
+        let err = loopback_addr("0.0.0.0:0").unwrap_err();
+        assert!(err.contains("only loopback"), "{err}");
         assert_eq!(
             name_value(" grass = G3 ", "TERRAIN=GAIT").unwrap(),
             ("grass".to_owned(), "G3".to_owned())
