@@ -111,10 +111,41 @@ fn export_writes_a_model_images_and_matching_predictions() {
 }
 
 #[test]
-fn bench_rejects_zero_batch_runs() {
-    let out = presrs(&["bench", "--synthetic", "--batch-runs", "0"]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(stderr(&out).contains("--batch-runs"), "{}", stderr(&out));
+fn bench_rejects_zero_counts_as_bad_usage() {
+    for option in ["--batch-runs", "--batch", "--iterations"] {
+        let out = presrs(&["bench", "--synthetic", option, "0"]);
+        assert_eq!(out.status.code(), Some(2), "{option}: {}", stderr(&out));
+        assert!(stderr(&out).contains(option), "{}", stderr(&out));
+    }
+}
+
+#[test]
+fn bench_text_keeps_its_label_column() {
+    let out = presrs(&[
+        "bench",
+        "--synthetic",
+        "--iterations",
+        "10",
+        "--batch",
+        "4",
+        "--batch-runs",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    // Every line but the continuation one is a label padded to 27 columns, then its value.
+    let width = "batch throughput           ".len();
+    for line in text.lines().filter(|l| !l.starts_with("  ")) {
+        let (label, value) = line.split_at(width);
+        assert!(
+            label.ends_with(' ') && !value.starts_with(' '),
+            "the value of {line:?} does not start at column {width}:\n{text}"
+        );
+    }
+    assert!(
+        text.contains("paper                      245 us per image"),
+        "{text}"
+    );
 }
 
 #[test]

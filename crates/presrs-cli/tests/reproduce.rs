@@ -210,3 +210,60 @@ fn reproduce_reuses_matching_data_sets_and_resimulates_the_others() {
     assert!(!again_out.contains("reusing"), "{again_out}");
     assert_eq!(data_results(&other), data_results(&again));
 }
+
+#[test]
+fn options_that_cannot_work_are_refused_before_simulating() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let out_s = out.to_str().unwrap();
+    for (args, says) in [
+        (&["--hops-per-gait", "0"][..], "--hops-per-gait"),
+        // Fewer hops than training images drawn per terrain (the default --per-class 20).
+        (&["--hops-per-gait", "3"], "--per-class 20"),
+        (
+            &[
+                "--hops-per-gait",
+                "5",
+                "--per-class",
+                "6",
+                "--validation",
+                "2",
+            ],
+            "give --hops-per-gait 6 or more, or a --per-class of at most 5 with a smaller --validation (now 2)",
+        ),
+        (
+            &[
+                "--hops-per-gait",
+                "4",
+                "--per-class",
+                "3",
+                "--validation",
+                "3",
+            ],
+            "--validation 3 must be smaller than --per-class 3",
+        ),
+        // The test hopper weighs nominal x (1 + extra load): it must stay above 0.
+        (&["--hops-per-gait", "4", "--extra-load=-1"], "--extra-load"),
+        (
+            &["--hops-per-gait", "4", "--extra-load", "nan"],
+            "--extra-load",
+        ),
+        (&["--hops-per-gait", "4", "--repeats", "0"], "--repeats"),
+    ] {
+        let mut all = vec!["reproduce", "--out", out_s];
+        all.extend(args);
+        let output = presrs(&all);
+        assert_eq!(
+            output.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            stderr(&output)
+        );
+        assert!(
+            stderr(&output).contains(says),
+            "{args:?}: {}",
+            stderr(&output)
+        );
+        assert!(!out.join("dataset").exists(), "{args:?} simulated");
+    }
+}

@@ -176,6 +176,85 @@ fn print_config_and_overrides_and_image_terrain() {
         .args(["--terrains", "sand"])
         .output()
         .unwrap();
-    assert_eq!(output.status.code(), Some(1));
+    assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("unknown terrain"));
+}
+
+/// `presrs simulate --out DIR ARGS`, expected to be refused as bad usage (exit 2) before writing
+/// anything; returns stderr.
+fn refused(args: &[&str]) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let output = Command::new(env!("CARGO_BIN_EXE_presrs"))
+        .args(["simulate", "--out"])
+        .arg(&out)
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    stderr
+}
+
+#[test]
+fn terrains_and_gaits_are_named_once_and_images_not_after_built_ins() {
+    let texture = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/textures/grass.png")
+        .display()
+        .to_string();
+    let err = refused(&["--terrains", "wood,clay,wood", "--hops-per-gait", "1"]);
+    assert!(err.contains("--terrains lists wood twice"), "{err}");
+    let err = refused(&["--gaits", "G2,G2", "--hops-per-gait", "1"]);
+    assert!(err.contains("--gaits lists G2 twice"), "{err}");
+    // An image called like a built-in (the built-in would be simulated), with or without --terrains.
+    let image = format!("wood={texture}");
+    let err = refused(&["--terrain-image", &image, "--hops-per-gait", "1"]);
+    assert!(err.contains("wood is a built-in terrain"), "{err}");
+    let err = refused(&["--terrains", "clay", "--terrain-image", &image]);
+    assert!(err.contains("wood is a built-in terrain"), "{err}");
+    // Two images of one name; an image left out of --terrains.
+    let a = format!("photo={texture}");
+    let err = refused(&["--terrain-image", &a, "--terrain-image", &a]);
+    assert!(err.contains("gives the name photo to two images"), "{err}");
+    let err = refused(&["--terrains", "clay", "--terrain-image", &a]);
+    assert!(
+        err.contains("--terrain-image photo is not among --terrains"),
+        "{err}"
+    );
+    let err = refused(&["--gaits", "G9"]);
+    assert!(err.contains("--gaits G9: unknown gait"), "{err}");
+}
+
+#[test]
+fn bad_option_values_are_bad_usage() {
+    for (args, says) in [
+        (&["--hops-per-gait", "0"][..], "--hops-per-gait"),
+        (&["--load", "0"], "--load"),
+        (&["--load", "nan"], "--load"),
+        (&["--terrain-image", "foo"], "NAME=PNG"),
+        (&["--track", "foo"], "TERRAIN:METRES"),
+        (&["--track", "mud:3"], "unknown terrain \"mud\""),
+        (&["--track", "wood:1", "--repeats", "0"], "--repeats"),
+        (&["--track", "wood:1", "--start-gait", "G2"], "--adaptive"),
+        (
+            &["--track", "wood:1", "--fixed-gait", "G9"],
+            "--fixed-gait G9",
+        ),
+        // Judged before the model is even read.
+        (
+            &[
+                "--track",
+                "wood:1",
+                "--adaptive",
+                "no-such-model.json",
+                "--start-gait",
+                "G9",
+            ],
+            "--start-gait G9: unknown gait",
+        ),
+    ] {
+        let err = refused(args);
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
 }

@@ -293,6 +293,11 @@ fn several_clients_at_once_and_faulty_clients_do_not_disturb_them() {
         (end["event"].as_str(), end["frames"].as_u64()),
         (Some("end"), Some(2))
     );
+    // The wrong size, the unknown dtype and the NaN frame were rejected; with the fatal one, 4 errors.
+    assert_eq!(
+        (end["rejected_frames"].as_u64(), end["errors"].as_u64()),
+        (Some(3), Some(4))
+    );
 
     // Faulty client 2: half a frame, then gone.
     let mut cut = TcpStream::connect(&addr).unwrap();
@@ -386,7 +391,14 @@ fn malformed_tekscan_on_stdin_is_reported_and_skipped() {
     let writer = std::thread::spawn(move || stdin.write_all(body.as_bytes()));
     let out = child.wait_with_output().unwrap();
     writer.join().unwrap().unwrap();
-    assert!(out.status.success());
+    // The rest was classified, and the exit code says the input was bad.
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{log}");
+    assert!(log.contains("1 rejected frames, 1 errors"), "{log}");
+    assert!(
+        log.contains("error: stdin: 1 rejected frame(s), 1 error(s)"),
+        "{log}"
+    );
     let events = json_lines(&String::from_utf8(out.stdout).unwrap());
     let errors: Vec<&Value> = events.iter().filter(|e| e["event"] == "error").collect();
     assert_eq!(errors.len(), 1, "{errors:?}");
@@ -401,5 +413,143 @@ fn malformed_tekscan_on_stdin_is_reported_and_skipped() {
         .unwrap()
         .frame_count();
     assert_eq!(end["frames"].as_u64().unwrap() as usize, frames - 1);
+    assert_eq!(
+        (end["rejected_frames"].as_u64(), end["errors"].as_u64()),
+        (Some(1), Some(1))
+    );
     assert!(count(&events, "classification") > 0);
+}
+
+/// `presrs stream --model MODEL` (+ `extra`) on `input` as stdin: exit code, JSON events, stderr.
+fn stream_stdin(extra: &[&str], input: Vec<u8>) -> (Option<i32>, Vec<Value>, String) {
+    let (_, model) = fixture();
+    let mut child = presrs()
+        .args(["stream", "--model", model.to_str().unwrap()])
+        .args(extra)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let writer = std::thread::spawn(move || stdin.write_all(&input));
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap().unwrap();
+    let events = json_lines(&String::from_utf8(out.stdout).unwrap());
+    (
+        out.status.code(),
+        events,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn a_good_stream_exits_0_and_says_what_the_warm_up_took() {
+    let text = std::fs::read(recording("wood")).unwrap();
+    let (code, events, log) = stream_stdin(&[], text);
+    assert_eq!(code, Some(0), "{log}");
+    assert!(
+        log.contains("warm-up calibration done on the first 128 frames: stances before frame 128 were not classified"),
+        "{log}"
+    );
+    assert!(log.contains("0 rejected frames, 0 errors"), "{log}");
+    assert_eq!(count(&events, "error"), 0);
+    // With a calibration there is no warm-up, and no note.
+    let (dir, _) = fixture();
+    let manifest = dir.join("manifest.csv");
+    let text = std::fs::read(recording("wood")).unwrap();
+    let (code, _, log) = stream_stdin(&["--calibrate", manifest.to_str().unwrap()], text);
+    assert_eq!(code, Some(0), "{log}");
+    assert!(!log.contains("warm-up"), "{log}");
+}
+
+#[test]
+fn a_truncated_last_frame_or_a_bad_cell_on_stdin_exits_1_after_the_rest() {
+    let text = std::fs::read_to_string(recording("wood")).unwrap();
+    // Cut inside the last frame's rows (5 of its 44 rows, no end marker).
+    let lines: Vec<&str> = text.lines().collect();
+    let last = lines.iter().rposition(|l| l.starts_with("Frame ")).unwrap();
+    let cut = lines[..=last + 5].join("\n");
+    let (code, events, log) = stream_stdin(&[], cut.into_bytes());
+    assert_eq!(code, Some(1), "{log}");
+    assert!(count(&events, "classification") > 0);
+    let end = events.last().unwrap();
+    assert_eq!(end["event"], "end");
+    assert_eq!(end["errors"].as_u64(), Some(count(&events, "error") as u64));
+    assert!(end["errors"].as_u64().unwrap() >= 1, "{log}");
+    // A non-numeric cell in frame 5.
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    let frame5 = lines.iter().position(|l| l == "Frame 5").unwrap();
+    lines[frame5 + 3] = lines[frame5 + 3].replacen('0', "x", 1);
+    let (code, events, log) = stream_stdin(&[], lines.join("\n").into_bytes());
+    assert_eq!(code, Some(1), "{log}");
+    let end = events.last().unwrap();
+    assert_eq!(
+        (end["rejected_frames"].as_u64(), end["errors"].as_u64()),
+        (Some(1), Some(1))
+    );
+    assert!(count(&events, "classification") > 0);
+}
+
+#[test]
+fn frames_the_model_cannot_use_are_rejected_and_counted() {
+    // A 60x21 foot-scan recording; the model was trained on 44x44 images.
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/tekscan/FrasP01L.asf");
+    let Ok(text) = std::fs::read(&path) else {
+        eprintln!("skipped: {} is not there", path.display());
+        return;
+    };
+    let frames = presrs_io::read_recording(&path).unwrap().frame_count() as u64;
+    let (code, events, log) = stream_stdin(&[], text);
+    assert_eq!(code, Some(1), "{log}");
+    let errors: Vec<&Value> = events.iter().filter(|e| e["event"] == "error").collect();
+    assert_eq!(errors.len() as u64, frames);
+    assert!(
+        errors[0]["message"]
+            .as_str()
+            .unwrap()
+            .starts_with("input frame 0 rejected: a 60x21 frame"),
+        "{errors:?}"
+    );
+    assert_eq!(count(&events, "classification"), 0);
+    let end = events.last().unwrap();
+    assert_eq!(
+        (
+            end["frames"].as_u64(),
+            end["rejected_frames"].as_u64(),
+            end["errors"].as_u64()
+        ),
+        (Some(0), Some(frames), Some(frames))
+    );
+    assert!(
+        log.contains(&format!("{frames} rejected frames, {frames} errors")),
+        "{log}"
+    );
+}
+
+#[test]
+fn bad_addresses_and_gait_entries_are_bad_usage() {
+    for args in [
+        &["stream", "--model", "m.json", "--listen", "nonsense"][..],
+        &["stream", "--model", "m.json", "--listen", "0.0.0.0:7700"],
+        &["stream", "--model", "m.json", "--gait", "wood"],
+        &["replay", "walk.asf", "--connect", "nonsense"],
+        &[
+            "replay",
+            "walk.asf",
+            "--connect",
+            "127.0.0.1:1",
+            "--rate",
+            "0",
+        ],
+    ] {
+        let out = presrs().args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("invalid value"), "{args:?}: {err}");
+    }
+    let help = presrs().args(["replay", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert_eq!(help.matches("[default: 100]").count(), 1, "{help}");
 }

@@ -163,8 +163,31 @@ pub struct Simulator {
 
 impl Simulator {
     /// Builds the foot and draws the sensor (gains, dead sensels) from the master seed.
+    ///
+    /// Every image terrain needs a name of its own: not empty, not a built-in terrain's (the built-in
+    /// would always be the one simulated), not another image's.
     pub fn new(config: SimConfig, seed: u64, images: Vec<(String, HeightMap)>) -> Result<Self> {
         config.validate()?;
+        for (i, (name, _)) in images.iter().enumerate() {
+            if name.trim().is_empty() {
+                return Err(param("image_terrains", "a height-map terrain has no name"));
+            }
+            if BUILTIN_TERRAINS.contains(&name.as_str()) {
+                return Err(param(
+                    "image_terrains",
+                    format!(
+                        "the height-map terrain {name:?} has the name of a built-in terrain; give it \
+                         another name"
+                    ),
+                ));
+            }
+            if images[..i].iter().any(|(other, _)| other == name) {
+                return Err(param(
+                    "image_terrains",
+                    format!("two height-map terrains are called {name:?}"),
+                ));
+            }
+        }
         let foot = Foot::new(config.foot.clone(), &config.skin)?;
         let mut rng = ChaCha8Rng::seed_from_u64(splitmix(seed ^ 0x5E45_0B5E_0000_0001));
         let r = &config.realism;
@@ -269,10 +292,31 @@ impl Simulator {
     }
 
     /// The trials of a data set, in a fixed order (terrain, gait, index).
+    ///
+    /// A data set has at least one terrain, gait and hop per terrain and gait, and names each terrain and
+    /// gait once: a repeated one would give two trials of the same name (one movie overwriting the other)
+    /// and the same images twice in the manifest, where they could be both trained on and tested.
     pub fn plan(&self, spec: &DatasetSpec) -> Result<Vec<TrialPlan>> {
         let hops = spec
             .hops_per_gait
             .unwrap_or(self.config.experiment.hops_per_gait);
+        if hops == 0 {
+            return Err(param(
+                "hops_per_gait",
+                "must be at least 1 (a data set without hops has no images)",
+            ));
+        }
+        for (what, names) in [("terrains", &spec.terrains), ("gaits", &spec.gaits)] {
+            if names.is_empty() {
+                return Err(param(what, "none given"));
+            }
+            if let Some(twice) = first_repeated(names) {
+                return Err(param(
+                    what,
+                    format!("{twice:?} is listed twice; each can be simulated once"),
+                ));
+            }
+        }
         let per_trial = self.config.experiment.hops_per_trial.max(1);
         let load = spec.load_kg.unwrap_or(self.config.robot.body_mass_kg);
         if !(load.is_finite() && load > 0.0) {
@@ -481,6 +525,15 @@ impl Simulator {
     }
 }
 
+/// The first item that `items` holds twice (at its second place).
+pub fn first_repeated<T: PartialEq>(items: &[T]) -> Option<&T> {
+    items
+        .iter()
+        .enumerate()
+        .find(|(i, item)| items[..*i].contains(item))
+        .map(|(_, item)| item)
+}
+
 /// Centre of pressure (forward, left), m, from the ankle's moment balance: the massless foot carries the
 /// ground reaction `(T, N)` at the CoP, the leg's push `(-T, -N)` at the ankle (height `h_a`), and the
 /// ankle spring's torque `k_a * beta`: `x_cop = -(h_a T + k_a beta) / N`; plus the hop's random offset.
@@ -604,7 +657,9 @@ impl VelocityTable {
             let _ = write!(out, "{g:<6}");
             for (t, v) in self.terrains.iter().zip(row) {
                 let cell = match Self::paper_value(g, t) {
-                    Some(p) => format!("{v:.2} ({p:.2}, {:+.0} %)", (v / p - 1.0) * 100.0),
+                    Some(p) => {
+                        format!("{v:.2} ({p:.2}, {})", signed_percent((v / p - 1.0) * 100.0))
+                    }
                     None => format!("{v:.2}"),
                 };
                 let _ = write!(out, "{cell:>24}");
@@ -612,5 +667,85 @@ impl VelocityTable {
             out.push('\n');
         }
         out
+    }
+}
+
+/// A signed whole percentage, `+19 %`, `-6 %`, and `0 %` for anything that rounds to zero (not `-0 %`).
+fn signed_percent(percent: f64) -> String {
+    let rounded = percent.round();
+    if rounded == 0.0 {
+        "0 %".to_owned()
+    } else {
+        format!("{rounded:+.0} %")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    fn map() -> HeightMap {
+        HeightMap::new(2, 2, vec![0.0, 1.0, 0.5, 0.25]).unwrap()
+    }
+
+    #[test]
+    fn image_terrains_need_names_of_their_own() {
+        let config = SimConfig::default();
+        let image = |name: &str| (name.to_owned(), map());
+        let err = Simulator::new(config.clone(), 1, vec![image("wood")]).unwrap_err();
+        assert!(
+            err.to_string().contains("name of a built-in terrain"),
+            "{err}"
+        );
+        let err = Simulator::new(config.clone(), 1, vec![image("a"), image("a")]).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("two height-map terrains are called \"a\""),
+            "{err}"
+        );
+        assert!(Simulator::new(config.clone(), 1, vec![image(" ")]).is_err());
+        Simulator::new(config, 1, vec![image("a"), image("b")]).unwrap();
+    }
+
+    #[test]
+    fn a_plan_refuses_repeated_names_and_zero_hops() {
+        let sim = Simulator::new(SimConfig::default(), 1, Vec::new()).unwrap();
+        let mut spec = DatasetSpec::paper(1);
+        spec.hops_per_gait = Some(1);
+        assert_eq!(sim.plan(&spec).unwrap().len(), 12);
+        let mut twice = spec.clone();
+        twice.terrains = vec!["wood".into(), "clay".into(), "wood".into()];
+        let err = sim.plan(&twice).unwrap_err().to_string();
+        assert!(err.contains("terrains: \"wood\" is listed twice"), "{err}");
+        let mut twice = spec.clone();
+        twice.gaits = vec!["G2".into(), "G2".into()];
+        let err = sim.plan(&twice).unwrap_err().to_string();
+        assert!(err.contains("gaits: \"G2\" is listed twice"), "{err}");
+        let mut none = spec.clone();
+        none.hops_per_gait = Some(0);
+        let err = sim.plan(&none).unwrap_err().to_string();
+        assert!(err.contains("hops_per_gait: must be at least 1"), "{err}");
+        let mut none = spec.clone();
+        none.terrains.clear();
+        assert!(sim.plan(&none).is_err());
+    }
+
+    #[test]
+    fn the_table_prints_no_negative_zero() {
+        assert_eq!(signed_percent(-0.3), "0 %");
+        assert_eq!(signed_percent(-0.0), "0 %");
+        assert_eq!(signed_percent(0.4), "0 %");
+        assert_eq!(signed_percent(19.2), "+19 %");
+        assert_eq!(signed_percent(-5.6), "-6 %");
+        let table = VelocityTable {
+            gaits: vec!["G1".into()],
+            terrains: vec!["carpet".into()],
+            velocity_m_per_s: vec![vec![0.43 * 0.999]],
+            hops: vec![vec![1]],
+        };
+        let text = table.format_with_paper();
+        assert!(text.contains("0.43 (0.43, 0 %)"), "{text}");
     }
 }

@@ -43,14 +43,14 @@ pub struct BenchArgs {
     /// Use the synthetic test pattern of presrs-core instead of the simulator (no simulation needed).
     #[arg(long)]
     pub synthetic: bool,
-    /// Timed single-image classifications.
-    #[arg(long, default_value_t = 20_000)]
+    /// Timed single-image classifications (at least 1).
+    #[arg(long, default_value_t = 20_000, value_parser = super::usage::positive_count)]
     pub iterations: usize,
-    /// Images in the batch-throughput run.
-    #[arg(long, default_value_t = 4096)]
+    /// Images in the batch-throughput run (at least 1).
+    #[arg(long, default_value_t = 4096, value_parser = super::usage::positive_count)]
     pub batch: usize,
-    /// Timed batch runs; the median throughput is reported.
-    #[arg(long, default_value_t = 5)]
+    /// Timed batch runs (at least 1); the median throughput is reported.
+    #[arg(long, default_value_t = 5, value_parser = super::usage::positive_count)]
     pub batch_runs: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -411,7 +411,10 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         report.batch,
         report.batch_runs_images_per_s.len()
     )?;
-    writeln!(out, "paper (2.67 GHz Core 2 Duo) 245 us per image")?;
+    writeln!(
+        out,
+        "paper                      245 us per image (2.67 GHz Core 2 Duo)"
+    )?;
     if let Some(dir) = &args.export {
         writeln!(out, "exported to                {}", dir.display())?;
     }

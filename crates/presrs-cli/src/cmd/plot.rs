@@ -35,14 +35,15 @@ pub struct PlotArgs {
     /// Animate the recording (GIF), with its load curve and detected stances under it.
     #[arg(long)]
     pub movie: bool,
-    /// Movie: show every N-th frame.
-    #[arg(long, default_value_t = 1)]
+    /// Movie: show every N-th frame (at least 1).
+    #[arg(long, default_value_t = 1, value_parser = super::usage::positive_count)]
     pub stride: usize,
-    /// Movie: at most this many frames (the stride grows to fit).
-    #[arg(long, default_value_t = 300)]
+    /// Movie: at most this many frames, at least 1 (the stride grows to fit).
+    #[arg(long, default_value_t = 300, value_parser = super::usage::positive_count)]
     pub max_frames: usize,
-    /// Top of the colour scale, in the shown unit (default: the image's maximum).
-    #[arg(long)]
+    /// Top of the colour scale, in the shown unit, a finite number above 0 (default: the image's
+    /// maximum).
+    #[arg(long, value_parser = super::usage::positive_number)]
     pub vmax: Option<f64>,
     /// Outline the region a classifier with this crop would use (default: none drawn).
     #[arg(long = "outline-crop", value_parser = |t: &str| presrs_core::Crop::parse(t).map_err(|e| e.to_string()))]

@@ -44,9 +44,9 @@ pub struct ReplayArgs {
     /// Recording to send (TekScan, NPY, PNG or text matrix).
     pub file: PathBuf,
     /// The server's address, e.g. 127.0.0.1:7700.
-    #[arg(long)]
-    pub connect: String,
-    /// Frames per second, or `max` [default: 100].
+    #[arg(long, value_name = "IP:PORT", value_parser = super::usage::socket_addr)]
+    pub connect: SocketAddr,
+    /// Frames per second, or `max`.
     #[arg(long, default_value = "100")]
     pub rate: Rate,
     /// Give up if the server does not answer within this many seconds after the last frame.
@@ -56,10 +56,7 @@ pub struct ReplayArgs {
 
 pub fn run(args: &ReplayArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let recording = presrs_io::read_recording(&args.file)?;
-    let addr: SocketAddr = args
-        .connect
-        .parse()
-        .with_context(|| format!("--connect expects IP:PORT, got {:?}", args.connect))?;
+    let addr = args.connect;
     let stream = TcpStream::connect_timeout(&addr, Duration::from_secs(5))
         .with_context(|| format!("cannot connect to {addr}"))?;
     let _ = stream.set_nodelay(true);

@@ -77,8 +77,8 @@ pub struct ReproduceArgs {
     /// Seed of the simulation and of the training draws.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Repeats of each training draw.
-    #[arg(long, default_value_t = 10)]
+    /// Repeats of each training draw, at least 1.
+    #[arg(long, default_value_t = 10, value_parser = super::usage::positive_count)]
     pub repeats: usize,
     /// Training images drawn per terrain (the paper's 20), of which --validation choose the Parzen
     /// window's sigma; smaller values allow a small --hops-per-gait (at least this many per gait).
@@ -87,14 +87,17 @@ pub struct ReproduceArgs {
     /// Of the --per-class images, how many validate (the paper's 7).
     #[arg(long, default_value_t = 7)]
     pub validation: usize,
-    /// Recorded hops per terrain and gait (default: the simulator's paper-sized experiment).
-    #[arg(long)]
+    /// Recorded hops per terrain and gait, at least --per-class (default: the simulator's paper-sized
+    /// experiment, 80).
+    #[arg(long, value_parser = super::usage::positive_count)]
     pub hops_per_gait: Option<usize>,
     /// Skip the HTML report (DIR/report/index.html).
     #[arg(long)]
     pub no_report: bool,
-    /// Extra load of the load-independence test, as a fraction of the nominal body mass.
-    #[arg(long, default_value_t = 0.3)]
+    /// Extra load of the load-independence test, as a fraction of the nominal body mass: the heavier
+    /// hopper weighs nominal x (1 + EXTRA_LOAD), so it must be above -1 (a negative value tests a
+    /// lighter hopper).
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, value_parser = parse_extra_load)]
     pub extra_load: f64,
     /// Skip the comparison of every feature family x classifier (same draws as Table II).
     #[arg(long)]
@@ -220,15 +223,51 @@ struct Results {
     timings_s: BTreeMap<String, f64>,
 }
 
+/// `--extra-load`: a finite fraction above -1 (the heavier hopper's mass stays positive).
+fn parse_extra_load(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > -1.0 => Ok(x),
+        _ => Err(format!(
+            "expected a fraction of the nominal body mass above -1 (the test hopper weighs nominal x \
+             (1 + EXTRA_LOAD)), got {text:?}"
+        )),
+    }
+}
+
+/// The options that must agree with each other, checked before anything is simulated: some of the
+/// --per-class images train, and every gait records at least --per-class images per terrain.
+fn check_args(args: &ReproduceArgs, config: &SimConfig) -> Result<(), String> {
+    if args.validation >= args.per_class {
+        return Err(format!(
+            "--validation {} must be smaller than --per-class {}: some images must train; give \
+             --validation {} or less, or a larger --per-class",
+            args.validation,
+            args.per_class,
+            args.per_class.saturating_sub(1)
+        ));
+    }
+    let hops = args
+        .hops_per_gait
+        .unwrap_or(config.experiment.hops_per_gait);
+    if hops < args.per_class {
+        return Err(format!(
+            "--hops-per-gait {hops} records {hops} images per terrain and gait, fewer than the \
+             --per-class {} training images drawn per terrain from the training gait; give \
+             --hops-per-gait {} or more, or a --per-class of at most {hops} with a smaller --validation \
+             (now {})",
+            args.per_class, args.per_class, args.validation
+        ));
+    }
+    Ok(())
+}
+
 pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
     let mut timings = BTreeMap::new();
-    anyhow::ensure!(
-        args.validation < args.per_class,
-        "--validation ({}) must be smaller than --per-class ({}): some images must train",
-        args.validation,
-        args.per_class
-    );
+    let sim_config = SimConfig::default();
+    if let Err(message) = check_args(args, &sim_config) {
+        super::usage::exit_usage("reproduce", message);
+    }
     let draw = Draw {
         per_class: args.per_class,
         validation: args.validation,
@@ -237,7 +276,6 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
 
     // 1. The data set: read back from DIR/dataset when it is the one this run would simulate.
-    let sim_config = SimConfig::default();
     let mut spec = DatasetSpec::paper(args.seed);
     spec.hops_per_gait = args.hops_per_gait;
     let mut datasets = BTreeMap::new();

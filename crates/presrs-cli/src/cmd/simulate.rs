@@ -21,6 +21,7 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use presrs_sim::dataset::{BUILTIN_TERRAINS, first_repeated};
 use presrs_sim::terrain::HeightMap;
 use presrs_sim::{
     Dataset, DatasetSpec, HopRecord, SimConfig, Simulator, TrialOutput, TrialPlan, VelocityTable,
@@ -38,18 +39,19 @@ pub struct SimulateArgs {
     /// Seed of every random choice; the same seed gives the same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Recorded hops (stance images) per terrain for each gait [default: 80, i.e. 320 per gait].
-    #[arg(long)]
+    /// Recorded hops (stance images) per terrain for each gait, at least 1 [default: 80, i.e. 320 per
+    /// gait].
+    #[arg(long, value_parser = super::usage::positive_count)]
     pub hops_per_gait: Option<usize>,
-    /// Terrains, comma separated: wood, carpet, clay, grass, or names given with --terrain-image
-    /// [default: the four built-ins plus every --terrain-image].
+    /// Terrains, comma separated, each once: wood, carpet, clay, grass, or names given with
+    /// --terrain-image [default: the four built-ins plus every --terrain-image].
     #[arg(long, value_delimiter = ',')]
     pub terrains: Vec<String>,
-    /// Gaits, comma separated (names from the configuration) [default: G1,G2,G3].
+    /// Gaits, comma separated, each once (names from the configuration) [default: G1,G2,G3].
     #[arg(long, value_delimiter = ',')]
     pub gaits: Vec<String>,
-    /// Body mass including payload, kg [default: the configuration's robot.body_mass_kg, 2.5].
-    #[arg(long)]
+    /// Body mass including payload, kg, above 0 [default: the configuration's robot.body_mass_kg, 2.5].
+    #[arg(long, value_parser = super::usage::positive_number)]
     pub load: Option<f64>,
     /// JSON file of parameter overrides (any subset of what --print-config shows).
     #[arg(long)]
@@ -58,12 +60,14 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub print_config: bool,
     /// A terrain given as a greyscale height-map image, NAME=PNG (repeatable), e.g.
-    /// --terrain-image photo_grass=../shared/data/textures/grass.png
-    #[arg(long, value_name = "NAME=PNG")]
-    pub terrain_image: Vec<String>,
-    /// Run a track instead of writing a data set: terrain:metres segments in sequence, e.g.
-    /// wood:3,grass:3,clay:3,carpet:3. Each fixed gait runs it (and the adaptive policy with --adaptive).
-    #[arg(long, value_name = "SPEC")]
+    /// --terrain-image photo_grass=../shared/data/textures/grass.png. NAME must differ from the
+    /// built-in terrains' names and from the other images'.
+    #[arg(long, value_name = "NAME=PNG", value_parser = parse_terrain_image_arg)]
+    pub terrain_image: Vec<TerrainImageArg>,
+    /// Run a track instead of writing a data set: terrain:metres segments in sequence (built-in
+    /// terrains), e.g. wood:3,grass:3,clay:3,carpet:3. Each fixed gait runs it (and the adaptive policy
+    /// with --adaptive).
+    #[arg(long, value_name = "SPEC", value_parser = parse_track_arg)]
     pub track: Option<String>,
     /// Model file for the adaptive run: every stance is classified online (the model's online profile)
     /// and the robot switches to the gait its terrain-to-gait table recommends. Without a table in the
@@ -79,22 +83,64 @@ pub struct SimulateArgs {
     /// The adaptive run switches gait only after this many consecutive stances classified as the same
     /// terrain (1: on every decision, the default: on 3 m segments a delay costs more than the wrong
     /// switches it saves).
-    #[arg(long, default_value_t = 1, requires = "adaptive")]
+    #[arg(long, default_value_t = 1, requires = "adaptive", value_parser = super::usage::positive_count)]
     pub confirm: usize,
     /// Fixed gaits to compare with, comma separated (configured gaits or variants such as G3@0.62)
     /// [default: every gait of the configuration and every gait the terrain-to-gait table recommends].
     #[arg(long, value_delimiter = ',', requires = "track")]
     pub fixed_gait: Vec<String>,
-    /// Gait of the adaptive run at the start line (it knows no terrain yet) [default: the second gait of
-    /// the configuration, G2].
-    #[arg(long, requires = "track")]
+    /// Gait of the adaptive run at the start line (it knows no terrain yet): a configured gait or a
+    /// variant such as G3@0.62 [default: the second gait of the configuration, G2].
+    #[arg(long, requires = "adaptive")]
     pub start_gait: Option<String>,
-    /// Runs per policy (seeds --seed, --seed + 1, ...); every policy runs on the same seeds.
-    #[arg(long, default_value_t = 3, requires = "track")]
+    /// Runs per policy, at least 1 (seeds --seed, --seed + 1, ...); every policy runs on the same seeds.
+    #[arg(long, default_value_t = 3, requires = "track", value_parser = super::usage::positive_count)]
     pub repeats: usize,
     /// Also write the comparison, every run and every hop as JSON to this file.
     #[arg(long, requires = "track")]
     pub json: Option<PathBuf>,
+}
+
+/// `--terrain-image NAME=PNG`, checked for its form and name (the image is read later).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainImageArg {
+    pub name: String,
+    pub path: PathBuf,
+}
+
+/// Parses `NAME=PNG`; NAME must not be a built-in terrain's (the built-in would be simulated, never the
+/// image).
+fn parse_terrain_image_arg(text: &str) -> Result<TerrainImageArg, String> {
+    let (name, path) = super::usage::name_value(text, "NAME=PNG")?;
+    if BUILTIN_TERRAINS.contains(&name.as_str()) {
+        return Err(format!(
+            "{name} is a built-in terrain ({}); give the image another name, e.g. {name}_image={path}",
+            BUILTIN_TERRAINS.join(", ")
+        ));
+    }
+    Ok(TerrainImageArg {
+        name,
+        path: PathBuf::from(path),
+    })
+}
+
+/// Checks a track (`TERRAIN:METRES,...` of built-in terrains); returns it as given.
+fn parse_track_arg(text: &str) -> Result<String, String> {
+    let segments = presrs_sim::track::parse_track(text).map_err(|e| match e {
+        presrs_sim::SimError::Param { reason, .. } => reason,
+        other => other.to_string(),
+    })?;
+    if let Some(unknown) = segments
+        .iter()
+        .find(|s| !BUILTIN_TERRAINS.contains(&s.terrain.as_str()))
+    {
+        return Err(format!(
+            "unknown terrain {:?}; a track runs on the built-in terrains {}",
+            unknown.terrain,
+            BUILTIN_TERRAINS.join(", ")
+        ));
+    }
+    Ok(text.to_owned())
 }
 
 /// What [`write_dataset`] wrote.
@@ -761,12 +807,8 @@ pub fn load_config(path: Option<&Path>) -> anyhow::Result<SimConfig> {
 }
 
 /// Reads `NAME=PNG` as a height map scaled to `[0, 1]` (darkest pixel 0, brightest 1).
-fn read_terrain_image(arg: &str) -> anyhow::Result<(String, HeightMap)> {
-    let (name, path) = arg
-        .split_once('=')
-        .filter(|(n, p)| !n.trim().is_empty() && !p.trim().is_empty())
-        .with_context(|| format!("--terrain-image expects NAME=PNG, got {arg:?}"))?;
-    let path = Path::new(path.trim());
+fn read_terrain_image(arg: &TerrainImageArg) -> anyhow::Result<(String, HeightMap)> {
+    let path = arg.path.as_path();
     let rec = presrs_io::png::read_png(path)
         .with_context(|| format!("cannot read the height map {}", path.display()))?;
     let grid = rec.grid();
@@ -783,7 +825,76 @@ fn read_terrain_image(arg: &str) -> anyhow::Result<(String, HeightMap)> {
         .collect();
     let map = HeightMap::new(grid.cols, grid.rows, scaled)
         .with_context(|| format!("unusable height map {}", path.display()))?;
-    Ok((name.trim().to_owned(), map))
+    Ok((arg.name.clone(), map))
+}
+
+/// The terrains and gaits a data set would simulate, checked against each other and the configuration:
+/// each named once, terrains built-in or given as images (every image used), gaits known. The error
+/// says what is wrong with which option.
+fn dataset_names(
+    args: &SimulateArgs,
+    config: &SimConfig,
+) -> Result<(Vec<String>, Vec<String>), String> {
+    let images: Vec<&str> = args.terrain_image.iter().map(|i| i.name.as_str()).collect();
+    if let Some(twice) = first_repeated(&images) {
+        return Err(format!(
+            "--terrain-image gives the name {twice} to two images; give each its own"
+        ));
+    }
+    let terrains: Vec<String> = if args.terrains.is_empty() {
+        let mut terrains = DatasetSpec::paper(args.seed).terrains;
+        terrains.extend(images.iter().map(|&n| n.to_owned()));
+        terrains
+    } else {
+        args.terrains.iter().map(|t| t.trim().to_owned()).collect()
+    };
+    if let Some(twice) = first_repeated(&terrains) {
+        return Err(format!(
+            "--terrains lists {twice} twice; list each terrain once (a repeated terrain's images would \
+             be in the manifest twice, and could be both trained on and tested)"
+        ));
+    }
+    for terrain in &terrains {
+        if !BUILTIN_TERRAINS.contains(&terrain.as_str()) && !images.contains(&terrain.as_str()) {
+            return Err(format!(
+                "--terrains: unknown terrain {terrain:?}; the built-in terrains are {}, others must be \
+                 given as height maps with --terrain-image {terrain}=PNG",
+                BUILTIN_TERRAINS.join(", ")
+            ));
+        }
+    }
+    if let Some(unused) = images.iter().find(|&&n| !terrains.iter().any(|t| t == n)) {
+        return Err(format!(
+            "--terrain-image {unused} is not among --terrains; add it there or leave the image out"
+        ));
+    }
+    let gaits: Vec<String> = if args.gaits.is_empty() {
+        DatasetSpec::paper(args.seed).gaits
+    } else {
+        args.gaits.iter().map(|g| g.trim().to_owned()).collect()
+    };
+    if let Some(twice) = first_repeated(&gaits) {
+        return Err(format!("--gaits lists {twice} twice; list each gait once"));
+    }
+    check_gaits("--gaits", &gaits, config)?;
+    Ok((terrains, gaits))
+}
+
+/// Checks that every gait of `gaits` is one of `config`'s or a variant `BASE@BETA` of one; the error
+/// names `option`.
+pub fn check_gaits<'a>(
+    option: &str,
+    gaits: impl IntoIterator<Item = &'a String>,
+    config: &SimConfig,
+) -> Result<(), String> {
+    let sim = Simulator::new(config.clone(), 0, Vec::new()).map_err(|e| e.to_string())?;
+    for gait in gaits {
+        sim.gait(gait.trim()).map_err(|e| match e {
+            presrs_sim::SimError::Param { reason, .. } => format!("{option} {gait}: {reason}"),
+            other => format!("{option} {gait}: {other}"),
+        })?;
+    }
+    Ok(())
 }
 
 pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
@@ -798,21 +909,16 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let Some(out_dir) = args.out.as_deref() else {
         anyhow::bail!("--out DIR is required");
     };
+    let (terrains, gaits) = dataset_names(args, &config)
+        .unwrap_or_else(|message| super::usage::exit_usage("simulate", message));
     let images = args
         .terrain_image
         .iter()
-        .map(|a| read_terrain_image(a))
+        .map(read_terrain_image)
         .collect::<anyhow::Result<Vec<_>>>()?;
     let mut spec = DatasetSpec::paper(args.seed);
-    if args.terrains.is_empty() {
-        spec.terrains
-            .extend(images.iter().map(|(name, _)| name.clone()));
-    } else {
-        spec.terrains = args.terrains.iter().map(|t| t.trim().to_owned()).collect();
-    }
-    if !args.gaits.is_empty() {
-        spec.gaits = args.gaits.iter().map(|g| g.trim().to_owned()).collect();
-    }
+    spec.terrains = terrains;
+    spec.gaits = gaits;
     spec.hops_per_gait = args.hops_per_gait;
     spec.load_kg = args.load;
     spec.image_terrains = images;

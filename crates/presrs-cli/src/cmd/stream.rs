@@ -5,6 +5,16 @@
 //! (`--listen 127.0.0.1:PORT`, several clients at once; protocol in `docs/stream-protocol.md`). Output:
 //! JSON lines (touchdown, classification, lift-off, error, end) to stdout, or back to each client.
 //!
+//! A bad frame (unreadable, non-finite, or of a size the model cannot use) is rejected with an `error`
+//! event and the stream goes on; the `end` event and the summary on stderr count it among
+//! `rejected_frames` and `errors`. A finite input (stdin) with any rejected frame or error exits with
+//! code 1 once it has been read to its end; the server (`--listen`) logs each connection's summary and
+//! keeps serving.
+//!
+//! Without a calibration (from `--profile`, `--calibrate` or the model file) the detector calibrates on
+//! the stream's first frames (the warm-up, [`OnlineParams::warmup_frames`](presrs_core::online::OnlineParams));
+//! stances in them are not classified, and a line on stderr says so when the warm-up ends.
+//!
 //! Each connection has its own causal detector and classifier session (`presrs_core::online`); the
 //! model is shared read-only. Faults never panic and never grow memory without bound: frame sizes are
 //! capped before reading, output to a client goes through a bounded queue (overflow is dropped and
@@ -39,15 +49,21 @@ pub enum StreamFormat {
 }
 
 /// Classify a live stream of pressure frames online.
+///
+/// Bad frames are rejected (an error event each) and the stream goes on; reading stdin, the exit code is
+/// 1 when any frame was rejected or any error occurred (after the whole input, and the summary on
+/// stderr), 0 otherwise. Without a calibration the first frames (128) calibrate the detector: stances in
+/// them are not classified (stderr says how many frames it took).
 #[derive(Debug, clap::Args)]
 pub struct StreamArgs {
     /// Model file from `presrs train`.
     #[arg(long)]
     pub model: PathBuf,
     /// Listen for binary-protocol clients on this loopback address (e.g. 127.0.0.1:7700; port 0 picks
-    /// one, printed as the first JSON line) instead of reading stdin.
-    #[arg(long)]
-    pub listen: Option<String>,
+    /// one, printed as the first JSON line) instead of reading stdin. A connection's errors end at most
+    /// that connection; the server keeps serving.
+    #[arg(long, value_name = "IP:PORT", value_parser = super::usage::loopback_addr)]
+    pub listen: Option<SocketAddr>,
     /// Format of stdin.
     #[arg(long, value_enum, default_value = "tekscan")]
     pub format: StreamFormat,
@@ -66,8 +82,9 @@ pub struct StreamArgs {
     #[arg(long, value_delimiter = ',')]
     pub fuse: Vec<usize>,
     /// Recommended gait per terrain, TERRAIN=GAIT, comma separated (added to the profile's table).
-    #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT")]
-    pub gait: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
+          value_parser = |t: &str| super::usage::name_value(t, "TERRAIN=GAIT"))]
+    pub gait: Vec<(String, String)>,
     /// Most simultaneous clients.
     #[arg(long, default_value_t = 16)]
     pub max_clients: usize,
@@ -105,14 +122,8 @@ pub fn resolve_profile(args: &StreamArgs, file: &ModelFile) -> anyhow::Result<On
     if !args.fuse.is_empty() {
         profile.params.fusion_offsets.clone_from(&args.fuse);
     }
-    for entry in &args.gait {
-        let (terrain, gait) = entry
-            .split_once('=')
-            .filter(|(t, g)| !t.trim().is_empty() && !g.trim().is_empty())
-            .with_context(|| format!("--gait expects TERRAIN=GAIT, got {entry:?}"))?;
-        profile
-            .gait_table
-            .insert(terrain.trim().to_owned(), gait.trim().to_owned());
+    for (terrain, gait) in &args.gait {
+        profile.gait_table.insert(terrain.clone(), gait.clone());
     }
     Ok(profile)
 }
@@ -152,10 +163,42 @@ enum Input {
 /// What one connection did.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ConnectionSummary {
+    /// The classifier's counters; its `rejected_frames` counts only the frames it refused itself.
     pub stats: OnlineStats,
+    /// Every frame that came and was not used: unreadable (skipped by the reader), of a size the model
+    /// cannot use, or refused by the classifier (another size than the first frame, non-finite values).
+    /// Each is also an error.
+    pub rejected_frames: u64,
+    /// Error events: the rejected frames, classifications that failed and a fatal fault.
     pub errors: u64,
     pub dropped_events: u64,
     pub fatal: bool,
+    /// Frames the warm-up calibration used (0 with a calibration given); stances in them were not
+    /// classified.
+    pub warmup_frames: u64,
+}
+
+impl ConnectionSummary {
+    /// Whether anything went wrong on the connection (a rejected frame or an error).
+    pub fn had_errors(&self) -> bool {
+        self.errors > 0 || self.rejected_frames > 0 || self.fatal
+    }
+}
+
+/// Why `grid` frames cannot be classified by `model` (its crop does not give the grid it was trained
+/// on), or `None` when they can.
+fn unusable_for_model(model: &TrainedModel, grid: Grid) -> Option<String> {
+    let crop = model.crop();
+    match crop.window(grid) {
+        Ok((_, _, cropped)) if cropped == model.image_grid() => None,
+        Ok((_, _, cropped)) => Some(format!(
+            "a {grid} frame gives {cropped} sensels after the model's crop {crop}, the model needs {}",
+            model.image_grid()
+        )),
+        Err(err) => Some(format!(
+            "a {grid} frame does not fit the model's crop {crop}: {err}"
+        )),
+    }
 }
 
 /// Runs the online classifier over `next` until it ends, handing every JSON line to `emit` (which
@@ -175,6 +218,10 @@ fn run_connection(
     )?;
     let mut summary = ConnectionSummary::default();
     let (mut values, mut present) = (Vec::new(), Vec::new());
+    // Frames as they came (rejected ones included), for the messages; event frame indices count only
+    // the accepted ones.
+    let mut received = 0u64;
+    let mut warming_up = classifier.segmenter().warming_up();
     let mut logged = 0u64;
     let mut report = |summary: &mut ConnectionSummary, message: &str, fatal: bool| {
         summary.errors += 1;
@@ -194,38 +241,63 @@ fn run_connection(
                 timestamp_us,
                 arrival,
             } => {
+                let index = received;
+                received += 1;
                 let mask = has_mask.then_some(present.as_slice());
-                let pushed = FrameView::new(grid, &values, mask)
-                    .and_then(|view| classifier.push(&view).map(|step| (step, Instant::now())));
-                match pushed {
-                    Ok((step, decided)) => {
-                        let failed = step
-                            .events
-                            .iter()
-                            .filter(|event| matches!(event, OnlineEvent::Failed(_)))
-                            .count();
-                        summary.errors += failed as u64;
-                        let latency_us = decided.duration_since(arrival).as_secs_f64() * 1e6;
-                        for line in event_lines(&step, model, profile, latency_us, timestamp_us) {
-                            if !emit(line) {
-                                summary.dropped_events += 1;
+                let frames_before = classifier.stats().frames;
+                let pushed = match unusable_for_model(model, grid) {
+                    Some(why) => Err(why),
+                    None => match FrameView::new(grid, &values, mask)
+                        .and_then(|view| classifier.push(&view).map(|step| (step, Instant::now())))
+                    {
+                        Ok((step, decided)) => {
+                            // A frame taken but not classified is an `error` line (event_lines) and
+                            // one of the connection's errors.
+                            let failed = step
+                                .events
+                                .iter()
+                                .filter(|event| matches!(event, OnlineEvent::Failed(_)))
+                                .count();
+                            summary.errors += failed as u64;
+                            let latency_us = decided.duration_since(arrival).as_secs_f64() * 1e6;
+                            for line in event_lines(&step, model, profile, latency_us, timestamp_us)
+                            {
+                                if !emit(line) {
+                                    summary.dropped_events += 1;
+                                }
                             }
+                            Ok(())
                         }
+                        Err(err) => Err(err.to_string()),
+                    },
+                };
+                let message = match pushed {
+                    Ok(()) => None,
+                    // Not taken: the classifier's frame count did not move.
+                    Err(err) if classifier.stats().frames == frames_before => {
+                        summary.rejected_frames += 1;
+                        Some(format!("input frame {index} rejected: {err}"))
                     }
-                    Err(err) => {
-                        let frame = classifier.stats().frames;
-                        let line = report(
-                            &mut summary,
-                            &format!("frame after frame index {frame} rejected: {err}"),
-                            false,
-                        );
-                        if !emit(line) {
-                            summary.dropped_events += 1;
-                        }
+                    // Taken (frame `frames_before` of the stream), then not classified.
+                    Err(err) => Some(format!(
+                        "input frame {index} (frame {frames_before}): classification failed: {err}"
+                    )),
+                };
+                if let Some(message) = message {
+                    let line = report(&mut summary, &message, false);
+                    if !emit(line) {
+                        summary.dropped_events += 1;
                     }
+                }
+                if warming_up && !classifier.segmenter().warming_up() {
+                    warming_up = false;
+                    summary.warmup_frames = classifier.stats().frames;
+                    log(&warmup_note(summary.warmup_frames, false));
                 }
             }
             Input::Skipped(message) => {
+                received += 1;
+                summary.rejected_frames += 1;
                 let line = report(&mut summary, &message, false);
                 if !emit(line) {
                     summary.dropped_events += 1;
@@ -250,13 +322,17 @@ fn run_connection(
     }
     summary.stats = classifier.stats();
     let s = summary.stats;
+    if warming_up && s.frames > 0 {
+        summary.warmup_frames = s.frames;
+        log(&warmup_note(s.frames, true));
+    }
     let end = json!({
         "event": "end",
         "frames": s.frames,
         "stances": s.stances,
         "decisions": s.decisions,
         "fused_decisions": s.fused_decisions,
-        "rejected_frames": s.rejected_frames,
+        "rejected_frames": summary.rejected_frames,
         "errors": summary.errors,
         "dropped_events": summary.dropped_events,
     });
@@ -264,6 +340,23 @@ fn run_connection(
         summary.dropped_events += 1;
     }
     Ok(summary)
+}
+
+/// The stderr note that the warm-up calibration ended (`at_end`: with the stream, which was no longer).
+fn warmup_note(frames: u64, at_end: bool) -> String {
+    if at_end {
+        format!(
+            "the stream ended during the warm-up calibration ({frames} frames): no stance was classified \
+             (give --calibrate MANIFEST or --profile, or a model with an online profile, to classify from \
+             the first frame)"
+        )
+    } else {
+        format!(
+            "warm-up calibration done on the first {frames} frames: stances before frame {frames} were \
+             not classified (give --calibrate MANIFEST or --profile, or a model with an online profile, to \
+             classify from the first frame)"
+        )
+    }
 }
 
 /// The JSON lines of one step.
@@ -425,9 +518,16 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             if summary.fatal {
                 anyhow::bail!("the input stream ended with an error (see above)");
             }
+            if summary.had_errors() {
+                anyhow::bail!(
+                    "{name}: {} rejected frame(s), {} error(s) in the input (see the error events)",
+                    summary.rejected_frames,
+                    summary.errors
+                );
+            }
             Ok(())
         }
-        Some(addr) => serve(args, addr, model, &profile, out),
+        Some(addr) => serve(args, *addr, model, &profile, out),
     }
 }
 
@@ -438,7 +538,7 @@ fn summary_text(name: &str, s: &ConnectionSummary) -> String {
         s.stats.stances,
         s.stats.decisions,
         s.stats.fused_decisions,
-        s.stats.rejected_frames,
+        s.rejected_frames,
         s.errors,
         s.dropped_events
     )
@@ -447,18 +547,18 @@ fn summary_text(name: &str, s: &ConnectionSummary) -> String {
 /// The TCP server (see the module docs).
 fn serve(
     args: &StreamArgs,
-    addr: &str,
+    addr: SocketAddr,
     model: &TrainedModel,
     profile: &OnlineProfile,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    let wanted: SocketAddr = addr
-        .parse()
-        .with_context(|| format!("--listen expects IP:PORT, got {addr:?}"))?;
-    if !wanted.ip().is_loopback() {
-        anyhow::bail!("--listen {addr}: only loopback addresses are served (127.0.0.1 or [::1])");
-    }
-    let listener = TcpListener::bind(wanted).with_context(|| format!("cannot listen on {addr}"))?;
+    // `--listen` accepts loopback addresses only (checked when parsed); checked again here, where it
+    // matters.
+    anyhow::ensure!(
+        addr.ip().is_loopback(),
+        "--listen {addr}: only loopback addresses are served (127.0.0.1 or [::1])"
+    );
+    let listener = TcpListener::bind(addr).with_context(|| format!("cannot listen on {addr}"))?;
     let local = listener.local_addr()?;
     listener.set_nonblocking(true)?;
     writeln!(

@@ -158,9 +158,17 @@ impl TrackComparison {
                 .collect::<Vec<_>>()
                 .join(",")
         );
+        // The policy column fits the longest name (`fixed G3@0.62`) and a space.
+        let width = self
+            .policies
+            .iter()
+            .map(|p| p.policy.chars().count() + 1)
+            .max()
+            .unwrap_or(0)
+            .max(12);
         let _ = writeln!(
             out,
-            "{:<12}{:>10}{:>10}{:>11}{:>7}{:>22}{:>10}",
+            "{:<width$}{:>10}{:>10}{:>11}{:>7}{:>22}{:>10}",
             "policy", "finished", "time s", "speed m/s", "falls", "misclassified", "switches"
         );
         for p in &self.policies {
@@ -177,7 +185,7 @@ impl TrackComparison {
             };
             let _ = writeln!(
                 out,
-                "{:<12}{:>10}{:>10.2}{:>11.3}{:>7}{:>22}{:>10}",
+                "{:<width$}{:>10}{:>10.2}{:>11.3}{:>7}{:>22}{:>10}",
                 p.policy,
                 format!("{}/{}", p.finished(), p.runs.len()),
                 p.mean(|r| r.time_s),
@@ -305,8 +313,13 @@ pub fn run_track_comparison(
 ) -> anyhow::Result<()> {
     let track = parse_track(spec)?;
     let sim = Simulator::new(config.clone(), args.seed, Vec::new())?;
-    let repeats = args.repeats.max(1);
-    let seeds: Vec<u64> = (0..repeats as u64)
+    // Gait names are judged with the configuration, before anything runs.
+    if let Err(message) = super::simulate::check_gaits("--start-gait", &args.start_gait, config)
+        .and_then(|()| super::simulate::check_gaits("--fixed-gait", &args.fixed_gait, config))
+    {
+        super::usage::exit_usage("simulate", message);
+    }
+    let seeds: Vec<u64> = (0..args.repeats as u64)
         .map(|i| args.seed.wrapping_add(i))
         .collect();
     let mut policies = Vec::new();
@@ -354,7 +367,7 @@ pub fn run_track_comparison(
                 )?,
                 class_names: &class_names,
                 table: &gait_table_map,
-                confirm: args.confirm.max(1),
+                confirm: args.confirm,
                 streak: None,
             };
             let params = TrackParams::new(seed, &start);
@@ -468,6 +481,23 @@ mod tests {
             measured_table: None,
             policies,
         }
+    }
+
+    #[test]
+    fn the_policy_column_fits_the_longest_name() {
+        let cmp = comparison(vec![
+            policy("adaptive", &[11.0], 0),
+            policy("fixed G1", &[12.0], 0),
+            policy("fixed G3@0.62", &[10.0], 0),
+        ]);
+        let text = cmp.format();
+        let lines: Vec<&str> = text.lines().skip(1).take(4).collect();
+        // Every row's "finished" column ends where the header's does.
+        let end = lines[0].find("finished").unwrap() + "finished".len();
+        for line in &lines[1..] {
+            assert_eq!(&line[end - 3..end], "1/1", "{text}");
+        }
+        assert!(text.contains("fixed G3@0.62 "), "{text}");
     }
 
     #[test]
