@@ -49,9 +49,17 @@ impl GaussianConfig {
     }
 }
 
-/// The Ledoit-Wolf shrinkage weight of centred data `x` (`n x d`), as scikit-learn computes it, and the
-/// empirical covariance `S = xᵀx / n` (`d x d`).
-pub fn ledoit_wolf(x: &[f64], d: usize) -> (f64, Vec<f64>) {
+/// The Ledoit-Wolf shrinkage weight of centred data `x` (`n x d`, row-major), as scikit-learn computes
+/// it, and the empirical covariance `S = xᵀx / n` (`d x d`). Errors unless `d >= 1` and `x` holds
+/// `n >= 1` whole rows.
+pub fn ledoit_wolf(x: &[f64], d: usize) -> Result<(f64, Vec<f64>)> {
+    if d == 0 || x.is_empty() || x.len() % d != 0 {
+        return Err(CoreError::Shape {
+            what: "ledoit-wolf data",
+            expected: "at least one row of at least one value".into(),
+            got: format!("{} values in rows of {d}", x.len()),
+        });
+    }
     let n = x.len() / d;
     let mut emp = vec![0.0; d * d];
     for row in x.chunks_exact(d) {
@@ -66,9 +74,6 @@ pub fn ledoit_wolf(x: &[f64], d: usize) -> (f64, Vec<f64>) {
             emp[i * d + j] /= n as f64;
             emp[j * d + i] = emp[i * d + j];
         }
-    }
-    if n == 0 {
-        return (1.0, emp);
     }
     let nf = n as f64;
     let trace: f64 = (0..d).map(|i| emp[i * d + i]).sum();
@@ -88,7 +93,7 @@ pub fn ledoit_wolf(x: &[f64], d: usize) -> (f64, Vec<f64>) {
     } else {
         beta / delta
     };
-    (shrinkage, emp)
+    Ok((shrinkage, emp))
 }
 
 /// Lower Cholesky factor of `a` (`d x d`) in place; false if not positive definite.
@@ -119,7 +124,7 @@ fn cholesky_in_place(a: &mut [f64], d: usize) -> bool {
 
 /// Shrinks the covariance of centred `x` and factors it; returns (L, log det Σ, shrinkage weight).
 fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>, f64, f64)> {
-    let (lw, mut cov) = ledoit_wolf(x, d);
+    let (lw, mut cov) = ledoit_wolf(x, d)?;
     let weight = match shrinkage {
         Shrinkage::LedoitWolf => lw,
         Shrinkage::Fixed { weight } => weight,
