@@ -157,3 +157,16 @@ fn svm_models_are_checked_on_load() {
         ],
     );
 }
+
+#[test]
+fn parzen_models_need_a_usable_sigma() {
+    rejects(
+        ClassifierKind::Pwe,
+        &[
+            // σ² underflows to 0: 1/(2σ²) would be infinite and every posterior NaN
+            (&|v| classifier(v)["sigma"] = json!(1e-160), "`sigma`"),
+            (&|v| classifier(v)["sigma"] = json!(1e160), "`sigma`"),
+            (&|v| classifier(v)["dims"] = json!(0), "`dims`"),
+        ],
+    );
+}
