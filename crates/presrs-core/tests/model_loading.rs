@@ -5,8 +5,10 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // helpers of integration tests are test code too
 
 use presrs_core::classifier::ClassifierKind;
+use presrs_core::features::{FeatureConfig, Fft1dConfig};
 use presrs_core::pipeline::{
-    LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, synthetic_frame, train,
+    LabeledImage, MAX_TRANSFORM_LEN, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, synthetic_frame,
+    train,
 };
 use presrs_core::{Crop, Frame};
 use rand::SeedableRng;
@@ -169,4 +171,74 @@ fn parzen_models_need_a_usable_sigma() {
             (&|v| classifier(v)["dims"] = json!(0), "`dims`"),
         ],
     );
+}
+
+#[test]
+fn sizes_are_capped_before_anything_is_planned() {
+    rejects(
+        ClassifierKind::Pwe,
+        &[
+            // would plan a 2^32-point FFT (tens of GB) before noticing the PCA does not fit
+            (
+                &|v| v["image_grid"] = json!({"rows": 65536, "cols": 65536}),
+                "image_grid",
+            ),
+            (
+                &|v| v["image_grid"] = json!({"rows": u64::MAX, "cols": 3}),
+                "image_grid",
+            ),
+            (
+                &|v| v["image_grid"] = json!({"rows": 0, "cols": 41}),
+                "image_grid",
+            ),
+            (
+                &|v| v["features"] = json!({"kind": "fft1d", "fft_len": 1u64 << 40}),
+                "fft_len",
+            ),
+            (
+                &|v| {
+                    v["features"] = json!({"kind": "fft2d", "pad_rows": 1u64 << 20,
+                        "pad_cols": 1u64 << 20, "form": "polar"})
+                },
+                "pad_rows",
+            ),
+            (
+                &|v| {
+                    v["features"] = json!({"kind": "fft2d", "form": "polar",
+                        "radial_bins": u64::MAX, "angular_bins": 2})
+                },
+                "radial_bins",
+            ),
+            (
+                &|v| {
+                    let part = json!({"kind": "fft2d", "pad_rows": 2048, "pad_cols": 2048,
+                        "form": "polar", "radial_bins": 1, "angular_bins": 1});
+                    v["features"] = json!({"kind": "combined", "parts": [part, part]});
+                },
+                "at most",
+            ),
+        ],
+    );
+}
+
+/// Training applies the same limits, so every model it makes can be loaded again.
+#[test]
+fn training_cannot_make_a_model_too_large_to_load() {
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let frames: Vec<Frame> = (0..8).map(|i| synthetic_frame(i % 4, &mut rng)).collect();
+    let images: Vec<LabeledImage<'_>> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, frame)| LabeledImage::new(frame.view(), SYNTHETIC_CLASSES[i % 4]))
+        .collect();
+    let config = TrainConfig {
+        features: FeatureConfig::Fft1d(Fft1dConfig {
+            fft_len: Some(MAX_TRANSFORM_LEN + 2),
+        }),
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let err = train(&images, &[], &config).unwrap_err().to_string();
+    assert!(err.contains("fft_len") && err.contains("limit"), "{err}");
 }
