@@ -118,7 +118,10 @@ pub struct TrainingSummary {
 }
 
 /// Everything needed to classify images: crop, feature parameters, PCA, classifier state and class names.
-/// Serialisable; loading re-checks that the parts fit together.
+/// Serialisable; loading re-checks that the parts fit together (the features against the PCA, the PCA
+/// against the classifier, the classifier's own arrays, indices and values, the class names), and that
+/// the image grid and feature transforms are within [`MAX_MODEL_SENSELS`] and [`MAX_TRANSFORM_LEN`], so
+/// a model that loads classifies frames without panicking.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(try_from = "ModelFields", into = "ModelFields")]
 pub struct TrainedModel {
@@ -151,6 +154,89 @@ struct ModelFields {
 
 const FORMAT_VERSION: u32 = 1;
 
+/// The largest image a model takes once cropped, in sensels (`image_grid` rows x cols): the streaming
+/// readers' limit, far above any pressure sensor (the paper's array has 44 x 44). Training on larger
+/// images and loading a model that claims them are errors, so a crafted file cannot make loading plan
+/// gigantic transforms.
+pub const MAX_MODEL_SENSELS: usize = 1 << 20;
+
+/// The most points the feature transforms of one model may hold together: `fft_len` of the 1-D |FFT|,
+/// `pad_rows x pad_cols` of the 2-D one, summed over the parts of combined features (also the limit on
+/// the polar form's `radial_bins` and `angular_bins`). 4 Mi points are a few hundred MB of plans and
+/// buffers; the paper's setting needs 2048.
+pub const MAX_TRANSFORM_LEN: usize = 1 << 22;
+
+/// Checks `image_grid` and the transform sizes of `features` against [`MAX_MODEL_SENSELS`] and
+/// [`MAX_TRANSFORM_LEN`], before anything is planned or allocated.
+fn check_sizes(features: &FeatureConfig, image_grid: Grid) -> Result<()> {
+    let Grid { rows, cols } = image_grid;
+    if rows == 0
+        || cols == 0
+        || rows
+            .checked_mul(cols)
+            .is_none_or(|len| len > MAX_MODEL_SENSELS)
+    {
+        return Err(CoreError::Param {
+            name: "image_grid",
+            reason: format!(
+                "the images of a model must have 1 to {MAX_MODEL_SENSELS} sensels once cropped, got \
+                 {rows}x{cols}"
+            ),
+        });
+    }
+    let points = transform_points(features, image_grid)?;
+    if points > MAX_TRANSFORM_LEN {
+        return Err(CoreError::Param {
+            name: "features",
+            reason: format!(
+                "the feature transforms need {points} points (fft_len, pad_rows x pad_cols, summed over \
+                 the parts); at most {MAX_TRANSFORM_LEN} are allowed"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The points of the transforms `features` plans for `image_grid` (saturating).
+fn transform_points(features: &FeatureConfig, image_grid: Grid) -> Result<usize> {
+    let too_large = |name: &'static str, what: String| CoreError::Param {
+        name,
+        reason: format!("{what} exceeds the limit of {MAX_TRANSFORM_LEN}"),
+    };
+    match features {
+        FeatureConfig::Fft1d(config) => {
+            let len = config.resolved_len(image_grid)?;
+            if len > MAX_TRANSFORM_LEN {
+                return Err(too_large("fft_len", format!("the transform length {len}")));
+            }
+            Ok(len)
+        }
+        FeatureConfig::Fft2d(config) => {
+            for (name, bins) in [
+                ("radial_bins", config.radial_bins),
+                ("angular_bins", config.angular_bins),
+            ] {
+                if bins > MAX_TRANSFORM_LEN {
+                    return Err(too_large(name, format!("{bins} bins")));
+                }
+            }
+            let rows = config.pad_rows.unwrap_or(image_grid.rows);
+            let cols = config.pad_cols.unwrap_or(image_grid.cols);
+            match rows.checked_mul(cols) {
+                Some(points) if points <= MAX_TRANSFORM_LEN => Ok(points),
+                _ => Err(too_large(
+                    "pad_rows",
+                    format!("the {rows} x {cols} transform (pad_rows x pad_cols)"),
+                )),
+            }
+        }
+        FeatureConfig::Glcm(_) => Ok(0),
+        FeatureConfig::Combined(config) => config.parts.iter().try_fold(0usize, |total, part| {
+            Ok(total.saturating_add(transform_points(part, image_grid)?))
+        }),
+    }
+}
+
 impl From<TrainedModel> for ModelFields {
     fn from(model: TrainedModel) -> Self {
         model.fields
@@ -171,12 +257,22 @@ impl TryFrom<ModelFields> for TrainedModel {
                 fields.format_version
             )));
         }
-        let extractor = fields.features.extractor(fields.image_grid)?;
-        if extractor.output_len() != fields.pca.n_features() {
+        // Sizes first, then the feature count against the PCA's (both without allocating), and only
+        // then the extractor with its plans and buffers.
+        fields.features.check()?;
+        check_sizes(&fields.features, fields.image_grid)?;
+        let n_features = fields.features.output_len(fields.image_grid)?;
+        if n_features != fields.pca.n_features() {
             return Err(bad(format!(
-                "{} features per image but the PCA takes {}",
-                extractor.output_len(),
+                "{n_features} features per image but the PCA takes {}",
                 fields.pca.n_features()
+            )));
+        }
+        let extractor = fields.features.extractor(fields.image_grid)?;
+        if extractor.output_len() != n_features {
+            return Err(bad(format!(
+                "the extractor gives {} features per image, its configuration {n_features}",
+                extractor.output_len()
             )));
         }
         if fields.pca.n_components() != fields.classifier.dims() {
@@ -234,6 +330,8 @@ pub fn train(
         .collect::<Result<Vec<_>>>()?;
 
     let image_grid = config.crop.output_grid(first.frame.grid())?;
+    // The limits loading applies, so that every trained model can be read back.
+    check_sizes(&config.features, image_grid)?;
     let preprocessor = Preprocessor::new(
         config.crop,
         config.preprocess,

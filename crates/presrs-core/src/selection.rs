@@ -58,7 +58,7 @@ struct InnerFold {
 }
 
 /// Scores `candidates` on folds of `images` (training + validation images together); `conditions` (one per
-/// image) enables leave-one-condition-out. Deterministic in `seed`.
+/// image, else an error) enables leave-one-condition-out. Deterministic in `seed`.
 pub fn select(
     images: &[LabeledImage<'_>],
     conditions: Option<&[&str]>,
@@ -71,6 +71,7 @@ pub fn select(
             reason: "the automatic choice needs at least one candidate".into(),
         });
     }
+    check_conditions(conditions, images.len())?;
     let labels: Vec<&str> = images.iter().map(|i| i.label).collect();
     let mut distinct: Vec<&str> = conditions.map(<[&str]>::to_vec).unwrap_or_default();
     distinct.sort_unstable();
@@ -203,17 +204,51 @@ pub fn train_auto(
         .chain(validation_images)
         .copied()
         .collect();
-    if let Some(conditions) = conditions
-        && conditions.len() != all.len()
-    {
-        return Err(CoreError::Shape {
-            what: "conditions",
-            expected: all.len().to_string(),
-            got: conditions.len().to_string(),
-        });
-    }
+    check_conditions(conditions, all.len())?;
     let selection = select(&all, conditions, candidates, seed)?;
     let config = candidates[selection.chosen].clone();
     let model = train(train_images, validation_images, &config)?;
     Ok(model.with_selection(selection))
+}
+
+/// Errors unless `conditions`, when given, has one entry per image.
+fn check_conditions(conditions: Option<&[&str]>, n_images: usize) -> Result<()> {
+    match conditions {
+        Some(conditions) if conditions.len() != n_images => Err(CoreError::Shape {
+            what: "conditions",
+            expected: format!("one per image ({n_images})"),
+            got: conditions.len().to_string(),
+        }),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::{Frame, Grid};
+
+    #[test]
+    fn conditions_must_match_the_images() {
+        let frame = Frame::zeros(Grid::new(44, 44));
+        let images: Vec<LabeledImage<'_>> = ["a", "b", "a", "b"]
+            .iter()
+            .map(|label| LabeledImage::new(frame.view(), label))
+            .collect();
+        let candidates = [TrainConfig::default().check().unwrap()];
+        // Fewer conditions than images indexed past their end; more were silently ignored.
+        for conditions in [&["x", "y"][..], &["x", "y", "x", "y", "x"][..]] {
+            let err = select(&images, Some(conditions), &candidates, 1).unwrap_err();
+            assert!(
+                matches!(
+                    err,
+                    CoreError::Shape {
+                        what: "conditions",
+                        ..
+                    }
+                ),
+                "{err}"
+            );
+        }
+    }
 }

@@ -271,7 +271,7 @@ fn svm_agrees_with_scikit_learn_svc() {
 #[test]
 fn ledoit_wolf_matches_scikit_learn() {
     let case = fixture().ledoit_wolf;
-    let (shrinkage, empirical) = ledoit_wolf(&case.x, case.dims);
+    let (shrinkage, empirical) = ledoit_wolf(&case.x, case.dims).unwrap();
     assert!(
         (shrinkage - case.shrinkage).abs() < 1e-12,
         "{shrinkage} vs {}",
@@ -286,4 +286,21 @@ fn ledoit_wolf_matches_scikit_learn() {
             assert!((shrunk - case.covariance[i * d + j]).abs() < 1e-12);
         }
     }
+}
+
+#[test]
+fn ledoit_wolf_refuses_empty_or_ragged_data() {
+    // d = 0 divided by zero; n = 0 gave a NaN covariance
+    for (x, d) in [
+        (&[1.0, 2.0][..], 0),
+        (&[][..], 3),
+        (&[][..], 0),
+        (&[1.0, 2.0, 3.0][..], 2),
+    ] {
+        let err = ledoit_wolf(x, d).unwrap_err().to_string();
+        assert!(err.contains("ledoit-wolf data"), "{err}");
+    }
+    let (shrinkage, empirical) = ledoit_wolf(&[1.0, -1.0], 1).unwrap();
+    assert!(shrinkage.is_finite());
+    assert_eq!(empirical, vec![1.0]);
 }

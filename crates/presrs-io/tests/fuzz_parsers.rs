@@ -496,6 +496,45 @@ fn regressions_stay_fixed() {
     eprintln!("replayed {replayed} regression inputs");
 }
 
+/// The model files in `tests/fuzz_regressions/parse_model/` (valid files with one field corrupted) used
+/// to load and then panic, give NaN posteriors or plan a 2^32-point FFT; each is now refused on load with
+/// an error naming the file and the field.
+#[test]
+fn corrupted_model_files_are_refused_on_load() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/parse_model");
+    let expected = [
+        ("knn-k-0", "`k`"),
+        ("knn-class-out-of-range", "`classes`"),
+        ("mle-empty-factors", "`factors`"),
+        ("lda-zero-temperature", "`temperature`"),
+        ("svm-no-machines", "`machines`"),
+        ("svm-support-out-of-range", "`machines[0].support`"),
+        ("pwe-sigma-1e-160", "`sigma`"),
+        ("image-grid-65536x65536", "image_grid"),
+        ("fft-len-2-40", "fft_len"),
+    ];
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let mut listed: Vec<&str> = expected.iter().map(|(name, _)| *name).collect();
+    listed.sort_unstable();
+    assert_eq!(
+        names,
+        listed,
+        "every file in {} is listed here",
+        dir.display()
+    );
+    for (name, field) in expected {
+        let err = presrs_io::model_file::load_model(&dir.join(name))
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(name) && err.contains(field), "{name}: {err}");
+    }
+}
+
 /// CRC-32 (IEEE), as PNG chunks use.
 fn crc32(bytes: &[u8]) -> u32 {
     let mut crc = !0u32;

@@ -49,9 +49,17 @@ impl GaussianConfig {
     }
 }
 
-/// The Ledoit-Wolf shrinkage weight of centred data `x` (`n x d`), as scikit-learn computes it, and the
-/// empirical covariance `S = xᵀx / n` (`d x d`).
-pub fn ledoit_wolf(x: &[f64], d: usize) -> (f64, Vec<f64>) {
+/// The Ledoit-Wolf shrinkage weight of centred data `x` (`n x d`, row-major), as scikit-learn computes
+/// it, and the empirical covariance `S = xᵀx / n` (`d x d`). Errors unless `d >= 1` and `x` holds
+/// `n >= 1` whole rows.
+pub fn ledoit_wolf(x: &[f64], d: usize) -> Result<(f64, Vec<f64>)> {
+    if d == 0 || x.is_empty() || x.len() % d != 0 {
+        return Err(CoreError::Shape {
+            what: "ledoit-wolf data",
+            expected: "at least one row of at least one value".into(),
+            got: format!("{} values in rows of {d}", x.len()),
+        });
+    }
     let n = x.len() / d;
     let mut emp = vec![0.0; d * d];
     for row in x.chunks_exact(d) {
@@ -66,9 +74,6 @@ pub fn ledoit_wolf(x: &[f64], d: usize) -> (f64, Vec<f64>) {
             emp[i * d + j] /= n as f64;
             emp[j * d + i] = emp[i * d + j];
         }
-    }
-    if n == 0 {
-        return (1.0, emp);
     }
     let nf = n as f64;
     let trace: f64 = (0..d).map(|i| emp[i * d + i]).sum();
@@ -88,7 +93,7 @@ pub fn ledoit_wolf(x: &[f64], d: usize) -> (f64, Vec<f64>) {
     } else {
         beta / delta
     };
-    (shrinkage, emp)
+    Ok((shrinkage, emp))
 }
 
 /// Lower Cholesky factor of `a` (`d x d`) in place; false if not positive definite.
@@ -119,7 +124,7 @@ fn cholesky_in_place(a: &mut [f64], d: usize) -> bool {
 
 /// Shrinks the covariance of centred `x` and factors it; returns (L, log det Σ, shrinkage weight).
 fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>, f64, f64)> {
-    let (lw, mut cov) = ledoit_wolf(x, d);
+    let (lw, mut cov) = ledoit_wolf(x, d)?;
     let weight = match shrinkage {
         Shrinkage::LedoitWolf => lw,
         Shrinkage::Fixed { weight } => weight,
@@ -153,9 +158,13 @@ fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>,
     Ok((cov, log_det, weight))
 }
 
-/// A trained Gaussian classifier (MLE or LDA).
+/// A trained Gaussian classifier (MLE or LDA). Deserialising checks that the parts fit together: `dims`
+/// and `n_classes` at least 1; with `g` covariances (1 when `shared`, else `n_classes`): `n_classes x
+/// dims` `means`, `g` lower Cholesky factors of `dims x dims` with positive diagonals in `factors`, `g`
+/// `log_dets` and `g` `shrinkage` weights in `[0, 1]`; every value finite and the `temperature`
+/// positive. A file that breaks one of these is an error naming the field.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "GaussianFields", into = "GaussianFields")]
 pub struct GaussianModel {
     dims: usize,
     n_classes: usize,
@@ -172,6 +181,123 @@ pub struct GaussianModel {
     temperature: f64,
     /// Accuracy of the training-only model on the validation vectors (None without validation data).
     validation_accuracy: Option<f64>,
+}
+
+/// The serialised form of [`GaussianModel`], checked on load (see there).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GaussianFields {
+    dims: usize,
+    n_classes: usize,
+    shared: bool,
+    means: Vec<f64>,
+    factors: Vec<f64>,
+    log_dets: Vec<f64>,
+    shrinkage: Vec<f64>,
+    temperature: f64,
+    validation_accuracy: Option<f64>,
+}
+
+impl From<GaussianModel> for GaussianFields {
+    fn from(model: GaussianModel) -> Self {
+        Self {
+            dims: model.dims,
+            n_classes: model.n_classes,
+            shared: model.shared,
+            means: model.means,
+            factors: model.factors,
+            log_dets: model.log_dets,
+            shrinkage: model.shrinkage,
+            temperature: model.temperature,
+            validation_accuracy: model.validation_accuracy,
+        }
+    }
+}
+
+impl TryFrom<GaussianFields> for GaussianModel {
+    type Error = CoreError;
+
+    fn try_from(fields: GaussianFields) -> Result<Self> {
+        let bad = |reason: String| {
+            Err(CoreError::Param {
+                name: "gaussian model",
+                reason,
+            })
+        };
+        let d = fields.dims;
+        if d == 0 || fields.n_classes == 0 {
+            return bad(format!(
+                "`dims` and `n_classes` must be at least 1, got {d} and {}",
+                fields.n_classes
+            ));
+        }
+        let groups = if fields.shared { 1 } else { fields.n_classes };
+        let lengths = [
+            ("means", fields.means.len(), fields.n_classes.checked_mul(d)),
+            (
+                "factors",
+                fields.factors.len(),
+                d.checked_mul(d).and_then(|dd| dd.checked_mul(groups)),
+            ),
+            ("log_dets", fields.log_dets.len(), Some(groups)),
+            ("shrinkage", fields.shrinkage.len(), Some(groups)),
+        ];
+        for (field, got, expected) in lengths {
+            if Some(got) != expected {
+                let expected =
+                    expected.map_or_else(|| "more than fit in memory".into(), |e| e.to_string());
+                return bad(format!(
+                    "`{field}` holds {got} values, expected {expected} ({} classes of {d} dims, {})",
+                    fields.n_classes,
+                    if fields.shared {
+                        "one shared covariance"
+                    } else {
+                        "one covariance per class"
+                    }
+                ));
+            }
+        }
+        for (field, values) in [
+            ("means", &fields.means),
+            ("factors", &fields.factors),
+            ("log_dets", &fields.log_dets),
+        ] {
+            if values.iter().any(|v| !v.is_finite()) {
+                return bad(format!("`{field}` holds non-finite values"));
+            }
+        }
+        if let Some(weight) = fields.shrinkage.iter().find(|w| !(0.0..=1.0).contains(*w)) {
+            return bad(format!(
+                "`shrinkage` weights must be in [0, 1], got {weight}"
+            ));
+        }
+        // The forward substitution divides by the diagonal of each factor.
+        for (group, factor) in fields.factors.chunks_exact(d * d).enumerate() {
+            if let Some(i) = (0..d).find(|&i| factor[i * d + i] <= 0.0) {
+                return bad(format!(
+                    "`factors`: Cholesky factor {group} has the non-positive diagonal entry {} at {i}",
+                    factor[i * d + i]
+                ));
+            }
+        }
+        if !(fields.temperature.is_finite() && fields.temperature > 0.0) {
+            return bad(format!(
+                "`temperature` must be positive and finite, got {}",
+                fields.temperature
+            ));
+        }
+        Ok(Self {
+            dims: d,
+            n_classes: fields.n_classes,
+            shared: fields.shared,
+            means: fields.means,
+            factors: fields.factors,
+            log_dets: fields.log_dets,
+            shrinkage: fields.shrinkage,
+            temperature: fields.temperature,
+            validation_accuracy: fields.validation_accuracy,
+        })
+    }
 }
 
 impl GaussianModel {

@@ -44,9 +44,12 @@ impl KnnConfig {
     }
 }
 
-/// A trained k-NN classifier.
+/// A trained k-NN classifier. Deserialising checks that the parts fit together: `dims >= 1`, `vectors`
+/// holds `classes.len()` finite rows of `dims`, every class index is below `n_classes` and every class
+/// has a stored vector, and `1 <= k <= classes.len()`. A file that breaks one of these is an error naming
+/// the field.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "KnnFields", into = "KnnFields")]
 pub struct KnnModel {
     dims: usize,
     n_classes: usize,
@@ -55,6 +58,92 @@ pub struct KnnModel {
     classes: Vec<usize>,
     /// Validation accuracy of each candidate `k` (empty when a single `k` was given).
     validation_curve: Vec<(usize, f64)>,
+}
+
+/// The serialised form of [`KnnModel`], checked on load (see there).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KnnFields {
+    dims: usize,
+    n_classes: usize,
+    k: usize,
+    vectors: Vec<f64>,
+    classes: Vec<usize>,
+    validation_curve: Vec<(usize, f64)>,
+}
+
+impl From<KnnModel> for KnnFields {
+    fn from(model: KnnModel) -> Self {
+        Self {
+            dims: model.dims,
+            n_classes: model.n_classes,
+            k: model.k,
+            vectors: model.vectors,
+            classes: model.classes,
+            validation_curve: model.validation_curve,
+        }
+    }
+}
+
+impl TryFrom<KnnFields> for KnnModel {
+    type Error = CoreError;
+
+    fn try_from(fields: KnnFields) -> Result<Self> {
+        let bad = |reason: String| {
+            Err(CoreError::Param {
+                name: "knn model",
+                reason,
+            })
+        };
+        let n_stored = fields.classes.len();
+        if fields.dims == 0 {
+            return bad("`dims` must be at least 1".into());
+        }
+        if n_stored.checked_mul(fields.dims) != Some(fields.vectors.len()) {
+            return bad(format!(
+                "`vectors` holds {} values, not {n_stored} `classes` x {} `dims`",
+                fields.vectors.len(),
+                fields.dims
+            ));
+        }
+        if fields.vectors.iter().any(|v| !v.is_finite()) {
+            return bad("`vectors` holds non-finite values".into());
+        }
+        if let Some(&class) = fields.classes.iter().find(|&&c| c >= fields.n_classes) {
+            return bad(format!(
+                "`classes` holds class {class} but `n_classes` is {}",
+                fields.n_classes
+            ));
+        }
+        // Every class index is below n_classes, so n_classes <= n_stored when no class is empty.
+        let mut seen = vec![false; fields.n_classes.min(n_stored)];
+        for &class in &fields.classes {
+            if let Some(flag) = seen.get_mut(class) {
+                *flag = true;
+            }
+        }
+        if let Some(empty) = (0..fields.n_classes).find(|&c| !seen.get(c).copied().unwrap_or(false))
+        {
+            return bad(format!(
+                "class {empty} of `n_classes` {} has no stored vector in `classes`",
+                fields.n_classes
+            ));
+        }
+        if fields.k == 0 || fields.k > n_stored {
+            return bad(format!(
+                "`k` must be in 1 ..= {n_stored} (the stored vectors), got {}",
+                fields.k
+            ));
+        }
+        Ok(Self {
+            dims: fields.dims,
+            n_classes: fields.n_classes,
+            k: fields.k,
+            vectors: fields.vectors,
+            classes: fields.classes,
+            validation_curve: fields.validation_curve,
+        })
+    }
 }
 
 impl KnnModel {

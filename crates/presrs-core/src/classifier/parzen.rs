@@ -37,6 +37,20 @@ impl Default for SigmaChoice {
     }
 }
 
+/// Whether `sigma` is a usable kernel width: positive, and its square neither underflows to 0 nor
+/// overflows, so that the kernel's `1 / (2σ²)` and the density's normalisation `2πσ²` are finite and
+/// positive (about `1e-154 < σ < 1e153`). Outside that range the scores would be infinite or NaN.
+pub fn is_usable_sigma(sigma: f64) -> bool {
+    let variance = sigma * sigma;
+    let inv_two_var = 0.5 / variance;
+    let two_pi_var = 2.0 * std::f64::consts::PI * variance;
+    sigma > 0.0
+        && inv_two_var.is_finite()
+        && inv_two_var > 0.0
+        && two_pi_var.is_finite()
+        && two_pi_var > 0.0
+}
+
 /// A log-spaced grid of `steps` factors from `min_factor` to `max_factor` (both included), multiplied by
 /// the median nearest-neighbour distance of the training vectors.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -89,8 +103,9 @@ impl ParzenConfig {
             })
         };
         match &self.sigma {
-            SigmaChoice::Fixed { sigma } if !(sigma.is_finite() && *sigma > 0.0) => bad(format!(
-                "a fixed sigma must be positive and finite, got {sigma}"
+            SigmaChoice::Fixed { sigma } if !is_usable_sigma(*sigma) => bad(format!(
+                "a fixed sigma must be positive, with 1/(2 sigma²) and 2 pi sigma² finite \
+                 (about 1e-154 < sigma < 1e153), got {sigma}"
             )),
             SigmaChoice::Search(search) => {
                 let SigmaSearch {
@@ -128,7 +143,9 @@ pub struct SigmaPoint {
     pub mean_log_likelihood: f64,
 }
 
-/// A trained Parzen-window classifier.
+/// A trained Parzen-window classifier. Deserialising checks that the parts fit together: `dims >= 1`, a
+/// [usable](is_usable_sigma) `sigma`, `class_starts` splitting the finite stored `vectors` into non-empty
+/// classes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ParzenFields", into = "ParzenFields")]
 pub struct ParzenModel {
@@ -180,10 +197,14 @@ impl TryFrom<ParzenFields> for ParzenModel {
             name: "pwe model",
             reason,
         };
-        if fields.dims == 0 || !(fields.sigma.is_finite() && fields.sigma > 0.0) {
+        if fields.dims == 0 {
+            return Err(bad("`dims` must be at least 1, got 0".into()));
+        }
+        if !is_usable_sigma(fields.sigma) {
             return Err(bad(format!(
-                "needs dims > 0 and a positive sigma, got {} and {}",
-                fields.dims, fields.sigma
+                "`sigma` must be positive, with 1/(2 sigma²) and 2 pi sigma² finite (about 1e-154 < \
+                 sigma < 1e153), got {}",
+                fields.sigma
             )));
         }
         let starts = &fields.class_starts;
@@ -463,6 +484,17 @@ fn validation_curve(
     let mut curve = Vec::with_capacity(search.steps);
     for factor in search.factors() {
         model.sigma = factor * scale;
+        if !is_usable_sigma(model.sigma) {
+            return Err(CoreError::Param {
+                name: "pwe sigma",
+                reason: format!(
+                    "the sigma grid reaches {:e} ({factor} x the nearest-neighbour distance {scale:e}), \
+                     where 1/(2 sigma²) or 2 pi sigma² is not finite; narrow the grid or rescale the \
+                     features",
+                    model.sigma
+                ),
+            });
+        }
         let log_norm =
             -0.5 * dims as f64 * (2.0 * std::f64::consts::PI * model.sigma * model.sigma).ln();
         let mut correct = 0usize;
@@ -478,11 +510,20 @@ fn validation_curve(
                 correct += 1;
             }
         }
+        let mean_log_likelihood = log_likelihood / n_validation as f64;
+        // A non-finite value would be saved as JSON `null` and the model could not be read back.
+        if !mean_log_likelihood.is_finite() {
+            return Err(CoreError::NotEnoughData(format!(
+                "the validation log-likelihood at sigma {:e} is not finite (the vectors are too far \
+                 apart for f64 at this width)",
+                model.sigma
+            )));
+        }
         curve.push(SigmaPoint {
             factor,
             sigma: model.sigma,
             accuracy: correct as f64 / n_validation as f64,
-            mean_log_likelihood: log_likelihood / n_validation as f64,
+            mean_log_likelihood,
         });
     }
     Ok(curve)
@@ -677,6 +718,62 @@ mod tests {
         for (got, want) in factors.iter().zip([0.5, 1.0, 2.0, 4.0, 8.0]) {
             assert!((got - want).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn sigmas_whose_square_underflows_or_overflows_are_refused() {
+        for sigma in [
+            1e-160,
+            1e160,
+            f64::MIN_POSITIVE,
+            0.0,
+            -1.0,
+            f64::INFINITY,
+            f64::NAN,
+        ] {
+            assert!(!is_usable_sigma(sigma), "{sigma}");
+            let config = ParzenConfig {
+                sigma: SigmaChoice::Fixed { sigma },
+            };
+            let err = config.check().unwrap_err().to_string();
+            assert!(err.contains("pwe sigma"), "{err}");
+        }
+        for sigma in [1e-150, 1e-3, 1.0, 1e150] {
+            assert!(is_usable_sigma(sigma), "{sigma}");
+        }
+    }
+
+    #[test]
+    fn a_sigma_grid_reaching_unusable_widths_is_an_error_not_nan() {
+        // Nearest-neighbour distances ~1e-158: the grid's 1/32 x scale has σ² below f64's range, where
+        // every score was NaN and the saved validation curve held `null`s that could not be read back.
+        let (vectors, classes) = two_blobs();
+        let tiny: Vec<f64> = vectors.iter().map(|v| v * 1e-158).collect();
+        let data = LabeledVectors {
+            vectors: &tiny,
+            classes: &classes,
+        };
+        let err = ParzenModel::fit(data, data, 2, 2, &ParzenConfig::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("pwe sigma") && err.contains("sigma grid"),
+            "{err}"
+        );
+        // The same data at a usable scale trains, and its model survives a JSON round trip.
+        let data = LabeledVectors {
+            vectors: &vectors,
+            classes: &classes,
+        };
+        let model = ParzenModel::fit(data, data, 2, 2, &ParzenConfig::default()).unwrap();
+        assert!(
+            model
+                .validation_curve()
+                .iter()
+                .all(|p| p.mean_log_likelihood.is_finite())
+        );
+        let json = serde_json::to_string(&model).unwrap();
+        assert_eq!(serde_json::from_str::<ParzenModel>(&json).unwrap(), model);
     }
 
     #[test]

@@ -138,9 +138,14 @@ pub struct SvmCandidate {
     pub validation_accuracy: f64,
 }
 
-/// A trained one-vs-one SVM.
+/// A trained one-vs-one SVM. Deserialising checks that the parts fit together: `dims` and `n_classes`
+/// at least 1, `vectors` a whole number of finite rows of `dims`, one machine per pair of classes
+/// (`n_classes (n_classes - 1) / 2`), each with as many `coefs` as `support` indices, every index below
+/// the number of stored vectors, every coefficient and `rho` finite; a finite non-negative RBF `gamma`,
+/// and a positive finite `c` and `temperature`. A file that breaks one of these is an error naming the
+/// field.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "SvmFields", into = "SvmFields")]
 pub struct SvmModel {
     dims: usize,
     n_classes: usize,
@@ -153,6 +158,123 @@ pub struct SvmModel {
     temperature: f64,
     /// Every candidate tried, in order (empty when a single one was given).
     candidates: Vec<SvmCandidate>,
+}
+
+/// The serialised form of [`SvmModel`], checked on load (see there).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SvmFields {
+    dims: usize,
+    n_classes: usize,
+    kernel: Kernel,
+    c: f64,
+    vectors: Vec<f64>,
+    machines: Vec<PairMachine>,
+    temperature: f64,
+    candidates: Vec<SvmCandidate>,
+}
+
+impl From<SvmModel> for SvmFields {
+    fn from(model: SvmModel) -> Self {
+        Self {
+            dims: model.dims,
+            n_classes: model.n_classes,
+            kernel: model.kernel,
+            c: model.c,
+            vectors: model.vectors,
+            machines: model.machines,
+            temperature: model.temperature,
+            candidates: model.candidates,
+        }
+    }
+}
+
+impl TryFrom<SvmFields> for SvmModel {
+    type Error = CoreError;
+
+    fn try_from(fields: SvmFields) -> Result<Self> {
+        let bad = |reason: String| {
+            Err(CoreError::Param {
+                name: "svm model",
+                reason,
+            })
+        };
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if fields.dims == 0 || fields.n_classes == 0 {
+            return bad(format!(
+                "`dims` and `n_classes` must be at least 1, got {} and {}",
+                fields.dims, fields.n_classes
+            ));
+        }
+        if fields.vectors.len() % fields.dims != 0 {
+            return bad(format!(
+                "`vectors` holds {} values, not a whole number of rows of {} `dims`",
+                fields.vectors.len(),
+                fields.dims
+            ));
+        }
+        if fields.vectors.iter().any(|v| !v.is_finite()) {
+            return bad("`vectors` holds non-finite values".into());
+        }
+        let n_support = fields.vectors.len() / fields.dims;
+        let pairs = fields
+            .n_classes
+            .checked_mul(fields.n_classes - 1)
+            .map(|n| n / 2);
+        if pairs != Some(fields.machines.len()) {
+            return bad(format!(
+                "`machines` holds {} machines, but {} classes need one per pair ({})",
+                fields.machines.len(),
+                fields.n_classes,
+                pairs.map_or_else(|| "more than fit in memory".into(), |p| p.to_string())
+            ));
+        }
+        for (index, machine) in fields.machines.iter().enumerate() {
+            if machine.support.len() != machine.coefs.len() {
+                return bad(format!(
+                    "`machines[{index}]` has {} `support` indices but {} `coefs`",
+                    machine.support.len(),
+                    machine.coefs.len()
+                ));
+            }
+            if let Some(&s) = machine.support.iter().find(|&&s| s >= n_support) {
+                return bad(format!(
+                    "`machines[{index}].support` refers to vector {s}, but `vectors` holds {n_support}"
+                ));
+            }
+            if !machine.rho.is_finite() || machine.coefs.iter().any(|a| !a.is_finite()) {
+                return bad(format!(
+                    "`machines[{index}]` has non-finite `coefs` or `rho`"
+                ));
+            }
+        }
+        if let Kernel::Rbf { gamma } = fields.kernel
+            && !(gamma.is_finite() && gamma >= 0.0)
+        {
+            return bad(format!(
+                "the RBF kernel's `gamma` must be finite and non-negative, got {gamma}"
+            ));
+        }
+        if !positive(fields.c) {
+            return bad(format!("`c` must be positive and finite, got {}", fields.c));
+        }
+        if !positive(fields.temperature) {
+            return bad(format!(
+                "`temperature` must be positive and finite, got {}",
+                fields.temperature
+            ));
+        }
+        Ok(Self {
+            dims: fields.dims,
+            n_classes: fields.n_classes,
+            kernel: fields.kernel,
+            c: fields.c,
+            vectors: fields.vectors,
+            machines: fields.machines,
+            temperature: fields.temperature,
+            candidates: fields.candidates,
+        })
+    }
 }
 
 /// Solves the C-SVC dual for labels `y` (±1) with kernel matrix `k` (`n x n`); returns (α, rho).
