@@ -1,5 +1,6 @@
 #![doc = include_str!("../README.md")]
 
+mod aligned;
 pub mod classifier;
 pub mod crop;
 pub mod dead_sensels;

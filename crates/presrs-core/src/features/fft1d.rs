@@ -7,6 +7,8 @@
 use std::sync::Arc;
 
 use realfft::num_complex::Complex;
+
+use crate::aligned::Aligned;
 use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
@@ -254,9 +256,9 @@ struct HalfLengthF32 {
     /// The AVX-512 transform, used instead of `fft` when the CPU has it and `M` is a power of four
     /// (`M = 1024` for the paper's images).
     radix4: Option<Radix4Fft>,
-    z: Vec<Complex<f32>>,
+    z: Aligned<Complex<f32>>,
     /// rustfft's scratch, or the radix-4 transform's second buffer (`M` long).
-    scratch: Vec<Complex<f32>>,
+    scratch: Aligned<Complex<f32>>,
     /// `W^k` for `k = 0 .. pairs` (index 0 unused).
     twiddle_re: Vec<f32>,
     twiddle_im: Vec<f32>,
@@ -287,10 +289,10 @@ impl HalfLengthF32 {
             |f: fn(f64) -> f64| (0..pairs).map(|k| f(angle(k)) as f32).collect::<Vec<_>>();
         let (twiddle_re, twiddle_im) = (twiddle(f64::cos), twiddle(f64::sin));
         Self {
-            scratch: vec![Complex::default(); scratch_len],
+            scratch: Aligned::new(scratch_len),
             fft,
             radix4,
-            z: vec![Complex::default(); m],
+            z: Aligned::new(m),
             low: vec![0.0; pairs],
             high: vec![0.0; pairs],
             #[cfg(target_arch = "x86_64")]
@@ -465,6 +467,7 @@ mod split_avx512 {
     use realfft::num_complex::Complex;
 
     use super::split_pair;
+    use crate::aligned::Aligned;
     use crate::features::radix4::avx512::{from_ps, ps, times};
 
     #[derive(Clone, Debug)]
@@ -472,8 +475,8 @@ mod split_avx512 {
         simd: V4,
         /// `V = -i W^k = (wi, -wr)` for `k = 0 .. pairs`, each value twice: the (re, re) and (im, im)
         /// registers of [`times`]. The scalar tail reads `W^k` back from them.
-        v_re: Vec<f32>,
-        v_im: Vec<f32>,
+        v_re: Aligned<f32>,
+        v_im: Aligned<f32>,
         m: usize,
     }
 
@@ -482,8 +485,9 @@ mod split_avx512 {
         /// and whose complex FFT has length `m`; `None` without AVX-512.
         pub(super) fn new(twiddle_re: &[f32], twiddle_im: &[f32], m: usize) -> Option<Self> {
             let simd = V4::try_new()?;
-            let v_re = twiddle_im.iter().flat_map(|&wi| [wi, wi]).collect();
-            let v_im = twiddle_re.iter().flat_map(|&wr| [-wr, -wr]).collect();
+            let v_re: Vec<f32> = twiddle_im.iter().flat_map(|&wi| [wi, wi]).collect();
+            let v_im: Vec<f32> = twiddle_re.iter().flat_map(|&wr| [-wr, -wr]).collect();
+            let (v_re, v_im) = (Aligned::from_slice(&v_re), Aligned::from_slice(&v_im));
             Some(Self {
                 simd,
                 v_re,

@@ -92,12 +92,13 @@ pub(super) mod avx512 {
     use super::twiddle;
 
     type C32 = Complex<f32>;
+    use crate::aligned::Aligned;
 
     /// One pass: its stride and its twiddles (laid out for the pass's kind of register).
     #[derive(Clone, Debug)]
     struct Pass {
         stride: usize,
-        twiddles: Vec<C32>,
+        twiddles: Aligned<C32>,
     }
 
     #[derive(Clone, Debug)]
@@ -153,7 +154,10 @@ pub(super) mod avx512 {
                         }
                     }
                 }
-                passes.push(Pass { stride, twiddles });
+                passes.push(Pass {
+                    stride,
+                    twiddles: Aligned::from_slice(&twiddles),
+                });
                 n /= 4;
                 stride *= 4;
             }
