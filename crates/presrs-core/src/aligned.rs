@@ -56,6 +56,12 @@ impl<T: Copy + Default> Clone for Aligned<T> {
     }
 }
 
+impl<T: PartialEq> PartialEq for Aligned<T> {
+    fn eq(&self, other: &Self) -> bool {
+        **self == **other
+    }
+}
+
 impl<T> Deref for Aligned<T> {
     type Target = [T];
 
