@@ -33,8 +33,8 @@ pub struct Pca {
     /// matrix-vector product with no centred copy of `x`.
     projected_mean: Vec<f64>,
     /// `basis` without its first column, in 16-bit fixed point, derived (not serialised):
-    /// [`Pca::project_fast_into`] streams a quarter of the bytes of the f64 basis, which is what bounds
-    /// the projection's time.
+    /// [`Pca::project_fast_into`] streams a quarter of the bytes of the f64 basis (which bounded the
+    /// f64 projection's time; this one is bound by its integer multiply-adds).
     basis_fixed: FixedMatrix,
     /// The first column of `basis` (derived), multiplied exactly: the first feature of the 1-D |FFT| is
     /// the DC bin, the image's total load, far above the others; kept out of the fixed-point chunks, it
