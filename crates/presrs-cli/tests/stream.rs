@@ -529,7 +529,7 @@ fn frames_the_model_cannot_use_are_rejected_and_counted() {
 }
 
 #[test]
-fn bad_addresses_and_gait_entries_are_bad_usage() {
+fn bad_addresses_gait_entries_and_limits_are_bad_usage() {
     for args in [
         &["stream", "--model", "m.json", "--listen", "nonsense"][..],
         &["stream", "--model", "m.json", "--listen", "0.0.0.0:7700"],
@@ -542,6 +542,18 @@ fn bad_addresses_and_gait_entries_are_bad_usage() {
             "127.0.0.1:1",
             "--rate",
             "0",
+        ],
+        &["stream", "--model", "m.json", "--max-clients", "0"],
+        &["stream", "--model", "m.json", "--queue", "0"],
+        &["stream", "--model", "m.json", "--max-frame-bytes", "0"],
+        &["stream", "--model", "m.json", "--idle-timeout", "0"],
+        &["stream", "--model", "m.json", "--idle-timeout", "1e30"],
+        &[
+            "replay",
+            "walk.asf",
+            "--connect",
+            "127.0.0.1:1",
+            "--timeout=-1",
         ],
     ] {
         let out = presrs().args(args).output().unwrap();

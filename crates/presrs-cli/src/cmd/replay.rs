@@ -50,7 +50,7 @@ pub struct ReplayArgs {
     #[arg(long, default_value = "100")]
     pub rate: Rate,
     /// Give up if the server does not answer within this many seconds after the last frame.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::usage::positive_seconds)]
     pub timeout: f64,
 }
 

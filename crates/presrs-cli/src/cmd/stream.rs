@@ -86,16 +86,16 @@ pub struct StreamArgs {
           value_parser = |t: &str| super::usage::name_value(t, "TERRAIN=GAIT"))]
     pub gait: Vec<(String, String)>,
     /// Most simultaneous clients.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = super::usage::positive_count)]
     pub max_clients: usize,
     /// Largest frame payload accepted, bytes.
-    #[arg(long, default_value_t = DEFAULT_MAX_PAYLOAD_BYTES)]
+    #[arg(long, default_value_t = DEFAULT_MAX_PAYLOAD_BYTES, value_parser = super::usage::positive_count)]
     pub max_frame_bytes: usize,
     /// Output lines queued per client before further ones are dropped (and counted).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = super::usage::positive_count)]
     pub queue: usize,
     /// Close a connection idle for this many seconds.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::usage::positive_seconds)]
     pub idle_timeout: f64,
     /// Exit after this many connections have ended (demos and tests) [default: serve forever].
     #[arg(long)]

@@ -37,6 +37,17 @@ pub fn positive_number(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A time limit in seconds: finite, above 0 and at most a billion (about 31 years; `Duration` cannot
+/// hold every f64).
+pub fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 && x <= 1e9 => Ok(x),
+        _ => Err(format!(
+            "expected a number of seconds above 0 and at most 1e9, got {text:?}"
+        )),
+    }
+}
+
 /// `IP:PORT`, e.g. 127.0.0.1:7700.
 pub fn socket_addr(text: &str) -> Result<SocketAddr, String> {
     text.trim()
