@@ -237,6 +237,11 @@ fn bad_option_values_are_bad_usage() {
         (&["--track", "mud:3"], "unknown terrain \"mud\""),
         (&["--track", "wood:1", "--repeats", "0"], "--repeats"),
         (&["--track", "wood:1", "--start-gait", "G2"], "--adaptive"),
+        (&["--track", "wood:1", "--terrains", "wood"], "--terrains"),
+        (
+            &["--track", "wood:1", "--terrain-image", "x=y.png"],
+            "--terrain-image",
+        ),
         (
             &["--track", "wood:1", "--fixed-gait", "G9"],
             "--fixed-gait G9",

@@ -66,8 +66,9 @@ pub struct SimulateArgs {
     pub terrain_image: Vec<TerrainImageArg>,
     /// Run a track instead of writing a data set: terrain:metres segments in sequence (built-in
     /// terrains), e.g. wood:3,grass:3,clay:3,carpet:3. Each fixed gait runs it (and the adaptive policy
-    /// with --adaptive).
-    #[arg(long, value_name = "SPEC", value_parser = parse_track_arg)]
+    /// with --adaptive). Not with --terrains or --terrain-image, which choose a data set's terrains.
+    #[arg(long, value_name = "SPEC", value_parser = parse_track_arg,
+          conflicts_with_all = ["terrains", "terrain_image"])]
     pub track: Option<String>,
     /// Model file for the adaptive run: every stance is classified online (the model's online profile)
     /// and the robot switches to the gait its terrain-to-gait table recommends. Without a table in the
