@@ -56,6 +56,8 @@ fn eval_reports_accuracy_under_each_perturbation() {
         "dead=1",
         "--perturb",
         "noise=0.5",
+        "--perturb",
+        "load=1e308",
         "--json",
         "--report",
         dir.path().join("report").to_str().unwrap(),
@@ -71,7 +73,19 @@ fn eval_reports_accuracy_under_each_perturbation() {
             .as_f64()
             .unwrap()
     };
-    assert_eq!(rows.len(), 4);
+    assert_eq!(rows.len(), 5);
+    // Loads pushed past f64's range cannot be classified: each test image counts as wrong, and the
+    // row says how many there were; every other row classified all of its images.
+    let unclassified = |name: &str| {
+        rows.iter().find(|r| r["perturbation"] == name).unwrap()["unclassified"]
+            .as_u64()
+            .unwrap()
+    };
+    assert!(unclassified("load=1e308") > 0, "{rows:?}");
+    assert_eq!(accuracy("load=1e308"), 0.0, "{rows:?}");
+    for name in ["none", "load=1", "dead=1", "noise=0.5"] {
+        assert_eq!(unclassified(name), 0, "{name}: {rows:?}");
+    }
     // The clean row is the main result; a factor-1 load is no change at all.
     assert_eq!(accuracy("none"), json["overall_accuracy"].as_f64().unwrap());
     assert_eq!(accuracy("load=1"), accuracy("none"));
@@ -111,10 +125,17 @@ fn eval_reports_accuracy_under_each_perturbation() {
         "pwe",
         "--perturb",
         "shift=1,1",
+        "--perturb",
+        "load=1e308",
     ]);
     let stdout = String::from_utf8_lossy(&text.stdout);
     assert!(
         stdout.contains("accuracy with perturbed test images") && stdout.contains("shift=1,1"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("load=1e308: ")
+            && stdout.contains("could not be classified by this pipeline"),
         "{stdout}"
     );
     let bad = presrs(&[

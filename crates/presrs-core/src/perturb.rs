@@ -264,14 +264,29 @@ fn rotate(frame: FrameView<'_>, degrees: f64, out: &mut [f64]) {
     }
 }
 
+/// A level as a user would write it: plain decimals (`0.5`, `1`), but exponent form where the plain one
+/// would run to dozens of digits (`1e308`, not 309 digits). Parses back to the same value either way.
+struct Level(f64);
+
+impl fmt::Display for Level {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let magnitude = self.0.abs();
+        if magnitude != 0.0 && !(1e-6..1e16).contains(&magnitude) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
 impl fmt::Display for Perturbation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Self::Dead(x) | Self::Stuck(x) | Self::Gain(x) | Self::Noise(x) | Self::Rotate(x) => {
-                write!(f, "{}={x}", self.kind())
+                write!(f, "{}={}", self.kind(), Level(x))
             }
             Self::Shift(r, c) => write!(f, "shift={r},{c}"),
-            Self::Load(x) => write!(f, "load={x}"),
+            Self::Load(x) => write!(f, "load={}", Level(x)),
         }
     }
 }
@@ -398,7 +413,14 @@ mod tests {
             let err = p(bad).unwrap_err().to_string();
             assert!(err.contains("perturbation"), "{bad}: {err}");
         }
-        for text in ["dead=0.05", "shift=2,-1", "load=0.5", "rotate=10"] {
+        for text in [
+            "dead=0.05",
+            "shift=2,-1",
+            "load=0.5",
+            "rotate=10",
+            "load=1e308",
+            "noise=1e-7",
+        ] {
             assert_eq!(p(text).unwrap().to_string(), text);
         }
     }

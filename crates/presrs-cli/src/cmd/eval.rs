@@ -610,6 +610,9 @@ pub struct PerturbationRow {
     pub method: &'static str,
     pub accuracy: f64,
     pub accuracy_std: f64,
+    /// Perturbed test images (summed over repeats) that could not be classified at all, e.g. values
+    /// driven to infinity; each is counted as a wrong answer in `accuracy`.
+    pub unclassified: u64,
 }
 
 /// The `--json` document with `--perturb`: the usual fields plus the perturbation rows.
@@ -655,6 +658,7 @@ fn perturbation_rows(
         method,
         accuracy: r.overall.mean,
         accuracy_std: r.overall.std,
+        unclassified: r.unclassified,
     };
     let mut rows = vec![row("none".to_owned(), "configured", report)];
     let configured = evaluation
@@ -732,6 +736,18 @@ fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow:
             write!(out, " {:>20}", cell(p))?;
         }
         writeln!(out)?;
+    }
+    for r in rows.iter().filter(|r| r.unclassified > 0) {
+        let method = if r.method == "paper" {
+            "the paper's method"
+        } else {
+            "this pipeline"
+        };
+        writeln!(
+            out,
+            "{}: {} test image(s) could not be classified by {method} (counted as wrong)",
+            r.perturbation, r.unclassified
+        )?;
     }
     Ok(())
 }
