@@ -149,10 +149,16 @@ struct Server {
 
 impl Server {
     fn start(extra: &[&str]) -> Self {
-        let (dir, model) = fixture();
+        let (dir, _) = fixture();
+        let manifest = dir.join("manifest.csv");
+        Self::start_with(&[&["--calibrate", manifest.to_str().unwrap()], extra].concat())
+    }
+
+    /// A server without `--calibrate`: each connection calibrates on its first frames (warm-up).
+    fn start_with(extra: &[&str]) -> Self {
+        let (_, model) = fixture();
         let mut child = presrs()
-            .args(["stream", "--model", model.to_str().unwrap(), "--calibrate"])
-            .arg(dir.join("manifest.csv"))
+            .args(["stream", "--model", model.to_str().unwrap()])
             .args(["--listen", "127.0.0.1:0"])
             .args(extra)
             .stdout(Stdio::piped())
@@ -222,6 +228,28 @@ fn read_all_lines(stream: TcpStream) -> Vec<Value> {
     let mut text = String::new();
     BufReader::new(stream).read_to_string(&mut text).unwrap();
     json_lines(&text)
+}
+
+#[test]
+fn a_servers_messages_name_the_connection() {
+    // No calibration given: the connection's warm-up note goes to stderr, under the client's address
+    // (with several clients, whose stream it is about).
+    let server = Server::start_with(&["--exit-after", "1"]);
+    let events = replay(&server.addr, &recording("wood"));
+    assert_eq!(events.last().unwrap()["event"], "end");
+    let log = server.finish();
+    let note = log
+        .lines()
+        .find(|line| line.contains("warm-up calibration"))
+        .unwrap_or_else(|| panic!("no warm-up note: {log}"));
+    let client = note
+        .strip_prefix("presrs stream: 127.0.0.1:")
+        .and_then(|rest| rest.split_once(": "))
+        .map(|(port, _)| port);
+    assert!(
+        client.is_some_and(|port| port.parse::<u16>().is_ok()),
+        "{note}"
+    );
 }
 
 #[test]

@@ -714,7 +714,8 @@ fn handle_client(
     stderr_line!("presrs stream: {name}: connected");
     let (mut output, writer) = BoundedOutput::start(stream.try_clone()?, args.queue);
     let reader = std::io::BufReader::with_capacity(64 * 1024, stream.try_clone()?);
-    let log = |message: &str| stderr_line!("presrs stream: {message}");
+    // Named: with several clients, a message says whose stream it is about.
+    let log = |message: &str| stderr_line!("presrs stream: {name}: {message}");
     let mut emit = |line: String| output.send(line);
     let result = run_connection(
         model,
