@@ -743,10 +743,7 @@ fn parse_frames(
                 };
                 return Err(IoError::parse(file, line_no, message));
             }
-            data.push(match parsed {
-                Cell::Value(v) => v,
-                Cell::Absent => 0.0,
-            });
+            data.push(parsed.value());
         }
         cur.rows_done += 1;
         if cur.rows_done == rows {

@@ -31,7 +31,7 @@ use presrs_core::Grid;
 
 use crate::error::IoError;
 use crate::tekscan::frame_line;
-use crate::textutil::{Cell, is_blank, parse_cell};
+use crate::textutil::{is_blank, parse_cell};
 
 /// Longest header line accepted, bytes.
 const MAX_HEADER_LINE: usize = 64 * 1024;
@@ -409,15 +409,7 @@ fn parse_row(
             return false;
         }
         match parse_cell(cell) {
-            Ok(Cell::Value(v)) => {
-                values.push(v);
-                present.push(true);
-            }
-            Ok(Cell::Absent) => {
-                values.push(0.0);
-                present.push(false);
-                absent = true;
-            }
+            Ok(parsed) => absent |= !parsed.push_to(values, present),
             Err(err) => {
                 cell_error = Some(format!(
                     "frame {number} row {} column {}: `{cell}`: {}",

@@ -10,7 +10,7 @@ use std::path::Path;
 use presrs_core::{Grid, Recording, SensorMeta};
 
 use crate::error::{IoError, display_name};
-use crate::textutil::{Cell, decode_text, is_blank, numbered_lines, parse_cell, split_cells};
+use crate::textutil::{decode_text, is_blank, numbered_lines, parse_cell, split_cells};
 
 /// Reads a text matrix file as a one-frame recording (raw units, no frame period).
 pub fn read_text_matrix(path: &Path) -> Result<Recording, IoError> {
@@ -61,15 +61,7 @@ pub fn parse_text_matrix(text: &str, source_name: &str) -> Result<Recording, IoE
         }
         for (col, cell) in cells.iter().enumerate() {
             match parse_cell(cell) {
-                Ok(Cell::Value(v)) => {
-                    values.push(v);
-                    present.push(true);
-                }
-                Ok(Cell::Absent) => {
-                    values.push(0.0);
-                    present.push(false);
-                    any_absent = true;
-                }
+                Ok(parsed) => any_absent |= !parsed.push_to(&mut values, &mut present),
                 Err(err) => {
                     return Err(IoError::parse(
                         file,

@@ -127,6 +127,24 @@ pub(crate) enum Cell {
     Absent,
 }
 
+impl Cell {
+    /// The value a frame holds for the cell: an absent sensel reads 0 (its mask entry says it is absent).
+    pub(crate) fn value(self) -> f64 {
+        match self {
+            Cell::Value(v) => v,
+            Cell::Absent => 0.0,
+        }
+    }
+
+    /// Appends the cell to a frame's values and presence mask; true if the sensel is present.
+    pub(crate) fn push_to(self, values: &mut Vec<f64>, present: &mut Vec<bool>) -> bool {
+        let here = matches!(self, Cell::Value(_));
+        values.push(self.value());
+        present.push(here);
+        here
+    }
+}
+
 /// Why a cell is not a finite number or `B`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum CellError {
