@@ -9,7 +9,9 @@
 //!
 //! Representation: row `r` of the matrix is `s_r · q_r` with integers `|q_rc| ≤ 32767` and
 //! `s_r = max_c |w_rc| / 32767` (the rows are principal axes: their loadings share one scale well). A
-//! vector `d` is quantized when it is multiplied ([`FixedVector`]), in block floating point: each chunk
+//! vector `d` (f32: the features of the classification path are) is quantized when it is multiplied
+//! ([`FixedVector`]), in block floating point, in two passes (differences and chunk maxima, then integers):
+//! each chunk
 //! `k` of [`CHUNK`] values has its own scale `t_k = max_{c∈k} |d_c| / 16383`, because the values of a
 //! feature vector span orders of magnitude (the DC bin of an image's spectrum is far above its high
 //! frequencies), and one scale for all would round the small ones away. The vector's integers have 15
@@ -90,8 +92,10 @@ pub(crate) struct FixedMatrix {
 pub(crate) struct FixedVector {
     scales: Vec<f32>,
     chunks: Vec<Chunk>,
-    /// Scratch: each chunk's largest magnitude, then its reciprocal scale.
-    inverses: Vec<f64>,
+    /// Scratch of [`quantize_difference`](Self::quantize_difference): `x - mean`, and each chunk's
+    /// largest magnitude, then its reciprocal scale.
+    differences: Vec<f32>,
+    inverses: Vec<f32>,
 }
 
 /// The scale of a matrix row of largest magnitude `max` (finite), and its reciprocal (0 for a zero row).
@@ -100,24 +104,6 @@ fn row_scale(max: f64) -> (f64, f64) {
         (0.0, 0.0)
     } else {
         (max / LIMIT, LIMIT / max)
-    }
-}
-
-/// The scale of a vector chunk of largest magnitude `max`, as the f32 the product multiplies by, and the
-/// reciprocal to quantize with (computed from that f32, so `|d| · inverse ≤ 16383` up to rounding).
-/// A chunk of zeros gets 0; a non-finite `max` (a NaN or infinite value, or a scale beyond f32) gets NaN,
-/// so the product comes out NaN rather than silently finite; a scale below f32's normal range is raised
-/// to its smallest normal (the steps are then finer than needed, never too coarse).
-fn chunk_scale(max: f64) -> (f32, f64) {
-    if max == 0.0 {
-        return (0.0, 0.0);
-    }
-    #[allow(clippy::cast_possible_truncation)]
-    let scale = ((max / VECTOR_LIMIT) as f32).max(f32::MIN_POSITIVE);
-    if max.is_finite() && scale.is_finite() {
-        (scale, 1.0 / f64::from(scale))
-    } else {
-        (f32::NAN, 0.0)
     }
 }
 
@@ -312,25 +298,53 @@ impl FixedVector {
         Self {
             scales: vec![0.0; chunks],
             chunks: vec![Chunk::ZERO; chunks],
+            differences: vec![0.0; chunks * CHUNK],
             inverses: vec![0.0; chunks],
         }
     }
 
-    /// Sets this vector to `x - mean` (formed in f64) quantized into `chunks` chunks (at least
-    /// `x.len()` values; the padding is zero). A non-finite difference makes every product NaN.
+    /// Sets this vector to `x - mean` quantized into `chunks` chunks (at least `x.len()` values; the
+    /// padding is zero). The difference is formed in f32 (exact when the two are within a factor of two
+    /// of each other, else rounded by at most `2⁻²⁴` of it), each chunk's scale is its largest magnitude /
+    /// 16383 in f32, and each value is rounded to the nearest multiple of it. Two passes over f32 values
+    /// (an earlier version took three over f64 ones): the classification path, whose features are f32
+    /// already. A non-finite difference (or a sum of magnitudes beyond f32's range) makes every product
+    /// NaN.
     ///
     /// # Panics
     /// If `mean` is not as long as `x` or `x` does not fit in `chunks`.
-    pub(crate) fn quantize_difference(&mut self, x: &[f64], mean: &[f64], chunks: usize) {
+    pub(crate) fn quantize_difference(&mut self, x: &[f32], mean: &[f32], chunks: usize) {
         assert_eq!(
             x.len(),
             mean.len(),
             "FixedVector: mean has the wrong length"
         );
         assert!(x.len() <= chunks * CHUNK, "FixedVector: too few chunks");
-        // Compiled for the CPU's instruction set: the baseline x86-64 target has no rounding instruction,
-        // and `round_ties_even` would be a library call per value.
-        pulp::Arch::new().dispatch(Quantize {
+        // Compiled for the CPU's instruction set, so that the loops vectorize; the narrowing of the
+        // integers to 16 bits is written per instruction set (`NarrowChunk`).
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        {
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                return simd.vectorize(Quantize {
+                    simd,
+                    vector: self,
+                    x,
+                    mean,
+                    chunks,
+                });
+            }
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                return simd.vectorize(Quantize {
+                    simd,
+                    vector: self,
+                    x,
+                    mean,
+                    chunks,
+                });
+            }
+        }
+        pulp::NullaryFnOnce::call(Quantize {
+            simd: pulp::Scalar::new(),
             vector: self,
             x,
             mean,
@@ -339,20 +353,72 @@ impl FixedVector {
     }
 }
 
-/// [`FixedVector::quantize_difference`] inside pulp's dispatch.
-struct Quantize<'a> {
+/// The scale of a vector chunk of largest magnitude `max` (`max / 16383`), and the reciprocal to quantize
+/// with (with which `|d| · inverse ≤ 16383` up to a few f32 roundings, well below the 16383.5 that would
+/// round to 16384). A chunk of zeros gets 0; a non-finite `max` (a NaN or infinite value) gets NaN, so the
+/// product comes out NaN rather than silently finite; a scale below f32's normal range is raised to its
+/// smallest normal (the steps are then finer than needed, never too coarse).
+fn chunk_scale(max: f32) -> (f32, f32) {
+    if max == 0.0 {
+        return (0.0, 0.0);
+    }
+    #[allow(clippy::cast_possible_truncation)]
+    let (limit, step) = (VECTOR_LIMIT as f32, (1.0 / VECTOR_LIMIT) as f32);
+    // One division (the reciprocal of `max / 16383` would be a second one, dependent on the first):
+    // `max · step` and `16383 / max` are each within an f32 rounding of the exact pair.
+    let scale = max * step;
+    if !max.is_finite() {
+        (f32::NAN, 0.0)
+    } else if scale < f32::MIN_POSITIVE {
+        (f32::MIN_POSITIVE, 1.0 / f32::MIN_POSITIVE)
+    } else {
+        (scale, limit / max)
+    }
+}
+
+/// `v` (with `|v| ≤ 16383.5`) rounded to the nearest integer, ties to even: what the vector kernels'
+/// conversions (`cvtps2dq` under the default rounding mode) give.
+#[inline(always)]
+fn round_to_i16(v: f32) -> i16 {
+    // In range by the caller's scale: the cast neither saturates nor truncates a fraction.
+    #[allow(clippy::cast_possible_truncation)]
+    let q = v.round_ties_even() as i16;
+    q
+}
+
+/// Pass 2 of [`FixedVector::quantize_difference`] on one instruction set: `out[j] = round(d[j] · inverse)`
+/// (ties to even) for a whole chunk. Written per instruction set because the compiled generic loop
+/// narrowed the 32-bit integers to 16 bits lane by lane (`vpextrw`/`vpinsrw`), which cost more than the
+/// arithmetic of both passes.
+trait NarrowChunk: Copy {
+    fn narrow_chunk(self, d: &[f32; CHUNK], inverse: f32, out: &mut [i16; CHUNK]);
+}
+
+impl NarrowChunk for pulp::Scalar {
+    #[inline(always)]
+    fn narrow_chunk(self, d: &[f32; CHUNK], inverse: f32, out: &mut [i16; CHUNK]) {
+        for (dst, &d) in out.iter_mut().zip(d) {
+            *dst = round_to_i16(d * inverse);
+        }
+    }
+}
+
+/// [`FixedVector::quantize_difference`] on one instruction set.
+struct Quantize<'a, S> {
+    simd: S,
     vector: &'a mut FixedVector,
-    x: &'a [f64],
-    mean: &'a [f64],
+    x: &'a [f32],
+    mean: &'a [f32],
     chunks: usize,
 }
 
-impl pulp::WithSimd for Quantize<'_> {
+impl<S: pulp::Simd + NarrowChunk> pulp::NullaryFnOnce for Quantize<'_, S> {
     type Output = ();
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, simd: S) {
+    fn call(self) {
         let Self {
+            simd,
             vector,
             x,
             mean,
@@ -361,49 +427,52 @@ impl pulp::WithSimd for Quantize<'_> {
         vector.scales.resize(chunks, 0.0);
         vector.chunks.resize(chunks, Chunk::ZERO);
         vector.inverses.resize(chunks, 0.0);
+        vector.differences.resize(x.len(), 0.0);
         let whole = x.len() / CHUNK;
-        let (x_whole, x_rest) = x.split_at(whole * CHUNK);
-        let (mean_whole, mean_rest) = mean.split_at(whole * CHUNK);
-        let chunk_pairs = || {
-            x_whole
-                .chunks_exact(CHUNK)
-                .zip(mean_whole.chunks_exact(CHUNK))
-                // Whole registers: CHUNK is a multiple of every register width.
-                .map(|(x, mean)| (S::as_simd_f64s(x).0, S::as_simd_f64s(mean).0))
-        };
-        // Three passes, so that no chunk waits on the previous one's reduction and division: the
-        // maxima, the scales, the integers.
-        //
-        // Sums of |x - mean| over every value, lane-wise, are kept as well: finite when every difference
-        // is (x86 `max` ignores NaN, so the maxima alone would not tell; only values near f64's range,
-        // which no image gives, overflow the sum).
-        //
-        // Four sums, each register of a chunk's group of four into its own: one sum would chain every
-        // addition of the vector behind the previous one (its latency, not the arithmetic, was the cost).
-        let mut sums = [simd.splat_f64s(0.0); 4];
-        for ((x, mean), max_out) in chunk_pairs().zip(&mut vector.inverses) {
-            let mut max = simd.splat_f64s(0.0);
-            // Whole groups of four: a chunk is 64 values, a multiple of four registers of any width.
-            for (x, mean) in x.chunks_exact(4).zip(mean.chunks_exact(4)) {
-                for ((&x, &mean), sum) in x.iter().zip(mean).zip(&mut sums) {
-                    let d = simd.abs_f64s(simd.sub_f64s(x, mean));
-                    max = simd.max_f64s(max, d);
-                    *sum = simd.add_f64s(*sum, d);
+        let split = whole * CHUNK;
+        // Pass 1: the differences (kept, so pass 2 does not form them again), each chunk's largest
+        // magnitude, and lane-wise sums of magnitudes: finite when every difference is (x86 `max`
+        // ignores NaN, so the maxima alone would not tell).
+        let mut sums = [simd.splat_f32s(0.0); 4];
+        for (((x, mean), d), max_out) in x[..split]
+            .chunks_exact(CHUNK)
+            .zip(mean[..split].chunks_exact(CHUNK))
+            .zip(vector.differences[..split].chunks_exact_mut(CHUNK))
+            .zip(&mut vector.inverses)
+        {
+            // Whole groups of four registers: a chunk is 64 values, a multiple of four registers of any
+            // width. Four sums, so that no addition waits on the previous one.
+            let (x, mean, d) = (
+                S::as_simd_f32s(x).0,
+                S::as_simd_f32s(mean).0,
+                S::as_mut_simd_f32s(d).0,
+            );
+            let mut max = simd.splat_f32s(0.0);
+            for ((x, mean), d) in x
+                .chunks_exact(4)
+                .zip(mean.chunks_exact(4))
+                .zip(d.chunks_exact_mut(4))
+            {
+                for (((&x, &mean), d), sum) in x.iter().zip(mean).zip(d).zip(&mut sums) {
+                    *d = simd.sub_f32s(x, mean);
+                    let magnitude = simd.abs_f32s(*d);
+                    max = simd.max_f32s(max, magnitude);
+                    *sum = simd.add_f32s(*sum, magnitude);
                 }
             }
-            *max_out = simd.reduce_max_f64s(max);
+            *max_out = simd.reduce_max_f32s(max);
         }
-        let sum = simd.add_f64s(
-            simd.add_f64s(sums[0], sums[1]),
-            simd.add_f64s(sums[2], sums[3]),
-        );
-        let mut rest_sum = 0.0;
+        let mut rest_sum = 0.0f32;
         if let Some(max_out) = vector.inverses.get_mut(whole) {
-            let mut max = 0.0f64;
-            for (&x, &mean) in x_rest.iter().zip(mean_rest) {
-                let d = (x - mean).abs();
-                max = max.max(d);
-                rest_sum += d;
+            let mut max = 0.0f32;
+            for ((&x, &mean), d) in x[split..]
+                .iter()
+                .zip(&mean[split..])
+                .zip(&mut vector.differences[split..])
+            {
+                *d = x - mean;
+                max = max.max(d.abs());
+                rest_sum += d.abs();
             }
             *max_out = max;
         }
@@ -413,18 +482,14 @@ impl pulp::WithSimd for Quantize<'_> {
         for (scale, max_then_inverse) in vector.scales.iter_mut().zip(&mut vector.inverses) {
             (*scale, *max_then_inverse) = chunk_scale(*max_then_inverse);
         }
-        let rounder = simd.splat_f64s(ROUNDER);
-        for (((x, mean), &inverse), dst) in
-            chunk_pairs().zip(&vector.inverses).zip(&mut vector.chunks)
+        // Pass 2: the integers.
+        for ((d, &inverse), dst) in vector.differences[..split]
+            .chunks_exact(CHUNK)
+            .zip(&vector.inverses)
+            .zip(&mut vector.chunks)
         {
-            let inverse = simd.splat_f64s(inverse);
-            let mut bits = [0u64; CHUNK];
-            for ((&x, &mean), bits) in x.iter().zip(mean).zip(S::as_mut_simd_u64s(&mut bits).0) {
-                let scaled = simd.mul_add_e_f64s(simd.sub_f64s(x, mean), inverse, rounder);
-                *bits = simd.transmute_u64s_f64s(scaled);
-            }
-            for (dst, &bits) in dst.iter_mut().zip(&bits) {
-                *dst = low_bits(bits);
+            if let Ok(d) = <&[f32; CHUNK]>::try_from(d) {
+                simd.narrow_chunk(d, inverse, dst);
             }
         }
         // The partial chunk (if any) and the padding chunks after it.
@@ -434,11 +499,15 @@ impl pulp::WithSimd for Quantize<'_> {
         if let (Some(dst), Some(&inverse)) =
             (vector.chunks.get_mut(whole), vector.inverses.get(whole))
         {
-            for ((dst, &x), &mean) in dst.iter_mut().zip(x_rest).zip(mean_rest) {
-                *dst = low_bits(((x - mean) * inverse + ROUNDER).to_bits());
+            for (dst, &d) in dst.iter_mut().zip(&vector.differences[split..]) {
+                *dst = round_to_i16(d * inverse);
             }
         }
-        if !(simd.reduce_sum_f64s(sum) + rest_sum).is_finite() {
+        let sum = simd.add_f32s(
+            simd.add_f32s(sums[0], sums[1]),
+            simd.add_f32s(sums[2], sums[3]),
+        );
+        if !(simd.reduce_sum_f32s(sum) + rest_sum).is_finite() {
             vector.scales.fill(f32::NAN);
         }
     }
@@ -487,14 +556,49 @@ impl<K: PairDot> pulp::NullaryFnOnce for Product<'_, K> {
 
 #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
 mod x86 {
-    use super::{CHUNK, PairDot};
+    use super::{CHUNK, NarrowChunk, PairDot};
     use pulp::Simd;
     use pulp::x86::{V3, V4};
 
     #[cfg(target_arch = "x86")]
-    use core::arch::x86::{__m256i, __m512i};
+    use core::arch::x86::{__m256, __m256i, __m512, __m512i};
     #[cfg(target_arch = "x86_64")]
-    use core::arch::x86_64::{__m256i, __m512i};
+    use core::arch::x86_64::{__m256, __m256i, __m512, __m512i};
+
+    /// AVX-512: four registers of f32 scaled, converted (`vcvtps2dq`, nearest even) and narrowed
+    /// (`vpmovdw`).
+    impl NarrowChunk for V4 {
+        #[inline(always)]
+        fn narrow_chunk(self, d: &[f32; CHUNK], inverse: f32, out: &mut [i16; CHUNK]) {
+            let d: [__m512; 4] = pulp::cast(*d);
+            let inverse = self.avx512f._mm512_set1_ps(inverse);
+            let narrowed: [__m256i; 4] = core::array::from_fn(|i| {
+                let scaled = self.avx512f._mm512_mul_ps(d[i], inverse);
+                self.avx512f
+                    ._mm512_cvtepi32_epi16(self.avx512f._mm512_cvtps_epi32(scaled))
+            });
+            *out = pulp::cast(narrowed);
+        }
+    }
+
+    /// AVX2: eight registers scaled and converted (`vcvtps2dq`), packed in pairs (`vpackssdw`, which
+    /// interleaves 128-bit halves) and put back in order (`vpermq`).
+    impl NarrowChunk for V3 {
+        #[inline(always)]
+        fn narrow_chunk(self, d: &[f32; CHUNK], inverse: f32, out: &mut [i16; CHUNK]) {
+            let d: [__m256; 8] = pulp::cast(*d);
+            let inverse = self.avx._mm256_set1_ps(inverse);
+            let words = |i: usize| {
+                self.avx
+                    ._mm256_cvtps_epi32(self.avx._mm256_mul_ps(d[i], inverse))
+            };
+            let packed: [__m256i; 4] = core::array::from_fn(|i| {
+                let pairs = self.avx2._mm256_packs_epi32(words(2 * i), words(2 * i + 1));
+                self.avx2._mm256_permute4x64_epi64::<0b11_01_10_00>(pairs)
+            });
+            *out = pulp::cast(packed);
+        }
+    }
 
     /// AVX-512: a chunk is two registers (`vpmaddwd` each, `vpaddd`, `vcvtdq2ps`, `vfmadd`).
     impl PairDot for V4 {
@@ -699,7 +803,8 @@ mod tests {
 
     fn quantized(d: &[f64], chunks: usize) -> FixedVector {
         let mut v = FixedVector::default();
-        v.quantize_difference(d, &vec![0.0; d.len()], chunks);
+        let d: Vec<f32> = d.iter().map(|&v| v as f32).collect();
+        v.quantize_difference(&d, &vec![0.0; d.len()], chunks);
         v
     }
 

@@ -41,6 +41,11 @@ pub struct Pca {
     /// does not coarsen the steps of the low frequencies it would share a chunk with (and 1025 features
     /// leave 1024, whole chunks).
     basis_first: Vec<f64>,
+    /// `mean[1..]` in f32 (derived): the fixed-point path centres f32 features in f32.
+    mean_rest_f32: Vec<f32>,
+    /// `Σ_{i ≥ 1} basis[k][i] · (mean_rest_f32[i - 1] - mean[i])` (derived): what rounding the means to f32
+    /// moves each output by, added back exactly.
+    mean_correction: Vec<f64>,
 }
 
 /// The buffers of [`Pca::project_fast_into`] and [`Pca::project_fast_many`] (the centred inputs in
@@ -48,6 +53,8 @@ pub struct Pca {
 #[derive(Clone, Debug, Default)]
 pub struct ProjectionScratch {
     centred: Vec<FixedVector>,
+    /// Features `1..` of one f64 input in f32.
+    single: Vec<f32>,
 }
 
 /// The serialised form of [`Pca`]; checked on the way in.
@@ -242,6 +249,18 @@ impl Pca {
             .collect();
         let basis_fixed = FixedMatrix::from_f64(&rest, explained_variance.len(), n_features - 1);
         let basis_first = basis.iter().step_by(n_features).copied().collect();
+        #[allow(clippy::cast_possible_truncation)]
+        let mean_rest_f32: Vec<f32> = mean[1..].iter().map(|&m| m as f32).collect();
+        let mean_correction = basis
+            .chunks_exact(n_features)
+            .map(|row| {
+                row[1..]
+                    .iter()
+                    .zip(mean_rest_f32.iter().zip(&mean[1..]))
+                    .map(|(&loading, (&rounded, &exact))| loading * (f64::from(rounded) - exact))
+                    .sum()
+            })
+            .collect();
         Self {
             n_features,
             mean,
@@ -251,6 +270,8 @@ impl Pca {
             projected_mean,
             basis_fixed,
             basis_first,
+            mean_rest_f32,
+            mean_correction,
         }
     }
 
@@ -313,24 +334,27 @@ impl Pca {
     pub fn scratch(&self) -> ProjectionScratch {
         ProjectionScratch {
             centred: vec![FixedVector::with_chunks(self.basis_fixed.chunks_per_row())],
+            single: Vec::with_capacity(self.mean_rest_f32.len()),
         }
     }
 
     /// Writes `basis · (x - mean)` into `out` the fast way, in fixed point (`crate::fixed_matrix`): each
-    /// axis in 16-bit integers with one scale (its largest loading / 32767), `x - mean` formed in f64 and
+    /// axis in 16-bit integers with one scale (its largest loading / 32767), the features `1..` rounded to
+    /// f32 and centred in f32 (on the means rounded to f32, whose rounding is added back exactly), then
     /// rounded in blocks of 64 features, each block to 15-bit integers with its own scale (its largest
     /// value / 16383), the integer products summed exactly in i32, then scaled and summed in f32. The
     /// first feature (the DC bin of the 1-D |FFT|, far above the rest) is multiplied exactly. This is the
-    /// classification path (training and classifying both use it, so they agree): the product is bound
-    /// by moving the basis through the core, and 16-bit integers are a quarter of the f64 basis's bytes.
+    /// classification path (training and classifying both use it, so they agree): the product is bound by
+    /// its integer multiply-adds, and 16-bit integers are a quarter of the f64 basis's bytes.
     ///
     /// Error: each output is within
     /// `2⁻¹⁶ maxᵢ |basisₖᵢ| Σᵢ |xᵢ - meanᵢ| + 2⁻¹⁵ Σ_blocks (max_block |x - mean|) Σ_block |basisₖᵢ|`
-    /// (half a step of each rounding), plus a few f32 roundings, of the exact value (about `1e-5` of the
-    /// largest output; tested against [`project_into`](Self::project_into)). Rounding the axes by `2⁻¹⁶`
-    /// of their largest loading is far below how well tens of training images determine them, and
-    /// rounding the centred features by `2⁻¹⁵` of their block's largest one below what one count of an
-    /// 8-bit sensel changes them by. Does not allocate.
+    /// (half a step of each rounding), plus a few f32 roundings (of the features, `2⁻²⁴` of each, and of
+    /// the sums), of the exact value (about `1e-5` of the largest output; tested against
+    /// [`project_into`](Self::project_into)). Rounding the axes by `2⁻¹⁶` of their largest loading is far
+    /// below how well tens of training images determine them, and rounding the centred features by `2⁻¹⁵`
+    /// of their block's largest one below what one count of an 8-bit sensel changes them by. Does not
+    /// allocate.
     pub fn project_fast_into(
         &self,
         x: &[f64],
@@ -340,10 +364,26 @@ impl Pca {
         check_len("pca input", self.n_features, x.len())?;
         check_len("pca output", self.n_components(), out.len())?;
         scratch.centred.resize_with(1, FixedVector::default);
-        let centred = &mut scratch.centred[..1];
-        centred[0].quantize_difference(&x[1..], &self.mean[1..], self.basis_fixed.chunks_per_row());
-        self.basis_fixed.times_vectors(centred, out);
-        self.add_first_column(x, out);
+        narrow(&x[1..], &mut scratch.single);
+        self.quantize_rest(&scratch.single, &mut scratch.centred[0]);
+        self.finish(std::iter::once(x[0]), &scratch.centred[..1], out);
+        Ok(())
+    }
+
+    /// [`project_fast_into`](Self::project_fast_into) of features given in single precision (the fast 1-D
+    /// |FFT|'s output), read as they are: bit for bit the result of `project_fast_into` on the same values
+    /// widened to f64. Does not allocate.
+    pub fn project_fast_f32_into(
+        &self,
+        x: &[f32],
+        scratch: &mut ProjectionScratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        check_len("pca input", self.n_features, x.len())?;
+        check_len("pca output", self.n_components(), out.len())?;
+        scratch.centred.resize_with(1, FixedVector::default);
+        self.quantize_rest(&x[1..], &mut scratch.centred[0]);
+        self.finish(std::iter::once(f64::from(x[0])), &scratch.centred[..1], out);
         Ok(())
     }
 
@@ -366,29 +406,37 @@ impl Pca {
         }
         let n = xs.len() / self.n_features;
         check_len("pca outputs", n * self.n_components(), out.len())?;
-        let chunks = self.basis_fixed.chunks_per_row();
         if scratch.centred.len() < n {
             scratch.centred.resize_with(n, FixedVector::default);
         }
         let centred = &mut scratch.centred[..n];
         for (vector, x) in centred.iter_mut().zip(xs.chunks_exact(self.n_features)) {
-            vector.quantize_difference(&x[1..], &self.mean[1..], chunks);
+            narrow(&x[1..], &mut scratch.single);
+            self.quantize_rest(&scratch.single, vector);
         }
-        self.basis_fixed.times_vectors(centred, out);
-        for (x, out) in xs
-            .chunks_exact(self.n_features)
-            .zip(out.chunks_exact_mut(self.n_components()))
-        {
-            self.add_first_column(x, out);
-        }
+        let firsts = xs.chunks_exact(self.n_features).map(|x| x[0]);
+        self.finish(firsts, centred, out);
         Ok(())
     }
 
-    /// `out += basis[.., 0] · (x[0] - mean[0])`: the fast path's first column, exact.
-    fn add_first_column(&self, x: &[f64], out: &mut [f64]) {
-        let centred = x[0] - self.mean[0];
-        for (value, &loading) in out.iter_mut().zip(&self.basis_first) {
-            *value += loading * centred;
+    /// Quantizes the features `1..` of one input (in f32) minus their means into `vector`.
+    fn quantize_rest(&self, rest: &[f32], vector: &mut FixedVector) {
+        vector.quantize_difference(rest, &self.mean_rest_f32, self.basis_fixed.chunks_per_row());
+    }
+
+    /// The projections of inputs whose first features `firsts` gives and whose features `1..` are
+    /// quantized in `vectors`, into `out` (`n_components` values per input).
+    fn finish(&self, firsts: impl Iterator<Item = f64>, vectors: &[FixedVector], out: &mut [f64]) {
+        self.basis_fixed.times_vectors(vectors, out);
+        for (first, out) in firsts.zip(out.chunks_exact_mut(self.n_components())) {
+            let centred = first - self.mean[0];
+            for ((value, &loading), &correction) in out
+                .iter_mut()
+                .zip(&self.basis_first)
+                .zip(&self.mean_correction)
+            {
+                *value += loading * centred + correction;
+            }
         }
     }
 
@@ -412,6 +460,13 @@ impl Pca {
         }
         Ok(())
     }
+}
+
+/// `x` rounded to f32 into `out` (cleared first).
+fn narrow(x: &[f64], out: &mut Vec<f32>) {
+    out.clear();
+    #[allow(clippy::cast_possible_truncation)]
+    out.extend(x.iter().map(|&value| value as f32));
 }
 
 /// `out = matrix · x` for a row-major `out.len() x cols` f64 matrix: the safe runtime-dispatched SIMD kernel

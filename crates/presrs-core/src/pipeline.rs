@@ -22,7 +22,7 @@ use crate::classifier::{
     ClassifierConfig, ClassifierModel, ClassifierScratch, LabeledVectors, SigmaPoint,
 };
 use crate::crop::Crop;
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, Result, check_len};
 use crate::features::{FeatureConfig, FeatureExtractor, Precision};
 use crate::frame::{Frame, FrameView, Grid};
 use crate::pca::{Pca, ProjectionScratch};
@@ -472,19 +472,14 @@ impl Preprocessor {
         out: &mut [f64],
         precision: Precision,
     ) -> Result<()> {
-        // The common case of classification: the 1-D |FFT| reads the crop straight from the frame.
-        if let (Precision::Fast, FeatureExtractor::Fft1d(extractor)) =
-            (precision, &mut self.extractor)
-            && frame.present().is_none()
-            && !self.preprocess.normalise_load
+        if precision == Precision::Fast
+            && let Some(features) = self.fast_f32_features(frame)?
         {
-            let start = crop_start(&self.crop, self.image_grid, frame)?;
-            return extractor.extract_fast_window_into(
-                frame.values(),
-                start,
-                frame.grid().cols,
-                out,
-            );
+            check_len("feature buffer", features.len(), out.len())?;
+            for (dst, &value) in out.iter_mut().zip(features) {
+                *dst = f64::from(value);
+            }
+            return Ok(());
         }
         crop_masked_into(&self.crop, self.image_grid, frame, &mut self.cropped)?;
         if self.preprocess.fill_absent
@@ -511,6 +506,24 @@ impl Preprocessor {
             Precision::Exact => self.extractor.extract_into(&self.cropped, out),
             Precision::Fast => self.extractor.extract_fast_into(&self.cropped, out),
         }
+    }
+}
+
+impl Preprocessor {
+    /// The common case of classification: the 1-D |FFT| reads the crop straight from the frame (no
+    /// absent sensels, no load normalisation) and gives its features in f32, as the fixed-point PCA reads
+    /// them. `None` when the case does not apply.
+    fn fast_f32_features(&mut self, frame: &FrameView<'_>) -> Result<Option<&[f32]>> {
+        if let FeatureExtractor::Fft1d(extractor) = &mut self.extractor
+            && frame.present().is_none()
+            && !self.preprocess.normalise_load
+        {
+            let start = crop_start(&self.crop, self.image_grid, frame)?;
+            return extractor
+                .extract_fast_window(frame.values(), start, frame.grid().cols)
+                .map(Some);
+        }
+        Ok(None)
     }
 }
 
@@ -764,15 +777,29 @@ impl<'m> Session<'m> {
         Ok(&self.features)
     }
 
+    /// The features of `frame` in the precision classification computes them in, f32, when it takes the
+    /// common path (1-D |FFT| features, no absent sensels, no load normalisation; `None` otherwise, and
+    /// [`fast_features`](Self::fast_features) gives them): the values of `fast_features`, before they
+    /// are widened to f64. [`Pca::project_fast_f32_into`] reads them as they are.
+    pub fn fast_features_f32(&mut self, frame: &FrameView<'_>) -> Result<Option<&[f32]>> {
+        self.preprocessor.fast_f32_features(frame)
+    }
+
     /// The PCA-reduced feature vector of `frame` (what the classifier sees): the
     /// [`fast_features`](Self::fast_features) and the PCA's fixed-point projection.
     pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
-        self.fast_features(frame)?;
-        self.model.fields.pca.project_fast_into(
-            &self.features,
-            &mut self.projection,
-            &mut self.reduced,
-        )?;
+        let pca = &self.model.fields.pca;
+        match self.preprocessor.fast_f32_features(frame)? {
+            // The same values as `fast_features` gives, without widening them to f64 and back.
+            Some(features) => {
+                pca.project_fast_f32_into(features, &mut self.projection, &mut self.reduced)?;
+            }
+            None => {
+                self.preprocessor
+                    .features_into(frame, &mut self.features, Precision::Fast)?;
+                pca.project_fast_into(&self.features, &mut self.projection, &mut self.reduced)?;
+            }
+        }
         Ok(&self.reduced)
     }
 }

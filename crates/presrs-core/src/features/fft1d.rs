@@ -75,11 +75,16 @@ pub struct Fft1dExtractor {
     signal: Vec<f64>,
     spectrum: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
-    /// The single-precision transform of the classification path (even `N` only).
-    fast: Option<HalfLengthF32>,
+    /// The single-precision transform of the classification path (even `N` only; boxed, as it holds
+    /// its buffers and twiddles inline).
+    fast: Option<Box<HalfLengthF32>>,
     /// For odd `N`, where the window of [`extract_fast_window_into`](Self::extract_fast_window_into) is
     /// copied for the exact path (empty otherwise).
     window_copy: Vec<f64>,
+    /// The single-precision features of the last fast extraction (`output_len` long).
+    fast_out: Vec<f32>,
+    /// For odd `N`: the exact features, before they are rounded into `fast_out` (empty otherwise).
+    exact_out: Vec<f64>,
 }
 
 impl std::fmt::Debug for Fft1dExtractor {
@@ -107,11 +112,17 @@ impl Fft1dExtractor {
             spectrum: plan.make_output_vec(),
             scratch: plan.make_scratch_vec(),
             plan,
-            fast: (fft_len % 2 == 0).then(|| HalfLengthF32::new(fft_len)),
+            fast: (fft_len % 2 == 0).then(|| Box::new(HalfLengthF32::new(fft_len))),
             window_copy: if fft_len % 2 == 0 {
                 Vec::new()
             } else {
                 vec![0.0; grid.len()]
+            },
+            fast_out: vec![0.0; fft_len / 2 + 1],
+            exact_out: if fft_len % 2 == 0 {
+                Vec::new()
+            } else {
+                vec![0.0; fft_len / 2 + 1]
             },
         }
     }
@@ -179,6 +190,24 @@ impl Fft1dExtractor {
         stride: usize,
         out: &mut [f64],
     ) -> Result<()> {
+        check_len("fft1d feature buffer", self.output_len(), out.len())?;
+        let features = self.extract_fast_window(values, first, stride)?;
+        for (dst, &value) in out.iter_mut().zip(features) {
+            *dst = f64::from(value);
+        }
+        Ok(())
+    }
+
+    /// [`extract_fast_window_into`](Self::extract_fast_window_into) in the precision the fast path computes
+    /// in: the features as f32, in the extractor's buffer (what the PCA's fixed-point projection reads,
+    /// `Pca::project_fast_f32_into`; widening them to f64 only to round them back cost a tenth of a
+    /// classification). Odd `N` computes them exactly and rounds them to f32.
+    pub fn extract_fast_window(
+        &mut self,
+        values: &[f64],
+        first: usize,
+        stride: usize,
+    ) -> Result<&[f32]> {
         let Grid { rows, cols } = self.grid;
         let end = (rows - 1)
             .checked_mul(stride)
@@ -191,7 +220,6 @@ impl Fft1dExtractor {
                 got: format!("{} values", values.len()),
             });
         }
-        check_len("fft1d feature buffer", self.output_len(), out.len())?;
         let window = Window {
             values,
             first,
@@ -200,19 +228,25 @@ impl Fft1dExtractor {
             cols,
         };
         match self.fast.as_mut() {
-            Some(fast) => fast.magnitudes(window, out),
+            Some(fast) => fast.magnitudes(window, &mut self.fast_out),
             None => {
                 // Odd N: the exact path on a copy of the window.
                 let mut image = std::mem::take(&mut self.window_copy);
+                let mut exact = std::mem::take(&mut self.exact_out);
                 for (r, dst) in image.chunks_exact_mut(cols).enumerate() {
                     dst.copy_from_slice(window.row(r));
                 }
-                let result = self.extract_into(&image, out);
+                let result = self.extract_into(&image, &mut exact);
+                #[allow(clippy::cast_possible_truncation)]
+                for (dst, &value) in self.fast_out.iter_mut().zip(&exact) {
+                    *dst = value as f32;
+                }
                 self.window_copy = image;
-                return result;
+                self.exact_out = exact;
+                result?;
             }
         }
-        Ok(())
+        Ok(&self.fast_out)
     }
 
     /// The features of `image` in a new vector.
@@ -304,7 +338,7 @@ impl HalfLengthF32 {
 
     /// `out[k] = |X[k]|` for `k = 0 ..= M` of the image in `window` (row after row, at most `N` values),
     /// `out` `M + 1` long.
-    fn magnitudes(&mut self, window: Window<'_>, out: &mut [f64]) {
+    fn magnitudes(&mut self, window: Window<'_>, out: &mut [f32]) {
         let m = self.z.len();
         pulp::Arch::new().dispatch(Pack {
             window,
@@ -354,7 +388,7 @@ impl HalfLengthF32 {
         }
         if m % 2 == 0 && m > 0 {
             // k = M/2 pairs with itself: W^{M/2} = -i, so X = E - i O = (Re Z, -Im Z).
-            out[m / 2] = f64::from(z[m / 2].norm());
+            out[m / 2] = z[m / 2].norm();
         }
     }
 }
@@ -393,14 +427,14 @@ struct SplitSpectrum<'a> {
     low: &'a mut [f32],
     high: &'a mut [f32],
     /// `M + 1` magnitudes; the middle bin of an even `M` is left to the caller.
-    out: &'a mut [f64],
+    out: &'a mut [f32],
 }
 
 impl pulp::WithSimd for SplitSpectrum<'_> {
     type Output = ();
 
     /// Plain loops, compiled with the instruction set `S` enables (pulp's dispatch), which the compiler
-    /// vectorises (the magnitudes into `low`/`high` as f32, then widened into `out`).
+    /// vectorises (the magnitudes into `low`/`high`, then into `out` in order).
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
         let Self {
@@ -423,13 +457,11 @@ impl pulp::WithSimd for SplitSpectrum<'_> {
         {
             (*lo, *hi) = split_pair(*a, *c, wr, wi);
         }
-        out[0] = f64::from((z[0].re + z[0].im).abs());
-        out[m] = f64::from((z[0].re - z[0].im).abs());
-        for (dst, &v) in out[1..pairs].iter_mut().zip(&low[1..]) {
-            *dst = f64::from(v);
-        }
+        out[0] = (z[0].re + z[0].im).abs();
+        out[m] = (z[0].re - z[0].im).abs();
+        out[1..pairs].copy_from_slice(&low[1..]);
         for (dst, &v) in out[m + 1 - pairs..m].iter_mut().zip(high[1..].iter().rev()) {
-            *dst = f64::from(v);
+            *dst = v;
         }
     }
 }
@@ -457,13 +489,11 @@ fn split_pair(a: Complex<f32>, c: Complex<f32>, wr: f32, wi: f32) -> (f32, f32) 
 /// `S = A + conj C`, `D = A - conj C` and `V = -i W^k` (stored as (re, re) and (im, im) lane pairs),
 /// `2 X[k] = S + V D` and `2 conj X[M-k] = S - V D`; the squared parts of both are gathered into one
 /// register (`X[M-k]` reversed, so that both halves land in ascending order) and one square root gives
-/// 16 magnitudes, widened to f64 and stored.
+/// 16 magnitudes, stored as two halves.
 #[cfg(target_arch = "x86_64")]
 mod split_avx512 {
-    use core::arch::x86_64::__m512d;
-
+    use pulp::Simd;
     use pulp::x86::V4;
-    use pulp::{Simd, f64x8};
     use realfft::num_complex::Complex;
 
     use super::split_pair;
@@ -500,7 +530,7 @@ mod split_avx512 {
         ///
         /// # Panics
         /// If `z` is not `M` long or `out` not `M + 1`.
-        pub(super) fn run(&self, z: &[Complex<f32>], out: &mut [f64]) {
+        pub(super) fn run(&self, z: &[Complex<f32>], out: &mut [f32]) {
             assert!(
                 z.len() == self.m && out.len() == self.m + 1,
                 "split: wrong lengths"
@@ -516,12 +546,7 @@ mod split_avx512 {
     struct Run<'a> {
         split: &'a Split,
         z: &'a [Complex<f32>],
-        out: &'a mut [f64],
-    }
-
-    #[inline(always)]
-    fn pd(x: __m512d) -> f64x8 {
-        pulp::cast(x)
+        out: &'a mut [f32],
     }
 
     impl pulp::NullaryFnOnce for Run<'_> {
@@ -533,8 +558,8 @@ mod split_avx512 {
             let (simd, m) = (split.simd, split.m);
             let f = simd.avx512f;
             let pairs = split.v_re.len() / 2;
-            out[0] = f64::from((z[0].re + z[0].im).abs());
-            out[m] = f64::from((z[0].re - z[0].im).abs());
+            out[0] = (z[0].re + z[0].im).abs();
+            out[m] = (z[0].re - z[0].im).abs();
             // Blocks of 8 pairs from k = 1.
             let blocks = (pairs - 1) / 8;
             let ascending = V4::as_simd_c32s(&z[1..1 + 8 * blocks]).0;
@@ -542,8 +567,8 @@ mod split_avx512 {
             let v_re = V4::as_simd_f32s(&split.v_re[2..2 + 16 * blocks]).0;
             let v_im = V4::as_simd_f32s(&split.v_im[2..2 + 16 * blocks]).0;
             let (head, tail) = out.split_at_mut(m - 8 * blocks);
-            let low = V4::as_mut_simd_f64s(&mut head[1..1 + 8 * blocks]).0;
-            let high = V4::as_mut_simd_f64s(&mut tail[..8 * blocks]).0;
+            let low = head[1..1 + 8 * blocks].chunks_exact_mut(8);
+            let high = tail[..8 * blocks].chunks_exact_mut(8);
             let reverse = f._mm512_setr_epi64(7, 6, 5, 4, 3, 2, 1, 0);
             // The sign bit of each imaginary part.
             let conjugate = f._mm512_castsi512_ps(f._mm512_set1_epi64(i64::MIN));
@@ -557,8 +582,8 @@ mod split_avx512 {
                 .iter()
                 .zip(descending.iter().rev())
                 .zip(v_re.iter().zip(v_im))
-                .zip(low.iter_mut())
-                .zip(high.iter_mut().rev())
+                .zip(low)
+                .zip(high.rev())
             {
                 let c =
                     f._mm512_castpd_ps(f._mm512_permutexvar_pd(reverse, f._mm512_castps_pd(ps(c))));
@@ -574,16 +599,16 @@ mod split_avx512 {
                     f._mm512_permutex2var_ps(p2, odd, q2),
                 );
                 let magnitudes = f._mm512_mul_ps(f._mm512_sqrt_ps(sums), half);
-                *low = pd(f._mm512_cvtps_pd(f._mm512_castps512_ps256(magnitudes)));
-                *high =
-                    pd(f._mm512_cvtps_pd(simd.avx512dq._mm512_extractf32x8_ps::<1>(magnitudes)));
+                let magnitudes: [[f32; 8]; 2] = pulp::cast(magnitudes);
+                low.copy_from_slice(&magnitudes[0]);
+                high.copy_from_slice(&magnitudes[1]);
             }
             // The pairs after the last whole block.
             for k in 1 + 8 * blocks..pairs {
                 let (wr, wi) = (-split.v_im[2 * k], split.v_re[2 * k]);
                 let (lo, hi) = split_pair(z[k], z[m - k], wr, wi);
-                out[k] = f64::from(lo);
-                out[m - k] = f64::from(hi);
+                out[k] = lo;
+                out[m - k] = hi;
             }
         }
     }
@@ -684,11 +709,12 @@ mod tests {
             split_avx512: None,
             ..HalfLengthF32::new(2048)
         };
-        let (mut a, mut b) = (vec![f64::NAN; 1025], vec![f64::NAN; 1025]);
+        let (mut a, mut b) = (vec![f32::NAN; 1025], vec![f32::NAN; 1025]);
         here.magnitudes(window, &mut a);
         elsewhere.magnitudes(window, &mut b);
         let sum: f64 = values.iter().sum();
-        for (k, (a, b)) in a.iter().zip(&b).enumerate() {
+        for (k, (&a, &b)) in a.iter().zip(&b).enumerate() {
+            let (a, b) = (f64::from(a), f64::from(b));
             assert!((a - b).abs() <= 1e-6 * sum, "bin {k}: {a} vs {b}");
         }
     }
@@ -715,7 +741,7 @@ mod tests {
             let z: Vec<Complex<f32>> = (0..m)
                 .map(|_| Complex::new(rng.random_range(-1e4..1e4), rng.random_range(-1e4..1e4)))
                 .collect();
-            let (mut want, mut got) = (vec![f64::NAN; m + 1], vec![f64::NAN; m + 1]);
+            let (mut want, mut got) = (vec![f32::NAN; m + 1], vec![f32::NAN; m + 1]);
             let (mut low, mut high) = (plain.low.clone(), plain.high.clone());
             pulp::Arch::new().dispatch(SplitSpectrum {
                 z: &z,
@@ -730,7 +756,7 @@ mod tests {
                 .iter()
                 .copied()
                 .filter(|v| v.is_finite())
-                .fold(0.0, f64::max);
+                .fold(0.0, f32::max);
             for k in (0..=m).filter(|&k| m % 2 != 0 || k != m / 2) {
                 assert!(
                     (got[k] - want[k]).abs() <= 1e-6 * largest,
