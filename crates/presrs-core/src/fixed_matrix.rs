@@ -1008,6 +1008,92 @@ mod tests {
         }
     }
 
+    /// `d - mean` quantized by every instruction set this CPU has, by hand (`Quantize` on that set).
+    fn quantized_by_each(
+        d: &[f32],
+        mean: &[f32],
+        chunks: usize,
+    ) -> Vec<(&'static str, FixedVector)> {
+        let run = |name, quantize: &dyn Fn(&mut FixedVector)| {
+            let mut v = FixedVector::default();
+            quantize(&mut v);
+            (name, v)
+        };
+        let mut all = vec![run("scalar", &|vector| {
+            pulp::NullaryFnOnce::call(Quantize {
+                simd: pulp::Scalar::new(),
+                vector,
+                x: d,
+                mean,
+                chunks,
+            })
+        })];
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        {
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                all.push(run("avx2", &|vector| {
+                    simd.vectorize(Quantize {
+                        simd,
+                        vector,
+                        x: d,
+                        mean,
+                        chunks,
+                    })
+                }));
+            }
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                all.push(run("avx512", &|vector| {
+                    simd.vectorize(Quantize {
+                        simd,
+                        vector,
+                        x: d,
+                        mean,
+                        chunks,
+                    })
+                }));
+            }
+        }
+        all
+    }
+
+    /// Every instruction set gives the integers of the plain definition, `round(d · 16383 / max)` with
+    /// ties to even, and the scales `max / 16383`, on whole and partial chunks, including ties, the
+    /// largest magnitudes (±16383) and values that differ in sign only.
+    #[test]
+    fn every_instruction_set_quantizes_like_the_definition() {
+        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        let len = 3 * CHUNK + 21;
+        let mut x: Vec<f32> = (0..len).map(|_| rng.random_range(-1e4f32..1e4)).collect();
+        let mean: Vec<f32> = (0..len).map(|_| rng.random_range(-1e3f32..1e3)).collect();
+        // Chunk 1 holds exact ties: d = k + 0.5 steps with max 16383 (one step is 1).
+        for (j, value) in x[CHUNK..2 * CHUNK].iter_mut().enumerate() {
+            *value = mean[CHUNK + j] + (j as f32 - 32.0) + 0.5;
+        }
+        x[CHUNK] = mean[CHUNK] + 16383.0;
+        x[CHUNK + 1] = mean[CHUNK + 1] - 16383.0;
+        let chunks = len.div_ceil(CHUNK) + 1;
+        let results = quantized_by_each(&x, &mean, chunks);
+        for (name, v) in &results {
+            for (k, chunk) in v.chunks.iter().enumerate() {
+                let range = k * CHUNK..((k + 1) * CHUNK).min(len);
+                let d: Vec<f32> = range.clone().map(|i| x[i] - mean[i]).collect();
+                let max = d.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+                let (scale, inverse) = chunk_scale(max);
+                assert_eq!(v.scales[k].to_bits(), scale.to_bits(), "{name} chunk {k}");
+                for j in 0..CHUNK {
+                    let want = d
+                        .get(j)
+                        .map_or(0, |&d| (d * inverse).round_ties_even() as i16);
+                    assert_eq!(chunk[j], want, "{name} chunk {k} value {j}");
+                }
+            }
+        }
+        // The ties of chunk 1 went to even integers.
+        let (_, v) = &results[0];
+        assert_eq!(&v.chunks[1][2..6], &[-30, -28, -28, -26]);
+        assert_eq!(&v.chunks[1][..2], &[16383, -16383]);
+    }
+
     #[test]
     fn empty_shapes() {
         let m = FixedMatrix::from_f64(&[], 3, 0);
