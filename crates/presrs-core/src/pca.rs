@@ -397,15 +397,7 @@ impl Pca {
         scratch: &mut ProjectionScratch,
         out: &mut [f64],
     ) -> Result<()> {
-        if xs.len() % self.n_features != 0 {
-            return Err(CoreError::Shape {
-                what: "pca inputs",
-                expected: format!("whole vectors of {} features", self.n_features),
-                got: format!("{} values", xs.len()),
-            });
-        }
-        let n = xs.len() / self.n_features;
-        check_len("pca outputs", n * self.n_components(), out.len())?;
+        let n = self.check_many(xs.len(), out.len())?;
         if scratch.centred.len() < n {
             scratch.centred.resize_with(n, FixedVector::default);
         }
@@ -417,6 +409,42 @@ impl Pca {
         let firsts = xs.chunks_exact(self.n_features).map(|x| x[0]);
         self.finish(firsts, centred, out);
         Ok(())
+    }
+
+    /// [`project_fast_many`](Self::project_fast_many) of features given in single precision, as
+    /// [`project_fast_f32_into`](Self::project_fast_f32_into) reads them: each result bit for bit that
+    /// of `project_fast_f32_into`. Allocates only to grow `scratch`.
+    pub fn project_fast_many_f32(
+        &self,
+        xs: &[f32],
+        scratch: &mut ProjectionScratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let n = self.check_many(xs.len(), out.len())?;
+        if scratch.centred.len() < n {
+            scratch.centred.resize_with(n, FixedVector::default);
+        }
+        let centred = &mut scratch.centred[..n];
+        for (vector, x) in centred.iter_mut().zip(xs.chunks_exact(self.n_features)) {
+            self.quantize_rest(&x[1..], vector);
+        }
+        let firsts = xs.chunks_exact(self.n_features).map(|x| f64::from(x[0]));
+        self.finish(firsts, centred, out);
+        Ok(())
+    }
+
+    /// The number of inputs in `values` values for `outputs` outputs, or why they do not fit.
+    fn check_many(&self, values: usize, outputs: usize) -> Result<usize> {
+        if values % self.n_features != 0 {
+            return Err(CoreError::Shape {
+                what: "pca inputs",
+                expected: format!("whole vectors of {} features", self.n_features),
+                got: format!("{values} values"),
+            });
+        }
+        let n = values / self.n_features;
+        check_len("pca outputs", n * self.n_components(), outputs)?;
+        Ok(n)
     }
 
     /// Quantizes the features `1..` of one input (in f32) minus their means into `vector`.

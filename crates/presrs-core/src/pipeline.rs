@@ -833,8 +833,9 @@ fn classify_reduced(
 #[derive(Debug)]
 struct BatchSession<'m> {
     session: Session<'m>,
-    /// Row-major `block x n_features`.
-    features: Vec<f64>,
+    /// Row-major `block x n_features`, in the single precision the projection reads (the fast features
+    /// as they are, any others rounded).
+    features: Vec<f32>,
     /// Row-major `block x n_components`.
     reduced: Vec<f64>,
 }
@@ -861,17 +862,14 @@ impl<'m> BatchSession<'m> {
             .iter()
             .zip(self.features.chunks_exact_mut(n_features))
         {
-            let error = session
-                .preprocessor
-                .features_into(frame, row, Precision::Fast)
-                .err();
+            let error = single_features_into(session, frame, row).err();
             if error.is_some() {
                 row.fill(0.0);
             }
             failed.push(error);
         }
         if let Err(err) =
-            pca.project_fast_many(&self.features, &mut session.projection, &mut self.reduced)
+            pca.project_fast_many_f32(&self.features, &mut session.projection, &mut self.reduced)
         {
             // Cannot happen (the buffers are sized above); every frame gets the reason all the same.
             let reason = err.to_string();
@@ -906,6 +904,29 @@ impl<'m> BatchSession<'m> {
             })
             .collect()
     }
+}
+
+/// The features of `frame` as classification computes them, in f32, into `out`: straight from the fast
+/// path, or computed in f64 by the session and rounded.
+fn single_features_into(
+    session: &mut Session<'_>,
+    frame: &FrameView<'_>,
+    out: &mut [f32],
+) -> Result<()> {
+    if let Some(features) = session.preprocessor.fast_f32_features(frame)? {
+        check_len("feature buffer", features.len(), out.len())?;
+        out.copy_from_slice(features);
+        return Ok(());
+    }
+    session
+        .preprocessor
+        .features_into(frame, &mut session.features, Precision::Fast)?;
+    check_len("feature buffer", session.features.len(), out.len())?;
+    #[allow(clippy::cast_possible_truncation)]
+    for (dst, &value) in out.iter_mut().zip(&session.features) {
+        *dst = value as f32;
+    }
+    Ok(())
 }
 
 /// A synthetic 100 Hz movie for benchmarks and tests of the online path: `stances` times, 20 empty flight

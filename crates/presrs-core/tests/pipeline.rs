@@ -107,8 +107,18 @@ fn batch_matches_one_at_a_time() {
     let mut views: Vec<FrameView<'_>> = frames.iter().map(Frame::view).collect();
     let odd = Frame::zeros(Grid::new(20, 20));
     views.insert(5, odd.view());
+    // A frame with absent sensels takes the f64 feature path (the others the f32 one) in both.
+    let source = &frames[7];
+    let mut present = vec![true; source.grid().len()];
+    present[source.grid().cols * 20 + 20] = false;
+    let masked = Frame::with_mask(source.grid(), source.values().to_vec(), Some(present)).unwrap();
+    views.insert(9, masked.view());
     let batch = model.classify_batch(&views);
-    assert!(batch[BATCH_BLOCK + 4].is_err(), "the NaN frame is refused");
+    assert!(batch[BATCH_BLOCK + 5].is_err(), "the NaN frame is refused");
+    assert!(
+        batch[9].is_ok(),
+        "the frame with an absent sensel is classified"
+    );
     assert_eq!(batch.len(), views.len());
     let mut session = model.session();
     for (view, result) in views.iter().zip(&batch) {
