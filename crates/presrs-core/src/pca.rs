@@ -353,7 +353,9 @@ impl Pca {
     /// the sums), of the exact value (about `1e-5` of the largest output; tested against
     /// [`project_into`](Self::project_into)). Rounding the axes by `2⁻¹⁶` of their largest loading is far
     /// below how well tens of training images determine them, and rounding the centred features by `2⁻¹⁵`
-    /// of their block's largest one below what one count of an 8-bit sensel changes them by. Does not
+    /// of their block's largest one below what one count of an 8-bit sensel changes them by. Rounding a
+    /// feature to f32 moves it by `2⁻²⁴` of its value: below its block's step unless its values sit more
+    /// than about 500 times their spread away from zero (the DC bin does, and is kept exact). Does not
     /// allocate.
     pub fn project_fast_into(
         &self,

@@ -287,3 +287,70 @@ fn fast_projection_matches_the_exact_one_within_single_precision() {
             .is_err()
     );
 }
+
+/// Features given in f32 (the fast 1-D |FFT|'s output) project bit for bit as the same values widened to
+/// f64, one at a time and in a batch, and the f32 path stays within the stated accuracy of the exact
+/// projection (the means' rounding to f32 is added back: a large common offset costs nothing).
+#[test]
+fn single_precision_inputs_project_like_their_widened_values() {
+    let (n_train, d) = (60, 1025);
+    let mut data = anisotropic_data(n_train + 8, d, 33);
+    // A large offset on every feature, the DC bin's much larger: the means are far from zero.
+    for row in data.chunks_exact_mut(d) {
+        row[0] += 1e5;
+        for value in &mut row[1..] {
+            *value += 3e3;
+        }
+    }
+    let pca = Pca::fit(&data[..n_train * d], d, 51).unwrap();
+    let dims = pca.n_components();
+    let single: Vec<f32> = data[n_train * d..].iter().map(|&v| v as f32).collect();
+    let widened: Vec<f64> = single.iter().map(|&v| f64::from(v)).collect();
+    let mut scratch = pca.scratch();
+    let (mut from_single, mut from_double) = (vec![0.0; dims], vec![0.0; dims]);
+    let mut exact = vec![0.0; dims];
+    for (x32, x64) in single.chunks_exact(d).zip(widened.chunks_exact(d)) {
+        pca.project_fast_f32_into(x32, &mut scratch, &mut from_single)
+            .unwrap();
+        pca.project_fast_into(x64, &mut scratch, &mut from_double)
+            .unwrap();
+        assert_eq!(from_single, from_double);
+        pca.project_into(x64, &mut exact).unwrap();
+        for k in 0..dims {
+            let magnitude: f64 = pca
+                .component(k)
+                .iter()
+                .zip(x64)
+                .zip(pca.mean())
+                .map(|((b, v), m)| (b * (v - m)).abs())
+                .sum();
+            assert!(
+                (from_single[k] - exact[k]).abs() <= 1e-5 * magnitude,
+                "component {k}: {} vs {} (sum of |terms| {magnitude})",
+                from_single[k],
+                exact[k]
+            );
+        }
+    }
+    let mut many_single = vec![0.0; 8 * dims];
+    let mut many_double = vec![0.0; 8 * dims];
+    pca.project_fast_many_f32(&single, &mut scratch, &mut many_single)
+        .unwrap();
+    pca.project_fast_many(&widened, &mut scratch, &mut many_double)
+        .unwrap();
+    assert_eq!(many_single, many_double);
+    for (x32, batched) in single.chunks_exact(d).zip(many_single.chunks_exact(dims)) {
+        pca.project_fast_f32_into(x32, &mut scratch, &mut from_single)
+            .unwrap();
+        assert_eq!(from_single, batched);
+    }
+    // Lengths are checked as in the f64 path.
+    assert!(
+        pca.project_fast_f32_into(&single[..d - 1], &mut scratch, &mut from_single)
+            .is_err()
+    );
+    assert!(
+        pca.project_fast_many_f32(&single[..d + 1], &mut scratch, &mut many_single)
+            .is_err()
+    );
+}
