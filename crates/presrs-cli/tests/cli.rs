@@ -558,6 +558,18 @@ fn train_says_when_dims_is_capped_and_what_pwe_needs_to_train() {
         "{err}"
     );
     assert!(!model.exists());
+    // The automatic choice tries pwe too: refused before any candidate is scored.
+    let mut auto = train.to_vec();
+    auto[8] = "auto";
+    let out = presrs(&[&auto[..], &["--validation", "0"]].concat());
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("--validation 0 leaves no validation images")
+            && err.contains("automatic choice tries the Parzen window"),
+        "{err}"
+    );
+    assert!(!model.exists());
 }
 
 #[test]

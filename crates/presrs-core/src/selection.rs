@@ -199,6 +199,21 @@ pub fn train_auto(
     candidates: &[CheckedTrainConfig],
     seed: u64,
 ) -> Result<TrainedModel> {
+    // The winner is trained on the given split: a candidate that cannot be trained without validation
+    // images is refused now, not after every candidate has been scored.
+    if validation_images.is_empty()
+        && let Some(config) = candidates
+            .iter()
+            .map(CheckedTrainConfig::config)
+            .find(|config| config.classifier.needs_validation())
+    {
+        return Err(CoreError::NotEnoughData(format!(
+            "the candidate {} + {} chooses its parameters on validation images, and there are none: \
+             keep some for validation, or leave it out of the candidates (or give it a fixed sigma)",
+            config.features.name(),
+            config.classifier.kind().as_str()
+        )));
+    }
     let all: Vec<LabeledImage<'_>> = train_images
         .iter()
         .chain(validation_images)
@@ -250,5 +265,30 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    /// Without validation images, a candidate that needs them (the Parzen window choosing σ) is refused
+    /// before any candidate is scored; with a fixed σ the same candidate trains.
+    #[test]
+    fn candidates_needing_validation_images_are_refused_up_front() {
+        let frame = Frame::zeros(Grid::new(44, 44));
+        let images: Vec<LabeledImage<'_>> = ["a", "b", "a", "b"]
+            .iter()
+            .map(|label| LabeledImage::new(frame.view(), label))
+            .collect();
+        let candidates = [TrainConfig::default().check().unwrap()];
+        let err = train_auto(&images, &[], None, &candidates, 1).unwrap_err();
+        assert!(
+            matches!(&err, CoreError::NotEnoughData(reason) if reason.contains("fft1d + pwe")),
+            "{err}"
+        );
+        let fixed = TrainConfig {
+            classifier: crate::classifier::ClassifierConfig::Pwe(crate::classifier::ParzenConfig {
+                sigma: crate::classifier::SigmaChoice::Fixed { sigma: 1.0 },
+            }),
+            ..TrainConfig::default()
+        };
+        let trained = train_auto(&images, &[], None, &[fixed.check().unwrap()], 1);
+        assert!(trained.is_ok(), "{:?}", trained.err());
     }
 }

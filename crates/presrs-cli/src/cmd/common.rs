@@ -200,26 +200,34 @@ impl PipelineArgs {
 }
 
 /// Refuses a draw that leaves no validation images when the classifier needs them: the Parzen window
-/// (pwe) chooses its sigma on them, and no option fixes sigma. `picked` describes the draw for the
-/// message.
+/// (pwe) chooses its sigma on them, and no option fixes sigma; an automatic choice of the classifier
+/// tries pwe among the others (and would fail only after scoring every candidate, if pwe won).
 pub fn check_validation_set(
     pipeline: &PipelineArgs,
     validation: ValidationSize,
     validation_images: usize,
 ) -> anyhow::Result<()> {
-    if validation_images == 0 && pipeline.classifier == ClassifierChoice::Kind(ClassifierKind::Pwe)
-    {
-        let given = match validation {
-            ValidationSize::Count(count) => count.to_string(),
-            ValidationSize::Fraction(fraction) => fraction.to_string(),
-        };
-        anyhow::bail!(
-            "--validation {given} leaves no validation images, and the Parzen window (pwe) chooses its \
-             sigma on them: give --validation a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) \
-             with at least 3 images per class, or another --classifier"
-        );
+    if validation_images > 0 {
+        return Ok(());
     }
-    Ok(())
+    let given = match validation {
+        ValidationSize::Count(count) => count.to_string(),
+        ValidationSize::Fraction(fraction) => fraction.to_string(),
+    };
+    let remedy = "give --validation a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) with at \
+                  least 3 images per class";
+    match pipeline.classifier {
+        ClassifierChoice::Kind(ClassifierKind::Pwe) => anyhow::bail!(
+            "--validation {given} leaves no validation images, and the Parzen window (pwe) chooses its \
+             sigma on them: {remedy}, or another --classifier"
+        ),
+        ClassifierChoice::Auto => anyhow::bail!(
+            "--validation {given} leaves no validation images, and the automatic choice tries the \
+             Parzen window (pwe), which chooses its sigma on them: {remedy}, or a --classifier other \
+             than pwe or auto"
+        ),
+        ClassifierChoice::Kind(_) => Ok(()),
+    }
 }
 
 /// How samples are taken from movies.

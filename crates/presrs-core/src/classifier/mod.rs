@@ -102,6 +102,17 @@ impl ClassifierConfig {
         }
     }
 
+    /// Whether fitting needs validation vectors: the Parzen window choosing σ on them (a fixed σ does
+    /// not; the other classifiers use them when there are some and do without otherwise).
+    pub fn needs_validation(&self) -> bool {
+        matches!(
+            self,
+            Self::Pwe(ParzenConfig {
+                sigma: SigmaChoice::Search(_),
+            })
+        )
+    }
+
     /// Checks the parameters on their own (no data needed).
     pub fn check(&self) -> Result<()> {
         match self {
