@@ -169,6 +169,8 @@ fn parzen_models_need_a_usable_sigma() {
             (&|v| classifier(v)["sigma"] = json!(1e-160), "`sigma`"),
             (&|v| classifier(v)["sigma"] = json!(1e160), "`sigma`"),
             (&|v| classifier(v)["dims"] = json!(0), "`dims`"),
+            // finite, but its square overflows: every distance to it would be NaN
+            (&|v| classifier(v)["vectors"][0] = json!(1e200), "too long"),
         ],
     );
 }

@@ -255,3 +255,47 @@ fn classifier_model_serde_round_trip_classifies_identically() {
     value["class_starts"] = serde_json::json!([0, 5, 3]);
     assert!(serde_json::from_value::<ClassifierModel>(value).is_err());
 }
+
+/// A vector whose squared length overflows is refused with a reason, in training and when classified,
+/// instead of giving NaN posteriors.
+#[test]
+fn vectors_too_long_to_square_are_refused() {
+    let train = blobs(2, 5, 3, 3.0, 11);
+    let validation = blobs(2, 3, 3, 3.0, 12);
+    let model = ParzenModel::fit(
+        labeled(&train),
+        labeled(&validation),
+        2,
+        3,
+        &ParzenConfig::default(),
+    )
+    .unwrap();
+    let mut scratch = model.scratch();
+    let mut posteriors = vec![0.0; 2];
+    let err = model
+        .classify_into(&[1e200, 0.0, 0.0], &mut scratch, &mut posteriors)
+        .unwrap_err();
+    assert!(err.to_string().contains("too long"), "{err}");
+    assert!(
+        model
+            .log_scores_into(&[0.0, -1e160, 0.0], &mut scratch, &mut posteriors)
+            .is_err()
+    );
+    // 1e150 squares to 1e300: still usable.
+    assert!(
+        model
+            .classify_into(&[1e150, 0.0, 0.0], &mut scratch, &mut posteriors)
+            .is_ok()
+    );
+    let mut huge = train.clone();
+    huge.0[4] = 1e155;
+    let err = ParzenModel::fit(
+        labeled(&huge),
+        labeled(&validation),
+        2,
+        3,
+        &ParzenConfig::default(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("too long"), "{err}");
+}

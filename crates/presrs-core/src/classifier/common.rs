@@ -88,8 +88,12 @@ pub(crate) fn merged(
 
 /// Softmax of `scores / temperature` in place; returns the arg-max (first on ties).
 pub(crate) fn softmax_in_place(scores: &mut [f64], temperature: f64) -> usize {
+    // The differences from the top score are divided, not the scores: a tiny temperature (a model file
+    // may hold any positive one) would take large scores to ±inf, and inf - inf to NaN posteriors; the
+    // differences only go to -inf, whose exponential is 0.
+    let top = scores[argmax(scores)];
     for score in scores.iter_mut() {
-        *score /= temperature;
+        *score = (*score - top) / temperature;
     }
     super::parzen::normalise_log_scores(scores)
 }
@@ -154,4 +158,34 @@ pub(crate) fn fit_temperature(scores: &[f64], classes: &[usize], n_classes: usiz
         }
     }
     best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn softmax_matches_the_definition_and_survives_extreme_temperatures() {
+        let scores = [-3.0, 1.5, 0.25, 1.5];
+        for temperature in [0.7, 1.0, 40.0] {
+            let mut posteriors = scores;
+            let best = softmax_in_place(&mut posteriors, temperature);
+            assert_eq!(best, 1, "the first of the tied maxima");
+            let total: f64 = scores.iter().map(|s| (s / temperature).exp()).sum();
+            for (p, s) in posteriors.iter().zip(&scores) {
+                assert!((p - (s / temperature).exp() / total).abs() < 1e-12);
+            }
+        }
+        // Large scores and a tiny temperature: one-hot (split over the tie), never NaN.
+        let large = [-1e300, 2e300, 1e300, 2e300];
+        for temperature in [1e-300, f64::MIN_POSITIVE, 5e-324] {
+            let mut posteriors = large;
+            assert_eq!(softmax_in_place(&mut posteriors, temperature), 1);
+            assert_eq!(
+                posteriors,
+                [0.0, 0.5, 0.0, 0.5],
+                "temperature {temperature:e}"
+            );
+        }
+    }
 }

@@ -223,6 +223,9 @@ impl TryFrom<ParzenFields> for ParzenModel {
         if fields.vectors.iter().any(|value| !value.is_finite()) {
             return Err(bad("non-finite stored vectors".into()));
         }
+        if fields.vectors.chunks_exact(fields.dims).any(too_long) {
+            return Err(bad(format!("a stored vector {TOO_LONG}")));
+        }
         Ok(Self::assemble(
             fields.dims,
             fields.sigma,
@@ -253,6 +256,17 @@ impl ParzenModel {
         config.check()?;
         check_vectors(&train, "pwe training vectors", dims, n_classes)?;
         check_vectors(&validation, "pwe validation vectors", dims, n_classes)?;
+        for (what, data) in [
+            ("pwe training vectors", &train),
+            ("pwe validation vectors", &validation),
+        ] {
+            if data.vectors.chunks_exact(dims).any(too_long) {
+                return Err(CoreError::Param {
+                    name: what,
+                    reason: format!("a vector {TOO_LONG}"),
+                });
+            }
+        }
         require_per_class(&train, n_classes, 1)?;
 
         let (sigma, scale, validation_curve) = match &config.sigma {
@@ -407,7 +421,7 @@ impl ParzenModel {
     ) -> Result<usize> {
         check_len("pwe input", self.dims, x.len())?;
         check_len("pwe class scores", self.n_classes(), posteriors.len())?;
-        let inv_two_var = self.relative_kernels(x, scratch, posteriors);
+        let inv_two_var = self.relative_kernels(x, scratch, posteriors)?;
         // `posteriors` holds each class's nearest squared distance.
         let nearest = posteriors.iter().copied().fold(f64::INFINITY, f64::min);
         for value in posteriors.iter_mut() {
@@ -442,7 +456,7 @@ impl ParzenModel {
     ) -> Result<()> {
         check_len("pwe input", self.dims, x.len())?;
         check_len("pwe class scores", self.n_classes(), out.len())?;
-        let inv_two_var = self.relative_kernels(x, scratch, out);
+        let inv_two_var = self.relative_kernels(x, scratch, out)?;
         for (class, score) in out.iter_mut().enumerate() {
             let members =
                 &scratch.sq_distances[self.class_starts[class]..self.class_starts[class + 1]];
@@ -455,12 +469,24 @@ impl ParzenModel {
     /// The kernel terms of every stored vector relative to its class's nearest one,
     /// `exp(-(|x - p|² - n_c) / (2σ²))`, into `scratch.sq_distances`, and each class's nearest squared
     /// distance `n_c` into `nearest` (log-sum-exp around the nearest member: the largest term is
-    /// exp(0) = 1, no underflow). Returns `1 / (2σ²)`. Lengths are the caller's to check.
-    fn relative_kernels(&self, x: &[f64], scratch: &mut ParzenScratch, nearest: &mut [f64]) -> f64 {
+    /// exp(0) = 1, no underflow). Returns `1 / (2σ²)`, or an error when `x`'s squared length overflows.
+    /// Lengths are the caller's to check.
+    fn relative_kernels(
+        &self,
+        x: &[f64],
+        scratch: &mut ParzenScratch,
+        nearest: &mut [f64],
+    ) -> Result<f64> {
+        let x_sq_norm = sum_of_squares(x);
+        if !x_sq_norm.is_finite() {
+            return Err(CoreError::Param {
+                name: "pwe input",
+                reason: format!("the vector {TOO_LONG}"),
+            });
+        }
         scratch.sq_distances.resize(self.n_stored(), 0.0);
         // sq_distances <- p·x, then |x|² + |p|² - 2 p·x (clamped: rounding can make it slightly negative)
         columns_times_vector(&self.vectors_by_dim, x, &mut scratch.sq_distances);
-        let x_sq_norm = sum_of_squares(x);
         for (dist, p_sq_norm) in scratch.sq_distances.iter_mut().zip(self.sq_norms.iter()) {
             *dist = (x_sq_norm + p_sq_norm - 2.0 * *dist).max(0.0);
         }
@@ -475,8 +501,17 @@ impl ParzenModel {
         }
         // One call over every stored vector: whole registers across class boundaries.
         exp_neg_in_place(&mut scratch.sq_distances);
-        inv_two_var
+        Ok(inv_two_var)
     }
+}
+
+/// Why a vector is refused when its squared length is not finite: the distances are formed as
+/// `|x|² + |p|² - 2 p·x`, and an infinite square makes them NaN (the posteriors with them).
+const TOO_LONG: &str = "is too long for the Parzen window: its squared length overflows f64 (a component beyond about 1e153)";
+
+/// Whether `v`'s squared length overflows (or `v` holds a non-finite value).
+fn too_long(v: &[f64]) -> bool {
+    !sum_of_squares(v).is_finite()
 }
 
 /// `Σ v²` in four running sums: one sum would wait for each addition before the next (51 in a row for the
