@@ -365,11 +365,7 @@ impl Pca {
     ) -> Result<()> {
         check_len("pca input", self.n_features, x.len())?;
         check_len("pca output", self.n_components(), out.len())?;
-        scratch.centred.resize_with(1, FixedVector::default);
-        narrow(&x[1..], &mut scratch.single);
-        self.quantize_rest(&scratch.single, &mut scratch.centred[0]);
-        self.finish(std::iter::once(x[0]), &scratch.centred[..1], out);
-        Ok(())
+        self.project_many(x, scratch, out)
     }
 
     /// [`project_fast_into`](Self::project_fast_into) of features given in single precision (the fast 1-D
@@ -383,10 +379,7 @@ impl Pca {
     ) -> Result<()> {
         check_len("pca input", self.n_features, x.len())?;
         check_len("pca output", self.n_components(), out.len())?;
-        scratch.centred.resize_with(1, FixedVector::default);
-        self.quantize_rest(&x[1..], &mut scratch.centred[0]);
-        self.finish(std::iter::once(f64::from(x[0])), &scratch.centred[..1], out);
-        Ok(())
+        self.project_many(x, scratch, out)
     }
 
     /// [`project_fast_into`](Self::project_fast_into) for many inputs at once: `xs` holds whole input
@@ -399,18 +392,7 @@ impl Pca {
         scratch: &mut ProjectionScratch,
         out: &mut [f64],
     ) -> Result<()> {
-        let n = self.check_many(xs.len(), out.len())?;
-        if scratch.centred.len() < n {
-            scratch.centred.resize_with(n, FixedVector::default);
-        }
-        let centred = &mut scratch.centred[..n];
-        for (vector, x) in centred.iter_mut().zip(xs.chunks_exact(self.n_features)) {
-            narrow(&x[1..], &mut scratch.single);
-            self.quantize_rest(&scratch.single, vector);
-        }
-        let firsts = xs.chunks_exact(self.n_features).map(|x| x[0]);
-        self.finish(firsts, centred, out);
-        Ok(())
+        self.project_many(xs, scratch, out)
     }
 
     /// [`project_fast_many`](Self::project_fast_many) of features given in single precision, as
@@ -422,36 +404,41 @@ impl Pca {
         scratch: &mut ProjectionScratch,
         out: &mut [f64],
     ) -> Result<()> {
-        let n = self.check_many(xs.len(), out.len())?;
+        self.project_many(xs, scratch, out)
+    }
+
+    /// The fast projection of the whole input vectors in `xs` (f64 or f32) into `out`, each input's
+    /// features `1..` rounded to f32 (if they are not already) and quantized, the first kept exact.
+    fn project_many<T: FastInput>(
+        &self,
+        xs: &[T],
+        scratch: &mut ProjectionScratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        if xs.len() % self.n_features != 0 {
+            return Err(CoreError::Shape {
+                what: "pca inputs",
+                expected: format!("whole vectors of {} features", self.n_features),
+                got: format!("{} values", xs.len()),
+            });
+        }
+        let n = xs.len() / self.n_features;
+        check_len("pca outputs", n * self.n_components(), out.len())?;
         if scratch.centred.len() < n {
             scratch.centred.resize_with(n, FixedVector::default);
         }
         let centred = &mut scratch.centred[..n];
         for (vector, x) in centred.iter_mut().zip(xs.chunks_exact(self.n_features)) {
-            self.quantize_rest(&x[1..], vector);
+            let rest = T::as_single(&x[1..], &mut scratch.single);
+            vector.quantize_difference(
+                rest,
+                &self.mean_rest_f32,
+                self.basis_fixed.chunks_per_row(),
+            );
         }
-        let firsts = xs.chunks_exact(self.n_features).map(|x| f64::from(x[0]));
+        let firsts = xs.chunks_exact(self.n_features).map(|x| x[0].widen());
         self.finish(firsts, centred, out);
         Ok(())
-    }
-
-    /// The number of inputs in `values` values for `outputs` outputs, or why they do not fit.
-    fn check_many(&self, values: usize, outputs: usize) -> Result<usize> {
-        if values % self.n_features != 0 {
-            return Err(CoreError::Shape {
-                what: "pca inputs",
-                expected: format!("whole vectors of {} features", self.n_features),
-                got: format!("{values} values"),
-            });
-        }
-        let n = values / self.n_features;
-        check_len("pca outputs", n * self.n_components(), outputs)?;
-        Ok(n)
-    }
-
-    /// Quantizes the features `1..` of one input (in f32) minus their means into `vector`.
-    fn quantize_rest(&self, rest: &[f32], vector: &mut FixedVector) {
-        vector.quantize_difference(rest, &self.mean_rest_f32, self.basis_fixed.chunks_per_row());
     }
 
     /// The projections of inputs whose first features `firsts` gives and whose features `1..` are
@@ -492,11 +479,34 @@ impl Pca {
     }
 }
 
-/// `x` rounded to f32 into `out` (cleared first).
-fn narrow(x: &[f64], out: &mut Vec<f32>) {
-    out.clear();
-    #[allow(clippy::cast_possible_truncation)]
-    out.extend(x.iter().map(|&value| value as f32));
+/// A feature value the fast projection reads: f64 (rounded to f32 on the way in) or f32 (read as it is).
+trait FastInput: Copy {
+    /// `values` in f32: themselves, or rounded into `buffer` (cleared first).
+    fn as_single<'a>(values: &'a [Self], buffer: &'a mut Vec<f32>) -> &'a [f32];
+    fn widen(self) -> f64;
+}
+
+impl FastInput for f64 {
+    fn as_single<'a>(values: &'a [f64], buffer: &'a mut Vec<f32>) -> &'a [f32] {
+        buffer.clear();
+        #[allow(clippy::cast_possible_truncation)]
+        buffer.extend(values.iter().map(|&value| value as f32));
+        buffer
+    }
+
+    fn widen(self) -> f64 {
+        self
+    }
+}
+
+impl FastInput for f32 {
+    fn as_single<'a>(values: &'a [f32], _buffer: &'a mut Vec<f32>) -> &'a [f32] {
+        values
+    }
+
+    fn widen(self) -> f64 {
+        f64::from(self)
+    }
 }
 
 /// `out = matrix · x` for a row-major `out.len() x cols` f64 matrix: the safe runtime-dispatched SIMD kernel
