@@ -243,13 +243,18 @@ mod tests {
     use super::*;
     use crate::frame::{Frame, Grid};
 
+    /// Four images of `frame`, labelled a, b, a, b.
+    fn blank_images(frame: &Frame) -> Vec<LabeledImage<'_>> {
+        ["a", "b", "a", "b"]
+            .iter()
+            .map(|label| LabeledImage::new(frame.view(), label))
+            .collect()
+    }
+
     #[test]
     fn conditions_must_match_the_images() {
         let frame = Frame::zeros(Grid::new(44, 44));
-        let images: Vec<LabeledImage<'_>> = ["a", "b", "a", "b"]
-            .iter()
-            .map(|label| LabeledImage::new(frame.view(), label))
-            .collect();
+        let images = blank_images(&frame);
         let candidates = [TrainConfig::default().check().unwrap()];
         // Fewer conditions than images indexed past their end; more were silently ignored.
         for conditions in [&["x", "y"][..], &["x", "y", "x", "y", "x"][..]] {
@@ -272,10 +277,7 @@ mod tests {
     #[test]
     fn candidates_needing_validation_images_are_refused_up_front() {
         let frame = Frame::zeros(Grid::new(44, 44));
-        let images: Vec<LabeledImage<'_>> = ["a", "b", "a", "b"]
-            .iter()
-            .map(|label| LabeledImage::new(frame.view(), label))
-            .collect();
+        let images = blank_images(&frame);
         let candidates = [TrainConfig::default().check().unwrap()];
         let err = train_auto(&images, &[], None, &candidates, 1).unwrap_err();
         assert!(

@@ -91,11 +91,17 @@ pub(crate) fn softmax_in_place(scores: &mut [f64], temperature: f64) -> usize {
     // The differences from the top score are divided, not the scores: a tiny temperature (a model file
     // may hold any positive one) would take large scores to ±inf, and inf - inf to NaN posteriors; the
     // differences only go to -inf, whose exponential is 0.
-    let top = scores[argmax(scores)];
+    let best = argmax(scores);
+    let top = scores[best];
+    let mut total = 0.0;
     for score in scores.iter_mut() {
-        *score = (*score - top) / temperature;
+        *score = ((*score - top) / temperature).exp();
+        total += *score;
     }
-    super::parzen::normalise_log_scores(scores)
+    for score in scores.iter_mut() {
+        *score /= total;
+    }
+    best
 }
 
 /// Fraction of rows of `scores` (`n x n_classes`) whose arg-max is the true class.

@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::common::{check_vectors, require_per_class};
+use super::common::{argmax, check_vectors, require_per_class};
 use crate::aligned::Aligned;
 use crate::error::{CoreError, Result, check_len};
 use crate::simd::{columns_times_vector, exp_neg_in_place};
@@ -534,26 +534,6 @@ pub struct ParzenScratch {
     sq_distances: Vec<f64>,
 }
 
-/// Turns log scores into posteriors in place (softmax) and returns the arg-max (first on ties).
-pub(crate) fn normalise_log_scores(scores: &mut [f64]) -> usize {
-    let mut best = 0;
-    for (class, &score) in scores.iter().enumerate() {
-        if score > scores[best] {
-            best = class;
-        }
-    }
-    let top = scores[best];
-    let mut total = 0.0;
-    for score in scores.iter_mut() {
-        *score = (*score - top).exp();
-        total += *score;
-    }
-    for score in scores.iter_mut() {
-        *score /= total;
-    }
-    best
-}
-
 fn validation_curve(
     train: LabeledVectors<'_>,
     validation: LabeledVectors<'_>,
@@ -591,7 +571,7 @@ fn validation_curve(
         {
             model.log_scores_into(x, &mut scratch, &mut scores)?;
             log_likelihood += scores[class] + log_norm;
-            if normalise_log_scores(&mut scores) == class {
+            if argmax(&scores) == class {
                 correct += 1;
             }
         }
