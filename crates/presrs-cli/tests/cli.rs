@@ -219,6 +219,7 @@ fn inspect_describes_the_shared_tekscan_files() {
     assert_eq!(doc["frames"], 205);
     assert_eq!(doc["frame_period_s"], 0.032);
     assert_eq!(doc["units"], "KPa");
+    assert_eq!(doc["units_stated"], true);
     let stances = doc["stances"].as_array().unwrap();
     let complete: Vec<_> = stances.iter().filter(|s| s["partial"] == false).collect();
     assert_eq!(complete.len(), 5);
@@ -235,6 +236,17 @@ fn inspect_describes_the_shared_tekscan_files() {
     assert!(
         text.contains("16 rows x 16 cols") && text.contains("frames         10 at 0.7 s"),
         "{text}"
+    );
+    // example3.asf has no UNITS line: raw counts, said to be assumed.
+    assert!(
+        text.contains("units          raw (assumed: the file states no unit)"),
+        "{text}"
+    );
+    let out = presrs(&["inspect", &shared("example3.asf"), "--json"]);
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (&doc["units"], &doc["units_stated"]),
+        (&"raw".into(), &false.into())
     );
 }
 

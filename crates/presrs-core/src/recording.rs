@@ -68,7 +68,10 @@ pub struct SensorMeta {
     pub row_pitch_mm: Option<f64>,
     /// Distance between sensel centres along a row (between columns), millimetres.
     pub col_pitch_mm: Option<f64>,
-    pub units: PressureUnit,
+    /// The unit of the values, when the source states one (TekScan `UNITS`). `None` (a TekScan export
+    /// without a `UNITS` line, an image, an array, a text matrix): the values are taken as raw counts,
+    /// see [`units_or_raw`](Self::units_or_raw), and tools say that this was assumed.
+    pub units: Option<PressureUnit>,
     /// Value that corresponds to the sensor's full scale, in `units` (255 for 8-bit raw counts).
     pub full_scale: Option<f64>,
     /// Readings at or below this value are reported as zero by the acquisition software.
@@ -76,6 +79,13 @@ pub struct SensorMeta {
     /// Every other header field, in file order, kept verbatim so that a file can be written back.
     /// Keys are the first token of a header line; a free-text line is stored with an empty value.
     pub extra: Vec<(String, String)>,
+}
+
+impl SensorMeta {
+    /// The unit of the values: the stated one, or raw counts when the source states none.
+    pub fn units_or_raw(&self) -> &PressureUnit {
+        self.units.as_ref().unwrap_or(&PressureUnit::Raw)
+    }
 }
 
 /// Per-frame bookkeeping kept for round-tripping TekScan files.

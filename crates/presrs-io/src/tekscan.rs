@@ -241,7 +241,7 @@ fn parse_header(
                 end_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?))
             }
             "SENSOR_TYPE" => meta.sensor = (!value.is_empty()).then(|| value.to_owned()),
-            "UNITS" => meta.units = PressureUnit::parse(value),
+            "UNITS" => meta.units = Some(PressureUnit::parse(value)),
             "ROW_SPACING" | "COL_SPACING" => match parse_length_mm(value) {
                 Some(mm) if key == "ROW_SPACING" => meta.row_pitch_mm = Some(mm),
                 Some(mm) => meta.col_pitch_mm = Some(mm),
@@ -320,7 +320,7 @@ fn parse_header(
         ));
     }
     if let Some((value, at)) = saturation {
-        match saturation_in_units(&value, &meta.units) {
+        match saturation_in_units(&value, meta.units_or_raw()) {
             Some(full_scale) => meta.full_scale = Some(full_scale),
             None => {
                 // Not expressible in the recording's units (e.g. kPa for a raw export): keep it verbatim.
@@ -897,7 +897,7 @@ fn clip(text: &str) -> String {
 /// Writes a recording as a TekScan ASCII movie (LF line endings).
 ///
 /// The header holds `DATA_TYPE MOVIE`, `ROWS`, `COLS`, `ROW_SPACING`/`COL_SPACING` in mm, `SENSOR_TYPE`,
-/// `SECONDS_PER_FRAME`, `UNITS`, `NOISE_THRESHOLD`, `SATURATION_PRESSURE` (from `full_scale`),
+/// `SECONDS_PER_FRAME`, `UNITS` (when `meta.units` states one), `NOISE_THRESHOLD`, `SATURATION_PRESSURE` (from `full_scale`),
 /// `START_FRAME`/`END_FRAME` (the first and last frame numbers), then the entries of `meta.extra` that are
 /// not already written, then `ASCII_DATA @@`. Absent sensels are written `B`; numbers are written so that
 /// they read back bit-exactly. Reading the output with [`parse_tekscan`] gives back an equal recording.
@@ -942,16 +942,19 @@ pub fn write_tekscan<W: Write + ?Sized>(recording: &Recording, w: &mut W) -> std
         header_number(&mut buf, "SECONDS_PER_FRAME", period, "");
         written.push("SECONDS_PER_FRAME");
     }
-    buf.extend_from_slice(b"UNITS ");
-    buf.extend_from_slice(meta.units.as_tekscan().as_bytes());
-    buf.push(b'\n');
-    written.push("UNITS");
+    // A source that stated no unit is written without one too (read back, it is the same recording).
+    if let Some(units) = &meta.units {
+        buf.extend_from_slice(b"UNITS ");
+        buf.extend_from_slice(units.as_tekscan().as_bytes());
+        buf.push(b'\n');
+        written.push("UNITS");
+    }
     if let Some(noise) = meta.noise_threshold {
         header_number(&mut buf, "NOISE_THRESHOLD", noise, "");
         written.push("NOISE_THRESHOLD");
     }
     if let Some(full_scale) = meta.full_scale {
-        let unit = format!(" {}", meta.units.as_tekscan());
+        let unit = format!(" {}", meta.units_or_raw().as_tekscan());
         header_number(&mut buf, "SATURATION_PRESSURE", full_scale, &unit);
         written.push("SATURATION_PRESSURE");
     }
@@ -1073,7 +1076,9 @@ fn validate_for_tekscan(recording: &Recording) -> std::io::Result<()> {
     if let Some(sensor) = &meta.sensor {
         single_line("SENSOR_TYPE", sensor)?;
     }
-    single_line("UNITS", meta.units.as_tekscan())?;
+    if let Some(units) = &meta.units {
+        single_line("UNITS", units.as_tekscan())?;
+    }
     for (key, value) in &meta.extra {
         single_line("header key", key)?;
         single_line("header value", value)?;
@@ -1169,7 +1174,7 @@ mod tests {
         assert_eq!(meta.sensor.as_deref(), Some("5051"));
         assert!((meta.row_pitch_mm.unwrap() - 1.27).abs() < 1e-12);
         assert!((meta.col_pitch_mm.unwrap() - 1.27).abs() < 1e-12);
-        assert_eq!(meta.units, PressureUnit::KPa);
+        assert_eq!(meta.units, Some(PressureUnit::KPa));
         assert_eq!(meta.noise_threshold, Some(3.0));
         assert!((meta.full_scale.unwrap() - 137.895_145_863_36).abs() < 1e-6);
         assert_eq!(rec.frame_period_s(), Some(0.01));
@@ -1197,12 +1202,36 @@ mod tests {
     }
 
     #[test]
+    fn a_file_without_units_stays_without_them() {
+        let text = "ROWS 1\nCOLS 2\nSATURATION_PRESSURE 255 raw\nASCII_DATA @@\nFrame 1\n3,4\n";
+        let rec = strict(text).unwrap().recording;
+        assert_eq!(rec.meta.units, None);
+        assert_eq!(rec.meta.units_or_raw(), &PressureUnit::Raw);
+        // The saturation pressure is read in the assumed raw counts.
+        assert_eq!(rec.meta.full_scale, Some(255.0));
+        let mut written = Vec::new();
+        write_tekscan(&rec, &mut written).unwrap();
+        let written = String::from_utf8(written).unwrap();
+        assert!(!written.contains("UNITS"), "{written}");
+        let again = strict(&written).unwrap().recording;
+        assert_eq!(again, rec);
+        // A stated raw unit is written back.
+        let stated = strict(&text.replace("COLS 2\n", "COLS 2\nUNITS raw\n"))
+            .unwrap()
+            .recording;
+        assert_eq!(stated.meta.units, Some(PressureUnit::Raw));
+        let mut written = Vec::new();
+        write_tekscan(&stated, &mut written).unwrap();
+        assert!(String::from_utf8(written).unwrap().contains("UNITS raw\n"));
+    }
+
+    #[test]
     fn comments_that_look_like_keys_stay_text() {
         let text = "ROWS 1\nCOLS 1\nRows 3 were damaged\nUnits are kPa\nCOMMENTS:\nROWS 3 damaged\n\
                     COMMENTS:\nCOLS 1\nUNITS KPa\nascii_data was missing once\nASCII_DATA @@\nFrame 1\n3\n";
         let parsed = strict(text).unwrap();
         let rec = parsed.recording;
-        assert_eq!(rec.meta.units, PressureUnit::KPa);
+        assert_eq!(rec.meta.units, Some(PressureUnit::KPa));
         let extra: Vec<(&str, &str)> = rec
             .meta
             .extra
@@ -1714,7 +1743,7 @@ mod tests {
             sensor: Some("5051".into()),
             row_pitch_mm: Some(1.27),
             col_pitch_mm: Some(0.635),
-            units: PressureUnit::KPa,
+            units: Some(PressureUnit::KPa),
             full_scale: Some(137.9),
             noise_threshold: Some(3.0),
             extra: vec![

@@ -33,7 +33,7 @@ fn frasp01l_f_scan_insole() {
     assert_eq!(rec.grid(), Grid::new(60, 21));
     assert_eq!(rec.frame_count(), 205);
     assert_eq!(rec.frame_period_s(), Some(0.032));
-    assert_eq!(rec.meta.units, PressureUnit::KPa);
+    assert_eq!(rec.meta.units, Some(PressureUnit::KPa));
     assert_eq!(rec.meta.row_pitch_mm, Some(5.08));
     assert_eq!(rec.meta.col_pitch_mm, Some(5.08));
     assert_eq!(rec.meta.sensor.as_deref(), Some("FSCAN"));
@@ -100,7 +100,9 @@ fn example3_capacitive_array() {
     assert_eq!(rec.grid(), Grid::new(16, 16));
     assert_eq!(rec.frame_count(), 10);
     assert_eq!(rec.frame_period_s(), Some(0.7));
-    assert_eq!(rec.meta.units, PressureUnit::Raw);
+    // No UNITS line: not stated, taken as raw counts.
+    assert_eq!(rec.meta.units, None);
+    assert_eq!(rec.meta.units_or_raw(), &PressureUnit::Raw);
     assert_eq!(rec.meta.row_pitch_mm, None);
     assert_eq!(rec.meta.sensor, None);
     assert_eq!(rec.meta.noise_threshold, Some(0.0));
@@ -334,14 +336,14 @@ fn extra_strategy() -> impl Strategy<Value = Vec<(String, String)>> {
         .prop_map(|entries| entries.into_iter().filter(not_reserved).collect())
 }
 
-fn unit_strategy() -> impl Strategy<Value = PressureUnit> {
-    prop_oneof![
+fn unit_strategy() -> impl Strategy<Value = Option<PressureUnit>> {
+    prop::option::of(prop_oneof![
         Just(PressureUnit::Raw),
         Just(PressureUnit::KPa),
         Just(PressureUnit::MPa),
         Just(PressureUnit::Psi),
         Just(PressureUnit::Other("N/cm2".into())),
-    ]
+    ])
 }
 
 fn meta_strategy() -> impl Strategy<Value = SensorMeta> {

@@ -43,7 +43,8 @@ impl PressureScale {
                 col_pitch_mm: None,
             };
         };
-        let (unit, factor) = match (&meta.units, meta.units.kpa_per_unit()) {
+        let units = meta.units_or_raw();
+        let (unit, factor) = match (units, units.kpa_per_unit()) {
             (_, Some(factor)) => ("kPa".to_owned(), factor),
             (PressureUnit::Raw, None) => ("raw counts".to_owned(), 1.0),
             (other, None) => (other.as_tekscan().to_owned(), 1.0),
@@ -621,7 +622,7 @@ mod tests {
         let meta = SensorMeta {
             row_pitch_mm: Some(5.08),
             col_pitch_mm: Some(5.08),
-            units: PressureUnit::parse("KPa"),
+            units: Some(PressureUnit::parse("KPa")),
             ..SensorMeta::default()
         };
         Recording::new(grid, Some(0.032), data, Some(present), meta).unwrap()

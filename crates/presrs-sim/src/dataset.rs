@@ -491,7 +491,7 @@ impl Simulator {
             sensor: Some(cfg.sensor.model.clone()),
             row_pitch_mm: Some(cfg.foot.pitch_m * 1e3),
             col_pitch_mm: Some(cfg.foot.pitch_m * 1e3),
-            units: PressureUnit::Raw,
+            units: Some(PressureUnit::Raw),
             full_scale: Some(cfg.sensor.max_count),
             noise_threshold: Some(cfg.realism.noise_threshold_counts),
             extra: Vec::new(),

@@ -40,7 +40,9 @@ struct InspectReport {
     cols: usize,
     frames: usize,
     frame_period_s: Option<f64>,
+    /// The unit of the values: the file's, or `raw` when it states none (`units_stated` false).
     units: String,
+    units_stated: bool,
     row_pitch_mm: Option<f64>,
     col_pitch_mm: Option<f64>,
     absent_sensels: usize,
@@ -93,7 +95,8 @@ pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         cols: grid.cols,
         frames: recording.frame_count(),
         frame_period_s: recording.frame_period_s(),
-        units: recording.meta.units.to_string(),
+        units: recording.meta.units_or_raw().to_string(),
+        units_stated: recording.meta.units.is_some(),
         row_pitch_mm: recording.meta.row_pitch_mm,
         col_pitch_mm: recording.meta.col_pitch_mm,
         absent_sensels: recording
@@ -171,7 +174,15 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
         report.frames,
         or_unknown(period)
     )?;
-    writeln!(out, "units          {}", report.units)?;
+    if report.units_stated {
+        writeln!(out, "units          {}", report.units)?;
+    } else {
+        writeln!(
+            out,
+            "units          {} (assumed: the file states no unit)",
+            report.units
+        )?;
+    }
     writeln!(
         out,
         "total load     {} .. {} (baseline noise {:.3})",
