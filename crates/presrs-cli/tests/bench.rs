@@ -32,7 +32,17 @@ fn export_writes_a_model_images_and_matching_predictions() {
         &["--iterations", "50", "--batch", "16", "--batch-runs", "2"],
     );
     let report: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
-    assert!(report["single_image_median_ns"].as_u64().unwrap() > 0);
+    let ns = |key: &str| report[key].as_u64().unwrap();
+    assert!(ns("single_image_min_ns") > 0);
+    // Order statistics of one sample: non-decreasing.
+    let order = [
+        "single_image_min_ns",
+        "single_image_p25_ns",
+        "single_image_median_ns",
+        "single_image_p75_ns",
+        "single_image_p99_ns",
+    ];
+    assert!(order.windows(2).all(|w| ns(w[0]) <= ns(w[1])), "{report}");
     // Each stage timed alone; together about one classification (not asserted: timings are noisy).
     for stage in ["features", "pca", "classifier"] {
         assert!(
