@@ -177,11 +177,20 @@ pub fn select(
             chosen = i;
         }
     }
-    if scores[chosen].error.is_some() {
-        return Err(CoreError::NotEnoughData(format!(
-            "no candidate could be trained: {}",
-            scores[chosen].error.as_deref().unwrap_or("")
-        )));
+    if let Some(error) = &scores[chosen].error {
+        // Every candidate failed; the first one's reason stands for them.
+        let name = format!(
+            "{} + {}",
+            scores[chosen].features, scores[chosen].classifier
+        );
+        return Err(CoreError::NotEnoughData(if scores.len() == 1 {
+            format!("{name} could not be trained ({error})")
+        } else {
+            format!(
+                "none of the {} candidates could be trained ({name}: {error})",
+                scores.len()
+            )
+        }));
     }
     Ok(Selection {
         method,
@@ -270,6 +279,35 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    /// When every candidate fails, the error names the first and gives its reason, once.
+    #[test]
+    fn every_candidate_failing_names_the_first_and_its_reason() {
+        let frame = Frame::zeros(Grid::new(44, 44));
+        let labels = ["a", "b"].repeat(6);
+        let images: Vec<_> = labels
+            .iter()
+            .map(|label| LabeledImage::new(frame.view(), label))
+            .collect();
+        // Identical images: the Parzen window cannot scale σ to their distances.
+        let pwe = TrainConfig::default().check().unwrap();
+        let err = select(&images, None, std::slice::from_ref(&pwe), 1).unwrap_err();
+        let text = err.to_string();
+        assert!(
+            text.starts_with(
+                "not enough data: fft1d + pwe could not be trained (not enough data: "
+            ),
+            "{text}"
+        );
+        let err = select(&images, None, &[pwe.clone(), pwe], 1).unwrap_err();
+        let text = err.to_string();
+        assert!(
+            text.starts_with(
+                "not enough data: none of the 2 candidates could be trained (fft1d + pwe: "
+            ),
+            "{text}"
+        );
     }
 
     /// Without validation images, a candidate that needs them (the Parzen window choosing σ) is refused
