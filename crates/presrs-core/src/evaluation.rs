@@ -457,7 +457,9 @@ impl Evaluation<'_, '_> {
                     .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
                 if total == 0 {
                     return Err(CoreError::NotEnoughData(
-                        "no sample is left to test on after drawing the training set".into(),
+                        "no sample is left to test on: the training set took every sample (draw fewer \
+                         per class, or train on one condition and test on the others)"
+                            .into(),
                     ));
                 }
                 let mut result = result.clone();
@@ -750,6 +752,27 @@ mod tests {
         assert!(a.overall.mean > 0.8, "{:?}", a.overall);
         let correct: u64 = (0..4).map(|i| a.confusion.counts[i][i]).sum();
         assert!((correct as f64 / total as f64 - a.overall.mean).abs() < 1e-12);
+    }
+
+    /// Training on every sample of every condition leaves none to test: an error that says what to change.
+    #[test]
+    fn a_training_set_of_every_sample_is_refused_with_a_way_out() {
+        let data = data();
+        let samples = samples(&data);
+        let protocol = Protocol::TrainCondition {
+            condition: None,
+            per_class: None,
+            validation: ValidationSize::Count(3),
+        };
+        let config = paper_config_with_dims(10);
+        let err = evaluation(&samples, &protocol, 1, 3)
+            .run(Models::Config(&config))
+            .unwrap_err();
+        assert!(
+            matches!(&err, CoreError::NotEnoughData(reason)
+                if reason.contains("the training set took every sample (draw fewer per class")),
+            "{err}"
+        );
     }
 
     #[test]
