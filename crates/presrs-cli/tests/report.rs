@@ -365,3 +365,51 @@ fn report_with_default_options_on_a_small_data_set() {
     );
     assert!(out_dir.join("index.html").is_file());
 }
+
+/// One condition and fewer images than --per-class: training on every image would leave nothing to test
+/// on, so the evaluations hold a third of each class out (this failed with "no sample is left to test
+/// on" before), and the report is written.
+#[test]
+fn report_on_one_condition_with_few_images_tests_on_held_out_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    run_ok(presrs().args([
+        "simulate",
+        "--out",
+        sim.to_str().unwrap(),
+        "--seed",
+        "7",
+        "--hops-per-gait",
+        "6",
+        "--terrains",
+        "wood,carpet",
+        "--gaits",
+        "G2",
+    ]));
+    let out_dir = dir.path().join("report");
+    let output = presrs()
+        .args([
+            "report",
+            "--manifest",
+            sim.join("manifest.csv").to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--repeats",
+            "1",
+            "--fault-repeats",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{err}");
+    assert!(
+        err.contains("the evaluations draw") && err.contains("and test on the rest"),
+        "{err}"
+    );
+    let html = std::fs::read_to_string(out_dir.join("index.html")).unwrap();
+    assert!(
+        html.contains("trained on G2"),
+        "the evaluation is in the report"
+    );
+}

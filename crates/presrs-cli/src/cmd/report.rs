@@ -65,7 +65,9 @@ pub struct ReportArgs {
     /// Train on this condition (default: G2 when present, else every condition).
     #[arg(long)]
     pub train_condition: Option<String>,
-    /// Images drawn per class for training + validation, at least 1 (fewer if a class has fewer).
+    /// Images drawn per class for training + validation, at least 1 (fewer if a class has fewer; when
+    /// every condition trains and a class has no more than this, the evaluations draw two thirds of it
+    /// and test on the rest).
     #[arg(long, default_value_t = 20, value_parser = super::common::parse_positive)]
     pub per_class: usize,
     /// Of those, how many per class validate sigma: a count (7) or a fraction (0.35). When a class has
@@ -721,14 +723,29 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 args.validation,
                 args.seed,
                 &config,
-            )?;
+            )
+            .with_context(|| {
+                format!(
+                    "{}: cannot train the report's model",
+                    args.manifest.display()
+                )
+            })?;
             if args.repeats > 0 {
                 let eval_samples = eval_samples(triples);
-                let (per_class, validation) = shrink_draw(
-                    smallest_class(&eval_samples, train_condition.as_deref()),
+                let (per_class, validation, held_out) = evaluation_draw(
+                    &eval_samples,
+                    train_condition.as_deref(),
                     args.per_class,
                     args.validation,
                 );
+                if held_out {
+                    stderr_line!(
+                        "note: the evaluations draw {per_class} image(s) per class for training + \
+                         validation and test on the rest (every condition trains, and a class has too \
+                         few images to draw --per-class {} and keep some)",
+                        args.per_class
+                    );
+                }
                 let protocol = Protocol::TrainCondition {
                     condition: train_condition.clone(),
                     per_class: Some(per_class),
@@ -743,7 +760,13 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                     progress: &|| bar.inc(1),
                 }
                 .run(Models::Config(&config))
-                .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
+                .map_err(|err| {
+                    anyhow::anyhow!(
+                        "{}: cannot evaluate the model for the report (--repeats 0 leaves the \
+                         evaluation out): {err}",
+                        args.manifest.display()
+                    )
+                })?;
                 bar.finish_and_clear();
                 let name = format!(
                     "trained on {}",
@@ -797,6 +820,32 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 }
 
 /// The number of images of the smallest class among `samples` of `condition` (all when `None`).
+/// How many images per class the report's evaluations draw for training + validation: `per_class`, or
+/// [`shrink_draw`]'s fewer when a class has fewer; and when `condition` covers every sample (`None`, or
+/// the only condition) and the smallest class would be drawn whole, two thirds of it, so that every class
+/// keeps images to test on (true in the third place then).
+fn evaluation_draw(
+    samples: &[EvalSample<'_>],
+    condition: Option<&str>,
+    per_class: usize,
+    validation: ValidationSize,
+) -> (usize, ValidationSize, bool) {
+    let smallest = smallest_class(samples, condition);
+    let covers_every_sample = condition.is_none_or(|c| {
+        samples
+            .iter()
+            .all(|s| s.condition.is_none_or(|own| own == c))
+    });
+    if covers_every_sample && smallest <= per_class {
+        let draw = smallest - smallest.div_ceil(3);
+        let (draw, validation) = shrink_draw(draw, per_class, validation);
+        (draw, validation, true)
+    } else {
+        let (draw, validation) = shrink_draw(smallest, per_class, validation);
+        (draw, validation, false)
+    }
+}
+
 fn smallest_class(samples: &[EvalSample<'_>], condition: Option<&str>) -> usize {
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     for s in samples
@@ -836,8 +885,8 @@ pub fn fault_sweep(
     use presrs_core::perturb::Perturbation;
     let started = Instant::now();
     let samples = eval_samples(triples);
-    let smallest = smallest_class(&samples, condition);
-    let (per_class, validation) = shrink_draw(smallest, args.per_class, args.validation);
+    let (per_class, validation, _) =
+        evaluation_draw(&samples, condition, args.per_class, args.validation);
     let protocol = Protocol::TrainCondition {
         condition: condition.map(str::to_owned),
         per_class: Some(per_class),
