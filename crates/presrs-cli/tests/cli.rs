@@ -205,6 +205,44 @@ fn eval_reports_the_contract_fields() {
         "{}",
         stdout(&out)
     );
+
+    // The movies only: each trial is one terrain, so holding a trial out holds its label out too.
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    let movies: String = text
+        .lines()
+        .filter(|line| line.starts_with("path,") || line.contains(",G4,"))
+        .map(|line| format!("{line}\n"))
+        .collect();
+    let movies_manifest = dir.path().join("movies.csv");
+    std::fs::write(&movies_manifest, movies).unwrap();
+    let out = presrs(&[
+        "eval",
+        "--manifest",
+        movies_manifest.to_str().unwrap(),
+        "--leave-one-out",
+        "group",
+        "--classifier",
+        "mle",
+        "--repeats",
+        "1",
+        "--dims",
+        "5",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains(&format!(
+            "with group trial0 held out, its test images labelled {} cannot be recognised",
+            SYNTHETIC_CLASSES[0]
+        )),
+        "{err}"
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let never = doc["labels_never_trained"].as_object().unwrap();
+    assert_eq!(never.len(), 4, "{never:?}");
+    assert_eq!(never["trial2"], serde_json::json!([SYNTHETIC_CLASSES[2]]));
+    assert_eq!(doc["overall_accuracy"], 0.0);
 }
 
 #[test]

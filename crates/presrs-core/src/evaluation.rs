@@ -539,6 +539,56 @@ pub struct ComparisonRow {
 }
 
 /// One train/test partition.
+/// The labels a protocol tests that its training sets can never hold, by held-out value (leave-one-out)
+/// or as `"all"` (a training condition): such samples are wrong whatever the model, e.g. a group that is
+/// one terrain's only trial. Empty when every tested label can be trained. Sorted.
+pub fn labels_never_trained(
+    samples: &[EvalSample<'_>],
+    protocol: &Protocol,
+) -> BTreeMap<String, Vec<String>> {
+    let labels_where = |keep: &dyn Fn(&EvalSample<'_>) -> bool| {
+        samples
+            .iter()
+            .filter(|s| keep(s))
+            .map(|s| s.label)
+            .collect::<std::collections::BTreeSet<_>>()
+    };
+    let mut out = BTreeMap::new();
+    match protocol {
+        Protocol::TrainCondition {
+            condition: Some(condition),
+            ..
+        } => {
+            let trainable = labels_where(&|s| s.condition == Some(condition.as_str()));
+            let missing: Vec<String> = labels_where(&|_| true)
+                .difference(&trainable)
+                .map(|&l| l.to_owned())
+                .collect();
+            if !missing.is_empty() {
+                out.insert("all".to_owned(), missing);
+            }
+        }
+        Protocol::TrainCondition {
+            condition: None, ..
+        } => {}
+        Protocol::LeaveOneOut { .. } => {
+            let values: std::collections::BTreeSet<&str> =
+                samples.iter().filter_map(|s| s.group).collect();
+            for value in values {
+                let trainable = labels_where(&|s| s.group != Some(value));
+                let missing: Vec<String> = labels_where(&|s| s.group == Some(value))
+                    .difference(&trainable)
+                    .map(|&l| l.to_owned())
+                    .collect();
+                if !missing.is_empty() {
+                    out.insert(value.to_owned(), missing);
+                }
+            }
+        }
+    }
+    out
+}
+
 struct Fold {
     train: Vec<usize>,
     validation: Vec<usize>,
@@ -752,6 +802,55 @@ mod tests {
         assert!(a.overall.mean > 0.8, "{:?}", a.overall);
         let correct: u64 = (0..4).map(|i| a.confusion.counts[i][i]).sum();
         assert!((correct as f64 / total as f64 - a.overall.mean).abs() < 1e-12);
+    }
+
+    #[test]
+    fn labels_never_trained_by_protocol() {
+        let frame = Frame::zeros(crate::frame::Grid::new(2, 2));
+        // (label, condition = group): wood in every trial, carpet only in t1, grass only in G1's t2.
+        let rows = [
+            ("wood", "t1"),
+            ("carpet", "t1"),
+            ("wood", "t2"),
+            ("grass", "t2"),
+            ("wood", "t3"),
+        ];
+        let samples: Vec<EvalSample<'_>> = rows
+            .iter()
+            .map(|&(label, group)| EvalSample {
+                frame: frame.view(),
+                label,
+                condition: Some(group),
+                group: Some(group),
+            })
+            .collect();
+        let loo = Protocol::LeaveOneOut {
+            column: "trial".into(),
+            per_class: None,
+            validation: ValidationSize::Count(0),
+        };
+        let missing = labels_never_trained(&samples, &loo);
+        let expected: BTreeMap<String, Vec<String>> = [
+            ("t1".to_owned(), vec!["carpet".to_owned()]),
+            ("t2".to_owned(), vec!["grass".to_owned()]),
+        ]
+        .into();
+        assert_eq!(missing, expected);
+        let on_t1 = Protocol::TrainCondition {
+            condition: Some("t1".into()),
+            per_class: None,
+            validation: ValidationSize::Count(0),
+        };
+        assert_eq!(
+            labels_never_trained(&samples, &on_t1),
+            [("all".to_owned(), vec!["grass".to_owned()])].into()
+        );
+        let on_all = Protocol::TrainCondition {
+            condition: None,
+            per_class: None,
+            validation: ValidationSize::Count(0),
+        };
+        assert!(labels_never_trained(&samples, &on_all).is_empty());
     }
 
     /// Training on every sample of every condition leaves none to test: an error that says what to change.

@@ -82,6 +82,10 @@ pub struct EvalJson<'r> {
     /// The automatic choice of every trained model (with `--features auto` or `--classifier auto`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub selections: Vec<presrs_core::selection::Selection>,
+    /// Tested labels no training set of the protocol holds, by held-out value (`all` for a training
+    /// condition); those samples are wrong whatever the model.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub labels_never_trained: BTreeMap<String, Vec<String>>,
 }
 
 #[derive(Debug, Serialize)]
@@ -141,6 +145,7 @@ impl<'r> EvalJson<'r> {
                 .collect(),
             report,
             selections: Vec::new(),
+            labels_never_trained: BTreeMap::new(),
         }
     }
 }
@@ -195,6 +200,19 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             validation: args.validation,
         },
     };
+    let never_trained = presrs_core::evaluation::labels_never_trained(&samples, &protocol);
+    for (held_out, labels) in &never_trained {
+        let tested = match (&args.leave_one_out, held_out.as_str()) {
+            (Some(column), value) => format!("with {column} {value} held out, its"),
+            (None, _) => "the".to_owned(),
+        };
+        stderr_line!(
+            "warning: {}: {tested} test images labelled {} cannot be recognised: no training image has \
+             that label",
+            args.manifest.display(),
+            labels.join(", ")
+        );
+    }
     let folds = match &protocol {
         Protocol::LeaveOneOut { .. } => {
             let mut values: Vec<_> = samples.iter().filter_map(|s| s.group).collect();
@@ -294,6 +312,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.json {
         let mut json = EvalJson::new(&report);
         json.selections = selections;
+        json.labels_never_trained = never_trained;
         if !perturbed.is_empty() {
             return write_json(
                 out,
