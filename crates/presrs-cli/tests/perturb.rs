@@ -149,6 +149,58 @@ fn eval_reports_accuracy_under_each_perturbation() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("between 0 and 1"));
 }
 
+/// With an automatic part, the rows named `paper` are the paper's method (fft1d + pwe) even when the
+/// other part is fixed: here the features are automatic and the classifier mle, and the paper rows
+/// equal the rows of an explicit fft1d + pwe run with the same draws (they were fft1d + mle's).
+#[test]
+fn the_paper_rows_next_to_an_automatic_choice_are_the_paper_method() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let rows = |pipeline: &[&str], method: &str| {
+        let mut args = vec![
+            "eval",
+            "--manifest",
+            manifest.to_str().unwrap(),
+            "--train-condition",
+            "G2",
+            "--validation",
+            "3",
+            "--repeats",
+            "2",
+            "--dims",
+            "10",
+            "--perturb",
+            "dead=0.1",
+            "--perturb",
+            "rotate=10",
+            "--json",
+        ];
+        args.extend_from_slice(pipeline);
+        let out = presrs(&args);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        json["perturbations"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|r| r["method"] == method)
+            .map(|r| (r["perturbation"].clone(), r["accuracy"].clone()))
+            .collect::<Vec<_>>()
+    };
+    let paper = rows(&["--classifier", "mle"], "paper");
+    let explicit = rows(
+        &["--features", "fft1d", "--classifier", "pwe"],
+        "configured",
+    );
+    assert_eq!(paper.len(), 3);
+    assert_eq!(paper, explicit);
+}
+
 /// The real F-Scan insole export (60 x 21, 205 frames, absent sensels outside the insole).
 fn real_file() -> PathBuf {
     PathBuf::from(format!(

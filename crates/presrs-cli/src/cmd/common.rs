@@ -157,6 +157,20 @@ impl PipelineArgs {
         Ok(config.check()?)
     }
 
+    /// The paper's method (1-D |FFT| features, Parzen window) with these options' crop, dims and
+    /// preprocessing: what an automatic choice is shown next to. [`train_config`](Self::train_config) is
+    /// the same only when both parts are `auto`.
+    pub fn paper_config(&self, grid: presrs_core::Grid) -> anyhow::Result<CheckedTrainConfig> {
+        let config = TrainConfig {
+            crop: self.crop.resolve(grid),
+            features: FeatureKind::Fft1d.default_config(),
+            dims: self.dims(),
+            classifier: ClassifierKind::Pwe.default_config(),
+            preprocess: self.preprocess(),
+        };
+        Ok(config.check()?)
+    }
+
     /// Every configuration an automatic choice tries (auto parts run over the candidates — the cheap
     /// feature families unless `--full-search` — fixed parts stay), or, with `all`, every feature x
     /// classifier combination (for `--compare`).

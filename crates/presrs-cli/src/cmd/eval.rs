@@ -289,7 +289,8 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             n_train.saturating_sub(1)
         );
     }
-    let perturbed = perturbation_rows(args, evaluation, models, &config, folds, &report)?;
+    let paper = args.pipeline.paper_config(samples[0].frame.grid())?;
+    let perturbed = perturbation_rows(args, evaluation, models, &paper, folds, &report)?;
     if let Some(dir) = &args.report {
         let name = match &args.leave_one_out {
             Some(column) => format!("leave one {column} out"),

@@ -872,14 +872,15 @@ fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<Ev
 
 /// `presrs report`'s sensor-fault sweep: the paper's protocol (trained on `condition`, `per_class`
 /// images per class or fewer when a class has fewer) with every test image perturbed at each level of
-/// [`Perturbation::default_sweep`](presrs_core::perturb::Perturbation::default_sweep), for the paper's
-/// method and (with auto options) the automatic choice; each model is trained once per repeat and
-/// tested under every perturbation. Also returns a note on how it was run.
+/// [`Perturbation::default_sweep`](presrs_core::perturb::Perturbation::default_sweep), for the configured
+/// pipeline `config`, or with auto options for the paper's method (whatever the fixed part says) and the
+/// automatic choice; each model is trained once per repeat and tested under every perturbation. Also
+/// returns a note on how it was run.
 pub fn fault_sweep(
     args: &ReportArgs,
     triples: &[(&Frame, &str, Option<&str>)],
     condition: Option<&str>,
-    paper: &CheckedTrainConfig,
+    config: &CheckedTrainConfig,
 ) -> anyhow::Result<(Vec<FaultResult>, String)> {
     use presrs_core::evaluation::TestTransform;
     use presrs_core::perturb::Perturbation;
@@ -898,6 +899,12 @@ pub fn fault_sweep(
     each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
     let auto = args.pipeline.is_auto();
     let methods = 1 + usize::from(auto);
+    // Next to an automatic choice the paper's method; else the configured pipeline alone.
+    let paper = if auto {
+        &args.pipeline.paper_config(samples[0].frame.grid())?
+    } else {
+        config
+    };
     let bar = progress_bar((methods * args.fault_repeats) as u64, "fault sweep");
     stderr_line!(
         "fault sweep: {} perturbations x {methods} method(s) x {} repeat(s) (--fault-repeats 0 skips it)",
@@ -1147,6 +1154,41 @@ mod tests {
                 .accuracy,
             clean.overall
         );
+
+        // With the features automatic and the classifier fixed (mle), the line labelled the paper's
+        // method is the paper's method: the numbers of the explicit fft1d + pwe run above (it was the
+        // configured fft1d + mle).
+        let mle_args = Wrapper::parse_from([
+            "report",
+            "--manifest",
+            "m.csv",
+            "--out",
+            "out",
+            "--classifier",
+            "mle",
+            "--dims",
+            "20",
+            "--per-class",
+            "10",
+            "--validation",
+            "3",
+            "--fault-repeats",
+            "2",
+        ])
+        .args;
+        let mle_config = mle_args.pipeline.train_config(Grid::new(44, 44)).unwrap();
+        let (auto_faults, _) = fault_sweep(&mle_args, &triples, Some("G2"), &mle_config).unwrap();
+        let paper: Vec<_> = auto_faults
+            .iter()
+            .filter(|f| f.method == PAPER_METHOD)
+            .map(|f| (f.perturbation, f.accuracy))
+            .collect();
+        let explicit: Vec<_> = faults
+            .iter()
+            .map(|f| (f.perturbation, f.accuracy))
+            .collect();
+        assert_eq!(paper, explicit);
+        assert!(auto_faults.iter().any(|f| f.method == AUTO_METHOD));
 
         // The report draws them and tabulates the same numbers.
         let report_samples: Vec<ReportSample<'_>> = frames
