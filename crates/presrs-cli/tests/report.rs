@@ -325,10 +325,10 @@ fn report_with_a_model_file() {
 
 /// With the default options (20 per class, 7 validating) on a data set with fewer images per class,
 /// the draw shrinks as a whole: the validation count becomes the same fraction of what is drawn.
-#[test]
-fn report_with_default_options_on_a_small_data_set() {
-    let dir = tempfile::tempdir().unwrap();
-    let sim = dir.path().join("sim");
+/// `presrs report` with its default options and one repeat of each evaluation on a small simulation of
+/// wood and carpet at `gaits` (6 hops each): the exit status and stderr.
+fn default_report_on_a_small_simulation(dir: &Path, gaits: &str) -> (bool, String) {
+    let sim = dir.join("sim");
     run_ok(presrs().args([
         "simulate",
         "--out",
@@ -340,16 +340,15 @@ fn report_with_default_options_on_a_small_data_set() {
         "--terrains",
         "wood,carpet",
         "--gaits",
-        "G1,G2",
+        gaits,
     ]));
-    let out_dir = dir.path().join("report");
     let output = presrs()
         .args([
             "report",
             "--manifest",
             sim.join("manifest.csv").to_str().unwrap(),
             "--out",
-            out_dir.to_str().unwrap(),
+            dir.join("report").to_str().unwrap(),
             "--repeats",
             "1",
             "--fault-repeats",
@@ -357,13 +356,20 @@ fn report_with_default_options_on_a_small_data_set() {
         ])
         .output()
         .unwrap();
-    let err = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{err}");
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    (output.status.success(), stderr)
+}
+
+#[test]
+fn report_with_default_options_on_a_small_data_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ok, err) = default_report_on_a_small_simulation(dir.path(), "G1,G2");
+    assert!(ok, "{err}");
     assert!(
         err.contains("fewer than --per-class 20") && err.contains("a fraction 0.35"),
         "{err}"
     );
-    assert!(out_dir.join("index.html").is_file());
+    assert!(dir.path().join("report/index.html").is_file());
 }
 
 /// One condition and fewer images than --per-class: training on every image would leave nothing to test
@@ -372,42 +378,13 @@ fn report_with_default_options_on_a_small_data_set() {
 #[test]
 fn report_on_one_condition_with_few_images_tests_on_held_out_images() {
     let dir = tempfile::tempdir().unwrap();
-    let sim = dir.path().join("sim");
-    run_ok(presrs().args([
-        "simulate",
-        "--out",
-        sim.to_str().unwrap(),
-        "--seed",
-        "7",
-        "--hops-per-gait",
-        "6",
-        "--terrains",
-        "wood,carpet",
-        "--gaits",
-        "G2",
-    ]));
-    let out_dir = dir.path().join("report");
-    let output = presrs()
-        .args([
-            "report",
-            "--manifest",
-            sim.join("manifest.csv").to_str().unwrap(),
-            "--out",
-            out_dir.to_str().unwrap(),
-            "--repeats",
-            "1",
-            "--fault-repeats",
-            "1",
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{err}");
+    let (ok, err) = default_report_on_a_small_simulation(dir.path(), "G2");
+    assert!(ok, "{err}");
     assert!(
         err.contains("the evaluations draw") && err.contains("and test on the rest"),
         "{err}"
     );
-    let html = std::fs::read_to_string(out_dir.join("index.html")).unwrap();
+    let html = std::fs::read_to_string(dir.path().join("report/index.html")).unwrap();
     assert!(
         html.contains("trained on G2"),
         "the evaluation is in the report"

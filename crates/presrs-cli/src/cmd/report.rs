@@ -1076,26 +1076,23 @@ mod tests {
             #[command(flatten)]
             args: ReportArgs,
         }
-        let args = Wrapper::parse_from([
-            "report",
-            "--manifest",
-            "m.csv",
-            "--out",
-            "out",
-            "--features",
-            "fft1d",
-            "--classifier",
-            "pwe",
-            "--dims",
-            "20",
-            "--per-class",
-            "10",
-            "--validation",
-            "3",
-            "--fault-repeats",
-            "2",
-        ])
-        .args;
+        // The report's options with `pipeline` (features, classifier) and the test's draw.
+        let parse = |pipeline: &[&str]| {
+            let mut argv = vec!["report", "--manifest", "m.csv", "--out", "out"];
+            argv.extend_from_slice(pipeline);
+            argv.extend([
+                "--dims",
+                "20",
+                "--per-class",
+                "10",
+                "--validation",
+                "3",
+                "--fault-repeats",
+                "2",
+            ]);
+            Wrapper::parse_from(argv).args
+        };
+        let args = parse(&["--features", "fft1d", "--classifier", "pwe"]);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         let frames: Vec<(Frame, &str, &str)> = (0..96)
             .map(|i| {
@@ -1158,24 +1155,7 @@ mod tests {
         // With the features automatic and the classifier fixed (mle), the line labelled the paper's
         // method is the paper's method: the numbers of the explicit fft1d + pwe run above (it was the
         // configured fft1d + mle).
-        let mle_args = Wrapper::parse_from([
-            "report",
-            "--manifest",
-            "m.csv",
-            "--out",
-            "out",
-            "--classifier",
-            "mle",
-            "--dims",
-            "20",
-            "--per-class",
-            "10",
-            "--validation",
-            "3",
-            "--fault-repeats",
-            "2",
-        ])
-        .args;
+        let mle_args = parse(&["--classifier", "mle"]);
         let mle_config = mle_args.pipeline.train_config(Grid::new(44, 44)).unwrap();
         let (auto_faults, _) = fault_sweep(&mle_args, &triples, Some("G2"), &mle_config).unwrap();
         let paper: Vec<_> = auto_faults
