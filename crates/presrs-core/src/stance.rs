@@ -574,6 +574,13 @@ fn estimate_baseline(
             }
         }
     }
+    // The unloaded level is never below the lowest reading: a line fitted to a block can dip under it at
+    // the block's end (a sensor that reads 0 in swing got a baseline of -1.8 there, and frames of total
+    // load 0 were "1.8 above the baseline").
+    let lowest = values.iter().copied().fold(f64::INFINITY, f64::min);
+    for level in &mut baseline {
+        *level = level.max(lowest);
+    }
     (baseline, sigma)
 }
 
@@ -721,6 +728,29 @@ mod tests {
         let curve = interpolate(&[1.0, 3.0], &[10.0, 20.0], 6);
         assert_eq!(curve, vec![5.0, 10.0, 15.0, 20.0, 25.0, 30.0]);
         assert_eq!(interpolate(&[2.0], &[7.0], 3), vec![7.0; 3]);
+    }
+
+    /// A sensor that reads exactly 0 in swing early on and a few counts of noise later: the line fitted to
+    /// the unloaded frames slopes up, and below the first frames it would dip under 0, the lowest reading.
+    #[test]
+    fn the_baseline_never_drops_below_the_lowest_reading() {
+        let values: Vec<f64> = (0..256)
+            .map(|i| match (i % 16, i) {
+                (0..=3, _) => 5000.0, // stances
+                (_, 0..128) => 0.0,   // silent swing
+                (k, _) => {
+                    if k % 2 == 0 {
+                        6.0
+                    } else {
+                        0.0
+                    }
+                } // noisy swing
+            })
+            .collect();
+        let (baseline, _) = estimate_baseline(&values, 256, 0.1, 0.01);
+        let lowest = baseline.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(lowest >= 0.0, "{lowest}: {baseline:?}");
+        assert!(baseline[255] > 0.0, "the rise is still followed");
     }
 
     #[test]
