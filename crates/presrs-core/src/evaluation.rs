@@ -538,7 +538,6 @@ pub struct ComparisonRow {
     pub train_seconds: MeanStd,
 }
 
-/// One train/test partition.
 /// The labels a protocol tests that its training sets can never hold, by held-out value (leave-one-out)
 /// or as `"all"` (a training condition): such samples are wrong whatever the model, e.g. a group that is
 /// one terrain's only trial. Empty when every tested label can be trained. Sorted.
@@ -589,6 +588,7 @@ pub fn labels_never_trained(
     out
 }
 
+/// One train/test partition.
 struct Fold {
     train: Vec<usize>,
     validation: Vec<usize>,

@@ -736,15 +736,10 @@ mod tests {
     fn the_baseline_never_drops_below_the_lowest_reading() {
         let values: Vec<f64> = (0..256)
             .map(|i| match (i % 16, i) {
-                (0..=3, _) => 5000.0, // stances
-                (_, 0..128) => 0.0,   // silent swing
-                (k, _) => {
-                    if k % 2 == 0 {
-                        6.0
-                    } else {
-                        0.0
-                    }
-                } // noisy swing
+                (0..=3, _) => 5000.0,        // stances
+                (_, 0..128) => 0.0,          // silent swing
+                (k, _) if k % 2 == 0 => 6.0, // noisy swing
+                _ => 0.0,
             })
             .collect();
         let (baseline, _) = estimate_baseline(&values, 256, 0.1, 0.01);

@@ -897,8 +897,8 @@ fn clip(text: &str) -> String {
 /// Writes a recording as a TekScan ASCII movie (LF line endings).
 ///
 /// The header holds `DATA_TYPE MOVIE`, `ROWS`, `COLS`, `ROW_SPACING`/`COL_SPACING` in mm, `SENSOR_TYPE`,
-/// `SECONDS_PER_FRAME`, `UNITS` (when `meta.units` states one), `NOISE_THRESHOLD`, `SATURATION_PRESSURE` (from `full_scale`),
-/// `START_FRAME`/`END_FRAME` (the first and last frame numbers), then the entries of `meta.extra` that are
+/// `SECONDS_PER_FRAME`, `UNITS` (when `meta.units` states one), `NOISE_THRESHOLD`,
+/// `SATURATION_PRESSURE` (from `full_scale`), `START_FRAME`/`END_FRAME` (the first and last frame numbers), then the entries of `meta.extra` that are
 /// not already written, then `ASCII_DATA @@`. Absent sensels are written `B`; numbers are written so that
 /// they read back bit-exactly. Reading the output with [`parse_tekscan`] gives back an equal recording.
 ///

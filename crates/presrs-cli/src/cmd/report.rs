@@ -819,7 +819,6 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The number of images of the smallest class among `samples` of `condition` (all when `None`).
 /// How many images per class the report's evaluations draw for training + validation: `per_class`, or
 /// [`shrink_draw`]'s fewer when a class has fewer; and when `condition` covers every sample (`None`, or
 /// the only condition) and the smallest class would be drawn whole, two thirds of it, so that every class
@@ -846,6 +845,7 @@ fn evaluation_draw(
     }
 }
 
+/// The number of images of the smallest class among `samples` of `condition` (all when `None`).
 fn smallest_class(samples: &[EvalSample<'_>], condition: Option<&str>) -> usize {
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     for s in samples
