@@ -128,10 +128,29 @@ fn stores_training_and_validation_vectors() {
     }
 }
 
+/// Mean over `validation` of the log posterior (equal priors) of the true class under `model`, from
+/// the naive scores.
+fn naive_mean_log_posterior(model: &ParzenModel, validation: &(Vec<f64>, Vec<usize>)) -> f64 {
+    let dims = model.dims();
+    let total: f64 = validation
+        .0
+        .chunks(dims)
+        .zip(&validation.1)
+        .map(|(x, &class)| {
+            let scores = naive_log_scores(model, x);
+            let top = scores.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+            let log_total = top + scores.iter().map(|s| (s - top).exp()).sum::<f64>().ln();
+            scores[class] - log_total
+        })
+        .sum();
+    total / validation.1.len() as f64
+}
+
 #[test]
 fn search_records_the_curve_and_breaks_ties_toward_larger_sigma() {
-    // Well separated classes: every sigma from small to moderate classifies validation perfectly,
-    // so the chosen sigma is the largest perfect one.
+    // Classes 50 apart with points within 1 of their centre: every sigma of the grid classifies the
+    // validation set perfectly and with posteriors that round to exactly 1, so accuracy and log-loss
+    // tie everywhere and the chosen sigma is the largest.
     let train = blobs(3, 10, 4, 50.0, 6);
     let validation = blobs(3, 5, 4, 50.0, 7);
     let search = SigmaSearch {
@@ -151,11 +170,79 @@ fn search_records_the_curve_and_breaks_ties_toward_larger_sigma() {
         assert!((point.factor - factor).abs() < 1e-12);
         assert!((point.sigma - factor * scale).abs() < 1e-9 * scale);
         assert!(point.mean_log_likelihood.is_finite());
+        assert_eq!(point.accuracy, 1.0);
+        assert_eq!(point.mean_log_posterior, Some(0.0), "{point:?}");
     }
-    let best = curve.iter().map(|p| p.accuracy).fold(0.0, f64::max);
-    assert_eq!(best, 1.0);
-    let largest_best = curve.iter().rev().find(|p| p.accuracy == best).unwrap();
-    assert_eq!(model.sigma(), largest_best.sigma);
+    assert_eq!(model.sigma(), curve.last().unwrap().sigma);
+}
+
+#[test]
+fn search_breaks_accuracy_ties_by_the_validation_log_loss() {
+    // Classes 6 apart: the whole grid classifies validation perfectly, but the widest kernels spread
+    // each class's density over its neighbours and flatten the posteriors. Accuracy alone chose the
+    // widest, where an obvious image got a confidence near 1/3.
+    let train = blobs(3, 10, 2, 6.0, 16);
+    let validation = blobs(3, 10, 2, 6.0, 17);
+    let config = ParzenConfig {
+        sigma: SigmaChoice::Search(SigmaSearch {
+            min_factor: 0.25,
+            max_factor: 32.0,
+            steps: 8,
+        }),
+    };
+    let model = ParzenModel::fit(labeled(&train), labeled(&validation), 3, 2, &config).unwrap();
+    let curve = model.validation_curve();
+    assert!(curve.iter().all(|p| p.accuracy == 1.0), "{curve:?}");
+    // The recorded log posteriors are the definition's, from a model on the training set alone.
+    for point in curve {
+        let fixed = ParzenConfig {
+            sigma: SigmaChoice::Fixed { sigma: point.sigma },
+        };
+        let train_only =
+            ParzenModel::fit(labeled(&train), labeled(&(vec![], vec![])), 3, 2, &fixed).unwrap();
+        let expected = naive_mean_log_posterior(&train_only, &validation);
+        let recorded = point.mean_log_posterior.unwrap();
+        assert!(
+            (recorded - expected).abs() <= 1e-9 * (1.0 + expected.abs()),
+            "sigma {}: {recorded} vs {expected}",
+            point.sigma
+        );
+        assert!(recorded <= 0.0);
+    }
+    let best = curve
+        .iter()
+        .max_by(|a, b| {
+            a.mean_log_posterior
+                .partial_cmp(&b.mean_log_posterior)
+                .unwrap()
+        })
+        .unwrap();
+    assert_eq!(model.sigma(), best.sigma);
+    assert!(model.sigma() < curve.last().unwrap().sigma);
+    // The widest kernel's confidence in a class centre is near 1/3; the chosen one's is near 1.
+    let confidence = |model: &ParzenModel| {
+        let mut scratch = model.scratch();
+        let mut posteriors = vec![0.0; 3];
+        let class = model
+            .classify_into(&[12.0, 0.0], &mut scratch, &mut posteriors)
+            .unwrap();
+        assert_eq!(class, 2);
+        posteriors[class]
+    };
+    assert!(confidence(&model) > 0.95, "{}", confidence(&model));
+    let widest = ParzenModel::fit(
+        labeled(&train),
+        labeled(&validation),
+        3,
+        2,
+        &ParzenConfig {
+            sigma: SigmaChoice::Fixed {
+                sigma: curve.last().unwrap().sigma,
+            },
+        },
+    )
+    .unwrap();
+    assert!(confidence(&widest) < 0.5, "{}", confidence(&widest));
 }
 
 #[test]
