@@ -4,7 +4,8 @@
 Reads what `presrs bench --export DIR` wrote (the trained model file, the test images, presrs's features,
 reduced vectors, predictions and timings), runs the same pipeline -- crop 44x44 -> 38x41, 1-D |FFT|
 (eqs. 3-5: row-major vectorisation, zero padding to N = 2048, |rfft|, 1025 values), PCA to 51 dims with
-presrs's trained mean and axes, Parzen window with presrs's stored vectors and sigma, equal class priors --
+presrs's trained mean and axes, Parzen window with presrs's stored vectors and sigma, equal class priors,
+posteriors calibrated by presrs's temperature (softmax of temperature x log class densities) --
 checks every stage against presrs, times one call per image and one vectorised call on a batch, and prints
 the ratios. Two peers:
 
@@ -72,6 +73,8 @@ class State:
         self.explained_variance = np.asarray(pca["explained_variance"], dtype=np.float64)
         self.dims = classifier["dims"]
         self.sigma = float(classifier["sigma"])
+        # posteriors = softmax(temperature * log class densities); model files before calibration: 1
+        self.temperature = float(classifier.get("temperature", 1.0))
         self.vectors = np.asarray(classifier["vectors"], dtype=np.float64).reshape(-1, self.dims)
         self.class_starts = np.asarray(classifier["class_starts"], dtype=np.intp)
         assert self.basis.shape == (self.dims, self.n_features)
@@ -102,7 +105,9 @@ class NumpyPeer:
     classification path does it, squared distances `|z|^2 + |p|^2 - 2 p.z` with the |z|^2 term dropped (it is the same for
     every stored vector, so it cancels in the posteriors), and the class densities shifted by the largest
     kernel exponent before exp (log-sum-exp with one shift for all classes: the best class's density is
-    at least 1/count, so nothing that matters underflows).
+    at least 1/count, so nothing that matters underflows). With a calibrated model (temperature T != 1,
+    posteriors = softmax(T * log densities)) the other classes' densities matter even where they underflow,
+    so the log densities are formed with one shift per class, as presrs does then.
     """
 
     name = "numpy"
@@ -120,6 +125,23 @@ class NumpyPeer:
         self.b = np.einsum("ij,ij->i", state.vectors, state.vectors) * inv_two_var
         self.starts = state.class_starts[:-1]
         self.inv_counts = 1.0 / np.diff(state.class_starts)
+        self.temperature = state.temperature
+
+        self.counts = np.diff(state.class_starts)
+
+    def log_densities(self, z: np.ndarray) -> np.ndarray:
+        """Log class densities (up to one constant per image), log-sum-exp shifted per class: with a
+        temperature the posteriors are exp(T * log density), and a class hundreds of units below the best
+        one, whose density underflows, still gets a posterior that counts."""
+        exponent = z @ self.a.T - self.b
+        top = np.maximum.reduceat(exponent, self.starts, axis=-1)
+        kernel = np.exp(exponent - np.repeat(top, self.counts, axis=-1))
+        return top + np.log(np.add.reduceat(kernel, self.starts, axis=-1) * self.inv_counts)
+
+    def tempered(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        scores = self.log_densities(z)
+        posteriors = np.exp(self.temperature * (scores - scores.max(axis=-1, keepdims=True)))
+        return np.argmax(scores, axis=-1), posteriors / posteriors.sum(axis=-1, keepdims=True)
 
     def features(self, images: np.ndarray) -> np.ndarray:
         """eqs. 3-5 on one image or a stack: crop, row-major vectorisation, |rfft| zero-padded to N."""
@@ -138,12 +160,19 @@ class NumpyPeer:
 
     def classify(self, image: np.ndarray) -> tuple[int, np.ndarray]:
         """One 44x44 image -> (class index, posteriors)."""
-        density = self.densities(self.reduce(self.features(image)))
+        z = self.reduce(self.features(image))
+        if self.temperature != 1.0:
+            best, posteriors = self.tempered(z)
+            return int(best), posteriors
+        density = self.densities(z)
         return int(np.argmax(density)), density / density.sum()
 
     def classify_batch(self, images: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """n x 44 x 44 images -> (class indices, n x classes posteriors), one vectorised pass."""
-        density = self.densities(self.reduce(self.features(images)))
+        z = self.reduce(self.features(images))
+        if self.temperature != 1.0:
+            return self.tempered(z)
+        density = self.densities(z)
         return np.argmax(density, axis=1), density / density.sum(axis=1, keepdims=True)
 
 
@@ -167,6 +196,7 @@ class SklearnPeer:
         self.pca = pca
         # One Gaussian KDE per class on that class's stored vectors, exact (atol = rtol = 0). score_samples
         # gives log(mean kernel) - (d/2) log(2 pi sigma^2); the constant is the same for every class.
+        self.temperature = state.temperature
         self.kdes = [
             KernelDensity(kernel="gaussian", bandwidth=state.sigma).fit(state.vectors[start:end])
             for start, end in zip(state.class_starts[:-1], state.class_starts[1:])
@@ -180,14 +210,14 @@ class SklearnPeer:
         z = self.pca.transform(self.features(image)[None, :])
         scores = np.array([kde.score_samples(z)[0] for kde in self.kdes])
         best = int(np.argmax(scores))
-        posteriors = np.exp(scores - scores[best])
+        posteriors = np.exp(self.temperature * (scores - scores[best]))
         return best, posteriors / posteriors.sum()
 
     def classify_batch(self, images: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z = self.pca.transform(self.features(images))
         scores = np.stack([kde.score_samples(z) for kde in self.kdes], axis=1)
         best = np.argmax(scores, axis=1)
-        posteriors = np.exp(scores - scores.max(axis=1, keepdims=True))
+        posteriors = np.exp(self.temperature * (scores - scores.max(axis=1, keepdims=True)))
         return best, posteriors / posteriors.sum(axis=1, keepdims=True)
 
 

@@ -11,6 +11,7 @@
 //! Every repeat draws with its own seed (`seed + repeat`), so a run is reproducible and repeats differ.
 //! Results are means and standard deviations over the repeats; the confusion matrix sums all repeats.
 
+use crate::reliability::Reliability;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -171,6 +172,10 @@ pub struct EvalReport {
     /// is an error instead: that is bad data, not a fault the evaluation injected.
     #[serde(default)]
     pub unclassified: u64,
+    /// The confidences of every classified test image against whether it was right, over all repeats:
+    /// how far the model's confidences can be trusted.
+    #[serde(default)]
+    pub reliability: Reliability,
 }
 
 /// A function that trains a model from training and validation sample indices (and a seed).
@@ -362,6 +367,7 @@ impl Evaluation<'_, '_> {
             times_ns: Vec<u64>,
             results: Vec<RepeatResult>,
             unclassified: u64,
+            reliability: Reliability,
         }
         let mut tallies: Vec<Tally> = perturbs
             .iter()
@@ -370,6 +376,7 @@ impl Evaluation<'_, '_> {
                 times_ns: Vec::new(),
                 results: Vec::with_capacity(repeats),
                 unclassified: 0,
+                reliability: Reliability::default(),
             })
             .collect();
         for repeat in 0..repeats {
@@ -401,7 +408,7 @@ impl Evaluation<'_, '_> {
                     .zip(correct_by_condition.iter_mut())
                 {
                     // `Ok(None)`: a perturbed image the model could not classify.
-                    let outcomes: Vec<Result<Option<(usize, u64)>>> = fold
+                    let outcomes: Vec<Result<Option<(usize, f64, u64)>>> = fold
                         .test
                         .par_iter()
                         .map_init(
@@ -416,6 +423,7 @@ impl Evaluation<'_, '_> {
                                 match session.classify(&frame) {
                                     Ok(prediction) => Ok(Some((
                                         prediction.class,
+                                        prediction.confidence,
                                         start.elapsed().as_nanos() as u64,
                                     ))),
                                     Err(_) if perturbed.is_some() => Ok(None),
@@ -426,7 +434,7 @@ impl Evaluation<'_, '_> {
                         .collect();
                     let confusion = &mut tally.confusion;
                     for (&i, outcome) in fold.test.iter().zip(outcomes) {
-                        let Some((predicted, ns)) = outcome? else {
+                        let Some((predicted, confidence, ns)) = outcome? else {
                             // A wrong answer, with no predicted class for the confusion matrix.
                             tally.unclassified += 1;
                             correct.entry(fold.key_of(&samples[i])).or_default().1 += 1;
@@ -444,9 +452,11 @@ impl Evaluation<'_, '_> {
                         let key = fold.key_of(&samples[i]);
                         let entry = correct.entry(key).or_default();
                         entry.1 += 1;
-                        if predicted_label == samples[i].label {
+                        let right = predicted_label == samples[i].label;
+                        if right {
                             entry.0 += 1;
                         }
+                        tally.reliability.add(confidence, right);
                     }
                 }
                 progress();
@@ -477,6 +487,7 @@ impl Evaluation<'_, '_> {
                 let mut report =
                     report_of(protocol, tally.results, tally.confusion, tally.times_ns);
                 report.unclassified = tally.unclassified;
+                report.reliability = tally.reliability;
                 report
             })
             .collect())
@@ -522,6 +533,7 @@ fn report_of(
         confusion,
         median_classify_ns,
         unclassified: 0,
+        reliability: Reliability::default(),
     }
 }
 

@@ -15,6 +15,7 @@ pub mod perturb;
 pub mod pipeline;
 pub mod preprocess;
 pub mod recording;
+pub mod reliability;
 pub mod selection;
 mod simd;
 pub mod split;

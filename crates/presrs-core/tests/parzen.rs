@@ -90,11 +90,13 @@ fn fast_scores_match_the_definition() {
             .max_by(|&a, &b| naive[a].total_cmp(&naive[b]))
             .unwrap();
         assert_eq!(class, best);
-        let total: f64 = naive.iter().map(|s| (s - naive[best]).exp()).sum();
+        // Equal priors, calibrated: softmax(T · scores).
+        let t = model.temperature();
+        let total: f64 = naive.iter().map(|s| (t * (s - naive[best])).exp()).sum();
         for (p, s) in posteriors.iter().zip(&naive) {
             assert!(
-                (p - (s - naive[best]).exp() / total).abs() < 1e-9,
-                "equal-prior posterior"
+                (p - (t * (s - naive[best])).exp() / total).abs() < 1e-9,
+                "equal-prior posterior at temperature {t}"
             );
         }
     }
@@ -230,9 +232,10 @@ fn search_breaks_accuracy_ties_by_the_validation_log_loss() {
         posteriors[class]
     };
     assert!(confidence(&model) > 0.95, "{}", confidence(&model));
+    // Uncalibrated, the widest kernel's posteriors are nearly flat.
     let widest = ParzenModel::fit(
         labeled(&train),
-        labeled(&validation),
+        labeled(&(vec![], vec![])),
         3,
         2,
         &ParzenConfig {
@@ -242,6 +245,7 @@ fn search_breaks_accuracy_ties_by_the_validation_log_loss() {
         },
     )
     .unwrap();
+    assert_eq!(widest.temperature(), 1.0);
     assert!(confidence(&widest) < 0.5, "{}", confidence(&widest));
 }
 
@@ -337,6 +341,28 @@ fn classifier_model_serde_round_trip_classifies_identically() {
         let c2 = back.classify_into(x, &mut s2, &mut p2).unwrap();
         assert_eq!((c1, &p1), (c2, &p2));
     }
+    // A model file written before calibration (no `temperature`): the same labels, uncalibrated
+    // posteriors.
+    let mut value: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(value["temperature"].as_f64().unwrap() != 1.0);
+    value.as_object_mut().unwrap().remove("temperature");
+    let old: ClassifierModel = serde_json::from_value(value).unwrap();
+    let ClassifierModel::Pwe(old_pwe) = &old else {
+        panic!("not pwe")
+    };
+    assert_eq!(old_pwe.temperature(), 1.0);
+    let mut s3 = old.scratch();
+    let mut p3 = vec![0.0; 3];
+    for x in queries.0.chunks(6) {
+        let c1 = model.classify_into(x, &mut s1, &mut p1).unwrap();
+        assert_eq!(old.classify_into(x, &mut s3, &mut p3).unwrap(), c1);
+    }
+    for bad in [0.0, -1.0] {
+        let mut value: serde_json::Value = serde_json::from_str(&json).unwrap();
+        value["temperature"] = serde_json::json!(bad);
+        let err = serde_json::from_value::<ClassifierModel>(value).unwrap_err();
+        assert!(err.to_string().contains("temperature"), "{err}");
+    }
     // tampered: class_starts that do not cover the stored vectors
     let mut value: serde_json::Value = serde_json::from_str(&json).unwrap();
     value["class_starts"] = serde_json::json!([0, 5, 3]);
@@ -385,4 +411,100 @@ fn vectors_too_long_to_square_are_refused() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("too long"), "{err}");
+}
+
+#[test]
+fn the_temperature_is_fitted_to_leave_one_out_scores() {
+    // Overlapping classes (centres 1.5 apart, points within 1): some stored vectors are nearer another
+    // class, so the fit lands inside the range, not at an end.
+    let train = blobs(3, 12, 3, 1.5, 21);
+    let validation = blobs(3, 6, 3, 1.5, 22);
+    let model = ParzenModel::fit(
+        labeled(&train),
+        labeled(&validation),
+        3,
+        3,
+        &ParzenConfig::default(),
+    )
+    .unwrap();
+    // The oracle: every stored vector scored by a fixed-σ model of all the other stored vectors.
+    let stored: Vec<(Vec<f64>, usize)> = (0..3)
+        .flat_map(|class| {
+            model
+                .class_vectors(class)
+                .chunks(3)
+                .map(move |p| (p.to_vec(), class))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let mut scores = Vec::new();
+    let mut truths = Vec::new();
+    for (i, (x, class)) in stored.iter().enumerate() {
+        let others: (Vec<f64>, Vec<usize>) = (
+            stored
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .flat_map(|(_, (p, _))| p.clone())
+                .collect(),
+            stored
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, (_, c))| *c)
+                .collect(),
+        );
+        let fixed = ParzenConfig {
+            sigma: SigmaChoice::Fixed {
+                sigma: model.sigma(),
+            },
+        };
+        let leave_one_out =
+            ParzenModel::fit(labeled(&others), labeled(&(vec![], vec![])), 3, 3, &fixed).unwrap();
+        scores.extend(naive_log_scores(&leave_one_out, x));
+        truths.push(*class);
+    }
+    let expected =
+        presrs_core::classifier::calibration::fit_temperature(&scores, &truths, 3).unwrap();
+    let t = model.temperature();
+    assert!((t - expected).abs() <= 1e-6 * expected, "{t} vs {expected}");
+    let (lo, hi) = presrs_core::classifier::calibration::TEMPERATURE_RANGE;
+    assert!(t > lo && t < hi, "{t}");
+}
+
+#[test]
+fn tempered_posteriors_keep_classes_whose_density_underflows() {
+    // Classes 60 apart with σ = 1: another class's score is about -1800 below the best, where its
+    // density underflows f64 (exp(-745) is the least), but at T = 0.001 its posterior is e^-1.8 relative.
+    let train = blobs(2, 6, 2, 60.0, 31);
+    let fixed = ParzenConfig {
+        sigma: SigmaChoice::Fixed { sigma: 1.0 },
+    };
+    let model =
+        ParzenModel::fit(labeled(&train), labeled(&(vec![], vec![])), 2, 2, &fixed).unwrap();
+    let mut value = serde_json::to_value(&model).unwrap();
+    value["temperature"] = serde_json::json!(0.001);
+    let model: ParzenModel = serde_json::from_value(value).unwrap();
+    let mut scratch = model.scratch();
+    let mut posteriors = vec![0.0; 2];
+    for x in [[0.5, 0.0], [59.0, 0.3], [30.5, 0.0]] {
+        let naive = naive_log_scores(&model, &x);
+        let best = if naive[1] > naive[0] { 1 } else { 0 };
+        let class = model
+            .classify_into(&x, &mut scratch, &mut posteriors)
+            .unwrap();
+        assert_eq!(class, best);
+        let gap = naive[best] - naive[1 - best];
+        let expected_other = 1.0 / (1.0 + (0.001 * gap).exp());
+        assert!(
+            (posteriors[1 - best] - expected_other).abs() < 1e-9,
+            "{x:?}: gap {gap}, {posteriors:?} vs {expected_other}"
+        );
+        if x[0] < 1.0 {
+            assert!(
+                gap > 745.0 && posteriors[1 - best] > 0.1,
+                "{gap} {posteriors:?}"
+            );
+        }
+    }
 }

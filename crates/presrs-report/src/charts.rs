@@ -516,6 +516,9 @@ pub struct ValidationFigure {
     pub title: String,
     /// `(sigma, validation accuracy in [0, 1])`.
     pub curve: Vec<(f64, f64)>,
+    /// `(sigma, geometric mean over the validation images of the posterior of their true class)`, the
+    /// tie-break among the most accurate widths (empty for models that did not record it).
+    pub confidence: Vec<(f64, f64)>,
     pub chosen_sigma: Option<f64>,
     /// Explained variance ratio per principal component, and how many the model keeps.
     pub explained: Vec<f64>,
@@ -537,10 +540,16 @@ impl Figure for ValidationFigure {
         // Accuracy against sigma.
         let (s0, s1) = finite_range(self.curve.iter().map(|p| p.0).filter(|s| *s > 0.0))
             .unwrap_or((0.1, 10.0));
-        let (a0, _) = finite_range(self.curve.iter().map(|p| 100.0 * p.1)).unwrap_or((0.0, 100.0));
+        let (a0, _) = finite_range(
+            self.curve
+                .iter()
+                .chain(&self.confidence)
+                .map(|p| 100.0 * p.1),
+        )
+        .unwrap_or((0.0, 100.0));
         let mut chart = ChartBuilder::on(&left)
             .caption(
-                "validation accuracy against the Parzen width σ",
+                "validation accuracy and confidence against the Parzen width σ",
                 title_font(TITLE - 3.0),
             )
             .margin(10)
@@ -555,7 +564,7 @@ impl Figure for ValidationFigure {
             .configure_mesh()
             .light_line_style(WHITE)
             .x_desc("σ (PCA feature units, log scale)")
-            .y_desc("validation accuracy (%)")
+            .y_desc("validation accuracy, confidence (%)")
             .axis_desc_style(font(LABEL - 1.0))
             .label_style(font(TICK))
             .y_label_formatter(&|v| num(*v))
@@ -577,6 +586,18 @@ impl Figure for ValidationFigure {
                 .iter()
                 .map(|&(s, a)| Circle::new((s, 100.0 * a), 3, line.filled())),
         )?;
+        if !self.confidence.is_empty() {
+            let line = category_color(1);
+            chart
+                .draw_series(LineSeries::new(
+                    self.confidence.iter().map(|&(s, c)| (s, 100.0 * c)),
+                    line.stroke_width(2),
+                ))?
+                .label("confidence in the true class (geometric mean)")
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], line.stroke_width(2))
+                });
+        }
         if let Some(sigma) = self.chosen_sigma {
             let mark = category_color(3);
             chart

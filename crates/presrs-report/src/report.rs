@@ -573,6 +573,11 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
             .iter()
             .map(|p| (p.sigma, p.accuracy))
             .collect();
+        let confidence: Vec<(f64, f64)> = model
+            .validation_curve()
+            .iter()
+            .filter_map(|p| Some((p.sigma, p.mean_log_posterior?.exp())))
+            .collect();
         if !curve.is_empty() {
             sections.push(Section {
                 id: "validation",
@@ -583,12 +588,16 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
                     Job::Validation(ValidationFigure {
                         title: "Validation curve and principal components".into(),
                         curve,
+                        confidence,
                         chosen_sigma: model.sigma(),
                         explained: model.pca().explained_variance_ratio(),
                         kept: model.pca().n_components(),
                     }),
                     "Left: accuracy on the validation images of a model trained on the training \
-                     images only, for each Parzen width σ tried; the red line is the σ kept. Right: \
+                     images only, for each Parzen width σ tried, and the geometric mean of the \
+                     posterior it gives their true class; the red line is the σ kept: the most \
+                     accurate, and among those the most confident in the right answers (the lowest \
+                     log-loss). Right: \
                      share of the training variance the kept principal components explain."
                         .to_owned(),
                 )),

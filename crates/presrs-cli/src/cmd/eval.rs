@@ -8,6 +8,7 @@ use anyhow::Context;
 use presrs_core::evaluation::{
     ComparisonRow, EvalReport, EvalSample, Evaluation, Models, Protocol, TestTransform,
 };
+use presrs_core::reliability::Reliability;
 use presrs_core::split::ValidationSize;
 use serde::Serialize;
 
@@ -78,6 +79,8 @@ pub struct EvalJson<'r> {
     pub median_classify_ns: u64,
     pub per_class: BTreeMap<String, ClassMetrics>,
     pub sigmas: Vec<f64>,
+    /// How far the reported confidences can be trusted (the full tally: `report.reliability`).
+    pub calibration: CalibrationJson,
     pub report: &'r EvalReport,
     /// The automatic choice of every trained model (with `--features auto` or `--classifier auto`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -93,6 +96,54 @@ pub struct ConfusionJson {
     pub labels: Vec<String>,
     pub counts: Vec<Vec<u64>>,
     pub row_normalised: Vec<Vec<f64>>,
+}
+
+/// The confidences of the tested images against whether they were right (`null` where no image counts).
+#[derive(Debug, Serialize)]
+pub struct CalibrationJson {
+    pub mean_confidence: Option<f64>,
+    pub mean_confidence_right: Option<f64>,
+    pub mean_confidence_wrong: Option<f64>,
+    /// Count-weighted mean over ten confidence bins of |accuracy - mean confidence| (0: calibrated).
+    pub expected_calibration_error: Option<f64>,
+}
+
+impl CalibrationJson {
+    pub fn new(reliability: &Reliability) -> Self {
+        Self {
+            mean_confidence: reliability.mean_confidence(),
+            mean_confidence_right: reliability.mean_confidence_right(),
+            mean_confidence_wrong: reliability.mean_confidence_wrong(),
+            expected_calibration_error: reliability.expected_calibration_error(),
+        }
+    }
+}
+
+/// One line on how far the confidences can be trusted, or `None` when nothing was classified.
+pub fn calibration_line(reliability: &Reliability) -> Option<String> {
+    let (Some(mean), Some(accuracy), Some(error)) = (
+        reliability.mean_confidence(),
+        reliability.accuracy(),
+        reliability.expected_calibration_error(),
+    ) else {
+        return None;
+    };
+    let side = |value: Option<f64>, what: &str| {
+        value.map_or_else(String::new, |v| format!(", {v:.2} when {what}"))
+    };
+    let verdict = if error < 0.05 {
+        "calibrated"
+    } else if mean < accuracy {
+        "under-confident: right more often than it says"
+    } else {
+        "over-confident: right less often than it says"
+    };
+    Some(format!(
+        "confidence: mean {mean:.2}{}{}; right {:.1} % of the time; calibration error {error:.3} ({verdict})",
+        side(reliability.mean_confidence_right(), "right"),
+        side(reliability.mean_confidence_wrong(), "wrong"),
+        100.0 * accuracy,
+    ))
 }
 
 #[derive(Debug, Serialize)]
@@ -124,6 +175,7 @@ impl<'r> EvalJson<'r> {
                 row_normalised: confusion.row_normalised(),
             },
             median_classify_ns: report.median_classify_ns,
+            calibration: CalibrationJson::new(&report.reliability),
             per_class: confusion
                 .labels
                 .iter()
@@ -399,6 +451,9 @@ pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<
             100.0 * recall[i],
             100.0 * precision[i]
         )?;
+    }
+    if let Some(line) = calibration_line(&report.reliability) {
+        writeln!(out, "{line}")?;
     }
     let sigmas: Vec<f64> = report
         .repeats

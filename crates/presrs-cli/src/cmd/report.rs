@@ -15,6 +15,7 @@ use presrs_core::evaluation::{
     Confusion, EvalReport, EvalSample, MeanStd, Models, Protocol, RepeatResult,
 };
 use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
+use presrs_core::reliability::Reliability;
 use presrs_core::split::{ValidationSize, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording, SensorMeta};
@@ -609,8 +610,10 @@ fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> anyhow::Result<
     let mut counts = vec![vec![0u64; labels.len()]; labels.len()];
     let mut by_condition: BTreeMap<String, (u64, u64)> = BTreeMap::new();
     let (mut correct, mut total) = (0u64, 0u64);
+    let mut reliability = Reliability::default();
     for (sample, result) in samples.iter().zip(results) {
-        let predicted = result?.class;
+        let prediction = result?;
+        let predicted = prediction.class;
         let Some(truth) = sample
             .label
             .as_deref()
@@ -619,6 +622,7 @@ fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> anyhow::Result<
             continue;
         };
         counts[truth][predicted] += 1;
+        reliability.add(prediction.confidence, truth == predicted);
         let hit = u64::from(truth == predicted);
         let entry = by_condition
             .entry(sample.condition.clone().unwrap_or_else(|| "all".to_owned()))
@@ -662,6 +666,7 @@ fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> anyhow::Result<
         confusion: Confusion { labels, counts },
         median_classify_ns: (elapsed.as_nanos() / samples.len().max(1) as u128) as u64,
         unclassified: 0,
+        reliability,
     })
 }
 

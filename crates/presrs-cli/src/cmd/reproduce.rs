@@ -32,6 +32,7 @@ use presrs_sim::{Dataset, DatasetSpec, SimConfig, TrialOutput};
 use serde::Serialize;
 
 use super::common::{CANDIDATE_FEATURES, progress_bar, spinner};
+use super::eval::{CalibrationJson, calibration_line};
 use super::report::SimulationReportData;
 use super::simulate::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
 
@@ -208,6 +209,10 @@ struct Results {
     table2_paper: BTreeMap<String, f64>,
     median_classify_ns: u64,
     paper_classify_ns: u64,
+    /// Table II's confidences against whether they were right, as `eval --json` gives them.
+    table2_calibration: CalibrationJson,
+    /// The same in one sentence (empty when nothing was classified).
+    table2_calibration_note: String,
     /// Train gait -> tested gait -> accuracy (means over repeats).
     train_test_matrix: BTreeMap<String, BTreeMap<String, f64>>,
     images_per_gait: BTreeMap<String, usize>,
@@ -413,6 +418,9 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         main.median_classify_ns as f64 / 1e3,
         PAPER_CLASSIFY_NS as f64 / 1e3
     )?;
+    if let Some(line) = calibration_line(&main.reliability) {
+        writeln!(out, "{line}")?;
+    }
     let mut matrix = BTreeMap::new();
     writeln!(out, "\nTrain gait x test gait accuracy (%)")?;
     write!(out, "{:<8}", "train")?;
@@ -556,6 +564,8 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             .collect(),
         median_classify_ns: main.median_classify_ns,
         paper_classify_ns: PAPER_CLASSIFY_NS,
+        table2_calibration: CalibrationJson::new(&main.reliability),
+        table2_calibration_note: calibration_line(&main.reliability).unwrap_or_default(),
         train_test_matrix: matrix,
         images_per_gait,
         segmentation,
@@ -828,6 +838,9 @@ fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io
         "\nMedian classification time: {:.2} µs per image (paper: 245 µs on a 2.67 GHz Core 2 Duo).\n",
         results.median_classify_ns as f64 / 1e3
     )?;
+    if !results.table2_calibration_note.is_empty() {
+        writeln!(w, "Reported {}.\n", results.table2_calibration_note)?;
+    }
     writeln!(w, "## Train gait × test gait accuracy\n")?;
     let gaits: Vec<&String> = results.images_per_gait.keys().collect();
     write!(w, "| train |")?;

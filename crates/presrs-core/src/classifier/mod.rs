@@ -5,6 +5,7 @@
 //! [`ClassifierModel`] (serde-tagged by `kind`, stored in trained models). Classification writes class
 //! posteriors into a caller buffer and uses a caller-provided [`ClassifierScratch`], so it does not allocate.
 
+pub mod calibration;
 mod common;
 pub mod gaussian;
 pub mod knn;
