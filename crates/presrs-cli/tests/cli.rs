@@ -187,6 +187,40 @@ fn eval_reports_the_contract_fields() {
     assert_eq!(per.keys().collect::<Vec<_>>(), ["G1", "G2", "G3", "G4"]);
     assert!(doc["median_classify_ns"].as_u64().unwrap() > 0);
     assert_eq!(doc["confusion"]["labels"].as_array().unwrap().len(), 4);
+    // How far the confidences can be trusted: the summary agrees with the full tally.
+    let calibration = &doc["calibration"];
+    let tally = &doc["report"]["reliability"];
+    let bins = tally["bins"].as_array().unwrap();
+    assert_eq!(bins.len(), 10);
+    let count: u64 = bins.iter().map(|b| b["count"].as_u64().unwrap()).sum();
+    let right: u64 = bins.iter().map(|b| b["right"].as_u64().unwrap()).sum();
+    let confusion_total: u64 = doc["confusion"]["counts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|row| row.as_array().unwrap().iter().map(|c| c.as_u64().unwrap()))
+        .sum();
+    assert_eq!(count, confusion_total);
+    let sum: f64 = bins
+        .iter()
+        .map(|b| b["confidence_sum"].as_f64().unwrap())
+        .sum();
+    let mean = calibration["mean_confidence"].as_f64().unwrap();
+    assert!((mean - sum / count as f64).abs() < 1e-9, "{calibration}");
+    assert!((0.25..=1.0).contains(&mean), "{calibration}");
+    let ece = calibration["expected_calibration_error"].as_f64().unwrap();
+    let naive_ece: f64 = bins
+        .iter()
+        .map(|b| {
+            (b["right"].as_u64().unwrap() as f64 - b["confidence_sum"].as_f64().unwrap()).abs()
+        })
+        .sum::<f64>()
+        / count as f64;
+    assert!(
+        (ece - naive_ece).abs() < 1e-9 && (0.0..=1.0).contains(&ece),
+        "{calibration}"
+    );
+    assert!(right as f64 / count as f64 >= 0.7);
 
     let out = presrs(&[
         "eval",

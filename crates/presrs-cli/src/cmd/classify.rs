@@ -142,8 +142,8 @@ fn classify_file(
     let recording = &args.samples.read(path, fills)?;
     let frames = match args.frame {
         Some(frame) if frame >= recording.frame_count() => anyhow::bail!(
-            "{name}: --frame {frame} is past the end ({} frames, numbered from 0)",
-            recording.frame_count()
+            "{name}: --frame {frame} is past the end ({})",
+            super::common::frames_numbered(recording.frame_count())
         ),
         Some(frame) => vec![(frame, unloaded_frame_warning(recording, frame))],
         None if recording.frame_count() == 1 => vec![(0, unloaded_frame_warning(recording, 0))],

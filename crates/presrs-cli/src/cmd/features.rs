@@ -42,8 +42,8 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let name = args.file.display();
     let frames = match args.frame {
         Some(frame) if frame >= recording.frame_count() => anyhow::bail!(
-            "{name}: --frame {frame} is past the end ({} frames, numbered from 0)",
-            recording.frame_count()
+            "{name}: --frame {frame} is past the end ({})",
+            super::common::frames_numbered(recording.frame_count())
         ),
         Some(frame) => vec![frame],
         None if recording.frame_count() == 1 => vec![0],

@@ -165,15 +165,11 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
         };
         writeln!(out, "               {what}")?;
     }
-    let period = report
-        .frame_period_s
-        .map(|p| format!("{p} s ({:.2} Hz)", 1.0 / p));
-    writeln!(
-        out,
-        "frames         {} at {}",
-        report.frames,
-        or_unknown(period)
-    )?;
+    let period = report.frame_period_s.map_or_else(
+        || "(frame period unknown)".to_owned(),
+        |p| format!("at {p} s ({:.2} Hz)", 1.0 / p),
+    );
+    writeln!(out, "frames         {} {period}", report.frames)?;
     if report.units_stated {
         writeln!(out, "units          {}", report.units)?;
     } else {
@@ -186,7 +182,9 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
     writeln!(
         out,
         "total load     {} .. {} (baseline noise {:.3})",
-        report.load_min, report.load_max, report.baseline_noise
+        load_text(report.load_min),
+        load_text(report.load_max),
+        report.baseline_noise
     )?;
     for warning in &report.warnings {
         writeln!(out, "warning        {warning}")?;
@@ -215,4 +213,16 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
         }
     }
     Ok(())
+}
+
+/// A total load for the table: whole numbers as they are (raw counts), others to a precision that
+/// fits their size (a float image's sum has a dozen meaningless decimals).
+fn load_text(load: f64) -> String {
+    if load.fract() == 0.0 || !load.is_finite() {
+        format!("{load}")
+    } else if load.abs() >= 100.0 {
+        format!("{load:.1}")
+    } else {
+        format!("{load:.4}")
+    }
 }
