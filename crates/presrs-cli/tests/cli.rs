@@ -717,3 +717,39 @@ fn eval_json_has_no_rust_enum_tags() {
         serde_json::from_value(serde_json::json!({"Fraction": 0.35})).unwrap();
     assert_eq!(old_fraction, fraction);
 }
+
+#[test]
+fn inspect_and_frame_errors_read_well_on_a_single_float_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("one.txt");
+    let row = (0..20)
+        .map(|c| format!("{:.7}", 1.0 + c as f64 / 3.0))
+        .collect::<Vec<_>>()
+        .join(" ")
+        + "\n";
+    std::fs::write(&image, row.repeat(12)).unwrap();
+    let file = image.to_str().unwrap();
+    let out = presrs(&["inspect", file]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(
+        text.contains("frames         1 (frame period unknown)"),
+        "{text}"
+    );
+    // the sum of 240 values with 7 decimals, printed to one decimal
+    let load = text
+        .lines()
+        .find(|l| l.starts_with("total load"))
+        .unwrap()
+        .split_whitespace()
+        .nth(2)
+        .unwrap();
+    assert_eq!(load.split('.').nth(1).map(str::len), Some(1), "{text}");
+    let out = presrs(&["features", file, "--frame", "3"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("--frame 3 is past the end (1 frame, frame 0)"),
+        "{}",
+        stderr(&out)
+    );
+}
