@@ -170,8 +170,8 @@ pub struct ParzenModel {
     /// The median nearest-neighbour distance the σ grid was scaled by (`None` for a fixed σ).
     scale: Option<f64>,
     validation_curve: Vec<SigmaPoint>,
-    /// The posteriors' temperature ([`super::calibration`]), fitted on the validation vectors; 1 without
-    /// them.
+    /// The posteriors' temperature ([`super::calibration`]), fitted on the leave-one-out scores of the
+    /// stored vectors when training had a validation set; 1 without one.
     temperature: f64,
     /// `|p|²` of each stored vector, derived (not serialised): `|x - p|² = |x|² + |p|² - 2 p·x` turns the
     /// distances into one SIMD matrix-vector product.
