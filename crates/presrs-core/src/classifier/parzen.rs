@@ -27,7 +27,7 @@ use super::calibration::{fit_temperature, is_usable_temperature};
 use super::common::{argmax, check_vectors, require_per_class};
 use crate::aligned::Aligned;
 use crate::error::{CoreError, Result, check_len};
-use crate::simd::{columns_times_vector, exp_neg_in_place};
+use crate::simd::{columns_times_vector, exp_neg_in_place, ln_in_place};
 
 /// How σ is chosen.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -435,6 +435,7 @@ impl ParzenModel {
     pub fn scratch(&self) -> ParzenScratch {
         ParzenScratch {
             sq_distances: vec![0.0; self.n_stored()],
+            log_means: vec![0.0; self.n_classes()],
         }
     }
 
@@ -489,21 +490,25 @@ impl ParzenModel {
     /// and its relative kernel terms (in `scratch`), in the log domain: the scores of other classes are
     /// often hundreds below the best one, where `exp(score)` underflows (or is floored at `exp(-700)`)
     /// but `exp(T · score)` with a small `T` is a confidence that counts. Returns the best class (the
-    /// first on ties). One `ln` per class.
+    /// first on ties). One vectorised `ln` over the classes.
     fn tempered_posteriors(
         &self,
         nearest: f64,
         inv_two_var: f64,
-        scratch: &ParzenScratch,
+        scratch: &mut ParzenScratch,
         posteriors: &mut [f64],
     ) -> usize {
         // value_c = -score_c + a constant: a (n_c - nearest) - ln(mean relative kernel), the mean being at
         // least 1 / count (the class's nearest member contributes exp(0)).
-        for (class, value) in posteriors.iter_mut().enumerate() {
+        scratch.log_means.resize(posteriors.len(), 0.0);
+        for (class, mean) in scratch.log_means.iter_mut().enumerate() {
             let members =
                 &scratch.sq_distances[self.class_starts[class]..self.class_starts[class + 1]];
-            let mean = members.iter().sum::<f64>() / members.len() as f64;
-            *value = (*value - nearest) * inv_two_var - mean.ln();
+            *mean = members.iter().sum::<f64>() / members.len() as f64;
+        }
+        ln_in_place(&mut scratch.log_means);
+        for (value, log_mean) in posteriors.iter_mut().zip(&scratch.log_means) {
+            *value = (*value - nearest) * inv_two_var - log_mean;
         }
         let mut best = 0;
         for (class, &value) in posteriors.iter().enumerate() {
@@ -608,6 +613,8 @@ fn sum_of_squares(values: &[f64]) -> f64 {
 #[derive(Clone, Debug, Default)]
 pub struct ParzenScratch {
     sq_distances: Vec<f64>,
+    /// Per class, the log of the mean relative kernel term (calibrated posteriors only).
+    log_means: Vec<f64>,
 }
 
 fn validation_curve(
