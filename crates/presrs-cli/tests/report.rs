@@ -261,6 +261,7 @@ fn report_writes_every_figure_and_only_links_existing_files() {
         "validation.png",
         "confusion.png",
         "accuracy.png",
+        "reliability.png",
         "table1_velocity.png",
         "hopper.png",
     ] {
@@ -283,9 +284,23 @@ fn report_writes_every_figure_and_only_links_existing_files() {
         "Table I",
         "Confusion",
         "Accuracy per condition",
+        "How far the confidences can be trusted",
     ] {
         assert!(html.contains(heading), "no {heading} section");
     }
+    // The reliability table: a row per evaluation, with a calibration error in [0, 1].
+    let table = &html[html
+        .find("<th>calibration error</th>")
+        .expect("reliability table")..];
+    let row = &table[table.find("<tr><td>").unwrap()..table.find("</table>").unwrap()];
+    let error: f64 = row
+        .trim_end_matches("</td></tr>")
+        .rsplit("<td>")
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((0.0..=1.0).contains(&error), "{row}");
     // No temporary files left behind.
     for entry in std::fs::read_dir(&out).unwrap() {
         let name = entry.unwrap().file_name().to_string_lossy().into_owned();

@@ -19,7 +19,8 @@ use rayon::prelude::*;
 
 use crate::charts::{
     BarSeries, BarsFigure, ConfusionFigure, FaultFigure, FaultPanel, LoadCurveData,
-    LoadCurvesFigure, ScatterFigure, SpectraFigure, SpectrumPanel, TraceFigure, ValidationFigure,
+    LoadCurvesFigure, ReliabilityFigure, ScatterFigure, SpectraFigure, SpectrumPanel, TraceFigure,
+    ValidationFigure,
 };
 use crate::pressure::{Outline, PressureGrid, PressureScale};
 use crate::render::{Figure, save_figure};
@@ -122,6 +123,69 @@ impl<'a> ReportInputs<'a> {
     }
 }
 
+/// How far the evaluations' confidences can be trusted: a reliability diagram and a table (`None` when
+/// no evaluation tallied a confidence, e.g. one read from a file written before they were).
+fn reliability_section<'a>(evaluations: &[Evaluation<'_>]) -> Option<Section<'a>> {
+    let tallied: Vec<&Evaluation<'_>> = evaluations
+        .iter()
+        .filter(|e| e.report.reliability.count() > 0)
+        .collect();
+    if tallied.is_empty() {
+        return None;
+    }
+    let series = tallied
+        .iter()
+        .map(|e| {
+            let bins = e
+                .report
+                .reliability
+                .bins
+                .iter()
+                .filter_map(|bin| Some((bin.mean_confidence()?, bin.accuracy()?, bin.count)))
+                .collect();
+            (e.name.clone(), bins)
+        })
+        .collect();
+    let mut table = String::from(
+        "<table><tr><th>evaluation</th><th>images</th><th>right</th><th>mean confidence when \
+         right</th><th>when wrong</th><th>calibration error</th></tr>",
+    );
+    let or_dash = |v: Option<f64>| v.map_or("—".to_owned(), |v| format!("{v:.3}"));
+    for e in &tallied {
+        let r = &e.report.reliability;
+        let _ = write!(
+            table,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&e.name),
+            r.count(),
+            r.accuracy()
+                .map_or("—".to_owned(), |a| format!("{:.1} %", 100.0 * a)),
+            or_dash(r.mean_confidence_right()),
+            or_dash(r.mean_confidence_wrong()),
+            or_dash(r.expected_calibration_error()),
+        );
+    }
+    table.push_str("</table>");
+    Some(Section {
+        id: "reliability",
+        heading: "How far the confidences can be trusted".into(),
+        intro: String::new(),
+        figure: Some((
+            "reliability.png".into(),
+            Job::Reliability(ReliabilityFigure {
+                title: "Reliability of the reported confidence (all repeats)".into(),
+                series,
+            }),
+            "Test images grouped by the confidence the model gave their label (ten bins of 0.1); \
+             each point is a bin's mean confidence against the share of its images that were right. \
+             A calibrated model follows the diagonal; points above it are under-confident, below \
+             over-confident. The calibration error is the image-weighted mean distance to it."
+                .to_owned(),
+        )),
+        after: table,
+    })
+}
+
 /// A figure the report writes, with its file name.
 enum Job<'a> {
     Grid(PressureGrid<'a>),
@@ -133,6 +197,7 @@ enum Job<'a> {
     Bars(BarsFigure),
     Trace(TraceFigure),
     Faults(FaultFigure),
+    Reliability(ReliabilityFigure),
 }
 
 impl Job<'_> {
@@ -147,6 +212,7 @@ impl Job<'_> {
             Self::Bars(f) => save_figure(f, path),
             Self::Trace(f) => save_figure(f, path),
             Self::Faults(f) => save_figure(f, path),
+            Self::Reliability(f) => save_figure(f, path),
         }
     }
 
@@ -161,6 +227,7 @@ impl Job<'_> {
             Self::Bars(f) => f.size(),
             Self::Trace(f) => f.size(),
             Self::Faults(f) => f.size(),
+            Self::Reliability(f) => f.size(),
         }
     }
 }
@@ -741,6 +808,9 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
             )),
             after: table,
         });
+        if let Some(section) = reliability_section(&inputs.evaluations) {
+            sections.push(section);
+        }
     }
 
     // 7b. Accuracy against fault level.
