@@ -39,28 +39,9 @@ pub fn smoothed_log_loss(
     epsilon: f64,
     temperature: f64,
 ) -> f64 {
-    let rows = classes.len().max(1) as f64;
-    scores
-        .chunks_exact(n_classes)
-        .zip(classes)
-        .map(|(row, &class)| {
-            let top = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let log_total = (row
-                .iter()
-                .map(|s| (temperature * (s - top)).exp())
-                .sum::<f64>())
-            .ln();
-            row.iter()
-                .enumerate()
-                .map(|(c, &s)| {
-                    let target =
-                        epsilon / n_classes as f64 + if c == class { 1.0 - epsilon } else { 0.0 };
-                    -target * (temperature * (s - top) - log_total)
-                })
-                .sum::<f64>()
-        })
-        .sum::<f64>()
-        / rows
+    mean_over_rows(scores, classes, n_classes, epsilon, temperature, |term| {
+        -term.target * term.log_p
+    })
 }
 
 /// The derivative of [`smoothed_log_loss`] in `T`: mean over rows of `E_p[s] - E_target[s]`, which grows
@@ -72,29 +53,54 @@ fn slope(
     epsilon: f64,
     temperature: f64,
 ) -> f64 {
+    mean_over_rows(scores, classes, n_classes, epsilon, temperature, |term| {
+        (term.log_p.exp() - term.target) * term.shifted
+    })
+}
+
+/// One class of one row: its score less the row's largest, its log posterior at the temperature, and its
+/// smoothed target.
+struct Term {
+    shifted: f64,
+    log_p: f64,
+    target: f64,
+}
+
+/// The mean over rows of the sum over classes of `per_class(term)`.
+fn mean_over_rows(
+    scores: &[f64],
+    classes: &[usize],
+    n_classes: usize,
+    epsilon: f64,
+    temperature: f64,
+    per_class: impl Fn(Term) -> f64,
+) -> f64 {
     let rows = classes.len().max(1) as f64;
-    scores
+    let total: f64 = scores
         .chunks_exact(n_classes)
         .zip(classes)
         .map(|(row, &class)| {
             let top = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let weights: Vec<f64> = row
+            let log_total = row
                 .iter()
                 .map(|s| (temperature * (s - top)).exp())
-                .collect();
-            let total: f64 = weights.iter().sum();
+                .sum::<f64>()
+                .ln();
             row.iter()
-                .zip(&weights)
                 .enumerate()
-                .map(|(c, (&s, &w))| {
-                    let target =
-                        epsilon / n_classes as f64 + if c == class { 1.0 - epsilon } else { 0.0 };
-                    (w / total - target) * (s - top)
+                .map(|(c, &s)| {
+                    let shifted = s - top;
+                    per_class(Term {
+                        shifted,
+                        log_p: temperature * shifted - log_total,
+                        target: epsilon / n_classes as f64
+                            + if c == class { 1.0 - epsilon } else { 0.0 },
+                    })
                 })
                 .sum::<f64>()
         })
-        .sum::<f64>()
-        / rows
+        .sum();
+    total / rows
 }
 
 /// Fits `T` to `scores` (`rows x n_classes`, finite log-scale class scores such as log densities) and the true
