@@ -5,7 +5,7 @@ Reads what `presrs bench --export DIR` wrote (the trained model file, the test i
 reduced vectors, predictions and timings), runs the same pipeline -- crop 44x44 -> 38x41, 1-D |FFT|
 (eqs. 3-5: row-major vectorisation, zero padding to N = 2048, |rfft|, 1025 values), PCA to 51 dims with
 presrs's trained mean and axes, Parzen window with presrs's stored vectors and sigma, equal class priors,
-posteriors calibrated by presrs's temperature (softmax of temperature x log class densities) --
+posteriors calibrated by presrs's temperature (softmax of log class densities / temperature) --
 checks every stage against presrs, times one call per image and one vectorised call on a batch, and prints
 the ratios. Two peers:
 
@@ -73,7 +73,7 @@ class State:
         self.explained_variance = np.asarray(pca["explained_variance"], dtype=np.float64)
         self.dims = classifier["dims"]
         self.sigma = float(classifier["sigma"])
-        # posteriors = softmax(temperature * log class densities); model files before calibration: 1
+        # posteriors = softmax(log class densities / temperature); model files before calibration: 1
         self.temperature = float(classifier.get("temperature", 1.0))
         self.vectors = np.asarray(classifier["vectors"], dtype=np.float64).reshape(-1, self.dims)
         self.class_starts = np.asarray(classifier["class_starts"], dtype=np.intp)
@@ -106,7 +106,7 @@ class NumpyPeer:
     every stored vector, so it cancels in the posteriors), and the class densities shifted by the largest
     kernel exponent before exp (log-sum-exp with one shift for all classes: the best class's density is
     at least 1/count, so nothing that matters underflows). With a calibrated model (temperature T != 1,
-    posteriors = softmax(T * log densities)) the other classes' densities matter even where they underflow,
+    posteriors = softmax(log densities / T)) the other classes' densities matter even where they underflow,
     so the log densities are formed with one shift per class, as presrs does then.
     """
 
@@ -131,7 +131,7 @@ class NumpyPeer:
 
     def log_densities(self, z: np.ndarray) -> np.ndarray:
         """Log class densities (up to one constant per image), log-sum-exp shifted per class: with a
-        temperature the posteriors are exp(T * log density), and a class hundreds of units below the best
+        temperature the posteriors are exp(log density / T), and a class hundreds of units below the best
         one, whose density underflows, still gets a posterior that counts."""
         exponent = z @ self.a.T - self.b
         top = np.maximum.reduceat(exponent, self.starts, axis=-1)
@@ -140,7 +140,7 @@ class NumpyPeer:
 
     def tempered(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         scores = self.log_densities(z)
-        posteriors = np.exp(self.temperature * (scores - scores.max(axis=-1, keepdims=True)))
+        posteriors = np.exp((scores - scores.max(axis=-1, keepdims=True)) / self.temperature)
         return np.argmax(scores, axis=-1), posteriors / posteriors.sum(axis=-1, keepdims=True)
 
     def features(self, images: np.ndarray) -> np.ndarray:
@@ -210,14 +210,14 @@ class SklearnPeer:
         z = self.pca.transform(self.features(image)[None, :])
         scores = np.array([kde.score_samples(z)[0] for kde in self.kdes])
         best = int(np.argmax(scores))
-        posteriors = np.exp(self.temperature * (scores - scores[best]))
+        posteriors = np.exp((scores - scores[best]) / self.temperature)
         return best, posteriors / posteriors.sum()
 
     def classify_batch(self, images: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z = self.pca.transform(self.features(images))
         scores = np.stack([kde.score_samples(z) for kde in self.kdes], axis=1)
         best = np.argmax(scores, axis=1)
-        posteriors = np.exp(self.temperature * (scores - scores.max(axis=1, keepdims=True)))
+        posteriors = np.exp((scores - scores.max(axis=1, keepdims=True)) / self.temperature)
         return best, posteriors / posteriors.sum(axis=1, keepdims=True)
 
 

@@ -90,12 +90,12 @@ fn fast_scores_match_the_definition() {
             .max_by(|&a, &b| naive[a].total_cmp(&naive[b]))
             .unwrap();
         assert_eq!(class, best);
-        // Equal priors, calibrated: softmax(T · scores).
+        // Equal priors, calibrated: softmax(scores / T).
         let t = model.temperature();
-        let total: f64 = naive.iter().map(|s| (t * (s - naive[best])).exp()).sum();
+        let total: f64 = naive.iter().map(|s| ((s - naive[best]) / t).exp()).sum();
         for (p, s) in posteriors.iter().zip(&naive) {
             assert!(
-                (p - (t * (s - naive[best])).exp() / total).abs() < 1e-9,
+                (p - ((s - naive[best]) / t).exp() / total).abs() < 1e-9,
                 "equal-prior posterior at temperature {t}"
             );
         }
@@ -475,7 +475,7 @@ fn the_temperature_is_fitted_to_leave_one_out_scores() {
 #[test]
 fn tempered_posteriors_keep_classes_whose_density_underflows() {
     // Classes 60 apart with σ = 1: another class's score is about -1800 below the best, where its
-    // density underflows f64 (exp(-745) is the least), but at T = 0.001 its posterior is e^-1.8 relative.
+    // density underflows f64 (exp(-745) is the least), but at T = 1000 its posterior is e^-1.8 relative.
     let train = blobs(2, 6, 2, 60.0, 31);
     let fixed = ParzenConfig {
         sigma: SigmaChoice::Fixed { sigma: 1.0 },
@@ -483,7 +483,7 @@ fn tempered_posteriors_keep_classes_whose_density_underflows() {
     let model =
         ParzenModel::fit(labeled(&train), labeled(&(vec![], vec![])), 2, 2, &fixed).unwrap();
     let mut value = serde_json::to_value(&model).unwrap();
-    value["temperature"] = serde_json::json!(0.001);
+    value["temperature"] = serde_json::json!(1000.0);
     let model: ParzenModel = serde_json::from_value(value).unwrap();
     let mut scratch = model.scratch();
     let mut posteriors = vec![0.0; 2];
@@ -495,7 +495,7 @@ fn tempered_posteriors_keep_classes_whose_density_underflows() {
             .unwrap();
         assert_eq!(class, best);
         let gap = naive[best] - naive[1 - best];
-        let expected_other = 1.0 / (1.0 + (0.001 * gap).exp());
+        let expected_other = 1.0 / (1.0 + (gap / 1000.0).exp());
         assert!(
             (posteriors[1 - best] - expected_other).abs() < 1e-9,
             "{x:?}: gap {gap}, {posteriors:?} vs {expected_other}"

@@ -1,5 +1,5 @@
-//! Helpers shared by the classifiers: input checks and the validation-fitted softmax temperature that turns
-//! scores into calibrated-looking posteriors.
+//! Helpers shared by the classifiers: input checks, and the softmax at a temperature that turns scores into
+//! posteriors (the temperature is fitted in [`super::calibration`]).
 
 use super::LabeledVectors;
 use crate::error::{CoreError, Result};
@@ -125,45 +125,6 @@ pub(crate) fn argmax(values: &[f64]) -> usize {
         }
     }
     best
-}
-
-/// The softmax temperature that minimises the mean negative log posterior of the true class over the
-/// validation scores (`n x n_classes`, larger is more likely), on a log grid from 1e-3 to 1e4 times the
-/// median spread of the scores. 1 when there is no validation data.
-pub(crate) fn fit_temperature(scores: &[f64], classes: &[usize], n_classes: usize) -> f64 {
-    if classes.is_empty() || n_classes < 2 {
-        return 1.0;
-    }
-    let mut spreads: Vec<f64> = scores
-        .chunks_exact(n_classes)
-        .map(|row| {
-            let max = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let min = row.iter().copied().fold(f64::INFINITY, f64::min);
-            max - min
-        })
-        .filter(|s| s.is_finite() && *s > 0.0)
-        .collect();
-    if spreads.is_empty() {
-        return 1.0;
-    }
-    spreads.sort_by(f64::total_cmp);
-    let scale = spreads[spreads.len() / 2];
-    let mut row = vec![0.0; n_classes];
-    let mut best = (f64::INFINITY, scale);
-    for step in 0..=70 {
-        let temperature = scale * 10f64.powf(-3.0 + 7.0 * step as f64 / 70.0);
-        let mut nll = 0.0;
-        for (scores, &class) in scores.chunks_exact(n_classes).zip(classes) {
-            row.copy_from_slice(scores);
-            softmax_in_place(&mut row, temperature);
-            nll -= row[class].max(1e-300).ln();
-        }
-        // ties to the larger temperature (the less confident model)
-        if nll <= best.0 {
-            best = (nll, temperature);
-        }
-    }
-    best.1
 }
 
 #[cfg(test)]

@@ -11,8 +11,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
+use super::calibration::fit_temperature;
 use super::common::{
-    accuracy_of_scores, check_vectors, fit_temperature, merged, require_per_class, softmax_in_place,
+    accuracy_of_scores, check_vectors, merged, require_per_class, softmax_in_place,
 };
 use crate::error::{CoreError, Result, check_len};
 
@@ -377,7 +378,7 @@ impl GaussianModel {
             let first = Self::fit_on(&train, n_classes, dims, shared, config.shrinkage)?;
             let scores = first.scores_of(validation.vectors)?;
             (
-                fit_temperature(&scores, validation.classes, n_classes),
+                fit_temperature(&scores, validation.classes, n_classes)?,
                 Some(accuracy_of_scores(&scores, validation.classes, n_classes)),
             )
         };

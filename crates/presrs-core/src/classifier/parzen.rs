@@ -17,7 +17,7 @@
 //! the paper's `P` with `p + q` columns. Every grid point is recorded in [`ParzenModel::validation_curve`].
 //!
 //! # Calibrated posteriors
-//! The posteriors are `softmax(T · scores)` with a temperature `T` fitted on the leave-one-out scores of
+//! The posteriors are `softmax(scores / T)` with a temperature `T` fitted on the leave-one-out scores of
 //! the stored vectors ([`super::calibration`]; `T = 1` without a validation set). `T` never changes the
 //! label; it makes the confidence mean what it says.
 
@@ -410,7 +410,7 @@ impl ParzenModel {
     }
 
     /// The posteriors' temperature: [`classify_into`](Self::classify_into)'s posteriors are the softmax of
-    /// `temperature ·` [`log_scores_into`](Self::log_scores_into)'s scores (1: uncalibrated).
+    /// [`log_scores_into`](Self::log_scores_into)'s scores divided by it (1: uncalibrated).
     pub fn temperature(&self) -> f64 {
         self.temperature
     }
@@ -486,10 +486,10 @@ impl ParzenModel {
         Ok(best)
     }
 
-    /// The posteriors `softmax(T · scores)` from each class's nearest squared distance (in `posteriors`)
+    /// The posteriors `softmax(scores / T)` from each class's nearest squared distance (in `posteriors`)
     /// and its relative kernel terms (in `scratch`), in the log domain: the scores of other classes are
     /// often hundreds below the best one, where `exp(score)` underflows (or is floored at `exp(-700)`)
-    /// but `exp(T · score)` with a small `T` is a confidence that counts. Returns the best class (the
+    /// but `exp(score / T)` with a large `T` is a confidence that counts. Returns the best class (the
     /// first on ties). One vectorised `ln` over the classes.
     fn tempered_posteriors(
         &self,
@@ -516,9 +516,9 @@ impl ParzenModel {
                 best = class;
             }
         }
-        let lowest = posteriors[best];
+        let (lowest, inverse_temperature) = (posteriors[best], 1.0 / self.temperature);
         for value in posteriors.iter_mut() {
-            *value = (*value - lowest) * self.temperature;
+            *value = (*value - lowest) * inverse_temperature;
         }
         exp_neg_in_place(posteriors);
         let total: f64 = posteriors.iter().sum();

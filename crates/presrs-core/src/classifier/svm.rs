@@ -17,9 +17,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::common::{
-    check_vectors, fit_temperature, merged, require_per_class, validation_accuracy,
-};
+use super::calibration::fit_temperature;
+use super::common::{check_vectors, merged, require_per_class, validation_accuracy};
 use crate::error::{CoreError, Result, check_len};
 
 /// A kernel family (what is searched).
@@ -573,7 +572,7 @@ impl SvmModel {
                 if accuracy > best.0 {
                     best = (
                         accuracy,
-                        fit_temperature(&scores, validation.classes, n_classes),
+                        fit_temperature(&scores, validation.classes, n_classes)?,
                     );
                     (kernel, c) = (candidate_kernel, candidate_c);
                 }
