@@ -109,8 +109,8 @@ fn mean_over_rows(
 /// likely) and the true `classes`, minimising the log-loss (with [`laplace_smoothing`] when the plain one
 /// has no minimum; see the module documentation): bisection on the loss's derivative in `ln(1 / T)` (the
 /// loss is convex in `1 / T`, so the derivative changes sign at most once) over [`TEMPERATURE_RANGE`]
-/// times the median spread of the rows. Rows holding a non-finite score are left out. Returns 1 for fewer than two classes or no usable rows; an error for
-/// mismatched lengths or a class out of range.
+/// times the median spread of the rows. Rows holding a non-finite score are left out. Returns 1 for fewer
+/// than two classes or no usable rows; an error for mismatched lengths or a class out of range.
 pub fn fit_temperature(scores: &[f64], classes: &[usize], n_classes: usize) -> Result<f64> {
     if n_classes < 2 || classes.is_empty() {
         return Ok(1.0);
@@ -194,6 +194,15 @@ fn minimise_log_loss(
         }
     }
     Some((-0.5 * (lo + hi)).exp())
+}
+
+/// `ln Σ exp(scores)`, shifted by the largest score so that nothing overflows (`-inf` for no scores).
+pub(crate) fn log_sum_exp(scores: &[f64]) -> f64 {
+    let max = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if max == f64::NEG_INFINITY {
+        return max;
+    }
+    max + scores.iter().map(|s| (s - max).exp()).sum::<f64>().ln()
 }
 
 /// Whether `temperature` can scale posteriors: finite and positive.

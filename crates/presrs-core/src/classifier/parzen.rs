@@ -23,7 +23,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::calibration::{fit_temperature, is_usable_temperature};
+use super::calibration::{fit_temperature, is_usable_temperature, log_sum_exp};
 use super::common::{argmax, check_vectors, require_per_class};
 use crate::aligned::Aligned;
 use crate::error::{CoreError, Result, check_len};
@@ -719,15 +719,12 @@ fn calibrate(all: &LabeledVectors<'_>, n_classes: usize, dims: usize, sigma: f64
                 exponents[class].push(-d2 * inv_two_var);
             }
         }
-        for class_exponents in &exponents {
-            let top = class_exponents
+        // log of the mean kernel term per class
+        scores.extend(
+            exponents
                 .iter()
-                .copied()
-                .fold(f64::NEG_INFINITY, f64::max);
-            let mean = class_exponents.iter().map(|e| (e - top).exp()).sum::<f64>()
-                / class_exponents.len() as f64;
-            scores.push(top + mean.ln());
-        }
+                .map(|e| log_sum_exp(e) - (e.len() as f64).ln()),
+        );
         truths.push(truth);
     }
     fit_temperature(&scores, &truths, n_classes)
@@ -754,15 +751,6 @@ fn best_point(curve: &[SigmaPoint]) -> Option<SigmaPoint> {
             best
         }
     })
-}
-
-/// `ln Σ exp(scores)`, shifted by the largest score so that nothing overflows.
-fn log_sum_exp(scores: &[f64]) -> f64 {
-    let max = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    if max == f64::NEG_INFINITY {
-        return max;
-    }
-    max + scores.iter().map(|s| (s - max).exp()).sum::<f64>().ln()
 }
 
 /// Median over the rows of the distance to the nearest other row. `O(n² d)`, fine for training sets.
