@@ -77,6 +77,14 @@ fn knn_models_are_checked_on_load() {
                 "`vectors`",
             ),
             (&|v| classifier(v)["dims"] = json!(0), "`dims`"),
+            (
+                &|v| classifier(v)["temperature"] = json!(0.0),
+                "`temperature`",
+            ),
+            (
+                &|v| classifier(v)["temperature"] = json!(-2.0),
+                "`temperature`",
+            ),
             // every stored vector relabelled to class 0: classes 1..3 have none
             (
                 &|v| {

@@ -218,7 +218,7 @@ impl ClassifierModel {
                     )
                 }
             },
-            Self::Knn(model) => format!("k {}", model.k()),
+            Self::Knn(model) => format!("k {}, temperature {:.3e}", model.k(), model.temperature()),
         }
     }
 
