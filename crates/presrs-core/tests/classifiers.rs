@@ -45,9 +45,9 @@ fn bayes(x: &[f64]) -> usize {
 }
 
 /// How far the mean confidence on the test draws may be from the accuracy.
-/// (mle, lda and svm fit their temperature on the 18 validation draws and come out about 0.1
-/// over-confident here; pwe and knn fit on the leave-one-out scores of all 60 stored draws.)
-const CALIBRATION_TOLERANCE: f64 = 0.12;
+/// (Every backend fits its temperature on held-out scores of all 60 training and validation draws; fitted
+/// on the 18 validation draws alone, mle, lda and svm came out about 0.1 over-confident here.)
+const CALIBRATION_TOLERANCE: f64 = 0.1;
 
 /// The shared test body: training, agreement with the Bayes rule, posteriors, serde and errors.
 fn check_backend(config: &ClassifierConfig) {

@@ -5,13 +5,15 @@
 //! shrunk toward a scaled identity with the Ledoit-Wolf estimate of the shrinkage
 //! (`Σ = (1 - s) S + s μ I`, `μ = tr S / d`, `s` as in scikit-learn's `ledoit_wolf_shrinkage`), or a fixed
 //! `s`. Scores are log densities with equal priors; posteriors are their softmax at a temperature fitted on
-//! the validation set (by a model fitted on the training vectors alone), so the confidence is not the
-//! near-0/1 of a 50-dimensional Gaussian. The final model is fitted on training + validation vectors.
+//! five-fold cross-validated scores of the training + validation vectors
+//! (`calibration::cross_validated_scores`; the validation set scored by a model of the training vectors
+//! where a class is too small to fold), so the confidence is not the near-0/1 of a 50-dimensional
+//! Gaussian. The final model is fitted on training + validation vectors.
 
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::calibration::fit_temperature;
+use super::calibration::{cross_validated_scores, fit_temperature};
 use super::common::{
     accuracy_of_scores, check_vectors, merged, require_per_class, softmax_in_place,
 };
@@ -178,7 +180,7 @@ pub struct GaussianModel {
     log_dets: Vec<f64>,
     /// The shrinkage weight of each covariance.
     shrinkage: Vec<f64>,
-    /// Softmax temperature of the posteriors (fitted on validation).
+    /// Softmax temperature of the posteriors (fitted on cross-validated scores, see the module docs).
     temperature: f64,
     /// Accuracy of the training-only model on the validation vectors (None without validation data).
     validation_accuracy: Option<f64>,
@@ -372,20 +374,34 @@ impl GaussianModel {
         config.check()?;
         check_vectors(&train, "gaussian training vectors", dims, n_classes)?;
         check_vectors(&validation, "gaussian validation vectors", dims, n_classes)?;
+        let (vectors, classes) = merged(&train, &validation);
+        let all = LabeledVectors {
+            vectors: &vectors,
+            classes: &classes,
+        };
         let (temperature, validation_accuracy) = if validation.classes.is_empty() {
             (1.0, None)
         } else {
             let first = Self::fit_on(&train, n_classes, dims, shared, config.shrinkage)?;
             let scores = first.scores_of(validation.vectors)?;
+            let cross_validated = cross_validated_scores(
+                &all,
+                n_classes,
+                dims,
+                |part| Self::fit_on(part, n_classes, dims, shared, config.shrinkage),
+                |model, x, out| {
+                    let mut scratch = model.scratch();
+                    model.log_scores_into(x, &mut scratch, out)
+                },
+            )?;
+            let temperature = match cross_validated {
+                Some(cv) => fit_temperature(&cv, &classes, n_classes)?,
+                None => fit_temperature(&scores, validation.classes, n_classes)?,
+            };
             (
-                fit_temperature(&scores, validation.classes, n_classes)?,
+                temperature,
                 Some(accuracy_of_scores(&scores, validation.classes, n_classes)),
             )
-        };
-        let (vectors, classes) = merged(&train, &validation);
-        let all = LabeledVectors {
-            vectors: &vectors,
-            classes: &classes,
         };
         let mut model = Self::fit_on(&all, n_classes, dims, shared, config.shrinkage)?;
         model.temperature = temperature;

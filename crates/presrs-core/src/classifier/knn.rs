@@ -10,7 +10,7 @@
 //! `(votes + 1/2) / (k + C/2)`, which are far from calibrated: with `k = 9` of four classes a unanimous
 //! vote gives 0.86 and `k = 1` gives 0.5, whatever the data. `T` is fitted to the leave-one-out votes of
 //! the stored vectors (each scored by the `k` nearest of the others) by
-//! [`fit_temperature`](super::calibration::fit_temperature), as the Parzen window's is; it never changes a
+//! [`fit_temperature`], as the Parzen window's is; it never changes a
 //! label (the vote counts keep their order; tied counts stay tied and go to the nearest member).
 
 use serde::{Deserialize, Serialize};

@@ -11,13 +11,14 @@
 //! is fitted on the training vectors and scored on the validation vectors; the best accuracy wins (ties to
 //! the earlier candidate: linear before RBF, smaller C, gamma factors in grid order), and the final model is
 //! fitted on training + validation. Posteriors: softmax of `Σ_{j≠c} ln σ(f_cj)` (the pairwise decisions
-//! read as log-odds) at a temperature fitted on validation; the voted class always holds the top posterior
+//! read as log-odds) at a temperature fitted on the five-fold cross-validated scores of the chosen kernel and
+//! C over training + validation (`calibration::cross_validated_scores`); the voted class always holds the top posterior
 //! (in the rare near-ties where the two disagree, their posteriors are swapped).
 
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::calibration::fit_temperature;
+use super::calibration::{cross_validated_scores, fit_temperature};
 use super::common::{check_vectors, merged, require_per_class, validation_accuracy};
 use crate::error::{CoreError, Result, check_len};
 
@@ -580,17 +581,30 @@ impl SvmModel {
             temperature = best.1;
         }
         let (vectors, classes) = merged(&train, &validation);
-        let mut model = Self::fit_fixed(
-            LabeledVectors {
-                vectors: &vectors,
-                classes: &classes,
-            },
-            n_classes,
-            dims,
-            kernel,
-            c,
-            config.tol,
-        )?;
+        let all = LabeledVectors {
+            vectors: &vectors,
+            classes: &classes,
+        };
+        if !validation.classes.is_empty() {
+            // The chosen kernel and C, cross-validated over every vector (see `cross_validated_scores`);
+            // the validation set's fit stays where a class is too small to fold.
+            let cross_validated = cross_validated_scores(
+                &all,
+                n_classes,
+                dims,
+                |part| Self::fit_fixed(*part, n_classes, dims, kernel, c, config.tol),
+                |model, x, out| {
+                    let mut scratch = model.scratch();
+                    model.decide(x, &mut scratch)?;
+                    out.copy_from_slice(&scratch.scores);
+                    Ok(())
+                },
+            )?;
+            if let Some(scores) = cross_validated {
+                temperature = fit_temperature(&scores, &classes, n_classes)?;
+            }
+        }
+        let mut model = Self::fit_fixed(all, n_classes, dims, kernel, c, config.tol)?;
         model.temperature = temperature;
         model.candidates = candidates;
         Ok(model)
