@@ -207,6 +207,12 @@ pub(crate) fn log_sum_exp(scores: &[f64]) -> f64 {
     max + scores.iter().map(|s| (s - max).exp()).sum::<f64>().ln()
 }
 
+/// The temperature of model files written before their classifier was calibrated (serde's default for
+/// the field): `T = 1` leaves the scores as they were.
+pub fn unit_temperature() -> f64 {
+    1.0
+}
+
 /// Whether `temperature` can scale posteriors: finite and positive.
 pub fn is_usable_temperature(temperature: f64) -> bool {
     temperature.is_finite() && temperature > 0.0

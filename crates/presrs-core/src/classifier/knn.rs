@@ -16,7 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::LabeledVectors;
-use super::calibration::{fit_temperature, is_usable_temperature};
+use super::calibration::{fit_temperature, is_usable_temperature, unit_temperature};
 use super::common::{
     check_vectors, merged, require_per_class, softmax_in_place, validation_accuracy,
 };
@@ -87,10 +87,6 @@ struct KnnFields {
     /// vote fractions (1).
     #[serde(default = "unit_temperature")]
     temperature: f64,
-}
-
-fn unit_temperature() -> f64 {
-    1.0
 }
 
 impl From<KnnModel> for KnnFields {

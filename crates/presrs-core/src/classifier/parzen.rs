@@ -23,7 +23,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::calibration::{fit_temperature, is_usable_temperature, log_sum_exp};
+use super::calibration::{fit_temperature, is_usable_temperature, log_sum_exp, unit_temperature};
 use super::common::{argmax, check_vectors, require_per_class};
 use crate::aligned::Aligned;
 use crate::error::{CoreError, Result, check_len};
@@ -193,10 +193,6 @@ struct ParzenFields {
     /// Absent from model files written before calibration: those posteriors were uncalibrated (1).
     #[serde(default = "unit_temperature")]
     temperature: f64,
-}
-
-fn unit_temperature() -> f64 {
-    1.0
 }
 
 impl From<ParzenModel> for ParzenFields {

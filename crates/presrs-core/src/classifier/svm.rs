@@ -546,10 +546,11 @@ impl SvmModel {
             }
         }
         let mut candidates = Vec::new();
-        let mut temperature = 1.0;
         let (mut kernel, mut c) = grid[0];
+        // The chosen candidate's validation scores: the temperature's fallback (see below).
+        let mut validation_scores = None;
         if !validation.classes.is_empty() {
-            let mut best = (f64::NEG_INFINITY, 1.0);
+            let mut best_accuracy = f64::NEG_INFINITY;
             for &(candidate_kernel, candidate_c) in &grid {
                 let model = Self::fit_fixed(
                     train,
@@ -570,24 +571,22 @@ impl SvmModel {
                     c: candidate_c,
                     validation_accuracy: accuracy,
                 });
-                if accuracy > best.0 {
-                    best = (
-                        accuracy,
-                        fit_temperature(&scores, validation.classes, n_classes)?,
-                    );
+                if accuracy > best_accuracy {
+                    best_accuracy = accuracy;
+                    validation_scores = Some(scores);
                     (kernel, c) = (candidate_kernel, candidate_c);
                 }
             }
-            temperature = best.1;
         }
         let (vectors, classes) = merged(&train, &validation);
         let all = LabeledVectors {
             vectors: &vectors,
             classes: &classes,
         };
-        if !validation.classes.is_empty() {
+        let mut temperature = 1.0;
+        if let Some(validation_scores) = validation_scores {
             // The chosen kernel and C, cross-validated over every vector (see `cross_validated_scores`);
-            // the validation set's fit stays where a class is too small to fold.
+            // the validation set's scores where a class is too small to fold.
             let cross_validated = cross_validated_scores(
                 &all,
                 n_classes,
@@ -600,9 +599,10 @@ impl SvmModel {
                     Ok(())
                 },
             )?;
-            if let Some(scores) = cross_validated {
-                temperature = fit_temperature(&scores, &classes, n_classes)?;
-            }
+            temperature = match cross_validated {
+                Some(scores) => fit_temperature(&scores, &classes, n_classes)?,
+                None => fit_temperature(&validation_scores, validation.classes, n_classes)?,
+            };
         }
         let mut model = Self::fit_fixed(all, n_classes, dims, kernel, c, config.tol)?;
         model.temperature = temperature;
