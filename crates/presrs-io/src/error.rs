@@ -91,7 +91,7 @@ impl IoError {
 }
 
 /// The name used for `path` in error messages: the path as the caller gave it.
-pub(crate) fn display_name(path: &Path) -> String {
+pub fn display_name(path: &Path) -> String {
     path.display().to_string()
 }
 

@@ -1,7 +1,6 @@
 #![doc = include_str!("../README.md")]
 
 pub mod atomic;
-pub mod dataset;
 pub mod error;
 pub mod frame_protocol;
 pub mod manifest;

@@ -261,7 +261,7 @@ fn manifest_fixture(
     manifest: &Path,
     samples: &SampleArgs,
 ) -> anyhow::Result<Fixture> {
-    let (_, loaded) = load_manifest(manifest, samples)?;
+    let loaded = load_manifest(manifest, samples)?;
     let samples = loaded.samples;
     Ok(Fixture {
         model,

@@ -5,8 +5,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
+use presrs::dataset::DeadSenselFills;
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
-use presrs_io::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
 use serde::Serialize;
 

@@ -5,20 +5,14 @@ use std::path::Path;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use presrs_core::Crop;
+use presrs::dataset::{DeadSenselFills, SampleOptions, read_corrected};
+use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method};
+use presrs::{Dataset, Progress};
 use presrs_core::Recording;
-use presrs_core::classifier::ClassifierKind;
 use presrs_core::dead_sensels::DeadSenselConfig;
-use presrs_core::features::{FeatureConfig, FeatureKind};
-use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::Preprocess;
-use presrs_core::split::ValidationSize;
 use presrs_core::stance::SampleFrame;
 use presrs_io::ReadOptions;
-use presrs_io::dataset::{
-    DeadSenselFills, LoadedSamples, SampleOptions, load_samples, read_corrected,
-};
-use presrs_io::manifest::{Manifest, read_manifest};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
 #[derive(Debug, Clone, clap::Args)]
@@ -28,12 +22,12 @@ pub struct PipelineArgs {
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
     /// leave one condition out when it spans several, among fft1d, fft2d and fft2d_polar; --full-search
     /// adds glcm and fft2d_polar+glcm). `--features fft1d --classifier pwe` is the paper's method.
-    #[arg(long, default_value = "auto", value_parser = parse_features)]
+    #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<FeatureChoice>())]
     pub features: FeatureChoice,
     /// Classifier: pwe (Parzen window, the paper's), mle (Gaussian, shrunk full covariance per class),
     /// lda (shared covariance), svm (one-vs-one, linear or RBF, C and gamma chosen on validation), knn;
     /// or auto (the default: chosen by validation inside the training data among all five).
-    #[arg(long, default_value = "auto", value_parser = parse_classifier)]
+    #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
     /// With auto: try every feature family, the slow texture ones (glcm, fft2d_polar+glcm) too (about
     /// twice the time of the default search; they did not win on the simulated data).
@@ -61,186 +55,24 @@ pub struct CropArg {
     /// Region of each image used: auto (the paper's crop on a 44x44 array, the whole image otherwise),
     /// paper (drop the bottom 6 rows and first 3 columns: 44x44 -> 38x41), none, margins
     /// top,bottom,left,right, or a window row0:col0:rows:cols.
-    #[arg(long = "crop", default_value = "auto", value_parser = parse_crop_arg)]
+    #[arg(long = "crop", default_value = "auto", value_parser = |t: &str| t.parse::<CropChoice>())]
     pub crop: CropChoice,
 }
 
-/// Principal components kept without `--dims` (the paper's 51).
-pub const DEFAULT_DIMS: usize = 51;
-
-/// A crop, or `auto`: decided from the image size.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CropChoice {
-    Auto,
-    Fixed(Crop),
-}
-
-impl CropArg {
-    /// The crop for images of `grid`: as given, or resolved from `auto`.
-    pub fn resolve(&self, grid: presrs_core::Grid) -> Crop {
-        match self.crop {
-            CropChoice::Fixed(crop) => crop,
-            CropChoice::Auto if grid == presrs_core::Grid::new(44, 44) => Crop::PAPER,
-            CropChoice::Auto => Crop::NONE,
-        }
-    }
-}
-
-/// `--features`: families, or auto.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum FeatureChoice {
-    Auto,
-    Kinds(Vec<FeatureKind>),
-}
-
-/// `--classifier`: a family, or auto.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ClassifierChoice {
-    Auto,
-    Kind(ClassifierKind),
-}
-
-/// The feature families an automatic choice tries by default: the cheap ones (a GLCM image costs 2-3x
-/// an FFT one, and glcm never won on the simulated data).
-pub const FAST_CANDIDATE_FEATURES: [&[FeatureKind]; 3] = [
-    &[FeatureKind::Fft1d],
-    &[FeatureKind::Fft2d],
-    &[FeatureKind::Fft2dPolar],
-];
-
-/// The feature families a full automatic choice (`--full-search`) or a comparison tries.
-pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
-    &[FeatureKind::Fft1d],
-    &[FeatureKind::Fft2d],
-    &[FeatureKind::Fft2dPolar],
-    &[FeatureKind::Glcm],
-    &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
-];
-
 impl PipelineArgs {
-    /// The preprocessing steps these options ask for.
-    pub fn preprocess(&self) -> Preprocess {
-        Preprocess {
-            normalise_load: self.normalise_load,
-            fill_absent: self.fill_absent,
+    /// The method these options describe (`auto` parts chosen by validation).
+    pub fn method(&self) -> Method {
+        Method {
+            features: self.features.clone(),
+            classifier: self.classifier,
+            full_search: self.full_search,
+            dims: self.dims,
+            preprocess: Preprocess {
+                normalise_load: self.normalise_load,
+                fill_absent: self.fill_absent,
+            },
+            crop: self.crop.crop,
         }
-    }
-
-    /// Principal components to keep: `--dims`, or the paper's 51.
-    pub fn dims(&self) -> usize {
-        self.dims.unwrap_or(DEFAULT_DIMS)
-    }
-
-    /// Whether features or classifier are to be chosen automatically.
-    pub fn is_auto(&self) -> bool {
-        self.features == FeatureChoice::Auto || self.classifier == ClassifierChoice::Auto
-    }
-
-    /// The checked training configuration these options describe, for images of `grid`. An `auto`
-    /// part is the paper's choice here (fft1d, pwe); [`candidates`](Self::candidates) lists what auto tries.
-    pub fn train_config(&self, grid: presrs_core::Grid) -> anyhow::Result<CheckedTrainConfig> {
-        let features = match &self.features {
-            FeatureChoice::Kinds(kinds) => FeatureConfig::combined(kinds),
-            FeatureChoice::Auto => FeatureKind::Fft1d.default_config(),
-        };
-        let classifier = match self.classifier {
-            ClassifierChoice::Kind(kind) => kind.default_config(),
-            ClassifierChoice::Auto => ClassifierKind::Pwe.default_config(),
-        };
-        let config = TrainConfig {
-            crop: self.crop.resolve(grid),
-            features,
-            dims: self.dims(),
-            classifier,
-            preprocess: self.preprocess(),
-        };
-        Ok(config.check()?)
-    }
-
-    /// The paper's method (1-D |FFT| features, Parzen window) with these options' crop, dims and
-    /// preprocessing: what an automatic choice is shown next to. [`train_config`](Self::train_config) is
-    /// the same only when both parts are `auto`.
-    pub fn paper_config(&self, grid: presrs_core::Grid) -> anyhow::Result<CheckedTrainConfig> {
-        let config = TrainConfig {
-            crop: self.crop.resolve(grid),
-            features: FeatureKind::Fft1d.default_config(),
-            dims: self.dims(),
-            classifier: ClassifierKind::Pwe.default_config(),
-            preprocess: self.preprocess(),
-        };
-        Ok(config.check()?)
-    }
-
-    /// Every configuration an automatic choice tries (auto parts run over the candidates — the cheap
-    /// feature families unless `--full-search` — fixed parts stay), or, with `all`, every feature x
-    /// classifier combination (for `--compare`).
-    pub fn candidates(
-        &self,
-        grid: presrs_core::Grid,
-        all: bool,
-    ) -> anyhow::Result<Vec<CheckedTrainConfig>> {
-        let features: Vec<FeatureConfig> = match &self.features {
-            FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
-            _ if all || self.full_search => CANDIDATE_FEATURES
-                .iter()
-                .map(|kinds| FeatureConfig::combined(kinds))
-                .collect(),
-            _ => FAST_CANDIDATE_FEATURES
-                .iter()
-                .map(|kinds| FeatureConfig::combined(kinds))
-                .collect(),
-        };
-        let classifiers: Vec<ClassifierKind> = match self.classifier {
-            ClassifierChoice::Kind(kind) if !all => vec![kind],
-            _ => ClassifierKind::ALL.to_vec(),
-        };
-        let mut out = Vec::new();
-        for feature in &features {
-            for &classifier in &classifiers {
-                out.push(
-                    TrainConfig {
-                        crop: self.crop.resolve(grid),
-                        features: feature.clone(),
-                        dims: self.dims(),
-                        classifier: classifier.default_config(),
-                        preprocess: self.preprocess(),
-                    }
-                    .check()?,
-                );
-            }
-        }
-        Ok(out)
-    }
-}
-
-/// Refuses a draw that leaves no validation images when the classifier needs them: the Parzen window
-/// (pwe) chooses its sigma on them, and no option fixes sigma; an automatic choice of the classifier
-/// tries pwe among the others (and would fail only after scoring every candidate, if pwe won).
-pub fn check_validation_set(
-    pipeline: &PipelineArgs,
-    validation: ValidationSize,
-    validation_images: usize,
-) -> anyhow::Result<()> {
-    if validation_images > 0 {
-        return Ok(());
-    }
-    let given = match validation {
-        ValidationSize::Count(count) => count.to_string(),
-        ValidationSize::Fraction(fraction) => fraction.to_string(),
-    };
-    let remedy = "give --validation a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) with at \
-                  least 3 images per class";
-    match pipeline.classifier {
-        ClassifierChoice::Kind(ClassifierKind::Pwe) => anyhow::bail!(
-            "--validation {given} leaves no validation images, and the Parzen window (pwe) chooses its \
-             sigma on them: {remedy}, or another --classifier"
-        ),
-        ClassifierChoice::Auto => anyhow::bail!(
-            "--validation {given} leaves no validation images, and the automatic choice tries the \
-             Parzen window (pwe), which chooses its sigma on them: {remedy}, or a --classifier other \
-             than pwe or auto"
-        ),
-        ClassifierChoice::Kind(_) => Ok(()),
     }
 }
 
@@ -303,23 +135,14 @@ impl SampleArgs {
     }
 }
 
-/// Reads a manifest and all its samples; warnings go to stderr.
-pub fn load_manifest(
-    path: &Path,
-    samples: &SampleArgs,
-) -> anyhow::Result<(Manifest, LoadedSamples)> {
-    let manifest = read_manifest(path)?;
-    let spinner = spinner(&format!("reading {} files", manifest.rows.len()));
-    let loaded = load_samples(&manifest, &samples.options())?;
-    spinner.finish_and_clear();
-    for warning in &loaded.warnings {
+/// Reads a manifest and all its samples (a spinner meanwhile); warnings go to stderr.
+pub fn load_manifest(path: &Path, samples: &SampleArgs) -> anyhow::Result<Dataset> {
+    let dataset = Dataset::load(path, &samples.options(), &TerminalProgress::default())?;
+    for warning in &dataset.warnings {
         stderr_line!("warning: {warning}");
     }
-    note_dead_sensels(&loaded.dead_sensels);
-    if loaded.samples.is_empty() {
-        anyhow::bail!("{}: the manifest gives no samples", path.display());
-    }
-    Ok((manifest, loaded))
+    note_dead_sensels(&dataset.dead_sensels);
+    Ok(dataset)
 }
 
 /// The one-line note on stderr of the dead sensels filled, if any.
@@ -328,6 +151,52 @@ pub fn note_dead_sensels(fills: &DeadSenselFills) {
         stderr_line!(
             "note: {summary} (from their neighbours; --keep-dead-sensels to use them as read)"
         );
+    }
+}
+
+/// The library's progress on stderr: a bar (or a spinner for a task of unknown length) when stderr is a
+/// terminal, nothing otherwise; warnings as `warning: ...` lines.
+#[derive(Debug, Default)]
+pub struct TerminalProgress {
+    bar: std::sync::Mutex<Option<ProgressBar>>,
+}
+
+impl TerminalProgress {
+    fn bar(&self) -> std::sync::MutexGuard<'_, Option<ProgressBar>> {
+        self.bar
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
+
+impl Progress for TerminalProgress {
+    fn start(&self, task: &str, total: Option<u64>) {
+        let bar = match total {
+            Some(total) => progress_bar(total, task),
+            None => spinner(task),
+        };
+        if let Some(old) = self.bar().replace(bar) {
+            old.finish_and_clear();
+        }
+    }
+
+    fn advance(&self, steps: u64) {
+        if let Some(bar) = self.bar().as_ref() {
+            bar.inc(steps);
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = self.bar().take() {
+            bar.finish_and_clear();
+        }
+    }
+
+    fn warn(&self, message: &str) {
+        match self.bar().as_ref() {
+            Some(bar) => bar.suspend(|| stderr_line!("warning: {message}")),
+            None => stderr_line!("warning: {message}"),
+        }
     }
 }
 
@@ -374,66 +243,6 @@ pub fn parse_positive(text: &str) -> Result<usize, String> {
             "expected a whole number of at least 1, got {text:?}"
         )),
     }
-}
-
-/// Feature families joined with `+` or `,` (`fft1d`, `fft2d_polar+glcm`); the error lists the names.
-pub fn parse_feature_kinds(text: &str) -> Result<Vec<FeatureKind>, String> {
-    text.split(['+', ','])
-        .map(|part| {
-            FeatureKind::parse(part).map_err(|_| {
-                format!(
-                    "unknown feature family {:?} in {text:?}; known: {}, or several joined with + \
-                     (fft1d+glcm)",
-                    part.trim(),
-                    FeatureKind::ALL.map(FeatureKind::as_str).join(", ")
-                )
-            })
-        })
-        .collect()
-}
-
-fn parse_features(text: &str) -> Result<FeatureChoice, String> {
-    if text.trim().eq_ignore_ascii_case("auto") {
-        return Ok(FeatureChoice::Auto);
-    }
-    parse_feature_kinds(text)
-        .map(FeatureChoice::Kinds)
-        .map_err(|err| err.replacen("; known: ", "; known: auto, ", 1))
-}
-
-fn parse_classifier(text: &str) -> Result<ClassifierChoice, String> {
-    if text.trim().eq_ignore_ascii_case("auto") {
-        return Ok(ClassifierChoice::Auto);
-    }
-    ClassifierKind::parse(text)
-        .map(ClassifierChoice::Kind)
-        .map_err(|_| {
-            format!(
-                "unknown classifier {text:?}; known: auto, {}",
-                ClassifierKind::ALL.map(ClassifierKind::as_str).join(", ")
-            )
-        })
-}
-
-/// `--crop`: auto, or what [`Crop::parse`] reads; an empty value is refused (it is not `none`).
-pub fn parse_crop_arg(text: &str) -> Result<CropChoice, String> {
-    const FORMS: &str =
-        "auto, none, paper, margins top,bottom,left,right or a window row0:col0:rows:cols";
-    if text.trim().is_empty() {
-        return Err(format!("the crop is empty; expected {FORMS}"));
-    }
-    if text.trim().eq_ignore_ascii_case("auto") {
-        return Ok(CropChoice::Auto);
-    }
-    Crop::parse(text)
-        .map(CropChoice::Fixed)
-        .map_err(|err| match err {
-            presrs_core::CoreError::Param { reason, .. } => match reason.split_once("; expected") {
-                Some((why, _)) => format!("{why}; expected {FORMS}"),
-                None => reason,
-            },
-            other => other.to_string(),
-        })
 }
 
 fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {

@@ -4,15 +4,14 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::Context;
-use presrs_core::evaluation::{
-    ComparisonRow, EvalReport, EvalSample, Evaluation, Models, Protocol, TestTransform,
-};
+use presrs::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
+use presrs::method::{ClassifierChoice, FeatureChoice, Method};
+use presrs_core::evaluation::{ComparisonRow, EvalReport, Protocol};
 use presrs_core::reliability::Reliability;
 use presrs_core::split::ValidationSize;
 use serde::Serialize;
 
-use super::common::{PipelineArgs, SampleArgs, load_manifest, progress_bar, write_json};
+use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest, write_json};
 
 /// Evaluate the pipeline on a manifest: accuracy per condition/group, overall, confusion, timing.
 #[derive(Debug, clap::Args)]
@@ -206,146 +205,41 @@ impl<'r> EvalJson<'r> {
 }
 
 pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let (manifest, loaded) = load_manifest(&args.manifest, &args.samples)?;
-    manifest.require_column("label", "evaluation needs a label for every sample")?;
-    if let Some(column) = &args.leave_one_out
-        && !manifest.has_column(column)
-    {
-        anyhow::bail!(
-            "{}: --leave-one-out {column}: the manifest has no such column (columns: {})",
-            args.manifest.display(),
-            manifest.columns.join(", ")
-        );
-    }
-    let mut samples = Vec::with_capacity(loaded.samples.len());
-    for sample in &loaded.samples {
-        let label = sample.label.as_deref().ok_or_else(|| {
-            anyhow::anyhow!(
-                "{} line {}: field `label` is empty; evaluation needs a label for every sample",
-                args.manifest.display(),
-                sample.manifest_line
-            )
-        })?;
-        let group = match &args.leave_one_out {
-            Some(column) => Some(sample.column(column).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "{} line {}: field `{column}` is empty; --leave-one-out needs a value in every row",
-                    args.manifest.display(),
-                    sample.manifest_line
-                )
-            })?),
-            None => None,
-        };
-        samples.push(EvalSample {
-            frame: sample.frame.view(),
-            label,
-            condition: sample.condition.as_deref(),
-            group,
-        });
-    }
-    let protocol = match &args.leave_one_out {
-        Some(column) => Protocol::LeaveOneOut {
-            column: column.clone(),
-            per_class: args.per_class,
-            validation: args.validation,
+    let dataset = load_manifest(&args.manifest, &args.samples)?;
+    let options = EvalOptions {
+        holdout: match &args.leave_one_out {
+            Some(column) => Holdout::LeaveOneOut(column.clone()),
+            None => Holdout::TrainCondition(args.train_condition.clone()),
         },
-        None => Protocol::TrainCondition {
-            condition: args.train_condition.clone(),
-            per_class: args.per_class,
-            validation: args.validation,
-        },
+        per_class: args.per_class,
+        validation: args.validation,
+        repeats: args.repeats,
+        seed: args.seed,
+        method: args.pipeline.method(),
     };
-    let never_trained = presrs_core::evaluation::labels_never_trained(&samples, &protocol);
-    for (held_out, labels) in &never_trained {
-        let tested = match (&args.leave_one_out, held_out.as_str()) {
-            (Some(column), value) => format!("with {column} {value} held out, its"),
-            (None, _) => "the".to_owned(),
-        };
-        stderr_line!(
-            "warning: {}: {tested} test images labelled {} cannot be recognised: no training image has \
-             that label",
-            args.manifest.display(),
-            labels.join(", ")
-        );
+    let setup = EvalSetup::new(&dataset, &options)?;
+    for warning in &setup.warnings {
+        stderr_line!("warning: {warning}");
     }
-    let folds = match &protocol {
-        Protocol::LeaveOneOut { .. } => {
-            let mut values: Vec<_> = samples.iter().filter_map(|s| s.group).collect();
-            values.sort_unstable();
-            values.dedup();
-            values.len()
-        }
-        Protocol::TrainCondition { .. } => 1,
-    };
+    let progress = TerminalProgress::default();
     if args.compare {
-        let configs = args.pipeline.candidates(samples[0].frame.grid(), true)?;
-        let bar = progress_bar((configs.len() * folds * args.repeats) as u64, "comparing");
-        let evaluation = Evaluation {
-            samples: &samples,
-            protocol: &protocol,
-            repeats: args.repeats,
-            seed: args.seed,
-            progress: &|| bar.inc(1),
-        };
-        let rows = evaluation
-            .compare(&configs)
-            .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
-        bar.finish_and_clear();
+        let rows = setup.compare(&progress)?;
         if args.json {
-            let json = CompareJson::new(&rows, &args.pipeline)
+            let json = CompareJson::new(&rows, &options.method)
                 .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
             return write_json(out, &json);
         }
         return print_comparison(&rows, out);
     }
-    if args.validation == ValidationSize::Count(0) {
-        super::common::check_validation_set(&args.pipeline, args.validation, 0)
-            .with_context(|| format!("{}: cannot evaluate", args.manifest.display()))?;
-    }
-    let config = args.pipeline.train_config(samples[0].frame.grid())?;
-    let bar = progress_bar((folds * args.repeats) as u64, "training");
-    let candidates = if args.pipeline.is_auto() {
-        args.pipeline.candidates(samples[0].frame.grid(), false)?
-    } else {
-        Vec::new()
-    };
-    let models = if args.pipeline.is_auto() {
-        Models::Auto(&candidates)
-    } else {
-        Models::Config(&config)
-    };
-    let evaluation = Evaluation {
-        samples: &samples,
-        protocol: &protocol,
-        repeats: args.repeats,
-        seed: args.seed,
-        progress: &|| bar.inc(1),
-    };
-    let context =
-        |err: presrs_core::CoreError| anyhow::anyhow!("{}: {err}", args.manifest.display());
-    let presrs_core::evaluation::Evaluated {
-        reports,
+    let EvalOutcome {
+        report,
         selections,
-    } = evaluation.run_each(models, &[None]).map_err(context)?;
-    let report = reports
-        .into_iter()
-        .next()
-        .ok_or_else(|| anyhow::anyhow!("{}: no evaluation was run", args.manifest.display()))?;
-    bar.finish_and_clear();
-    // (one fold per repeat: with leave-one-out, n_train sums the folds)
-    if let Some(n_train) = report.repeats.iter().map(|r| r.n_train).min()
-        && let Some(dims) = args.pipeline.dims
-        && folds == 1
-        && dims >= n_train
-    {
-        stderr_line!(
-            "warning: --dims {dims}: models trained on {n_train} images keep at most {} principal \
-             components (one fewer than the training images)",
-            n_train.saturating_sub(1)
-        );
+        warnings,
+    } = setup.evaluate(&progress)?;
+    for warning in &warnings {
+        stderr_line!("warning: {warning}");
     }
-    let paper = args.pipeline.paper_config(samples[0].frame.grid())?;
-    let perturbed = perturbation_rows(args, evaluation, models, &paper, folds, &report)?;
+    let perturbed = setup.perturbed(&args.perturb, &report, &progress)?;
     if let Some(dir) = &args.report {
         let name = match &args.leave_one_out {
             Some(column) => format!("leave one {column} out"),
@@ -354,13 +248,14 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 .as_ref()
                 .map_or_else(|| "random draw".to_owned(), |c| format!("trained on {c}")),
         };
+        let config = options.method.train_config(dataset.grid())?;
         let path = super::report::write_eval_report(
             &args.manifest,
-            &loaded,
+            &dataset,
             (&report, &name),
             &config,
             &args.samples,
-            &fault_results(&perturbed, args.pipeline.is_auto()),
+            &fault_results(&perturbed, options.method.is_auto()),
             dir,
         )?;
         stderr_line!("report written to {}", path.display());
@@ -368,7 +263,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.json {
         let mut json = EvalJson::new(&report);
         json.selections = selections;
-        json.labels_never_trained = never_trained;
+        json.labels_never_trained = setup.never_trained.clone();
         if !perturbed.is_empty() {
             return write_json(
                 out,
@@ -525,15 +420,9 @@ pub struct CompareRowJson<'r> {
 
 impl<'r> CompareJson<'r> {
     /// The document of `rows`; fails when no combination could be evaluated.
-    pub fn new(
-        rows: &'r [ComparisonRow],
-        pipeline: &super::common::PipelineArgs,
-    ) -> anyhow::Result<Self> {
-        let configured = match (&pipeline.features, pipeline.classifier) {
-            (
-                super::common::FeatureChoice::Kinds(kinds),
-                super::common::ClassifierChoice::Kind(kind),
-            ) => {
+    pub fn new(rows: &'r [ComparisonRow], method: &Method) -> anyhow::Result<Self> {
+        let configured = match (&method.features, method.classifier) {
+            (FeatureChoice::Kinds(kinds), ClassifierChoice::Kind(kind)) => {
                 let features = presrs_core::features::FeatureConfig::combined(kinds).name();
                 rows.iter().position(|row| {
                     row.report.is_ok()
@@ -679,89 +568,12 @@ pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::
     Ok(())
 }
 
-/// Accuracy of one method with the test images perturbed (`--perturb`).
-#[derive(Debug, Serialize)]
-pub struct PerturbationRow {
-    /// `KIND=LEVEL`, or `none` for the unperturbed test images.
-    pub perturbation: String,
-    /// `configured` (what --features/--classifier say) or `paper` (fft1d + pwe, shown next to auto).
-    pub method: &'static str,
-    pub accuracy: f64,
-    pub accuracy_std: f64,
-    /// Perturbed test images (summed over repeats) that could not be classified at all, e.g. values
-    /// driven to infinity; each is counted as a wrong answer in `accuracy`.
-    pub unclassified: u64,
-}
-
 /// The `--json` document with `--perturb`: the usual fields plus the perturbation rows.
 #[derive(Debug, Serialize)]
 pub struct PerturbedJson<'r> {
     #[serde(flatten)]
     pub eval: EvalJson<'r>,
     pub perturbations: Vec<PerturbationRow>,
-}
-
-/// Evaluates every `--perturb` (same seeds, so the same draws and models as the main run; each model is
-/// trained once and tested under every perturbation). With an automatic choice, the paper's method is
-/// evaluated too, so that both degrade side by side.
-fn perturbation_rows(
-    args: &EvalArgs,
-    evaluation: Evaluation<'_, '_>,
-    models: Models<'_>,
-    paper: &presrs_core::CheckedTrainConfig,
-    folds: usize,
-    report: &EvalReport,
-) -> anyhow::Result<Vec<PerturbationRow>> {
-    if args.perturb.is_empty() {
-        return Ok(Vec::new());
-    }
-    let auto = matches!(models, Models::Auto(_));
-    let methods = 1 + usize::from(auto);
-    let bar = progress_bar((methods * folds * args.repeats) as u64, "perturbing");
-    let evaluation = Evaluation {
-        progress: &|| bar.inc(1),
-        ..evaluation
-    };
-    let context =
-        |err: presrs_core::CoreError| anyhow::anyhow!("{}: {err}", args.manifest.display());
-    let transforms: Vec<_> = args
-        .perturb
-        .iter()
-        .map(presrs_core::perturb::Perturbation::transform)
-        .collect();
-    let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
-    each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
-    let row = |perturbation: String, method, r: &EvalReport| PerturbationRow {
-        perturbation,
-        method,
-        accuracy: r.overall.mean,
-        accuracy_std: r.overall.std,
-        unclassified: r.unclassified,
-    };
-    let mut rows = vec![row("none".to_owned(), "configured", report)];
-    let configured = evaluation
-        .run_each(models, &each[1..])
-        .map_err(context)?
-        .reports;
-    let paper_reports = if auto {
-        evaluation
-            .run_each(Models::Config(paper), &each)
-            .map_err(context)?
-            .reports
-    } else {
-        Vec::new()
-    };
-    if let Some(plain) = paper_reports.first() {
-        rows.push(row("none".to_owned(), "paper", plain));
-    }
-    for (k, p) in args.perturb.iter().enumerate() {
-        rows.push(row(p.to_string(), "configured", &configured[k]));
-        if let Some(r) = paper_reports.get(k + 1) {
-            rows.push(row(p.to_string(), "paper", r));
-        }
-    }
-    bar.finish_and_clear();
-    Ok(rows)
 }
 
 /// The perturbation rows as the report's fault results: `configured` is the automatic choice with

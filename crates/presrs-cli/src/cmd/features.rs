@@ -36,7 +36,7 @@ pub struct FeaturesArgs {
 }
 
 pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let mut fills = presrs_io::dataset::DeadSenselFills::default();
+    let mut fills = presrs::dataset::DeadSenselFills::default();
     let recording = &args.samples.read(&args.file, &mut fills)?;
     super::common::note_dead_sensels(&fills);
     let name = args.file.display();
@@ -65,7 +65,7 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             frames
         }
     };
-    let crop = args.crop.resolve(recording.grid());
+    let crop = args.crop.crop.resolve(recording.grid());
     let config = FeatureConfig::combined(&args.features);
     let mut header_written = false;
     for index in frames {
@@ -100,5 +100,5 @@ fn parse_features(text: &str) -> Result<Vec<FeatureKind>, String> {
             FeatureKind::ALL.map(FeatureKind::as_str).join(", ")
         ));
     }
-    super::common::parse_feature_kinds(text)
+    presrs::method::parse_feature_kinds(text)
 }

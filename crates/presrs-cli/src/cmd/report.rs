@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
+use presrs::Sample;
 use presrs_core::evaluation::{
     Confusion, EvalReport, EvalSample, MeanStd, Models, Protocol, RepeatResult,
 };
@@ -19,7 +20,6 @@ use presrs_core::reliability::Reliability;
 use presrs_core::split::{ValidationSize, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording, SensorMeta};
-use presrs_io::dataset::{LoadedSamples, Sample};
 use presrs_io::model_file::load_model;
 use presrs_io::read_recording_with;
 use presrs_sim::trace::{HopTrace, trace_hops};
@@ -368,7 +368,7 @@ fn first_seconds(recording: &Recording, seconds: f64) -> anyhow::Result<Recordin
 // Called by `reproduce` and `eval` once they write reports.
 pub fn write_eval_report(
     manifest_path: &Path,
-    loaded: &LoadedSamples,
+    loaded: &presrs::Dataset,
     (report, evaluation_name): (&EvalReport, &str),
     config: &CheckedTrainConfig,
     sample_args: &SampleArgs,
@@ -430,7 +430,7 @@ fn labelled(samples: &[Sample]) -> Option<Vec<(&Frame, &str, Option<&str>)>> {
 /// The sensor metadata of the manifest's first file and up to four movies (one per label) for load
 /// curves.
 fn manifest_recordings(
-    loaded: &LoadedSamples,
+    loaded: &presrs::Dataset,
     sample_args: &SampleArgs,
     preferred_condition: Option<&str>,
 ) -> (Option<SensorMeta>, Vec<(String, Recording)>) {
@@ -541,7 +541,7 @@ fn simulate_outputs(dir: &Path) -> Option<(VelocityTable, SimConfig)> {
 
 fn write_manifest_report(
     manifest_path: &Path,
-    loaded: &LoadedSamples,
+    loaded: &presrs::Dataset,
     model: Option<(&TrainedModel, String)>,
     evaluations: Vec<Evaluation<'_>>,
     sample_args: &SampleArgs,
@@ -672,7 +672,7 @@ fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> anyhow::Result<
 
 pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
-    let (_manifest, loaded) = load_manifest(&args.manifest, &args.samples)?;
+    let loaded = load_manifest(&args.manifest, &args.samples)?;
     let conditions: BTreeSet<&str> = loaded
         .samples
         .iter()
@@ -691,7 +691,7 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         );
     }
     let grid = loaded.samples[0].frame.grid();
-    let config = args.pipeline.train_config(grid)?;
+    let config = args.pipeline.method().train_config(grid)?;
     let triples = labelled(&loaded.samples);
     let mut reports: Vec<(String, EvalReport)> = Vec::new();
     let model: Option<(TrainedModel, String)> = match (&args.model, &triples) {
@@ -902,11 +902,14 @@ pub fn fault_sweep(
     let transforms: Vec<_> = sweep.iter().map(Perturbation::transform).collect();
     let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
     each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
-    let auto = args.pipeline.is_auto();
+    let auto = args.pipeline.method().is_auto();
     let methods = 1 + usize::from(auto);
     // Next to an automatic choice the paper's method; else the configured pipeline alone.
     let paper = if auto {
-        &args.pipeline.paper_config(samples[0].frame.grid())?
+        &args
+            .pipeline
+            .method()
+            .paper_config(samples[0].frame.grid())?
     } else {
         config
     };
@@ -948,7 +951,10 @@ pub fn fault_sweep(
     };
     push(&paper_name, paper_reports);
     if auto {
-        let candidates = args.pipeline.candidates(samples[0].frame.grid(), false)?;
+        let candidates = args
+            .pipeline
+            .method()
+            .candidates(samples[0].frame.grid(), false)?;
         let reports = evaluation
             .run_each(Models::Auto(&candidates), &each)
             .map_err(context)?
@@ -1110,7 +1116,11 @@ mod tests {
             .collect();
         let triples: Vec<(&Frame, &str, Option<&str>)> =
             frames.iter().map(|(f, l, c)| (f, *l, Some(*c))).collect();
-        let config = args.pipeline.train_config(Grid::new(44, 44)).unwrap();
+        let config = args
+            .pipeline
+            .method()
+            .train_config(Grid::new(44, 44))
+            .unwrap();
         let (faults, note) = fault_sweep(&args, &triples, Some("G2"), &config).unwrap();
         assert!(note.contains("2 repeat(s)"), "{note}");
         let sweep = Perturbation::default_sweep();
@@ -1161,7 +1171,11 @@ mod tests {
         // method is the paper's method: the numbers of the explicit fft1d + pwe run above (it was the
         // configured fft1d + mle).
         let mle_args = parse(&["--classifier", "mle"]);
-        let mle_config = mle_args.pipeline.train_config(Grid::new(44, 44)).unwrap();
+        let mle_config = mle_args
+            .pipeline
+            .method()
+            .train_config(Grid::new(44, 44))
+            .unwrap();
         let (auto_faults, _) = fault_sweep(&mle_args, &triples, Some("G2"), &mle_config).unwrap();
         let paper: Vec<_> = auto_faults
             .iter()

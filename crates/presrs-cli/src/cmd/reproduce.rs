@@ -31,7 +31,9 @@ use presrs_io::atomic::write_atomic;
 use presrs_sim::{Dataset, DatasetSpec, SimConfig, TrialOutput};
 use serde::Serialize;
 
-use super::common::{CANDIDATE_FEATURES, progress_bar, spinner};
+use presrs::method::CANDIDATE_FEATURES;
+
+use super::common::{progress_bar, spinner};
 use super::eval::{CalibrationJson, calibration_line};
 use super::report::SimulationReportData;
 use super::simulate::{DatasetKey, check_simulator, read_dataset, write_dataset_with};

@@ -22,7 +22,7 @@
 
 use std::io::{BufRead, BufWriter, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
 use std::time::{Duration, Instant};
@@ -32,7 +32,7 @@ use presrs_core::online::{
     DecisionKind, OnlineClassifier, OnlineEvent, OnlineProfile, OnlineStats, Step,
 };
 use presrs_core::pipeline::TrainedModel;
-use presrs_core::stance::{ValidSegmentParams, segment};
+use presrs_core::stance::ValidSegmentParams;
 use presrs_core::{FrameView, Grid};
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
 use presrs_io::model_file::{ModelFile, load_model};
@@ -110,7 +110,7 @@ pub fn resolve_profile(args: &StreamArgs, file: &ModelFile) -> anyhow::Result<On
         serde_json::from_str(&text)
             .with_context(|| format!("invalid online profile {}", path.display()))?
     } else if let Some(path) = &args.calibrate {
-        learn_profile(path)?
+        presrs::train::learn_online_profile(path)?
     } else if let Some(online) = &file.online {
         online.clone()
     } else {
@@ -126,23 +126,6 @@ pub fn resolve_profile(args: &StreamArgs, file: &ModelFile) -> anyhow::Result<On
         profile.gait_table.insert(terrain.clone(), gait.clone());
     }
     Ok(profile)
-}
-
-/// Calibration and k from the recordings of a manifest (offline segmentation of each).
-pub fn learn_profile(manifest: &Path) -> anyhow::Result<OnlineProfile> {
-    let manifest = presrs_io::manifest::read_manifest(manifest)?;
-    let mut paths: Vec<&Path> = manifest.rows.iter().map(|row| row.path.as_path()).collect();
-    paths.sort();
-    paths.dedup();
-    let params = ValidSegmentParams::default();
-    let mut segmentations = Vec::new();
-    for path in paths {
-        let recording = presrs_io::read_recording(path)?;
-        if recording.frame_count() > 1 {
-            segmentations.push(segment(&recording.total_per_frame(), &params)?);
-        }
-    }
-    Ok(OnlineProfile::learn(&segmentations))
 }
 
 /// One frame source: fills `values`/`present`, returns what came.

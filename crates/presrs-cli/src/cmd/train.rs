@@ -5,10 +5,10 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs_core::pipeline::{LabeledImage, train};
-use presrs_core::split::{ValidationSize, stratified_split};
-use presrs_io::dataset::Sample;
-use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance, save_model};
+use presrs::train::{TrainOptions, learn_online_profile};
+use presrs_core::selection::Selection;
+use presrs_core::split::ValidationSize;
+use presrs_io::model_file::save_model;
 
 use super::common::{PipelineArgs, SampleArgs, load_manifest};
 
@@ -68,138 +68,30 @@ pub struct TrainArgs {
 }
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let (manifest, loaded) = load_manifest(&args.manifest, &args.samples)?;
-    manifest.require_column("label", "training needs a label for every sample")?;
-    let pool: Vec<&Sample> = match &args.train_condition {
-        Some(condition) => {
-            let pool: Vec<&Sample> = loaded
-                .samples
-                .iter()
-                .filter(|sample| sample.condition.as_deref() == Some(condition.as_str()))
-                .collect();
-            if pool.is_empty() {
-                let mut known: Vec<&str> = loaded
-                    .samples
-                    .iter()
-                    .filter_map(|s| s.condition.as_deref())
-                    .collect();
-                known.sort_unstable();
-                known.dedup();
-                anyhow::bail!(
-                    "{}: no sample has condition {condition:?} (conditions present: {})",
-                    args.manifest.display(),
-                    if known.is_empty() {
-                        "none".to_owned()
-                    } else {
-                        known.join(", ")
-                    }
-                );
-            }
-            pool
-        }
-        None => loaded.samples.iter().collect(),
+    let dataset = load_manifest(&args.manifest, &args.samples)?;
+    let options = TrainOptions {
+        condition: args.train_condition.clone(),
+        per_class: args.per_class,
+        validation: args.validation,
+        seed: args.seed,
+        method: args.pipeline.method(),
     };
-    let labels = sample_labels(&manifest.source, &pool)?;
-    let split = stratified_split(&labels, args.per_class, args.validation, args.seed)
-        .with_context(|| format!("{}: cannot draw the training set", args.manifest.display()))?;
-    super::common::check_validation_set(&args.pipeline, args.validation, split.validation.len())
-        .with_context(|| format!("{}: cannot train", args.manifest.display()))?;
-    let grid = pool[0].frame.grid();
-    let config = args.pipeline.train_config(grid)?;
-    let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
-        indices
-            .iter()
-            .map(|&i| LabeledImage::new(pool[i].frame.view(), labels[i]))
-            .collect()
-    };
-    let (train_images, validation_images) = (images(&split.train), images(&split.validation));
-    let model = if args.pipeline.is_auto() {
-        // validate the candidates inside the training data; across its conditions when it spans several
-        let conditions: Option<Vec<&str>> = split
-            .train
-            .iter()
-            .chain(&split.validation)
-            .map(|&i| pool[i].condition.as_deref())
-            .collect();
-        presrs_core::selection::train_auto(
-            &train_images,
-            &validation_images,
-            conditions.as_deref(),
-            &args.pipeline.candidates(grid, false)?,
-            args.seed,
-        )
-    } else {
-        train(&train_images, &validation_images, &config)
+    let training = presrs::train::train(&dataset, &options)?;
+    for warning in &training.warnings {
+        stderr_line!("warning: {warning}");
     }
-    .map_err(|err| anyhow::anyhow!("{}: training failed: {err}", args.manifest.display()))?;
-    let kept = model.pca().n_components();
-    if let Some(dims) = args.pipeline.dims
-        && kept < dims
-    {
-        stderr_line!(
-            "warning: --dims {dims}: kept {kept} principal components, the most that {} training images \
-             of {} features allow (at most one fewer than the training images, and no more than the \
-             features)",
-            split.train.len(),
-            model.pca().n_features()
-        );
-    }
+    let model = &training.model;
     if let Some(selection) = model.selection() {
-        writeln!(out, "automatic choice ({}):", selection.method)?;
-        for (i, score) in selection.scores.iter().enumerate() {
-            let mark = if i == selection.chosen { "*" } else { " " };
-            match &score.error {
-                None => writeln!(
-                    out,
-                    "{mark} {:<18} {:<5} {:6.2} % +- {:.2}",
-                    score.features,
-                    score.classifier,
-                    100.0 * score.accuracy.mean,
-                    100.0 * score.accuracy.std
-                )?,
-                Some(err) => writeln!(
-                    out,
-                    "{mark} {:<18} {:<5} failed: {err}",
-                    score.features, score.classifier
-                )?,
-            }
-        }
-        if let Some(chosen) = selection.chosen() {
-            writeln!(
-                out,
-                "chosen: {} + {} (the paper's method: --features fft1d --classifier pwe)",
-                chosen.features, chosen.classifier
-            )?;
-        }
+        print_selection(selection, out)?;
     }
-    let count = |indices: &[usize]| {
-        let mut counts = BTreeMap::new();
-        for &i in indices {
-            *counts.entry(labels[i].to_owned()).or_insert(0) += 1;
-        }
-        counts
-    };
-    let provenance = Provenance {
-        manifest: Some(args.manifest.display().to_string()),
-        manifest_sha256: Some(manifest.sha256.clone()),
-        seed: Some(args.seed),
-        train_condition: args.train_condition.clone(),
-        train_counts: count(&split.train),
-        validation_counts: count(&split.validation),
-        command: Some(std::env::args().collect::<Vec<_>>().join(" ")),
-        created_unix_s: std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .ok()
-            .map(|d| d.as_secs()),
-        dead_sensels: Some(DeadSenselProvenance {
-            corrected: !args.samples.keep_dead_sensels,
-            sensels: loaded.dead_sensels.sensels(),
-            recordings: loaded.dead_sensels.recordings.len(),
-        }),
-    };
-    let mut file = ModelFile::new(model.clone(), provenance);
+    let mut file = training.model_file(
+        &dataset,
+        &options,
+        !args.samples.keep_dead_sensels,
+        Some(std::env::args().collect::<Vec<_>>().join(" ")),
+    );
     if args.online_profile || args.gait_table.is_some() {
-        let mut profile = super::stream::learn_profile(&args.manifest).with_context(|| {
+        let mut profile = learn_online_profile(&args.manifest).with_context(|| {
             format!(
                 "{}: cannot learn the online profile",
                 args.manifest.display()
@@ -215,9 +107,9 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         out,
         "trained {} on {} images ({} training + {} validation) of {} classes: {}",
         model.classifier().kind(),
-        split.train.len() + split.validation.len(),
-        split.train.len(),
-        split.validation.len(),
+        training.n_train() + training.n_validation(),
+        training.n_train(),
+        training.n_validation(),
         model.class_names().len(),
         model.class_names().join(", ")
     )?;
@@ -260,23 +152,35 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The label of every sample; a sample without one is an error naming its manifest line.
-pub fn sample_labels<'s>(
-    manifest: &std::path::Path,
-    samples: &[&'s Sample],
-) -> anyhow::Result<Vec<&'s str>> {
-    samples
-        .iter()
-        .map(|sample| {
-            sample.label.as_deref().ok_or_else(|| {
-                anyhow::anyhow!(
-                    "{} line {}: field `label` is empty; training needs a label for every sample",
-                    manifest.display(),
-                    sample.manifest_line
-                )
-            })
-        })
-        .collect()
+/// The automatic choice's table: every candidate's validation accuracy, the chosen one marked.
+fn print_selection(selection: &Selection, out: &mut dyn Write) -> anyhow::Result<()> {
+    writeln!(out, "automatic choice ({}):", selection.method)?;
+    for (i, score) in selection.scores.iter().enumerate() {
+        let mark = if i == selection.chosen { "*" } else { " " };
+        match &score.error {
+            None => writeln!(
+                out,
+                "{mark} {:<18} {:<5} {:6.2} % +- {:.2}",
+                score.features,
+                score.classifier,
+                100.0 * score.accuracy.mean,
+                100.0 * score.accuracy.std
+            )?,
+            Some(err) => writeln!(
+                out,
+                "{mark} {:<18} {:<5} failed: {err}",
+                score.features, score.classifier
+            )?,
+        }
+    }
+    if let Some(chosen) = selection.chosen() {
+        writeln!(
+            out,
+            "chosen: {} + {} (the paper's method: --features fft1d --classifier pwe)",
+            chosen.features, chosen.classifier
+        )?;
+    }
+    Ok(())
 }
 
 /// The terrain-to-gait table of `--gait-table`: measured with the simulator (`sim`) or given.

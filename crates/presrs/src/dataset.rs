@@ -10,16 +10,18 @@
 //! `None`; [`LoadedSamples::dead_sensels`] says what was filled.
 
 use std::collections::{BTreeMap, HashMap};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sensels};
 use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
-use presrs_core::{Frame, Recording};
+use presrs_core::{Frame, Grid, Recording};
 use rayon::prelude::*;
 
-use crate::error::IoError;
-use crate::manifest::{Manifest, ManifestRow};
-use crate::{ReadOptions, read_recording_with};
+use presrs_io::manifest::{Manifest, ManifestRow, read_manifest};
+use presrs_io::{IoError, Parsed, ReadOptions, read_recording_with};
+
+use crate::error::{Error, Result};
+use crate::progress::Progress;
 
 /// How samples are picked from movies.
 #[derive(Clone, Debug)]
@@ -53,23 +55,23 @@ pub fn read_corrected(
     path: &std::path::Path,
     read: &ReadOptions,
     dead_sensels: Option<&DeadSenselConfig>,
-) -> Result<(crate::Parsed, Vec<DeadSensel>), IoError> {
+) -> std::result::Result<(Parsed, Vec<DeadSensel>), IoError> {
     let parsed = read_recording_with(path, read)?;
     let Some(config) = dead_sensels else {
         return Ok((parsed, Vec::new()));
     };
-    let crate::Parsed {
+    let Parsed {
         recording,
         warnings,
     } = parsed;
     let (recording, filled) = correct_dead_sensels(recording, config).map_err(|err| {
         IoError::format(
-            &crate::error::display_name(path),
+            &presrs_io::error::display_name(path),
             format!("cannot fill dead sensels: {err}"),
         )
     })?;
     Ok((
-        crate::Parsed {
+        Parsed {
             recording,
             warnings,
         },
@@ -159,16 +161,137 @@ pub struct LoadedSamples {
     pub dead_sensels: DeadSenselFills,
 }
 
+/// A data set: a manifest and the samples its files give, stance sampling and dead-sensel correction
+/// done ([`Dataset::load`]).
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    pub manifest: Manifest,
+    /// Every sample, in manifest order (a movie row gives its stances in time order).
+    pub samples: Vec<Sample>,
+    /// What did not stop loading (a movie without a stance, a reader's warning), each naming the file
+    /// and line.
+    pub warnings: Vec<String>,
+    /// The dead sensels filled, by recording.
+    pub dead_sensels: DeadSenselFills,
+}
+
+impl Dataset {
+    /// Reads the manifest at `path` and every file it lists (each once, in parallel). A manifest that
+    /// gives no sample is an error.
+    pub fn load(path: &Path, options: &SampleOptions, progress: &dyn Progress) -> Result<Self> {
+        let manifest = read_manifest(path)?;
+        Self::from_manifest(manifest, options, progress)
+    }
+
+    /// The samples of an already parsed manifest.
+    pub fn from_manifest(
+        manifest: Manifest,
+        options: &SampleOptions,
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        progress.start(&format!("reading {} files", manifest.rows.len()), None);
+        let loaded = load_samples(&manifest, options);
+        progress.finish();
+        let loaded = loaded?;
+        if loaded.samples.is_empty() {
+            return Err(Error::data(format!(
+                "{}: the manifest gives no samples",
+                manifest.source.display()
+            )));
+        }
+        Ok(Self {
+            manifest,
+            samples: loaded.samples,
+            warnings: loaded.warnings,
+            dead_sensels: loaded.dead_sensels,
+        })
+    }
+
+    /// The manifest file.
+    pub fn path(&self) -> &Path {
+        &self.manifest.source
+    }
+
+    /// The image grid of the first sample (readers check that a recording's frames share one).
+    pub fn grid(&self) -> Grid {
+        self.samples[0].frame.grid()
+    }
+
+    /// The samples of `condition` (all of them for `None`); none is an error listing the conditions
+    /// there are.
+    pub fn of_condition(&self, condition: Option<&str>) -> Result<Vec<&Sample>> {
+        let Some(condition) = condition else {
+            return Ok(self.samples.iter().collect());
+        };
+        let pool: Vec<&Sample> = self
+            .samples
+            .iter()
+            .filter(|sample| sample.condition.as_deref() == Some(condition))
+            .collect();
+        if pool.is_empty() {
+            let known = self.conditions();
+            return Err(Error::data(format!(
+                "{}: no sample has condition {condition:?} (conditions present: {})",
+                self.path().display(),
+                if known.is_empty() {
+                    "none".to_owned()
+                } else {
+                    known.join(", ")
+                }
+            )));
+        }
+        Ok(pool)
+    }
+
+    /// The distinct conditions of the samples, sorted.
+    pub fn conditions(&self) -> Vec<&str> {
+        let mut known: Vec<&str> = self
+            .samples
+            .iter()
+            .filter_map(|s| s.condition.as_deref())
+            .collect();
+        known.sort_unstable();
+        known.dedup();
+        known
+    }
+
+    /// An error unless the manifest has a `label` column; `why` says what needs it.
+    pub fn require_labels(&self, why: &str) -> Result<()> {
+        Ok(self.manifest.require_column("label", why)?)
+    }
+}
+
+/// The label of every sample; a sample without one is an error naming its manifest line and `why` a
+/// label is needed ("training needs a label for every sample").
+pub fn sample_labels<'s>(
+    manifest: &Path,
+    samples: &[&'s Sample],
+    why: &str,
+) -> Result<Vec<&'s str>> {
+    samples
+        .iter()
+        .map(|sample| {
+            sample.label.as_deref().ok_or_else(|| {
+                Error::data(format!(
+                    "{} line {}: field `label` is empty; {why}",
+                    manifest.display(),
+                    sample.manifest_line
+                ))
+            })
+        })
+        .collect()
+}
+
 /// Reads every file of `manifest` (each once, in parallel) and picks samples as described in the module
 /// documentation. Errors name the manifest line (and the file's own line for a parse error).
 pub fn load_samples(
     manifest: &Manifest,
     options: &SampleOptions,
-) -> Result<LoadedSamples, IoError> {
+) -> std::result::Result<LoadedSamples, IoError> {
     let mut unique: Vec<&PathBuf> = manifest.rows.iter().map(|row| &row.path).collect();
     unique.sort();
     unique.dedup();
-    type Read = Result<(crate::Parsed, Vec<DeadSensel>), IoError>;
+    type Read = std::result::Result<(Parsed, Vec<DeadSensel>), IoError>;
     let recordings: Vec<(&PathBuf, Read)> = unique
         .par_iter()
         .map(|&path| {
@@ -176,7 +299,7 @@ pub fn load_samples(
             (path, read)
         })
         .collect();
-    let mut by_path: HashMap<&PathBuf, crate::Parsed> = HashMap::with_capacity(recordings.len());
+    let mut by_path: HashMap<&PathBuf, Parsed> = HashMap::with_capacity(recordings.len());
     let mut fills = DeadSenselFills::default();
     for (path, parsed) in recordings {
         let parsed = parsed.map_err(|err| {
@@ -241,7 +364,7 @@ fn row_frames(
     recording: &Recording,
     options: &SampleOptions,
     warnings: &mut Vec<String>,
-) -> Result<Vec<usize>, IoError> {
+) -> std::result::Result<Vec<usize>, IoError> {
     let count = recording.frame_count();
     if let Some(frame) = row.frame {
         if frame >= count {
@@ -281,7 +404,7 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
 
     use super::*;
-    use presrs_core::{Grid, SensorMeta};
+    use presrs_core::SensorMeta;
 
     /// A 10-frame 12 x 12 movie loaded by a smooth dome (radius 4 around (5, 5)) from frame 2 on, with
     /// sensel (5, 4) dead, written as a 3-D NPY with a manifest naming frame 6.
@@ -308,10 +431,10 @@ mod tests {
             SensorMeta::default(),
         )
         .unwrap();
-        crate::npy::write_recording_npy(&rec, &dir.join("walk.npy")).unwrap();
+        presrs_io::npy::write_recording_npy(&rec, &dir.join("walk.npy")).unwrap();
         let path = dir.join("manifest.csv");
         std::fs::write(&path, "path,label,frame\nwalk.npy,wood,6\n").unwrap();
-        crate::manifest::read_manifest(&path).unwrap()
+        presrs_io::manifest::read_manifest(&path).unwrap()
     }
 
     #[test]
@@ -326,7 +449,7 @@ mod tests {
             "path,label,frame,load,subject\nwalk.npy,wood,6,12.5,s1\nwalk.npy,wood,7,,\n",
         )
         .unwrap();
-        let manifest = crate::manifest::read_manifest(&path).unwrap();
+        let manifest = presrs_io::manifest::read_manifest(&path).unwrap();
         let loaded = load_samples(&manifest, &SampleOptions::default()).unwrap();
         let [first, second] = loaded.samples.as_slice() else {
             panic!("{} samples", loaded.samples.len());

@@ -1,0 +1,371 @@
+//! Evaluation protocols on a data set: the set-up (labels, held-out column, draws), a fixed method or
+//! the automatic choice, every method side by side, and accuracy with perturbed test images. Progress
+//! goes to a [`Progress`]; errors name the manifest.
+
+use std::collections::BTreeMap;
+
+use presrs_core::evaluation::{
+    ComparisonRow, EvalReport, EvalSample, Evaluated, Evaluation, Models, Protocol, TestTransform,
+};
+use presrs_core::perturb::Perturbation;
+use presrs_core::split::ValidationSize;
+use presrs_core::{CheckedTrainConfig, CoreError};
+use serde::Serialize;
+
+use crate::dataset::Dataset;
+use crate::error::{Context, Error, Result};
+use crate::method::Method;
+use crate::progress::Progress;
+
+/// Which images train and which test.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Holdout {
+    /// Train on a random draw (from this condition only, when given), test on every other sample: the
+    /// paper's protocol.
+    TrainCondition(Option<String>),
+    /// Hold out each value of this manifest column in turn (`group`, `condition`, `path`, or an extra
+    /// column; not `label`).
+    LeaveOneOut(String),
+}
+
+/// How an evaluation is run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EvalOptions {
+    pub holdout: Holdout,
+    /// Images drawn per class for training + validation (`None`: all available).
+    pub per_class: Option<usize>,
+    pub validation: ValidationSize,
+    /// Repeats with seeds `seed`, `seed + 1`, ...
+    pub repeats: usize,
+    pub seed: u64,
+    pub method: Method,
+}
+
+impl Default for EvalOptions {
+    fn default() -> Self {
+        Self {
+            holdout: Holdout::TrainCondition(None),
+            per_class: None,
+            validation: ValidationSize::Fraction(0.35),
+            repeats: 10,
+            seed: 1,
+            method: Method::default(),
+        }
+    }
+}
+
+/// A data set ready to evaluate: its labelled samples, the protocol, and what the set-up found.
+#[derive(Debug)]
+pub struct EvalSetup<'d> {
+    dataset: &'d Dataset,
+    samples: Vec<EvalSample<'d>>,
+    protocol: Protocol,
+    options: EvalOptions,
+    /// Test labels no training set can hold, by held-out value (`labels_never_trained`).
+    pub never_trained: BTreeMap<String, Vec<String>>,
+    /// What the user should know before the run (labels that cannot be recognised).
+    pub warnings: Vec<String>,
+}
+
+/// The outcome of [`EvalSetup::evaluate`].
+#[derive(Clone, Debug)]
+pub struct EvalOutcome {
+    pub report: EvalReport,
+    /// The automatic choice of every trained model (empty for a fixed method).
+    pub selections: Vec<presrs_core::selection::Selection>,
+    /// What the user should know (fewer principal components than asked).
+    pub warnings: Vec<String>,
+}
+
+/// Accuracy of one method with the test images perturbed.
+#[derive(Clone, Debug, Serialize)]
+pub struct PerturbationRow {
+    /// `KIND=LEVEL`, or `none` for the unperturbed test images.
+    pub perturbation: String,
+    /// `configured` (the method asked for) or `paper` (fft1d + pwe, shown next to an automatic choice).
+    pub method: &'static str,
+    pub accuracy: f64,
+    pub accuracy_std: f64,
+    /// Perturbed test images (summed over repeats) that could not be classified at all, e.g. values
+    /// driven to infinity; each is counted as a wrong answer in `accuracy`.
+    pub unclassified: u64,
+}
+
+impl<'d> EvalSetup<'d> {
+    /// Checks the data set against the options (labels everywhere, the held-out column present and
+    /// filled) and finds the labels that no training set can hold.
+    pub fn new(dataset: &'d Dataset, options: &EvalOptions) -> Result<Self> {
+        let name = dataset.path().display();
+        dataset.require_labels("evaluation needs a label for every sample")?;
+        let column = match &options.holdout {
+            Holdout::LeaveOneOut(column) => Some(column.as_str()),
+            Holdout::TrainCondition(_) => None,
+        };
+        if let Some(column) = column
+            && !dataset.manifest.has_column(column)
+        {
+            return Err(Error::data(format!(
+                "{name}: --leave-one-out {column}: the manifest has no such column (columns: {})",
+                dataset.manifest.columns.join(", ")
+            )));
+        }
+        let mut samples = Vec::with_capacity(dataset.samples.len());
+        for sample in &dataset.samples {
+            let label = sample.label.as_deref().ok_or_else(|| {
+                Error::data(format!(
+                    "{name} line {}: field `label` is empty; evaluation needs a label for every sample",
+                    sample.manifest_line
+                ))
+            })?;
+            let group = match column {
+                Some(column) => Some(sample.column(column).ok_or_else(|| {
+                    Error::data(format!(
+                        "{name} line {}: field `{column}` is empty; --leave-one-out needs a value in \
+                         every row",
+                        sample.manifest_line
+                    ))
+                })?),
+                None => None,
+            };
+            samples.push(EvalSample {
+                frame: sample.frame.view(),
+                label,
+                condition: sample.condition.as_deref(),
+                group,
+            });
+        }
+        let protocol = match &options.holdout {
+            Holdout::LeaveOneOut(column) => Protocol::LeaveOneOut {
+                column: column.clone(),
+                per_class: options.per_class,
+                validation: options.validation,
+            },
+            Holdout::TrainCondition(condition) => Protocol::TrainCondition {
+                condition: condition.clone(),
+                per_class: options.per_class,
+                validation: options.validation,
+            },
+        };
+        let never_trained = presrs_core::evaluation::labels_never_trained(&samples, &protocol);
+        let warnings = never_trained
+            .iter()
+            .map(|(held_out, labels)| {
+                let tested = match column {
+                    Some(column) => format!("with {column} {held_out} held out, its"),
+                    None => "the".to_owned(),
+                };
+                format!(
+                    "{name}: {tested} test images labelled {} cannot be recognised: no training image \
+                     has that label",
+                    labels.join(", ")
+                )
+            })
+            .collect();
+        Ok(Self {
+            dataset,
+            samples,
+            protocol,
+            options: options.clone(),
+            never_trained,
+            warnings,
+        })
+    }
+
+    /// Models trained per repeat: one, or one per held-out value.
+    pub fn folds(&self) -> usize {
+        match &self.protocol {
+            Protocol::LeaveOneOut { .. } => {
+                let mut values: Vec<_> = self.samples.iter().filter_map(|s| s.group).collect();
+                values.sort_unstable();
+                values.dedup();
+                values.len()
+            }
+            Protocol::TrainCondition { .. } => 1,
+        }
+    }
+
+    /// The labelled samples as the evaluation engine sees them.
+    pub fn samples(&self) -> &[EvalSample<'d>] {
+        &self.samples
+    }
+
+    pub fn protocol(&self) -> &Protocol {
+        &self.protocol
+    }
+
+    /// Evaluates the options' method (a fixed one, or the automatic choice in every fold).
+    pub fn evaluate(&self, progress: &dyn Progress) -> Result<EvalOutcome> {
+        let method = &self.options.method;
+        if self.options.validation == ValidationSize::Count(0) {
+            method
+                .check_validation_set(self.options.validation, 0)
+                .with_context(|| format!("{}: cannot evaluate", self.dataset.path().display()))?;
+        }
+        let grid = self.samples[0].frame.grid();
+        let config = method.train_config(grid)?;
+        let candidates = if method.is_auto() {
+            method.candidates(grid, false)?
+        } else {
+            Vec::new()
+        };
+        let models = models(method, &config, &candidates);
+        let Evaluated {
+            reports,
+            selections,
+        } = self.run("training", 1, progress, |evaluation| {
+            evaluation.run_each(models, &[None])
+        })?;
+        let report = reports.into_iter().next().ok_or_else(|| {
+            Error::data(format!(
+                "{}: no evaluation was run",
+                self.dataset.path().display()
+            ))
+        })?;
+        let mut warnings = Vec::new();
+        // (one fold per repeat: with leave-one-out, n_train sums the folds)
+        if let Some(n_train) = report.repeats.iter().map(|r| r.n_train).min()
+            && let Some(dims) = method.dims
+            && self.folds() == 1
+            && dims >= n_train
+        {
+            warnings.push(format!(
+                "--dims {dims}: models trained on {n_train} images keep at most {} principal \
+                 components (one fewer than the training images)",
+                n_train.saturating_sub(1)
+            ));
+        }
+        Ok(EvalOutcome {
+            report,
+            selections,
+            warnings,
+        })
+    }
+
+    /// Every feature family x classifier with the same draws (the method's crop, dims and
+    /// preprocessing).
+    pub fn compare(&self, progress: &dyn Progress) -> Result<Vec<ComparisonRow>> {
+        let configs = self
+            .options
+            .method
+            .candidates(self.samples[0].frame.grid(), true)?;
+        self.run("comparing", configs.len(), progress, |evaluation| {
+            evaluation.compare(&configs)
+        })
+    }
+
+    /// Accuracy with every test image perturbed by each of `perturbations` (the same seeds, so the same
+    /// draws and models as [`evaluate`](Self::evaluate), whose `report` is the unperturbed row); each
+    /// model is trained once and tested under every perturbation. Next to an automatic choice the
+    /// paper's method is evaluated too, so that both degrade side by side.
+    pub fn perturbed(
+        &self,
+        perturbations: &[Perturbation],
+        report: &EvalReport,
+        progress: &dyn Progress,
+    ) -> Result<Vec<PerturbationRow>> {
+        if perturbations.is_empty() {
+            return Ok(Vec::new());
+        }
+        let method = &self.options.method;
+        let grid = self.samples[0].frame.grid();
+        let (config, paper) = (method.train_config(grid)?, method.paper_config(grid)?);
+        let candidates = if method.is_auto() {
+            method.candidates(grid, false)?
+        } else {
+            Vec::new()
+        };
+        let models = models(method, &config, &candidates);
+        let auto = method.is_auto();
+        let transforms: Vec<_> = perturbations.iter().map(Perturbation::transform).collect();
+        let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
+        each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
+        let (configured, paper_reports) = self.run(
+            "perturbing",
+            1 + usize::from(auto),
+            progress,
+            |evaluation| {
+                let configured = evaluation.run_each(models, &each[1..])?.reports;
+                let paper = if auto {
+                    evaluation.run_each(Models::Config(&paper), &each)?.reports
+                } else {
+                    Vec::new()
+                };
+                Ok((configured, paper))
+            },
+        )?;
+        let row = |perturbation: String, method, r: &EvalReport| PerturbationRow {
+            perturbation,
+            method,
+            accuracy: r.overall.mean,
+            accuracy_std: r.overall.std,
+            unclassified: r.unclassified,
+        };
+        let mut rows = vec![row("none".to_owned(), "configured", report)];
+        if let Some(plain) = paper_reports.first() {
+            rows.push(row("none".to_owned(), "paper", plain));
+        }
+        for (k, p) in perturbations.iter().enumerate() {
+            rows.push(row(p.to_string(), "configured", &configured[k]));
+            if let Some(r) = paper_reports.get(k + 1) {
+                rows.push(row(p.to_string(), "paper", r));
+            }
+        }
+        Ok(rows)
+    }
+
+    /// Runs `f` on the engine with progress counted in trained models (`methods` x folds x repeats),
+    /// its errors naming the manifest.
+    fn run<T>(
+        &self,
+        task: &str,
+        methods: usize,
+        progress: &dyn Progress,
+        f: impl FnOnce(&Evaluation<'_, 'd>) -> presrs_core::error::Result<T>,
+    ) -> Result<T> {
+        run_counted(
+            &self.samples,
+            &self.protocol,
+            (self.options.repeats, self.options.seed),
+            (task, (methods * self.folds() * self.options.repeats) as u64),
+            progress,
+            f,
+        )
+        .map_err(|err| Error::data(format!("{}: {err}", self.dataset.path().display())))
+    }
+}
+
+/// The models each fold trains: the configuration, or the automatic choice among `candidates`.
+fn models<'c>(
+    method: &Method,
+    config: &'c CheckedTrainConfig,
+    candidates: &'c [CheckedTrainConfig],
+) -> Models<'c> {
+    if method.is_auto() {
+        Models::Auto(candidates)
+    } else {
+        Models::Config(config)
+    }
+}
+
+/// Runs `f` on an evaluation of `samples` under `protocol` (`repeats`, `seed`), reporting one step of
+/// `task` (announced with `total` steps) per trained model.
+pub fn run_counted<'s, T>(
+    samples: &[EvalSample<'s>],
+    protocol: &Protocol,
+    (repeats, seed): (usize, u64),
+    (task, total): (&str, u64),
+    progress: &dyn Progress,
+    f: impl FnOnce(&Evaluation<'_, 's>) -> std::result::Result<T, CoreError>,
+) -> std::result::Result<T, CoreError> {
+    progress.start(task, Some(total));
+    let evaluation = Evaluation {
+        samples,
+        protocol,
+        repeats,
+        seed,
+        progress: &|| progress.advance(1),
+    };
+    let result = f(&evaluation);
+    progress.finish();
+    result
+}

@@ -1,0 +1,346 @@
+//! What a model is made of: crop, features, principal components, classifier, preprocessing — fixed,
+//! or chosen automatically by validation. The one definition of `auto` and of the paper's method.
+
+use std::str::FromStr;
+
+use presrs_core::classifier::ClassifierKind;
+use presrs_core::features::{FeatureConfig, FeatureKind};
+use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
+use presrs_core::preprocess::Preprocess;
+use presrs_core::split::ValidationSize;
+use presrs_core::{CoreError, Crop, Grid};
+
+use crate::error::{Error, Result};
+
+/// Principal components kept unless told otherwise (the paper's 51).
+pub const DEFAULT_DIMS: usize = 51;
+
+/// The feature families an automatic choice tries by default: the cheap ones (a GLCM image costs 2-3x
+/// an FFT one, and glcm never won on the simulated data).
+pub const FAST_CANDIDATE_FEATURES: [&[FeatureKind]; 3] = [
+    &[FeatureKind::Fft1d],
+    &[FeatureKind::Fft2d],
+    &[FeatureKind::Fft2dPolar],
+];
+
+/// The feature families a full automatic choice or a comparison tries.
+pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
+    &[FeatureKind::Fft1d],
+    &[FeatureKind::Fft2d],
+    &[FeatureKind::Fft2dPolar],
+    &[FeatureKind::Glcm],
+    &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
+];
+
+/// A crop, or `auto`: decided from the image size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CropChoice {
+    /// The paper's crop on a 44 x 44 array, the whole image otherwise.
+    #[default]
+    Auto,
+    Fixed(Crop),
+}
+
+impl CropChoice {
+    /// The crop for images of `grid`: as given, or resolved from `auto`.
+    pub fn resolve(self, grid: Grid) -> Crop {
+        match self {
+            Self::Fixed(crop) => crop,
+            Self::Auto if grid == Grid::new(44, 44) => Crop::PAPER,
+            Self::Auto => Crop::NONE,
+        }
+    }
+}
+
+/// Feature families, or `auto`.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum FeatureChoice {
+    #[default]
+    Auto,
+    Kinds(Vec<FeatureKind>),
+}
+
+/// A classifier family, or `auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ClassifierChoice {
+    #[default]
+    Auto,
+    Kind(ClassifierKind),
+}
+
+/// How a model is built: crop, features, reduction, classifier and preprocessing. The default is the
+/// automatic choice; [`Method::paper`] is the paper's 1-D |FFT| + Parzen window.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Method {
+    pub features: FeatureChoice,
+    pub classifier: ClassifierChoice,
+    /// With `auto`: try every feature family, the slow texture ones too.
+    pub full_search: bool,
+    /// Principal components kept (at most the training images minus one, and the features) [default:
+    /// [`DEFAULT_DIMS`]].
+    pub dims: Option<usize>,
+    pub preprocess: Preprocess,
+    pub crop: CropChoice,
+}
+
+impl Method {
+    /// The paper's method: 1-D |FFT| features, Parzen window, 51 components, the paper's crop on a
+    /// 44 x 44 array.
+    pub fn paper() -> Self {
+        Self {
+            features: FeatureChoice::Kinds(vec![FeatureKind::Fft1d]),
+            classifier: ClassifierChoice::Kind(ClassifierKind::Pwe),
+            ..Self::default()
+        }
+    }
+
+    /// Principal components to keep: as given, or the paper's 51.
+    pub fn dims(&self) -> usize {
+        self.dims.unwrap_or(DEFAULT_DIMS)
+    }
+
+    /// Whether features or classifier are to be chosen automatically.
+    pub fn is_auto(&self) -> bool {
+        self.features == FeatureChoice::Auto || self.classifier == ClassifierChoice::Auto
+    }
+
+    /// The checked training configuration for images of `grid`. An `auto` part is the paper's choice
+    /// here (fft1d, pwe); [`candidates`](Self::candidates) lists what auto tries.
+    pub fn train_config(&self, grid: Grid) -> Result<CheckedTrainConfig> {
+        let features = match &self.features {
+            FeatureChoice::Kinds(kinds) => FeatureConfig::combined(kinds),
+            FeatureChoice::Auto => FeatureKind::Fft1d.default_config(),
+        };
+        let classifier = match self.classifier {
+            ClassifierChoice::Kind(kind) => kind.default_config(),
+            ClassifierChoice::Auto => ClassifierKind::Pwe.default_config(),
+        };
+        self.config(grid, features, classifier)
+    }
+
+    /// The paper's method (1-D |FFT| features, Parzen window) with this method's crop, dims and
+    /// preprocessing: what an automatic choice is shown next to.
+    pub fn paper_config(&self, grid: Grid) -> Result<CheckedTrainConfig> {
+        self.config(
+            grid,
+            FeatureKind::Fft1d.default_config(),
+            ClassifierKind::Pwe.default_config(),
+        )
+    }
+
+    /// Every configuration an automatic choice tries (auto parts run over the candidates — the cheap
+    /// feature families unless `full_search` — fixed parts stay), or, with `all`, every feature x
+    /// classifier combination (for a comparison).
+    pub fn candidates(&self, grid: Grid, all: bool) -> Result<Vec<CheckedTrainConfig>> {
+        let families: &[&[FeatureKind]] = if all || self.full_search {
+            &CANDIDATE_FEATURES
+        } else {
+            &FAST_CANDIDATE_FEATURES
+        };
+        let features: Vec<FeatureConfig> = match &self.features {
+            FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
+            _ => families
+                .iter()
+                .map(|kinds| FeatureConfig::combined(kinds))
+                .collect(),
+        };
+        let classifiers: Vec<ClassifierKind> = match self.classifier {
+            ClassifierChoice::Kind(kind) if !all => vec![kind],
+            _ => ClassifierKind::ALL.to_vec(),
+        };
+        let mut out = Vec::with_capacity(features.len() * classifiers.len());
+        for feature in &features {
+            for &classifier in &classifiers {
+                out.push(self.config(grid, feature.clone(), classifier.default_config())?);
+            }
+        }
+        Ok(out)
+    }
+
+    fn config(
+        &self,
+        grid: Grid,
+        features: FeatureConfig,
+        classifier: presrs_core::classifier::ClassifierConfig,
+    ) -> Result<CheckedTrainConfig> {
+        let config = TrainConfig {
+            crop: self.crop.resolve(grid),
+            features,
+            dims: self.dims(),
+            classifier,
+            preprocess: self.preprocess,
+        };
+        Ok(config.check()?)
+    }
+
+    /// Refuses a draw that leaves no validation images when the classifier needs them: the Parzen
+    /// window (pwe) chooses its sigma on them, and no option fixes sigma; an automatic choice of the
+    /// classifier tries pwe among the others (and would fail only after scoring every candidate).
+    pub fn check_validation_set(
+        &self,
+        validation: ValidationSize,
+        validation_images: usize,
+    ) -> Result<()> {
+        if validation_images > 0 {
+            return Ok(());
+        }
+        let given = match validation {
+            ValidationSize::Count(count) => count.to_string(),
+            ValidationSize::Fraction(fraction) => fraction.to_string(),
+        };
+        let remedy = "give --validation a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) \
+                      with at least 3 images per class";
+        match self.classifier {
+            ClassifierChoice::Kind(ClassifierKind::Pwe) => Err(Error::invalid(format!(
+                "--validation {given} leaves no validation images, and the Parzen window (pwe) \
+                 chooses its sigma on them: {remedy}, or another --classifier"
+            ))),
+            ClassifierChoice::Auto => Err(Error::invalid(format!(
+                "--validation {given} leaves no validation images, and the automatic choice tries \
+                 the Parzen window (pwe), which chooses its sigma on them: {remedy}, or a \
+                 --classifier other than pwe or auto"
+            ))),
+            ClassifierChoice::Kind(_) => Ok(()),
+        }
+    }
+}
+
+/// Feature families joined with `+` or `,` (`fft1d`, `fft2d_polar+glcm`); the error lists the names.
+pub fn parse_feature_kinds(text: &str) -> std::result::Result<Vec<FeatureKind>, String> {
+    text.split(['+', ','])
+        .map(|part| {
+            FeatureKind::parse(part).map_err(|_| {
+                format!(
+                    "unknown feature family {:?} in {text:?}; known: {}, or several joined with + \
+                     (fft1d+glcm)",
+                    part.trim(),
+                    FeatureKind::ALL.map(FeatureKind::as_str).join(", ")
+                )
+            })
+        })
+        .collect()
+}
+
+impl FromStr for FeatureChoice {
+    type Err = String;
+
+    /// `auto`, or families joined with `+`.
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        if text.trim().eq_ignore_ascii_case("auto") {
+            return Ok(Self::Auto);
+        }
+        parse_feature_kinds(text)
+            .map(Self::Kinds)
+            .map_err(|err| err.replacen("; known: ", "; known: auto, ", 1))
+    }
+}
+
+impl FromStr for ClassifierChoice {
+    type Err = String;
+
+    /// `auto`, or a classifier name.
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        if text.trim().eq_ignore_ascii_case("auto") {
+            return Ok(Self::Auto);
+        }
+        ClassifierKind::parse(text).map(Self::Kind).map_err(|_| {
+            format!(
+                "unknown classifier {text:?}; known: auto, {}",
+                ClassifierKind::ALL.map(ClassifierKind::as_str).join(", ")
+            )
+        })
+    }
+}
+
+impl FromStr for CropChoice {
+    type Err = String;
+
+    /// `auto`, or what [`Crop::parse`] reads; an empty value is refused (it is not `none`).
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        const FORMS: &str =
+            "auto, none, paper, margins top,bottom,left,right or a window row0:col0:rows:cols";
+        if text.trim().is_empty() {
+            return Err(format!("the crop is empty; expected {FORMS}"));
+        }
+        if text.trim().eq_ignore_ascii_case("auto") {
+            return Ok(Self::Auto);
+        }
+        Crop::parse(text).map(Self::Fixed).map_err(|err| match err {
+            CoreError::Param { reason, .. } => match reason.split_once("; expected") {
+                Some((why, _)) => format!("{why}; expected {FORMS}"),
+                None => reason,
+            },
+            other => other.to_string(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    #[test]
+    fn auto_tries_the_fast_families_with_every_classifier_and_paper_is_fft1d_pwe() {
+        let grid = Grid::new(44, 44);
+        let auto = Method::default();
+        assert!(auto.is_auto());
+        assert_eq!(
+            auto.candidates(grid, false).unwrap().len(),
+            FAST_CANDIDATE_FEATURES.len() * ClassifierKind::ALL.len()
+        );
+        let full = Method {
+            full_search: true,
+            ..Method::default()
+        };
+        assert_eq!(
+            full.candidates(grid, false).unwrap().len(),
+            CANDIDATE_FEATURES.len() * ClassifierKind::ALL.len()
+        );
+        let paper = Method::paper();
+        assert!(!paper.is_auto());
+        assert_eq!(paper.candidates(grid, false).unwrap().len(), 1);
+        let config = paper.train_config(grid).unwrap();
+        assert_eq!(config, paper.paper_config(grid).unwrap());
+        assert_eq!(config.config().crop, Crop::PAPER);
+        assert_eq!(
+            paper.train_config(Grid::new(20, 30)).unwrap().config().crop,
+            Crop::NONE
+        );
+    }
+
+    #[test]
+    fn choices_parse_and_bad_names_list_the_known_ones() {
+        assert_eq!("AUTO".parse::<FeatureChoice>(), Ok(FeatureChoice::Auto));
+        assert_eq!(
+            "fft1d+glcm".parse::<FeatureChoice>(),
+            Ok(FeatureChoice::Kinds(vec![
+                FeatureKind::Fft1d,
+                FeatureKind::Glcm
+            ]))
+        );
+        let err = "fft3d".parse::<FeatureChoice>().unwrap_err();
+        assert!(err.contains("known: auto, fft1d"), "{err}");
+        let err = "tree".parse::<ClassifierChoice>().unwrap_err();
+        assert!(err.contains("known: auto, pwe"), "{err}");
+        assert!("".parse::<CropChoice>().unwrap_err().contains("empty"));
+        assert_eq!(
+            "paper".parse::<CropChoice>(),
+            Ok(CropChoice::Fixed(Crop::PAPER))
+        );
+    }
+
+    #[test]
+    fn no_validation_images_is_refused_only_where_sigma_needs_them() {
+        let none = ValidationSize::Count(0);
+        assert!(Method::paper().check_validation_set(none, 0).is_err());
+        assert!(Method::default().check_validation_set(none, 0).is_err());
+        let lda = Method {
+            classifier: ClassifierChoice::Kind(ClassifierKind::Lda),
+            ..Method::paper()
+        };
+        assert!(lda.check_validation_set(none, 0).is_ok());
+        assert!(Method::paper().check_validation_set(none, 3).is_ok());
+    }
+}

@@ -1,0 +1,189 @@
+//! Training from a data set: the draw (condition, per class, validation share, seed), a fixed method or
+//! the automatic choice, the model file with its provenance, and the online profile.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use presrs_core::TrainedModel;
+use presrs_core::online::OnlineProfile;
+use presrs_core::pipeline::{LabeledImage, train as train_pipeline};
+use presrs_core::split::{ValidationSize, stratified_split};
+use presrs_core::stance::{ValidSegmentParams, segment};
+use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
+
+use crate::dataset::{Dataset, Sample, sample_labels};
+use crate::error::{Context, Error, Result};
+use crate::method::Method;
+
+/// What to train on and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrainOptions {
+    /// Train only on samples of this condition (the manifest's `condition` column, e.g. a gait).
+    pub condition: Option<String>,
+    /// Random samples drawn per class (`None`: every sample).
+    pub per_class: Option<usize>,
+    /// Of those, how many per class validate the hyper-parameters.
+    pub validation: ValidationSize,
+    /// Seed of the random draw and of the automatic choice's folds.
+    pub seed: u64,
+    pub method: Method,
+}
+
+impl Default for TrainOptions {
+    fn default() -> Self {
+        Self {
+            condition: None,
+            per_class: None,
+            validation: ValidationSize::Fraction(0.35),
+            seed: 1,
+            method: Method::default(),
+        }
+    }
+}
+
+/// A trained model and the draw it was trained on.
+#[derive(Clone, Debug)]
+pub struct Training {
+    pub model: TrainedModel,
+    /// Training and validation images per label.
+    pub train_counts: BTreeMap<String, usize>,
+    pub validation_counts: BTreeMap<String, usize>,
+    /// What the user should know (fewer principal components than asked).
+    pub warnings: Vec<String>,
+}
+
+impl Training {
+    /// Training images (without the validation ones).
+    pub fn n_train(&self) -> usize {
+        self.train_counts.values().sum()
+    }
+
+    /// Validation images.
+    pub fn n_validation(&self) -> usize {
+        self.validation_counts.values().sum()
+    }
+
+    /// The model file: the model with where it came from (`command` is the command line that made it,
+    /// when there is one).
+    pub fn model_file(
+        &self,
+        dataset: &Dataset,
+        options: &TrainOptions,
+        dead_sensels_corrected: bool,
+        command: Option<String>,
+    ) -> ModelFile {
+        let provenance = Provenance {
+            manifest: Some(dataset.path().display().to_string()),
+            manifest_sha256: Some(dataset.manifest.sha256.clone()),
+            seed: Some(options.seed),
+            train_condition: options.condition.clone(),
+            train_counts: self.train_counts.clone(),
+            validation_counts: self.validation_counts.clone(),
+            command,
+            created_unix_s: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .ok()
+                .map(|d| d.as_secs()),
+            dead_sensels: Some(DeadSenselProvenance {
+                corrected: dead_sensels_corrected,
+                sensels: dataset.dead_sensels.sensels(),
+                recordings: dataset.dead_sensels.recordings.len(),
+            }),
+        };
+        ModelFile::new(self.model.clone(), provenance)
+    }
+}
+
+/// Trains on `dataset` as `options` say: a stratified draw from the condition's samples, then the fixed
+/// method, or the automatic choice validated inside the training data (across its conditions when it
+/// spans several).
+pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
+    let name = dataset.path().display().to_string();
+    dataset.require_labels("training needs a label for every sample")?;
+    let pool: Vec<&Sample> = dataset.of_condition(options.condition.as_deref())?;
+    let labels = sample_labels(
+        dataset.path(),
+        &pool,
+        "training needs a label for every sample",
+    )?;
+    let split = stratified_split(&labels, options.per_class, options.validation, options.seed)
+        .with_context(|| format!("{name}: cannot draw the training set"))?;
+    let method = &options.method;
+    method
+        .check_validation_set(options.validation, split.validation.len())
+        .with_context(|| format!("{name}: cannot train"))?;
+    let grid = pool[0].frame.grid();
+    let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
+        indices
+            .iter()
+            .map(|&i| LabeledImage::new(pool[i].frame.view(), labels[i]))
+            .collect()
+    };
+    let (train_images, validation_images) = (images(&split.train), images(&split.validation));
+    let model = if method.is_auto() {
+        let conditions: Option<Vec<&str>> = split
+            .train
+            .iter()
+            .chain(&split.validation)
+            .map(|&i| pool[i].condition.as_deref())
+            .collect();
+        presrs_core::selection::train_auto(
+            &train_images,
+            &validation_images,
+            conditions.as_deref(),
+            &method.candidates(grid, false)?,
+            options.seed,
+        )
+    } else {
+        train_pipeline(
+            &train_images,
+            &validation_images,
+            &method.train_config(grid)?,
+        )
+    }
+    .map_err(|err| Error::data(format!("{name}: training failed: {err}")))?;
+    let mut warnings = Vec::new();
+    let kept = model.pca().n_components();
+    if let Some(dims) = method.dims
+        && kept < dims
+    {
+        warnings.push(format!(
+            "--dims {dims}: kept {kept} principal components, the most that {} training images of {} \
+             features allow (at most one fewer than the training images, and no more than the \
+             features)",
+            split.train.len(),
+            model.pca().n_features()
+        ));
+    }
+    let count = |indices: &[usize]| {
+        let mut counts = BTreeMap::new();
+        for &i in indices {
+            *counts.entry(labels[i].to_owned()).or_insert(0) += 1;
+        }
+        counts
+    };
+    Ok(Training {
+        model,
+        train_counts: count(&split.train),
+        validation_counts: count(&split.validation),
+        warnings,
+    })
+}
+
+/// The online profile (detector calibration and sample frame) learned by segmenting, offline, every
+/// movie a manifest lists.
+pub fn learn_online_profile(manifest: &Path) -> Result<OnlineProfile> {
+    let manifest = presrs_io::manifest::read_manifest(manifest)?;
+    let mut paths: Vec<&Path> = manifest.rows.iter().map(|row| row.path.as_path()).collect();
+    paths.sort();
+    paths.dedup();
+    let params = ValidSegmentParams::default();
+    let mut segmentations = Vec::new();
+    for path in paths {
+        let recording = presrs_io::read_recording(path)?;
+        if recording.frame_count() > 1 {
+            segmentations.push(segment(&recording.total_per_frame(), &params)?);
+        }
+    }
+    Ok(OnlineProfile::learn(&segmentations))
+}
