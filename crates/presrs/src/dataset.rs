@@ -9,7 +9,7 @@
 //! ([`presrs_core::dead_sensels::correct_dead_sensels`]), unless [`SampleOptions::dead_sensels`] is
 //! `None`; [`LoadedSamples::dead_sensels`] says what was filled.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sensels};
@@ -112,42 +112,68 @@ impl DeadSenselFills {
     }
 }
 
-/// One image with everything the manifest says about it.
+/// One image and what is known about it: the one sample type of presrs. Samples of a manifest
+/// ([`Dataset`]) keep their manifest row; samples made otherwise (the simulator's stances) have none.
 #[derive(Clone, Debug)]
 pub struct Sample {
     pub frame: Frame,
-    /// The file it came from and the 0-based frame index in it.
+    /// The terrain (class) name.
+    pub label: Option<String>,
+    /// The operating condition it was recorded in (a gait, a load).
+    pub condition: Option<String>,
+    /// The trial, subject or session it belongs to.
+    pub group: Option<String>,
+    /// Body mass or load, kg, when known.
+    pub load: Option<f64>,
+    /// The file (or trial) it came from, and its 0-based frame index there.
     pub source: PathBuf,
     pub frame_index: usize,
-    /// The manifest line that produced it.
-    pub manifest_line: usize,
-    /// The manifest's `path` field as written (`source` is it resolved).
-    pub path_text: String,
-    pub label: Option<String>,
-    pub condition: Option<String>,
-    pub group: Option<String>,
-    /// The manifest's `frame` field as written (empty when the sample was picked from a stance).
-    pub frame_text: Option<String>,
-    pub load: Option<f64>,
-    /// The manifest's `load` field as written.
-    pub load_text: Option<String>,
-    /// Other manifest columns (for `--leave-one-out COLUMN`).
-    pub extra: BTreeMap<String, String>,
+    /// The manifest row that produced it.
+    pub row: Option<ManifestRow>,
 }
 
 impl Sample {
-    /// The value of a manifest column for this sample, as written in its manifest row (`path`, `label`,
+    /// A sample that no manifest describes.
+    pub fn new(
+        frame: Frame,
+        label: impl Into<String>,
+        source: PathBuf,
+        frame_index: usize,
+    ) -> Self {
+        Self {
+            frame,
+            label: Some(label.into()),
+            condition: None,
+            group: None,
+            load: None,
+            source,
+            frame_index,
+            row: None,
+        }
+    }
+
+    /// The value of a column for this sample, as written in its manifest row (`path`, `label`,
     /// `condition`, `group`, `frame`, `load`, or an extra column); `None` when the field is empty. So
-    /// `--leave-one-out path` holds out one recording at a time.
+    /// `--leave-one-out path` holds out one recording at a time. Without a row: label, condition,
+    /// group and the source's path.
     pub fn column(&self, name: &str) -> Option<&str> {
+        if let Some(row) = &self.row {
+            return row.column(name);
+        }
         match name {
-            "path" => Some(&self.path_text),
+            "path" => self.source.to_str(),
             "label" => self.label.as_deref(),
             "condition" => self.condition.as_deref(),
             "group" => self.group.as_deref(),
-            "frame" => self.frame_text.as_deref(),
-            "load" => self.load_text.as_deref(),
-            _ => self.extra.get(name).map(String::as_str),
+            _ => None,
+        }
+    }
+
+    /// Where it was described, for messages: `manifest.csv line 4`, or the source and frame.
+    pub fn origin(&self, manifest: &Path) -> String {
+        match &self.row {
+            Some(row) => format!("{} line {}", manifest.display(), row.line),
+            None => format!("{} frame {}", self.source.display(), self.frame_index),
         }
     }
 }
@@ -273,9 +299,8 @@ pub fn sample_labels<'s>(
         .map(|sample| {
             sample.label.as_deref().ok_or_else(|| {
                 Error::data(format!(
-                    "{} line {}: field `label` is empty; {why}",
-                    manifest.display(),
-                    sample.manifest_line
+                    "{}: field `label` is empty; {why}",
+                    sample.origin(manifest)
                 ))
             })
         })
@@ -340,17 +365,13 @@ pub fn load_samples(
             };
             loaded.samples.push(Sample {
                 frame: view.to_frame(),
-                source: row.path.clone(),
-                frame_index,
-                manifest_line: row.line,
-                path_text: row.path_text.clone(),
                 label: row.label.clone(),
                 condition: row.condition.clone(),
                 group: row.group.clone(),
-                frame_text: row.frame_text.clone(),
                 load: row.load,
-                load_text: row.load_text.clone(),
-                extra: row.extra.clone(),
+                source: row.path.clone(),
+                frame_index,
+                row: Some(row.clone()),
             });
         }
     }

@@ -22,6 +22,12 @@ pub enum Error {
     /// A figure or the report could not be drawn.
     #[error(transparent)]
     Report(#[from] ReportError),
+    /// The operating system refused a file operation (the context says which file).
+    #[error(transparent)]
+    File(#[from] std::io::Error),
+    /// A JSON document could not be read or written (the context says which).
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
     /// The data do not fit what was asked (no sample, an unknown condition, a missing column); the
     /// message says why and what to try.
     #[error("{0}")]

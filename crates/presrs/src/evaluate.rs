@@ -8,6 +8,7 @@ use presrs_core::evaluation::{
     ComparisonRow, EvalReport, EvalSample, Evaluated, Evaluation, Models, Protocol, TestTransform,
 };
 use presrs_core::perturb::Perturbation;
+use presrs_core::reliability::Reliability;
 use presrs_core::split::ValidationSize;
 use presrs_core::{CheckedTrainConfig, CoreError};
 use serde::Serialize;
@@ -113,16 +114,15 @@ impl<'d> EvalSetup<'d> {
         for sample in &dataset.samples {
             let label = sample.label.as_deref().ok_or_else(|| {
                 Error::data(format!(
-                    "{name} line {}: field `label` is empty; evaluation needs a label for every sample",
-                    sample.manifest_line
+                    "{}: field `label` is empty; evaluation needs a label for every sample",
+                    sample.origin(dataset.path())
                 ))
             })?;
             let group = match column {
                 Some(column) => Some(sample.column(column).ok_or_else(|| {
                     Error::data(format!(
-                        "{name} line {}: field `{column}` is empty; --leave-one-out needs a value in \
-                         every row",
-                        sample.manifest_line
+                        "{}: field `{column}` is empty; --leave-one-out needs a value in every row",
+                        sample.origin(dataset.path())
                     ))
                 })?),
                 None => None,
@@ -368,4 +368,52 @@ pub fn run_counted<'s, T>(
     let result = f(&evaluation);
     progress.finish();
     result
+}
+
+/// The confidences of the tested images against whether they were right (`null` where no image counts).
+#[derive(Clone, Debug, Serialize)]
+pub struct CalibrationJson {
+    pub mean_confidence: Option<f64>,
+    pub mean_confidence_right: Option<f64>,
+    pub mean_confidence_wrong: Option<f64>,
+    /// Count-weighted mean over ten confidence bins of |accuracy - mean confidence| (0: calibrated).
+    pub expected_calibration_error: Option<f64>,
+}
+
+impl CalibrationJson {
+    pub fn new(reliability: &Reliability) -> Self {
+        Self {
+            mean_confidence: reliability.mean_confidence(),
+            mean_confidence_right: reliability.mean_confidence_right(),
+            mean_confidence_wrong: reliability.mean_confidence_wrong(),
+            expected_calibration_error: reliability.expected_calibration_error(),
+        }
+    }
+}
+
+/// One line on how far the confidences can be trusted, or `None` when nothing was classified.
+pub fn calibration_line(reliability: &Reliability) -> Option<String> {
+    let (Some(mean), Some(accuracy), Some(error)) = (
+        reliability.mean_confidence(),
+        reliability.accuracy(),
+        reliability.expected_calibration_error(),
+    ) else {
+        return None;
+    };
+    let side = |value: Option<f64>, what: &str| {
+        value.map_or_else(String::new, |v| format!(", {v:.2} when {what}"))
+    };
+    let verdict = if error < 0.05 {
+        "calibrated"
+    } else if mean < accuracy {
+        "under-confident: right more often than it says"
+    } else {
+        "over-confident: right less often than it says"
+    };
+    Some(format!(
+        "confidence: mean {mean:.2}{}{}; right {:.1} % of the time; calibration error {error:.3} ({verdict})",
+        side(reliability.mean_confidence_right(), "right"),
+        side(reliability.mean_confidence_wrong(), "wrong"),
+        100.0 * accuracy,
+    ))
 }

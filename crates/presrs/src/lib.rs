@@ -5,6 +5,9 @@ pub mod error;
 pub mod evaluate;
 pub mod method;
 pub mod progress;
+pub mod report;
+pub mod reproduce;
+pub mod simulation;
 pub mod train;
 
 pub use dataset::{Dataset, Sample, SampleOptions};
@@ -16,7 +19,5 @@ pub use progress::{Progress, Quiet, Recorder};
 pub use presrs_core as core;
 /// File formats, manifests, model files and the stream protocol.
 pub use presrs_io as io;
-/// Figures and the HTML report.
-pub use presrs_report as report;
 /// The hopper simulator: dynamics, terrain, skin, sensor, tracks.
 pub use presrs_sim as sim;

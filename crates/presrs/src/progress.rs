@@ -15,6 +15,9 @@ pub trait Progress: Sync {
     /// Something the user should know that did not stop the work (a file without stance, a capped
     /// option). Workflows that return a result also keep their warnings in it.
     fn warn(&self, _message: &str) {}
+    /// Something worth saying as it happens that is not a problem (a draw made smaller to fit the
+    /// data, how long a stage took).
+    fn note(&self, _message: &str) {}
 }
 
 /// Progress that shows nothing.
@@ -38,6 +41,7 @@ pub struct RecorderLog {
     /// Steps reported over all tasks.
     pub steps: u64,
     pub warnings: Vec<String>,
+    pub notes: Vec<String>,
 }
 
 impl Recorder {
@@ -65,5 +69,9 @@ impl Progress for Recorder {
 
     fn warn(&self, message: &str) {
         self.lock().warnings.push(message.to_owned());
+    }
+
+    fn note(&self, message: &str) {
+        self.lock().notes.push(message.to_owned());
     }
 }

@@ -214,11 +214,15 @@ fn simulated_fixture(seed: u64) -> anyhow::Result<Fixture> {
     let mut spec = presrs_sim::DatasetSpec::paper(seed);
     spec.hops_per_gait = Some(40);
     let dataset = presrs_sim::simulate_dataset(&presrs_sim::SimConfig::default(), &spec)?;
-    let (samples, _) = super::reproduce::stance_samples(&dataset.trials)?;
+    let (samples, _) = presrs::reproduce::stance_samples(&dataset.trials)?;
     let g2: Vec<usize> = (0..samples.len())
-        .filter(|&i| samples[i].gait == "G2")
+        .filter(|&i| samples[i].condition.as_deref() == Some("G2"))
         .collect();
-    let g2_labels: Vec<&str> = g2.iter().map(|&i| samples[i].terrain.as_str()).collect();
+    let label = |sample: &presrs::Sample| sample.label.clone().unwrap_or_default();
+    let g2_labels: Vec<&str> = g2
+        .iter()
+        .map(|&i| samples[i].label.as_deref().unwrap_or_default())
+        .collect();
     let split = presrs_core::split::stratified_split(
         &g2_labels,
         Some(20),
@@ -230,7 +234,10 @@ fn simulated_fixture(seed: u64) -> anyhow::Result<Fixture> {
             .iter()
             .map(|&k| {
                 let sample = &samples[g2[k]];
-                presrs_core::pipeline::LabeledImage::new(sample.frame.view(), &sample.terrain)
+                presrs_core::pipeline::LabeledImage::new(
+                    sample.frame.view(),
+                    sample.label.as_deref().unwrap_or_default(),
+                )
             })
             .collect()
     };
@@ -243,15 +250,18 @@ fn simulated_fixture(seed: u64) -> anyhow::Result<Fixture> {
         .chain(&split.validation)
         .map(|&k| g2[k])
         .collect();
-    let test: Vec<&super::reproduce::StanceSample> = (0..samples.len())
+    let test: Vec<&presrs::Sample> = (0..samples.len())
         .filter(|i| !trained.contains(i))
         .map(|i| &samples[i])
         .collect();
     Ok(Fixture {
         model,
         frames: test.iter().map(|s| s.frame.clone()).collect(),
-        truth: test.iter().map(|s| s.terrain.clone()).collect(),
-        conditions: test.iter().map(|s| s.gait.clone()).collect(),
+        truth: test.iter().map(|s| label(s)).collect(),
+        conditions: test
+            .iter()
+            .map(|s| s.condition.clone().unwrap_or_default())
+            .collect(),
     })
 }
 

@@ -169,6 +169,16 @@ impl TerminalProgress {
     }
 }
 
+impl TerminalProgress {
+    /// `KIND: message` on stderr, above the bar if one is shown.
+    fn line(&self, kind: &str, message: &str) {
+        match self.bar().as_ref() {
+            Some(bar) => bar.suspend(|| stderr_line!("{kind}: {message}")),
+            None => stderr_line!("{kind}: {message}"),
+        }
+    }
+}
+
 impl Progress for TerminalProgress {
     fn start(&self, task: &str, total: Option<u64>) {
         let bar = match total {
@@ -193,10 +203,11 @@ impl Progress for TerminalProgress {
     }
 
     fn warn(&self, message: &str) {
-        match self.bar().as_ref() {
-            Some(bar) => bar.suspend(|| stderr_line!("warning: {message}")),
-            None => stderr_line!("warning: {message}"),
-        }
+        self.line("warning", message);
+    }
+
+    fn note(&self, message: &str) {
+        self.line("note", message);
     }
 }
 

@@ -4,10 +4,12 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
+use presrs::evaluate::{
+    CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow,
+    calibration_line,
+};
 use presrs::method::{ClassifierChoice, FeatureChoice, Method};
 use presrs_core::evaluation::{ComparisonRow, EvalReport, Protocol};
-use presrs_core::reliability::Reliability;
 use presrs_core::split::ValidationSize;
 use serde::Serialize;
 
@@ -98,54 +100,6 @@ pub struct ConfusionJson {
     pub labels: Vec<String>,
     pub counts: Vec<Vec<u64>>,
     pub row_normalised: Vec<Vec<f64>>,
-}
-
-/// The confidences of the tested images against whether they were right (`null` where no image counts).
-#[derive(Debug, Serialize)]
-pub struct CalibrationJson {
-    pub mean_confidence: Option<f64>,
-    pub mean_confidence_right: Option<f64>,
-    pub mean_confidence_wrong: Option<f64>,
-    /// Count-weighted mean over ten confidence bins of |accuracy - mean confidence| (0: calibrated).
-    pub expected_calibration_error: Option<f64>,
-}
-
-impl CalibrationJson {
-    pub fn new(reliability: &Reliability) -> Self {
-        Self {
-            mean_confidence: reliability.mean_confidence(),
-            mean_confidence_right: reliability.mean_confidence_right(),
-            mean_confidence_wrong: reliability.mean_confidence_wrong(),
-            expected_calibration_error: reliability.expected_calibration_error(),
-        }
-    }
-}
-
-/// One line on how far the confidences can be trusted, or `None` when nothing was classified.
-pub fn calibration_line(reliability: &Reliability) -> Option<String> {
-    let (Some(mean), Some(accuracy), Some(error)) = (
-        reliability.mean_confidence(),
-        reliability.accuracy(),
-        reliability.expected_calibration_error(),
-    ) else {
-        return None;
-    };
-    let side = |value: Option<f64>, what: &str| {
-        value.map_or_else(String::new, |v| format!(", {v:.2} when {what}"))
-    };
-    let verdict = if error < 0.05 {
-        "calibrated"
-    } else if mean < accuracy {
-        "under-confident: right more often than it says"
-    } else {
-        "over-confident: right less often than it says"
-    };
-    Some(format!(
-        "confidence: mean {mean:.2}{}{}; right {:.1} % of the time; calibration error {error:.3} ({verdict})",
-        side(reliability.mean_confidence_right(), "right"),
-        side(reliability.mean_confidence_wrong(), "wrong"),
-        100.0 * accuracy,
-    ))
 }
 
 #[derive(Debug, Serialize)]
@@ -249,12 +203,12 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 .map_or_else(|| "random draw".to_owned(), |c| format!("trained on {c}")),
         };
         let config = options.method.train_config(dataset.grid())?;
-        let path = super::report::write_eval_report(
+        let path = presrs::report::write_eval_report(
             &args.manifest,
             &dataset,
             (&report, &name),
             &config,
-            &args.samples,
+            &args.samples.options(),
             &fault_results(&perturbed, options.method.is_auto()),
             dir,
         )?;
@@ -583,8 +537,8 @@ fn fault_results(rows: &[PerturbationRow], auto: bool) -> Vec<presrs_report::Fau
         .map(|r| presrs_report::FaultResult {
             perturbation: r.perturbation.parse().ok(),
             method: match (r.method, auto) {
-                ("paper", _) => super::report::PAPER_METHOD.to_owned(),
-                (_, true) => super::report::AUTO_METHOD.to_owned(),
+                ("paper", _) => presrs::report::PAPER_METHOD.to_owned(),
+                (_, true) => presrs::report::AUTO_METHOD.to_owned(),
                 _ => "this pipeline".to_owned(),
             },
             accuracy: presrs_core::evaluation::MeanStd {

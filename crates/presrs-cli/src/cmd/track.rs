@@ -314,8 +314,8 @@ pub fn run_track_comparison(
     let track = parse_track(spec)?;
     let sim = Simulator::new(config.clone(), args.seed, Vec::new())?;
     // Gait names are judged with the configuration, before anything runs.
-    if let Err(message) = super::simulate::check_gaits("--start-gait", &args.start_gait, config)
-        .and_then(|()| super::simulate::check_gaits("--fixed-gait", &args.fixed_gait, config))
+    if let Err(message) = presrs::simulation::check_gaits("--start-gait", &args.start_gait, config)
+        .and_then(|()| presrs::simulation::check_gaits("--fixed-gait", &args.fixed_gait, config))
     {
         super::usage::exit_usage("simulate", message);
     }

@@ -203,7 +203,7 @@ fn terrain_gait_table(
         }
         return Ok(table);
     }
-    let config = super::simulate::load_config(args.sim_config.as_deref())?;
+    let config = presrs::simulation::load_config(args.sim_config.as_deref())?;
     let table =
         super::track::measure_gait_table(&config, args.seed, class_names, args.gait_sweep, out)?;
     Ok(table.best)

@@ -1,0 +1,1231 @@
+//! Report assembly: every figure of a data set (and a model, an evaluation, the simulation) in a
+//! folder with an `index.html` that opens offline. [`report_dataset`] is `presrs report`;
+//! [`write_simulation_report`] (a simulated data set and its evaluations) is what `reproduce` writes,
+//! [`write_eval_report`] what `eval --report` writes. The figures themselves are `presrs-report`'s,
+//! re-exported here.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use presrs_core::evaluation::{
+    Confusion, EvalReport, EvalSample, MeanStd, Models, Protocol, RepeatResult,
+};
+use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
+use presrs_core::reliability::Reliability;
+use presrs_core::split::{ValidationSize, stratified_split};
+use presrs_core::stance::{ValidSegmentParams, segment_recording};
+use presrs_core::{Frame, Recording, SensorMeta};
+use presrs_io::model_file::load_model;
+use presrs_io::read_recording_with;
+use presrs_sim::trace::{HopTrace, trace_hops};
+use presrs_sim::{Dataset as SimDataset, SimConfig, VelocityTable};
+
+pub use presrs_report::{
+    Evaluation, FaultResult, Figure, Format, MovieOptions, PressureFigure, PressureGrid,
+    PressureScale, ReportError, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
+    render_rgb, render_svg, save_figure, write_movie,
+};
+
+use crate::dataset::{Dataset, Sample, SampleOptions};
+use crate::error::{Context, Error, Result};
+use crate::evaluate::run_counted;
+use crate::method::Method;
+use crate::progress::Progress;
+
+/// The paper's Table II (trained on G2).
+pub const PAPER_TABLE2: [(&str, f64); 4] = [
+    ("G1", 0.993),
+    ("G2", 0.991),
+    ("G3", 0.986),
+    ("overall", 0.990),
+];
+
+/// The paper's method, as fault results name it.
+pub const PAPER_METHOD: &str = "paper: fft1d + pwe";
+/// The automatic choice of features and classifier, as fault results name it.
+pub const AUTO_METHOD: &str = "automatic choice";
+
+/// What `presrs report` shows and how its model and evaluations are made.
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    /// A trained model to show (crop, PCA, validation curve) and to test on every image. Without it,
+    /// a model is trained on the data set (the paper's protocol) and evaluated with repeats.
+    pub model: Option<PathBuf>,
+    /// Train on this condition (default: G2 when present, else every condition).
+    pub train_condition: Option<String>,
+    /// Images drawn per class for training + validation (fewer if a class has fewer).
+    pub per_class: usize,
+    pub validation: ValidationSize,
+    /// Repeats of the evaluation (0: none).
+    pub repeats: usize,
+    /// Repeats of the sensor-fault sweep (0: none).
+    pub fault_repeats: usize,
+    pub seed: u64,
+    pub method: Method,
+    /// How the data set's samples were taken (the report says which stance frame, and reads movies
+    /// for load curves the same way).
+    pub samples: SampleOptions,
+}
+
+impl Default for ReportOptions {
+    fn default() -> Self {
+        Self {
+            model: None,
+            train_condition: None,
+            per_class: 20,
+            validation: ValidationSize::Count(7),
+            repeats: 5,
+            fault_repeats: 3,
+            seed: 1,
+            method: Method::default(),
+            samples: SampleOptions::default(),
+        }
+    }
+}
+
+/// Writes `out_dir/index.html` and its figures from `inputs`; returns the page's path.
+pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf> {
+    presrs_report::write_report(inputs, out_dir)
+        .with_context(|| format!("cannot write the report in {}", out_dir.display()))
+}
+
+/// Report samples of manifest samples (`label` and `condition` borrowed).
+pub fn report_samples(samples: &[Sample]) -> Vec<ReportSample<'_>> {
+    samples
+        .iter()
+        .map(|s| ReportSample {
+            frame: s.frame.view(),
+            label: s.label.as_deref(),
+            condition: s.condition.as_deref(),
+            source: s.source.display().to_string(),
+            frame_index: s.frame_index,
+        })
+        .collect()
+}
+
+/// The names of `evaluations`' reports: `trained on KEY`.
+// Called by `reproduce` and `eval` once they write reports.
+fn named_evaluations(evaluations: &BTreeMap<String, EvalReport>) -> Vec<Evaluation<'_>> {
+    evaluations
+        .iter()
+        .map(|(key, report)| Evaluation {
+            name: format!("trained on {key}"),
+            report,
+            reference: if key == "G2" {
+                paper_reference(report)
+            } else {
+                BTreeMap::new()
+            },
+        })
+        .collect()
+}
+
+/// Trains the model the report shows: `per_class` images per class of `condition` (all conditions when
+/// `None`), `validation` of them for sigma. Returns the model and a description.
+pub fn train_report_model(
+    samples: &[(&Frame, &str, Option<&str>)],
+    condition: Option<&str>,
+    per_class: usize,
+    validation: ValidationSize,
+    seed: u64,
+    config: &CheckedTrainConfig,
+) -> Result<(TrainedModel, String)> {
+    let pool: Vec<usize> = (0..samples.len())
+        .filter(|&i| condition.is_none_or(|c| samples[i].2 == Some(c)))
+        .collect();
+    let labels: Vec<&str> = pool.iter().map(|&i| samples[i].1).collect();
+    let smallest = labels
+        .iter()
+        .collect::<BTreeSet<_>>()
+        .iter()
+        .map(|l| labels.iter().filter(|x| x == l).count())
+        .min()
+        .unwrap_or(0);
+    let (per_class, validation) = shrink_draw(smallest, per_class, validation);
+    let split = stratified_split(&labels, Some(per_class), validation, seed)?;
+    let image = |&k: &usize| {
+        let (frame, label, _) = samples[pool[k]];
+        LabeledImage::new(frame.view(), label)
+    };
+    let train_images: Vec<_> = split.train.iter().map(image).collect();
+    let validation_images: Vec<_> = split.validation.iter().map(image).collect();
+    let model = train(&train_images, &validation_images, config)?;
+    let note = format!(
+        "Trained for this report on {}: {} training + {} validation images (seed {seed}).",
+        condition.map_or_else(|| "all conditions".to_owned(), |c| format!("condition {c}")),
+        train_images.len(),
+        validation_images.len()
+    );
+    Ok((model, note))
+}
+
+/// The draw per class when the smallest class has `smallest` images and `per_class` (with `validation`
+/// of them) were asked for: as asked when every class has enough; else `smallest` per class, with a
+/// count for validation turned into the same fraction of `per_class` (7 of 20 -> 0.35 of what is
+/// drawn), so that the draw shrinks as a whole. A fraction stays. (`per_class: usize::MAX` is "every
+/// image": a count then stays a count.)
+pub fn shrink_draw(
+    smallest: usize,
+    per_class: usize,
+    validation: ValidationSize,
+) -> (usize, ValidationSize) {
+    if smallest >= per_class {
+        return (per_class, validation);
+    }
+    let validation = match validation {
+        ValidationSize::Count(count)
+            if count > 0 && count < per_class && per_class != usize::MAX =>
+        {
+            ValidationSize::Fraction(count as f64 / per_class as f64)
+        }
+        other => other,
+    };
+    (smallest, validation)
+}
+
+/// What the report of a simulated data set takes from it: the mid-stance frame of every complete stance
+/// (with its terrain, gait, trial and frame index), the first 3 s of one recording per terrain at the
+/// training gait, the velocity table and the sensor. A few MB where the data set's movies are hundreds:
+/// `reproduce` keeps this and drops the movies before it simulates the heavier hopper.
+#[derive(Debug)]
+pub struct SimulationReportData {
+    frames: Vec<(Frame, String, String, String, usize)>,
+    train_gait: Option<String>,
+    recordings: Vec<(String, Recording)>,
+    table: VelocityTable,
+    sensor: Option<SensorMeta>,
+    segment: ValidSegmentParams,
+}
+
+impl SimulationReportData {
+    pub fn from_dataset(dataset: &SimDataset) -> Result<Self> {
+        let segment = ValidSegmentParams::default();
+        let mut frames = Vec::new();
+        for trial in &dataset.trials {
+            let segmentation = segment_recording(&trial.recording, &segment)?;
+            for stance in segmentation.complete() {
+                if let Some(frame) = trial.recording.frame(stance.mid_frame()) {
+                    frames.push((
+                        frame.to_frame(),
+                        trial.plan.terrain.clone(),
+                        trial.plan.gait.name.clone(),
+                        trial.plan.name(),
+                        stance.mid_frame(),
+                    ));
+                }
+            }
+        }
+        let gaits: BTreeSet<&str> = frames.iter().map(|f| f.2.as_str()).collect();
+        let train_gait = if gaits.contains("G2") {
+            Some("G2")
+        } else {
+            gaits.first().copied()
+        }
+        .map(str::to_owned);
+        // One recording per terrain, at the training gait.
+        let mut seen = BTreeSet::new();
+        let recordings = dataset
+            .trials
+            .iter()
+            .filter(|t| train_gait.as_ref().is_none_or(|g| &t.plan.gait.name == g))
+            .filter(|t| seen.insert(t.plan.terrain.clone()))
+            .map(|t| {
+                let name = format!("{} (first 3 s)", t.plan.name());
+                first_seconds(&t.recording, 3.0).map(|clipped| (name, clipped))
+            })
+            .collect::<Result<_>>()?;
+        Ok(Self {
+            frames,
+            train_gait,
+            recordings,
+            table: dataset.velocity_table(),
+            sensor: dataset.trials.first().map(|t| t.recording.meta.clone()),
+            segment,
+        })
+    }
+}
+
+/// The report of a simulated data set (from [`SimulationReportData::from_dataset`]), as `presrs
+/// reproduce` writes it: `evaluations` are keyed by training gait (the paper's Table II is shown next to
+/// `G2`). Trains one model on G2 (13 + 7 images per terrain, `seed`) for the PCA and validation-curve
+/// figures and traces four hops on wood and grass.
+pub fn write_simulation_report(
+    data: &SimulationReportData,
+    config: &SimConfig,
+    evaluations: &BTreeMap<String, EvalReport>,
+    seed: u64,
+    out_dir: &Path,
+) -> Result<PathBuf> {
+    let frames = &data.frames;
+    let samples: Vec<ReportSample<'_>> = frames
+        .iter()
+        .map(|(frame, terrain, gait, name, index)| ReportSample {
+            frame: frame.view(),
+            label: Some(terrain),
+            condition: Some(gait),
+            source: name.clone(),
+            frame_index: *index,
+        })
+        .collect();
+    let train_gait = data.train_gait.as_deref();
+    let train_config = presrs_core::pipeline::TrainConfig::default().check()?;
+    let triples: Vec<(&Frame, &str, Option<&str>)> = frames
+        .iter()
+        .map(|f| (&f.0, f.1.as_str(), Some(f.2.as_str())))
+        .collect();
+    let model = train_report_model(
+        &triples,
+        train_gait,
+        20,
+        ValidationSize::Count(7),
+        seed,
+        &train_config,
+    )
+    .ok();
+    let recordings: Vec<ReportRecording<'_>> = data
+        .recordings
+        .iter()
+        .map(|(name, recording)| ReportRecording {
+            name: name.clone(),
+            recording,
+        })
+        .collect();
+    let table = &data.table;
+    let traces = simulation_traces(config, table, train_gait.unwrap_or("G2"));
+    let mut inputs = ReportInputs::new(
+        "presrs reproduce: the paper's experiment on the simulator",
+        &samples,
+    );
+    inputs.notes = vec![format!(
+        "Simulated hopper on {} terrains x {} gaits, seed {seed}: the mid-stance frame of every \
+         complete stance the segmentation found.",
+        table.terrains.len(),
+        table.gaits.len()
+    )];
+    inputs.sensor = data.sensor.as_ref();
+    inputs.model_note = model.as_ref().map(|m| m.1.clone());
+    inputs.model = model.as_ref().map(|m| &m.0);
+    inputs.evaluations = named_evaluations(evaluations);
+    inputs.recordings = recordings;
+    inputs.segment = data.segment.clone();
+    inputs.simulation = Some(SimulationInputs {
+        velocity: table,
+        traces: &traces,
+    });
+    write_report(&inputs, out_dir)
+}
+
+/// Four hops on the slowest and the fastest terrain of `table` at `gait` (nothing if tracing fails).
+fn simulation_traces(config: &SimConfig, table: &VelocityTable, gait: &str) -> Vec<HopTrace> {
+    let mut terrains: Vec<&str> = Vec::new();
+    for preferred in ["wood", "grass"] {
+        if table.terrains.iter().any(|t| t == preferred) {
+            terrains.push(preferred);
+        }
+    }
+    if terrains.is_empty() {
+        terrains.extend(table.terrains.first().map(String::as_str));
+    }
+    terrains
+        .into_iter()
+        .filter_map(|t| trace_hops(config, t, gait, 4, 1e-3).ok())
+        .collect()
+}
+
+/// The first `seconds` of a recording (all of it when shorter or without a frame period).
+fn first_seconds(recording: &Recording, seconds: f64) -> Result<Recording> {
+    let keep = recording
+        .frame_period_s()
+        .map_or(recording.frame_count(), |p| (seconds / p).ceil() as usize)
+        .clamp(1, recording.frame_count().max(1));
+    if keep >= recording.frame_count() {
+        return Ok(recording.clone());
+    }
+    let len = recording.grid().len() * keep;
+    Ok(Recording::new(
+        recording.grid(),
+        recording.frame_period_s(),
+        recording.data()[..len].to_vec(),
+        recording.present().map(<[bool]>::to_vec),
+        recording.meta.clone(),
+    )?)
+}
+
+/// The report of `presrs eval`: the manifest's samples, the evaluation (named `evaluation_name`), a
+/// model trained like one repeat of it (for the PCA and validation-curve figures) and the load curves of
+/// up to four movies; with `faults` (from `--perturb`), accuracy against fault level.
+// Called by `reproduce` and `eval` once they write reports.
+pub fn write_eval_report(
+    manifest_path: &Path,
+    loaded: &Dataset,
+    (report, evaluation_name): (&EvalReport, &str),
+    config: &CheckedTrainConfig,
+    sample_options: &SampleOptions,
+    faults: &[FaultResult],
+    out_dir: &Path,
+) -> Result<PathBuf> {
+    let (condition, per_class, validation) = match &report.protocol {
+        Protocol::TrainCondition {
+            condition,
+            per_class,
+            validation,
+        } => (condition.clone(), *per_class, *validation),
+        Protocol::LeaveOneOut {
+            per_class,
+            validation,
+            ..
+        } => (None, *per_class, *validation),
+    };
+    let seed = report.repeats.first().map_or(1, |r| r.seed);
+    let model = labelled(&loaded.samples).and_then(|triples| {
+        train_report_model(
+            &triples,
+            condition.as_deref(),
+            per_class.unwrap_or(usize::MAX),
+            validation,
+            seed,
+            config,
+        )
+        .ok()
+    });
+    let evaluations = vec![Evaluation {
+        name: evaluation_name.to_owned(),
+        report,
+        reference: BTreeMap::new(),
+    }];
+    let fault_note = format!(
+        "{evaluation_name}, {} repeat(s) with the evaluation's draws.",
+        report.repeats.len()
+    );
+    write_manifest_report(
+        manifest_path,
+        loaded,
+        model.as_ref().map(|(m, note)| (m, note.clone())),
+        evaluations,
+        sample_options,
+        (faults, fault_note),
+        out_dir,
+    )
+}
+
+/// `(frame, label, condition)` of every sample, when all have a label.
+fn labelled(samples: &[Sample]) -> Option<Vec<(&Frame, &str, Option<&str>)>> {
+    samples
+        .iter()
+        .map(|s| Some((&s.frame, s.label.as_deref()?, s.condition.as_deref())))
+        .collect()
+}
+
+/// The sensor metadata of the manifest's first file and up to four movies (one per label) for load
+/// curves.
+fn manifest_recordings(
+    loaded: &Dataset,
+    sample_options: &SampleOptions,
+    preferred_condition: Option<&str>,
+) -> (Option<SensorMeta>, Vec<(String, Recording)>) {
+    let read = sample_options.read.clone();
+    let mut sources: Vec<(&Path, Option<&str>, Option<&str>)> = Vec::new();
+    let mut seen = BTreeSet::new();
+    for s in &loaded.samples {
+        if seen.insert(s.source.as_path()) {
+            sources.push((
+                s.source.as_path(),
+                s.label.as_deref(),
+                s.condition.as_deref(),
+            ));
+        }
+    }
+    let meta = sources
+        .first()
+        .and_then(|(path, ..)| read_recording_with(path, &read).ok())
+        .map(|p| p.recording.meta);
+    let mut labels_done = BTreeSet::new();
+    let mut movies = Vec::new();
+    let preferred: Vec<_> = sources
+        .iter()
+        .filter(|s| preferred_condition.is_none_or(|c| s.2 == Some(c)))
+        .chain(sources.iter())
+        .collect();
+    for &&(path, label, condition) in &preferred {
+        if movies.len() >= 4 {
+            break;
+        }
+        if labels_done.contains(&label) {
+            continue;
+        }
+        let Ok(parsed) = read_recording_with(path, &read) else {
+            continue;
+        };
+        if parsed.recording.frame_count() < 10 {
+            continue;
+        }
+        labels_done.insert(label);
+        let name = format!(
+            "{}{}{}",
+            path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            ),
+            label.map_or(String::new(), |l| format!(" · {l}")),
+            condition.map_or(String::new(), |c| format!(" · {c}")),
+        );
+        let recording = first_seconds(&parsed.recording, 3.0).unwrap_or(parsed.recording);
+        movies.push((name, recording));
+    }
+    (meta, movies)
+}
+
+/// Whether `manifest` sits in a `presrs simulate` output folder.
+fn is_simulate_output(manifest: &Path) -> bool {
+    manifest
+        .parent()
+        .is_some_and(|dir| dir.join("table1.csv").is_file() && dir.join("config.json").is_file())
+}
+
+/// Velocity table and config of a `presrs simulate` folder (its `table1.csv` and `config.json`).
+fn simulate_outputs(dir: &Path) -> Option<(VelocityTable, SimConfig)> {
+    let table_text = std::fs::read_to_string(dir.join("table1.csv")).ok()?;
+    let config =
+        SimConfig::from_json(&std::fs::read_to_string(dir.join("config.json")).ok()?).ok()?;
+    let mut rows: Vec<(String, String, f64, usize)> = Vec::new();
+    for line in table_text.lines().skip(1) {
+        let fields: Vec<&str> = line.split(',').collect();
+        if let [gait, terrain, velocity, _, hops, ..] = fields[..] {
+            rows.push((
+                gait.to_owned(),
+                terrain.to_owned(),
+                velocity.parse().ok()?,
+                hops.parse().ok()?,
+            ));
+        }
+    }
+    let mut gaits: Vec<String> = Vec::new();
+    let mut terrains: Vec<String> = Vec::new();
+    for (g, t, ..) in &rows {
+        if !gaits.contains(g) {
+            gaits.push(g.clone());
+        }
+        if !terrains.contains(t) {
+            terrains.push(t.clone());
+        }
+    }
+    let mut velocity = vec![vec![f64::NAN; terrains.len()]; gaits.len()];
+    let mut hops = vec![vec![0; terrains.len()]; gaits.len()];
+    for (g, t, v, n) in &rows {
+        let gi = gaits.iter().position(|x| x == g)?;
+        let ti = terrains.iter().position(|x| x == t)?;
+        velocity[gi][ti] = *v;
+        hops[gi][ti] = *n;
+    }
+    Some((
+        VelocityTable {
+            gaits,
+            terrains,
+            velocity_m_per_s: velocity,
+            hops,
+        },
+        config,
+    ))
+}
+
+fn write_manifest_report(
+    manifest_path: &Path,
+    loaded: &Dataset,
+    model: Option<(&TrainedModel, String)>,
+    evaluations: Vec<Evaluation<'_>>,
+    sample_options: &SampleOptions,
+    (faults, fault_note): (&[FaultResult], String),
+    out_dir: &Path,
+) -> Result<PathBuf> {
+    let samples = report_samples(&loaded.samples);
+    let conditions: BTreeSet<&str> = loaded
+        .samples
+        .iter()
+        .filter_map(|s| s.condition.as_deref())
+        .collect();
+    let preferred = if conditions.contains("G2") {
+        Some("G2")
+    } else {
+        conditions.first().copied()
+    };
+    let (meta, movies) = manifest_recordings(loaded, sample_options, preferred);
+    let simulated = manifest_path.parent().and_then(|dir| {
+        simulate_outputs(if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        })
+    });
+    let traces = simulated
+        .as_ref()
+        .map(|(table, config)| simulation_traces(config, table, preferred.unwrap_or("G2")))
+        .unwrap_or_default();
+    let title = format!("presrs report: {}", manifest_path.display());
+    let mut inputs = ReportInputs::new(title, &samples);
+    inputs.notes = vec![format!(
+        "{} images from {} ({} stance frame of each complete stance of a movie).",
+        samples.len(),
+        manifest_path.display(),
+        sample_options.sample
+    )];
+    inputs.sensor = meta.as_ref();
+    inputs.model = model.as_ref().map(|m| m.0);
+    inputs.model_note = model.map(|m| m.1);
+    inputs.evaluations = evaluations;
+    inputs.recordings = movies
+        .iter()
+        .map(|(name, recording)| ReportRecording {
+            name: name.clone(),
+            recording,
+        })
+        .collect();
+    inputs.sample_frame = sample_options.sample;
+    inputs.simulation = simulated.as_ref().map(|(table, _)| SimulationInputs {
+        velocity: table,
+        traces: &traces,
+    });
+    inputs.faults = faults.to_vec();
+    inputs.fault_note = Some(fault_note);
+    write_report(&inputs, out_dir)
+}
+
+/// Tests `model` on every sample (one "repeat"): its confusion matrix and accuracy per condition.
+fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> Result<EvalReport> {
+    let frames: Vec<_> = samples.iter().map(|s| s.frame.view()).collect();
+    let started = Instant::now();
+    let results = model.classify_batch(&frames);
+    let elapsed = started.elapsed();
+    let labels: Vec<String> = model.class_names().to_vec();
+    let mut counts = vec![vec![0u64; labels.len()]; labels.len()];
+    let mut by_condition: BTreeMap<String, (u64, u64)> = BTreeMap::new();
+    let (mut correct, mut total) = (0u64, 0u64);
+    let mut reliability = Reliability::default();
+    for (sample, result) in samples.iter().zip(results) {
+        let prediction = result?;
+        let predicted = prediction.class;
+        let Some(truth) = sample
+            .label
+            .as_deref()
+            .and_then(|l| labels.iter().position(|x| x == l))
+        else {
+            continue;
+        };
+        counts[truth][predicted] += 1;
+        reliability.add(prediction.confidence, truth == predicted);
+        let hit = u64::from(truth == predicted);
+        let entry = by_condition
+            .entry(sample.condition.clone().unwrap_or_else(|| "all".to_owned()))
+            .or_default();
+        entry.0 += hit;
+        entry.1 += 1;
+        correct += hit;
+        total += 1;
+    }
+    if total == 0 {
+        return Err(Error::data(format!(
+            "no sample has a label the model knows ({})",
+            labels.join(", ")
+        )));
+    }
+    let ratio = |c: u64, t: u64| c as f64 / t.max(1) as f64;
+    let per_condition: BTreeMap<String, f64> = by_condition
+        .iter()
+        .map(|(k, &(c, t))| (k.clone(), ratio(c, t)))
+        .collect();
+    Ok(EvalReport {
+        protocol: Protocol::TrainCondition {
+            condition: None,
+            per_class: None,
+            validation: ValidationSize::default(),
+        },
+        repeats: vec![RepeatResult {
+            seed: 0,
+            overall_accuracy: ratio(correct, total),
+            per_condition: per_condition.clone(),
+            sigmas: model.sigma().into_iter().collect(),
+            n_train: 0,
+            n_validation: 0,
+            n_test: total as usize,
+            train_seconds: 0.0,
+        }],
+        overall: MeanStd::of(&[ratio(correct, total)]),
+        per_condition: per_condition
+            .iter()
+            .map(|(k, &v)| (k.clone(), MeanStd::of(&[v])))
+            .collect(),
+        confusion: Confusion { labels, counts },
+        median_classify_ns: (elapsed.as_nanos() / samples.len().max(1) as u128) as u64,
+        unclassified: 0,
+        reliability,
+    })
+}
+
+/// `presrs report`: the report of a data set in `out_dir` (`index.html` and its figures), with a
+/// model (given, or trained on it), its evaluations and the sensor-fault sweep as `options` say.
+/// Returns the page's path.
+pub fn report_dataset(
+    dataset: &Dataset,
+    options: &ReportOptions,
+    out_dir: &Path,
+    progress: &dyn Progress,
+) -> Result<PathBuf> {
+    let name = dataset.path().display();
+    let loaded = dataset;
+    let conditions: BTreeSet<&str> = loaded
+        .samples
+        .iter()
+        .filter_map(|s| s.condition.as_deref())
+        .collect();
+    let train_condition = options
+        .train_condition
+        .clone()
+        .or_else(|| conditions.contains("G2").then(|| "G2".to_owned()));
+    if let Some(c) = &train_condition
+        && !conditions.contains(c.as_str())
+    {
+        return Err(Error::data(format!(
+            "{name}: --train-condition {c}: no sample has that condition (conditions: {})",
+            conditions.iter().copied().collect::<Vec<_>>().join(", ")
+        )));
+    }
+    let grid = loaded.samples[0].frame.grid();
+    let config = options.method.train_config(grid)?;
+    let triples = labelled(&loaded.samples);
+    let mut reports: Vec<(String, EvalReport)> = Vec::new();
+    let model: Option<(TrainedModel, String)> = match (&options.model, &triples) {
+        (Some(path), _) => {
+            let file = load_model(path)?;
+            if triples.is_some() {
+                let report = model_on_samples(&file.model, &loaded.samples)?;
+                reports.push((format!("model {} on every image", path.display()), report));
+            }
+            Some((file.model, format!("Loaded from {}.", path.display())))
+        }
+        (None, Some(triples)) => {
+            let condition = train_condition.as_deref();
+            let model = report_model(triples, condition, options, &config, progress)
+                .with_context(|| format!("{name}: cannot train the report's model"))?;
+            if options.repeats > 0 {
+                let report = report_evaluation(triples, condition, options, &config, progress)
+                    .map_err(|err| {
+                        Error::data(format!(
+                            "{name}: cannot evaluate the model for the report (--repeats 0 leaves \
+                             the evaluation out): {err}"
+                        ))
+                    })?;
+                let title = format!("trained on {}", condition.unwrap_or("all conditions"));
+                reports.push((title, report));
+            }
+            Some(model)
+        }
+        (None, None) => None,
+    };
+    let (faults, fault_note) = match &triples {
+        Some(triples) if options.fault_repeats > 0 => fault_sweep(
+            options,
+            triples,
+            train_condition.as_deref(),
+            &config,
+            progress,
+        )
+        .map_err(|err| Error::data(format!("{name}: fault sweep: {err}")))?,
+        _ => (Vec::new(), String::new()),
+    };
+    let evaluations: Vec<Evaluation<'_>> = reports
+        .iter()
+        .map(|(title, report)| Evaluation {
+            name: title.clone(),
+            report,
+            // The paper's Table II only next to the paper's experiment (a `presrs simulate` folder).
+            reference: if title == "trained on G2" && is_simulate_output(dataset.path()) {
+                paper_reference(report)
+            } else {
+                BTreeMap::new()
+            },
+        })
+        .collect();
+    write_manifest_report(
+        dataset.path(),
+        loaded,
+        model.as_ref().map(|(m, note)| (m, note.clone())),
+        evaluations,
+        &options.samples,
+        (&faults, fault_note),
+        out_dir,
+    )
+}
+
+/// The paper's Table II values for the conditions `report` tested (and overall).
+fn paper_reference(report: &EvalReport) -> BTreeMap<String, f64> {
+    PAPER_TABLE2
+        .iter()
+        .filter(|(c, _)| *c == "overall" || report.per_condition.contains_key(*c))
+        .map(|(c, v)| ((*c).to_owned(), *v))
+        .collect()
+}
+
+/// The model the report shows, trained on `condition` with the options' draw (shrunk, with a note,
+/// when a class has fewer images).
+fn report_model(
+    triples: &[(&Frame, &str, Option<&str>)],
+    condition: Option<&str>,
+    options: &ReportOptions,
+    config: &CheckedTrainConfig,
+    progress: &dyn Progress,
+) -> Result<(TrainedModel, String)> {
+    let smallest = smallest_class(&eval_samples(triples), condition);
+    if smallest < options.per_class {
+        let (per_class, validation) = shrink_draw(smallest, options.per_class, options.validation);
+        progress.note(&format!(
+            "a class has only {smallest} image(s){}, fewer than --per-class {}: drawing {per_class} \
+             per class, {} of them for validation",
+            condition.map_or_else(String::new, |c| format!(" of condition {c}")),
+            options.per_class,
+            match validation {
+                ValidationSize::Count(count) => count.to_string(),
+                ValidationSize::Fraction(f) => format!("a fraction {f}"),
+            }
+        ));
+    }
+    train_report_model(
+        triples,
+        condition,
+        options.per_class,
+        options.validation,
+        options.seed,
+        config,
+    )
+}
+
+/// The report's evaluation: the paper's protocol on `condition`, with the report's draw.
+fn report_evaluation(
+    triples: &[(&Frame, &str, Option<&str>)],
+    condition: Option<&str>,
+    options: &ReportOptions,
+    config: &CheckedTrainConfig,
+    progress: &dyn Progress,
+) -> std::result::Result<EvalReport, presrs_core::CoreError> {
+    let eval_samples = eval_samples(triples);
+    let (per_class, validation, held_out) = evaluation_draw(
+        &eval_samples,
+        condition,
+        options.per_class,
+        options.validation,
+    );
+    if held_out {
+        progress.note(&format!(
+            "the evaluations draw {per_class} image(s) per class for training + validation and test \
+             on the rest (every condition trains, and a class has too few images to draw --per-class \
+             {} and keep some)",
+            options.per_class
+        ));
+    }
+    let protocol = Protocol::TrainCondition {
+        condition: condition.map(str::to_owned),
+        per_class: Some(per_class),
+        validation,
+    };
+    run_counted(
+        &eval_samples,
+        &protocol,
+        (options.repeats, options.seed),
+        ("evaluating", options.repeats as u64),
+        progress,
+        |evaluation| evaluation.run(Models::Config(config)),
+    )
+}
+
+/// How many images per class the report's evaluations draw for training + validation: `per_class`, or
+/// [`shrink_draw`]'s fewer when a class has fewer; and when `condition` covers every sample (`None`, or
+/// the only condition) and the smallest class would be drawn whole, two thirds of it, so that every class
+/// keeps images to test on (true in the third place then).
+fn evaluation_draw(
+    samples: &[EvalSample<'_>],
+    condition: Option<&str>,
+    per_class: usize,
+    validation: ValidationSize,
+) -> (usize, ValidationSize, bool) {
+    let smallest = smallest_class(samples, condition);
+    let covers_every_sample = condition.is_none_or(|c| {
+        samples
+            .iter()
+            .all(|s| s.condition.is_none_or(|own| own == c))
+    });
+    if covers_every_sample && smallest <= per_class {
+        let draw = smallest - smallest.div_ceil(3);
+        let (draw, validation) = shrink_draw(draw, per_class, validation);
+        (draw, validation, true)
+    } else {
+        let (draw, validation) = shrink_draw(smallest, per_class, validation);
+        (draw, validation, false)
+    }
+}
+
+/// The number of images of the smallest class among `samples` of `condition` (all when `None`).
+fn smallest_class(samples: &[EvalSample<'_>], condition: Option<&str>) -> usize {
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for s in samples
+        .iter()
+        .filter(|s| condition.is_none_or(|c| s.condition == Some(c)))
+    {
+        *counts.entry(s.label).or_default() += 1;
+    }
+    counts.values().copied().min().unwrap_or(0)
+}
+
+/// Evaluation samples (no group) of labelled frames.
+fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<EvalSample<'a>> {
+    triples
+        .iter()
+        .map(|&(frame, label, condition)| EvalSample {
+            frame: frame.view(),
+            label,
+            condition,
+            group: None,
+        })
+        .collect()
+}
+
+/// `presrs report`'s sensor-fault sweep: the paper's protocol (trained on `condition`, `per_class`
+/// images per class or fewer when a class has fewer) with every test image perturbed at each level of
+/// [`Perturbation::default_sweep`](presrs_core::perturb::Perturbation::default_sweep), for the configured
+/// pipeline `config`, or with auto options for the paper's method (whatever the fixed part says) and the
+/// automatic choice; each model is trained once per repeat and tested under every perturbation. Also
+/// returns a note on how it was run.
+pub fn fault_sweep(
+    options: &ReportOptions,
+    triples: &[(&Frame, &str, Option<&str>)],
+    condition: Option<&str>,
+    config: &CheckedTrainConfig,
+    progress: &dyn Progress,
+) -> std::result::Result<(Vec<FaultResult>, String), presrs_core::CoreError> {
+    use presrs_core::evaluation::TestTransform;
+    use presrs_core::perturb::Perturbation;
+    let started = Instant::now();
+    let samples = eval_samples(triples);
+    let (per_class, validation, _) =
+        evaluation_draw(&samples, condition, options.per_class, options.validation);
+    let protocol = Protocol::TrainCondition {
+        condition: condition.map(str::to_owned),
+        per_class: Some(per_class),
+        validation,
+    };
+    let sweep = Perturbation::default_sweep();
+    let transforms: Vec<_> = sweep.iter().map(Perturbation::transform).collect();
+    let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
+    each.extend(transforms.iter().map(|t| Some(t as &TestTransform<'_>)));
+    let auto = options.method.is_auto();
+    let methods = 1 + usize::from(auto);
+    let grid = samples[0].frame.grid();
+    // Next to an automatic choice the paper's method; else the configured pipeline alone.
+    let paper_config;
+    let paper = if auto {
+        paper_config = options.method.paper_config(grid).map_err(core_error)?;
+        &paper_config
+    } else {
+        config
+    };
+    let candidates = if auto {
+        options.method.candidates(grid, false).map_err(core_error)?
+    } else {
+        Vec::new()
+    };
+    progress.note(&format!(
+        "fault sweep: {} perturbations x {methods} method(s) x {} repeat(s) (--fault-repeats 0 skips it)",
+        sweep.len(),
+        options.fault_repeats
+    ));
+    let (paper_reports, auto_reports) = run_counted(
+        &samples,
+        &protocol,
+        (options.fault_repeats, options.seed),
+        ("fault sweep", (methods * options.fault_repeats) as u64),
+        progress,
+        |evaluation| {
+            let paper = evaluation.run_each(Models::Config(paper), &each)?.reports;
+            let auto = if auto {
+                evaluation
+                    .run_each(Models::Auto(&candidates), &each)?
+                    .reports
+            } else {
+                Vec::new()
+            };
+            Ok((paper, auto))
+        },
+    )?;
+    let mut results = Vec::new();
+    let mut push = |method: &str, reports: Vec<EvalReport>| {
+        for (k, report) in reports.into_iter().enumerate() {
+            results.push(FaultResult {
+                perturbation: k.checked_sub(1).map(|k| sweep[k]),
+                method: method.to_owned(),
+                accuracy: report.overall,
+            });
+        }
+    };
+    let paper_name = if auto {
+        PAPER_METHOD.to_owned()
+    } else {
+        let c = paper.config();
+        format!("{} + {}", c.features.name(), c.classifier.kind().as_str())
+    };
+    push(&paper_name, paper_reports);
+    if auto {
+        push(AUTO_METHOD, auto_reports);
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    progress.note(&format!("fault sweep: {seconds:.1} s"));
+    let note = format!(
+        "Trained on {} ({per_class} images per class), {} repeat(s), seed {}; the sweep took {seconds:.1} s.",
+        condition.map_or_else(
+            || "every condition".to_owned(),
+            |c| format!("condition {c}")
+        ),
+        options.fault_repeats,
+        options.seed
+    );
+    Ok((results, note))
+}
+
+/// A configuration the library refused, as the evaluation engine's error.
+fn core_error(err: Error) -> presrs_core::CoreError {
+    match err {
+        Error::Core(err) => err,
+        other => presrs_core::CoreError::NotEnoughData(other.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+
+    use super::*;
+    use crate::progress::Quiet;
+    use presrs_core::Grid;
+    use presrs_sim::{DatasetSpec, simulate_dataset};
+
+    #[test]
+    fn a_short_class_shrinks_the_whole_draw() {
+        use ValidationSize::{Count, Fraction};
+        assert_eq!(shrink_draw(30, 20, Count(7)), (20, Count(7)));
+        assert_eq!(shrink_draw(6, 20, Count(7)), (6, Fraction(0.35)));
+        assert_eq!(shrink_draw(6, 20, Count(5)), (6, Fraction(0.25)));
+        assert_eq!(shrink_draw(6, 20, Fraction(0.3)), (6, Fraction(0.3)));
+        // every image asked for: a count stays a count
+        assert_eq!(shrink_draw(6, usize::MAX, Count(2)), (6, Count(2)));
+        // the scaled draw splits: 6 picked give 2 for validation, 4 for training
+        let labels = [["carpet"; 6], ["wood"; 6]].concat();
+        let (per_class, validation) = shrink_draw(6, 20, Count(7));
+        let split = stratified_split(&labels, Some(per_class), validation, 1).unwrap();
+        assert_eq!((split.train.len(), split.validation.len()), (8, 4));
+    }
+
+    /// The entry point `reproduce` calls, on a small simulated data set.
+    #[test]
+    fn simulation_report_has_table1_and_the_hopper() {
+        let config = SimConfig::default();
+        let mut spec = DatasetSpec::paper(3);
+        spec.hops_per_gait = Some(30);
+        let dataset = simulate_dataset(&config, &spec).unwrap();
+        let mut frames = Vec::new();
+        for trial in &dataset.trials {
+            let segmentation =
+                segment_recording(&trial.recording, &ValidSegmentParams::default()).unwrap();
+            for stance in segmentation.complete() {
+                frames.push((
+                    trial
+                        .recording
+                        .frame(stance.mid_frame())
+                        .unwrap()
+                        .to_frame(),
+                    trial.plan.terrain.clone(),
+                    trial.plan.gait.name.clone(),
+                ));
+            }
+        }
+        let samples: Vec<EvalSample<'_>> = frames
+            .iter()
+            .map(|(f, t, g)| EvalSample {
+                frame: f.view(),
+                label: t,
+                condition: Some(g),
+                group: None,
+            })
+            .collect();
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(15),
+            validation: ValidationSize::Count(5),
+        };
+        let config_train = presrs_core::pipeline::TrainConfig::default()
+            .check()
+            .unwrap();
+        let report = presrs_core::evaluation::Evaluation {
+            samples: &samples,
+            protocol: &protocol,
+            repeats: 2,
+            seed: 1,
+            progress: &|| {},
+        }
+        .run(Models::Config(&config_train))
+        .unwrap();
+        let evaluations = BTreeMap::from([("G2".to_owned(), report)]);
+        let dir = tempfile::tempdir().unwrap();
+        let index = write_simulation_report(
+            &SimulationReportData::from_dataset(&dataset).unwrap(),
+            &config,
+            &evaluations,
+            1,
+            dir.path(),
+        )
+        .unwrap();
+        let html = std::fs::read_to_string(index).unwrap();
+        for needle in [
+            "table1_velocity.png",
+            "hopper.png",
+            "confusion.png",
+            "paper",
+        ] {
+            assert!(html.contains(needle), "{needle}");
+        }
+        for part in html.split("src=\"").skip(1) {
+            let name = &part[..part.find('"').unwrap()];
+            assert!(dir.path().join(name).is_file(), "{name}");
+        }
+    }
+
+    /// The fault chart's numbers are those of `Evaluation::run_each`, and the report shows them.
+    #[test]
+    fn fault_sweep_numbers_come_from_the_evaluation_engine() {
+        use presrs_core::classifier::ClassifierKind;
+        use presrs_core::features::FeatureKind;
+        use presrs_core::perturb::Perturbation;
+        use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
+        use rand::SeedableRng;
+
+        use crate::method::{ClassifierChoice, FeatureChoice};
+
+        // The report's options with `features`, `classifier` and the test's draw.
+        let parse = |features: FeatureChoice, classifier: ClassifierKind| ReportOptions {
+            per_class: 10,
+            validation: ValidationSize::Count(3),
+            fault_repeats: 2,
+            method: Method {
+                features,
+                classifier: ClassifierChoice::Kind(classifier),
+                dims: Some(20),
+                ..Method::default()
+            },
+            ..ReportOptions::default()
+        };
+        let args = parse(
+            FeatureChoice::Kinds(vec![FeatureKind::Fft1d]),
+            ClassifierKind::Pwe,
+        );
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let frames: Vec<(Frame, &str, &str)> = (0..96)
+            .map(|i| {
+                (
+                    synthetic_frame(i % 4, &mut rng),
+                    SYNTHETIC_CLASSES[i % 4],
+                    ["G1", "G2", "G3"][(i / 4) % 3],
+                )
+            })
+            .collect();
+        let triples: Vec<(&Frame, &str, Option<&str>)> =
+            frames.iter().map(|(f, l, c)| (f, *l, Some(*c))).collect();
+        let config = args.method.train_config(Grid::new(44, 44)).unwrap();
+        let (faults, note) = fault_sweep(&args, &triples, Some("G2"), &config, &Quiet).unwrap();
+        assert!(note.contains("2 repeat(s)"), "{note}");
+        let sweep = Perturbation::default_sweep();
+        assert_eq!(
+            faults.len(),
+            1 + sweep.len(),
+            "one method, the clean run and every level"
+        );
+
+        let samples = eval_samples(&triples);
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(8), // 8 images per class of G2: fewer than --per-class 10
+            validation: ValidationSize::Fraction(0.3), // --validation 3 of 10, scaled
+        };
+        let dead = Perturbation::Dead(0.1);
+        let transform = |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
+            Ok(dead.apply(frame, seed, i as u64))
+        };
+        let evaluation = presrs_core::evaluation::Evaluation {
+            samples: &samples,
+            protocol: &protocol,
+            repeats: 2,
+            seed: 1,
+            progress: &|| {},
+        };
+        let direct = evaluation
+            .run_each(Models::Config(&config), &[Some(&transform)])
+            .unwrap()
+            .reports
+            .remove(0);
+        let swept = faults
+            .iter()
+            .find(|f| f.perturbation == Some(dead))
+            .unwrap();
+        assert_eq!(swept.accuracy, direct.overall);
+        let clean = evaluation.run(Models::Config(&config)).unwrap();
+        assert_eq!(
+            faults
+                .iter()
+                .find(|f| f.perturbation.is_none())
+                .unwrap()
+                .accuracy,
+            clean.overall
+        );
+
+        // With the features automatic and the classifier fixed (mle), the line labelled the paper's
+        // method is the paper's method: the numbers of the explicit fft1d + pwe run above (it was the
+        // configured fft1d + mle).
+        let mle_args = parse(FeatureChoice::Auto, ClassifierKind::Mle);
+        let mle_config = mle_args.method.train_config(Grid::new(44, 44)).unwrap();
+        let (auto_faults, _) =
+            fault_sweep(&mle_args, &triples, Some("G2"), &mle_config, &Quiet).unwrap();
+        let paper: Vec<_> = auto_faults
+            .iter()
+            .filter(|f| f.method == PAPER_METHOD)
+            .map(|f| (f.perturbation, f.accuracy))
+            .collect();
+        let explicit: Vec<_> = faults
+            .iter()
+            .map(|f| (f.perturbation, f.accuracy))
+            .collect();
+        assert_eq!(paper, explicit);
+        assert!(auto_faults.iter().any(|f| f.method == AUTO_METHOD));
+
+        // The report draws them and tabulates the same numbers.
+        let report_samples: Vec<ReportSample<'_>> = frames
+            .iter()
+            .map(|(f, l, c)| ReportSample {
+                frame: f.view(),
+                label: Some(l),
+                condition: Some(c),
+                source: "synthetic".into(),
+                frame_index: 0,
+            })
+            .collect();
+        let mut inputs = ReportInputs::new("faults", &report_samples);
+        inputs.faults = faults.clone();
+        inputs.fault_note = Some(note);
+        let dir = tempfile::tempdir().unwrap();
+        let index = write_report(&inputs, dir.path()).unwrap();
+        let html = std::fs::read_to_string(index).unwrap();
+        assert!(html.contains("src=\"fault_sweep.png\""));
+        assert!(dir.path().join("fault_sweep.png").is_file());
+        let row = html.split("<tr><td>dead=0.1</td>").nth(1).unwrap();
+        let expected = format!(
+            "<td>{:.1} % ± {:.1}</td>",
+            100.0 * direct.overall.mean,
+            100.0 * direct.overall.std
+        );
+        assert!(row.starts_with(&expected), "{expected} vs {}", &row[..60]);
+    }
+}
