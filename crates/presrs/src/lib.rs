@@ -3,6 +3,7 @@
 pub mod dataset;
 pub mod error;
 pub mod evaluate;
+pub mod gait;
 pub mod method;
 pub mod progress;
 pub mod report;

@@ -2,7 +2,7 @@
 //!
 //! The folder layout is [`presrs::simulation`]'s.
 //!
-//! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`super::track`]).
+//! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`presrs::gait`]).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -63,9 +63,9 @@ pub struct SimulateArgs {
     /// With --adaptive and a model without a terrain-to-gait table: the `beta_des` grid searched around
     /// each configured gait when measuring it, FROM:TO:STEP in radians, or none (the configured gaits
     /// only). Variants are named BASE@BETA, e.g. G3@0.62.
-    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = super::track::GaitSweep::DEFAULT_TEXT,
-          value_parser = super::track::parse_gait_sweep)]
-    pub gait_sweep: super::track::GaitSweep,
+    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = presrs::gait::GaitSweep::DEFAULT_TEXT,
+          value_parser = presrs::gait::parse_gait_sweep)]
+    pub gait_sweep: presrs::gait::GaitSweep,
     /// The adaptive run switches gait only after this many consecutive stances classified as the same
     /// terrain (1: on every decision, the default: on 3 m segments a delay costs more than the wrong
     /// switches it saves).

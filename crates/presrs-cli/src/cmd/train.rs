@@ -58,9 +58,9 @@ pub struct TrainArgs {
     pub sim_config: Option<PathBuf>,
     /// For `--gait-table sim`: the `beta_des` grid searched around each configured gait, FROM:TO:STEP in
     /// radians, or none (the configured gaits only). Variants are named BASE@BETA, e.g. G3@0.62.
-    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = super::track::GaitSweep::DEFAULT_TEXT,
-          value_parser = super::track::parse_gait_sweep)]
-    pub gait_sweep: super::track::GaitSweep,
+    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = presrs::gait::GaitSweep::DEFAULT_TEXT,
+          value_parser = presrs::gait::parse_gait_sweep)]
+    pub gait_sweep: presrs::gait::GaitSweep,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -204,7 +204,13 @@ fn terrain_gait_table(
         return Ok(table);
     }
     let config = presrs::simulation::load_config(args.sim_config.as_deref())?;
-    let table =
-        super::track::measure_gait_table(&config, args.seed, class_names, args.gait_sweep, out)?;
-    Ok(table.best)
+    let measured = presrs::gait::measure_gait_table(
+        &config,
+        args.seed,
+        class_names,
+        args.gait_sweep,
+        &super::common::TerminalProgress::default(),
+    )?;
+    write!(out, "{}", measured.format())?;
+    Ok(measured.table.best)
 }
