@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's "Calibration of the simulator" table: how the paper's method degrades as the simulator's
+"""The "Calibration of the simulator" table of docs/reproducing.md: how the paper's method degrades as the simulator's
 realism knobs get harsher.
 
 For each setting (everything else at the built-in configuration) it writes a simulator configuration,

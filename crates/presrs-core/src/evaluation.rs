@@ -1,6 +1,6 @@
 //! The evaluation engine: train on one part of a dataset, test on the rest, repeat with new seeds.
 //!
-//! Two protocols (see `shared/docs/interface.md`):
+//! Two protocols (see `docs/interface.md`):
 //! - [`Protocol::TrainCondition`], the paper's: draw `per_class` random images per class from one
 //!   condition (a gait), `validation` of them for hyper-parameters, and test on every other sample of every
 //!   condition. Accuracy is reported per tested condition (the training condition's held-out remainder

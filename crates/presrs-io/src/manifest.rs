@@ -1,4 +1,4 @@
-//! Dataset manifests: a CSV file with a header row naming each sample (see `shared/docs/interface.md`).
+//! Dataset manifests: a CSV file with a header row naming each sample (see `docs/interface.md`).
 //!
 //! ```text
 //! path,label,condition,group,frame,load

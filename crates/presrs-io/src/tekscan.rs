@@ -1,6 +1,6 @@
 //! TekScan ASCII movies and snapshots (`.asf`, sometimes `.csv`): reader and writer.
 //!
-//! See `shared/docs/tekscan-ascii.md` for the format. What this module does where the format notes are
+//! See `docs/tekscan-ascii.md` for the format. What this module does where the format notes are
 //! silent:
 //!
 //! * **Header.** Lines up to `ASCII_DATA` (found by search) are `KEY value` lines; the key is the first

@@ -52,8 +52,9 @@ impl Default for RealismParams {
             dead_sensel_fraction: 0.0,
             terrain_variability: 1.0,
             touchdown_angle_noise_rad: 0.005,
-            // Calibrated so that the paper's protocol gives the paper's Table II (workspace README,
-            // "Calibration"): a few millimetres of hop-to-hop foot placement on the 48 x 52 mm foot.
+            // Calibrated so that the paper's protocol gives the paper's Table II (docs/reproducing.md,
+            // "Calibration of the simulator"): a few millimetres of hop-to-hop foot placement on the
+            // 48 x 52 mm foot.
             lateral_cop_sd_m: 3.0e-3,
             foreaft_cop_sd_m: 2.2e-3,
         }

@@ -89,7 +89,7 @@ pub struct CarpetParams {
     pub loop_crown_m: f64,
     /// Random variation of loop height and position, m. A flooring carpet's loops are tufted by machine
     /// but not on a perfect lattice; the position spread (a seventh of the stitch) is what keeps its
-    /// spectrum from being a few orientation-dependent spikes (calibrated: workspace README, "Calibration").
+    /// spectrum from being a few orientation-dependent spikes (calibrated: docs/reproducing.md).
     pub loop_height_sd_m: f64,
     pub loop_position_sd_m: f64,
     /// Depth of the gaps between loops below the loop tops, m (beyond the skin's reach).
