@@ -22,3 +22,8 @@ pub use presrs_core as core;
 pub use presrs_io as io;
 /// The hopper simulator: dynamics, terrain, skin, sensor, tracks.
 pub use presrs_sim as sim;
+
+/// The top-level README's examples, compiled (and run where they can be) by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+struct ReadmeDoctests;
