@@ -83,6 +83,13 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // `presrs ... | head`: the reader went away; that is not an error.
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
+        Err(err) if err.downcast_ref::<cmd::usage::UsageError>().is_some() => {
+            let _ = out.flush();
+            if let Some(usage) = err.downcast_ref::<cmd::usage::UsageError>() {
+                let _ = usage.to_clap().print();
+            }
+            ExitCode::from(2)
+        }
         Err(err) => {
             // What was printed before the failure comes first, then the reason.
             let _ = out.flush();

@@ -1,22 +1,46 @@
 //! Bad usage: parsers of option values that can be judged alone (clap reports their errors, exit code
-//! 2), and [`exit_usage`] for what can only be judged with other options or the configuration.
+//! 2), and [`UsageError`] for what can only be judged with other options or the configuration.
 
 use std::net::SocketAddr;
 
 use clap::CommandFactory;
 use clap::error::ErrorKind;
 
-/// Reports `message` the way clap reports its own errors (the message, the subcommand's usage line, a
-/// pointer to `--help`) and exits with code 2, the contract's "bad usage". Only for checks made before
-/// the subcommand has written anything (its buffered output would be lost).
-pub fn exit_usage(subcommand: &str, message: impl std::fmt::Display) -> ! {
-    let mut cli = crate::Cli::command();
-    cli.build();
-    let err = match cli.find_subcommand_mut(subcommand) {
-        Some(sub) => sub.error(ErrorKind::ArgumentConflict, message),
-        None => cli.error(ErrorKind::ArgumentConflict, message),
-    };
-    err.exit()
+/// Options that cannot be used together (judged with each other or the configuration). `main` reports
+/// it the way clap reports its own errors (the message, the subcommand's usage line, a pointer to
+/// `--help`) with exit code 2, the contract's "bad usage".
+#[derive(Debug)]
+pub struct UsageError {
+    pub subcommand: &'static str,
+    pub message: String,
+}
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+impl UsageError {
+    /// The error for `subcommand`, as an `anyhow::Error` a command returns.
+    pub fn new(subcommand: &'static str, message: impl std::fmt::Display) -> anyhow::Error {
+        anyhow::Error::new(Self {
+            subcommand,
+            message: message.to_string(),
+        })
+    }
+
+    /// The error as clap would have made it.
+    pub fn to_clap(&self) -> clap::Error {
+        let mut cli = crate::Cli::command();
+        cli.build();
+        match cli.find_subcommand_mut(self.subcommand) {
+            Some(sub) => sub.error(ErrorKind::ArgumentConflict, &self.message),
+            None => cli.error(ErrorKind::ArgumentConflict, &self.message),
+        }
+    }
 }
 
 /// A whole number of at least 1.
