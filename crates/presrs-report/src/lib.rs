@@ -8,38 +8,17 @@
 //! (no system font, no network) and can be written as PNG or SVG; movies as GIF.
 
 pub mod charts;
+mod error;
+mod format;
 pub mod pressure;
 pub mod render;
 pub mod report;
+mod scale;
 
-use plotters::drawing::DrawingAreaErrorKind;
-
+pub use error::{ReportError, Result};
 pub use pressure::{MovieOptions, PressureFigure, PressureGrid, PressureScale, write_movie};
 pub use render::{Figure, Format, render_rgb, render_svg, save_figure};
 pub use report::{
     Evaluation, FaultResult, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
     write_report,
 };
-
-/// What can go wrong while drawing or writing figures.
-#[derive(Debug, thiserror::Error)]
-pub enum ReportError {
-    /// plotters could not draw (a backend or font error).
-    #[error("drawing failed: {0}")]
-    Plot(String),
-    /// The data cannot be shown as asked.
-    #[error("{0}")]
-    Input(String),
-    #[error(transparent)]
-    Io(#[from] presrs_io::IoError),
-    #[error(transparent)]
-    Core(#[from] presrs_core::CoreError),
-}
-
-impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for ReportError {
-    fn from(err: DrawingAreaErrorKind<E>) -> Self {
-        Self::Plot(err.to_string())
-    }
-}
-
-pub type Result<T, E = ReportError> = std::result::Result<T, E>;

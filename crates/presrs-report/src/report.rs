@@ -22,9 +22,9 @@ use crate::charts::{
     LoadCurvesFigure, ReliabilityFigure, ScatterFigure, SpectraFigure, SpectrumPanel, TraceFigure,
     ValidationFigure,
 };
+use crate::error::{ReportError, Result};
 use crate::pressure::{Outline, PressureGrid, PressureScale};
 use crate::render::{Figure, save_figure};
-use crate::{ReportError, Result};
 
 /// One image of the data set.
 #[derive(Clone, Debug)]
