@@ -1,6 +1,6 @@
 //! The frames after the header: `Frame N` lines and rows of `COLS` cells, up to `@@` or the end.
 
-use presrs_core::{FrameInfo, Grid};
+use presrs_core::FrameInfo;
 
 use super::header::Header;
 use super::lines::{clip, frame_line};
@@ -27,6 +27,37 @@ struct Current {
     rows_done: usize,
 }
 
+/// Where the frame reader is: a small state machine over the non-blank lines after the header.
+enum State {
+    /// No frame yet: whether frames start with `Frame N` lines is not known.
+    Start,
+    /// Inside a frame (`framed`: it began with a `Frame N` line), fewer than ROWS rows read.
+    InFrame { frame: Current, framed: bool },
+    /// After a complete frame that began with a `Frame N` line (its number and that line).
+    AfterFrame { number: i64, first_line: usize },
+    /// After a complete frame of a file without `Frame` lines (snapshots).
+    AfterSnapshot,
+    /// After the `@@` terminator (its line): only blank lines may follow.
+    Terminated(usize),
+    /// A truncated last frame was dropped (lenient reading): only blank lines follow.
+    Dropped,
+}
+
+/// The frames read so far and what reading them needs.
+struct Reader<'a> {
+    header: &'a Header,
+    file: &'a str,
+    options: &'a ReadOptions,
+    warnings: &'a mut Vec<String>,
+    data: Vec<f64>,
+    mask: Vec<bool>,
+    any_absent: bool,
+    info: Vec<FrameInfo>,
+    cells: Vec<&'a str>,
+    /// Jumps in the frame numbers: (line, previous number, number, numbers missing).
+    gaps: Vec<(usize, i64, i64, i128)>,
+}
+
 pub(super) fn parse_frames(
     header: &Header,
     lines: &[(usize, &str)],
@@ -35,176 +66,266 @@ pub(super) fn parse_frames(
     options: &ReadOptions,
     warnings: &mut Vec<String>,
 ) -> Result<Body, IoError> {
-    let Grid { rows, cols } = header.grid;
-    let grid_len = header.grid.len();
-    // Reserve for the announced frames, but never more than the input could hold (>= 2 bytes per value).
-    // In i128: `END_FRAME - START_FRAME + 1` overflows i64 for extreme (crafted) values.
-    let announced = match (header.start_frame, header.end_frame) {
-        (Some((_, s)), Some((_, e))) if e >= s => {
-            usize::try_from(i128::from(e) - i128::from(s) + 1).unwrap_or(usize::MAX)
-        }
-        _ => 1,
-    };
-    let cap = announced.saturating_mul(grid_len).min(input_len / 2 + 1);
-    let mut data: Vec<f64> = Vec::with_capacity(cap);
-    let mut mask: Vec<bool> = Vec::new();
-    let mut any_absent = false;
-    let mut info: Vec<FrameInfo> = Vec::new();
-    let mut framed: Option<bool> = None;
-    let mut current: Option<Current> = None;
-    let mut terminator: Option<usize> = None;
-    let mut dropped_truncated = false;
-    let mut cells: Vec<&str> = Vec::new();
-    // Jumps in the frame numbers: (line, previous number, number, numbers missing).
-    let mut gaps: Vec<(usize, i64, i64, i128)> = Vec::new();
-    // Frames without `Frame` lines are numbered from START_FRAME; a crafted START_FRAME near i64::MAX
-    // leaves no room for the next number.
-    let next_snapshot_number = |info: &Vec<FrameInfo>, line_no: usize| {
-        let start = header.start_frame.map_or(1, |(_, s)| s);
-        i64::try_from(info.len())
-            .ok()
-            .and_then(|n| start.checked_add(n))
-            .ok_or_else(|| {
-                let from = header
-                    .start_frame
-                    .map_or_else(String::new, |(at, _)| format!(" (line {at})"));
-                IoError::parse(
-                    file,
-                    line_no,
-                    format!(
-                        "frame {} of the file cannot be numbered: START_FRAME {start}{from} + {} is \
-                         beyond the largest frame number ({})",
-                        info.len() + 1,
-                        info.len(),
-                        i64::MAX
-                    ),
-                )
-            })
-    };
+    let mut reader = Reader::new(header, input_len, file, options, warnings);
     let last_nonblank = lines
         .iter()
         .rposition(|(_, line)| !is_blank(line))
         .unwrap_or(0);
-
+    let mut state = State::Start;
     for (index, &(line_no, raw)) in lines.iter().enumerate() {
         let line = raw.trim();
         if is_blank(line) {
             continue;
         }
-        if let Some(at) = terminator {
+        state = if let State::Terminated(at) = state {
+            return Err(reader.after_terminator(at, line_no, line));
+        } else if line == "@@" {
+            reader.terminator(state, line_no)?
+        } else if let Some(parsed) = frame_line(line) {
+            reader.frame_line(state, line_no, parsed)?
+        } else {
+            reader.data_row(state, line_no, line, index == last_nonblank)?
+        };
+    }
+    reader.finish(state, lines)
+}
+
+impl<'a> Reader<'a> {
+    fn new(
+        header: &'a Header,
+        input_len: usize,
+        file: &'a str,
+        options: &'a ReadOptions,
+        warnings: &'a mut Vec<String>,
+    ) -> Self {
+        // Reserve for the announced frames, but never more than the input could hold (>= 2 bytes per
+        // value). In i128: `END_FRAME - START_FRAME + 1` overflows i64 for extreme (crafted) values.
+        let announced = match (header.start_frame, header.end_frame) {
+            (Some((_, s)), Some((_, e))) if e >= s => {
+                usize::try_from(i128::from(e) - i128::from(s) + 1).unwrap_or(usize::MAX)
+            }
+            _ => 1,
+        };
+        let cap = announced
+            .saturating_mul(header.grid.len())
+            .min(input_len / 2 + 1);
+        Self {
+            header,
+            file,
+            options,
+            warnings,
+            data: Vec::with_capacity(cap),
+            mask: Vec::new(),
+            any_absent: false,
+            info: Vec::new(),
+            cells: Vec::new(),
+            gaps: Vec::new(),
+        }
+    }
+
+    fn rows(&self) -> usize {
+        self.header.grid.rows
+    }
+
+    /// Any non-blank line after `@@`.
+    fn after_terminator(&self, at: usize, line_no: usize, line: &str) -> IoError {
+        IoError::parse(
+            self.file,
+            line_no,
+            format!(
+                "expected nothing after the `@@` terminator on line {at}, found `{}`",
+                clip(line)
+            ),
+        )
+    }
+
+    /// `@@`: the data ends; a frame still missing rows is an error.
+    fn terminator(&self, state: State, line_no: usize) -> Result<State, IoError> {
+        if let State::InFrame { frame: cur, .. } = &state {
             return Err(IoError::parse(
-                file,
+                self.file,
                 line_no,
                 format!(
-                    "expected nothing after the `@@` terminator on line {at}, found `{}`",
-                    clip(line)
+                    "frame {} (from line {}) has {} rows, expected {} (ROWS) before the `@@` terminator",
+                    cur.number,
+                    cur.first_line,
+                    cur.rows_done,
+                    self.rows()
                 ),
             ));
         }
-        if line == "@@" {
-            if let Some(cur) = &current
-                && cur.rows_done < rows
-            {
+        Ok(State::Terminated(line_no))
+    }
+
+    /// `Frame N`: a new frame, after a complete one whose number it must follow.
+    fn frame_line(
+        &mut self,
+        state: State,
+        line_no: usize,
+        parsed: Result<(i64, Option<&str>), String>,
+    ) -> Result<State, IoError> {
+        let (number, suffix) =
+            parsed.map_err(|message| IoError::parse(self.file, line_no, message))?;
+        match state {
+            State::InFrame { framed: false, .. } | State::AfterSnapshot => {
                 return Err(IoError::parse(
-                    file,
-                    line_no,
-                    format!(
-                        "frame {} (from line {}) has {} rows, expected {rows} (ROWS) before the `@@` terminator",
-                        cur.number, cur.first_line, cur.rows_done
-                    ),
-                ));
-            }
-            terminator = Some(line_no);
-            continue;
-        }
-        if let Some(parsed) = frame_line(line) {
-            let (number, suffix) =
-                parsed.map_err(|message| IoError::parse(file, line_no, message))?;
-            if framed == Some(false) {
-                return Err(IoError::parse(
-                    file,
+                    self.file,
                     line_no,
                     "found a `Frame` line after frame data that had none; expected every frame to \
                      start with a `Frame N` line, or none to",
                 ));
             }
-            framed = Some(true);
-            if let Some(cur) = &current
-                && cur.rows_done < rows
-            {
+            State::InFrame { frame: cur, .. } => {
                 return Err(IoError::parse(
-                    file,
+                    self.file,
                     line_no,
                     format!(
-                        "frame {} (from line {}) has {} rows, expected {rows} (ROWS), before the next `Frame` line",
-                        cur.number, cur.first_line, cur.rows_done
+                        "frame {} (from line {}) has {} rows, expected {} (ROWS), before the next `Frame` line",
+                        cur.number,
+                        cur.first_line,
+                        cur.rows_done,
+                        self.rows()
                     ),
                 ));
             }
-            // `current` is now the complete frame before this one.
-            if let Some(prev) = &current {
-                let step = i128::from(number) - i128::from(prev.number);
-                if step <= 0 {
-                    let message = format!(
-                        "frame {number} {} frame {} (line {}): expected increasing frame numbers \
-                         (time runs backwards or repeats here)",
-                        if step == 0 { "repeats" } else { "comes after" },
-                        prev.number,
-                        prev.first_line
-                    );
-                    if !options.lenient {
-                        return Err(IoError::parse(
-                            file,
-                            line_no,
-                            format!("{message}; read leniently to keep the frames anyway"),
-                        ));
-                    }
-                    warnings.push(format!("{file} line {line_no}: {message}; frames kept"));
-                } else if step > 1 {
-                    gaps.push((line_no, prev.number, number, step - 1));
-                }
-            }
-            current = Some(Current {
+            State::AfterFrame {
+                number: prev,
+                first_line,
+            } => self.check_step(line_no, prev, first_line, number)?,
+            State::Start | State::Terminated(_) | State::Dropped => {}
+        }
+        Ok(State::InFrame {
+            frame: Current {
                 number,
                 suffix: suffix.map(str::to_owned),
                 first_line: line_no,
                 rows_done: 0,
-            });
-            continue;
-        }
+            },
+            framed: true,
+        })
+    }
 
-        // A data row.
-        if framed.is_none() {
-            framed = Some(false);
-        }
-        let need_new = match &current {
-            Some(cur) if cur.rows_done < rows => false,
-            Some(cur) if framed == Some(true) => {
+    /// Frame `number` after frame `prev` (from `prev_line`): going back or repeating is an error (a
+    /// warning when lenient); a jump is noted for the gap warnings.
+    fn check_step(
+        &mut self,
+        line_no: usize,
+        prev: i64,
+        prev_line: usize,
+        number: i64,
+    ) -> Result<(), IoError> {
+        let step = i128::from(number) - i128::from(prev);
+        if step <= 0 {
+            let message = format!(
+                "frame {number} {} frame {prev} (line {prev_line}): expected increasing frame numbers \
+                 (time runs backwards or repeats here)",
+                if step == 0 { "repeats" } else { "comes after" },
+            );
+            if !self.options.lenient {
                 return Err(IoError::parse(
-                    file,
+                    self.file,
+                    line_no,
+                    format!("{message}; read leniently to keep the frames anyway"),
+                ));
+            }
+            let file = self.file;
+            self.warnings
+                .push(format!("{file} line {line_no}: {message}; frames kept"));
+        } else if step > 1 {
+            self.gaps.push((line_no, prev, number, step - 1));
+        }
+        Ok(())
+    }
+
+    /// A row of cells: the next row of the frame being read, or the first of a new snapshot frame.
+    fn data_row(
+        &mut self,
+        state: State,
+        line_no: usize,
+        line: &'a str,
+        last: bool,
+    ) -> Result<State, IoError> {
+        let (mut cur, framed) = match state {
+            State::InFrame { frame, framed } => (frame, framed),
+            State::AfterFrame { number, first_line } => {
+                return Err(IoError::parse(
+                    self.file,
                     line_no,
                     format!(
-                        "frame {} (from line {}) already has {rows} rows (ROWS); expected a `Frame` line \
-                         or the `@@` terminator, found another row of data",
-                        cur.number, cur.first_line
+                        "frame {number} (from line {first_line}) already has {} rows (ROWS); expected a \
+                         `Frame` line or the `@@` terminator, found another row of data",
+                        self.rows()
                     ),
                 ));
             }
-            _ => true,
+            State::Start | State::AfterSnapshot | State::Terminated(_) | State::Dropped => (
+                Current {
+                    number: self.next_snapshot_number(line_no)?,
+                    suffix: None,
+                    first_line: line_no,
+                    rows_done: 0,
+                },
+                false,
+            ),
         };
-        if need_new {
-            current = Some(Current {
-                number: next_snapshot_number(&info, line_no)?,
-                suffix: None,
-                first_line: line_no,
-                rows_done: 0,
-            });
+        if !self.read_cells(&cur, line_no, line, last)? {
+            return Ok(State::Dropped);
         }
-        let Some(cur) = current.as_mut() else {
-            continue;
-        };
-        let row = cur.rows_done;
-        split_cells(line, &mut cells).map_err(|at| {
+        cur.rows_done += 1;
+        if cur.rows_done < self.rows() {
+            return Ok(State::InFrame { frame: cur, framed });
+        }
+        self.info.push(FrameInfo {
+            number: cur.number,
+            suffix: cur.suffix.take(),
+        });
+        Ok(if framed {
+            State::AfterFrame {
+                number: cur.number,
+                first_line: cur.first_line,
+            }
+        } else {
+            State::AfterSnapshot
+        })
+    }
+
+    /// Frames without `Frame` lines are numbered from START_FRAME; a crafted START_FRAME near i64::MAX
+    /// leaves no room for the next number.
+    fn next_snapshot_number(&self, line_no: usize) -> Result<i64, IoError> {
+        let start = self.header.start_frame.map_or(1, |(_, s)| s);
+        let n = self.info.len();
+        i64::try_from(n)
+            .ok()
+            .and_then(|n| start.checked_add(n))
+            .ok_or_else(|| {
+                let from = self
+                    .header
+                    .start_frame
+                    .map_or_else(String::new, |(at, _)| format!(" (line {at})"));
+                IoError::parse(
+                    self.file,
+                    line_no,
+                    format!(
+                        "frame {} of the file cannot be numbered: START_FRAME {start}{from} + {n} is \
+                         beyond the largest frame number ({})",
+                        n + 1,
+                        i64::MAX
+                    ),
+                )
+            })
+    }
+
+    /// Reads row `cur.rows_done` of frame `cur` into the data; `Ok(false)` when it was the file's
+    /// truncated last line and the frame was dropped (lenient reading).
+    fn read_cells(
+        &mut self,
+        cur: &Current,
+        line_no: usize,
+        line: &'a str,
+        last: bool,
+    ) -> Result<bool, IoError> {
+        let (file, cols, row) = (self.file, self.header.grid.cols, cur.rows_done);
+        split_cells(line, &mut self.cells).map_err(|at| {
             IoError::parse(
                 file,
                 line_no,
@@ -216,43 +337,12 @@ pub(super) fn parse_frames(
                 ),
             )
         })?;
-        if cells.len() != cols {
-            if index == last_nonblank && cells.len() < cols && terminator.is_none() {
-                let message = format!(
-                    "frame {} is truncated: its row {} has {} of {cols} values (COLS) at the end of the file",
-                    cur.number,
-                    row + 1,
-                    cells.len()
-                );
-                if options.lenient {
-                    warnings.push(format!("{file} line {line_no}: {message}; frame dropped"));
-                    data.truncate(info.len() * grid_len);
-                    if info.is_empty() {
-                        mask.clear();
-                    }
-                    current = None;
-                    dropped_truncated = true;
-                    break;
-                }
-                return Err(IoError::parse(
-                    file,
-                    line_no,
-                    format!("{message} (read leniently to drop it)"),
-                ));
-            }
-            return Err(IoError::parse(
-                file,
-                line_no,
-                format!(
-                    "frame {} has {} values in row {}, expected {cols} (COLS)",
-                    cur.number,
-                    cells.len(),
-                    row + 1
-                ),
-            ));
+        if self.cells.len() != cols {
+            return self.wrong_cell_count(cur, line_no, last);
         }
-        let first_frame = info.is_empty();
-        for (col, cell) in cells.iter().enumerate() {
+        let first_frame = self.info.is_empty();
+        for col in 0..cols {
+            let cell = self.cells[col];
             let parsed = parse_cell(cell).map_err(|err| {
                 IoError::parse(
                     file,
@@ -269,84 +359,142 @@ pub(super) fn parse_frames(
             })?;
             let present = matches!(parsed, Cell::Value(_));
             if first_frame {
-                mask.push(present);
-                any_absent |= !present;
-            } else if mask[row * cols + col] != present {
-                let first = info[0].number;
-                let message = if present {
-                    format!(
-                        "frame {} row {} column {} holds a value but frame {first} has `B` (no sensel) there; \
-                         expected the same sensel outline in every frame",
-                        cur.number,
-                        row + 1,
-                        col + 1
-                    )
-                } else {
-                    format!(
-                        "frame {} row {} column {} is `B` (no sensel) but frame {first} has a value there; \
-                         expected the same sensel outline in every frame",
-                        cur.number,
-                        row + 1,
-                        col + 1
-                    )
-                };
-                return Err(IoError::parse(file, line_no, message));
+                self.mask.push(present);
+                self.any_absent |= !present;
+            } else if self.mask[row * cols + col] != present {
+                return Err(self.outline_changed(cur, line_no, row, col, present));
             }
-            data.push(parsed.value());
+            self.data.push(parsed.value());
         }
-        cur.rows_done += 1;
-        if cur.rows_done == rows {
-            info.push(FrameInfo {
-                number: cur.number,
-                suffix: cur.suffix.take(),
-            });
-        }
+        Ok(true)
     }
 
-    if let Some(cur) = &current
-        && cur.rows_done < rows
-    {
-        let last_line = lines.last().map_or(header.end_line, |&(n, _)| n);
-        let message = format!(
-            "frame {} (from line {}) is truncated: the file ends after {} of {rows} rows (ROWS)",
-            cur.number, cur.first_line, cur.rows_done
+    /// A row of another length than COLS: the truncated last line of the file (dropped when lenient,
+    /// `Ok(false)`), else an error.
+    fn wrong_cell_count(
+        &mut self,
+        cur: &Current,
+        line_no: usize,
+        last: bool,
+    ) -> Result<bool, IoError> {
+        let (file, cols, row, found) = (
+            self.file,
+            self.header.grid.cols,
+            cur.rows_done,
+            self.cells.len(),
         );
-        if options.lenient {
-            warnings.push(format!("{file} line {last_line}: {message}; frame dropped"));
-            data.truncate(info.len() * grid_len);
-            dropped_truncated = true;
-        } else {
+        if last && found < cols {
+            let message = format!(
+                "frame {} is truncated: its row {} has {found} of {cols} values (COLS) at the end of the file",
+                cur.number,
+                row + 1,
+            );
+            if self.options.lenient {
+                self.warnings
+                    .push(format!("{file} line {line_no}: {message}; frame dropped"));
+                self.data.truncate(self.info.len() * self.header.grid.len());
+                if self.info.is_empty() {
+                    self.mask.clear();
+                }
+                return Ok(false);
+            }
             return Err(IoError::parse(
                 file,
-                last_line,
+                line_no,
                 format!("{message} (read leniently to drop it)"),
             ));
         }
-    }
-    report_gaps(&gaps, file, warnings);
-    if info.is_empty() {
-        let line_no = lines.last().map_or(header.end_line, |&(n, _)| n);
-        return Err(IoError::parse(
+        Err(IoError::parse(
             file,
             line_no,
             format!(
-                "expected frame data ({rows} rows of {cols} values) after the header ending on line {}, found {}",
-                header.end_line,
-                if dropped_truncated {
-                    "only a truncated frame"
-                } else {
-                    "none"
-                }
+                "frame {} has {found} values in row {}, expected {cols} (COLS)",
+                cur.number,
+                row + 1
             ),
-        ));
+        ))
     }
-    Ok(Body {
-        data,
-        mask: any_absent.then_some(mask),
-        info,
-        terminator,
-        dropped_truncated,
-    })
+
+    /// A cell present where the first frame has `B`, or the other way round.
+    fn outline_changed(
+        &self,
+        cur: &Current,
+        line_no: usize,
+        row: usize,
+        col: usize,
+        present: bool,
+    ) -> IoError {
+        let first = self.info[0].number;
+        let message = if present {
+            format!(
+                "frame {} row {} column {} holds a value but frame {first} has `B` (no sensel) there; \
+                 expected the same sensel outline in every frame",
+                cur.number,
+                row + 1,
+                col + 1
+            )
+        } else {
+            format!(
+                "frame {} row {} column {} is `B` (no sensel) but frame {first} has a value there; \
+                 expected the same sensel outline in every frame",
+                cur.number,
+                row + 1,
+                col + 1
+            )
+        };
+        IoError::parse(self.file, line_no, message)
+    }
+
+    /// The end of the input: a frame still missing rows is truncated (dropped when lenient); at least
+    /// one frame must have been read.
+    fn finish(mut self, state: State, lines: &[(usize, &str)]) -> Result<Body, IoError> {
+        let (file, rows, cols) = (self.file, self.header.grid.rows, self.header.grid.cols);
+        let last_line = lines.last().map_or(self.header.end_line, |&(n, _)| n);
+        let mut dropped_truncated = matches!(state, State::Dropped);
+        if let State::InFrame { frame: cur, .. } = &state {
+            let message = format!(
+                "frame {} (from line {}) is truncated: the file ends after {} of {rows} rows (ROWS)",
+                cur.number, cur.first_line, cur.rows_done
+            );
+            if !self.options.lenient {
+                return Err(IoError::parse(
+                    file,
+                    last_line,
+                    format!("{message} (read leniently to drop it)"),
+                ));
+            }
+            self.warnings
+                .push(format!("{file} line {last_line}: {message}; frame dropped"));
+            self.data.truncate(self.info.len() * self.header.grid.len());
+            dropped_truncated = true;
+        }
+        report_gaps(&self.gaps, file, self.warnings);
+        if self.info.is_empty() {
+            return Err(IoError::parse(
+                file,
+                last_line,
+                format!(
+                    "expected frame data ({rows} rows of {cols} values) after the header ending on line {}, found {}",
+                    self.header.end_line,
+                    if dropped_truncated {
+                        "only a truncated frame"
+                    } else {
+                        "none"
+                    }
+                ),
+            ));
+        }
+        Ok(Body {
+            data: self.data,
+            mask: self.any_absent.then_some(self.mask),
+            info: self.info,
+            terminator: match state {
+                State::Terminated(at) => Some(at),
+                _ => None,
+            },
+            dropped_truncated,
+        })
+    }
 }
 
 /// Gap warnings given one by one; more are summed up in one warning.
