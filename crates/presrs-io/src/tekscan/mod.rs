@@ -7,19 +7,19 @@
 //!   token, an upper-case identifier as TekScan writes them, with a trailing `:` ignored (`ROWS: 44`
 //!   works). A line whose first token is not an upper-case identifier (`overground walk p10`, `Rows 3 were
 //!   damaged`), and the line right after a bare `KEY:` line such as `COMMENTS:` (unless it is a plausible
-//!   known key line such as `ROWS 44`), is free text: it is kept in [`SensorMeta::extra`] as the whole line
+//!   known key line such as `ROWS 44`), is free text: it is kept in [`SensorMeta::extra`](presrs_core::SensorMeta::extra) as the whole line
 //!   with an empty value. Blank lines in the header are skipped. If the file has no `ASCII_DATA` line but
 //!   a `Frame N` line follows the header, the header ends there.
 //! * **Typed keys.** `ROWS`/`COLS` (required, positive integers) give the grid; `SENSOR_TYPE`,
 //!   `ROW_SPACING`/`COL_SPACING` (converted to mm from `mm`/`millimeters`/`cm`/`inches`/...), `UNITS`,
 //!   `NOISE_THRESHOLD`, `SECONDS_PER_FRAME` and `SATURATION_PRESSURE` (as `full_scale`, when its unit is
-//!   `UNITS` or convertible to it) fill [`SensorMeta`] and the frame period. A typed value that cannot be
+//!   `UNITS` or convertible to it) fill [`SensorMeta`](presrs_core::SensorMeta) and the frame period. A typed value that cannot be
 //!   understood (`ROW_SPACING 5 furlongs`, `SECONDS_PER_FRAME 0`) is kept verbatim in `extra` and
 //!   reported as a warning; nothing is lost. `DATA_TYPE`, `START_FRAME`, `END_FRAME` and `ASCII_DATA` are
 //!   structural: they are checked but not kept (the writer derives them). Every other key is kept verbatim,
 //!   in file order, in `extra`. A repeated typed key keeps the first value (a conflicting repeated
 //!   `ROWS`/`COLS` is an error) and is reported as a warning.
-//! * **Frames.** Frame numbers and `Frame` line suffixes are kept as written in [`FrameInfo`]. Files
+//! * **Frames.** Frame numbers and `Frame` line suffixes are kept as written in [`FrameInfo`](presrs_core::FrameInfo). Files
 //!   without `Frame` lines (snapshots) are cut into frames of `ROWS` rows, numbered from `START_FRAME`
 //!   (default 1). Blank and comma-only lines are skipped anywhere; `@@` ends the data and must be followed
 //!   only by blank lines. `B` cells must be at the same positions in every frame.

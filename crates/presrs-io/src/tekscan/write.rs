@@ -15,7 +15,7 @@ use crate::textutil::{push_int, push_number};
 /// `SECONDS_PER_FRAME`, `UNITS` (when `meta.units` states one), `NOISE_THRESHOLD`,
 /// `SATURATION_PRESSURE` (from `full_scale`), `START_FRAME`/`END_FRAME` (the first and last frame numbers), then the entries of `meta.extra` that are
 /// not already written, then `ASCII_DATA @@`. Absent sensels are written `B`; numbers are written so that
-/// they read back bit-exactly. Reading the output with [`parse_tekscan`] gives back an equal recording.
+/// they read back bit-exactly. Reading the output with [`parse_tekscan`](super::parse_tekscan) gives back an equal recording.
 ///
 /// Fails (`InvalidInput`) without writing anything when the recording cannot be represented: no frames,
 /// non-finite values, frame numbers that do not increase, or header text / frame suffixes with line
