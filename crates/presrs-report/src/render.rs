@@ -7,7 +7,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
-use crate::{ReportError, Result};
+use crate::error::{ReportError, Result};
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/LICENSE-DejaVu.txt`): every figure uses it, so no
 /// system font is needed.

@@ -1,0 +1,211 @@
+//! Load curves: a recording's total load per frame with its stances and sampled frames.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use presrs_core::Recording;
+use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
+
+use super::common::{TITLE, draw_legend, finite_range, numeric_axes, padded};
+use crate::error::Result;
+use crate::render::{Figure, category_color, title_font};
+use crate::scale::PressureScale;
+
+/// Soft colour for shaded stance phases.
+const STANCE_SHADE: RGBColor = RGBColor(255, 224, 178);
+
+/// A recording's total load per frame with its detected stances and sampled frames.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadCurveData {
+    pub name: String,
+    pub period_s: Option<f64>,
+    /// Load per frame in the axis unit.
+    pub load: Vec<f64>,
+    pub load_label: String,
+    /// Complete stances `(first frame, one past the last)`, and stances cut by the recording's ends.
+    pub stances: Vec<(usize, usize)>,
+    pub partial: Vec<(usize, usize)>,
+    /// Frames used as samples.
+    pub sampled: Vec<usize>,
+    /// The segmentation's baseline (same unit as `load`).
+    pub baseline: Vec<f64>,
+}
+
+impl LoadCurveData {
+    /// Segments `recording` and marks the frames `sample` picks from complete stances.
+    pub fn from_recording(
+        name: String,
+        recording: &Recording,
+        scale: &PressureScale,
+        segment: &ValidSegmentParams,
+        sample: SampleFrame,
+    ) -> Result<Self> {
+        let (load_label, factor) = scale.load_axis();
+        let totals = recording.total_per_frame();
+        let segmentation = segment_recording(recording, segment)?;
+        // A stance too short for a fixed offset gives no sample; that is not an error for a picture.
+        let sampled = segmentation.samples(sample, false).unwrap_or_default();
+        let (mut stances, mut partial) = (Vec::new(), Vec::new());
+        for s in &segmentation.stances {
+            if s.partial {
+                partial.push((s.start, s.end()));
+            } else {
+                stances.push((s.start, s.end()));
+            }
+        }
+        Ok(Self {
+            name,
+            period_s: recording.frame_period_s(),
+            load: totals.iter().map(|v| v * factor).collect(),
+            load_label,
+            stances,
+            partial,
+            sampled,
+            baseline: segmentation.baseline.iter().map(|v| v * factor).collect(),
+        })
+    }
+
+    fn time(&self, frame: f64) -> f64 {
+        self.period_s.map_or(frame, |p| frame * p)
+    }
+
+    fn time_label(&self) -> &'static str {
+        if self.period_s.is_some() {
+            "time (s)"
+        } else {
+            "frame"
+        }
+    }
+}
+
+/// Draws one load curve in `area`: stances shaded, sampled frames marked, an optional cursor.
+pub fn draw_load_curve<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    data: &LoadCurveData,
+    cursor: Option<usize>,
+    legend: bool,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let n = data.load.len().max(1);
+    let (lo, hi) = finite_range(
+        data.load
+            .iter()
+            .copied()
+            .chain(data.baseline.iter().copied()),
+    )
+    .unwrap_or((0.0, 1.0));
+    let mut y_range = padded(lo.min(0.0), hi, 0.08);
+    if legend {
+        // Room above the curve for the legend.
+        y_range.end += 0.8 * (y_range.end - y_range.start);
+    }
+    let x_range = data.time(0.0)..data.time((n - 1).max(1) as f64);
+    let mut chart = ChartBuilder::on(area)
+        .caption(&data.name, title_font(TITLE - 2.0))
+        .margin(8)
+        .margin_right(16)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x_range, y_range.clone())?;
+    numeric_axes(&mut chart, data.time_label(), &data.load_label)
+        .y_labels(5)
+        .draw()?;
+    let shade = |spans: &[(usize, usize)], color: RGBAColor| {
+        spans
+            .iter()
+            .map(|&(a, b)| {
+                Rectangle::new(
+                    [
+                        (data.time(a as f64 - 0.5), y_range.start),
+                        (data.time(b as f64 - 0.5), y_range.end),
+                    ],
+                    color.filled(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    chart
+        .draw_series(shade(&data.stances, STANCE_SHADE.to_rgba()))?
+        .label("detected stance")
+        .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], STANCE_SHADE.filled()));
+    if !data.partial.is_empty() {
+        chart
+            .draw_series(shade(&data.partial, RGBColor(220, 220, 220).to_rgba()))?
+            .label("stance cut by the recording's end")
+            .legend(|(x, y)| {
+                Rectangle::new(
+                    [(x, y - 6), (x + 16, y + 6)],
+                    RGBColor(220, 220, 220).filled(),
+                )
+            });
+    }
+    if !data.baseline.is_empty() {
+        chart
+            .draw_series(LineSeries::new(
+                data.baseline
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| (data.time(i as f64), v)),
+                RGBColor(120, 120, 120).stroke_width(1),
+            ))?
+            .label("baseline")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], RGBColor(120, 120, 120)));
+    }
+    let line = category_color(0);
+    chart
+        .draw_series(LineSeries::new(
+            data.load
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| (data.time(i as f64), v)),
+            line.stroke_width(2),
+        ))?
+        .label("total load")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], line.stroke_width(2)));
+    let mark = category_color(3);
+    chart
+        .draw_series(data.sampled.iter().filter_map(|&i| {
+            data.load
+                .get(i)
+                .map(|&v| Circle::new((data.time(i as f64), v), 4, mark.filled()))
+        }))?
+        .label("sampled frame")
+        .legend(move |(x, y)| Circle::new((x + 8, y), 4, mark.filled()));
+    if let Some(c) = cursor {
+        let t = data.time(c as f64);
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(t, y_range.start), (t, y_range.end)],
+            BLACK.stroke_width(2),
+        )))?;
+    }
+    if legend {
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    }
+    Ok(())
+}
+
+/// Load curves of a few recordings, stacked.
+#[derive(Debug)]
+pub struct LoadCurvesFigure {
+    pub title: String,
+    pub curves: Vec<LoadCurveData>,
+}
+
+impl Figure for LoadCurvesFigure {
+    fn size(&self) -> (u32, u32) {
+        (1000, 40 + 230 * self.curves.len().max(1) as u32)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let body = root.titled(&self.title, title_font(TITLE + 2.0))?;
+        let areas = body.split_evenly((self.curves.len().max(1), 1));
+        for (i, (area, curve)) in areas.iter().zip(&self.curves).enumerate() {
+            draw_load_curve(area, curve, None, i == 0)?;
+        }
+        Ok(())
+    }
+}

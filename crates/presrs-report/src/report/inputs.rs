@@ -1,0 +1,109 @@
+//! What a report is made from: the samples and, optionally, a model, evaluations, fault results and
+//! the simulator's outputs.
+
+use std::collections::BTreeMap;
+
+use presrs_core::evaluation::{EvalReport, MeanStd};
+use presrs_core::perturb::Perturbation;
+use presrs_core::pipeline::TrainedModel;
+use presrs_core::stance::{SampleFrame, ValidSegmentParams};
+use presrs_core::{FrameView, Recording, SensorMeta};
+use presrs_sim::VelocityTable;
+use presrs_sim::trace::HopTrace;
+
+/// One image of the data set.
+#[derive(Clone, Debug)]
+pub struct ReportSample<'a> {
+    pub frame: FrameView<'a>,
+    pub label: Option<&'a str>,
+    /// The operating condition (gait, load, ...), if any.
+    pub condition: Option<&'a str>,
+    /// Where it came from (a file or trial name) and its 0-based frame index there.
+    pub source: String,
+    pub frame_index: usize,
+}
+
+/// A recording whose load curve is shown.
+#[derive(Clone, Debug)]
+pub struct ReportRecording<'a> {
+    pub name: String,
+    pub recording: &'a Recording,
+}
+
+/// An evaluation to show (confusion matrix, accuracy per condition).
+#[derive(Clone, Debug)]
+pub struct Evaluation<'a> {
+    /// E.g. `trained on G2`.
+    pub name: String,
+    pub report: &'a EvalReport,
+    /// Reference accuracies per tested condition (and `overall`) to compare with, e.g. the paper's
+    /// Table II; empty for none.
+    pub reference: BTreeMap<String, f64>,
+}
+
+/// Accuracy of one method with every test image perturbed ([`presrs_core::perturb`]): one point of the
+/// accuracy-against-fault chart. `perturbation: None` is the clean run, drawn at the clean level of
+/// every kind.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaultResult {
+    pub perturbation: Option<Perturbation>,
+    /// E.g. `paper: fft1d + pwe`, `automatic choice`.
+    pub method: String,
+    pub accuracy: MeanStd,
+}
+
+/// What only simulated data sets have.
+#[derive(Clone, Debug)]
+pub struct SimulationInputs<'a> {
+    /// Table I: forward velocity per gait and terrain (with the paper's values).
+    pub velocity: &'a VelocityTable,
+    /// A few hops of the hopper (see `presrs_sim::trace::trace_hops`).
+    pub traces: &'a [HopTrace],
+}
+
+/// Everything a report can show; all optional except the samples.
+#[derive(Clone, Debug)]
+pub struct ReportInputs<'a> {
+    pub title: String,
+    /// Lines of context under the title (command, data set, seed).
+    pub notes: Vec<String>,
+    /// The sensor (units and pitch) of the samples; raw counts and square sensels when `None`.
+    pub sensor: Option<&'a SensorMeta>,
+    pub samples: &'a [ReportSample<'a>],
+    /// A trained model: its crop, features, PCA and validation curve are shown.
+    pub model: Option<&'a TrainedModel>,
+    /// How the model was obtained (e.g. `trained on G2, 13 + 7 images per class, seed 1`).
+    pub model_note: Option<String>,
+    pub evaluations: Vec<Evaluation<'a>>,
+    /// Recordings whose load curves are shown (a handful).
+    pub recordings: Vec<ReportRecording<'a>>,
+    /// How the stances of those recordings are found and sampled.
+    pub segment: ValidSegmentParams,
+    pub sample_frame: SampleFrame,
+    pub simulation: Option<SimulationInputs<'a>>,
+    /// Accuracy under sensor faults (a sweep of levels per kind, a line per method); empty for none.
+    pub faults: Vec<FaultResult>,
+    /// How the fault results were obtained (protocol, repeats), shown under the chart.
+    pub fault_note: Option<String>,
+}
+
+impl<'a> ReportInputs<'a> {
+    /// Inputs with only samples (add the rest field by field).
+    pub fn new(title: impl Into<String>, samples: &'a [ReportSample<'a>]) -> Self {
+        Self {
+            title: title.into(),
+            notes: Vec::new(),
+            sensor: None,
+            samples,
+            model: None,
+            model_note: None,
+            evaluations: Vec::new(),
+            recordings: Vec::new(),
+            segment: ValidSegmentParams::default(),
+            sample_frame: SampleFrame::default(),
+            simulation: None,
+            faults: Vec::new(),
+            fault_note: None,
+        }
+    }
+}
