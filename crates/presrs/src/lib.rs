@@ -1,9 +1,11 @@
 #![doc = include_str!("../README.md")]
 
+pub mod classify;
 pub mod dataset;
 pub mod error;
 pub mod evaluate;
 pub mod gait;
+pub mod inspect;
 pub mod method;
 pub mod progress;
 pub mod report;

@@ -259,13 +259,3 @@ pub fn parse_positive(text: &str) -> Result<usize, String> {
 fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {
     text.parse::<SampleFrame>().map_err(|err| err.to_string())
 }
-
-/// How many frames a recording has and how they are numbered, for errors about `--frame`: "1 frame,
-/// frame 0", "205 frames, numbered 0 to 204".
-pub fn frames_numbered(count: usize) -> String {
-    match count {
-        0 => "no frames".to_owned(),
-        1 => "1 frame, frame 0".to_owned(),
-        n => format!("{n} frames, numbered 0 to {}", n - 1),
-    }
-}

@@ -43,7 +43,7 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let frames = match args.frame {
         Some(frame) if frame >= recording.frame_count() => anyhow::bail!(
             "{name}: --frame {frame} is past the end ({})",
-            super::common::frames_numbered(recording.frame_count())
+            presrs::classify::frames_numbered(recording.frame_count())
         ),
         Some(frame) => vec![frame],
         None if recording.frame_count() == 1 => vec![0],

@@ -3,9 +3,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs_core::stance::{ValidSegmentParams, segment_recording};
-use presrs_io::read_recording_with;
-use serde::Serialize;
+use presrs::inspect::{InspectReport, inspect};
 
 use super::common::{SampleArgs, write_json};
 
@@ -21,95 +19,8 @@ pub struct InspectArgs {
     pub samples: SampleArgs,
 }
 
-#[derive(Debug, Serialize)]
-struct StanceReport {
-    start: usize,
-    len: usize,
-    peak_load: f64,
-    peak_frame: usize,
-    /// The frame used as this stance's sample (`--stance-frame`; the first one for `all`).
-    sample_frame: Option<usize>,
-    partial: bool,
-}
-
-#[derive(Debug, Serialize)]
-struct InspectReport {
-    file: String,
-    sensor: Option<String>,
-    rows: usize,
-    cols: usize,
-    frames: usize,
-    frame_period_s: Option<f64>,
-    /// The unit of the values: the file's, or `raw` when it states none (`units_stated` false).
-    units: String,
-    units_stated: bool,
-    row_pitch_mm: Option<f64>,
-    col_pitch_mm: Option<f64>,
-    absent_sensels: usize,
-    /// Present sensels that read 0 in every frame while their neighbours carry load
-    /// ([`presrs_core::dead_sensels`]), 0-based.
-    dead_sensels: Vec<presrs_core::dead_sensels::DeadSensel>,
-    /// Whether train, eval, classify, features and report fill those sensels from their neighbours
-    /// when they read this file: yes unless `--keep-dead-sensels`, and only in a recording of at least
-    /// three frames (one image is not evidence enough).
-    dead_sensels_filled: bool,
-    /// Smallest and largest total load of a frame (sum of sensel values, in `units`).
-    load_min: f64,
-    load_max: f64,
-    baseline_noise: f64,
-    stances: Vec<StanceReport>,
-    warnings: Vec<String>,
-}
-
 pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let parsed = read_recording_with(&args.file, &args.samples.read_options())?;
-    let recording = &parsed.recording;
-    let totals = recording.total_per_frame();
-    let segmentation = segment_recording(recording, &ValidSegmentParams::default())
-        .map_err(|err| anyhow::anyhow!("{}: cannot segment: {err}", args.file.display()))?;
-    let sample = args.samples.stance_frame;
-    let stances = segmentation
-        .stances
-        .iter()
-        .map(|stance| StanceReport {
-            start: stance.start,
-            len: stance.len,
-            peak_load: stance.peak_load,
-            peak_frame: stance.peak_frame,
-            sample_frame: presrs_core::stance::sample_frames(stance, sample)
-                .ok()
-                .and_then(|frames| frames.first().copied()),
-            partial: stance.partial,
-        })
-        .collect();
-    let grid = recording.grid();
-    let dead_config = presrs_core::dead_sensels::DeadSenselConfig::default();
-    let dead_sensels = presrs_core::dead_sensels::detect_dead_sensels(recording, &dead_config);
-    let dead_sensels_filled = !dead_sensels.is_empty()
-        && !args.samples.keep_dead_sensels
-        && presrs_core::dead_sensels::correctable(recording.frame_count(), &dead_config);
-    let report = InspectReport {
-        file: args.file.display().to_string(),
-        sensor: recording.meta.sensor.clone(),
-        rows: grid.rows,
-        cols: grid.cols,
-        frames: recording.frame_count(),
-        frame_period_s: recording.frame_period_s(),
-        units: recording.meta.units_or_raw().to_string(),
-        units_stated: recording.meta.units.is_some(),
-        row_pitch_mm: recording.meta.row_pitch_mm,
-        col_pitch_mm: recording.meta.col_pitch_mm,
-        absent_sensels: recording
-            .present()
-            .map_or(0, |mask| mask.iter().filter(|&&here| !here).count()),
-        dead_sensels,
-        dead_sensels_filled,
-        load_min: totals.iter().copied().fold(f64::INFINITY, f64::min),
-        load_max: totals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        baseline_noise: segmentation.noise,
-        stances,
-        warnings: parsed.warnings.clone(),
-    };
+    let report = inspect(&args.file, &args.samples.options())?;
     if args.json {
         return write_json(out, &report);
     }

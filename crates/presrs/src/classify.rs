@@ -1,0 +1,169 @@
+//! Classifying recordings with a trained model: the chosen frame of each file, or the sample frame of
+//! every stance phase of a movie, with a warning where the label may mean little.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use presrs_core::Recording;
+use presrs_core::pipeline::{Session, TrainedModel};
+use presrs_core::stance::{ValidSegmentParams, segment_recording};
+use serde::Serialize;
+
+use crate::dataset::{DeadSenselFills, SampleOptions, read_corrected};
+use crate::error::{Context, Error, Result};
+
+/// One classified frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct Classified {
+    pub file: String,
+    pub frame: usize,
+    pub label: String,
+    pub confidence: f64,
+    /// The posterior of every class (equal priors), by class name.
+    pub posteriors: BTreeMap<String, f64>,
+    /// Why this label may mean little: the frame lies outside every stance phase, or carries no load.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
+}
+
+/// What was classified in one file, and what the user should know about the file.
+#[derive(Clone, Debug, Default)]
+pub struct FileClassification {
+    /// The reader's warnings, and a movie without a complete stance phase.
+    pub warnings: Vec<String>,
+    pub frames: Vec<Classified>,
+}
+
+/// Which frames of a file are classified.
+#[derive(Clone, Debug, Default)]
+pub struct ClassifyOptions {
+    /// This 0-based frame of every file, instead of the stance sample frames.
+    pub frame: Option<usize>,
+    /// How files are read and stances sampled (the sample frame, partial stances, dead sensels).
+    pub samples: SampleOptions,
+}
+
+/// Reads `path` (its dead sensels filled as `options` say, noted in `fills`) and classifies its
+/// frames with `session` (a session of `model`).
+pub fn classify_file(
+    model: &TrainedModel,
+    session: &mut Session<'_>,
+    path: &Path,
+    options: &ClassifyOptions,
+    fills: &mut DeadSenselFills,
+) -> Result<FileClassification> {
+    let (parsed, filled) = read_corrected(
+        path,
+        &options.samples.read,
+        options.samples.dead_sensels.as_ref(),
+    )?;
+    fills.add(path.to_path_buf(), filled);
+    let name = path.display().to_string();
+    let mut classification = classify_recording(model, session, &parsed.recording, &name, options)?;
+    let mut warnings = parsed.warnings;
+    warnings.append(&mut classification.warnings);
+    classification.warnings = warnings;
+    Ok(classification)
+}
+
+/// Classifies the frames `options` choose in `recording` (named `name` in messages).
+pub fn classify_recording(
+    model: &TrainedModel,
+    session: &mut Session<'_>,
+    recording: &Recording,
+    name: &str,
+    options: &ClassifyOptions,
+) -> Result<FileClassification> {
+    let mut warnings = Vec::new();
+    let frames = match options.frame {
+        Some(frame) if frame >= recording.frame_count() => {
+            return Err(Error::invalid(format!(
+                "{name}: --frame {frame} is past the end ({})",
+                frames_numbered(recording.frame_count())
+            )));
+        }
+        Some(frame) => vec![(frame, unloaded_frame_warning(recording, frame))],
+        None if recording.frame_count() == 1 => vec![(0, unloaded_frame_warning(recording, 0))],
+        None => {
+            let segmentation = segment_recording(recording, &ValidSegmentParams::default())
+                .with_context(|| format!("{name}: cannot segment"))?;
+            let frames = segmentation
+                .samples(options.samples.sample, options.samples.include_partial)
+                .context(name)?;
+            if frames.is_empty() {
+                warnings.push(format!(
+                    "{name}: {} frames but no complete stance phase; nothing classified (choose a \
+                     frame with --frame K)",
+                    recording.frame_count()
+                ));
+            }
+            frames.into_iter().map(|frame| (frame, None)).collect()
+        }
+    };
+    let mut classified = Vec::with_capacity(frames.len());
+    for (index, warning) in frames {
+        let Some(frame) = recording.frame(index) else {
+            continue;
+        };
+        let prediction = session
+            .classify(&frame)
+            .map_err(|err| Error::data(format!("{name}: frame {index}: {err}")))?;
+        classified.push(Classified {
+            file: name.to_owned(),
+            frame: index,
+            label: prediction.label.to_owned(),
+            confidence: prediction.confidence,
+            posteriors: model
+                .class_names()
+                .iter()
+                .cloned()
+                .zip(prediction.posteriors.iter().copied())
+                .collect(),
+            warning,
+        });
+    }
+    Ok(FileClassification {
+        warnings,
+        frames: classified,
+    })
+}
+
+/// Why frame `index` (chosen by number) is no foot contact, if it is none: in a movie, a frame
+/// outside every stance phase the segmentation finds (its load above the baseline is at most the
+/// segmentation's `off_level`, or it is a short blip); in a one-frame file, a frame without load.
+pub fn unloaded_frame_warning(recording: &Recording, index: usize) -> Option<String> {
+    let totals = recording.total_per_frame();
+    let total = *totals.get(index)?;
+    if recording.frame_count() == 1 {
+        return (total <= 0.0).then(|| {
+            format!(
+                "frame {index} carries no load (total {total}): the label of an empty image means \
+                 nothing"
+            )
+        });
+    }
+    let segmentation = segment_recording(recording, &ValidSegmentParams::default()).ok()?;
+    if segmentation.stances.iter().any(|s| s.contains(index)) {
+        return None;
+    }
+    let baseline = segmentation.baseline.get(index).copied().unwrap_or(0.0);
+    let round = |x: f64| (x * 1e3).round() / 1e3;
+    Some(format!(
+        "frame {index} lies outside every stance phase (total load {}, {} above the baseline; a \
+         stance frame carries more than {} above it): the foot is not on the ground, so its label \
+         means little",
+        round(total),
+        round(total - baseline),
+        round(segmentation.off_level)
+    ))
+}
+
+/// How many frames a recording has and how they are numbered, for errors about a frame number:
+/// "1 frame, frame 0", "205 frames, numbered 0 to 204".
+pub fn frames_numbered(count: usize) -> String {
+    match count {
+        0 => "no frames".to_owned(),
+        1 => "1 frame, frame 0".to_owned(),
+        n => format!("{n} frames, numbered 0 to {}", n - 1),
+    }
+}
