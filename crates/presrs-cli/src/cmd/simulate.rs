@@ -143,7 +143,7 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     let image_names: Vec<&str> = args.terrain_image.iter().map(|i| i.name.as_str()).collect();
     let (terrains, gaits) = dataset_names(&args.terrains, &image_names, &args.gaits, &config)
-        .map_err(|message| super::usage::UsageError::new("simulate", message))?;
+        .map_err(|message| super::usage::UsageError::error("simulate", message))?;
     let images = args
         .terrain_image
         .iter()

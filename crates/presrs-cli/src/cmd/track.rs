@@ -20,7 +20,7 @@ pub fn run_track_comparison(
     if let Err(message) = presrs::simulation::check_gaits("--start-gait", &args.start_gait, config)
         .and_then(|()| presrs::simulation::check_gaits("--fixed-gait", &args.fixed_gait, config))
     {
-        return Err(super::usage::UsageError::new("simulate", message));
+        return Err(super::usage::UsageError::error("simulate", message));
     }
     let options = TrackOptions {
         seed: args.seed,

@@ -25,7 +25,7 @@ impl std::error::Error for UsageError {}
 
 impl UsageError {
     /// The error for `subcommand`, as an `anyhow::Error` a command returns.
-    pub fn new(subcommand: &'static str, message: impl std::fmt::Display) -> anyhow::Error {
+    pub fn error(subcommand: &'static str, message: impl std::fmt::Display) -> anyhow::Error {
         anyhow::Error::new(Self {
             subcommand,
             message: message.to_string(),
