@@ -1,5 +1,6 @@
 #![doc = include_str!("../README.md")]
 
+pub mod bench;
 pub mod classify;
 pub mod dataset;
 pub mod error;
