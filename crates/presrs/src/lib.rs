@@ -5,6 +5,7 @@ pub mod error;
 pub mod evaluate;
 pub mod method;
 pub mod progress;
+pub mod stream;
 pub mod train;
 
 pub use dataset::{Dataset, Sample, SampleOptions};
