@@ -34,7 +34,9 @@ use crate::error::{Error, Result};
 
 pub use output::BoundedOutput;
 pub use server::{ServeSummary, ServerNotice, ServerOptions, ShutdownHandle, StreamServer};
-pub use session::{ConnectionSummary, InputFormat, SessionNotice, SessionOptions, run_session};
+pub use session::{
+    ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
+};
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
 /// and `--gait`).
