@@ -12,6 +12,7 @@ pub mod progress;
 pub mod report;
 pub mod reproduce;
 pub mod simulation;
+pub mod stream;
 pub mod train;
 
 pub use dataset::{Dataset, Sample, SampleOptions};

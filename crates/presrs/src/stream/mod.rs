@@ -1,0 +1,87 @@
+//! The online stream: pressure frames in as they come, terrain decisions out as JSON lines.
+//!
+//! Input is TekScan ASCII text or the binary frame protocol of `docs/stream-protocol.md`
+//! ([`presrs_io::frame_protocol`]); output is one JSON object per line (`touchdown`, `classification`,
+//! `liftoff`, `error`, `end`). Two ways to run it:
+//! - [`run_session`]: one session over any reader and writer (stdin and stdout, a pipe, a file);
+//! - [`StreamServer`]: binary-protocol clients over TCP on a loopback address, several at once, until
+//!   [`ShutdownHandle::stop`] (or a given number of connections).
+//!
+//! A bad frame (unreadable, non-finite, or of a size the model cannot use) is rejected with an `error`
+//! event and the stream goes on; the `end` event and the [`ConnectionSummary`] count it among
+//! `rejected_frames` and `errors`.
+//!
+//! Without a calibration (in the [`OnlineProfile`]) the detector calibrates on the stream's first frames
+//! (the warm-up, [`OnlineParams::warmup_frames`](presrs_core::online::OnlineParams)); stances in them
+//! are not classified, and a [`SessionNotice`] says so when the warm-up ends.
+//!
+//! Each session has its own causal detector and classifier (`presrs_core::online`); the model is shared
+//! read-only. Faults never panic and never grow memory without bound: frame sizes are capped before
+//! reading, output to a client goes through a [`BoundedOutput`] (overflow is dropped and counted), the
+//! number of clients is capped, idle connections are closed. Nothing here prints: what a person should
+//! see comes back through the notice callbacks and the summaries.
+
+mod events;
+mod output;
+mod server;
+mod session;
+
+use std::path::Path;
+
+use presrs_core::online::OnlineProfile;
+
+use crate::error::{Error, Result};
+
+pub use output::BoundedOutput;
+pub use server::{ServeSummary, ServerNotice, ServerOptions, ShutdownHandle, StreamServer};
+pub use session::{
+    ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
+};
+
+/// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
+/// and `--gait`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ProfileOverrides {
+    /// Classify the k-th frame after touchdown.
+    pub sample_offset: Option<usize>,
+    /// Also fuse the posteriors of these offsets after touchdown (empty: keep the profile's).
+    pub fuse: Vec<usize>,
+    /// Terrain -> recommended gait, added to the profile's table.
+    pub gait: Vec<(String, String)>,
+}
+
+/// The profile to run with: the JSON file `profile_file`, else one learned from the recordings of the
+/// manifest `calibrate`, else the model file's `model_profile`, else the defaults (warm-up
+/// calibration); then `overrides`.
+pub fn resolve_profile(
+    profile_file: Option<&Path>,
+    calibrate: Option<&Path>,
+    model_profile: Option<&OnlineProfile>,
+    overrides: &ProfileOverrides,
+) -> Result<OnlineProfile> {
+    let mut profile = if let Some(path) = profile_file {
+        read_profile(path)?
+    } else if let Some(manifest) = calibrate {
+        crate::train::learn_online_profile(manifest)?
+    } else {
+        model_profile.cloned().unwrap_or_default()
+    };
+    if let Some(k) = overrides.sample_offset {
+        profile.params.sample_offset = k;
+    }
+    if !overrides.fuse.is_empty() {
+        profile.params.fusion_offsets.clone_from(&overrides.fuse);
+    }
+    for (terrain, gait) in &overrides.gait {
+        profile.gait_table.insert(terrain.clone(), gait.clone());
+    }
+    Ok(profile)
+}
+
+/// An online profile from its JSON file.
+pub fn read_profile(path: &Path) -> Result<OnlineProfile> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|err| Error::system(format!("cannot read the profile {}", path.display()), err))?;
+    serde_json::from_str(&text)
+        .map_err(|err| Error::data(format!("invalid online profile {}: {err}", path.display())))
+}

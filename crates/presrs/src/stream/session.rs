@@ -1,0 +1,369 @@
+//! One session: frames from a source through the causal classifier, JSON lines to a sink.
+
+use std::io::{BufRead, Read, Write};
+use std::time::Instant;
+
+use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile, OnlineStats};
+use presrs_core::pipeline::TrainedModel;
+use presrs_core::stance::ValidSegmentParams;
+use presrs_core::{FrameView, Grid};
+use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
+use presrs_io::tekscan_stream::TekscanStream;
+
+use super::events::{end_line, error_line, event_lines};
+use crate::error::Result;
+
+/// How the frames of a session are encoded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InputFormat {
+    /// TekScan ASCII movie text, frame by frame.
+    #[default]
+    Tekscan,
+    /// The binary frame protocol of `docs/stream-protocol.md`.
+    Binary,
+}
+
+/// How to read one session.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SessionOptions {
+    pub format: InputFormat,
+    /// The source's name in messages (`stdin`, a client's address).
+    pub name: String,
+    /// Largest binary frame payload accepted, bytes (checked before it is read).
+    pub max_frame_bytes: usize,
+}
+
+impl Default for SessionOptions {
+    fn default() -> Self {
+        Self {
+            format: InputFormat::Tekscan,
+            name: "stdin".to_owned(),
+            max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES,
+        }
+    }
+}
+
+/// What a session did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ConnectionSummary {
+    /// The classifier's counters; its `rejected_frames` counts only the frames it refused itself.
+    pub stats: OnlineStats,
+    /// Every frame that came and was not used: unreadable (skipped by the reader), of a size the model
+    /// cannot use, or refused by the classifier (another size than the first frame, non-finite values).
+    /// Each is also an error.
+    pub rejected_frames: u64,
+    /// Error events: the rejected frames, classifications that failed and a fatal fault.
+    pub errors: u64,
+    pub dropped_events: u64,
+    /// The input could not go on (bad magic, a frame over the size cap, cut inside a frame, no header).
+    pub fatal: bool,
+    /// Frames the warm-up calibration used (0 with a calibration given); stances in them were not
+    /// classified.
+    pub warmup_frames: u64,
+}
+
+impl ConnectionSummary {
+    /// Whether anything went wrong in the session (a rejected frame or an error).
+    pub fn had_errors(&self) -> bool {
+        self.errors > 0 || self.rejected_frames > 0 || self.fatal
+    }
+}
+
+/// What a session tells the person watching it, as it happens.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SessionNotice {
+    /// An `error` event's message (only the first [`MAX_ERROR_NOTICES`] of a session).
+    Error(String),
+    /// More errors came than are noticed one by one: further ones are only counted.
+    ErrorsMuted,
+    /// The warm-up calibration ended after `frames` frames: stances before then were not classified.
+    WarmupDone { frames: u64 },
+    /// The input ended during the warm-up calibration (`frames` frames): no stance was classified.
+    WarmupUnfinished { frames: u64 },
+}
+
+/// Errors of a session noticed one by one; a faulty client must not flood the log.
+pub const MAX_ERROR_NOTICES: u64 = 10;
+
+/// Runs one session: frames from `input` as `options` say, through the causal classifier, every JSON
+/// line written (and flushed) to `output` at once. A line that cannot be written is dropped and counted
+/// (a closed stdout is the reader's business). Returns when the input ends or cannot go on.
+pub fn run_session<R: BufRead>(
+    model: &TrainedModel,
+    profile: &OnlineProfile,
+    input: R,
+    output: &mut dyn Write,
+    options: &SessionOptions,
+    notify: &dyn Fn(&SessionNotice),
+) -> Result<ConnectionSummary> {
+    let mut emit = |line: String| -> bool {
+        writeln!(output, "{line}")
+            .and_then(|()| output.flush())
+            .is_ok()
+    };
+    match options.format {
+        InputFormat::Tekscan => run_connection(
+            model,
+            profile,
+            tekscan_source(input, &options.name),
+            &mut emit,
+            notify,
+        ),
+        InputFormat::Binary => run_connection(
+            model,
+            profile,
+            binary_source(input, &options.name, options.max_frame_bytes),
+            &mut emit,
+            notify,
+        ),
+    }
+}
+
+/// One frame source: fills `values`/`present`, returns what came.
+pub(super) enum Input {
+    Frame {
+        grid: Grid,
+        has_mask: bool,
+        timestamp_us: Option<u64>,
+        arrival: Instant,
+    },
+    /// A bad frame was skipped; the stream goes on.
+    Skipped(String),
+    /// The stream cannot go on.
+    Fatal(String),
+    End,
+}
+
+/// A session in progress: the classifier, the counters, and where lines and notices go.
+struct Connection<'a, 'm> {
+    model: &'m TrainedModel,
+    profile: &'a OnlineProfile,
+    classifier: OnlineClassifier<'m>,
+    summary: ConnectionSummary,
+    emit: &'a mut dyn FnMut(String) -> bool,
+    notify: &'a dyn Fn(&SessionNotice),
+    /// Errors reported so far (the first few are noticed).
+    reported: u64,
+}
+
+impl Connection<'_, '_> {
+    fn emit(&mut self, line: String) {
+        if !(self.emit)(line) {
+            self.summary.dropped_events += 1;
+        }
+    }
+
+    /// Counts an error, notices it (the first few), and emits its `error` line.
+    fn error(&mut self, message: &str, fatal: bool) {
+        self.summary.errors += 1;
+        if self.reported < MAX_ERROR_NOTICES {
+            (self.notify)(&SessionNotice::Error(message.to_owned()));
+        } else if self.reported == MAX_ERROR_NOTICES {
+            (self.notify)(&SessionNotice::ErrorsMuted);
+        }
+        self.reported += 1;
+        self.emit(error_line(message, fatal));
+    }
+
+    /// Classifies one frame (input frame `index`, as it came), emitting its events or its error.
+    fn frame(
+        &mut self,
+        index: u64,
+        grid: Grid,
+        frame: (&[f64], Option<&[bool]>),
+        arrival: Instant,
+        timestamp_us: Option<u64>,
+    ) {
+        let frames_before = self.classifier.stats().frames;
+        let pushed = match unusable_for_model(self.model, grid) {
+            Some(why) => Err(why),
+            None => match FrameView::new(grid, frame.0, frame.1)
+                .and_then(|view| self.classifier.push(&view))
+            {
+                Ok(step) => {
+                    let latency_us = arrival.elapsed().as_secs_f64() * 1e6;
+                    // A frame taken but not classified is an `error` line (event_lines) and one of
+                    // the session's errors.
+                    let failed = step
+                        .events
+                        .iter()
+                        .filter(|event| matches!(event, OnlineEvent::Failed(_)))
+                        .count();
+                    let lines =
+                        event_lines(&step, self.model, self.profile, latency_us, timestamp_us);
+                    self.summary.errors += failed as u64;
+                    lines.into_iter().for_each(|line| self.emit(line));
+                    Ok(())
+                }
+                Err(err) => Err(err.to_string()),
+            },
+        };
+        let message = match pushed {
+            Ok(()) => return,
+            // Not taken: the classifier's frame count did not move.
+            Err(err) if self.classifier.stats().frames == frames_before => {
+                self.summary.rejected_frames += 1;
+                format!("input frame {index} rejected: {err}")
+            }
+            // Taken (frame `frames_before` of the stream), then not classified.
+            Err(err) => {
+                format!("input frame {index} (frame {frames_before}): classification failed: {err}")
+            }
+        };
+        self.error(&message, false);
+    }
+}
+
+/// Runs the online classifier over `next` until it ends, handing every JSON line to `emit` (which
+/// returns false when it had to drop the line).
+pub(super) fn run_connection(
+    model: &TrainedModel,
+    profile: &OnlineProfile,
+    mut next: impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input,
+    emit: &mut dyn FnMut(String) -> bool,
+    notify: &dyn Fn(&SessionNotice),
+) -> Result<ConnectionSummary> {
+    let classifier = OnlineClassifier::new(
+        model,
+        &ValidSegmentParams::default(),
+        &profile.params,
+        profile.calibration,
+    )?;
+    let mut warming_up = classifier.segmenter().warming_up();
+    let mut conn = Connection {
+        model,
+        profile,
+        classifier,
+        summary: ConnectionSummary::default(),
+        emit,
+        notify,
+        reported: 0,
+    };
+    let (mut values, mut present) = (Vec::new(), Vec::new());
+    // Frames as they came (rejected ones included), for the messages; event frame indices count only
+    // the accepted ones.
+    let mut received = 0u64;
+    loop {
+        match next(&mut values, &mut present) {
+            Input::Frame {
+                grid,
+                has_mask,
+                timestamp_us,
+                arrival,
+            } => {
+                let mask = has_mask.then_some(present.as_slice());
+                conn.frame(received, grid, (&values, mask), arrival, timestamp_us);
+                received += 1;
+                if warming_up && !conn.classifier.segmenter().warming_up() {
+                    warming_up = false;
+                    conn.summary.warmup_frames = conn.classifier.stats().frames;
+                    let frames = conn.summary.warmup_frames;
+                    notify(&SessionNotice::WarmupDone { frames });
+                }
+            }
+            Input::Skipped(message) => {
+                received += 1;
+                conn.summary.rejected_frames += 1;
+                conn.error(&message, false);
+            }
+            Input::Fatal(message) => {
+                conn.summary.fatal = true;
+                conn.error(&message, true);
+                break;
+            }
+            Input::End => break,
+        }
+    }
+    finish(conn, warming_up)
+}
+
+/// Ends the session: the stances still open, the warm-up notice if it never ended, the `end` line.
+fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSummary> {
+    let lines = event_lines(
+        &conn.classifier.finish()?,
+        conn.model,
+        conn.profile,
+        0.0,
+        None,
+    );
+    lines.into_iter().for_each(|line| conn.emit(line));
+    conn.summary.stats = conn.classifier.stats();
+    let frames = conn.summary.stats.frames;
+    if warming_up && frames > 0 {
+        conn.summary.warmup_frames = frames;
+        (conn.notify)(&SessionNotice::WarmupUnfinished { frames });
+    }
+    let end = end_line(&conn.summary);
+    conn.emit(end);
+    Ok(conn.summary)
+}
+
+/// Why `grid` frames cannot be classified by `model` (its crop does not give the grid it was trained
+/// on), or `None` when they can.
+fn unusable_for_model(model: &TrainedModel, grid: Grid) -> Option<String> {
+    let crop = model.crop();
+    match crop.window(grid) {
+        Ok((_, _, cropped)) if cropped == model.image_grid() => None,
+        Ok((_, _, cropped)) => Some(format!(
+            "a {grid} frame gives {cropped} sensels after the model's crop {crop}, the model needs {}",
+            model.image_grid()
+        )),
+        Err(err) => Some(format!(
+            "a {grid} frame does not fit the model's crop {crop}: {err}"
+        )),
+    }
+}
+
+/// A binary-protocol source over any reader.
+pub(super) fn binary_source<R: Read>(
+    mut reader: R,
+    name: &str,
+    max_frame_bytes: usize,
+) -> impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input {
+    let mut frames = FrameReader::new(name, max_frame_bytes);
+    move |values, _present| match frames.read_frame(&mut reader, values) {
+        Ok(Some(header)) => Input::Frame {
+            grid: Grid::new(header.rows, header.cols),
+            has_mask: false,
+            timestamp_us: Some(header.timestamp_us),
+            arrival: Instant::now(),
+        },
+        Ok(None) => Input::End,
+        Err(err @ FrameError::Skipped { .. }) => Input::Skipped(err.to_string()),
+        Err(err) => Input::Fatal(err.to_string()),
+    }
+}
+
+/// A TekScan ASCII source over a buffered reader.
+fn tekscan_source<R: BufRead>(
+    reader: R,
+    name: &str,
+) -> impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input {
+    let mut stream = TekscanStream::new(reader, name);
+    let mut failures = 0usize;
+    move |values, present| match stream.next_frame(values, present) {
+        Ok(Some(frame)) => {
+            failures = 0;
+            match stream.header() {
+                Some(header) => Input::Frame {
+                    grid: header.grid,
+                    has_mask: frame.has_absent,
+                    timestamp_us: None,
+                    arrival: Instant::now(),
+                },
+                None => Input::Fatal("no header".to_owned()),
+            }
+        }
+        Ok(None) => Input::End,
+        Err(err) if stream.header().is_none() => Input::Fatal(err.to_string()),
+        Err(err) => {
+            failures += 1;
+            if failures > 1000 {
+                Input::Fatal(format!("{err} (too many bad frames in a row)"))
+            } else {
+                Input::Skipped(err.to_string())
+            }
+        }
+    }
+}
