@@ -9,6 +9,7 @@ pub mod evaluation;
 pub mod features;
 mod fixed_matrix;
 pub mod frame;
+pub mod metrics;
 pub mod online;
 pub mod pca;
 pub mod perturb;

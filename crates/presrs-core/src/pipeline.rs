@@ -13,6 +13,8 @@
 //! of the configuration and the model, so training and classification preprocess alike. Every image, in
 //! training and afterwards, must have the same grid once cropped.
 
+use std::collections::BTreeMap;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -25,6 +27,7 @@ use crate::crop::Crop;
 use crate::error::{CoreError, Result, check_len};
 use crate::features::{FeatureConfig, FeatureExtractor, Precision};
 use crate::frame::{Frame, FrameView, Grid};
+use crate::metrics::MeanStd;
 use crate::pca::{Pca, ProjectionScratch};
 use crate::preprocess::{FillScratch, Preprocess, fill_from_neighbours, normalise_load};
 
@@ -117,6 +120,36 @@ pub struct TrainingSummary {
     pub validation_per_class: Vec<usize>,
 }
 
+/// One candidate's validation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    pub features: String,
+    pub classifier: String,
+    pub config: TrainConfig,
+    /// Accuracy over the folds (mean and spread); 0 when the candidate failed.
+    pub accuracy: MeanStd,
+    /// Accuracy of each fold, by held-out condition (or `split k`).
+    pub per_fold: BTreeMap<String, f64>,
+    /// Why the candidate could not be trained, if it could not.
+    pub error: Option<String>,
+}
+
+/// What the automatic choice ([`crate::selection::select`]) did: plain data, stored in the model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Selection {
+    /// How the candidates were validated (in words).
+    pub method: String,
+    /// Index of the chosen candidate in `scores`.
+    pub chosen: usize,
+    pub scores: Vec<CandidateScore>,
+}
+
+impl Selection {
+    pub fn chosen(&self) -> Option<&CandidateScore> {
+        self.scores.get(self.chosen)
+    }
+}
+
 /// Everything needed to classify images: crop, feature parameters, PCA, classifier state and class names.
 /// Serialisable; loading re-checks that the parts fit together (the features against the PCA, the PCA
 /// against the classifier, the classifier's own arrays, indices and values, the class names), and that
@@ -149,7 +182,7 @@ struct ModelFields {
     summary: TrainingSummary,
     /// The automatic choice that picked `features` and `classifier`, when there was one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    selection: Option<crate::selection::Selection>,
+    selection: Option<Selection>,
 }
 
 const FORMAT_VERSION: u32 = 1;
@@ -685,12 +718,12 @@ impl TrainedModel {
 
     /// The automatic choice of features and classifier (with every candidate's validation scores), when
     /// the model was trained by [`crate::selection::train_auto`].
-    pub fn selection(&self) -> Option<&crate::selection::Selection> {
+    pub fn selection(&self) -> Option<&Selection> {
         self.fields.selection.as_ref()
     }
 
     /// This model with `selection` recorded.
-    pub fn with_selection(mut self, selection: crate::selection::Selection) -> Self {
+    pub fn with_selection(mut self, selection: Selection) -> Self {
         self.fields.selection = Some(selection);
         self
     }
