@@ -630,7 +630,8 @@ fn folds(samples: &[EvalSample<'_>], protocol: &Protocol, seed: u64) -> Result<V
 mod tests {
     use super::*;
     use crate::frame::Frame;
-    use crate::pipeline::{SYNTHETIC_CLASSES, TrainConfig, synthetic_frame};
+    use crate::pipeline::TrainConfig;
+    use crate::testing::{SYNTHETIC_CLASSES, synthetic_frame};
     use rand::SeedableRng;
 
     fn data() -> Vec<(Frame, &'static str, &'static str)> {

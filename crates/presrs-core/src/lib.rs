@@ -21,6 +21,8 @@ pub mod selection;
 mod simd;
 pub mod split;
 pub mod stance;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 
 pub use crop::Crop;
 pub use error::CoreError;

@@ -1073,7 +1073,7 @@ mod tests {
     fn fault_sweep_numbers_come_from_the_evaluation_engine() {
         use clap::Parser;
         use presrs_core::perturb::Perturbation;
-        use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
+        use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
         use rand::SeedableRng;
 
         #[derive(clap::Parser)]
