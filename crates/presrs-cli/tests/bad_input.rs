@@ -351,7 +351,7 @@ fn bad_model_files_stop_classify() {
     let d = dir.path();
     let frame = d.join("ok.txt");
     std::fs::write(&frame, "1 2\n3 4\n").unwrap();
-    let (model, _) = presrs_core::pipeline::bench_fixture(1, 0).unwrap();
+    let (model, _) = presrs_core::testing::bench_fixture(1, 0).unwrap();
     let good = serde_json::to_vec(&presrs_io::model_file::ModelFile::new(
         model,
         presrs_io::model_file::Provenance::default(),

@@ -8,7 +8,7 @@ use common::{presrs, stderr, stdout};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
+use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
 use presrs_core::{Frame, Grid, Recording, SensorMeta};
 use rand::SeedableRng;
 

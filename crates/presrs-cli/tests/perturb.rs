@@ -7,7 +7,7 @@ mod common;
 use common::presrs;
 use std::path::{Path, PathBuf};
 
-use presrs_core::pipeline::{SYNTHETIC_CLASSES, synthetic_frame};
+use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
 use presrs_core::{Recording, SensorMeta};
 use rand::SeedableRng;
 

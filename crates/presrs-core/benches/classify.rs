@@ -1,5 +1,5 @@
 //! Classification latency and batch throughput on the paper-sized synthetic setup
-//! (`pipeline::bench_fixture`: 44 x 44 frames cropped to 38 x 41, |FFT| N = 2048 -> 1025 features,
+//! (`testing::bench_fixture`: 44 x 44 frames cropped to 38 x 41, |FFT| N = 2048 -> 1025 features,
 //! PCA to 51, Parzen window over 80 stored vectors).
 //!
 //! `cargo bench -p presrs-core --bench classify -- --warm-up-time 1 --measurement-time 3`
@@ -9,7 +9,7 @@ use std::hint::black_box;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use presrs_core::FrameView;
 use presrs_core::features::{Fft1dConfig, Fft1dExtractor};
-use presrs_core::pipeline::bench_fixture;
+use presrs_core::testing::bench_fixture;
 
 const SEED: u64 = 2024;
 const BATCH: usize = 256;

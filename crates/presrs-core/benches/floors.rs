@@ -18,7 +18,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use presrs_core::FrameView;
-use presrs_core::pipeline::bench_fixture;
+use presrs_core::testing::bench_fixture;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 

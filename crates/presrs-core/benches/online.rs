@@ -13,8 +13,9 @@ use std::time::Instant;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use presrs_core::Frame;
 use presrs_core::online::{Calibration, OnlineClassifier, OnlineEvent, OnlineParams};
-use presrs_core::pipeline::{TrainedModel, bench_fixture, synthetic_stream};
+use presrs_core::pipeline::TrainedModel;
 use presrs_core::stance::{ValidSegmentParams, segment};
+use presrs_core::testing::{bench_fixture, synthetic_stream};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

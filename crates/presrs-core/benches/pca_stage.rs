@@ -12,7 +12,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, ColMut, ColRef, MatRef, Par};
 use presrs_core::pca::Pca;
-use presrs_core::pipeline::bench_fixture;
+use presrs_core::testing::bench_fixture;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

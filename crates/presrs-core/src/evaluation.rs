@@ -11,7 +11,6 @@
 //! Every repeat draws with its own seed (`seed + repeat`), so a run is reproducible and repeats differ.
 //! Results are means and standard deviations over the repeats; the confusion matrix sums all repeats.
 
-use crate::reliability::Reliability;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -20,9 +19,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
 use crate::frame::{Frame, FrameView};
-use crate::pipeline::{CheckedTrainConfig, LabeledImage, train};
-use crate::selection::Selection;
+use crate::metrics::ratio;
+use crate::pipeline::{CheckedTrainConfig, LabeledImage, Selection, train};
+use crate::reliability::Reliability;
 use crate::split::{ValidationSize, stratified_split};
+
+// The summaries an [`EvalReport`] is made of, nameable from here as before they moved to the leaf module.
+pub use crate::metrics::{Confusion, MeanStd};
 
 /// One sample to evaluate on.
 #[derive(Clone, Copy, Debug)]
@@ -52,93 +55,6 @@ pub enum Protocol {
         per_class: Option<usize>,
         validation: ValidationSize,
     },
-}
-
-/// Mean and spread over repeats.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct MeanStd {
-    pub mean: f64,
-    pub std: f64,
-}
-
-impl MeanStd {
-    /// Mean and sample standard deviation (0 for a single value).
-    pub fn of(values: &[f64]) -> Self {
-        if values.is_empty() {
-            return Self::default();
-        }
-        let n = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / n;
-        let std = if values.len() > 1 {
-            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-        } else {
-            0.0
-        };
-        Self { mean, std }
-    }
-}
-
-/// Counts of true class (rows) against predicted class (columns), summed over repeats.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Confusion {
-    pub labels: Vec<String>,
-    pub counts: Vec<Vec<u64>>,
-}
-
-impl Confusion {
-    fn new(labels: Vec<String>) -> Self {
-        let n = labels.len();
-        Self {
-            labels,
-            counts: vec![vec![0; n]; n],
-        }
-    }
-
-    /// Each row divided by its total (rows of an absent class stay 0).
-    pub fn row_normalised(&self) -> Vec<Vec<f64>> {
-        self.counts
-            .iter()
-            .map(|row| {
-                let total: u64 = row.iter().sum();
-                row.iter()
-                    .map(|&c| {
-                        if total == 0 {
-                            0.0
-                        } else {
-                            c as f64 / total as f64
-                        }
-                    })
-                    .collect()
-            })
-            .collect()
-    }
-
-    /// Recall of each class: correct / true count.
-    pub fn recall(&self) -> Vec<f64> {
-        (0..self.labels.len())
-            .map(|i| ratio(self.counts[i][i], self.counts[i].iter().sum()))
-            .collect()
-    }
-
-    /// Precision of each class: correct / predicted count.
-    pub fn precision(&self) -> Vec<f64> {
-        (0..self.labels.len())
-            .map(|j| {
-                ratio(
-                    self.counts[j][j],
-                    self.counts.iter().map(|row| row[j]).sum(),
-                )
-            })
-            .collect()
-    }
-}
-
-fn ratio(num: u64, den: u64) -> f64 {
-    if den == 0 {
-        0.0
-    } else {
-        num as f64 / den as f64
-    }
 }
 
 /// What one repeat found.
@@ -714,7 +630,8 @@ fn folds(samples: &[EvalSample<'_>], protocol: &Protocol, seed: u64) -> Result<V
 mod tests {
     use super::*;
     use crate::frame::Frame;
-    use crate::pipeline::{SYNTHETIC_CLASSES, TrainConfig, synthetic_frame};
+    use crate::pipeline::TrainConfig;
+    use crate::testing::{SYNTHETIC_CLASSES, synthetic_frame};
     use rand::SeedableRng;
 
     fn data() -> Vec<(Frame, &'static str, &'static str)> {

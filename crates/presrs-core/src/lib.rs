@@ -9,6 +9,7 @@ pub mod evaluation;
 pub mod features;
 mod fixed_matrix;
 pub mod frame;
+pub mod metrics;
 pub mod online;
 pub mod pca;
 pub mod perturb;
@@ -20,6 +21,8 @@ pub mod selection;
 mod simd;
 pub mod split;
 pub mod stance;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 
 pub use crop::Crop;
 pub use error::CoreError;

@@ -13,42 +13,14 @@
 
 use std::collections::BTreeMap;
 
-use serde::{Deserialize, Serialize};
-
 use crate::error::{CoreError, Result};
-use crate::evaluation::MeanStd;
-use crate::pipeline::{CheckedTrainConfig, LabeledImage, TrainConfig, TrainedModel, train};
+use crate::metrics::MeanStd;
+use crate::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
 use crate::split::{ValidationSize, stratified_split};
 
-/// One candidate's validation.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CandidateScore {
-    pub features: String,
-    pub classifier: String,
-    pub config: TrainConfig,
-    /// Accuracy over the folds (mean and spread); 0 when the candidate failed.
-    pub accuracy: MeanStd,
-    /// Accuracy of each fold, by held-out condition (or `split k`).
-    pub per_fold: BTreeMap<String, f64>,
-    /// Why the candidate could not be trained, if it could not.
-    pub error: Option<String>,
-}
-
-/// What the automatic choice did.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Selection {
-    /// How the candidates were validated (in words).
-    pub method: String,
-    /// Index of the chosen candidate in `scores`.
-    pub chosen: usize,
-    pub scores: Vec<CandidateScore>,
-}
-
-impl Selection {
-    pub fn chosen(&self) -> Option<&CandidateScore> {
-        self.scores.get(self.chosen)
-    }
-}
+// The record of a selection is plain data kept in the trained model (`pipeline`); the procedure lives
+// here. Re-exported so `select`'s result type is nameable beside it.
+pub use crate::pipeline::{CandidateScore, Selection};
 
 struct InnerFold {
     name: String,
@@ -251,6 +223,7 @@ fn check_conditions(conditions: Option<&[&str]>, n_images: usize) -> Result<()> 
 mod tests {
     use super::*;
     use crate::frame::{Frame, Grid};
+    use crate::pipeline::TrainConfig;
 
     /// Four images of `frame`, labelled a, b, a, b.
     fn blank_images(frame: &Frame) -> Vec<LabeledImage<'_>> {

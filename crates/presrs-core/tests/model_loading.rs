@@ -6,10 +6,8 @@
 
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, Fft1dConfig};
-use presrs_core::pipeline::{
-    LabeledImage, MAX_TRANSFORM_LEN, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, synthetic_frame,
-    train,
-};
+use presrs_core::pipeline::{LabeledImage, MAX_TRANSFORM_LEN, TrainConfig, TrainedModel, train};
+use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
 use presrs_core::{Crop, Frame};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -13,12 +13,10 @@ use presrs_core::Frame;
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::FeatureKind;
 use presrs_core::online::{Calibration, OnlineClassifier, OnlineParams};
-use presrs_core::pipeline::{
-    LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, synthetic_frame, synthetic_stream,
-    train,
-};
+use presrs_core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
 use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::{ValidSegmentParams, segment};
+use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame, synthetic_stream};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};

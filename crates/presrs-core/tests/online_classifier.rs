@@ -10,8 +10,8 @@ use presrs_core::online::{
     Calibration, CausalSegmenter, DecisionKind, MAX_OFFSET_FRAMES, OnlineClassifier, OnlineEvent,
     OnlineParams, SegEvent,
 };
-use presrs_core::pipeline::{bench_fixture, synthetic_frame};
 use presrs_core::stance::{ValidSegmentParams, segment};
+use presrs_core::testing::{bench_fixture, synthetic_frame};
 use presrs_core::{Frame, Grid};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -5,9 +5,9 @@
 use presrs_core::classifier::{ClassifierConfig, ParzenConfig, SigmaChoice};
 use presrs_core::features::{FeatureConfig, Fft1dConfig, Fft1dExtractor};
 use presrs_core::pipeline::{
-    BATCH_BLOCK, LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, bench_fixture,
-    extract_features, synthetic_frame, train,
+    BATCH_BLOCK, LabeledImage, TrainConfig, TrainedModel, extract_features, train,
 };
+use presrs_core::testing::{SYNTHETIC_CLASSES, bench_fixture, synthetic_frame};
 use presrs_core::{CoreError, Crop, Frame, FrameView, Grid};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -6,10 +6,10 @@
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{
-    LabeledImage, SYNTHETIC_CLASSES, TrainConfig, TrainedModel, extract_features_with,
-    synthetic_frame, train,
+    LabeledImage, TrainConfig, TrainedModel, extract_features_with, train,
 };
 use presrs_core::preprocess::{FillScratch, Preprocess, fill_from_neighbours, normalise_load};
+use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
 use presrs_core::{Crop, Frame, Grid};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -139,7 +139,7 @@ pub fn parse_model(bytes: &[u8], file: &str) -> Result<ModelFile, IoError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use presrs_core::pipeline::bench_fixture;
+    use presrs_core::testing::bench_fixture;
 
     fn model_bytes() -> Vec<u8> {
         let (model, _) = bench_fixture(3, 0).unwrap();

@@ -13,7 +13,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use presrs_core::pipeline::{SYNTHETIC_CLASSES, bench_fixture};
+use presrs_core::testing::{SYNTHETIC_CLASSES, bench_fixture};
 use presrs_core::{Frame, Grid, Recording, SensorMeta};
 use presrs_core::{LabeledImage, TrainConfig};
 use presrs_io::ReadOptions;

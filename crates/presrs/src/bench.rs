@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use presrs_core::Frame;
-use presrs_core::pipeline::{TrainedModel, bench_fixture};
+use presrs_core::pipeline::TrainedModel;
+use presrs_core::testing::bench_fixture;
 use presrs_io::model_file::{ModelFile, Provenance, load_model, save_model};
 use presrs_io::npy::write_npy_f64;
 use serde::Serialize;
@@ -292,7 +293,7 @@ fn synthetic_fixture(seed: u64) -> Result<Fixture> {
         model,
         frames,
         truth: (0..n)
-            .map(|i| presrs_core::pipeline::SYNTHETIC_CLASSES[i % 4].to_owned())
+            .map(|i| presrs_core::testing::SYNTHETIC_CLASSES[i % 4].to_owned())
             .collect(),
         conditions: vec![String::new(); n],
     })

@@ -18,7 +18,7 @@
 //! every fit was tried: with 28 validation images it capped the confidence near 0.97 and left every
 //! classifier under-confident, calibration error 0.06-0.11 against 0.004-0.06 without it.)
 
-use super::LabeledVectors;
+use super::common::LabeledVectors;
 use crate::error::{CoreError, Result};
 
 /// The range `T` is searched in, relative to the median spread (largest less smallest score) of the rows:

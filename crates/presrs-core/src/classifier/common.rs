@@ -1,8 +1,14 @@
 //! Helpers shared by the classifiers: input checks, and the softmax at a temperature that turns scores into
 //! posteriors (the temperature is fitted in [`super::calibration`]).
 
-use super::LabeledVectors;
 use crate::error::{CoreError, Result};
+
+/// Reduced vectors with their class indices, `n x dims` row-major.
+#[derive(Clone, Copy, Debug)]
+pub struct LabeledVectors<'a> {
+    pub vectors: &'a [f64],
+    pub classes: &'a [usize],
+}
 
 /// Checks shapes, class indices and finiteness of `data`.
 pub(crate) fn check_vectors(

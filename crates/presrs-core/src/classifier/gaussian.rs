@@ -12,8 +12,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::LabeledVectors;
 use super::calibration::{cross_validated_scores, fit_temperature};
+use super::common::LabeledVectors;
 use super::common::{
     accuracy_of_scores, check_vectors, merged, require_per_class, softmax_in_place,
 };

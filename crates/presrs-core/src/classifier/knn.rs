@@ -15,8 +15,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::LabeledVectors;
 use super::calibration::{fit_temperature, is_usable_temperature, unit_temperature};
+use super::common::LabeledVectors;
 use super::common::{
     check_vectors, merged, require_per_class, softmax_in_place, validation_accuracy,
 };

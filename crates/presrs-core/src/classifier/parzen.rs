@@ -25,6 +25,8 @@ use serde::{Deserialize, Serialize};
 
 use super::calibration::{fit_temperature, is_usable_temperature, log_sum_exp, unit_temperature};
 use super::common::{argmax, check_vectors, require_per_class};
+// Defined with the other shared helpers (calibration needs it too); kept nameable from here.
+pub use super::common::LabeledVectors;
 use crate::aligned::Aligned;
 use crate::error::{CoreError, Result, check_len};
 use crate::simd::{columns_times_vector, exp_neg_in_place, ln_in_place};
@@ -260,13 +262,6 @@ impl TryFrom<ParzenFields> for ParzenModel {
             fields.temperature,
         ))
     }
-}
-
-/// Reduced vectors with their class indices, `n x dims` row-major.
-#[derive(Clone, Copy, Debug)]
-pub struct LabeledVectors<'a> {
-    pub vectors: &'a [f64],
-    pub classes: &'a [usize],
 }
 
 impl ParzenModel {

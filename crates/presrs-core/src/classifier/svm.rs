@@ -17,8 +17,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::LabeledVectors;
 use super::calibration::{cross_validated_scores, fit_temperature};
+use super::common::LabeledVectors;
 use super::common::{check_vectors, merged, require_per_class, validation_accuracy};
 use crate::error::{CoreError, Result, check_len};
 

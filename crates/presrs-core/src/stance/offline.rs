@@ -13,7 +13,7 @@
 //!    one pass of median +- 4 x 1.4826 x MAD), refitting the baseline to them as the set changes: their
 //!    median corrects each block's level (a recording shorter than ~1.5 windows gets a least-squares line
 //!    instead) and their MAD is the noise. Drift is followed at the time scale of the window: within one
-//!    window it should stay small against the off level. Cost: O(n log n) per clipping round.
+//!    window it should stay small against the off level. Cost: O(n) per clipping round.
 //! 2. **Hysteresis.** A frame is *loaded* when its load above the baseline exceeds the *off* level and a
 //!    stance must reach the higher *on* level somewhere. Each level is the larger of a multiple of the
 //!    baseline noise (so that noise does not make stances) and a fraction of the recording's load range
@@ -36,11 +36,10 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
+use super::robust::{median, median_and_sigma, quantile};
 use crate::error::{CoreError, Result};
 use crate::recording::Recording;
 
-/// Scale factor turning a median absolute deviation into a standard deviation for Gaussian noise.
-const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 /// Residuals further than this many noise sigmas from the baseline are not "unloaded" frames.
 const CLIP_SIGMAS: f64 = 4.0;
 /// While growing the set of unloaded frames from the low tail, frames up to this many (underestimated)
@@ -610,7 +609,7 @@ impl BaselineFit<'_> {
         }
         scratch.clear();
         scratch.extend((0..n).filter(|&t| quiet[t]).map(residual));
-        let global = quantile(scratch, 0.5);
+        let global = median(scratch);
         let knots: Vec<f64> = self
             .bounds
             .iter()
@@ -619,7 +618,7 @@ impl BaselineFit<'_> {
                 scratch.clear();
                 scratch.extend((start..end).filter(|&t| quiet[t]).map(residual));
                 if scratch.len() >= MIN_QUIET_PER_BLOCK {
-                    level + quantile(scratch, 0.5)
+                    level + median(scratch)
                 } else {
                     level + global
                 }
@@ -665,28 +664,6 @@ fn line_through(values: &[f64], use_point: &[bool]) -> Vec<f64> {
         .collect()
 }
 
-/// Median of `values` and its robust sigma (1.4826 x MAD). Reorders `values`; must not be empty.
-fn median_and_sigma(values: &mut [f64]) -> (f64, f64) {
-    let median = quantile(values, 0.5);
-    for value in values.iter_mut() {
-        *value = (*value - median).abs();
-    }
-    (median, MAD_TO_SIGMA * quantile(values, 0.5))
-}
-
-/// Linearly interpolated quantile `level` in [0, 1] of `values` (sorted in place). 0 for no values.
-fn quantile(values: &mut [f64], level: f64) -> f64 {
-    if values.is_empty() {
-        return 0.0;
-    }
-    values.sort_unstable_by(f64::total_cmp);
-    let position = level.clamp(0.0, 1.0) * (values.len() - 1) as f64;
-    let below = position.floor() as usize;
-    let above = (below + 1).min(values.len() - 1);
-    let weight = position - below as f64;
-    values[below] * (1.0 - weight) + values[above] * weight
-}
-
 /// Piecewise-linear curve through `(xs[i], ys[i])` evaluated at 0..n, extrapolated linearly beyond the
 /// first/last knots (so that a linear drift is followed to the ends). `xs` strictly increasing.
 fn interpolate(xs: &[f64], ys: &[f64], n: usize) -> Vec<f64> {
@@ -714,14 +691,6 @@ fn interpolate(xs: &[f64], ys: &[f64], n: usize) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn quantile_interpolates() {
-        assert_eq!(quantile(&mut [3.0, 1.0, 2.0], 0.5), 2.0);
-        assert_eq!(quantile(&mut [4.0, 1.0], 0.5), 2.5);
-        assert_eq!(quantile(&mut [4.0, 1.0, 2.0, 3.0, 0.0], 0.0), 0.0);
-        assert_eq!(quantile(&mut [], 0.3), 0.0);
-    }
 
     #[test]
     fn interpolation_extrapolates_linearly() {

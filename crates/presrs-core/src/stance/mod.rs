@@ -1,0 +1,21 @@
+//! Stance detection: which frames of a recording or stream are stances, and which frame of each to
+//! classify.
+//!
+//! - [`offline`]: a whole recording at once (the paper's method; [`segment`], [`segment_recording`]).
+//! - [`causal`]: one total load at a time, without looking ahead ([`CausalSegmenter`]), with the offline
+//!   method's rules and levels learned from offline segmentations ([`Calibration`]).
+//!
+//! Both measure the baseline and its noise with the same robust statistics (median, 1.4826 x MAD) from
+//! one private module. The offline items are also nameable here (`stance::segment`), as before the split.
+
+pub mod causal;
+pub mod offline;
+mod robust;
+
+pub use causal::{
+    Calibration, CausalSegmenter, Levels, Liftoff, OnlineParams, SegEvent, SegEvents, Touchdown,
+};
+pub use offline::{
+    SampleFrame, SegmentParams, Segmentation, Stance, ValidSegmentParams, sample_frames, segment,
+    segment_recording,
+};
