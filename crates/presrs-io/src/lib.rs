@@ -6,6 +6,7 @@ pub mod frame_protocol;
 pub mod manifest;
 pub mod model_file;
 pub mod npy;
+mod parsed;
 pub mod png;
 pub mod tekscan;
 pub mod tekscan_stream;
@@ -18,34 +19,10 @@ use presrs_core::Recording;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use error::IoError;
+pub use parsed::{Parsed, ReadOptions};
 pub use tekscan::{parse_tekscan, read_tekscan, write_tekscan, write_tekscan_file};
 
 /// How strictly to read.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct ReadOptions {
-    /// Accept a TekScan file whose last frame is truncated (or that ends before `END_FRAME`): the
-    /// incomplete frame is dropped and reported in [`Parsed::warnings`] instead of being an error. Also
-    /// accept `Frame` numbers that repeat or go back (reported in the warnings, the frames kept).
-    pub lenient: bool,
-}
-
-impl ReadOptions {
-    /// Options for lenient reading (see [`ReadOptions::lenient`]).
-    pub fn lenient() -> Self {
-        Self { lenient: true }
-    }
-}
-
-/// A recording read from a file, with what the reader had to say about it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Parsed {
-    pub recording: Recording,
-    /// Problems that did not stop reading, each naming the file and line (a dropped truncated frame, a
-    /// header value that was not understood and was kept verbatim, a frame count that disagrees with
-    /// `START_FRAME`/`END_FRAME`, a jump in the frame numbers, ...). Empty for a clean file.
-    pub warnings: Vec<String>,
-}
-
 /// The file formats [`read_recording`] knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FileKind {

@@ -12,6 +12,5 @@ pub mod report;
 pub mod reproduce;
 pub mod simulate;
 pub mod stream;
-pub mod track;
 pub mod train;
 pub mod usage;

@@ -2,14 +2,15 @@
 //!
 //! The folder layout is [`presrs::simulation`]'s.
 //!
-//! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`presrs::gait`]).
+//! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`presrs::gait`], [`run_track_comparison`]).
 
 use std::io::Write;
 use std::path::PathBuf;
 
+use presrs::gait::{TrackOptions, compare_on_track};
 use presrs::simulation::{dataset_names, load_config, read_terrain_image, write_dataset};
-use presrs_sim::DatasetSpec;
 use presrs_sim::dataset::BUILTIN_TERRAINS;
+use presrs_sim::{DatasetSpec, SimConfig};
 
 use super::common::TerminalProgress;
 
@@ -136,7 +137,7 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         return Ok(());
     }
     if let Some(track) = &args.track {
-        return super::track::run_track_comparison(args, &config, track, out);
+        return run_track_comparison(args, &config, track, out);
     }
     let Some(out_dir) = args.out.as_deref() else {
         anyhow::bail!("--out DIR is required");
@@ -171,5 +172,42 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         summary.reruns
     )?;
     writeln!(out, "manifest: {}", summary.manifest.display())?;
+    Ok(())
+}
+
+/// `--track`: fixed gaits and (with `--adaptive`) the adaptive policy on the same seeds.
+pub fn run_track_comparison(
+    args: &SimulateArgs,
+    config: &SimConfig,
+    spec: &str,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    // Gait names are judged with the configuration, before anything runs.
+    if let Err(message) = presrs::simulation::check_gaits("--start-gait", &args.start_gait, config)
+        .and_then(|()| presrs::simulation::check_gaits("--fixed-gait", &args.fixed_gait, config))
+    {
+        return Err(super::usage::UsageError::error("simulate", message));
+    }
+    let options = TrackOptions {
+        seed: args.seed,
+        repeats: args.repeats,
+        adaptive: args.adaptive.clone(),
+        gait_sweep: args.gait_sweep,
+        confirm: args.confirm,
+        fixed_gaits: args.fixed_gait.clone(),
+        start_gait: args.start_gait.clone(),
+    };
+    let outcome = compare_on_track(config, spec, &options, &TerminalProgress::default())?;
+    for note in &outcome.notes {
+        writeln!(out, "{note}")?;
+    }
+    if let Some(measured) = &outcome.measured {
+        write!(out, "{}", measured.format())?;
+    }
+    write!(out, "{}", outcome.comparison.format())?;
+    if let Some(path) = &args.json {
+        outcome.comparison.write_json(path)?;
+        writeln!(out, "JSON: {}", path.display())?;
+    }
     Ok(())
 }

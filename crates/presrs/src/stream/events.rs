@@ -4,7 +4,7 @@ use presrs_core::online::{DecisionKind, OnlineEvent, OnlineProfile, Step};
 use presrs_core::pipeline::TrainedModel;
 use serde_json::{Value, json};
 
-use super::session::ConnectionSummary;
+use super::summary::ConnectionSummary;
 
 /// The JSON lines of one step of the classifier.
 pub(super) fn event_lines(

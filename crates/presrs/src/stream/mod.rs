@@ -25,6 +25,7 @@ mod events;
 mod output;
 mod server;
 mod session;
+mod summary;
 
 use std::path::Path;
 

@@ -3,7 +3,7 @@
 use std::io::{BufRead, Read, Write};
 use std::time::Instant;
 
-use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile, OnlineStats};
+use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
 use presrs_core::pipeline::TrainedModel;
 use presrs_core::stance::ValidSegmentParams;
 use presrs_core::{FrameView, Grid};
@@ -11,6 +11,7 @@ use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameRead
 use presrs_io::tekscan_stream::TekscanStream;
 
 use super::events::{end_line, error_line, event_lines};
+pub use super::summary::ConnectionSummary;
 use crate::error::Result;
 
 /// How the frames of a session are encoded.
@@ -40,32 +41,6 @@ impl Default for SessionOptions {
             name: "stdin".to_owned(),
             max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES,
         }
-    }
-}
-
-/// What a session did.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct ConnectionSummary {
-    /// The classifier's counters; its `rejected_frames` counts only the frames it refused itself.
-    pub stats: OnlineStats,
-    /// Every frame that came and was not used: unreadable (skipped by the reader), of a size the model
-    /// cannot use, or refused by the classifier (another size than the first frame, non-finite values).
-    /// Each is also an error.
-    pub rejected_frames: u64,
-    /// Error events: the rejected frames, classifications that failed and a fatal fault.
-    pub errors: u64,
-    pub dropped_events: u64,
-    /// The input could not go on (bad magic, a frame over the size cap, cut inside a frame, no header).
-    pub fatal: bool,
-    /// Frames the warm-up calibration used (0 with a calibration given); stances in them were not
-    /// classified.
-    pub warmup_frames: u64,
-}
-
-impl ConnectionSummary {
-    /// Whether anything went wrong in the session (a rejected frame or an error).
-    pub fn had_errors(&self) -> bool {
-        self.errors > 0 || self.rejected_frames > 0 || self.fatal
     }
 }
 
