@@ -39,197 +39,287 @@ pub(super) struct Header {
     pub(super) end_line: usize,
 }
 
+/// Where the header reader is: a small state machine over the lines up to `ASCII_DATA`.
+#[derive(Clone, Copy, PartialEq)]
+enum State {
+    /// Reading `KEY value` lines.
+    Keys,
+    /// On the line right after a bare `KEY:` label such as `COMMENTS:`: free text, unless it is a
+    /// plausible known key line (`ROWS 44`).
+    AfterLabel,
+}
+
+/// What the header has said so far.
+struct Reader<'a> {
+    file: &'a str,
+    warnings: &'a mut Vec<String>,
+    meta: SensorMeta,
+    rows: Option<usize>,
+    cols: Option<usize>,
+    period: Option<f64>,
+    start_frame: Option<(usize, i64)>,
+    end_frame: Option<(usize, i64)>,
+    /// (value, position in `extra` where it belongs if it stays verbatim): whether it becomes
+    /// `full_scale` depends on `UNITS`, which may come later.
+    saturation: Option<(String, usize)>,
+    /// The line of each known key's first occurrence.
+    seen: HashMap<String, usize>,
+    /// A `Frame N` line ends the header only in files without an `ASCII_DATA` line (so that a comment
+    /// such as `Frame 3 was bad` in a normal header is kept as text).
+    frame_line_ends: bool,
+}
+
+/// Reads the header from the file's `lines`; the driver of the state machine, one line at a time.
 pub(super) fn parse_header(
     lines: &[(usize, &str)],
     file: &str,
     warnings: &mut Vec<String>,
 ) -> Result<Header, IoError> {
-    let mut meta = SensorMeta::default();
-    let mut rows: Option<(usize, usize)> = None;
-    let mut cols: Option<(usize, usize)> = None;
-    let mut period = None;
-    let mut start_frame = None;
-    let mut end_frame = None;
-    // (value, position in `extra` where it belongs if it stays verbatim)
-    let mut saturation: Option<(String, usize)> = None;
-    let mut seen: HashMap<String, usize> = HashMap::new();
-    let mut after_label = false;
-    let mut end = None;
-    // A `Frame N` line ends the header only in files without an `ASCII_DATA` line (so that a comment such
-    // as `Frame 3 was bad` in a normal header is kept as text).
-    let has_ascii_data = lines
-        .iter()
-        .any(|(_, line)| is_ascii_data(line.split_whitespace().next().unwrap_or("")));
-
+    let mut reader = Reader::new(lines, file, warnings);
+    let mut state = State::Keys;
     for (index, &(line_no, raw)) in lines.iter().enumerate() {
         let line = raw.trim();
-        if is_blank(line) {
-            after_label = false;
-            continue;
-        }
         let token = line.split_whitespace().next().unwrap_or("");
-        let key = token.trim_end_matches(':').to_owned();
-        if is_ascii_data(token) {
-            end = Some((index + 1, line_no));
-            break;
-        }
-        if !has_ascii_data && frame_line(line).is_some() {
-            end = Some((index, line_no));
-            break;
-        }
-        let value = line[token.len()..].trim();
-        let key_like = looks_like_key(token);
-        // After a `COMMENTS:` label, a known key counts only if its value makes sense for it.
-        let known = key_like
-            && KNOWN_KEYS.contains(&key.as_str())
-            && (!after_label || plausible_value(&key, value));
-        if !known && (after_label || !key_like) {
-            meta.extra.push((line.to_owned(), String::new()));
-            after_label = false;
-            continue;
-        }
-        after_label = token.ends_with(':') && value.is_empty();
-        if !known {
-            meta.extra.push((token.to_owned(), value.to_owned()));
-            continue;
-        }
-        if let Some(first) = seen.get(&key) {
-            let same_dims = match key.as_str() {
-                "ROWS" | "COLS" => {
-                    let previous = if key == "ROWS" { rows } else { cols };
-                    let now = parse_dim(&key, value, file, line_no)?;
-                    if previous.map(|(_, n)| n) != Some(now) {
-                        return Err(IoError::parse(
-                            file,
-                            line_no,
-                            format!(
-                                "{key} {now} contradicts {key} {} on line {first}",
-                                previous.map_or(0, |(_, n)| n)
-                            ),
-                        ));
-                    }
-                    true
-                }
-                _ => false,
-            };
-            if !same_dims {
-                warnings.push(format!(
-                    "{file} line {line_no}: repeated {key} ignored, keeping the value of line {first}"
-                ));
-            }
-            continue;
-        }
-        seen.insert(key.clone(), line_no);
-        match key.as_str() {
-            "DATA_TYPE" => {}
-            "ROWS" => rows = Some((line_no, parse_dim(&key, value, file, line_no)?)),
-            "COLS" => cols = Some((line_no, parse_dim(&key, value, file, line_no)?)),
-            "START_FRAME" => {
-                start_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?))
-            }
-            "END_FRAME" => {
-                end_frame = Some((line_no, parse_frame_number(&key, value, file, line_no)?))
-            }
-            "SENSOR_TYPE" => meta.sensor = (!value.is_empty()).then(|| value.to_owned()),
-            "UNITS" => meta.units = Some(PressureUnit::parse(value)),
-            "ROW_SPACING" | "COL_SPACING" => match parse_length_mm(value) {
-                Some(mm) if key == "ROW_SPACING" => meta.row_pitch_mm = Some(mm),
-                Some(mm) => meta.col_pitch_mm = Some(mm),
-                None => keep_verbatim(
-                    &mut meta,
-                    warnings,
-                    file,
-                    line_no,
-                    token,
-                    value,
-                    "expected a positive length with a unit (mm, cm or inches)",
-                ),
-            },
-            "SECONDS_PER_FRAME" => match value.parse::<f64>() {
-                Ok(p) if p.is_finite() && p > 0.0 => period = Some(p),
-                _ => keep_verbatim(
-                    &mut meta,
-                    warnings,
-                    file,
-                    line_no,
-                    token,
-                    value,
-                    "expected a positive number of seconds; the frame period is unknown",
-                ),
-            },
-            "NOISE_THRESHOLD" => match value.parse::<f64>() {
-                Ok(n) if n.is_finite() => meta.noise_threshold = Some(n),
-                _ => keep_verbatim(
-                    &mut meta,
-                    warnings,
-                    file,
-                    line_no,
-                    token,
-                    value,
-                    "expected a number",
-                ),
-            },
-            "SATURATION_PRESSURE" => {
-                saturation = Some((value.to_owned(), meta.extra.len()));
-            }
-            _ => meta.extra.push((token.to_owned(), value.to_owned())),
+        state = if is_blank(line) {
+            State::Keys // a label's text is the line right after it, not the next non-blank one
+        } else if is_ascii_data(token) {
+            return reader.finish(index + 1, line_no);
+        } else if reader.frame_line_ends && frame_line(line).is_some() {
+            return reader.finish(index, line_no);
+        } else {
+            reader.key_line(state, line_no, line, token)?
+        };
+    }
+    Err(no_ascii_data(lines, file))
+}
+
+/// The file ended without an `ASCII_DATA` line (nor a `Frame N` line in a file without one).
+fn no_ascii_data(lines: &[(usize, &str)], file: &str) -> IoError {
+    IoError::parse(
+        file,
+        lines.last().map_or(1, |&(n, _)| n),
+        "expected an `ASCII_DATA` line ending the TekScan header, found the end of the file \
+         (is this a TekScan ASCII export?)",
+    )
+}
+
+impl<'a> Reader<'a> {
+    fn new(lines: &[(usize, &str)], file: &'a str, warnings: &'a mut Vec<String>) -> Self {
+        let has_ascii_data = lines
+            .iter()
+            .any(|(_, line)| is_ascii_data(line.split_whitespace().next().unwrap_or("")));
+        Self {
+            file,
+            warnings,
+            meta: SensorMeta::default(),
+            rows: None,
+            cols: None,
+            period: None,
+            start_frame: None,
+            end_frame: None,
+            saturation: None,
+            seen: HashMap::new(),
+            frame_line_ends: !has_ascii_data,
         }
     }
 
-    let last_line = lines.last().map_or(1, |&(n, _)| n);
-    let Some((data_start, end_line)) = end else {
-        return Err(IoError::parse(
-            file,
-            last_line,
-            "expected an `ASCII_DATA` line ending the TekScan header, found the end of the file \
-             (is this a TekScan ASCII export?)",
-        ));
-    };
-    let (rows, cols) = match (rows, cols) {
-        (Some((_, r)), Some((_, c))) => (r, c),
-        (r, c) => {
-            let missing: Vec<&str> = [("ROWS", r.is_none()), ("COLS", c.is_none())]
-                .into_iter()
-                .filter_map(|(k, missing)| missing.then_some(k))
-                .collect();
+    /// A non-blank line starting with `token`: free text, another key, a repeated known key or a
+    /// known key's first occurrence.
+    fn key_line(
+        &mut self,
+        state: State,
+        line_no: usize,
+        line: &str,
+        token: &str,
+    ) -> Result<State, IoError> {
+        let key = token.trim_end_matches(':');
+        let value = line[token.len()..].trim();
+        let after_label = state == State::AfterLabel;
+        let key_like = looks_like_key(token);
+        // After a `COMMENTS:` label, a known key counts only if its value makes sense for it.
+        let known =
+            key_like && KNOWN_KEYS.contains(&key) && (!after_label || plausible_value(key, value));
+        if !known && (after_label || !key_like) {
+            return Ok(self.free_text(line));
+        }
+        if !known {
+            self.other_key(token, value);
+        } else if let Some(&first) = self.seen.get(key) {
+            self.repeated_key(key, value, line_no, first)?;
+        } else {
+            self.seen.insert(key.to_owned(), line_no);
+            self.typed_key(key, token, value, line_no)?;
+        }
+        Ok(if token.ends_with(':') && value.is_empty() {
+            State::AfterLabel
+        } else {
+            State::Keys
+        })
+    }
+
+    /// A line that is not a `KEY value` line: kept whole, with an empty value.
+    fn free_text(&mut self, line: &str) -> State {
+        self.meta.extra.push((line.to_owned(), String::new()));
+        State::Keys
+    }
+
+    /// A key this module does not interpret: kept verbatim, in file order.
+    fn other_key(&mut self, token: &str, value: &str) {
+        self.meta.extra.push((token.to_owned(), value.to_owned()));
+    }
+
+    /// A known key already seen on line `first`: ignored with a warning, except that a ROWS or COLS
+    /// contradicting the first is an error (which grid would be right?).
+    fn repeated_key(
+        &mut self,
+        key: &str,
+        value: &str,
+        line_no: usize,
+        first: usize,
+    ) -> Result<(), IoError> {
+        let previous = match key {
+            "ROWS" => self.rows,
+            "COLS" => self.cols,
+            _ => {
+                let file = self.file;
+                self.warnings.push(format!(
+                    "{file} line {line_no}: repeated {key} ignored, keeping the value of line {first}"
+                ));
+                return Ok(());
+            }
+        };
+        let now = parse_dim(key, value, self.file, line_no)?;
+        if previous != Some(now) {
             return Err(IoError::parse(
-                file,
-                end_line,
+                self.file,
+                line_no,
                 format!(
-                    "the header has no {} line; expected `ROWS <n>` and `COLS <n>` before the data",
-                    missing.join(" or ")
+                    "{key} {now} contradicts {key} {} on line {first}",
+                    previous.unwrap_or(0)
                 ),
             ));
         }
-    };
-    if rows.checked_mul(cols).is_none() {
-        return Err(IoError::parse(
-            file,
-            end_line,
-            format!("ROWS {rows} x COLS {cols} is too large"),
-        ));
+        Ok(())
     }
-    if let Some((value, at)) = saturation {
-        match saturation_in_units(&value, meta.units_or_raw()) {
-            Some(full_scale) => meta.full_scale = Some(full_scale),
+
+    /// The first occurrence of a known key: structural keys are checked, the others fill the header.
+    fn typed_key(
+        &mut self,
+        key: &str,
+        token: &str,
+        value: &str,
+        line_no: usize,
+    ) -> Result<(), IoError> {
+        let file = self.file;
+        match key {
+            "DATA_TYPE" => {}
+            "ROWS" => self.rows = Some(parse_dim(key, value, file, line_no)?),
+            "COLS" => self.cols = Some(parse_dim(key, value, file, line_no)?),
+            "START_FRAME" => {
+                self.start_frame = Some((line_no, parse_frame_number(key, value, file, line_no)?));
+            }
+            "END_FRAME" => {
+                self.end_frame = Some((line_no, parse_frame_number(key, value, file, line_no)?));
+            }
+            "SENSOR_TYPE" => self.meta.sensor = (!value.is_empty()).then(|| value.to_owned()),
+            "UNITS" => self.meta.units = Some(PressureUnit::parse(value)),
+            "SATURATION_PRESSURE" => {
+                self.saturation = Some((value.to_owned(), self.meta.extra.len()));
+            }
+            "ROW_SPACING" | "COL_SPACING" | "SECONDS_PER_FRAME" | "NOISE_THRESHOLD" => {
+                self.measure(key, token, value, line_no);
+            }
+            _ => self.meta.extra.push((token.to_owned(), value.to_owned())),
+        }
+        Ok(())
+    }
+
+    /// A spacing, the frame period or the noise threshold: a value not understood is kept verbatim
+    /// with a warning rather than failing the file.
+    fn measure(&mut self, key: &str, token: &str, value: &str, line_no: usize) {
+        const LENGTH: &str = "expected a positive length with a unit (mm, cm or inches)";
+        let number = value.parse::<f64>().ok().filter(|n| n.is_finite());
+        let (slot, parsed, expected) = match key {
+            "ROW_SPACING" => (&mut self.meta.row_pitch_mm, parse_length_mm(value), LENGTH),
+            "COL_SPACING" => (&mut self.meta.col_pitch_mm, parse_length_mm(value), LENGTH),
+            "SECONDS_PER_FRAME" => (
+                &mut self.period,
+                number.filter(|&p| p > 0.0),
+                "expected a positive number of seconds; the frame period is unknown",
+            ),
+            _ => (&mut self.meta.noise_threshold, number, "expected a number"),
+        };
+        match parsed {
+            Some(parsed) => *slot = Some(parsed),
             None => {
-                // Not expressible in the recording's units (e.g. kPa for a raw export): keep it verbatim.
-                meta.extra.insert(
-                    at.min(meta.extra.len()),
-                    ("SATURATION_PRESSURE".to_owned(), value),
-                );
+                let file = self.file;
+                self.warnings.push(format!(
+                    "{file} line {line_no}: {token} `{value}` not understood ({expected}); kept verbatim"
+                ));
+                self.meta.extra.push((token.to_owned(), value.to_owned()));
             }
         }
     }
-    Ok(Header {
-        grid: Grid::new(rows, cols),
-        period,
-        meta,
-        start_frame,
-        end_frame,
-        data_start,
-        end_line,
-    })
+
+    /// The header ends (data from line index `data_start`, the end on line `end_line`): ROWS and COLS
+    /// must have been given, and SATURATION_PRESSURE can now be read in the final UNITS.
+    fn finish(mut self, data_start: usize, end_line: usize) -> Result<Header, IoError> {
+        let grid = self.grid(end_line)?;
+        self.place_saturation();
+        Ok(Header {
+            grid,
+            period: self.period,
+            meta: self.meta,
+            start_frame: self.start_frame,
+            end_frame: self.end_frame,
+            data_start,
+            end_line,
+        })
+    }
+
+    /// `ROWS x COLS`, both required (the error names the ones missing), the product within `usize`.
+    fn grid(&self, end_line: usize) -> Result<Grid, IoError> {
+        let (rows, cols) = match (self.rows, self.cols) {
+            (Some(r), Some(c)) => (r, c),
+            (r, c) => {
+                let missing: Vec<&str> = [("ROWS", r.is_none()), ("COLS", c.is_none())]
+                    .into_iter()
+                    .filter_map(|(k, missing)| missing.then_some(k))
+                    .collect();
+                return Err(IoError::parse(
+                    self.file,
+                    end_line,
+                    format!(
+                        "the header has no {} line; expected `ROWS <n>` and `COLS <n>` before the data",
+                        missing.join(" or ")
+                    ),
+                ));
+            }
+        };
+        if rows.checked_mul(cols).is_none() {
+            return Err(IoError::parse(
+                self.file,
+                end_line,
+                format!("ROWS {rows} x COLS {cols} is too large"),
+            ));
+        }
+        Ok(Grid::new(rows, cols))
+    }
+
+    /// SATURATION_PRESSURE as `full_scale`, or verbatim at its place in `extra` when it is not
+    /// expressible in the recording's units (e.g. kPa for a raw export).
+    fn place_saturation(&mut self) {
+        let Some((value, at)) = self.saturation.take() else {
+            return;
+        };
+        match saturation_in_units(&value, self.meta.units_or_raw()) {
+            Some(full_scale) => self.meta.full_scale = Some(full_scale),
+            None => self.meta.extra.insert(
+                at.min(self.meta.extra.len()),
+                ("SATURATION_PRESSURE".to_owned(), value),
+            ),
+        }
+    }
 }
 
 /// Whether `value` parses for the keys whose malformed values are errors.
@@ -247,21 +337,6 @@ fn looks_like_key(token: &str) -> bool {
     let mut chars = key.chars();
     chars.next().is_some_and(|c| c.is_ascii_uppercase())
         && chars.all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
-}
-
-fn keep_verbatim(
-    meta: &mut SensorMeta,
-    warnings: &mut Vec<String>,
-    file: &str,
-    line_no: usize,
-    token: &str,
-    value: &str,
-    expected: &str,
-) {
-    warnings.push(format!(
-        "{file} line {line_no}: {token} `{value}` not understood ({expected}); kept verbatim"
-    ));
-    meta.extra.push((token.to_owned(), value.to_owned()));
 }
 
 fn parse_dim(key: &str, value: &str, file: &str, line_no: usize) -> Result<usize, IoError> {
