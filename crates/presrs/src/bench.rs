@@ -223,21 +223,11 @@ fn simulated_fixture(seed: u64) -> Result<Fixture> {
         presrs_core::split::ValidationSize::Count(7),
         seed,
     )?;
-    let images = |indices: &[usize]| -> Vec<presrs_core::pipeline::LabeledImage<'_>> {
-        indices
-            .iter()
-            .map(|&k| {
-                let sample = &samples[g2[k]];
-                presrs_core::pipeline::LabeledImage::new(
-                    sample.frame.view(),
-                    sample.label.as_deref().unwrap_or_default(),
-                )
-            })
-            .collect()
-    };
+    let (train_images, validation_images) = crate::train::split_images(&split, |k| {
+        presrs_core::pipeline::LabeledImage::new(samples[g2[k]].frame.view(), g2_labels[k])
+    });
     let config = presrs_core::pipeline::TrainConfig::default().check()?;
-    let model =
-        presrs_core::pipeline::train(&images(&split.train), &images(&split.validation), &config)?;
+    let model = presrs_core::pipeline::train(&train_images, &validation_images, &config)?;
     let trained: std::collections::HashSet<usize> = split
         .train
         .iter()

@@ -32,6 +32,7 @@ use crate::error::{Context, Error, Result};
 use crate::evaluate::run_counted;
 use crate::method::Method;
 use crate::progress::Progress;
+use crate::train::split_images;
 
 /// The paper's Table II (trained on G2).
 pub const PAPER_TABLE2: [(&str, f64); 4] = [
@@ -144,12 +145,10 @@ pub fn train_report_model(
         .unwrap_or(0);
     let (per_class, validation) = shrink_draw(smallest, per_class, validation);
     let split = stratified_split(&labels, Some(per_class), validation, seed)?;
-    let image = |&k: &usize| {
+    let (train_images, validation_images) = split_images(&split, |k| {
         let (frame, label, _) = samples[pool[k]];
         LabeledImage::new(frame.view(), label)
-    };
-    let train_images: Vec<_> = split.train.iter().map(image).collect();
-    let validation_images: Vec<_> = split.validation.iter().map(image).collect();
+    });
     let model = train(&train_images, &validation_images, config)?;
     let note = format!(
         "Trained for this report on {}: {} training + {} validation images (seed {seed}).",

@@ -34,6 +34,7 @@ use crate::method::CANDIDATE_FEATURES;
 use crate::progress::Progress;
 use crate::report::{PAPER_TABLE2, SimulationReportData, write_simulation_report};
 use crate::simulation::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
+use crate::train::split_images;
 
 /// The paper's classification time on a 2.67 GHz Core 2 Duo, ns.
 pub const PAPER_CLASSIFY_NS: u64 = 245_000;
@@ -682,13 +683,9 @@ fn load_independence(
             ValidationSize::Count(draw.validation),
             seed.wrapping_add(repeat as u64),
         )?;
-        let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
-            indices
-                .iter()
-                .map(|&i| LabeledImage::new(pool[i].frame.view(), labels[i]))
-                .collect()
-        };
-        let (train_images, validation_images) = (images(&split.train), images(&split.validation));
+        let (train_images, validation_images) = split_images(&split, |i| {
+            LabeledImage::new(pool[i].frame.view(), labels[i])
+        });
         let model = train(&train_images, &validation_images, config)?;
         let normalised = train(&train_images, &validation_images, &normalised_config)?;
         let mut session = model.session();

@@ -7,7 +7,7 @@ use std::path::Path;
 use presrs_core::TrainedModel;
 use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::{LabeledImage, train as train_pipeline};
-use presrs_core::split::{ValidationSize, stratified_split};
+use presrs_core::split::{Split, ValidationSize, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
@@ -113,13 +113,9 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         .check_validation_set(options.validation, split.validation.len())
         .with_context(|| format!("{name}: cannot train"))?;
     let grid = pool[0].frame.grid();
-    let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
-        indices
-            .iter()
-            .map(|&i| LabeledImage::new(pool[i].frame.view(), labels[i]))
-            .collect()
-    };
-    let (train_images, validation_images) = (images(&split.train), images(&split.validation));
+    let (train_images, validation_images) = split_images(&split, |i| {
+        LabeledImage::new(pool[i].frame.view(), labels[i])
+    });
     let model = if method.is_auto() {
         let conditions: Option<Vec<&str>> = split
             .train
@@ -168,6 +164,16 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         validation_counts: count(&split.validation),
         warnings,
     })
+}
+
+/// The training and validation images of a draw: `image(i)` is the image at index `i` of what was
+/// drawn from.
+pub fn split_images<'s>(
+    split: &Split,
+    image: impl Fn(usize) -> LabeledImage<'s>,
+) -> (Vec<LabeledImage<'s>>, Vec<LabeledImage<'s>>) {
+    let images = |indices: &[usize]| indices.iter().map(|&i| image(i)).collect();
+    (images(&split.train), images(&split.validation))
 }
 
 /// The online profile (detector calibration and sample frame) learned by segmenting, offline, every
