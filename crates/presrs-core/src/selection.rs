@@ -1,6 +1,6 @@
 //! Automatic choice of the feature family and classifier, by validation inside the training data only.
 //!
-//! Every candidate [`TrainConfig`] is scored on folds made from the training + validation images alone:
+//! Every candidate [`TrainConfig`](crate::pipeline::TrainConfig) is scored on folds made from the training + validation images alone:
 //! - when those images carry conditions (e.g. gaits) with at least two distinct values, **leave one
 //!   condition out**: train on the other conditions (their own 35 % validating the classifier's
 //!   hyper-parameters), test on the held-out one — what users need is accuracy on conditions the model has

@@ -1,6 +1,6 @@
 //! Causal stance detection: one total load at a time, deciding without looking ahead.
 //!
-//! [`segment`](super::segment) sees a whole recording; a robot has to decide while its foot is still on
+//! [`segment`](super::segment()) sees a whole recording; a robot has to decide while its foot is still on
 //! the ground. [`CausalSegmenter`] takes one total load at a time and decides without looking ahead,
 //! with the offline method's rules (see [`super::offline`]):
 //!
@@ -219,8 +219,8 @@ pub struct Liftoff {
     /// the last frame of the stream).
     pub frame: usize,
     /// Whether the stance got its (single-frame) decision. From [`CausalSegmenter`], whether it asked
-    /// for one; from [`OnlineClassifier`], whether a decision was made (false when the sample frame
-    /// could not be classified, see [`OnlineEvent::Failed`]).
+    /// for one; from [`OnlineClassifier`](crate::online::OnlineClassifier), whether a decision was made (false when the sample frame
+    /// could not be classified, see [`OnlineEvent::Failed`](crate::online::OnlineEvent::Failed)).
     pub sampled: bool,
 }
 
