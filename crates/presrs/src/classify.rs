@@ -107,7 +107,7 @@ pub fn classify_recording(
         };
         let prediction = session
             .classify(&frame)
-            .map_err(|err| Error::data(format!("{name}: frame {index}: {err}")))?;
+            .with_context(|| format!("{name}: frame {index}"))?;
         classified.push(Classified {
             file: name.to_owned(),
             frame: index,

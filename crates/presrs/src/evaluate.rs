@@ -330,7 +330,7 @@ impl<'d> EvalSetup<'d> {
             progress,
             f,
         )
-        .map_err(|err| Error::data(format!("{}: {err}", self.dataset.path().display())))
+        .with_context(|| self.dataset.path().display().to_string())
     }
 }
 

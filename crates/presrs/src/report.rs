@@ -728,7 +728,7 @@ pub fn report_dataset(
             &config,
             progress,
         )
-        .map_err(|err| Error::data(format!("{name}: fault sweep: {err}")))?,
+        .with_context(|| format!("{name}: fault sweep"))?,
         _ => (Vec::new(), String::new()),
     };
     let evaluations: Vec<Evaluation<'_>> = reports

@@ -12,7 +12,7 @@ use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
 use crate::dataset::{Dataset, Sample, sample_labels};
-use crate::error::{Context, Error, Result};
+use crate::error::{Context, Result};
 use crate::method::Method;
 
 /// What to train on and how.
@@ -137,7 +137,7 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
             &method.train_config(grid)?,
         )
     }
-    .map_err(|err| Error::data(format!("{name}: training failed: {err}")))?;
+    .with_context(|| format!("{name}: training failed"))?;
     let mut warnings = Vec::new();
     let kept = model.pca().n_components();
     if let Some(dims) = method.dims

@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
+use anyhow::Context;
 use presrs::evaluate::{
     CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow,
     calibration_line,
@@ -180,7 +181,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let rows = setup.compare(&progress)?;
         if args.json {
             let json = CompareJson::new(&rows, &options.method)
-                .map_err(|err| anyhow::anyhow!("{}: {err}", args.manifest.display()))?;
+                .with_context(|| args.manifest.display().to_string())?;
             return write_json(out, &json);
         }
         return print_comparison(&rows, out);
