@@ -16,7 +16,7 @@ use crate::config::SimConfig;
 use crate::error::{Result, SimError, param};
 use crate::sensor::{SensorFaults, SensorInstance};
 use crate::skin::Foot;
-use crate::slip::{Gait, HopTruth, Hopper, Sample};
+use crate::slip::{ContactState, Gait, HopTruth, Hopper};
 use crate::terrain::{HeightMap, Terrain};
 
 /// The paper's Table I: average forward velocity (m/s) per gait (rows G1-G3) and terrain
@@ -389,7 +389,7 @@ impl Simulator {
         let angle_noise = Normal::new(0.0, cfg.realism.touchdown_angle_noise_rad)
             .map_err(|e| param("realism.touchdown_angle_noise_rad", e.to_string()))?;
         let period = cfg.sensor.frame_period_s;
-        let mut samples: Vec<Sample> = Vec::new();
+        let mut samples: Vec<ContactState> = Vec::new();
         for i in 0..cfg.robot.warmup_hops {
             hopper.hop(
                 i,
@@ -539,7 +539,7 @@ pub fn first_repeated<T: PartialEq>(items: &[T]) -> Option<&T> {
 /// ankle spring's torque `k_a * beta`: `x_cop = -(h_a T + k_a beta) / N`; plus the hop's random offset.
 pub fn ankle_cop(
     robot: &crate::slip::RobotParams,
-    sample: &Sample,
+    sample: &ContactState,
     offset: (f64, f64),
 ) -> (f64, f64) {
     let n = sample.normal_force_n.max(1e-9);

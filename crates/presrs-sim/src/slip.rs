@@ -315,9 +315,10 @@ impl GroundParams {
     }
 }
 
-/// Where the robot is between two samples; what the skin model needs at a frame time.
+/// The contact between foot and ground at one instant (between two simulation steps): what the skin
+/// model needs at a frame time. (Not a data-set sample: that is `presrs::Sample`.)
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Sample {
+pub struct ContactState {
     /// Time since the start of the trial, s.
     pub t_s: f64,
     /// Index of the hop whose stance this sample is in (`None` in flight).
@@ -491,7 +492,7 @@ impl Hopper {
         event: &impl Fn(f64, &[f64; 5]) -> f64,
         clock: SampleClock,
         leg_angle_rad: f64,
-        samples: &mut Vec<Sample>,
+        samples: &mut Vec<ContactState>,
         limit: Option<(f64, f64, &str)>,
     ) -> Result<()> {
         let g = GRAVITY_M_PER_S2;
@@ -505,7 +506,7 @@ impl Hopper {
                 return Ok(());
             }
             if self.t_s >= clock.record_from_s - 1e-12 {
-                samples.push(Sample {
+                samples.push(ContactState {
                     t_s: self.t_s,
                     stance_of_hop: None,
                     normal_force_n: 0.0,
@@ -533,7 +534,7 @@ impl Hopper {
         hop_index: usize,
         sample_period_s: f64,
         record_from_s: f64,
-        samples: &mut Vec<Sample>,
+        samples: &mut Vec<ContactState>,
         angle_noise_rad: f64,
     ) -> Result<HopTruth> {
         let g = GRAVITY_M_PER_S2;
@@ -619,7 +620,7 @@ impl Hopper {
                 continue;
             }
             if self.t_s >= record_from_s - 1e-12 {
-                samples.push(Sample {
+                samples.push(ContactState {
                     t_s: self.t_s,
                     stance_of_hop: Some(hop_index),
                     normal_force_n: normal,

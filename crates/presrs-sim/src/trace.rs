@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::config::SimConfig;
 use crate::dataset::Simulator;
 use crate::error::{Result, param};
-use crate::slip::{GRAVITY_M_PER_S2, HopTruth, Hopper, Sample};
+use crate::slip::{ContactState, GRAVITY_M_PER_S2, HopTruth, Hopper};
 
 /// One sample of a [`HopTrace`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -57,7 +57,7 @@ pub fn trace_hops(
     let ground = simulator.terrain(terrain)?.ground();
     let gait_params = simulator.gait(gait)?;
     let mut hopper = Hopper::new(config.robot.clone(), gait_params, ground, config.integrator)?;
-    let mut samples: Vec<Sample> = Vec::new();
+    let mut samples: Vec<ContactState> = Vec::new();
     for i in 0..config.robot.warmup_hops {
         hopper.hop(i, step_s, f64::INFINITY, &mut samples, 0.0)?;
     }
@@ -76,7 +76,7 @@ pub fn trace_hops(
         truths.push(truth);
         let (t_end, end) = (hopper.t_s, hopper.state);
         // Integrate the body's motion from the apex through the samples to the next apex.
-        let accel = |s: &Sample| {
+        let accel = |s: &ContactState| {
             (
                 s.tangential_force_n / mass,
                 s.normal_force_n / mass - GRAVITY_M_PER_S2,
@@ -86,8 +86,8 @@ pub fn trace_hops(
             (t_start, start[0], start[1], start[2], start[3]);
         let mut a = (0.0, -GRAVITY_M_PER_S2);
         let mut hop_points = Vec::with_capacity(samples.len() + 2);
-        hop_points.push((t, x, y, None::<Sample>));
-        let flight_end = Sample {
+        hop_points.push((t, x, y, None::<ContactState>));
+        let flight_end = ContactState {
             t_s: t_end,
             stance_of_hop: None,
             normal_force_n: 0.0,

@@ -38,7 +38,7 @@ use presrs_core::Grid;
 
 use crate::dataset::{Simulator, ankle_cop};
 use crate::error::{Result, SimError, param};
-use crate::slip::{GRAVITY_M_PER_S2, Gait, Hopper, Sample};
+use crate::slip::{ContactState, GRAVITY_M_PER_S2, Gait, Hopper};
 use crate::terrain::Terrain;
 
 /// One stretch of a track: `length_m` metres of one terrain.
@@ -283,7 +283,7 @@ where
         Ok(h)
     };
     let mut hopper = new_hopper(&gait, 0.0, 0.0)?;
-    let mut samples: Vec<Sample> = Vec::new();
+    let mut samples: Vec<ContactState> = Vec::new();
     let mut frames: Vec<f64> = Vec::new();
     let mut counts = Vec::with_capacity(grid.len());
     let mut hops = Vec::new();
