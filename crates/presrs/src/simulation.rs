@@ -220,29 +220,80 @@ pub fn write_dataset_with(
 ) -> Result<(DatasetSummary, Option<Dataset>)> {
     let key = DatasetKey::new(config, spec);
     let sim = Simulator::new(config.clone(), spec.seed, spec.image_terrains.clone())?;
-    let plans: Vec<TrialPlan> = sim.plan(spec)?;
-    let total = plans.len();
-    // The old stamp goes first: until the new one is written, the folder claims no complete data set.
-    // The files it lists that the new data set does not have (movies of a larger one) go at the end.
     let stamp_path = out_dir.join(STAMP_FILE);
-    let old_files: Vec<String> = std::fs::read_to_string(&stamp_path)
+    let old_files = remove_stamp(&stamp_path)?;
+    for dir in [out_dir, &out_dir.join("recordings"), &out_dir.join("truth")] {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+    }
+    let (truths, mut files, kept) = write_trials(&sim, spec, out_dir, keep, progress)?;
+    let velocity = velocity_table(&truths);
+    let mut write_file =
+        |rel: &str, write: &dyn Fn(&mut dyn Write) -> std::io::Result<()>| -> Result<()> {
+            let file = write_hashed(out_dir, rel, write)?;
+            files.insert(rel.to_owned(), file);
+            Ok(())
+        };
+    write_file("manifest.csv", &|w| write_manifest(&truths, w))?;
+    write_file("truth/hops.csv", &|w| write_hops(&truths, w))?;
+    write_file("truth/trials.json", &|w| {
+        serde_json::to_writer(&mut *w, &truths).map_err(std::io::Error::from)?;
+        writeln!(w)
+    })?;
+    write_file("table1.csv", &|w| write_table1(&velocity, w))?;
+    write_file("config.json", &|w| {
+        w.write_all(config_json(config).as_bytes())
+    })?;
+    // The stamp, last.
+    let frames = truths.iter().map(|t| t.frames).sum();
+    let stamp = DatasetStamp {
+        format: STAMP_FORMAT,
+        made_from: key,
+        trials: truths.len(),
+        frames,
+        files,
+    };
+    presrs_io::write_atomic(&stamp_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &stamp).map_err(std::io::Error::from)?;
+        writeln!(w)
+    })?;
+    remove_stale(out_dir, old_files, &stamp);
+    let summary = DatasetSummary::of(out_dir, &truths, frames, velocity);
+    Ok((summary, keep.then_some(Dataset { trials: kept })))
+}
+
+/// Removes the folder's stamp first: until the new one is written, the folder claims no complete data
+/// set. Returns the files the old stamp listed (those the new data set lacks go at the end).
+fn remove_stamp(stamp_path: &Path) -> Result<Vec<String>> {
+    let old_files: Vec<String> = std::fs::read_to_string(stamp_path)
         .ok()
         .and_then(|text| serde_json::from_str::<DatasetStamp>(&text).ok())
         .map(|old| old.files.into_keys().collect())
         .unwrap_or_default();
-    match std::fs::remove_file(&stamp_path) {
-        Err(err) if err.kind() != std::io::ErrorKind::NotFound => {
-            return Err(err)
-                .with_context(|| format!("cannot remove the old stamp {}", stamp_path.display()));
-        }
-        _ => {}
+    match std::fs::remove_file(stamp_path) {
+        Err(err) if err.kind() != std::io::ErrorKind::NotFound => Err(err)
+            .with_context(|| format!("cannot remove the old stamp {}", stamp_path.display())),
+        _ => Ok(old_files),
     }
-    let rec_dir = out_dir.join("recordings");
-    let truth_dir = out_dir.join("truth");
-    for dir in [out_dir, &rec_dir, &truth_dir] {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
-    }
+}
+
+/// The trials' truth and movie files, and the trials themselves with `keep`.
+type WrittenTrials = (
+    Vec<TrialTruth>,
+    BTreeMap<String, FileStamp>,
+    Vec<TrialOutput>,
+);
+
+/// Simulates every trial of `spec` (in parallel) and writes its movie; returns the truths in plan
+/// order, the movies' stamps and (with `keep`) the trials.
+fn write_trials(
+    sim: &Simulator,
+    spec: &DatasetSpec,
+    out_dir: &Path,
+    keep: bool,
+    progress: &dyn Progress,
+) -> Result<WrittenTrials> {
+    let total = sim.plan(spec)?.len();
     progress.start("simulating trials", Some(total as u64));
     type Written = (TrialTruth, FileStamp, Option<TrialOutput>);
     let written = sim.for_each_trial(spec, |trial| -> Result<Written> {
@@ -267,131 +318,107 @@ pub fn write_dataset_with(
         Ok((truth, file, keep.then_some(trial)))
     });
     progress.finish();
-    let written: Vec<Written> = written?;
     let mut files = BTreeMap::new();
-    let mut truths = Vec::with_capacity(written.len());
+    let mut truths = Vec::new();
     let mut kept = Vec::new();
-    for (truth, file, trial) in written {
+    for (truth, file, trial) in written? {
         files.insert(truth.path.clone(), file);
         truths.push(truth);
         kept.extend(trial);
     }
-    let mut write_file =
-        |rel: &str, write: &dyn Fn(&mut dyn Write) -> std::io::Result<()>| -> Result<()> {
-            let file = write_hashed(out_dir, rel, write)?;
-            files.insert(rel.to_owned(), file);
-            Ok(())
-        };
+    Ok((truths, files, kept))
+}
 
-    // Manifest.
-    write_file("manifest.csv", &|w| {
-        writeln!(w, "path,label,condition,group,frame,load")?;
-        for t in &truths {
+/// `manifest.csv`: one row per movie.
+fn write_manifest(truths: &[TrialTruth], w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "path,label,condition,group,frame,load")?;
+    for t in truths {
+        writeln!(
+            w,
+            "{},{},{},{},,{}",
+            csv_cell(&t.path),
+            csv_cell(&t.terrain),
+            csv_cell(&t.gait),
+            csv_cell(&t.name),
+            t.load_kg
+        )?;
+    }
+    Ok(())
+}
+
+/// `truth/hops.csv`: one row per hop.
+fn write_hops(truths: &[TrialTruth], w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "path,group,label,condition,hop,touchdown_time_s,liftoff_time_s,stance_duration_s,\
+         touchdown_angle_rad,liftoff_angle_rad,first_stance_frame,last_stance_frame,mid_stance_frame,\
+         stance_frames,peak_normal_force_n,peak_tangential_force_n,mid_stance_normal_force_n,\
+         mean_forward_velocity_m_per_s,apex_height_m,load_kg"
+    )?;
+    for t in truths {
+        for h in &t.hops {
+            let opt = |v: Option<usize>| v.map(|v| v.to_string()).unwrap_or_default();
+            let mid_force = match (h.mid_stance_frame, h.first_stance_frame) {
+                (Some(mid), Some(first)) => h
+                    .frame_normal_force_n
+                    .get(mid - first)
+                    .map(|f| format!("{f}"))
+                    .unwrap_or_default(),
+                _ => String::new(),
+            };
+            let tr = &h.truth;
             writeln!(
                 w,
-                "{},{},{},{},,{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 csv_cell(&t.path),
+                csv_cell(&t.name),
                 csv_cell(&t.terrain),
                 csv_cell(&t.gait),
-                csv_cell(&t.name),
+                tr.hop,
+                tr.touchdown_time_s,
+                tr.liftoff_time_s,
+                tr.stance_duration_s,
+                tr.touchdown_angle_rad,
+                tr.liftoff_angle_rad,
+                opt(h.first_stance_frame),
+                opt(h.last_stance_frame),
+                opt(h.mid_stance_frame),
+                h.frame_normal_force_n.len(),
+                tr.peak_normal_force_n,
+                tr.peak_tangential_force_n,
+                mid_force,
+                tr.mean_forward_velocity_m_per_s,
+                tr.apex_height_m,
                 t.load_kg
             )?;
         }
-        Ok(())
-    })?;
+    }
+    Ok(())
+}
 
-    // Per-hop truth.
-    write_file("truth/hops.csv", &|w| {
-        writeln!(
-            w,
-            "path,group,label,condition,hop,touchdown_time_s,liftoff_time_s,stance_duration_s,\
-             touchdown_angle_rad,liftoff_angle_rad,first_stance_frame,last_stance_frame,mid_stance_frame,\
-             stance_frames,peak_normal_force_n,peak_tangential_force_n,mid_stance_normal_force_n,\
-             mean_forward_velocity_m_per_s,apex_height_m,load_kg"
-        )?;
-        for t in &truths {
-            for h in &t.hops {
-                let opt = |v: Option<usize>| v.map(|v| v.to_string()).unwrap_or_default();
-                let mid_force = match (h.mid_stance_frame, h.first_stance_frame) {
-                    (Some(mid), Some(first)) => h
-                        .frame_normal_force_n
-                        .get(mid - first)
-                        .map(|f| format!("{f}"))
-                        .unwrap_or_default(),
-                    _ => String::new(),
-                };
-                let tr = &h.truth;
-                writeln!(
-                    w,
-                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                    csv_cell(&t.path),
-                    csv_cell(&t.name),
-                    csv_cell(&t.terrain),
-                    csv_cell(&t.gait),
-                    tr.hop,
-                    tr.touchdown_time_s,
-                    tr.liftoff_time_s,
-                    tr.stance_duration_s,
-                    tr.touchdown_angle_rad,
-                    tr.liftoff_angle_rad,
-                    opt(h.first_stance_frame),
-                    opt(h.last_stance_frame),
-                    opt(h.mid_stance_frame),
-                    h.frame_normal_force_n.len(),
-                    tr.peak_normal_force_n,
-                    tr.peak_tangential_force_n,
-                    mid_force,
-                    tr.mean_forward_velocity_m_per_s,
-                    tr.apex_height_m,
-                    t.load_kg
-                )?;
-            }
+/// `table1.csv`: the simulated velocity per gait and terrain beside the paper's.
+fn write_table1(velocity: &VelocityTable, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "gait,terrain,velocity_m_per_s,paper_m_per_s,hops")?;
+    for (gi, (g, row)) in velocity
+        .gaits
+        .iter()
+        .zip(&velocity.velocity_m_per_s)
+        .enumerate()
+    {
+        for (ti, (t, v)) in velocity.terrains.iter().zip(row).enumerate() {
+            let paper = VelocityTable::paper_value(g, t)
+                .map(|p| p.to_string())
+                .unwrap_or_default();
+            writeln!(w, "{g},{t},{v},{paper},{}", velocity.hops[gi][ti])?;
         }
-        Ok(())
-    })?;
-    write_file("truth/trials.json", &|w| {
-        serde_json::to_writer(&mut *w, &truths).map_err(std::io::Error::from)?;
-        writeln!(w)
-    })?;
+    }
+    Ok(())
+}
 
-    // Table I.
-    let velocity = velocity_table(&truths);
-    write_file("table1.csv", &|w| {
-        writeln!(w, "gait,terrain,velocity_m_per_s,paper_m_per_s,hops")?;
-        for (gi, (g, row)) in velocity
-            .gaits
-            .iter()
-            .zip(&velocity.velocity_m_per_s)
-            .enumerate()
-        {
-            for (ti, (t, v)) in velocity.terrains.iter().zip(row).enumerate() {
-                let paper = VelocityTable::paper_value(g, t)
-                    .map(|p| p.to_string())
-                    .unwrap_or_default();
-                writeln!(w, "{g},{t},{v},{paper},{}", velocity.hops[gi][ti])?;
-            }
-        }
-        Ok(())
-    })?;
-    write_file("config.json", &|w| {
-        w.write_all(config_json(config).as_bytes())
-    })?;
-
-    // The stamp, last.
-    let frames = truths.iter().map(|t| t.frames).sum();
-    let stamp = DatasetStamp {
-        format: STAMP_FORMAT,
-        made_from: key,
-        trials: truths.len(),
-        frames,
-        files,
-    };
-    presrs_io::write_atomic(&stamp_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &stamp).map_err(std::io::Error::from)?;
-        writeln!(w)
-    })?;
+/// Removes the files an older data set in the folder had and the new stamp does not list.
+fn remove_stale(out_dir: &Path, old_files: Vec<String>, stamp: &DatasetStamp) {
     for rel in old_files {
-        // Only plain relative paths inside the folder, as this function writes them.
+        // Only plain relative paths inside the folder, as this module writes them.
         let inside = Path::new(&rel)
             .components()
             .all(|c| matches!(c, std::path::Component::Normal(_)));
@@ -400,26 +427,29 @@ pub fn write_dataset_with(
             let _ = std::fs::remove_file(out_dir.join(&rel));
         }
     }
+}
 
-    let hops: usize = truths.iter().map(|t| t.hops.len()).sum();
-    let stance_sum: f64 = truths
-        .iter()
-        .flat_map(|t| t.hops.iter().map(|h| h.truth.stance_duration_s))
-        .sum();
-    let summary = DatasetSummary {
-        manifest: out_dir.join("manifest.csv"),
-        trials: truths.len(),
-        hops,
-        frames,
-        reruns: truths.iter().map(|t| t.attempts - 1).sum(),
-        velocity,
-        mean_stance_s: if hops == 0 {
-            f64::NAN
-        } else {
-            stance_sum / hops as f64
-        },
-    };
-    Ok((summary, keep.then_some(Dataset { trials: kept })))
+impl DatasetSummary {
+    fn of(out_dir: &Path, truths: &[TrialTruth], frames: usize, velocity: VelocityTable) -> Self {
+        let hops: usize = truths.iter().map(|t| t.hops.len()).sum();
+        let stance_sum: f64 = truths
+            .iter()
+            .flat_map(|t| t.hops.iter().map(|h| h.truth.stance_duration_s))
+            .sum();
+        Self {
+            manifest: out_dir.join("manifest.csv"),
+            trials: truths.len(),
+            hops,
+            frames,
+            reruns: truths.iter().map(|t| t.attempts - 1).sum(),
+            velocity,
+            mean_stance_s: if hops == 0 {
+                f64::NAN
+            } else {
+                stance_sum / hops as f64
+            },
+        }
+    }
 }
 
 /// Reads back the data set `write_dataset` wrote in `dir`, if its stamp says it was made from `wanted`
