@@ -326,49 +326,11 @@ pub fn reproduce(options: &ReproduceOptions, progress: &dyn Progress) -> Result<
 
     // 5. Load independence.
     let load_start = Instant::now();
-    let nominal_kg = sim_config.robot.body_mass_kg;
-    let mut heavy_spec = spec.clone();
-    heavy_spec.load_kg = Some(nominal_kg * (1.0 + args.extra_load));
-    heavy_spec.seed = args.seed.wrapping_add(1_000_003);
-    let heavy_dir = args
-        .out
-        .join(format!("dataset-load{:.2}", 1.0 + args.extra_load));
-    let (load_dataset_note, heavy) = match obtain_dataset(
-        &sim_config,
-        &heavy_spec,
-        &heavy_dir,
-        args.resimulate,
-        progress,
-    ) {
-        Ok((heavy, origin)) => {
-            let note = Some(origin.note.clone());
-            datasets.insert("load".to_owned(), origin);
-            (
-                note,
-                stance_samples(&heavy.trials).map(|(samples, _)| samples),
-            )
-        }
-        Err((note, err)) => (note, Err(err)),
-    };
-    let (load_check, load_error) = match heavy {
-        Ok(heavy_samples) => {
-            let training_pool: Vec<&Sample> = samples
-                .iter()
-                .filter(|s| s.condition.as_deref() == Some("G2"))
-                .collect();
-            let check = load_independence(
-                &training_pool,
-                &heavy_samples,
-                (nominal_kg, nominal_kg * (1.0 + args.extra_load)),
-                &config,
-                draw,
-                (args.repeats, args.seed),
-            )?;
-            (Some(check), None)
-        }
-        // The main tables stand on their own; say why this part is missing instead of failing all.
-        Err(err) => (None, Some(err.to_string())),
-    };
+    let load = load_test(&sim_config, &spec, &samples, &config, args, progress)?;
+    if let Some(origin) = load.origin {
+        datasets.insert("load".to_owned(), origin);
+    }
+    let (load_dataset_note, load_check, load_error) = (load.note, load.check, load.error);
     timings.insert(
         "load_independence".to_owned(),
         load_start.elapsed().as_secs_f64(),
@@ -412,31 +374,15 @@ pub fn reproduce(options: &ReproduceOptions, progress: &dyn Progress) -> Result<
         evaluations,
         timings_s: timings,
     };
-    let json_path = args.out.join("results.json");
-    write_atomic(&json_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &results).map_err(std::io::Error::from)?;
-        writeln!(w)
-    })?;
-    let report_path = match &report_data {
-        Some(report_data) => {
-            progress.start("writing the report", None);
-            let path = write_simulation_report(
-                report_data,
-                &sim_config,
-                &results.evaluations,
-                args.seed,
-                &args.out.join("report"),
-            );
-            progress.finish();
-            Some(path?)
-        }
-        None => None,
-    };
     let table1_text = table.format_with_paper();
-    let markdown_path = args.out.join("results.md");
-    write_atomic(&markdown_path, |w| {
-        write_markdown(&results, &table1_text, w)
-    })?;
+    let (json_path, markdown_path, report_path) = write_results(
+        &results,
+        &table1_text,
+        report_data.as_ref(),
+        &sim_config,
+        args,
+        progress,
+    )?;
     Ok(Reproduction {
         results,
         table1_text,
@@ -446,6 +392,118 @@ pub fn reproduce(options: &ReproduceOptions, progress: &dyn Progress) -> Result<
         json_path,
         markdown_path,
         report_path,
+    })
+}
+
+/// Writes `results.json`, the report (from `report_data`) and `results.md`; returns their paths.
+fn write_results(
+    results: &Results,
+    table1_text: &str,
+    report_data: Option<&SimulationReportData>,
+    sim_config: &SimConfig,
+    args: &ReproduceOptions,
+    progress: &dyn Progress,
+) -> Result<(PathBuf, PathBuf, Option<PathBuf>)> {
+    let json_path = args.out.join("results.json");
+    write_atomic(&json_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, results).map_err(std::io::Error::from)?;
+        writeln!(w)
+    })?;
+    let report_path = match report_data {
+        Some(report_data) => {
+            progress.start("writing the report", None);
+            let path = write_simulation_report(
+                report_data,
+                sim_config,
+                &results.evaluations,
+                args.seed,
+                &args.out.join("report"),
+            );
+            progress.finish();
+            Some(path?)
+        }
+        None => None,
+    };
+    let markdown_path = args.out.join("results.md");
+    write_atomic(&markdown_path, |w| write_markdown(results, table1_text, w))?;
+    Ok((json_path, markdown_path, report_path))
+}
+
+/// What the load-independence test found, and where its data set came from.
+struct LoadTest {
+    origin: Option<DatasetOrigin>,
+    /// `reusing ...` / `simulating ...`, when the heavier hopper's data set was tried.
+    note: Option<String>,
+    check: Option<LoadCheck>,
+    /// Why there is no check (the heavier hopper could not be simulated or segmented).
+    error: Option<String>,
+}
+
+/// The load-independence test: the heavier hopper's data set (read back or simulated), and models
+/// trained on the nominal G2 `samples` tested on it. A heavier hopper that cannot be had is reported,
+/// not fatal: the main tables stand on their own.
+fn load_test(
+    sim_config: &SimConfig,
+    spec: &DatasetSpec,
+    samples: &[Sample],
+    config: &CheckedTrainConfig,
+    args: &ReproduceOptions,
+    progress: &dyn Progress,
+) -> Result<LoadTest> {
+    let nominal_kg = sim_config.robot.body_mass_kg;
+    let heavy_kg = nominal_kg * (1.0 + args.extra_load);
+    let mut heavy_spec = spec.clone();
+    heavy_spec.load_kg = Some(heavy_kg);
+    heavy_spec.seed = args.seed.wrapping_add(1_000_003);
+    let heavy_dir = args
+        .out
+        .join(format!("dataset-load{:.2}", 1.0 + args.extra_load));
+    let (origin, note, heavy) = match obtain_dataset(
+        sim_config,
+        &heavy_spec,
+        &heavy_dir,
+        args.resimulate,
+        progress,
+    ) {
+        Ok((heavy, origin)) => {
+            let note = Some(origin.note.clone());
+            let samples = stance_samples(&heavy.trials).map(|(samples, _)| samples);
+            (Some(origin), note, samples)
+        }
+        Err((note, err)) => (None, note, Err(err)),
+    };
+    let heavy_samples = match heavy {
+        Ok(heavy_samples) => heavy_samples,
+        Err(err) => {
+            return Ok(LoadTest {
+                origin,
+                note,
+                check: None,
+                error: Some(err.to_string()),
+            });
+        }
+    };
+    let training_pool: Vec<&Sample> = samples
+        .iter()
+        .filter(|s| s.condition.as_deref() == Some("G2"))
+        .collect();
+    let draw = Draw {
+        per_class: args.per_class,
+        validation: args.validation,
+    };
+    let check = load_independence(
+        &training_pool,
+        &heavy_samples,
+        (nominal_kg, heavy_kg),
+        config,
+        draw,
+        (args.repeats, args.seed),
+    )?;
+    Ok(LoadTest {
+        origin,
+        note,
+        check: Some(check),
+        error: None,
     })
 }
 
