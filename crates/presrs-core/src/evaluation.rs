@@ -27,17 +27,6 @@ use crate::split::{ValidationSize, stratified_split};
 // The summaries an [`EvalReport`] is made of, nameable from here as before they moved to the leaf module.
 pub use crate::metrics::{Confusion, MeanStd};
 
-/// One sample to evaluate on.
-#[derive(Clone, Copy, Debug)]
-pub struct EvalSample<'a> {
-    pub frame: FrameView<'a>,
-    pub label: &'a str,
-    /// The operating condition (e.g. gait) the sample was recorded in.
-    pub condition: Option<&'a str>,
-    /// The value of the leave-one-out column, when that protocol is used.
-    pub group: Option<&'a str>,
-}
-
 /// How training and test sets are formed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -129,7 +118,7 @@ pub struct Evaluated {
 /// the samples, the protocol and the seed, so runs with the same ones pair up.
 #[derive(Clone, Copy)]
 pub struct Evaluation<'e, 's> {
-    pub samples: &'e [EvalSample<'s>],
+    pub samples: &'e [LabeledImage<'s>],
     pub protocol: &'e Protocol,
     pub repeats: usize,
     pub seed: u64,
@@ -165,11 +154,8 @@ impl Evaluation<'_, '_> {
         perturbs: &[Option<&TestTransform<'_>>],
     ) -> Result<Evaluated> {
         let samples = self.samples;
-        let images = |set: &[usize]| -> Vec<LabeledImage<'_>> {
-            set.iter()
-                .map(|&i| LabeledImage::new(samples[i].frame, samples[i].label))
-                .collect()
-        };
+        let images =
+            |set: &[usize]| -> Vec<LabeledImage<'_>> { set.iter().map(|&i| samples[i]).collect() };
         match models {
             Models::Config(config) => {
                 let reports = self.run_with(perturbs, &|train_set, validation_set, _| {
@@ -470,10 +456,10 @@ pub struct ComparisonRow {
 /// or as `"all"` (a training condition): such samples are wrong whatever the model, e.g. a group that is
 /// one terrain's only trial. Empty when every tested label can be trained. Sorted.
 pub fn labels_never_trained(
-    samples: &[EvalSample<'_>],
+    samples: &[LabeledImage<'_>],
     protocol: &Protocol,
 ) -> BTreeMap<String, Vec<String>> {
-    let labels_where = |keep: &dyn Fn(&EvalSample<'_>) -> bool| {
+    let labels_where = |keep: &dyn Fn(&LabeledImage<'_>) -> bool| {
         samples
             .iter()
             .filter(|s| keep(s))
@@ -526,7 +512,7 @@ struct Fold {
 }
 
 impl Fold {
-    fn key_of(&self, sample: &EvalSample<'_>) -> String {
+    fn key_of(&self, sample: &LabeledImage<'_>) -> String {
         let key = if self.by_group {
             sample.group
         } else {
@@ -536,7 +522,7 @@ impl Fold {
     }
 }
 
-fn folds(samples: &[EvalSample<'_>], protocol: &Protocol, seed: u64) -> Result<Vec<Fold>> {
+fn folds(samples: &[LabeledImage<'_>], protocol: &Protocol, seed: u64) -> Result<Vec<Fold>> {
     match protocol {
         Protocol::TrainCondition {
             condition,
@@ -670,7 +656,7 @@ mod tests {
 
     /// `protocol` on `samples`, `repeats` times from `seed`, without a progress callback.
     fn evaluation<'e, 's>(
-        samples: &'e [EvalSample<'s>],
+        samples: &'e [LabeledImage<'s>],
         protocol: &'e Protocol,
         repeats: usize,
         seed: u64,
@@ -684,9 +670,9 @@ mod tests {
         }
     }
 
-    fn samples<'a>(data: &'a [(Frame, &'static str, &'static str)]) -> Vec<EvalSample<'a>> {
+    fn samples<'a>(data: &'a [(Frame, &'static str, &'static str)]) -> Vec<LabeledImage<'a>> {
         data.iter()
-            .map(|(frame, label, condition)| EvalSample {
+            .map(|(frame, label, condition)| LabeledImage {
                 frame: frame.view(),
                 label,
                 condition: Some(condition),
@@ -744,9 +730,9 @@ mod tests {
             ("grass", "t2"),
             ("wood", "t3"),
         ];
-        let samples: Vec<EvalSample<'_>> = rows
+        let samples: Vec<LabeledImage<'_>> = rows
             .iter()
-            .map(|&(label, group)| EvalSample {
+            .map(|&(label, group)| LabeledImage {
                 frame: frame.view(),
                 label,
                 condition: Some(group),

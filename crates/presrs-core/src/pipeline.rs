@@ -96,16 +96,28 @@ impl TryFrom<TrainConfig> for CheckedTrainConfig {
     }
 }
 
-/// A training or validation image with its class name.
+/// A labelled image as the algorithms see it (a borrowed view of a data set's sample): its class name
+/// and, for evaluation, the operating condition it was recorded in and its value of the held-out
+/// column.
 #[derive(Clone, Copy, Debug)]
 pub struct LabeledImage<'a> {
     pub frame: FrameView<'a>,
     pub label: &'a str,
+    /// The operating condition (e.g. gait) the image was recorded in.
+    pub condition: Option<&'a str>,
+    /// The value of the leave-one-out column, when that protocol is used.
+    pub group: Option<&'a str>,
 }
 
 impl<'a> LabeledImage<'a> {
+    /// An image with its class name (no condition, no group).
     pub fn new(frame: FrameView<'a>, label: &'a str) -> Self {
-        Self { frame, label }
+        Self {
+            frame,
+            label,
+            condition: None,
+            group: None,
+        }
     }
 }
 

@@ -5,9 +5,10 @@
 use std::collections::BTreeMap;
 
 use presrs_core::evaluation::{
-    ComparisonRow, EvalReport, EvalSample, Evaluated, Evaluation, Models, Protocol, TestTransform,
+    ComparisonRow, EvalReport, Evaluated, Evaluation, Models, Protocol, TestTransform,
 };
 use presrs_core::perturb::Perturbation;
+use presrs_core::pipeline::LabeledImage;
 use presrs_core::reliability::Reliability;
 use presrs_core::split::ValidationSize;
 use presrs_core::{CheckedTrainConfig, CoreError};
@@ -59,7 +60,7 @@ impl Default for EvalOptions {
 #[derive(Debug)]
 pub struct EvalSetup<'d> {
     dataset: &'d Dataset,
-    samples: Vec<EvalSample<'d>>,
+    samples: Vec<LabeledImage<'d>>,
     protocol: Protocol,
     options: EvalOptions,
     /// Test labels no training set can hold, by held-out value (`labels_never_trained`).
@@ -127,7 +128,7 @@ impl<'d> EvalSetup<'d> {
                 })?),
                 None => None,
             };
-            samples.push(EvalSample {
+            samples.push(LabeledImage {
                 frame: sample.frame.view(),
                 label,
                 condition: sample.condition.as_deref(),
@@ -185,7 +186,7 @@ impl<'d> EvalSetup<'d> {
     }
 
     /// The labelled samples as the evaluation engine sees them.
-    pub fn samples(&self) -> &[EvalSample<'d>] {
+    pub fn samples(&self) -> &[LabeledImage<'d>] {
         &self.samples
     }
 
@@ -350,7 +351,7 @@ fn models<'c>(
 /// Runs `f` on an evaluation of `samples` under `protocol` (`repeats`, `seed`), reporting one step of
 /// `task` (announced with `total` steps) per trained model.
 pub fn run_counted<'s, T>(
-    samples: &[EvalSample<'s>],
+    samples: &[LabeledImage<'s>],
     protocol: &Protocol,
     (repeats, seed): (usize, u64),
     (task, total): (&str, u64),

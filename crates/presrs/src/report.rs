@@ -8,9 +8,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use presrs_core::evaluation::{
-    Confusion, EvalReport, EvalSample, MeanStd, Models, Protocol, RepeatResult,
-};
+use presrs_core::evaluation::{Confusion, EvalReport, MeanStd, Models, Protocol, RepeatResult};
 use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
 use presrs_core::reliability::Reliability;
 use presrs_core::split::{ValidationSize, stratified_split};
@@ -840,7 +838,7 @@ fn report_evaluation(
 /// the only condition) and the smallest class would be drawn whole, two thirds of it, so that every class
 /// keeps images to test on (true in the third place then).
 fn evaluation_draw(
-    samples: &[EvalSample<'_>],
+    samples: &[LabeledImage<'_>],
     condition: Option<&str>,
     per_class: usize,
     validation: ValidationSize,
@@ -862,7 +860,7 @@ fn evaluation_draw(
 }
 
 /// The number of images of the smallest class among `samples` of `condition` (all when `None`).
-fn smallest_class(samples: &[EvalSample<'_>], condition: Option<&str>) -> usize {
+fn smallest_class(samples: &[LabeledImage<'_>], condition: Option<&str>) -> usize {
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     for s in samples
         .iter()
@@ -874,10 +872,10 @@ fn smallest_class(samples: &[EvalSample<'_>], condition: Option<&str>) -> usize 
 }
 
 /// Evaluation samples (no group) of labelled frames.
-fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<EvalSample<'a>> {
+fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<LabeledImage<'a>> {
     triples
         .iter()
-        .map(|&(frame, label, condition)| EvalSample {
+        .map(|&(frame, label, condition)| LabeledImage {
             frame: frame.view(),
             label,
             condition,
@@ -1043,9 +1041,9 @@ mod tests {
                 ));
             }
         }
-        let samples: Vec<EvalSample<'_>> = frames
+        let samples: Vec<LabeledImage<'_>> = frames
             .iter()
-            .map(|(f, t, g)| EvalSample {
+            .map(|(f, t, g)| LabeledImage {
                 frame: f.view(),
                 label: t,
                 condition: Some(g),

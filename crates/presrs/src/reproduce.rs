@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use presrs_core::classifier::ClassifierKind;
-use presrs_core::evaluation::{ComparisonRow, EvalReport, EvalSample, MeanStd, Models, Protocol};
+use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd, Models, Protocol};
 use presrs_core::features::FeatureConfig;
 use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, TrainConfig, train};
 use presrs_core::split::{ValidationSize, stratified_split};
@@ -311,7 +311,7 @@ pub fn reproduce(options: &ReproduceOptions, progress: &dyn Progress) -> Result<
     }
 
     // 4. Table II and the train-gait x test-gait matrix.
-    let eval_samples: Vec<EvalSample<'_>> = samples.iter().map(eval_sample).collect();
+    let eval_samples: Vec<LabeledImage<'_>> = samples.iter().map(eval_sample).collect();
     let config = TrainConfig::default().check()?;
     let gaits: Vec<String> = images_per_gait.keys().cloned().collect();
     let eval_start = Instant::now();
@@ -535,8 +535,8 @@ fn table1_maps(
 }
 
 /// A stance sample as the evaluation engine sees it (terrain label, gait condition).
-fn eval_sample(sample: &Sample) -> EvalSample<'_> {
-    EvalSample {
+fn eval_sample(sample: &Sample) -> LabeledImage<'_> {
+    LabeledImage {
         frame: sample.frame.view(),
         label: sample.label.as_deref().unwrap_or_default(),
         condition: sample.condition.as_deref(),
@@ -546,7 +546,7 @@ fn eval_sample(sample: &Sample) -> EvalSample<'_> {
 
 /// The paper's method trained on each gait in turn (the options' draw), tested on every other image.
 fn evaluate_each_gait(
-    samples: &[EvalSample<'_>],
+    samples: &[LabeledImage<'_>],
     gaits: &[String],
     config: &CheckedTrainConfig,
     args: &ReproduceOptions,
@@ -602,7 +602,7 @@ fn train_test_matrix(
 
 /// Every feature family x classifier with Table II's protocol and draws.
 fn compare_methods(
-    samples: &[EvalSample<'_>],
+    samples: &[LabeledImage<'_>],
     draw: Draw,
     args: &ReproduceOptions,
     progress: &dyn Progress,
