@@ -11,10 +11,10 @@ mod fixed_matrix;
 pub mod frame;
 pub mod metrics;
 pub mod online;
-pub mod pca;
 pub mod perturb;
 pub mod pipeline;
 pub mod preprocess;
+pub mod projection;
 pub mod recording;
 pub mod reliability;
 pub mod selection;
@@ -23,6 +23,9 @@ pub mod split;
 pub mod stance;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
+
+/// The PCA, at its old path (`presrs_core::pca`); it lives in [`projection`].
+pub use projection::pca;
 
 pub use crop::Crop;
 pub use error::CoreError;
