@@ -1,14 +1,13 @@
 #![doc = include_str!("../README.md")]
 
-mod aligned;
 pub mod classifier;
 pub mod crop;
 pub mod dead_sensels;
 pub mod error;
 pub mod evaluation;
 pub mod features;
-mod fixed_matrix;
 pub mod frame;
+mod kernels;
 pub mod metrics;
 pub mod online;
 pub mod perturb;
@@ -18,7 +17,6 @@ pub mod projection;
 pub mod recording;
 pub mod reliability;
 pub mod selection;
-mod simd;
 pub mod split;
 pub mod stance;
 #[cfg(any(test, feature = "testing"))]

@@ -8,7 +8,7 @@
 //! output by is added back exactly. The error bound is stated on [`super::Pca::project_fast_into`].
 
 use crate::error::{CoreError, Result, check_len};
-use crate::fixed_matrix::{FixedMatrix, FixedVector};
+use crate::kernels::{FixedMatrix, FixedVector};
 
 /// The derived, fixed-point form of a PCA's basis and mean (not serialised: rebuilt from them).
 #[derive(Clone, Debug, PartialEq)]

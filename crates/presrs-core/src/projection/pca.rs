@@ -386,11 +386,11 @@ impl Pca {
 }
 
 /// `out = matrix · x` for a row-major `out.len() x cols` f64 matrix: the safe runtime-dispatched SIMD kernel
-/// of [`crate::simd`] (AVX2 + FMA where available; this product is most of the classification time).
+/// of `crate::kernels` (AVX2 + FMA where available; this product is most of the classification time).
 /// Sequential, deterministic on a given machine, and does not allocate. Lengths are the caller's
 /// responsibility (panics if `x` is not `cols` long or `matrix` is too short).
 pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f64]) {
-    crate::simd::matrix_vector(matrix, cols, x, out);
+    crate::kernels::matrix_vector(matrix, cols, x, out);
 }
 
 #[cfg(test)]

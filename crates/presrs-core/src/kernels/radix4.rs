@@ -81,7 +81,7 @@ fn twiddle(j: usize, p: usize, n: usize) -> Complex<f32> {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) mod avx512 {
+pub(in crate::kernels) mod avx512 {
     use core::arch::x86_64::{__m512, __m512d};
 
     use pulp::Simd;
@@ -92,7 +92,7 @@ pub(super) mod avx512 {
     use super::twiddle;
 
     type C32 = Complex<f32>;
-    use crate::aligned::Aligned;
+    use crate::kernels::aligned::Aligned;
 
     /// One pass: its stride and its twiddles (laid out for the pass's kind of register).
     #[derive(Clone, Debug)]
@@ -215,12 +215,12 @@ pub(super) mod avx512 {
     }
 
     #[inline(always)]
-    pub(in crate::features) fn ps(x: f32x16) -> __m512 {
+    pub(in crate::kernels) fn ps(x: f32x16) -> __m512 {
         pulp::cast(x)
     }
 
     #[inline(always)]
-    pub(in crate::features) fn from_ps(x: __m512) -> f32x16 {
+    pub(in crate::kernels) fn from_ps(x: __m512) -> f32x16 {
         pulp::cast(x)
     }
 
@@ -237,7 +237,7 @@ pub(super) mod avx512 {
     /// `a · w` for `w` given as its (re, re) and (im, im) registers (also the real-FFT split step's
     /// product, in `fft1d`).
     #[inline(always)]
-    pub(in crate::features) fn times(simd: V4, a: f32x16, w_re: f32x16, w_im: f32x16) -> f32x16 {
+    pub(in crate::kernels) fn times(simd: V4, a: f32x16, w_re: f32x16, w_im: f32x16) -> f32x16 {
         let f = simd.avx512f;
         let swapped = f._mm512_permute_ps::<0b1011_0001>(ps(a));
         from_ps(f._mm512_fmaddsub_ps(ps(a), ps(w_re), f._mm512_mul_ps(swapped, ps(w_im))))

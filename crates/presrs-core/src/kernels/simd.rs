@@ -2,7 +2,7 @@
 //! otherwise).
 //!
 //! [`matrix_vector`] is the exact PCA projection (51 x 1025; `Pca::project_into`; classification uses the
-//! fixed-point product of `crate::fixed_matrix`): `out = matrix · x` for a row-major matrix;
+//! fixed-point product of `kernels::fixed_dot`): `out = matrix · x` for a row-major matrix;
 //! [`columns_times_vector`] the Parzen distance expansion (80 x 51) on the matrix stored by columns.
 //!
 //! The PCA product is limited by streaming the matrix (418 KB for the f64 PCA basis, from L2), not by
