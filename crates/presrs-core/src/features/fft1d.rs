@@ -525,54 +525,6 @@ mod tests {
         }
     }
 
-    /// The AVX-512 split step against the compiled loop, on random spectra of lengths with no whole
-    /// block, whole blocks only, and blocks and a scalar tail (odd and even `M`).
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn the_avx512_split_matches_the_plain_loop() {
-        use rand::{Rng, SeedableRng};
-        if pulp::x86::V4::try_new().is_none() {
-            eprintln!("no AVX-512 on this CPU: the explicit split step is not used here");
-            return;
-        }
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        for n in [2, 4, 6, 16, 34, 36, 66, 130, 1000, 2048, 2050] {
-            let m = n / 2;
-            let plain = HalfLengthF32 {
-                split_avx512: None,
-                ..HalfLengthF32::new(n)
-            };
-            let explicit = SplitAvx512::new(&plain.twiddle_re, &plain.twiddle_im, m).unwrap();
-            let z: Vec<Complex<f32>> = (0..m)
-                .map(|_| Complex::new(rng.random_range(-1e4..1e4), rng.random_range(-1e4..1e4)))
-                .collect();
-            let (mut want, mut got) = (vec![f32::NAN; m + 1], vec![f32::NAN; m + 1]);
-            let (mut low, mut high) = (plain.low.clone(), plain.high.clone());
-            pulp::Arch::new().dispatch(SplitSpectrum {
-                z: &z,
-                twiddle_re: &plain.twiddle_re,
-                twiddle_im: &plain.twiddle_im,
-                low: &mut low,
-                high: &mut high,
-                out: &mut want,
-            });
-            explicit.run(&z, &mut got);
-            let largest = want
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .fold(0.0, f32::max);
-            for k in (0..=m).filter(|&k| m % 2 != 0 || k != m / 2) {
-                assert!(
-                    (got[k] - want[k]).abs() <= 1e-6 * largest,
-                    "n {n} bin {k}: {} vs {}",
-                    got[k],
-                    want[k]
-                );
-            }
-        }
-    }
-
     #[test]
     fn wrong_buffer_sizes_are_errors() {
         let mut extractor = Fft1dExtractor::new(Grid::new(2, 2), &Fft1dConfig::PAPER).unwrap();

@@ -11,6 +11,8 @@
 
 mod aligned;
 mod fixed_dot;
+#[cfg(test)]
+mod harness;
 mod radix4;
 mod simd;
 mod split;
