@@ -1,28 +1,29 @@
 #![doc = include_str!("../README.md")]
 
-mod aligned;
 pub mod classifier;
 pub mod crop;
 pub mod dead_sensels;
 pub mod error;
 pub mod evaluation;
 pub mod features;
-mod fixed_matrix;
 pub mod frame;
+mod kernels;
 pub mod metrics;
 pub mod online;
-pub mod pca;
 pub mod perturb;
 pub mod pipeline;
 pub mod preprocess;
+pub mod projection;
 pub mod recording;
 pub mod reliability;
 pub mod selection;
-mod simd;
 pub mod split;
 pub mod stance;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
+
+/// The PCA, at its old path (`presrs_core::pca`); it lives in [`projection`].
+pub use projection::pca;
 
 pub use crop::Crop;
 pub use error::CoreError;

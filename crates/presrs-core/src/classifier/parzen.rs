@@ -27,9 +27,8 @@ use super::calibration::{fit_temperature, is_usable_temperature, log_sum_exp, un
 use super::common::{argmax, check_vectors, require_per_class};
 // Defined with the other shared helpers (calibration needs it too); kept nameable from here.
 pub use super::common::LabeledVectors;
-use crate::aligned::Aligned;
 use crate::error::{CoreError, Result, check_len};
-use crate::simd::{columns_times_vector, exp_neg_in_place, ln_in_place};
+use crate::kernels::{Aligned, columns_times_vector, exp_neg_in_place, ln_in_place};
 
 /// How σ is chosen.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -179,7 +178,7 @@ pub struct ParzenModel {
     /// distances into one SIMD matrix-vector product.
     sq_norms: Aligned<f64>,
     /// The stored vectors by dimension (`dims x n_stored`, derived, not serialised): the product `P · x`
-    /// on short rows runs faster column by column (`simd::columns_times_vector`).
+    /// on short rows runs faster column by column (`kernels::columns_times_vector`).
     vectors_by_dim: Aligned<f64>,
 }
 

@@ -8,14 +8,15 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex;
 
-use crate::aligned::Aligned;
 use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use super::radix4::Radix4Fft;
 use crate::error::{CoreError, Result, check_len};
 use crate::frame::Grid;
+#[cfg(target_arch = "x86_64")]
+use crate::kernels::SplitAvx512;
+use crate::kernels::{Aligned, Radix4Fft, SplitSpectrum};
 
 /// Parameters of the 1-D |FFT| features.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -301,7 +302,7 @@ struct HalfLengthF32 {
     high: Vec<f32>,
     /// The split step in AVX-512 registers, when the CPU has them.
     #[cfg(target_arch = "x86_64")]
-    split_avx512: Option<split_avx512::Split>,
+    split_avx512: Option<SplitAvx512>,
 }
 
 impl HalfLengthF32 {
@@ -330,7 +331,7 @@ impl HalfLengthF32 {
             low: vec![0.0; pairs],
             high: vec![0.0; pairs],
             #[cfg(target_arch = "x86_64")]
-            split_avx512: split_avx512::Split::new(&twiddle_re, &twiddle_im, m),
+            split_avx512: SplitAvx512::new(&twiddle_re, &twiddle_im, m),
             twiddle_re,
             twiddle_im,
         }
@@ -416,201 +417,6 @@ impl pulp::WithSimd for Pack<'_> {
             }
         }
         padding.fill(0.0);
-    }
-}
-
-/// The split step of [`HalfLengthF32`] on the pairs `(k, M-k)`, `0 < k < M-k`, and the output.
-struct SplitSpectrum<'a> {
-    z: &'a [Complex<f32>],
-    twiddle_re: &'a [f32],
-    twiddle_im: &'a [f32],
-    low: &'a mut [f32],
-    high: &'a mut [f32],
-    /// `M + 1` magnitudes; the middle bin of an even `M` is left to the caller.
-    out: &'a mut [f32],
-}
-
-impl pulp::WithSimd for SplitSpectrum<'_> {
-    type Output = ();
-
-    /// Plain loops, compiled with the instruction set `S` enables (pulp's dispatch), which the compiler
-    /// vectorises (the magnitudes into `low`/`high`, then into `out` in order).
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        let Self {
-            z,
-            twiddle_re,
-            twiddle_im,
-            low,
-            high,
-            out,
-        } = self;
-        let pairs = low.len();
-        let m = z.len();
-        // Z[k] and Z[M-k] for k = 1 .. pairs, read straight from the spectrum.
-        let inputs = z[1..pairs]
-            .iter()
-            .zip(z[m + 1 - pairs..m].iter().rev())
-            .zip(twiddle_re[1..].iter().zip(&twiddle_im[1..]));
-        for (((a, c), (&wr, &wi)), (lo, hi)) in
-            inputs.zip(low[1..].iter_mut().zip(high[1..].iter_mut()))
-        {
-            (*lo, *hi) = split_pair(*a, *c, wr, wi);
-        }
-        out[0] = (z[0].re + z[0].im).abs();
-        out[m] = (z[0].re - z[0].im).abs();
-        out[1..pairs].copy_from_slice(&low[1..]);
-        for (dst, &v) in out[m + 1 - pairs..m].iter_mut().zip(high[1..].iter().rev()) {
-            *dst = v;
-        }
-    }
-}
-
-/// `(|X[k]|, |X[M-k]|)` from `a = Z[k]`, `c = Z[M-k]` and `W^k = (wr, wi)`.
-#[inline(always)]
-fn split_pair(a: Complex<f32>, c: Complex<f32>, wr: f32, wi: f32) -> (f32, f32) {
-    let (ar, ai, cr, ci) = (a.re, a.im, c.re, c.im);
-    let (even_re, even_im) = (0.5 * (ar + cr), 0.5 * (ai - ci));
-    let (odd_re, odd_im) = (0.5 * (ai + ci), 0.5 * (cr - ar));
-    let (t_re, t_im) = (wr * odd_re - wi * odd_im, wr * odd_im + wi * odd_re);
-    let (p_re, p_im) = (even_re + t_re, even_im + t_im);
-    let (q_re, q_im) = (even_re - t_re, even_im - t_im);
-    (
-        (p_re * p_re + p_im * p_im).sqrt(),
-        (q_re * q_re + q_im * q_im).sqrt(),
-    )
-}
-
-/// The split step of [`HalfLengthF32`] written out in AVX-512 registers: the compiled loop of
-/// [`SplitSpectrum`] reverses `Z[M-k]` and gathers real and imaginary parts value by value, and took
-/// about a third of the time of the transform itself.
-///
-/// A block is 8 consecutive `k`: `A = Z[k ..]`, `C = Z[M-k-7 ..]` reversed (one `vpermpd`), then with
-/// `S = A + conj C`, `D = A - conj C` and `V = -i W^k` (stored as (re, re) and (im, im) lane pairs),
-/// `2 X[k] = S + V D` and `2 conj X[M-k] = S - V D`; the squared parts of both are gathered into one
-/// register (`X[M-k]` reversed, so that both halves land in ascending order) and one square root gives
-/// 16 magnitudes, stored as two halves.
-#[cfg(target_arch = "x86_64")]
-mod split_avx512 {
-    use pulp::Simd;
-    use pulp::x86::V4;
-    use realfft::num_complex::Complex;
-
-    use super::split_pair;
-    use crate::aligned::Aligned;
-    use crate::features::radix4::avx512::{from_ps, ps, times};
-
-    #[derive(Clone, Debug)]
-    pub(super) struct Split {
-        simd: V4,
-        /// `V = -i W^k = (wi, -wr)` for `k = 0 .. pairs`, each value twice: the (re, re) and (im, im)
-        /// registers of [`times`]. The scalar tail reads `W^k` back from them.
-        v_re: Aligned<f32>,
-        v_im: Aligned<f32>,
-        m: usize,
-    }
-
-    impl Split {
-        /// For the real transform whose pairs have the twiddles `W^k = (twiddle_re[k], twiddle_im[k])`
-        /// and whose complex FFT has length `m`; `None` without AVX-512.
-        pub(super) fn new(twiddle_re: &[f32], twiddle_im: &[f32], m: usize) -> Option<Self> {
-            let simd = V4::try_new()?;
-            let v_re: Vec<f32> = twiddle_im.iter().flat_map(|&wi| [wi, wi]).collect();
-            let v_im: Vec<f32> = twiddle_re.iter().flat_map(|&wr| [-wr, -wr]).collect();
-            let (v_re, v_im) = (Aligned::from_slice(&v_re), Aligned::from_slice(&v_im));
-            Some(Self {
-                simd,
-                v_re,
-                v_im,
-                m,
-            })
-        }
-
-        /// `out[k] = |X[k]|` for `k = 0 ..= M` except the middle bin of an even `M` (left to the caller).
-        ///
-        /// # Panics
-        /// If `z` is not `M` long or `out` not `M + 1`.
-        pub(super) fn run(&self, z: &[Complex<f32>], out: &mut [f32]) {
-            assert!(
-                z.len() == self.m && out.len() == self.m + 1,
-                "split: wrong lengths"
-            );
-            self.simd.vectorize(Run {
-                split: self,
-                z,
-                out,
-            });
-        }
-    }
-
-    struct Run<'a> {
-        split: &'a Split,
-        z: &'a [Complex<f32>],
-        out: &'a mut [f32],
-    }
-
-    impl pulp::NullaryFnOnce for Run<'_> {
-        type Output = ();
-
-        #[inline(always)]
-        fn call(self) {
-            let Self { split, z, out } = self;
-            let (simd, m) = (split.simd, split.m);
-            let f = simd.avx512f;
-            let pairs = split.v_re.len() / 2;
-            out[0] = (z[0].re + z[0].im).abs();
-            out[m] = (z[0].re - z[0].im).abs();
-            // Blocks of 8 pairs from k = 1.
-            let blocks = (pairs - 1) / 8;
-            let ascending = V4::as_simd_c32s(&z[1..1 + 8 * blocks]).0;
-            let descending = V4::as_simd_c32s(&z[m - 8 * blocks..m]).0;
-            let v_re = V4::as_simd_f32s(&split.v_re[2..2 + 16 * blocks]).0;
-            let v_im = V4::as_simd_f32s(&split.v_im[2..2 + 16 * blocks]).0;
-            let (head, tail) = out.split_at_mut(m - 8 * blocks);
-            let low = head[1..1 + 8 * blocks].chunks_exact_mut(8);
-            let high = tail[..8 * blocks].chunks_exact_mut(8);
-            let reverse = f._mm512_setr_epi64(7, 6, 5, 4, 3, 2, 1, 0);
-            // The sign bit of each imaginary part.
-            let conjugate = f._mm512_castsi512_ps(f._mm512_set1_epi64(i64::MIN));
-            // Lanes 0..8: |X[k]|² halves (even, odd lanes of P²); lanes 8..16: those of Q², reversed.
-            let even =
-                f._mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 30, 28, 26, 24, 22, 20, 18, 16);
-            let odd =
-                f._mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 31, 29, 27, 25, 23, 21, 19, 17);
-            let half = f._mm512_set1_ps(0.5);
-            for ((((&a, &c), (&vr, &vi)), low), high) in ascending
-                .iter()
-                .zip(descending.iter().rev())
-                .zip(v_re.iter().zip(v_im))
-                .zip(low)
-                .zip(high.rev())
-            {
-                let c =
-                    f._mm512_castpd_ps(f._mm512_permutexvar_pd(reverse, f._mm512_castps_pd(ps(c))));
-                let c_conj = simd.avx512dq._mm512_xor_ps(c, conjugate);
-                let s = f._mm512_add_ps(ps(a), c_conj);
-                let d = f._mm512_sub_ps(ps(a), c_conj);
-                let t = ps(times(simd, from_ps(d), vr, vi));
-                let p = f._mm512_add_ps(s, t);
-                let q = f._mm512_sub_ps(s, t);
-                let (p2, q2) = (f._mm512_mul_ps(p, p), f._mm512_mul_ps(q, q));
-                let sums = f._mm512_add_ps(
-                    f._mm512_permutex2var_ps(p2, even, q2),
-                    f._mm512_permutex2var_ps(p2, odd, q2),
-                );
-                let magnitudes = f._mm512_mul_ps(f._mm512_sqrt_ps(sums), half);
-                let magnitudes: [[f32; 8]; 2] = pulp::cast(magnitudes);
-                low.copy_from_slice(&magnitudes[0]);
-                high.copy_from_slice(&magnitudes[1]);
-            }
-            // The pairs after the last whole block.
-            for k in 1 + 8 * blocks..pairs {
-                let (wr, wi) = (-split.v_im[2 * k], split.v_re[2 * k]);
-                let (lo, hi) = split_pair(z[k], z[m - k], wr, wi);
-                out[k] = lo;
-                out[m - k] = hi;
-            }
-        }
     }
 }
 
@@ -716,55 +522,6 @@ mod tests {
         for (k, (&a, &b)) in a.iter().zip(&b).enumerate() {
             let (a, b) = (f64::from(a), f64::from(b));
             assert!((a - b).abs() <= 1e-6 * sum, "bin {k}: {a} vs {b}");
-        }
-    }
-
-    /// The AVX-512 split step against the compiled loop, on random spectra of lengths with no whole
-    /// block, whole blocks only, and blocks and a scalar tail (odd and even `M`).
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn the_avx512_split_matches_the_plain_loop() {
-        use rand::{Rng, SeedableRng};
-        if pulp::x86::V4::try_new().is_none() {
-            eprintln!("no AVX-512 on this CPU: the explicit split step is not used here");
-            return;
-        }
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        for n in [2, 4, 6, 16, 34, 36, 66, 130, 1000, 2048, 2050] {
-            let m = n / 2;
-            let plain = HalfLengthF32 {
-                split_avx512: None,
-                ..HalfLengthF32::new(n)
-            };
-            let explicit =
-                split_avx512::Split::new(&plain.twiddle_re, &plain.twiddle_im, m).unwrap();
-            let z: Vec<Complex<f32>> = (0..m)
-                .map(|_| Complex::new(rng.random_range(-1e4..1e4), rng.random_range(-1e4..1e4)))
-                .collect();
-            let (mut want, mut got) = (vec![f32::NAN; m + 1], vec![f32::NAN; m + 1]);
-            let (mut low, mut high) = (plain.low.clone(), plain.high.clone());
-            pulp::Arch::new().dispatch(SplitSpectrum {
-                z: &z,
-                twiddle_re: &plain.twiddle_re,
-                twiddle_im: &plain.twiddle_im,
-                low: &mut low,
-                high: &mut high,
-                out: &mut want,
-            });
-            explicit.run(&z, &mut got);
-            let largest = want
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .fold(0.0, f32::max);
-            for k in (0..=m).filter(|&k| m % 2 != 0 || k != m / 2) {
-                assert!(
-                    (got[k] - want[k]).abs() <= 1e-6 * largest,
-                    "n {n} bin {k}: {} vs {}",
-                    got[k],
-                    want[k]
-                );
-            }
         }
     }
 

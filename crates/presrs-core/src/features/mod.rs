@@ -7,7 +7,6 @@
 pub mod fft1d;
 pub mod fft2d;
 pub mod glcm;
-mod radix4;
 
 use serde::{Deserialize, Serialize};
 

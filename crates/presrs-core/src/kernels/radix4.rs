@@ -81,7 +81,7 @@ fn twiddle(j: usize, p: usize, n: usize) -> Complex<f32> {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) mod avx512 {
+pub(in crate::kernels) mod avx512 {
     use core::arch::x86_64::{__m512, __m512d};
 
     use pulp::Simd;
@@ -92,7 +92,7 @@ pub(super) mod avx512 {
     use super::twiddle;
 
     type C32 = Complex<f32>;
-    use crate::aligned::Aligned;
+    use crate::kernels::aligned::Aligned;
 
     /// One pass: its stride and its twiddles (laid out for the pass's kind of register).
     #[derive(Clone, Debug)]
@@ -215,12 +215,12 @@ pub(super) mod avx512 {
     }
 
     #[inline(always)]
-    pub(in crate::features) fn ps(x: f32x16) -> __m512 {
+    pub(in crate::kernels) fn ps(x: f32x16) -> __m512 {
         pulp::cast(x)
     }
 
     #[inline(always)]
-    pub(in crate::features) fn from_ps(x: __m512) -> f32x16 {
+    pub(in crate::kernels) fn from_ps(x: __m512) -> f32x16 {
         pulp::cast(x)
     }
 
@@ -237,7 +237,7 @@ pub(super) mod avx512 {
     /// `a · w` for `w` given as its (re, re) and (im, im) registers (also the real-FFT split step's
     /// product, in `fft1d`).
     #[inline(always)]
-    pub(in crate::features) fn times(simd: V4, a: f32x16, w_re: f32x16, w_im: f32x16) -> f32x16 {
+    pub(in crate::kernels) fn times(simd: V4, a: f32x16, w_re: f32x16, w_im: f32x16) -> f32x16 {
         let f = simd.avx512f;
         let swapped = f._mm512_permute_ps::<0b1011_0001>(ps(a));
         from_ps(f._mm512_fmaddsub_ps(ps(a), ps(w_re), f._mm512_mul_ps(swapped, ps(w_im))))
@@ -386,6 +386,7 @@ pub(super) mod avx512 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernels::harness::{Harness, X86V4};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -412,16 +413,16 @@ mod tests {
         }
     }
 
-    /// Against the naive DFT in f64: within a few f32 roundings per pass of the sum of |x|.
+    /// Against the naive DFT in f64 (its only backend is AVX-512): within a few f32 roundings per pass of
+    /// the sum of |x|.
     #[test]
     fn matches_the_naive_dft() {
-        let Some(_) = Radix4Fft::new(64) else {
-            eprintln!("no AVX-512 on this CPU: the radix-4 FFT is not used here, nothing to test");
-            return;
-        };
+        let mut harness = Harness::new("radix4");
         let mut rng = ChaCha8Rng::seed_from_u64(41);
         for len in [64, 256, 1024, 4096] {
-            let fft = Radix4Fft::new(len).unwrap();
+            let Some(fft) = Radix4Fft::new(len) else {
+                continue;
+            };
             for trial in 0..3 {
                 let x: Vec<Complex<f32>> = (0..len)
                     .map(|i| match trial {
@@ -439,15 +440,21 @@ mod tests {
                 let data = fft.process(&mut data, &mut scratch);
                 let exact = naive_dft(&x);
                 let scale: f64 = x.iter().map(|v| f64::from(v.norm())).sum::<f64>().max(1.0);
-                for (k, (got, want)) in data.iter().zip(&exact).enumerate() {
-                    let error = (Complex::new(f64::from(got.re), f64::from(got.im)) - want).norm();
-                    assert!(
-                        error <= 1e-6 * scale,
-                        "len {len} trial {trial} bin {k}: {got} vs {want}"
-                    );
-                }
+                let parts = |v: &[Complex<f64>]| -> Vec<f64> {
+                    v.iter().flat_map(|v| [v.re, v.im]).collect()
+                };
+                let got: Vec<Complex<f64>> = data
+                    .iter()
+                    .map(|v| Complex::new(f64::from(v.re), f64::from(v.im)))
+                    .collect();
+                // 1e-6 of the sum of |x| on the complex error: 1e-6 / √2 on each part.
+                let case = format!("len {len} trial {trial}");
+                harness.compare(X86V4, &case, &parts(&got), &parts(&exact), |_| {
+                    1e-6 * scale * std::f64::consts::FRAC_1_SQRT_2
+                });
             }
         }
+        harness.finish(&[X86V4]);
     }
 
     /// The same as rustfft's f32 transform, within f32 rounding.

@@ -2,7 +2,7 @@
 //! otherwise).
 //!
 //! [`matrix_vector`] is the exact PCA projection (51 x 1025; `Pca::project_into`; classification uses the
-//! fixed-point product of `crate::fixed_matrix`): `out = matrix · x` for a row-major matrix;
+//! fixed-point product of `kernels::fixed_dot`): `out = matrix · x` for a row-major matrix;
 //! [`columns_times_vector`] the Parzen distance expansion (80 x 51) on the matrix stored by columns.
 //!
 //! The PCA product is limited by streaming the matrix (418 KB for the f64 PCA basis, from L2), not by
@@ -495,6 +495,9 @@ fn ln(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernels::harness::{
+        Backend, Harness, Portable128, Portable256, Portable512, Scalar, X86V3, X86V4,
+    };
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -505,41 +508,30 @@ mod tests {
         }
     }
 
-    type Kernel = fn(&[f64], usize, &[f64], &mut [f64]);
+    /// Every backend of the f64 kernels: pulp's scalar and portable emulations with 1, 2, 4 and 8 lanes
+    /// (so every lane count and tail length runs whatever the test machine has), AVX2 and AVX-512.
+    const BACKENDS: [Backend; 6] = [Scalar, Portable128, Portable256, Portable512, X86V3, X86V4];
 
-    /// The kernel on one given instruction set (pulp's portable emulations included), bypassing dispatch.
-    fn with<S: Simd, T: Element>(simd: S) -> impl Fn(&[T], usize, &[T], &mut [f64]) {
-        move |matrix, cols, x, out| {
-            if cols == 0 {
-                out.fill(0.0);
-            } else {
-                simd.vectorize(MatVecs {
-                    matrix,
-                    cols,
-                    rows: out.len(),
-                    xs: x,
-                    outs: out,
-                });
-            }
+    /// The kernel on one backend, bypassing dispatch (`None`: not on this CPU).
+    fn on(backend: Backend, matrix: &[f64], cols: usize, x: &[f64], out: &mut [f64]) -> Option<()> {
+        if cols == 0 {
+            out.fill(0.0);
+            return backend.supported().then_some(());
         }
-    }
-
-    /// Every backend: the one dispatched at run time, plus pulp's portable emulations with 1, 2, 4 and 8
-    /// lanes (so every lane count and tail length runs whatever the test machine has).
-    fn backends() -> Vec<(&'static str, Kernel)> {
-        vec![
-            ("dispatched", matrix_vector),
-            ("scalar", |m, c, x, o| with(pulp::Scalar::new())(m, c, x, o)),
-            ("scalar128", |m, c, x, o| with(pulp::Scalar128b)(m, c, x, o)),
-            ("scalar256", |m, c, x, o| with(pulp::Scalar256b)(m, c, x, o)),
-            ("scalar512", |m, c, x, o| with(pulp::Scalar512b)(m, c, x, o)),
-        ]
+        let rows = out.len();
+        backend.run(MatVecs {
+            matrix,
+            cols,
+            rows,
+            xs: x,
+            outs: out,
+        })
     }
 
     /// Checks every backend against the oracle on a random `rows x cols` matrix, within `1e-12` of the
     /// sum of the absolute products of each row (a forward error bound for any summation order is
     /// `cols * eps` times that sum: 2.3e-13 for 1025 columns).
-    fn check(rows: usize, cols: usize, rng: &mut ChaCha8Rng) {
+    fn check(harness: &mut Harness, rows: usize, cols: usize, rng: &mut ChaCha8Rng) {
         // Mixed signs and magnitudes so that cancellation happens.
         let value = |rng: &mut ChaCha8Rng| {
             let scale = 10f64.powi(rng.random_range(-3..=3));
@@ -549,32 +541,39 @@ mod tests {
         let x: Vec<f64> = (0..cols).map(|_| value(rng)).collect();
         let mut expected = vec![0.0; rows];
         naive(&matrix, cols, &x, &mut expected);
-        for (name, kernel) in backends() {
+        let magnitude =
+            |r: usize| -> f64 { (0..cols).map(|j| (matrix[r * cols + j] * x[j]).abs()).sum() };
+        for backend in BACKENDS {
             let mut got = vec![f64::NAN; rows];
-            kernel(&matrix, cols, &x, &mut got);
-            for r in 0..rows {
-                let magnitude: f64 = (0..cols).map(|j| (matrix[r * cols + j] * x[j]).abs()).sum();
-                let tolerance = 1e-12 * magnitude;
-                assert!(
-                    (got[r] - expected[r]).abs() <= tolerance,
-                    "{name}, {rows} x {cols}, row {r}: {} vs {} (tolerance {tolerance:e})",
-                    got[r],
-                    expected[r]
-                );
+            if on(backend, &matrix, cols, &x, &mut got).is_some() {
+                harness.compare(backend, &format!("{rows} x {cols}"), &got, &expected, |r| {
+                    1e-12 * magnitude(r)
+                });
             }
+        }
+        // The dispatched entry point is one of them.
+        let mut got = vec![f64::NAN; rows];
+        matrix_vector(&matrix, cols, &x, &mut got);
+        for r in 0..rows {
+            assert!(
+                (got[r] - expected[r]).abs() <= 1e-12 * magnitude(r),
+                "dispatched {rows} x {cols}"
+            );
         }
     }
 
     #[test]
     fn matches_the_naive_product_on_many_shapes() {
+        let mut harness = Harness::new("simd::matrix_vector");
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for rows in (0..=20).chain([31, 51, 80]) {
             for cols in (0..=19).chain([31, 32, 33, 51, 63, 64, 65, 127, 1024, 1025]) {
-                check(rows, cols, &mut rng);
+                check(&mut harness, rows, cols, &mut rng);
             }
         }
-        check(51, 1025, &mut rng); // the paper's PCA
-        check(80, 51, &mut rng); // the paper's Parzen expansion
+        check(&mut harness, 51, 1025, &mut rng); // the paper's PCA
+        check(&mut harness, 80, 51, &mut rng); // the paper's Parzen expansion
+        harness.finish(&BACKENDS);
     }
 
     /// Many vectors at once give, bit for bit, what one vector at a time gives (every row remainder).
@@ -627,17 +626,7 @@ mod tests {
     /// the sum of absolute products.
     #[test]
     fn columns_times_vector_matches_the_naive_product() {
-        fn on<S: Simd>(simd: S) -> impl Fn(&[f64], &[f64], &mut [f64]) {
-            move |columns, x, out| simd.vectorize(ColumnsTimesVector { columns, x, out })
-        }
-        type Kernel = fn(&[f64], &[f64], &mut [f64]);
-        let backends: [(&str, Kernel); 5] = [
-            ("dispatched", columns_times_vector),
-            ("scalar", |m, x, o| on(pulp::Scalar::new())(m, x, o)),
-            ("scalar128", |m, x, o| on(pulp::Scalar128b)(m, x, o)),
-            ("scalar256", |m, x, o| on(pulp::Scalar256b)(m, x, o)),
-            ("scalar512", |m, x, o| on(pulp::Scalar512b)(m, x, o)),
-        ];
+        let mut harness = Harness::new("simd::columns_times_vector");
         let mut rng = ChaCha8Rng::seed_from_u64(14);
         for rows in (0..=19).chain([31, 32, 33, 63, 64, 65, 80, 129]) {
             for cols in [0, 1, 2, 3, 7, 51, 64] {
@@ -652,22 +641,36 @@ mod tests {
                     .flat_map(|j| (0..rows).map(move |r| (r, j)))
                     .map(|(r, j)| matrix[r * cols + j])
                     .collect();
-                for (name, kernel) in backends {
+                for backend in BACKENDS {
                     let mut got = vec![f64::NAN; rows];
-                    kernel(&columns, &x, &mut got);
-                    for r in 0..rows {
-                        let magnitude: f64 =
-                            (0..cols).map(|j| (matrix[r * cols + j] * x[j]).abs()).sum();
-                        assert!(
-                            (got[r] - expected[r]).abs() <= 1e-12 * magnitude,
-                            "{name}, {rows} x {cols}, row {r}: {} vs {}",
-                            got[r],
-                            expected[r]
-                        );
+                    let run = backend.run(ColumnsTimesVector {
+                        columns: &columns,
+                        x: &x,
+                        out: &mut got,
+                    });
+                    if run.is_some() {
+                        let case = format!("{rows} x {cols}");
+                        harness.compare(backend, &case, &got, &expected, |r| {
+                            1e-12
+                                * (0..cols)
+                                    .map(|j| (matrix[r * cols + j] * x[j]).abs())
+                                    .sum::<f64>()
+                        });
                     }
+                }
+                let mut got = vec![f64::NAN; rows];
+                columns_times_vector(&columns, &x, &mut got);
+                for r in 0..rows {
+                    let magnitude: f64 =
+                        (0..cols).map(|j| (matrix[r * cols + j] * x[j]).abs()).sum();
+                    assert!(
+                        (got[r] - expected[r]).abs() <= 1e-12 * magnitude,
+                        "dispatched"
+                    );
                 }
             }
         }
+        harness.finish(&BACKENDS);
     }
 
     /// The vectorised `exp(-z)` against libm's on a dense sweep, random arguments and the edges, on the
@@ -686,22 +689,23 @@ mod tests {
             699.999,
             700.0,
         ]);
-        for (name, run) in [
-            ("dispatched", exp_neg_in_place as fn(&mut [f64])),
-            ("scalar", |v: &mut [f64]| {
-                pulp::Scalar::new().vectorize(ExpNeg { values: v })
-            }),
-        ] {
+        let want: Vec<f64> = z.iter().map(|&z| (-z).exp()).collect();
+        let mut harness = Harness::new("simd::exp_neg_in_place");
+        for backend in BACKENDS {
             let mut got = z.clone();
-            run(&mut got);
-            for (&z, &value) in z.iter().zip(&got) {
-                let expected = (-z).exp();
-                assert!(
-                    (value - expected).abs() <= 7e-16 * expected,
-                    "{name}: exp(-{z}) = {value}, libm {expected}"
-                );
+            if backend.run(ExpNeg { values: &mut got }).is_some() {
+                harness.compare(backend, "sweep", &got, &want, |i| 7e-16 * want[i]);
             }
         }
+        harness.finish(&BACKENDS);
+        let mut got = z.clone();
+        exp_neg_in_place(&mut got);
+        assert!(
+            got.iter()
+                .zip(&want)
+                .all(|(g, w)| (g - w).abs() <= 7e-16 * w),
+            "dispatched"
+        );
         let mut clamped = [701.0, 1e6, f64::INFINITY];
         exp_neg_in_place(&mut clamped);
         for value in clamped {
@@ -728,23 +732,22 @@ mod tests {
             std::f64::consts::FRAC_1_SQRT_2,
             1.0 / 80.0,
         ]);
-        for (name, run) in [
-            ("dispatched", ln_in_place as fn(&mut [f64])),
-            ("scalar", |v: &mut [f64]| {
-                pulp::Scalar::new().vectorize(Ln { values: v })
-            }),
-        ] {
+        let want: Vec<f64> = x.iter().map(|&x| x.ln()).collect();
+        let tolerance = |i: usize| 4.5e-16 * want[i].abs() + 1e-16 * x[i].max(1.0 / x[i]).min(2.0);
+        let mut harness = Harness::new("simd::ln_in_place");
+        for backend in BACKENDS {
             let mut got = x.clone();
-            run(&mut got);
-            for (&x, &value) in x.iter().zip(&got) {
-                let expected = x.ln();
-                assert!(
-                    (value - expected).abs()
-                        <= 4.5e-16 * expected.abs() + 1e-16 * x.max(1.0 / x).min(2.0),
-                    "{name}: ln({x:e}) = {value:e}, libm {expected:e}"
-                );
+            if backend.run(Ln { values: &mut got }).is_some() {
+                harness.compare(backend, "sweep", &got, &want, tolerance);
             }
         }
+        harness.finish(&BACKENDS);
+        let mut got = x.clone();
+        ln_in_place(&mut got);
+        assert!(
+            (0..x.len()).all(|i| (got[i] - want[i]).abs() <= tolerance(i)),
+            "dispatched"
+        );
     }
 
     #[test]

@@ -744,32 +744,28 @@ impl PairDot for ScalarKernel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernels::harness::{Backend, Harness, Scalar, X86V3, X86V4};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
     type Run = Box<dyn Fn(&FixedMatrix, &[FixedVector], &mut [f64])>;
 
-    /// Every kernel this CPU can run, and the dispatching entry point.
-    fn kernels() -> Vec<(&'static str, Run)> {
-        let mut all: Vec<(&'static str, Run)> = vec![
-            (
-                "dispatch",
-                Box::new(|m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
-                    m.times_vectors(xs, outs)
-                }),
-            ),
-            (
-                "scalar",
-                Box::new(|m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
-                    m.times_vectors_with(ScalarKernel, xs, outs)
-                }),
-            ),
-        ];
+    /// The backends of both kernels (the product and the quantization): a scalar loop, AVX2, AVX-512.
+    const BACKENDS: [Backend; 3] = [Scalar, X86V3, X86V4];
+
+    /// Every kernel this CPU can run.
+    fn kernels() -> Vec<(Backend, Run)> {
+        let mut all: Vec<(Backend, Run)> = vec![(
+            Scalar,
+            Box::new(|m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
+                m.times_vectors_with(ScalarKernel, xs, outs)
+            }),
+        )];
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         {
             if let Some(simd) = pulp::x86::V3::try_new() {
                 all.push((
-                    "avx2",
+                    X86V3,
                     Box::new(
                         move |m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
                             simd.vectorize(Product {
@@ -784,7 +780,7 @@ mod tests {
             }
             if let Some(simd) = pulp::x86::V4::try_new() {
                 all.push((
-                    "avx512",
+                    X86V4,
                     Box::new(
                         move |m: &FixedMatrix, xs: &[FixedVector], outs: &mut [f64]| {
                             simd.vectorize(Product {
@@ -840,6 +836,7 @@ mod tests {
     /// Against the f64 product of the unquantized values, within the stated bound.
     #[test]
     fn matches_the_exact_product_within_the_stated_bound() {
+        let mut harness = Harness::new("fixed_dot::times_vectors");
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         for &(rows, cols) in &[
             (1, 1),
@@ -866,40 +863,46 @@ mod tests {
                 .iter()
                 .map(|d| quantized(d, m.chunks_per_row()))
                 .collect();
-            for (name, run) in kernels() {
-                let mut outs = vec![f64::NAN; xs.len() * rows];
-                run(&m, &xs, &mut outs);
-                for (v, (d, x)) in ds.iter().zip(&xs).enumerate() {
-                    for r in 0..rows {
-                        let w = &values[r * cols..(r + 1) * cols];
-                        let exact: f64 = w.iter().zip(d).map(|(a, b)| a * b).sum();
-                        let sum_abs_d: f64 = d.iter().map(|v| v.abs()).sum();
-                        // The stated bound, chunk by chunk, and the f32 arithmetic: a few
-                        // roundings of the sum of the magnitudes of the represented terms.
-                        let s_r = m.scales[r];
-                        let mut bound = 0.5 * s_r * sum_abs_d;
-                        let mut represented = 0.0;
-                        for (k, &t) in x.scales.iter().enumerate() {
-                            let t = f64::from(t);
-                            let columns = k * CHUNK..((k + 1) * CHUNK).min(cols);
-                            let w_k: f64 = w[columns.clone()].iter().map(|v| v.abs()).sum();
-                            bound += 0.5 * t * w_k + 0.25 * s_r * t * CHUNK as f64;
-                            represented += columns
-                                .map(|c| {
-                                    (m.get(r, c) * t * f64::from(x.chunks[k][c % CHUNK])).abs()
-                                })
-                                .sum::<f64>();
-                        }
-                        bound += 4e-6 * represented;
-                        let got = outs[v * rows + r];
-                        assert!(
-                            (got - exact).abs() <= bound,
-                            "{name} {rows}x{cols} vector {v} row {r}: {got} vs {exact} (bound {bound})"
-                        );
+            // The oracle, the f64 product of the unquantized values, and the stated bound, chunk by
+            // chunk, plus the f32 arithmetic: a few roundings of the sum of the magnitudes of the
+            // represented terms.
+            let mut exact = vec![0.0; xs.len() * rows];
+            let mut bounds = vec![0.0; xs.len() * rows];
+            for (v, (d, x)) in ds.iter().zip(&xs).enumerate() {
+                for r in 0..rows {
+                    let w = &values[r * cols..(r + 1) * cols];
+                    exact[v * rows + r] = w.iter().zip(d).map(|(a, b)| a * b).sum();
+                    let sum_abs_d: f64 = d.iter().map(|v| v.abs()).sum();
+                    let s_r = m.scales[r];
+                    let mut bound = 0.5 * s_r * sum_abs_d;
+                    let mut represented = 0.0;
+                    for (k, &t) in x.scales.iter().enumerate() {
+                        let t = f64::from(t);
+                        let columns = k * CHUNK..((k + 1) * CHUNK).min(cols);
+                        let w_k: f64 = w[columns.clone()].iter().map(|v| v.abs()).sum();
+                        bound += 0.5 * t * w_k + 0.25 * s_r * t * CHUNK as f64;
+                        represented += columns
+                            .map(|c| (m.get(r, c) * t * f64::from(x.chunks[k][c % CHUNK])).abs())
+                            .sum::<f64>();
                     }
+                    bounds[v * rows + r] = bound + 4e-6 * represented;
                 }
             }
+            for (backend, run) in kernels() {
+                let mut outs = vec![f64::NAN; xs.len() * rows];
+                run(&m, &xs, &mut outs);
+                harness.compare(backend, &format!("{rows}x{cols}"), &outs, &exact, |i| {
+                    bounds[i]
+                });
+            }
+            let mut outs = vec![f64::NAN; xs.len() * rows];
+            m.times_vectors(&xs, &mut outs);
+            assert!(
+                (0..outs.len()).all(|i| (outs[i] - exact[i]).abs() <= bounds[i]),
+                "dispatched"
+            );
         }
+        harness.finish(&BACKENDS);
     }
 
     #[test]
@@ -926,12 +929,12 @@ mod tests {
             })
             .collect();
         let x = quantized(&d, m.chunks_per_row());
-        for (name, run) in kernels() {
+        for (backend, run) in kernels() {
             let mut outs = vec![0.0; 3];
             run(&m, std::slice::from_ref(&x), &mut outs);
             for r in 0..3 {
                 let exact: f64 = (0..cols).map(|c| w[r * cols + c] * d[c]).sum();
-                assert_eq!(outs[r], exact, "{name} row {r}");
+                assert_eq!(outs[r], exact, "{backend:?} row {r}");
             }
         }
     }
@@ -944,13 +947,13 @@ mod tests {
         let m = FixedMatrix::from_f64(&vec![0.25; cols], 1, cols);
         for sign in [1.0, -1.0] {
             let x = quantized(&vec![sign * 7.0; cols], m.chunks_per_row());
-            for (name, run) in kernels() {
+            for (backend, run) in kernels() {
                 let mut outs = [0.0];
                 run(&m, std::slice::from_ref(&x), &mut outs);
                 let exact = sign * 0.25 * 7.0 * cols as f64;
                 assert!(
                     (outs[0] - exact).abs() <= 1e-6 * exact.abs(),
-                    "{name}: {outs:?}"
+                    "{backend:?}: {outs:?}"
                 );
             }
         }
@@ -967,7 +970,7 @@ mod tests {
         let d: Vec<f64> = (0..cols).map(|_| rng.random_range(-1e4..1e4)).collect();
         let one = quantized(&d, m.chunks_per_row());
         let two = [one.clone(), quantized(&vec![1.0; cols], m.chunks_per_row())];
-        for (name, run) in kernels() {
+        for (backend, run) in kernels() {
             let mut single = vec![0.0; rows];
             run(&m, std::slice::from_ref(&one), &mut single);
             let mut pair = vec![0.0; 2 * rows];
@@ -975,7 +978,7 @@ mod tests {
             assert_eq!(
                 single[..],
                 pair[..rows],
-                "{name}: batching changed a result"
+                "{backend:?}: batching changed a result"
             );
         }
     }
@@ -1009,17 +1012,13 @@ mod tests {
     }
 
     /// `d - mean` quantized by every instruction set this CPU has, by hand (`Quantize` on that set).
-    fn quantized_by_each(
-        d: &[f32],
-        mean: &[f32],
-        chunks: usize,
-    ) -> Vec<(&'static str, FixedVector)> {
+    fn quantized_by_each(d: &[f32], mean: &[f32], chunks: usize) -> Vec<(Backend, FixedVector)> {
         let run = |name, quantize: &dyn Fn(&mut FixedVector)| {
             let mut v = FixedVector::default();
             quantize(&mut v);
             (name, v)
         };
-        let mut all = vec![run("scalar", &|vector| {
+        let mut all = vec![run(Scalar, &|vector| {
             pulp::NullaryFnOnce::call(Quantize {
                 simd: pulp::Scalar::new(),
                 vector,
@@ -1031,7 +1030,7 @@ mod tests {
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         {
             if let Some(simd) = pulp::x86::V3::try_new() {
-                all.push(run("avx2", &|vector| {
+                all.push(run(X86V3, &|vector| {
                     simd.vectorize(Quantize {
                         simd,
                         vector,
@@ -1042,7 +1041,7 @@ mod tests {
                 }));
             }
             if let Some(simd) = pulp::x86::V4::try_new() {
-                all.push(run("avx512", &|vector| {
+                all.push(run(X86V4, &|vector| {
                     simd.vectorize(Quantize {
                         simd,
                         vector,
@@ -1073,21 +1072,34 @@ mod tests {
         x[CHUNK + 1] = mean[CHUNK + 1] - 16383.0;
         let chunks = len.div_ceil(CHUNK) + 1;
         let results = quantized_by_each(&x, &mean, chunks);
-        for (name, v) in &results {
-            for (k, chunk) in v.chunks.iter().enumerate() {
-                let range = k * CHUNK..((k + 1) * CHUNK).min(len);
-                let d: Vec<f32> = range.clone().map(|i| x[i] - mean[i]).collect();
-                let max = d.iter().fold(0.0f32, |m, v| m.max(v.abs()));
-                let (scale, inverse) = chunk_scale(max);
-                assert_eq!(v.scales[k].to_bits(), scale.to_bits(), "{name} chunk {k}");
-                for j in 0..CHUNK {
-                    let want = d
-                        .get(j)
-                        .map_or(0, |&d| (d * inverse).round_ties_even() as i16);
-                    assert_eq!(chunk[j], want, "{name} chunk {k} value {j}");
-                }
-            }
+        // The oracle: the plain definition, exactly (tolerance 0), scales and integers.
+        let mut want = Vec::new();
+        for k in 0..chunks {
+            let range = (k * CHUNK).min(len)..((k + 1) * CHUNK).min(len);
+            let d: Vec<f32> = range.map(|i| x[i] - mean[i]).collect();
+            let max = d.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+            let (scale, inverse) = chunk_scale(max);
+            want.push(f64::from(scale));
+            want.extend((0..CHUNK).map(|j| {
+                f64::from(
+                    d.get(j)
+                        .map_or(0, |&d| (d * inverse).round_ties_even() as i16),
+                )
+            }));
         }
+        let mut harness = Harness::new("fixed_dot::quantize_difference");
+        for (backend, v) in &results {
+            let got: Vec<f64> = v
+                .scales
+                .iter()
+                .zip(&v.chunks)
+                .flat_map(|(&scale, chunk)| {
+                    std::iter::once(f64::from(scale)).chain(chunk.iter().map(|&q| f64::from(q)))
+                })
+                .collect();
+            harness.compare(*backend, "3 chunks and 21", &got, &want, |_| 0.0);
+        }
+        harness.finish(&BACKENDS);
         // The ties of chunk 1 went to even integers.
         let (_, v) = &results[0];
         assert_eq!(&v.chunks[1][2..6], &[-30, -28, -28, -26]);

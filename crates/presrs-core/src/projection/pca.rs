@@ -14,8 +14,9 @@ use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
 use faer::{Mat, Par};
 use serde::{Deserialize, Serialize};
 
+use super::fixed_basis::FixedBasis;
+pub use super::fixed_basis::ProjectionScratch;
 use crate::error::{CoreError, Result, check_len};
-use crate::fixed_matrix::{FixedMatrix, FixedVector};
 
 /// A fitted PCA: `project(x) = basis · (x - mean)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -32,29 +33,8 @@ pub struct Pca {
     /// `basis · mean`, derived (not serialised): projecting is then `basis · x - projected_mean`, one
     /// matrix-vector product with no centred copy of `x`.
     projected_mean: Vec<f64>,
-    /// `basis` without its first column, in 16-bit fixed point, derived (not serialised):
-    /// [`Pca::project_fast_into`] streams a quarter of the bytes of the f64 basis (which bounded the
-    /// f64 projection's time; this one is bound by its integer multiply-adds).
-    basis_fixed: FixedMatrix,
-    /// The first column of `basis` (derived), multiplied exactly: the first feature of the 1-D |FFT| is
-    /// the DC bin, the image's total load, far above the others; kept out of the fixed-point chunks, it
-    /// does not coarsen the steps of the low frequencies it would share a chunk with (and 1025 features
-    /// leave 1024, whole chunks).
-    basis_first: Vec<f64>,
-    /// `mean[1..]` in f32 (derived): the fixed-point path centres f32 features in f32.
-    mean_rest_f32: Vec<f32>,
-    /// `Σ_{i ≥ 1} basis[k][i] · (mean_rest_f32[i - 1] - mean[i])` (derived): what rounding the means to f32
-    /// moves each output by, added back exactly.
-    mean_correction: Vec<f64>,
-}
-
-/// The buffers of [`Pca::project_fast_into`] and [`Pca::project_fast_many`] (the centred inputs in
-/// fixed point), made once per session.
-#[derive(Clone, Debug, Default)]
-pub struct ProjectionScratch {
-    centred: Vec<FixedVector>,
-    /// Features `1..` of one f64 input in f32.
-    single: Vec<f32>,
+    /// The basis in fixed point (derived, not serialised): what [`Pca::project_fast_into`] multiplies.
+    fixed: FixedBasis,
 }
 
 /// The serialised form of [`Pca`]; checked on the way in.
@@ -242,25 +222,7 @@ impl Pca {
     ) -> Self {
         let mut projected_mean = vec![0.0; explained_variance.len()];
         matrix_vector(&basis, n_features, &mean, &mut projected_mean);
-        let rest: Vec<f64> = basis
-            .chunks_exact(n_features)
-            .flat_map(|row| &row[1..])
-            .copied()
-            .collect();
-        let basis_fixed = FixedMatrix::from_f64(&rest, explained_variance.len(), n_features - 1);
-        let basis_first = basis.iter().step_by(n_features).copied().collect();
-        #[allow(clippy::cast_possible_truncation)]
-        let mean_rest_f32: Vec<f32> = mean[1..].iter().map(|&m| m as f32).collect();
-        let mean_correction = basis
-            .chunks_exact(n_features)
-            .map(|row| {
-                row[1..]
-                    .iter()
-                    .zip(mean_rest_f32.iter().zip(&mean[1..]))
-                    .map(|(&loading, (&rounded, &exact))| loading * (f64::from(rounded) - exact))
-                    .sum()
-            })
-            .collect();
+        let fixed = FixedBasis::new(&basis, &mean, n_features);
         Self {
             n_features,
             mean,
@@ -268,10 +230,7 @@ impl Pca {
             explained_variance,
             total_variance,
             projected_mean,
-            basis_fixed,
-            basis_first,
-            mean_rest_f32,
-            mean_correction,
+            fixed,
         }
     }
 
@@ -332,13 +291,10 @@ impl Pca {
 
     /// Buffers for [`project_fast_into`](Self::project_fast_into).
     pub fn scratch(&self) -> ProjectionScratch {
-        ProjectionScratch {
-            centred: vec![FixedVector::with_chunks(self.basis_fixed.chunks_per_row())],
-            single: Vec::with_capacity(self.mean_rest_f32.len()),
-        }
+        self.fixed.scratch()
     }
 
-    /// Writes `basis · (x - mean)` into `out` the fast way, in fixed point (`crate::fixed_matrix`): each
+    /// Writes `basis · (x - mean)` into `out` the fast way, in fixed point (`fixed_basis`): each
     /// axis in 16-bit integers with one scale (its largest loading / 32767), the features `1..` rounded to
     /// f32 and centred in f32 (on the means rounded to f32, whose rounding is added back exactly), then
     /// rounded in blocks of 64 features, each block to 15-bit integers with its own scale (its largest
@@ -365,7 +321,7 @@ impl Pca {
     ) -> Result<()> {
         check_len("pca input", self.n_features, x.len())?;
         check_len("pca output", self.n_components(), out.len())?;
-        self.project_many(x, scratch, out)
+        self.fixed.project(x, scratch, out)
     }
 
     /// [`project_fast_into`](Self::project_fast_into) of features given in single precision (the fast 1-D
@@ -379,7 +335,7 @@ impl Pca {
     ) -> Result<()> {
         check_len("pca input", self.n_features, x.len())?;
         check_len("pca output", self.n_components(), out.len())?;
-        self.project_many(x, scratch, out)
+        self.fixed.project(x, scratch, out)
     }
 
     /// [`project_fast_into`](Self::project_fast_into) for many inputs at once: `xs` holds whole input
@@ -392,7 +348,7 @@ impl Pca {
         scratch: &mut ProjectionScratch,
         out: &mut [f64],
     ) -> Result<()> {
-        self.project_many(xs, scratch, out)
+        self.fixed.project(xs, scratch, out)
     }
 
     /// [`project_fast_many`](Self::project_fast_many) of features given in single precision, as
@@ -404,57 +360,7 @@ impl Pca {
         scratch: &mut ProjectionScratch,
         out: &mut [f64],
     ) -> Result<()> {
-        self.project_many(xs, scratch, out)
-    }
-
-    /// The fast projection of the whole input vectors in `xs` (f64 or f32) into `out`, each input's
-    /// features `1..` rounded to f32 (if they are not already) and quantized, the first kept exact.
-    fn project_many<T: FastInput>(
-        &self,
-        xs: &[T],
-        scratch: &mut ProjectionScratch,
-        out: &mut [f64],
-    ) -> Result<()> {
-        if xs.len() % self.n_features != 0 {
-            return Err(CoreError::Shape {
-                what: "pca inputs",
-                expected: format!("whole vectors of {} features", self.n_features),
-                got: format!("{} values", xs.len()),
-            });
-        }
-        let n = xs.len() / self.n_features;
-        check_len("pca outputs", n * self.n_components(), out.len())?;
-        if scratch.centred.len() < n {
-            scratch.centred.resize_with(n, FixedVector::default);
-        }
-        let centred = &mut scratch.centred[..n];
-        for (vector, x) in centred.iter_mut().zip(xs.chunks_exact(self.n_features)) {
-            let rest = T::as_single(&x[1..], &mut scratch.single);
-            vector.quantize_difference(
-                rest,
-                &self.mean_rest_f32,
-                self.basis_fixed.chunks_per_row(),
-            );
-        }
-        let firsts = xs.chunks_exact(self.n_features).map(|x| x[0].widen());
-        self.finish(firsts, centred, out);
-        Ok(())
-    }
-
-    /// The projections of inputs whose first features `firsts` gives and whose features `1..` are
-    /// quantized in `vectors`, into `out` (`n_components` values per input).
-    fn finish(&self, firsts: impl Iterator<Item = f64>, vectors: &[FixedVector], out: &mut [f64]) {
-        self.basis_fixed.times_vectors(vectors, out);
-        for (first, out) in firsts.zip(out.chunks_exact_mut(self.n_components())) {
-            let centred = first - self.mean[0];
-            for ((value, &loading), &correction) in out
-                .iter_mut()
-                .zip(&self.basis_first)
-                .zip(&self.mean_correction)
-            {
-                *value += loading * centred + correction;
-            }
-        }
+        self.fixed.project(xs, scratch, out)
     }
 
     /// `basis · (x - mean)` in a new vector.
@@ -479,42 +385,12 @@ impl Pca {
     }
 }
 
-/// A feature value the fast projection reads: f64 (rounded to f32 on the way in) or f32 (read as it is).
-trait FastInput: Copy {
-    /// `values` in f32: themselves, or rounded into `buffer` (cleared first).
-    fn as_single<'a>(values: &'a [Self], buffer: &'a mut Vec<f32>) -> &'a [f32];
-    fn widen(self) -> f64;
-}
-
-impl FastInput for f64 {
-    fn as_single<'a>(values: &'a [f64], buffer: &'a mut Vec<f32>) -> &'a [f32] {
-        buffer.clear();
-        #[allow(clippy::cast_possible_truncation)]
-        buffer.extend(values.iter().map(|&value| value as f32));
-        buffer
-    }
-
-    fn widen(self) -> f64 {
-        self
-    }
-}
-
-impl FastInput for f32 {
-    fn as_single<'a>(values: &'a [f32], _buffer: &'a mut Vec<f32>) -> &'a [f32] {
-        values
-    }
-
-    fn widen(self) -> f64 {
-        f64::from(self)
-    }
-}
-
 /// `out = matrix · x` for a row-major `out.len() x cols` f64 matrix: the safe runtime-dispatched SIMD kernel
-/// of [`crate::simd`] (AVX2 + FMA where available; this product is most of the classification time).
+/// of `crate::kernels` (AVX2 + FMA where available; this product is most of the classification time).
 /// Sequential, deterministic on a given machine, and does not allocate. Lengths are the caller's
 /// responsibility (panics if `x` is not `cols` long or `matrix` is too short).
 pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f64]) {
-    crate::simd::matrix_vector(matrix, cols, x, out);
+    crate::kernels::matrix_vector(matrix, cols, x, out);
 }
 
 #[cfg(test)]
