@@ -823,7 +823,7 @@ impl<'m> Session<'m> {
     /// The features of `frame` in the precision classification computes them in, f32, when it takes the
     /// common path (1-D |FFT| features, no absent sensels, no load normalisation; `None` otherwise, and
     /// [`fast_features`](Self::fast_features) gives them): the values of `fast_features`, before they
-    /// are widened to f64. [`Pca::project_fast_f32_into`] reads them as they are.
+    /// are widened to f64. [`Pca::project_fast_into`] reads them as they are.
     pub fn fast_features_f32(&mut self, frame: &FrameView<'_>) -> Result<Option<&[f32]>> {
         self.preprocessor.fast_f32_features(frame)
     }
@@ -835,7 +835,7 @@ impl<'m> Session<'m> {
         match self.preprocessor.fast_f32_features(frame)? {
             // The same values as `fast_features` gives, without widening them to f64 and back.
             Some(features) => {
-                pca.project_fast_f32_into(features, &mut self.projection, &mut self.reduced)?;
+                pca.project_fast_into(features, &mut self.projection, &mut self.reduced)?;
             }
             None => {
                 self.preprocessor
@@ -912,7 +912,7 @@ impl<'m> BatchSession<'m> {
             failed.push(error);
         }
         if let Err(err) =
-            pca.project_fast_many_f32(&self.features, &mut session.projection, &mut self.reduced)
+            pca.project_fast_many(&self.features, &mut session.projection, &mut self.reduced)
         {
             // Cannot happen (the buffers are sized above); every frame gets the reason all the same.
             let reason = err.to_string();

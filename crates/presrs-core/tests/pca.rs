@@ -310,7 +310,7 @@ fn single_precision_inputs_project_like_their_widened_values() {
     let (mut from_single, mut from_double) = (vec![0.0; dims], vec![0.0; dims]);
     let mut exact = vec![0.0; dims];
     for (x32, x64) in single.chunks_exact(d).zip(widened.chunks_exact(d)) {
-        pca.project_fast_f32_into(x32, &mut scratch, &mut from_single)
+        pca.project_fast_into(x32, &mut scratch, &mut from_single)
             .unwrap();
         pca.project_fast_into(x64, &mut scratch, &mut from_double)
             .unwrap();
@@ -334,23 +334,23 @@ fn single_precision_inputs_project_like_their_widened_values() {
     }
     let mut many_single = vec![0.0; 8 * dims];
     let mut many_double = vec![0.0; 8 * dims];
-    pca.project_fast_many_f32(&single, &mut scratch, &mut many_single)
+    pca.project_fast_many(&single, &mut scratch, &mut many_single)
         .unwrap();
     pca.project_fast_many(&widened, &mut scratch, &mut many_double)
         .unwrap();
     assert_eq!(many_single, many_double);
     for (x32, batched) in single.chunks_exact(d).zip(many_single.chunks_exact(dims)) {
-        pca.project_fast_f32_into(x32, &mut scratch, &mut from_single)
+        pca.project_fast_into(x32, &mut scratch, &mut from_single)
             .unwrap();
         assert_eq!(from_single, batched);
     }
     // Lengths are checked as in the f64 path.
     assert!(
-        pca.project_fast_f32_into(&single[..d - 1], &mut scratch, &mut from_single)
+        pca.project_fast_into(&single[..d - 1], &mut scratch, &mut from_single)
             .is_err()
     );
     assert!(
-        pca.project_fast_many_f32(&single[..d + 1], &mut scratch, &mut many_single)
+        pca.project_fast_many(&single[..d + 1], &mut scratch, &mut many_single)
             .is_err()
     );
 }

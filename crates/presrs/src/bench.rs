@@ -143,7 +143,7 @@ fn stage_times(model: &TrainedModel, frames: &[Frame], iterations: usize) -> Res
     let mut projected = vec![0.0; pca.n_components()];
     let pca_ns = median_ns(iterations, |i| {
         let result = match &features[i % frames.len()] {
-            StageFeatures::Single(x) => pca.project_fast_f32_into(x, &mut scratch, &mut projected),
+            StageFeatures::Single(x) => pca.project_fast_into(x, &mut scratch, &mut projected),
             StageFeatures::Double(x) => pca.project_fast_into(x, &mut scratch, &mut projected),
         };
         black_box(result.is_ok());

@@ -201,7 +201,7 @@ impl Fft1dExtractor {
 
     /// [`extract_fast_window_into`](Self::extract_fast_window_into) in the precision the fast path computes
     /// in: the features as f32, in the extractor's buffer (what the PCA's fixed-point projection reads,
-    /// `Pca::project_fast_f32_into`; widening them to f64 only to round them back cost a tenth of a
+    /// `Pca::project_fast_into`; widening them to f64 only to round them back cost a tenth of a
     /// classification). Odd `N` computes them exactly and rounds them to f32.
     pub fn extract_fast_window(
         &mut self,

@@ -121,11 +121,20 @@ impl FixedBasis {
     }
 }
 
-/// A feature value the fast projection reads: f64 (rounded to f32 on the way in) or f32 (read as it is).
-pub(super) trait FastInput: Copy {
+/// A feature value the fast projection reads: f64 (rounded to f32 on the way in) or f32 (read as it is,
+/// the fast 1-D |FFT|'s output). Sealed: only these two.
+pub trait FastInput: Copy + sealed::Sealed {
     /// `values` in f32: themselves, or rounded into `buffer` (cleared first).
+    #[doc(hidden)]
     fn as_single<'a>(values: &'a [Self], buffer: &'a mut Vec<f32>) -> &'a [f32];
+    #[doc(hidden)]
     fn widen(self) -> f64;
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for f64 {}
+    impl Sealed for f32 {}
 }
 
 impl FastInput for f64 {

@@ -5,4 +5,5 @@
 mod fixed_basis;
 pub mod pca;
 
+pub use fixed_basis::FastInput;
 pub use pca::{Pca, ProjectionScratch};

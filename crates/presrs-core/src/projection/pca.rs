@@ -14,8 +14,8 @@ use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
 use faer::{Mat, Par};
 use serde::{Deserialize, Serialize};
 
-use super::fixed_basis::FixedBasis;
 pub use super::fixed_basis::ProjectionScratch;
+use super::fixed_basis::{FastInput, FixedBasis};
 use crate::error::{CoreError, Result, check_len};
 
 /// A fitted PCA: `project(x) = basis · (x - mean)`.
@@ -313,9 +313,12 @@ impl Pca {
     /// feature to f32 moves it by `2⁻²⁴` of its value: below its block's step unless its values sit more
     /// than about 500 times their spread away from zero (the DC bin does, and is kept exact). Does not
     /// allocate.
-    pub fn project_fast_into(
+    ///
+    /// The features may be f64 (rounded to f32 on the way in) or f32 (the fast 1-D |FFT|'s output,
+    /// read as they are: bit for bit the result on the same values widened to f64).
+    pub fn project_fast_into<T: FastInput>(
         &self,
-        x: &[f64],
+        x: &[T],
         scratch: &mut ProjectionScratch,
         out: &mut [f64],
     ) -> Result<()> {
@@ -324,39 +327,13 @@ impl Pca {
         self.fixed.project(x, scratch, out)
     }
 
-    /// [`project_fast_into`](Self::project_fast_into) of features given in single precision (the fast 1-D
-    /// |FFT|'s output), read as they are: bit for bit the result of `project_fast_into` on the same values
-    /// widened to f64. Does not allocate.
-    pub fn project_fast_f32_into(
+    /// [`project_fast_into`](Self::project_fast_into) for many inputs at once (f64 or f32): `xs` holds
+    /// whole input vectors (row-major), `out` receives `n_components` values per input. Each result is
+    /// bit for bit the one-at-a-time result; the basis is read once per block of its rows for all inputs
+    /// instead of once per input (what makes batches faster). Allocates only to grow `scratch`.
+    pub fn project_fast_many<T: FastInput>(
         &self,
-        x: &[f32],
-        scratch: &mut ProjectionScratch,
-        out: &mut [f64],
-    ) -> Result<()> {
-        check_len("pca input", self.n_features, x.len())?;
-        check_len("pca output", self.n_components(), out.len())?;
-        self.fixed.project(x, scratch, out)
-    }
-
-    /// [`project_fast_into`](Self::project_fast_into) for many inputs at once: `xs` holds whole input
-    /// vectors (row-major), `out` receives `n_components` values per input. Each result is bit for bit the
-    /// one-at-a-time result; the basis is read once per block of its rows for all inputs instead of once
-    /// per input (what makes batches faster). Allocates only to grow `scratch`.
-    pub fn project_fast_many(
-        &self,
-        xs: &[f64],
-        scratch: &mut ProjectionScratch,
-        out: &mut [f64],
-    ) -> Result<()> {
-        self.fixed.project(xs, scratch, out)
-    }
-
-    /// [`project_fast_many`](Self::project_fast_many) of features given in single precision, as
-    /// [`project_fast_f32_into`](Self::project_fast_f32_into) reads them: each result bit for bit that
-    /// of `project_fast_f32_into`. Allocates only to grow `scratch`.
-    pub fn project_fast_many_f32(
-        &self,
-        xs: &[f32],
+        xs: &[T],
         scratch: &mut ProjectionScratch,
         out: &mut [f64],
     ) -> Result<()> {
