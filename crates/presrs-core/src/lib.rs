@@ -16,6 +16,7 @@ pub mod preprocess;
 pub mod projection;
 pub mod recording;
 pub mod reliability;
+pub mod sample;
 pub mod selection;
 pub mod split;
 pub mod stance;
@@ -32,3 +33,4 @@ pub use pipeline::{
     CheckedTrainConfig, LabeledImage, Prediction, Session, TrainConfig, TrainedModel, train,
 };
 pub use recording::{FrameInfo, PressureUnit, Recording, SensorMeta};
+pub use sample::Sample;

@@ -9,12 +9,12 @@
 //! ([`presrs_core::dead_sensels::correct_dead_sensels`]), unless [`SampleOptions::dead_sensels`] is
 //! `None`; [`LoadedSamples::dead_sensels`] says what was filled.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sensels};
 use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
-use presrs_core::{Frame, Grid, Recording};
+use presrs_core::{Grid, Recording};
 use rayon::prelude::*;
 
 use presrs_io::manifest::{Manifest, ManifestRow, read_manifest};
@@ -112,71 +112,7 @@ impl DeadSenselFills {
     }
 }
 
-/// One image and what is known about it: the one sample type of presrs. Samples of a manifest
-/// ([`Dataset`]) keep their manifest row; samples made otherwise (the simulator's stances) have none.
-#[derive(Clone, Debug)]
-pub struct Sample {
-    pub frame: Frame,
-    /// The terrain (class) name.
-    pub label: Option<String>,
-    /// The operating condition it was recorded in (a gait, a load).
-    pub condition: Option<String>,
-    /// The trial, subject or session it belongs to.
-    pub group: Option<String>,
-    /// Body mass or load, kg, when known.
-    pub load: Option<f64>,
-    /// The file (or trial) it came from, and its 0-based frame index there.
-    pub source: PathBuf,
-    pub frame_index: usize,
-    /// The manifest row that produced it.
-    pub row: Option<ManifestRow>,
-}
-
-impl Sample {
-    /// A sample that no manifest describes.
-    pub fn new(
-        frame: Frame,
-        label: impl Into<String>,
-        source: PathBuf,
-        frame_index: usize,
-    ) -> Self {
-        Self {
-            frame,
-            label: Some(label.into()),
-            condition: None,
-            group: None,
-            load: None,
-            source,
-            frame_index,
-            row: None,
-        }
-    }
-
-    /// The value of a column for this sample, as written in its manifest row (`path`, `label`,
-    /// `condition`, `group`, `frame`, `load`, or an extra column); `None` when the field is empty. So
-    /// `--leave-one-out path` holds out one recording at a time. Without a row: label, condition,
-    /// group and the source's path.
-    pub fn column(&self, name: &str) -> Option<&str> {
-        if let Some(row) = &self.row {
-            return row.column(name);
-        }
-        match name {
-            "path" => self.source.to_str(),
-            "label" => self.label.as_deref(),
-            "condition" => self.condition.as_deref(),
-            "group" => self.group.as_deref(),
-            _ => None,
-        }
-    }
-
-    /// Where it was described, for messages: `manifest.csv line 4`, or the source and frame.
-    pub fn origin(&self, manifest: &Path) -> String {
-        match &self.row {
-            Some(row) => format!("{} line {}", manifest.display(), row.line),
-            None => format!("{} frame {}", self.source.display(), self.frame_index),
-        }
-    }
-}
+pub use presrs_core::Sample;
 
 /// The samples of a manifest, with what did not stop loading (a movie without stances, reader warnings).
 #[derive(Clone, Debug, Default)]
@@ -371,11 +307,31 @@ pub fn load_samples(
                 load: row.load,
                 source: row.path.clone(),
                 frame_index,
-                row: Some(row.clone()),
+                line: Some(row.line),
+                columns: row_columns(row),
             });
         }
     }
     Ok(loaded)
+}
+
+/// A manifest row's fields as written, by column name (empty ones left out).
+fn row_columns(row: &ManifestRow) -> BTreeMap<String, String> {
+    let mut columns = row.extra.clone();
+    let known = [
+        ("path", Some(&row.path_text)),
+        ("label", row.label.as_ref()),
+        ("condition", row.condition.as_ref()),
+        ("group", row.group.as_ref()),
+        ("frame", row.frame_text.as_ref()),
+        ("load", row.load_text.as_ref()),
+    ];
+    for (name, value) in known {
+        if let Some(value) = value {
+            columns.insert(name.to_owned(), value.clone());
+        }
+    }
+    columns
 }
 
 /// The frame indices one manifest row contributes.

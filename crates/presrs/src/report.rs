@@ -21,8 +21,8 @@ use presrs_sim::{Dataset as SimDataset, SimConfig, VelocityTable};
 
 pub use presrs_report::{
     Evaluation, FaultResult, Figure, Format, MovieOptions, PressureFigure, PressureGrid,
-    PressureScale, ReportError, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
-    render_rgb, render_svg, save_figure, write_movie,
+    PressureScale, ReportError, ReportInputs, ReportRecording, SimulationInputs, render_rgb,
+    render_svg, save_figure, write_movie,
 };
 
 use crate::dataset::{Dataset, Sample, SampleOptions};
@@ -87,20 +87,6 @@ impl Default for ReportOptions {
 pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf> {
     presrs_report::write_report(inputs, out_dir)
         .with_context(|| format!("cannot write the report in {}", out_dir.display()))
-}
-
-/// Report samples of manifest samples (`label` and `condition` borrowed).
-pub fn report_samples(samples: &[Sample]) -> Vec<ReportSample<'_>> {
-    samples
-        .iter()
-        .map(|s| ReportSample {
-            frame: s.frame.view(),
-            label: s.label.as_deref(),
-            condition: s.condition.as_deref(),
-            source: s.source.display().to_string(),
-            frame_index: s.frame_index,
-        })
-        .collect()
 }
 
 /// The names of `evaluations`' reports: `trained on KEY`.
@@ -187,7 +173,8 @@ pub fn shrink_draw(
 /// `reproduce` keeps this and drops the movies before it simulates the heavier hopper.
 #[derive(Debug)]
 pub struct SimulationReportData {
-    frames: Vec<(Frame, String, String, String, usize)>,
+    /// The mid-stance image of every complete stance (terrain label, gait condition, trial source).
+    samples: Vec<Sample>,
     train_gait: Option<String>,
     recordings: Vec<(String, Recording)>,
     table: VelocityTable,
@@ -198,22 +185,26 @@ pub struct SimulationReportData {
 impl SimulationReportData {
     pub fn from_dataset(dataset: &SimDataset) -> Result<Self> {
         let segment = ValidSegmentParams::default();
-        let mut frames = Vec::new();
+        let mut samples = Vec::new();
         for trial in &dataset.trials {
             let segmentation = segment_recording(&trial.recording, &segment)?;
             for stance in segmentation.complete() {
                 if let Some(frame) = trial.recording.frame(stance.mid_frame()) {
-                    frames.push((
+                    let mut sample = Sample::new(
                         frame.to_frame(),
                         trial.plan.terrain.clone(),
-                        trial.plan.gait.name.clone(),
-                        trial.plan.name(),
+                        PathBuf::from(trial.plan.name()),
                         stance.mid_frame(),
-                    ));
+                    );
+                    sample.condition = Some(trial.plan.gait.name.clone());
+                    samples.push(sample);
                 }
             }
         }
-        let gaits: BTreeSet<&str> = frames.iter().map(|f| f.2.as_str()).collect();
+        let gaits: BTreeSet<&str> = samples
+            .iter()
+            .filter_map(|s| s.condition.as_deref())
+            .collect();
         let train_gait = if gaits.contains("G2") {
             Some("G2")
         } else {
@@ -233,7 +224,7 @@ impl SimulationReportData {
             })
             .collect::<Result<_>>()?;
         Ok(Self {
-            frames,
+            samples,
             train_gait,
             recordings,
             table: dataset.velocity_table(),
@@ -254,23 +245,10 @@ pub fn write_simulation_report(
     seed: u64,
     out_dir: &Path,
 ) -> Result<PathBuf> {
-    let frames = &data.frames;
-    let samples: Vec<ReportSample<'_>> = frames
-        .iter()
-        .map(|(frame, terrain, gait, name, index)| ReportSample {
-            frame: frame.view(),
-            label: Some(terrain),
-            condition: Some(gait),
-            source: name.clone(),
-            frame_index: *index,
-        })
-        .collect();
+    let samples = &data.samples;
     let train_gait = data.train_gait.as_deref();
     let train_config = presrs_core::pipeline::TrainConfig::default().check()?;
-    let triples: Vec<(&Frame, &str, Option<&str>)> = frames
-        .iter()
-        .map(|f| (&f.0, f.1.as_str(), Some(f.2.as_str())))
-        .collect();
+    let triples = labelled(samples).unwrap_or_default();
     let model = train_report_model(
         &triples,
         train_gait,
@@ -292,7 +270,7 @@ pub fn write_simulation_report(
     let traces = simulation_traces(config, table, train_gait.unwrap_or("G2"));
     let mut inputs = ReportInputs::new(
         "presrs reproduce: the paper's experiment on the simulator",
-        &samples,
+        samples,
     );
     inputs.notes = vec![format!(
         "Simulated hopper on {} terrains x {} gaits, seed {seed}: the mid-stance frame of every \
@@ -535,7 +513,7 @@ fn write_manifest_report(
     (faults, fault_note): (&[FaultResult], String),
     out_dir: &Path,
 ) -> Result<PathBuf> {
-    let samples = report_samples(&loaded.samples);
+    let samples = &loaded.samples;
     let conditions: BTreeSet<&str> = loaded
         .samples
         .iter()
@@ -559,7 +537,7 @@ fn write_manifest_report(
         .map(|(table, config)| simulation_traces(config, table, preferred.unwrap_or("G2")))
         .unwrap_or_default();
     let title = format!("presrs report: {}", manifest_path.display());
-    let mut inputs = ReportInputs::new(title, &samples);
+    let mut inputs = ReportInputs::new(title, samples);
     inputs.notes = vec![format!(
         "{} images from {} ({} stance frame of each complete stance of a movie).",
         samples.len(),
@@ -1199,14 +1177,12 @@ mod tests {
         assert!(auto_faults.iter().any(|f| f.method == AUTO_METHOD));
 
         // The report draws them and tabulates the same numbers.
-        let report_samples: Vec<ReportSample<'_>> = frames
+        let report_samples: Vec<Sample> = frames
             .iter()
-            .map(|(f, l, c)| ReportSample {
-                frame: f.view(),
-                label: Some(l),
-                condition: Some(c),
-                source: "synthetic".into(),
-                frame_index: 0,
+            .map(|(f, l, c)| {
+                let mut sample = Sample::new(f.clone(), *l, "synthetic".into(), 0);
+                sample.condition = Some((*c).to_owned());
+                sample
             })
             .collect();
         let mut inputs = ReportInputs::new("faults", &report_samples);

@@ -7,21 +7,9 @@ use presrs_core::evaluation::{EvalReport, MeanStd};
 use presrs_core::perturb::Perturbation;
 use presrs_core::pipeline::TrainedModel;
 use presrs_core::stance::{SampleFrame, ValidSegmentParams};
-use presrs_core::{FrameView, Recording, SensorMeta};
+use presrs_core::{Recording, Sample, SensorMeta};
 use presrs_sim::VelocityTable;
 use presrs_sim::trace::HopTrace;
-
-/// One image of the data set.
-#[derive(Clone, Debug)]
-pub struct ReportSample<'a> {
-    pub frame: FrameView<'a>,
-    pub label: Option<&'a str>,
-    /// The operating condition (gait, load, ...), if any.
-    pub condition: Option<&'a str>,
-    /// Where it came from (a file or trial name) and its 0-based frame index there.
-    pub source: String,
-    pub frame_index: usize,
-}
 
 /// A recording whose load curve is shown.
 #[derive(Clone, Debug)]
@@ -69,7 +57,7 @@ pub struct ReportInputs<'a> {
     pub notes: Vec<String>,
     /// The sensor (units and pitch) of the samples; raw counts and square sensels when `None`.
     pub sensor: Option<&'a SensorMeta>,
-    pub samples: &'a [ReportSample<'a>],
+    pub samples: &'a [Sample],
     /// A trained model: its crop, features, PCA and validation curve are shown.
     pub model: Option<&'a TrainedModel>,
     /// How the model was obtained (e.g. `trained on G2, 13 + 7 images per class, seed 1`).
@@ -89,7 +77,7 @@ pub struct ReportInputs<'a> {
 
 impl<'a> ReportInputs<'a> {
     /// Inputs with only samples (add the rest field by field).
-    pub fn new(title: impl Into<String>, samples: &'a [ReportSample<'a>]) -> Self {
+    pub fn new(title: impl Into<String>, samples: &'a [Sample]) -> Self {
         Self {
             title: title.into(),
             notes: Vec::new(),

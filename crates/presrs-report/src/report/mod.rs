@@ -26,9 +26,7 @@ use self::simulation::{hopper_section, table1_section};
 use crate::error::Result;
 
 pub use self::faults::fault_panels;
-pub use self::inputs::{
-    Evaluation, FaultResult, ReportInputs, ReportRecording, ReportSample, SimulationInputs,
-};
+pub use self::inputs::{Evaluation, FaultResult, ReportInputs, ReportRecording, SimulationInputs};
 
 /// Writes `out_dir/index.html` and its figures; returns the page's path.
 pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf> {

@@ -11,7 +11,9 @@ use presrs_core::pipeline::{TrainedModel, extract_features};
 use presrs_core::{FrameView, Grid, Recording};
 use rayon::prelude::*;
 
-use super::inputs::{ReportInputs, ReportSample};
+use presrs_core::Sample;
+
+use super::inputs::ReportInputs;
 use super::page::{Job, Section, esc};
 use crate::charts::{LoadCurveData, LoadCurvesFigure, ScatterFigure, SpectraFigure, SpectrumPanel};
 use crate::error::{ReportError, Result};
@@ -19,7 +21,7 @@ use crate::pressure::{Outline, PressureGrid, PressureScale};
 
 /// The samples grouped by label (rows) and condition (columns), with what the sections about them share.
 pub(super) struct Groups<'a> {
-    pub(super) samples: &'a [ReportSample<'a>],
+    pub(super) samples: &'a [Sample],
     pub(super) scale: PressureScale,
     /// The grid of the first sample.
     pub(super) grid: Grid,
@@ -39,8 +41,8 @@ impl<'a> Groups<'a> {
     pub(super) fn new(inputs: &ReportInputs<'a>) -> Result<Self> {
         let scale = PressureScale::from_meta(inputs.sensor);
         let samples = inputs.samples;
-        let labels = distinct(samples.iter().filter_map(|s| s.label));
-        let conditions = distinct(samples.iter().filter_map(|s| s.condition));
+        let labels = distinct(samples.iter().filter_map(|s| s.label.as_deref()));
+        let conditions = distinct(samples.iter().filter_map(|s| s.condition.as_deref()));
         let has_conditions = !conditions.is_empty();
         let row_names = if labels.is_empty() {
             vec!["(no label)".to_owned()]
@@ -70,15 +72,16 @@ impl<'a> Groups<'a> {
         })
     }
 
-    pub(super) fn label_index(&self, s: &ReportSample<'_>) -> usize {
+    pub(super) fn label_index(&self, s: &Sample) -> usize {
         self.row_names
             .iter()
             .position(|n| n == label_of(s))
             .unwrap_or(0)
     }
 
-    pub(super) fn cond_index(&self, s: &ReportSample<'_>) -> usize {
+    pub(super) fn cond_index(&self, s: &Sample) -> usize {
         s.condition
+            .as_deref()
             .and_then(|c| self.col_names.iter().position(|n| n == c))
             .unwrap_or(0)
     }
@@ -88,7 +91,7 @@ impl<'a> Groups<'a> {
         let vectors: Vec<Option<Vec<f64>>> = self
             .samples
             .par_iter()
-            .map(|s| extract_features(&s.frame, &self.crop, &self.features_config).ok())
+            .map(|s| extract_features(&s.frame.view(), &self.crop, &self.features_config).ok())
             .collect();
         let len = vectors.iter().flatten().map(Vec::len).next().unwrap_or(0);
         Features { vectors, len }
@@ -101,8 +104,8 @@ pub(super) struct Features {
     pub(super) len: usize,
 }
 
-fn label_of<'s>(sample: &ReportSample<'s>) -> &'s str {
-    sample.label.unwrap_or("(no label)")
+fn label_of(sample: &Sample) -> &str {
+    sample.label.as_deref().unwrap_or("(no label)")
 }
 
 /// Distinct values in first-seen order, sorted.
@@ -132,8 +135,8 @@ pub(super) fn data_section<'a>(inputs: &ReportInputs<'_>, g: &Groups<'a>) -> Sec
         col_names,
         ..
     } = g;
-    let label_index = |s: &ReportSample<'_>| g.label_index(s);
-    let cond_index = |s: &ReportSample<'_>| g.cond_index(s);
+    let label_index = |s: &Sample| g.label_index(s);
+    let cond_index = |s: &Sample| g.cond_index(s);
     let grid = g.grid;
     let mut counts = vec![vec![0usize; col_names.len()]; row_names.len()];
     for s in *samples {
@@ -204,23 +207,22 @@ pub(super) fn images_section<'a>(g: &Groups<'a>) -> Section<'a> {
         col_names,
         ..
     } = g;
-    let label_index = |s: &ReportSample<'_>| g.label_index(s);
-    let cond_index = |s: &ReportSample<'_>| g.cond_index(s);
+    let label_index = |s: &Sample| g.label_index(s);
+    let cond_index = |s: &Sample| g.cond_index(s);
     let (grid, crop) = (g.grid, g.crop);
     let mut cells: Vec<Vec<Option<FrameView<'_>>>> =
         vec![vec![None; col_names.len()]; row_names.len()];
-    let mut chosen: Vec<Vec<Option<&ReportSample<'_>>>> =
-        vec![vec![None; col_names.len()]; row_names.len()];
+    let mut chosen: Vec<Vec<Option<&Sample>>> = vec![vec![None; col_names.len()]; row_names.len()];
     for (r, row) in cells.iter_mut().enumerate() {
         for (c, cell) in row.iter_mut().enumerate() {
-            let mut members: Vec<(&ReportSample<'_>, f64)> = samples
+            let mut members: Vec<(&Sample, f64)> = samples
                 .iter()
                 .filter(|s| label_index(s) == r && cond_index(s) == c)
-                .map(|s| (s, s.frame.total()))
+                .map(|s| (s, s.frame.view().total()))
                 .collect();
             members.sort_by(|a, b| a.1.total_cmp(&b.1));
             if let Some(&(s, _)) = members.get(members.len() / 2) {
-                *cell = Some(s.frame);
+                *cell = Some(s.frame.view());
                 chosen[r][c] = Some(s);
             }
         }
@@ -239,7 +241,7 @@ pub(super) fn images_section<'a>(g: &Groups<'a>) -> Section<'a> {
                     "<li>{} {}: {} frame {}</li>",
                     esc(&row_names[r]),
                     esc(&col_names[c]),
-                    esc(&s.source),
+                    esc(&s.source.display().to_string()),
                     s.frame_index
                 );
             }
@@ -286,8 +288,8 @@ pub(super) fn spectra_section<'a>(g: &Groups<'a>, features: &Features) -> Option
         col_names,
         ..
     } = g;
-    let label_index = |s: &ReportSample<'_>| g.label_index(s);
-    let cond_index = |s: &ReportSample<'_>| g.cond_index(s);
+    let label_index = |s: &Sample| g.label_index(s);
+    let cond_index = |s: &Sample| g.cond_index(s);
     let (grid, crop, features_config) = (g.grid, g.crop, &g.features_config);
     let n_features = features.len;
     let features = &features.vectors;
@@ -422,8 +424,8 @@ pub(super) fn pca_section<'a>(
         col_names,
         ..
     } = g;
-    let label_index = |s: &ReportSample<'_>| g.label_index(s);
-    let cond_index = |s: &ReportSample<'_>| g.cond_index(s);
+    let label_index = |s: &Sample| g.label_index(s);
+    let cond_index = |s: &Sample| g.cond_index(s);
     let n_features = features.len;
     let features = &features.vectors;
     let usable: Vec<(usize, &Vec<f64>)> = features
