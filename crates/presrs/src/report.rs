@@ -874,7 +874,7 @@ pub fn fault_sweep(
     condition: Option<&str>,
     config: &CheckedTrainConfig,
     progress: &dyn Progress,
-) -> std::result::Result<(Vec<FaultResult>, String), presrs_core::CoreError> {
+) -> Result<(Vec<FaultResult>, String)> {
     use presrs_core::evaluation::TestTransform;
     use presrs_core::perturb::Perturbation;
     let started = Instant::now();
@@ -896,13 +896,13 @@ pub fn fault_sweep(
     // Next to an automatic choice the paper's method; else the configured pipeline alone.
     let paper_config;
     let paper = if auto {
-        paper_config = options.method.paper_config(grid).map_err(core_error)?;
+        paper_config = options.method.paper_config(grid)?;
         &paper_config
     } else {
         config
     };
     let candidates = if auto {
-        options.method.candidates(grid, false).map_err(core_error)?
+        options.method.candidates(grid, false)?
     } else {
         Vec::new()
     };
@@ -961,14 +961,6 @@ pub fn fault_sweep(
         options.seed
     );
     Ok((results, note))
-}
-
-/// A configuration the library refused, as the evaluation engine's error.
-fn core_error(err: Error) -> presrs_core::CoreError {
-    match err {
-        Error::Core(err) => err,
-        other => presrs_core::CoreError::NotEnoughData(other.to_string()),
-    }
 }
 
 #[cfg(test)]
