@@ -640,6 +640,33 @@ pub fn extract_features_with(
     Ok(out)
 }
 
+/// [`extract_features_with`] for many images of one grid, row-major `frames.len() x n_features` (the
+/// transforms planned once). Equal, image for image, to what `extract_features_with` gives.
+pub fn extract_features_many(
+    frames: &[FrameView<'_>],
+    crop: &Crop,
+    preprocess: Preprocess,
+    features: &FeatureConfig,
+) -> Result<(Vec<f64>, usize)> {
+    features.check()?;
+    let Some(first) = frames.first() else {
+        return Ok((Vec::new(), 0));
+    };
+    let image_grid = crop.output_grid(first.grid())?;
+    let mut preprocessor = Preprocessor::new(
+        *crop,
+        preprocess,
+        image_grid,
+        features.extractor(image_grid)?,
+    );
+    let width = preprocessor.extractor.output_len();
+    let mut out = vec![0.0; frames.len() * width];
+    for (frame, row) in frames.iter().zip(out.chunks_exact_mut(width)) {
+        preprocessor.features_into(frame, row, Precision::Exact)?;
+    }
+    Ok((out, width))
+}
+
 impl TrainedModel {
     /// A classification session with its own buffers (one per thread).
     pub fn session(&self) -> Session<'_> {

@@ -16,6 +16,7 @@ use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sense
 use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
 use presrs_core::{Grid, Recording};
 use rayon::prelude::*;
+use sha2::{Digest, Sha256};
 
 use presrs_io::manifest::{Manifest, ManifestRow, read_manifest};
 use presrs_io::{IoError, Parsed, ReadOptions, read_recording_with};
@@ -169,6 +170,52 @@ impl Dataset {
         })
     }
 
+    /// A data set of samples already in memory (arrays from Python, images made by a program), named
+    /// `name` in messages. Its stand-in manifest has the columns the samples fill (`path`, `label`,
+    /// `condition`, `group`) and no rows; its SHA-256 identifies the samples' images and fields, so a
+    /// model's provenance still names the data it came from. No samples, or samples of different grids,
+    /// is an error.
+    pub fn from_samples(name: impl Into<PathBuf>, samples: Vec<Sample>) -> Result<Self> {
+        let source = name.into();
+        let Some(first) = samples.first() else {
+            return Err(Error::data(format!("{}: no samples", source.display())));
+        };
+        let grid = first.frame.grid();
+        if let Some((index, odd)) = samples
+            .iter()
+            .enumerate()
+            .find(|(_, sample)| sample.frame.grid() != grid)
+        {
+            return Err(Error::data(format!(
+                "{}: sample {index} is {} where the first is {grid}; every image must have one size",
+                source.display(),
+                odd.frame.grid()
+            )));
+        }
+        let mut columns = vec!["path".to_owned()];
+        for (column, filled) in [
+            ("label", samples.iter().any(|s| s.label.is_some())),
+            ("condition", samples.iter().any(|s| s.condition.is_some())),
+            ("group", samples.iter().any(|s| s.group.is_some())),
+        ] {
+            if filled {
+                columns.push(column.to_owned());
+            }
+        }
+        let manifest = Manifest {
+            sha256: samples_sha256(&samples),
+            source,
+            columns,
+            rows: Vec::new(),
+        };
+        Ok(Self {
+            manifest,
+            samples,
+            warnings: Vec::new(),
+            dead_sensels: DeadSenselFills::default(),
+        })
+    }
+
     /// The manifest file.
     pub fn path(&self) -> &Path {
         &self.manifest.source
@@ -316,6 +363,30 @@ pub fn load_samples(
 }
 
 /// A manifest row's fields as written, by column name (empty ones left out).
+/// SHA-256 (hex) of samples in memory: each image's grid and values, then its label, condition and
+/// group, so that the same images with the same fields give the same digest.
+fn samples_sha256(samples: &[Sample]) -> String {
+    let mut hasher = Sha256::new();
+    for sample in samples {
+        let grid = sample.frame.grid();
+        hasher.update((grid.rows as u64).to_le_bytes());
+        hasher.update((grid.cols as u64).to_le_bytes());
+        for value in sample.frame.values() {
+            hasher.update(value.to_le_bytes());
+        }
+        for field in [&sample.label, &sample.condition, &sample.group] {
+            let text = field.as_deref().unwrap_or("");
+            hasher.update((text.len() as u64).to_le_bytes());
+            hasher.update(text.as_bytes());
+        }
+    }
+    hasher
+        .finalize()
+        .iter()
+        .map(|byte| format!("{byte:02x}"))
+        .collect()
+}
+
 fn row_columns(row: &ManifestRow) -> BTreeMap<String, String> {
     let mut columns = row.extra.clone();
     let known = [

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod classify;
 pub mod dataset;
+pub mod describe;
 pub mod error;
 pub mod evaluate;
 pub mod gait;
@@ -16,6 +17,7 @@ pub mod stream;
 pub mod train;
 
 pub use dataset::{Dataset, Sample, SampleOptions};
+pub use describe::describe_model;
 pub use error::{Context, Error, Result};
 pub use method::{ClassifierChoice, CropChoice, FeatureChoice, Method};
 pub use progress::{Progress, Quiet, Recorder};

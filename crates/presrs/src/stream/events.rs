@@ -14,6 +14,21 @@ pub(super) fn event_lines(
     latency_us: f64,
     timestamp_us: Option<u64>,
 ) -> Vec<String> {
+    event_values(step, model, profile, latency_us, timestamp_us)
+        .into_iter()
+        .map(|value| value.to_string())
+        .collect()
+}
+
+/// The events of one step of the classifier as JSON values (`docs/stream-protocol.md`: touchdown,
+/// classification, error, liftoff), for a face that is not a stream (the Python package).
+pub fn event_values(
+    step: &Step<'_>,
+    model: &TrainedModel,
+    profile: &OnlineProfile,
+    latency_us: f64,
+    timestamp_us: Option<u64>,
+) -> Vec<Value> {
     step.events
         .iter()
         .map(|event| match event {
@@ -51,7 +66,6 @@ pub(super) fn event_lines(
                 "frame": lo.frame,
             }),
         })
-        .map(|value| value.to_string())
         .collect()
 }
 

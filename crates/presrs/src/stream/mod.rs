@@ -33,6 +33,7 @@ use presrs_core::online::OnlineProfile;
 
 use crate::error::{Error, Result};
 
+pub use events::event_values;
 pub use output::BoundedOutput;
 pub use server::{ServeSummary, ServerNotice, ServerOptions, ShutdownHandle, StreamServer};
 pub use session::{

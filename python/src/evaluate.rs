@@ -1,0 +1,209 @@
+//! `presrs.evaluate`: the evaluation protocols (train on a draw and test on the rest, or leave one
+//! group out), on a manifest or on numpy arrays.
+
+use std::path::PathBuf;
+
+use numpy::{PyArray1, PyArrayMethods};
+use presrs::core::evaluation::EvalReport;
+use presrs::evaluate::{CalibrationJson, EvalOptions, EvalSetup, Holdout};
+use presrs::{Dataset, Quiet, SampleOptions};
+use pyo3::prelude::*;
+use pyo3::types::PyString;
+
+use crate::errors::{IntoPyResult, data_error};
+use crate::model::{dataset_of, method, validation_size, warn};
+
+/// What an evaluation measured.
+#[pyclass(module = "presrs", name = "Evaluation", frozen)]
+#[derive(Debug)]
+pub struct Evaluation {
+    report: EvalReport,
+    warnings: Vec<String>,
+}
+
+#[pymethods]
+impl Evaluation {
+    /// Mean accuracy over the repeats (0-1).
+    #[getter]
+    fn accuracy(&self) -> f64 {
+        self.report.overall.mean
+    }
+
+    /// Standard deviation of the accuracy over the repeats.
+    #[getter]
+    fn accuracy_std(&self) -> f64 {
+        self.report.overall.std
+    }
+
+    /// Accuracy per tested condition (or held-out value): `{name: (mean, std)}`.
+    #[getter]
+    fn per_condition(&self) -> std::collections::BTreeMap<String, (f64, f64)> {
+        self.report
+            .per_condition
+            .iter()
+            .map(|(name, m)| (name.clone(), (m.mean, m.std)))
+            .collect()
+    }
+
+    /// The accuracy of every repeat.
+    #[getter]
+    fn repeats(&self) -> Vec<f64> {
+        self.report
+            .repeats
+            .iter()
+            .map(|r| r.overall_accuracy)
+            .collect()
+    }
+
+    /// The class names of the confusion matrix's rows (true) and columns (predicted).
+    #[getter]
+    fn classes(&self) -> Vec<String> {
+        self.report.confusion.labels.clone()
+    }
+
+    /// Counts over all repeats: row = true class, column = predicted class (`classes` order).
+    #[getter]
+    fn confusion<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.report.confusion.labels.len();
+        let flat: Vec<u64> = self
+            .report
+            .confusion
+            .counts
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        Ok(PyArray1::from_vec(py, flat).reshape([n, n])?.into_any())
+    }
+
+    /// How far the confidences can be trusted: mean confidence (overall, when right, when wrong) and
+    /// the expected calibration error.
+    #[getter]
+    fn calibration<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let value = serde_json::to_value(CalibrationJson::new(&self.report.reliability))
+            .map_err(|err| data_error(err.to_string()))?;
+        crate::json::to_py(py, &value)
+    }
+
+    /// Median time to classify one image, in microseconds.
+    #[getter]
+    fn classify_us(&self) -> f64 {
+        self.report.median_classify_ns as f64 / 1e3
+    }
+
+    /// What the user should know (labels no training set holds, fewer components than asked).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// The whole report as plain dicts and lists (what `presrs eval --json` holds).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let value =
+            serde_json::to_value(&self.report).map_err(|err| data_error(err.to_string()))?;
+        crate::json::to_py(py, &value)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<presrs.Evaluation accuracy {:.2} % +- {:.2} over {} repeats>",
+            100.0 * self.report.overall.mean,
+            100.0 * self.report.overall.std,
+            self.report.repeats.len()
+        )
+    }
+}
+
+/// Evaluates a method on `data`: a manifest (a path) or images `(n, rows, cols)` with `labels`.
+///
+/// By default a model is trained on a random draw and tested on every other image (the paper's
+/// protocol), `repeats` times. `leave_one_out="group"` (or `"condition"`, or a manifest column) holds
+/// out each value in turn; `train_condition` trains on one condition only. The method options are
+/// `Model.train`'s.
+#[pyfunction]
+#[pyo3(signature = (data, labels = None, *, groups = None, conditions = None, leave_one_out = None,
+    train_condition = None, per_class = None, validation = 0.35, repeats = 10, seed = 1,
+    features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false))]
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    labels: Option<&Bound<'_, PyAny>>,
+    groups: Option<&Bound<'_, PyAny>>,
+    conditions: Option<&Bound<'_, PyAny>>,
+    leave_one_out: Option<String>,
+    train_condition: Option<String>,
+    per_class: Option<usize>,
+    validation: f64,
+    repeats: usize,
+    seed: u64,
+    features: &str,
+    classifier: &str,
+    dims: Option<usize>,
+    crop: &str,
+    full_search: bool,
+) -> PyResult<Evaluation> {
+    if repeats == 0 {
+        return Err(data_error("repeats=0: give at least one repeat"));
+    }
+    let holdout = match (leave_one_out, train_condition) {
+        (Some(_), Some(_)) => {
+            return Err(data_error(
+                "leave_one_out and train_condition: choose one protocol",
+            ));
+        }
+        (Some(column), None) => Holdout::LeaveOneOut(column),
+        (None, condition) => Holdout::TrainCondition(condition),
+    };
+    let options = EvalOptions {
+        holdout,
+        per_class,
+        validation: validation_size(validation)?,
+        repeats,
+        seed,
+        method: method(features, classifier, crop, dims, full_search)?,
+    };
+    let dataset = load(py, data, labels, groups, conditions)?;
+    for warning in &dataset.warnings {
+        warn(py, warning)?;
+    }
+    let setup = EvalSetup::new(&dataset, &options).py_err()?;
+    let mut warnings = setup.warnings.clone();
+    let outcome = py.detach(|| setup.evaluate(&Quiet)).py_err()?;
+    warnings.extend(outcome.warnings);
+    for warning in &warnings {
+        warn(py, warning)?;
+    }
+    Ok(Evaluation {
+        report: outcome.report,
+        warnings,
+    })
+}
+
+/// A manifest's data set, or one of arrays in memory.
+fn load(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    labels: Option<&Bound<'_, PyAny>>,
+    groups: Option<&Bound<'_, PyAny>>,
+    conditions: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Dataset> {
+    let is_path = data.is_instance_of::<PyString>() || data.hasattr("__fspath__")?;
+    if is_path {
+        if labels.is_some() || groups.is_some() || conditions.is_some() {
+            return Err(data_error(
+                "a manifest gives its own labels, groups and conditions: pass only its path",
+            ));
+        }
+        let path: PathBuf = data.extract()?;
+        return py
+            .detach(|| Dataset::load(&path, &SampleOptions::default(), &Quiet))
+            .py_err();
+    }
+    let Some(labels) = labels else {
+        return Err(data_error(
+            "labels: images need one label each (or pass a manifest's path instead)",
+        ));
+    };
+    dataset_of(data, labels, groups, conditions)
+}

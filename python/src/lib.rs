@@ -1,0 +1,32 @@
+//! The native module of the `presrs` Python package (`presrs._native`): numpy arrays in and out over
+//! the presrs library. The package's Python files (`presrs/__init__.py`, `presrs/sklearn.py`) re-export
+//! it; see `python/README.md`.
+
+mod arrays;
+mod errors;
+mod evaluate;
+mod json;
+mod model;
+mod online;
+mod recording;
+mod simulate;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _native(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    module.add_class::<model::Model>()?;
+    module.add_class::<recording::Recording>()?;
+    module.add_class::<recording::Stance>()?;
+    module.add_class::<evaluate::Evaluation>()?;
+    module.add_class::<simulate::Trial>()?;
+    module.add_class::<online::OnlineClassifier>()?;
+    module.add_function(wrap_pyfunction!(recording::read, module)?)?;
+    module.add_function(wrap_pyfunction!(recording::segment, module)?)?;
+    module.add_function(wrap_pyfunction!(recording::segment_params, module)?)?;
+    module.add_function(wrap_pyfunction!(recording::features, module)?)?;
+    module.add_function(wrap_pyfunction!(evaluate::evaluate, module)?)?;
+    module.add_function(wrap_pyfunction!(simulate::simulate, module)?)?;
+    Ok(())
+}

@@ -1,0 +1,149 @@
+//! `presrs.OnlineClassifier`: frames in one at a time, stance and terrain events out, with the causal
+//! detector and the events of `presrs stream` (docs/stream-protocol.md).
+
+use std::time::Instant;
+
+use presrs::core::online::{OnlineClassifier as CoreOnline, OnlineProfile};
+use presrs::core::stance::ValidSegmentParams;
+use presrs::io::model_file::ModelFile;
+use presrs::stream::event_values;
+use pyo3::prelude::*;
+use self_cell::self_cell;
+use serde_json::Value;
+
+use crate::arrays::Images;
+use crate::errors::{IntoPyResult, data_error};
+use crate::model::Model;
+
+/// A model file, its online profile and a classifier running on them.
+struct Running {
+    file: ModelFile,
+    profile: OnlineProfile,
+}
+
+self_cell!(
+    struct Online {
+        owner: Running,
+        #[covariant]
+        dependent: CoreOnline,
+    }
+);
+
+/// Classifies a stream of frames as `presrs stream` does: feed frames with `push`, read the events
+/// (touchdown, classification, liftoff, error) it returns, and `finish` at the end of the stream.
+#[pyclass(module = "presrs", name = "OnlineClassifier", unsendable)]
+pub struct OnlineClassifier {
+    online: Online,
+    /// Frames pushed so far.
+    frames: u64,
+}
+
+impl std::fmt::Debug for OnlineClassifier {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OnlineClassifier")
+            .field("frames", &self.frames)
+            .finish()
+    }
+}
+
+#[pymethods]
+impl OnlineClassifier {
+    /// A classifier for `model`, with the model file's online profile (calibration, sample frame,
+    /// gait table) when it has one, else warm-up calibration on the first frames. `gait_table` adds
+    /// terrain -> gait entries to the profile's.
+    #[new]
+    #[pyo3(signature = (model, *, gait_table = None))]
+    fn new(
+        model: &Bound<'_, Model>,
+        gait_table: Option<std::collections::BTreeMap<String, String>>,
+    ) -> PyResult<Self> {
+        let file = model.get().file().clone();
+        let mut profile = file.online.clone().unwrap_or_default();
+        profile.gait_table.extend(gait_table.unwrap_or_default());
+        let online = Online::try_new(Running { file, profile }, |running| {
+            CoreOnline::new(
+                &running.file.model,
+                &ValidSegmentParams::default(),
+                &running.profile.params,
+                running.profile.calibration,
+            )
+        })
+        .py_err()?;
+        Ok(Self { online, frames: 0 })
+    }
+
+    /// Feeds one frame `(rows, cols)`; returns the events it completed, as dicts.
+    fn push<'py>(
+        &mut self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Vec<Bound<'py, PyAny>>> {
+        let images = Images::new(frame, "frame")?;
+        if images.batch {
+            return Err(data_error(
+                "frame: push one frame (rows, cols) at a time; loop over a movie's frames",
+            ));
+        }
+        let view = images.frame(0)?;
+        let index = self.frames;
+        let values = self.online.with_dependent_mut(|running, online| {
+            let started = Instant::now();
+            let step = online
+                .push(&view)
+                .map_err(|err| data_error(format!("frame {index}: {err}")))?;
+            let latency_us = started.elapsed().as_secs_f64() * 1e6;
+            Ok::<_, PyErr>(event_values(
+                &step,
+                &running.file.model,
+                &running.profile,
+                latency_us,
+                None,
+            ))
+        })?;
+        self.frames += 1;
+        to_dicts(py, &values)
+    }
+
+    /// Ends the stream: the events of a stance still open (a decision not yet made, its lift-off).
+    fn finish<'py>(&mut self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
+        let values = self.online.with_dependent_mut(|running, online| {
+            let step = online.finish().py_err()?;
+            Ok::<_, PyErr>(event_values(
+                &step,
+                &running.file.model,
+                &running.profile,
+                0.0,
+                None,
+            ))
+        })?;
+        to_dicts(py, &values)
+    }
+
+    /// Whether the detector is still calibrating on the first frames (no model-file profile).
+    #[getter]
+    fn warming_up(&self) -> bool {
+        self.online.borrow_dependent().segmenter().warming_up()
+    }
+
+    /// Counters: frames, stances, decisions, fused decisions, rejected frames.
+    #[getter]
+    fn stats(&self) -> std::collections::BTreeMap<&'static str, u64> {
+        let s = self.online.borrow_dependent().stats();
+        [
+            ("frames", s.frames),
+            ("stances", s.stances),
+            ("decisions", s.decisions),
+            ("fused_decisions", s.fused_decisions),
+            ("rejected_frames", s.rejected_frames),
+        ]
+        .into_iter()
+        .collect()
+    }
+}
+
+fn to_dicts<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    values
+        .iter()
+        .map(|value| crate::json::to_py(py, value))
+        .collect()
+}
