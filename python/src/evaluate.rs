@@ -12,6 +12,7 @@ use pyo3::types::PyString;
 
 use crate::errors::{IntoPyResult, data_error};
 use crate::model::{dataset_of, method, validation_size, warn};
+use crate::threads::detached;
 
 /// What an evaluation measured.
 #[pyclass(module = "presrs", name = "Evaluation", frozen)]
@@ -169,7 +170,7 @@ pub fn evaluate(
     }
     let setup = EvalSetup::new(&dataset, &options).py_err()?;
     let mut warnings = setup.warnings.clone();
-    let outcome = py.detach(|| setup.evaluate(&Quiet)).py_err()?;
+    let outcome = detached(py, || setup.evaluate(&Quiet))?.py_err()?;
     warnings.extend(outcome.warnings);
     for warning in &warnings {
         warn(py, warning)?;
@@ -196,9 +197,10 @@ fn load(
             ));
         }
         let path: PathBuf = data.extract()?;
-        return py
-            .detach(|| Dataset::load(&path, &SampleOptions::default(), &Quiet))
-            .py_err();
+        return detached(py, || {
+            Dataset::load(&path, &SampleOptions::default(), &Quiet)
+        })?
+        .py_err();
     }
     let Some(labels) = labels else {
         return Err(data_error(

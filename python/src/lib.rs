@@ -10,6 +10,7 @@ mod model;
 mod online;
 mod recording;
 mod simulate;
+mod threads;
 
 use pyo3::prelude::*;
 

@@ -19,6 +19,7 @@ use self_cell::self_cell;
 
 use crate::arrays::{Images, labels};
 use crate::errors::{IntoPyResult, data_error};
+use crate::threads::detached;
 
 type SessionSlot<'a> = Mutex<Session<'a>>;
 
@@ -86,7 +87,7 @@ impl Model {
     ) -> PyResult<Vec<presrs::core::pipeline::Classification>> {
         let frames = images.frames()?;
         let model = &self.file().model;
-        let results = py.detach(|| model.classify_batch(&frames));
+        let results = detached(py, || model.classify_batch(&frames))?;
         results
             .into_iter()
             .enumerate()
@@ -148,7 +149,7 @@ impl Model {
             seed,
             method,
         };
-        let training = py.detach(|| train(&dataset, &options)).py_err()?;
+        let training = detached(py, || train(&dataset, &options))?.py_err()?;
         for warning in &training.warnings {
             warn(py, warning)?;
         }

@@ -18,6 +18,7 @@ use pyo3::types::PyDict;
 use crate::arrays::Images;
 use crate::errors::{IntoPyResult, data_error};
 use crate::model::warn;
+use crate::threads::detached;
 
 /// A recording: frames of one pressure array, with what the file says about the sensor.
 #[pyclass(module = "presrs", name = "Recording", frozen)]
@@ -169,9 +170,7 @@ impl Recording {
 #[pyo3(signature = (path, *, lenient = false))]
 pub fn read(py: Python<'_>, path: PathBuf, lenient: bool) -> PyResult<Recording> {
     let options = ReadOptions { lenient };
-    let parsed = py
-        .detach(|| read_recording_with(&path, &options))
-        .py_err()?;
+    let parsed = detached(py, || read_recording_with(&path, &options))?.py_err()?;
     for warning in &parsed.warnings {
         warn(py, warning)?;
     }
@@ -334,9 +333,10 @@ pub fn features<'py>(
         .map_err(|err| data_error(format!("crop={crop:?}: {err}")))?
         .resolve(images.grid());
     let frames = images.frames()?;
-    let (values, width) = py
-        .detach(|| extract_features_many(&frames, &crop, Preprocess::NONE, &config))
-        .py_err()?;
+    let (values, width) = detached(py, || {
+        extract_features_many(&frames, &crop, Preprocess::NONE, &config)
+    })?
+    .py_err()?;
     let array = PyArray1::from_vec(py, values);
     if images.batch {
         Ok(array.reshape([images.len(), width])?.into_any())

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 
 use crate::errors::IntoPyResult;
 use crate::recording::Recording;
+use crate::threads::detached;
 
 /// One simulated trial: a movie of a hopper on one terrain with one gait.
 #[pyclass(module = "presrs", name = "Trial", frozen, get_all)]
@@ -60,8 +61,7 @@ pub fn simulate(
     }
     spec.hops_per_gait = hops;
     spec.load_kg = load_kg;
-    let dataset = py
-        .detach(|| simulate_dataset(&config, &spec))
+    let dataset = detached(py, || simulate_dataset(&config, &spec))?
         .map_err(presrs::Error::from)
         .py_err()?;
     dataset
