@@ -102,7 +102,8 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
 
     def predict(self, X):
         """The label of every image, as given in ``y``."""
-        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
+        posteriors = self.predict_proba(X)
+        return self.classes_[np.argmax(posteriors, axis=1)]
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
