@@ -177,6 +177,35 @@ class NumpyPeer:
 
 
 # --------------------------------------------------------------------------------------------------------
+# Peer 1b: presrs's own Python package
+
+
+class PresrsPythonPeer:
+    """presrs's Python package (`pip install ./python`): the same Rust code behind a Python call, so its
+    figures are what a Python robot loop pays on top of presrs (argument checks, the numpy array in, the
+    posteriors out)."""
+
+    name = "presrs (Python)"
+
+    def __init__(self, model_path: Path):
+        import presrs  # noqa: PLC0415 - optional: the table leaves this row out without it
+
+        self.presrs = presrs
+        self.model = presrs.Model.load(model_path)
+
+    def classify(self, image: np.ndarray) -> tuple[int, np.ndarray]:
+        posteriors = self.model.predict_proba(image)
+        return int(posteriors.argmax()), posteriors
+
+    def classify_batch(self, images: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        posteriors = self.model.predict_proba(images)
+        return posteriors.argmax(axis=1), posteriors
+
+    def features(self, images: np.ndarray) -> np.ndarray:
+        return self.presrs.features(images)
+
+
+# --------------------------------------------------------------------------------------------------------
 # Peer 2: scikit-learn
 
 
@@ -286,8 +315,11 @@ def agreement(peer, images, presrs, features, reduced) -> dict:
     result["features_max_rel_diff"] = float(np.abs(peer_features - features).max() / np.abs(features).max())
     if hasattr(peer, "reduce"):
         peer_reduced = peer.reduce(peer_features)
-    else:
+    elif hasattr(peer, "pca"):
         peer_reduced = peer.pca.transform(peer_features)
+    else:  # presrs's own package: its PCA is presrs's
+        result["reduced_max_rel_diff"] = 0.0
+        return result
     result["reduced_max_rel_diff"] = float(np.abs(peer_reduced - reduced).max() / np.abs(reduced).max())
     return result
 
@@ -392,6 +424,10 @@ def main() -> int:
     batch = exported["timing"]["batch"]
 
     peers = [NumpyPeer(state, image_shape), SklearnPeer(state, image_shape)]
+    try:
+        peers.append(PresrsPythonPeer(args.export / exported["model_file"]))
+    except ImportError:
+        print("(the presrs Python package is not installed here: its row is left out)", file=sys.stderr)
     results = {
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "machine": machine(),
@@ -440,7 +476,7 @@ def main() -> int:
             raise SystemExit("presrs bench did not run on the exported test images (another seed?)")
         entry = {"load_average": load_average(), "presrs": presrs, "peers": {}}
         for peer in peers:
-            iterations = args.iterations if peer.name == "numpy" else args.sklearn_iterations
+            iterations = args.sklearn_iterations if peer.name == "scikit-learn" else args.iterations
             gc.collect()
             single = time_single(peer, images, iterations)
             gc.collect()
@@ -547,6 +583,17 @@ def markdown(results: dict) -> str:
         f"{'met' if single_ok else '**missed**'} ({numpy_peer['single_ratio']:.1f}x); batch at least 5x the "
         f"throughput: {'met' if batch_ok else '**missed**'} ({numpy_peer['batch_ratio']:.1f}x).",
     ]
+    python_peer = results["peers"].get("presrs (Python)")
+    if python_peer:
+        per_call_us = python_peer["single_image_median_ns"] / 1e3
+        batch_share = python_peer["batch_images_per_s"] / presrs["batch_images_per_s"]
+        lines.append(
+            f"Targets of issue #21, presrs's Python package: `model.predict_proba(image)` at most 10 µs per "
+            f"call: {'met' if per_call_us <= 10 else '**missed**'} ({per_call_us:.1f} µs, "
+            f"{numpy_peer['single_image_median_ns'] / python_peer['single_image_median_ns']:.1f}x faster "
+            f"than numpy); batch throughput within 20 % of Rust's: "
+            f"{'met' if batch_share >= 0.8 else '**missed**'} ({100 * batch_share:.0f} %)."
+        )
     if "presrs_accuracy" in results:
         lines.append(
             f"Predictions agree image by image; presrs's (and so the peers') accuracy on these test images is "

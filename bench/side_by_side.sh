@@ -35,6 +35,12 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --only-binary=:all: \
     -r "$bench_dir/requirements.txt"
+# presrs's own Python package (built from python/ with maturin): its row in the table. PYTHON_PACKAGE=0
+# leaves it out.
+if [ "${PYTHON_PACKAGE:-1}" != 0 ]; then
+    echo "== the presrs Python package (pip install ./python, release build)" >&2
+    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "$root/python"
+fi
 
 echo "== presrs (release build)" >&2
 cargo build --release --locked --quiet -p presrs-cli --manifest-path "$root/Cargo.toml"

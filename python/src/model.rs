@@ -253,7 +253,7 @@ impl Model {
 
     /// What the model is made of and where it came from, in a few lines.
     fn describe(&self) -> String {
-        presrs::describe_model(self.file())
+        presrs::describe_model(self.file()).trim_end().to_owned()
     }
 
     fn __repr__(&self) -> String {

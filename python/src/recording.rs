@@ -155,7 +155,7 @@ impl Recording {
         let name = self
             .path
             .as_ref()
-            .map_or_else(|| "array".to_owned(), |p| p.display().to_string());
+            .map_or_else(|| "in memory".to_owned(), |p| p.display().to_string());
         format!(
             "<presrs.Recording {name}: {} frames of {grid}, {}, {rate}>",
             self.recording.frame_count(),

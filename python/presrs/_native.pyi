@@ -1,0 +1,171 @@
+"""Type stubs of presrs's native module (the Rust extension behind `import presrs`)."""
+
+from collections.abc import Sequence
+from os import PathLike
+from typing import Any, Literal, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_Path = Union[str, PathLike[str]]
+_Images = npt.ArrayLike
+_Labels = Union[Sequence[Any], npt.ArrayLike]
+
+class Recording:
+    """A recording: frames of one pressure array, with what the file says about the sensor."""
+
+    def __init__(self, frames: _Images, *, frame_period_s: Optional[float] = None) -> None: ...
+    @property
+    def frames(self) -> npt.NDArray[np.float64]:
+        """float64 (n_frames, rows, cols), in the file's unit (a new array each time)."""
+    @property
+    def mask(self) -> npt.NDArray[np.bool_]:
+        """(rows, cols), True where a sensel is absent (outside the sensor's outline)."""
+    @property
+    def frame_period_s(self) -> Optional[float]: ...
+    @property
+    def units(self) -> str: ...
+    @property
+    def units_stated(self) -> bool: ...
+    @property
+    def sensor(self) -> dict[str, Any]: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    @property
+    def path(self) -> Optional[str]: ...
+    @property
+    def warnings(self) -> list[str]: ...
+    def total_load(self) -> npt.NDArray[np.float64]: ...
+    def __len__(self) -> int: ...
+
+class Stance:
+    """One stance phase; frames are 0-based."""
+
+    start: int
+    length: int
+    end: int
+    sample_frame: int
+    peak_load: float
+    peak_frame: int
+    partial: bool
+
+class Trial:
+    """One simulated trial."""
+
+    name: str
+    terrain: str
+    gait: str
+    load_kg: float
+    recording: Recording
+
+class Model:
+    """A trained terrain classifier (the CLI's model files)."""
+
+    @staticmethod
+    def train(
+        images: _Images,
+        labels: _Labels,
+        *,
+        features: str = "auto",
+        classifier: str = "auto",
+        groups: Optional[_Labels] = None,
+        conditions: Optional[_Labels] = None,
+        seed: int = 0,
+        dims: Optional[int] = None,
+        per_class: Optional[int] = None,
+        validation: float = 0.35,
+        crop: str = "auto",
+        full_search: bool = False,
+    ) -> Model: ...
+    @staticmethod
+    def load(path: _Path) -> Model: ...
+    def save(self, path: _Path) -> None: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(data: Union[str, bytes]) -> Model: ...
+    def predict(self, x: _Images) -> Any:
+        """A `str` for one image (rows, cols); an array of labels for a batch (n, rows, cols)."""
+    def predict_proba(self, x: _Images) -> npt.NDArray[np.float64]:
+        """(n_classes,) for one image; (n, n_classes) for a batch."""
+    @property
+    def classes_(self) -> npt.NDArray[np.str_]: ...
+    @property
+    def cropped_shape(self) -> tuple[int, int]: ...
+    @property
+    def has_online_profile(self) -> bool: ...
+    def describe(self) -> str: ...
+
+class Evaluation:
+    """What an evaluation measured."""
+
+    @property
+    def accuracy(self) -> float: ...
+    @property
+    def accuracy_std(self) -> float: ...
+    @property
+    def per_condition(self) -> dict[str, tuple[float, float]]: ...
+    @property
+    def repeats(self) -> list[float]: ...
+    @property
+    def classes(self) -> list[str]: ...
+    @property
+    def confusion(self) -> npt.NDArray[np.uint64]: ...
+    @property
+    def calibration(self) -> dict[str, Optional[float]]: ...
+    @property
+    def classify_us(self) -> float: ...
+    @property
+    def warnings(self) -> list[str]: ...
+    def to_dict(self) -> dict[str, Any]: ...
+
+class OnlineClassifier:
+    """Frames in one at a time, `presrs stream`'s events out (as dicts)."""
+
+    def __init__(self, model: Model, *, gait_table: Optional[dict[str, str]] = None) -> None: ...
+    def push(self, frame: _Images) -> list[dict[str, Any]]: ...
+    def finish(self) -> list[dict[str, Any]]: ...
+    @property
+    def warming_up(self) -> bool: ...
+    @property
+    def stats(self) -> dict[str, int]: ...
+
+def read(path: _Path, *, lenient: bool = False) -> Recording: ...
+def segment(
+    recording: Union[Recording, _Images],
+    *,
+    sample: Union[Literal["mid", "peak"], int, None] = None,
+    **params: Any,
+) -> list[Stance]: ...
+def segment_params() -> dict[str, Any]: ...
+def features(
+    images: _Images, family: str = "fft1d", crop: str = "auto"
+) -> npt.NDArray[np.float64]: ...
+def evaluate(
+    data: Union[_Path, _Images],
+    labels: Optional[_Labels] = None,
+    *,
+    groups: Optional[_Labels] = None,
+    conditions: Optional[_Labels] = None,
+    leave_one_out: Optional[str] = None,
+    train_condition: Optional[str] = None,
+    per_class: Optional[int] = None,
+    validation: float = 0.35,
+    repeats: int = 10,
+    seed: int = 1,
+    features: str = "auto",
+    classifier: str = "auto",
+    dims: Optional[int] = None,
+    crop: str = "auto",
+    full_search: bool = False,
+) -> Evaluation: ...
+def simulate(
+    *,
+    terrains: Optional[Sequence[str]] = None,
+    gaits: Optional[Sequence[str]] = None,
+    hops: Optional[int] = None,
+    seed: int = 1,
+    load_kg: Optional[float] = None,
+    config: Optional[_Path] = None,
+) -> list[Trial]: ...
