@@ -2,6 +2,7 @@
 
 from collections.abc import Sequence
 from os import PathLike
+from pathlib import Path
 from typing import Any, Literal, Optional, Union
 
 import numpy as np
@@ -34,7 +35,7 @@ class Recording:
     @property
     def shape(self) -> tuple[int, int]: ...
     @property
-    def path(self) -> Optional[str]: ...
+    def path(self) -> Optional[Path]: ...
     @property
     def warnings(self) -> list[str]: ...
     def total_load(self) -> npt.NDArray[np.float64]: ...

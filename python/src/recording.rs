@@ -126,6 +126,7 @@ impl Recording {
         (grid.rows, grid.cols)
     }
 
+    /// The file it was read from (None for one made from an array or simulated).
     #[getter]
     fn path(&self) -> Option<PathBuf> {
         self.path.clone()
@@ -189,8 +190,9 @@ pub struct Stance {
     end: usize,
     /// The frame a classifier would take (the `sample` asked for; the mid-stance frame by default).
     sample_frame: usize,
-    /// The largest total load in the stance, and its frame.
+    /// The largest total load in the stance.
     peak_load: f64,
+    /// The frame of `peak_load`.
     peak_frame: usize,
     /// The stance touches the first or last frame of the recording, so it may have been cut.
     partial: bool,
