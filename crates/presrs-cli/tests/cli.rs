@@ -753,3 +753,57 @@ fn inspect_and_frame_errors_read_well_on_a_single_float_image() {
         stderr(&out)
     );
 }
+
+/// Runs presrs with `stdin` (a file) or none, its stdout closed before it writes anything, as in
+/// `presrs ... | head -0`.
+fn with_closed_stdout(args: &[&str], stdin: Option<&Path>) -> std::process::Output {
+    let input = match stdin {
+        Some(path) => Stdio::from(std::fs::File::open(path).unwrap()),
+        None => Stdio::null(),
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_presrs"))
+        .args(args)
+        .stdin(input)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn every_writing_command_ends_quietly_on_a_closed_pipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    let model = model.to_str().unwrap();
+    let movie = dir.path().join("movie_grass.asf");
+    let movie_name = movie.display().to_string();
+    let fras = shared("FrasP01L.asf");
+    let runs: Vec<(Vec<&str>, Option<&Path>)> = vec![
+        (vec!["inspect", &fras], None),
+        (vec!["inspect", &fras, "--json"], None),
+        (vec!["features", &fras, "--stance-frame", "all"], None),
+        (vec!["classify", "--model", model, &movie_name], None),
+        (
+            vec!["classify", "--model", model, &movie_name, "--json"],
+            None,
+        ),
+        (vec!["stream", "--model", model], Some(movie.as_path())),
+    ];
+    for (args, stdin) in runs {
+        let out = with_closed_stdout(&args, stdin);
+        let code = out.status.code();
+        assert!(
+            matches!(code, Some(0 | 141)),
+            "{args:?}: {code:?} {}",
+            stderr(&out)
+        );
+        assert!(
+            !stderr(&out).contains("error:"),
+            "{args:?}: {}",
+            stderr(&out)
+        );
+    }
+}

@@ -18,7 +18,9 @@ files are still classified, and the exit code is then 1 (with --json, the docume
 `errors`).\n\nThe confidence is the posterior of the label (equal priors). Every classifier's posteriors are \
 calibrated when it is trained (a temperature fitted on held-out or leave-one-out scores), so that a confidence of 0.9 is \
 right about nine times in ten on data like the training data; `presrs eval` measures how well that holds \
-(mean confidence when right and when wrong, calibration error).\n\nExample:\n  presrs classify --model g2.model.json sim/recordings/wood_G1_000.asf foot.png --json"
+(mean confidence when right and when wrong, calibration error).\n\nExample:
+  presrs classify --model g2.model.json \\
+    sim/recordings/wood_G1_000.asf foot.png --json"
 )]
 pub struct ClassifyArgs {
     /// A model file written by `presrs train`.

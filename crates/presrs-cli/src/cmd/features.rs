@@ -12,8 +12,12 @@ use super::common::{CropArg, SampleArgs};
 /// Print feature vectors as CSV: a header `frame,f0,f1,...`, then one row per frame.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Examples:\n  presrs features walk.asf --frame 40 --features fft1d > f.csv\n  presrs features \
-walk.asf --features fft2d_polar+glcm > f.csv"
+    after_help = "The header names each column: fft1d_k (|FFT| bin k), fft2d_r_c (2-D |FFT| at row \
+frequency r, column frequency c), fft2d_polar_ring_i / fft2d_polar_wedge_j, glcm_ATTRIBUTE_dROW_dCOL.
+
+Examples:
+  presrs features walk.asf --frame 40 --features fft1d > f.csv
+  presrs features walk.asf --features fft2d_polar+glcm > f.csv"
 )]
 pub struct FeaturesArgs {
     /// A recording file (TekScan ASCII, .npy, greyscale .png, text matrix).
