@@ -9,7 +9,8 @@
 //!
 //! A bad frame (unreadable, non-finite, or of a size the model cannot use) is rejected with an `error`
 //! event and the stream goes on; the `end` event and the [`ConnectionSummary`] count it among
-//! `rejected_frames` and `errors`.
+//! `rejected_frames` and `errors`. But when the first frame already has a size the model cannot use,
+//! the stream comes from another sensor: one fatal `error` ends it instead of one error per frame.
 //!
 //! Without a calibration (in the [`OnlineProfile`]) the detector calibrates on the stream's first frames
 //! (the warm-up, [`OnlineParams::warmup_frames`](presrs_core::online::OnlineParams)); stances in them

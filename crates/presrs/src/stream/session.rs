@@ -141,7 +141,10 @@ impl Connection<'_, '_> {
         self.emit(error_line(message, fatal));
     }
 
-    /// Classifies one frame (input frame `index`, as it came), emitting its events or its error.
+    /// Classifies one frame (input frame `index`, as it came), emitting its events or its error. False
+    /// when the session cannot go on: the first frame has a size the model cannot use. A stream's frames
+    /// come from one sensor, so every later one would be rejected too: one fatal error instead of one
+    /// per frame. A later frame of another size (a glitch) is rejected alone.
     fn frame(
         &mut self,
         index: u64,
@@ -149,9 +152,19 @@ impl Connection<'_, '_> {
         frame: (&[f64], Option<&[bool]>),
         arrival: Instant,
         timestamp_us: Option<u64>,
-    ) {
+    ) -> bool {
         let frames_before = self.classifier.stats().frames;
         let pushed = match unusable_for_model(self.model, grid) {
+            Some(why) if frames_before == 0 => {
+                self.summary.rejected_frames += 1;
+                self.summary.fatal = true;
+                let message = format!(
+                    "input frame {index} rejected: {why}; the stream stops (its frames come from a \
+                     sensor this model was not trained on)"
+                );
+                self.error(&message, true);
+                return false;
+            }
             Some(why) => Err(why),
             None => match FrameView::new(grid, frame.0, frame.1)
                 .and_then(|view| self.classifier.push(&view))
@@ -175,7 +188,7 @@ impl Connection<'_, '_> {
             },
         };
         let message = match pushed {
-            Ok(()) => return,
+            Ok(()) => return true,
             // Not taken: the classifier's frame count did not move.
             Err(err) if self.classifier.stats().frames == frames_before => {
                 self.summary.rejected_frames += 1;
@@ -187,6 +200,7 @@ impl Connection<'_, '_> {
             }
         };
         self.error(&message, false);
+        true
     }
 }
 
@@ -228,8 +242,11 @@ pub(super) fn run_connection(
                 arrival,
             } => {
                 let mask = has_mask.then_some(present.as_slice());
-                conn.frame(received, grid, (&values, mask), arrival, timestamp_us);
+                let go_on = conn.frame(received, grid, (&values, mask), arrival, timestamp_us);
                 received += 1;
+                if !go_on {
+                    break;
+                }
                 if warming_up && !conn.classifier.segmenter().warming_up() {
                     warming_up = false;
                     conn.summary.warmup_frames = conn.classifier.stats().frames;
@@ -267,6 +284,7 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
     let frames = conn.summary.stats.frames;
     if warming_up && frames > 0 {
         conn.summary.warmup_frames = frames;
+        conn.summary.warmup_unfinished = true;
         (conn.notify)(&SessionNotice::WarmupUnfinished { frames });
     }
     let end = end_line(&conn.summary);
@@ -331,7 +349,7 @@ fn tekscan_source<R: BufRead>(
             }
         }
         Ok(None) => Input::End,
-        Err(err) if stream.header().is_none() => Input::Fatal(err.to_string()),
+        Err(err) if stream.header().is_none() || stream.stopped() => Input::Fatal(err.to_string()),
         Err(err) => {
             failures += 1;
             if failures > 1000 {
