@@ -807,3 +807,30 @@ fn every_writing_command_ends_quietly_on_a_closed_pipe() {
         );
     }
 }
+
+#[test]
+fn a_time_last_npy_is_named_and_read_with_axes() {
+    // rows x cols x frames = 20 x 10 x 90: read frames-first it would be 20 frames of 10 x 90.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("walk.npy");
+    let data: Vec<f64> = (0..20 * 10 * 90).map(|i| f64::from(i % 7)).collect();
+    let file = std::fs::File::create(&path).unwrap();
+    presrs_io::npy::write_npy_f64(file, &[20, 10, 90], &data).unwrap();
+    let name = path.to_str().unwrap();
+    let out = presrs(&["inspect", name, "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["frames"], 20);
+    let warnings = doc["warnings"].to_string();
+    assert!(warnings.contains("--axes rows,cols,frames"), "{warnings}");
+    let out = presrs(&["inspect", name, "--json", "--axes", "rows,cols,frames"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (&doc["frames"], &doc["rows"], &doc["cols"]),
+        (&90.into(), &20.into(), &10.into())
+    );
+    assert!(!doc["warnings"].to_string().contains("--axes"));
+    let out = presrs(&["inspect", name, "--axes", "rows,cols"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+}

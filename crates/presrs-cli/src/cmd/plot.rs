@@ -51,11 +51,14 @@ pub struct PlotArgs {
     /// Accept a TekScan file whose last frame is truncated.
     #[arg(long)]
     pub lenient: bool,
+    #[command(flatten)]
+    pub axes: super::common::AxesArg,
 }
 
 pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let read = presrs_io::ReadOptions {
         lenient: args.lenient,
+        axes: args.axes.axes,
     };
     let parsed = read_recording_with(&args.file, &read)?;
     for warning in &parsed.warnings {
