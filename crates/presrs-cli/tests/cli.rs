@@ -834,3 +834,74 @@ fn a_time_last_npy_is_named_and_read_with_axes() {
     let out = presrs(&["inspect", name, "--axes", "rows,cols"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
 }
+
+#[test]
+fn inspect_gives_the_load_in_the_recordings_unit_and_in_newtons() {
+    // kPa with a 5.08 mm pitch: the sum in kPa, and the force in newtons as plot --movie draws it.
+    let out = presrs(&["inspect", &shared("FrasP01L.asf")]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    let line = |start: &str| {
+        text.lines()
+            .find(|l| l.starts_with(start))
+            .unwrap_or_else(|| panic!("no {start:?} in {text}"))
+            .to_owned()
+    };
+    assert!(
+        line("total load")
+            .to_lowercase()
+            .contains("kpa summed over sensels"),
+        "{text}"
+    );
+    assert!(line("total force").ends_with("N (pressure x sensel area, as plot --movie draws it)"));
+    let out = presrs(&["inspect", &shared("FrasP01L.asf"), "--json"]);
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (load, force) = (
+        doc["load_max"].as_f64().unwrap(),
+        doc["force_max_n"].as_f64().unwrap(),
+    );
+    assert!(
+        (force - load * 5.08 * 5.08 * 1e-3).abs() < 1e-6 * force,
+        "{load} {force}"
+    );
+    // Raw counts, no pitch: the sum in raw counts and no force.
+    let out = presrs(&["inspect", &shared("example3.asf")]);
+    let text = stdout(&out);
+    assert!(text.contains("raw summed over sensels"), "{text}");
+    assert!(!text.contains("total force"), "{text}");
+}
+
+#[test]
+fn the_classify_table_stays_aligned_with_long_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    let deep = dir
+        .path()
+        .join("a-rather-long-folder-name-for-the-recordings/of/one/session");
+    std::fs::create_dir_all(&deep).unwrap();
+    let long = deep.join("movie_grass.asf");
+    std::fs::copy(dir.path().join("movie_grass.asf"), &long).unwrap();
+    let short = dir.path().join("img0.png");
+    let out = presrs(&[
+        "classify",
+        "--model",
+        model.to_str().unwrap(),
+        short.to_str().unwrap(),
+        long.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    // Every row's columns are where the header's are: the frame number ends under "frame", the label
+    // starts under "label".
+    let header = text.lines().next().unwrap();
+    let frame_end = header.find("frame").unwrap() + "frame".len();
+    let label_at = header.find("label").unwrap();
+    assert_eq!(text.lines().count(), 1 + 1 + 6, "{text}");
+    for line in text.lines().skip(1) {
+        let bytes = line.as_bytes();
+        assert!(bytes[frame_end - 1].is_ascii_digit(), "{text}");
+        assert_eq!(&line[frame_end..label_at], "  ", "{text}");
+        assert_ne!(bytes[label_at], b' ', "{text}");
+    }
+}

@@ -62,10 +62,25 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let mut results = Vec::new();
     let mut errors = Vec::new();
     let mut fills = DeadSenselFills::default();
+    // Columns as wide as the longest file name and label: the table stays aligned with long paths.
+    let file_width = args
+        .files
+        .iter()
+        .map(|path| path.display().to_string().chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(4);
+    let label_width = model
+        .class_names()
+        .iter()
+        .map(|name| name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(5);
     if !args.json {
         writeln!(
             out,
-            "{:<40} {:>6}  {:<12} {:>10}",
+            "{:<file_width$} {:>6}  {:<label_width$} {:>10}",
             "file", "frame", "label", "confidence"
         )?;
     }
@@ -106,7 +121,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             } else {
                 writeln!(
                     out,
-                    "{:<40} {:>6}  {:<12} {:>10.4}",
+                    "{:<file_width$} {:>6}  {:<label_width$} {:>10.4}",
                     sample.file, sample.frame, sample.label, sample.confidence
                 )?;
             }
