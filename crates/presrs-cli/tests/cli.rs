@@ -905,3 +905,21 @@ fn the_classify_table_stays_aligned_with_long_paths() {
         assert_ne!(bytes[label_at], b' ', "{text}");
     }
 }
+
+#[test]
+fn the_feature_csv_header_names_what_each_column_is() {
+    let file = shared("example3.asf");
+    let header = |features: &str| {
+        let out = presrs(&["features", &file, "--frame", "3", "--features", features]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        stdout(&out).lines().next().unwrap().to_owned()
+    };
+    let fft1d = header("fft1d");
+    assert!(fft1d.starts_with("frame,fft1d_bin0,fft1d_bin1,"), "{fft1d}");
+    assert!(fft1d.ends_with(",fft1d_bin128"), "{fft1d}");
+    let both = header("fft2d_polar+glcm");
+    assert!(both.starts_with("frame,fft2d_polar_ring0,"), "{both}");
+    assert!(both.contains(",fft2d_polar_wedge0,"), "{both}");
+    assert!(both.ends_with(",glcm_entropy_d5"), "{both}");
+    assert!(header("fft2d").starts_with("frame,fft2d_r0_c0,fft2d_r0_c1,"));
+}

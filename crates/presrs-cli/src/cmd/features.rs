@@ -9,11 +9,13 @@ use presrs_core::pipeline::extract_features;
 
 use super::common::{CropArg, SampleArgs};
 
-/// Print feature vectors as CSV: a header `frame,f0,f1,...`, then one row per frame.
+/// Print feature vectors as CSV: a header `frame,` and the features' names, then one row per frame.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "The header names each column: fft1d_k (|FFT| bin k), fft2d_r_c (2-D |FFT| at row \
-frequency r, column frequency c), fft2d_polar_ring_i / fft2d_polar_wedge_j, glcm_ATTRIBUTE_dROW_dCOL.
+    after_help = "The header names each column: fft1d_binK (|FFT| at frequency bin K), fft2d_rK_cL (2-D \
+|FFT| at row frequency bin K, column frequency bin L), fft2d_polar_ringI and fft2d_polar_wedgeJ (sums \
+over ring I and wedge J of the 2-D |FFT|), glcm_ATTRIBUTE_dD (a co-occurrence attribute at distance D, \
+averaged over the angles).
 
 Examples:
   presrs features walk.asf --frame 40 --features fft1d > f.csv
@@ -71,6 +73,12 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     let crop = args.crop.crop.resolve(recording.grid());
     let config = FeatureConfig::combined(&args.features);
+    let image_grid = crop
+        .output_grid(recording.grid())
+        .with_context(|| format!("{name}: cannot crop"))?;
+    let names = config
+        .feature_names(image_grid)
+        .with_context(|| format!("{name}: {image_grid} images"))?;
     let mut header_written = false;
     for index in frames {
         let Some(frame) = recording.frame(index) else {
@@ -79,11 +87,7 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let features = extract_features(&frame, &crop, &config)
             .with_context(|| format!("{name}: frame {index}"))?;
         if !header_written {
-            write!(out, "frame")?;
-            for k in 0..features.len() {
-                write!(out, ",f{k}")?;
-            }
-            writeln!(out)?;
+            writeln!(out, "frame,{}", names.join(","))?;
             header_written = true;
         }
         write!(out, "{index}")?;
