@@ -923,3 +923,50 @@ fn the_feature_csv_header_names_what_each_column_is() {
     assert!(both.ends_with(",glcm_entropy_d5"), "{both}");
     assert!(header("fft2d").starts_with("frame,fft2d_r0_c0,fft2d_r0_c1,"));
 }
+
+#[test]
+fn a_report_on_a_users_images_speaks_of_that_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    // The single images alone, without conditions.
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    let mut images = String::from("path,label\n");
+    for line in text.lines().skip(1).filter(|l| l.starts_with("img")) {
+        let fields: Vec<&str> = line.split(',').collect();
+        images.push_str(&format!("{},{}\n", fields[0], fields[1]));
+    }
+    let manifest = dir.path().join("images.csv");
+    std::fs::write(&manifest, images).unwrap();
+    let out_dir = dir.path().join("report");
+    let out = presrs(&[
+        "report",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--fault-repeats",
+        "0",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let html = std::fs::read_to_string(out_dir.join("index.html")).unwrap();
+    assert!(html.contains("96 single image(s)"), "what the data are");
+    for wrong in [
+        "stance of a movie",
+        "Fig. 5",
+        "Fig. 6",
+        "the paper's",
+        "Margins {",
+        "Window {",
+        "<th>overall</th>",
+    ] {
+        assert!(
+            !html.contains(wrong),
+            "{wrong:?} in the report on a user's images"
+        );
+    }
+    // One tested condition: one accuracy column.
+    assert!(html.contains("<th>evaluation</th><th>all</th></tr>"));
+}

@@ -12,7 +12,7 @@ use crate::charts::{LoadCurveData, draw_load_curve};
 use crate::format::num;
 // Re-exported here, its home before it moved to a leaf module.
 use crate::error::{ReportError, Result};
-use crate::render::{Figure, MASKED, font, render_rgb, save_gif, title_font, viridis};
+use crate::render::{Figure, MASKED, font, render_rgb, save_gif, title_font, title_width, viridis};
 pub use crate::scale::PressureScale;
 
 /// Sizes of the parts of a heat-map panel, pixels.
@@ -382,7 +382,9 @@ impl Figure for PressureGrid<'_> {
         let cols = self.col_names.len().max(1) as u32;
         let rows = self.row_names.len().max(1) as u32;
         (
-            (self.panel_w() * cols + Self::COLORBAR_W).max(420),
+            (self.panel_w() * cols + Self::COLORBAR_W)
+                .max(420)
+                .max(title_width(&self.title, 20.0)),
             rows * Self::PANEL_H + Self::TITLE_H,
         )
     }
@@ -621,5 +623,23 @@ mod tests {
             svg.contains("\n187.3\n"),
             "the maximum is not labelled: {svg}"
         );
+    }
+
+    #[test]
+    fn a_grid_of_one_image_is_as_wide_as_its_title() {
+        let grid = Grid::new(44, 44);
+        let frame = presrs_core::Frame::new(grid, vec![1.0; grid.len()]).unwrap();
+        let title = "Example pressure images (the median-load sample of each label and condition)";
+        let figure = PressureGrid {
+            title: title.to_owned(),
+            row_names: vec!["wood".into()],
+            col_names: vec![String::new()],
+            cells: vec![vec![Some(frame.view())]],
+            scale: PressureScale::default(),
+            outline: None,
+        };
+        let needed = title_width(title, 20.0);
+        assert!(needed > 600, "{needed}");
+        assert!(figure.size().0 >= needed, "{} < {needed}", figure.size().0);
     }
 }
