@@ -26,7 +26,7 @@ use signal_hook::iterator::Signals;
 
 use presrs::stream::{
     ConnectionSummary, InputFormat, ProfileOverrides, ServerNotice, ServerOptions, SessionNotice,
-    SessionOptions, StreamServer, resolve_profile, run_session,
+    SessionOptions, ShutdownHandle, StreamServer, resolve_profile, run_session,
 };
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use presrs_io::model_file::load_model;
@@ -278,15 +278,19 @@ fn run_stdin(
     signals: Signals,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
+    let stop = ShutdownHandle::default();
     let options = SessionOptions {
         format: args.format.into(),
         name: "stdin".to_owned(),
         max_frame_bytes: args.max_frame_bytes,
+        stop: Some(stop.clone()),
     };
     let log = |notice: &SessionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
     let (input, end_input) = StoppableInput::start();
     let caught = Arc::new(Mutex::new(None));
     let signal_thread = on_signal(signals, caught.clone(), move || {
+        // The flag first: the session must know the end it is about to read is a stop.
+        stop.stop();
         let _ = end_input.send(Chunk::End);
     });
     let input = std::io::BufReader::with_capacity(64 * 1024, input);

@@ -88,9 +88,19 @@ pub struct ServeSummary {
     pub refused: usize,
 }
 
-/// Stops a [`StreamServer`] from another thread.
-#[derive(Clone, Debug)]
+/// Stops a [`StreamServer`] (or a session on stdin, [`SessionOptions::stop`](super::SessionOptions))
+/// from another thread.
+#[derive(Clone, Debug, Default)]
 pub struct ShutdownHandle(Arc<AtomicBool>);
+
+/// Two handles are equal when they stop the same thing.
+impl PartialEq for ShutdownHandle {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl Eq for ShutdownHandle {}
 
 impl ShutdownHandle {
     /// Asks the server to stop: it accepts no more clients, closes the open connections (their sessions
@@ -145,7 +155,7 @@ impl StreamServer {
             model,
             profile,
             options,
-            stop: ShutdownHandle(Arc::new(AtomicBool::new(false))),
+            stop: ShutdownHandle::default(),
         })
     }
 

@@ -11,6 +11,7 @@ use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameRead
 use presrs_io::tekscan_stream::TekscanStream;
 
 use super::events::{end_line, error_line, event_lines};
+use super::server::ShutdownHandle;
 pub use super::summary::ConnectionSummary;
 use crate::error::Result;
 
@@ -32,6 +33,10 @@ pub struct SessionOptions {
     pub name: String,
     /// Largest binary frame payload accepted, bytes (checked before it is read).
     pub max_frame_bytes: usize,
+    /// Set when the session is being stopped (a signal): the input then ends where it was cut, and a
+    /// frame cut short by the stop is dropped, not an error. Whoever stops it must also end the input
+    /// (the reader returns end of file).
+    pub stop: Option<ShutdownHandle>,
 }
 
 impl Default for SessionOptions {
@@ -40,6 +45,7 @@ impl Default for SessionOptions {
             format: InputFormat::Tekscan,
             name: "stdin".to_owned(),
             max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES,
+            stop: None,
         }
     }
 }
@@ -77,21 +83,26 @@ pub fn run_session<R: BufRead>(
             .and_then(|()| output.flush())
             .is_ok()
     };
+    // After a stop, what is left of the input is not judged: the end of a cut frame is the end.
+    let until_stopped = |input: Input| match (&options.stop, input) {
+        (Some(stop), Input::Skipped(_) | Input::Fatal(_)) if stop.is_stopped() => Input::End,
+        (_, input) => input,
+    };
     match options.format {
-        InputFormat::Tekscan => run_connection(
-            model,
-            profile,
-            tekscan_source(input, &options.name),
-            &mut emit,
-            notify,
-        ),
-        InputFormat::Binary => run_connection(
-            model,
-            profile,
-            binary_source(input, &options.name, options.max_frame_bytes),
-            &mut emit,
-            notify,
-        ),
+        InputFormat::Tekscan => {
+            let mut source = tekscan_source(input, &options.name);
+            let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
+                until_stopped(source(values, present))
+            };
+            run_connection(model, profile, next, &mut emit, notify)
+        }
+        InputFormat::Binary => {
+            let mut source = binary_source(input, &options.name, options.max_frame_bytes);
+            let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
+                until_stopped(source(values, present))
+            };
+            run_connection(model, profile, next, &mut emit, notify)
+        }
     }
 }
 
