@@ -727,3 +727,42 @@ fn bad_addresses_gait_entries_and_limits_are_bad_usage() {
     let help = String::from_utf8_lossy(&help.stdout);
     assert_eq!(help.matches("[default: 100]").count(), 1, "{help}");
 }
+
+#[test]
+fn a_closed_stdout_ends_a_live_stream() {
+    // `presrs stream ... | head`: the input stays open (a live sensor), the reader of the decisions
+    // goes away; presrs must end by itself, quietly.
+    let (_, model) = fixture();
+    let mut child = presrs()
+        .args(["stream", "--model", model.to_str().unwrap()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let mut stdin = child.stdin.take().unwrap();
+    // presrs may be gone before all is written: that is the point.
+    let _ = stdin.write_all(&std::fs::read(recording("wood")).unwrap());
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("presrs stream went on with nobody reading its output");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    drop(stdin);
+    let mut log = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
+    assert_eq!(status.code(), Some(0), "{log}");
+    assert!(!log.contains("error:"), "{log}");
+}

@@ -68,8 +68,9 @@ pub enum SessionNotice {
 pub const MAX_ERROR_NOTICES: u64 = 10;
 
 /// Runs one session: frames from `input` as `options` say, through the causal classifier, every JSON
-/// line written (and flushed) to `output` at once. A line that cannot be written is dropped and counted
-/// (a closed stdout is the reader's business). Returns when the input ends or cannot go on.
+/// line written (and flushed) to `output` at once. A line that cannot be written is dropped and counted;
+/// a closed output (a broken pipe) ends the session as the end of the input would. Returns when the
+/// input ends or cannot go on.
 pub fn run_session<R: BufRead>(
     model: &TrainedModel,
     profile: &OnlineProfile,
@@ -78,13 +79,19 @@ pub fn run_session<R: BufRead>(
     options: &SessionOptions,
     notify: &dyn Fn(&SessionNotice),
 ) -> Result<ConnectionSummary> {
+    // A closed output (`presrs stream | head`): nobody reads the decisions any more, so the session
+    // ends as if the input had (a live input may never end by itself).
+    let closed = std::cell::Cell::new(false);
     let mut emit = |line: String| -> bool {
-        writeln!(output, "{line}")
-            .and_then(|()| output.flush())
-            .is_ok()
+        let written = writeln!(output, "{line}").and_then(|()| output.flush());
+        if let Err(err) = &written {
+            closed.set(closed.get() || err.kind() == std::io::ErrorKind::BrokenPipe);
+        }
+        written.is_ok()
     };
     // After a stop, what is left of the input is not judged: the end of a cut frame is the end.
     let until_stopped = |input: Input| match (&options.stop, input) {
+        _ if closed.get() => Input::End,
         (Some(stop), Input::Skipped(_) | Input::Fatal(_)) if stop.is_stopped() => Input::End,
         (_, input) => input,
     };
