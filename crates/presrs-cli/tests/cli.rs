@@ -867,7 +867,7 @@ fn inspect_gives_the_load_in_the_recordings_unit_and_in_newtons() {
     // Raw counts, no pitch: the sum in raw counts and no force.
     let out = presrs(&["inspect", &shared("example3.asf")]);
     let text = stdout(&out);
-    assert!(text.contains("raw summed over sensels"), "{text}");
+    assert!(text.contains("raw counts summed over sensels"), "{text}");
     assert!(!text.contains("total force"), "{text}");
 }
 

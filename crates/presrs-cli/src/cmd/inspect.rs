@@ -91,7 +91,12 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
         )?;
     }
     // The unit of every load below: the recording's unit summed over the sensels.
-    let load_unit = format!("{} summed over sensels", report.units);
+    let unit = if report.units == "raw" {
+        "raw counts"
+    } else {
+        report.units.as_str()
+    };
+    let load_unit = format!("{unit} summed over sensels");
     writeln!(
         out,
         "total load     {} .. {} {load_unit} (baseline noise {:.3})",
