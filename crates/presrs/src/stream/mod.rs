@@ -26,6 +26,7 @@ mod events;
 mod output;
 mod server;
 mod session;
+mod shutdown;
 mod summary;
 
 use std::path::Path;
@@ -35,10 +36,11 @@ use presrs_core::online::OnlineProfile;
 use crate::error::{Error, Result};
 
 pub use output::BoundedOutput;
-pub use server::{ServeSummary, ServerNotice, ServerOptions, ShutdownHandle, StreamServer};
+pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer};
 pub use session::{
     ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
 };
+pub use shutdown::ShutdownHandle;
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
 /// and `--gait`).

@@ -11,7 +11,7 @@ use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameRead
 use presrs_io::tekscan_stream::TekscanStream;
 
 use super::events::{end_line, error_line, event_lines};
-use super::server::ShutdownHandle;
+use super::shutdown::ShutdownHandle;
 pub use super::summary::ConnectionSummary;
 use crate::error::Result;
 
