@@ -11,7 +11,7 @@ use presrs::core::pipeline::extract_features_many;
 use presrs::core::preprocess::Preprocess;
 use presrs::core::stance::{SampleFrame, SegmentParams, Stance as CoreStance, ValidSegmentParams};
 use presrs::core::{Recording as CoreRecording, SensorMeta};
-use presrs::io::{ReadOptions, read_recording_with};
+use presrs::io::{ArrayAxes, ReadOptions, read_recording_with};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -167,10 +167,23 @@ impl Recording {
 
 /// Reads a recording in any format the CLI reads (TekScan ASCII, NPY, PNG, text matrices), told
 /// apart by content. `lenient`: drop a truncated last frame (with a warning) instead of failing.
+/// `axes`: what the axes of a 3-D `.npy` are, in the file's order (`"rows,cols,frames"` for an array
+/// whose time axis is last; default `"frames,rows,cols"`).
 #[pyfunction]
-#[pyo3(signature = (path, *, lenient = false))]
-pub fn read(py: Python<'_>, path: PathBuf, lenient: bool) -> PyResult<Recording> {
-    let options = ReadOptions { lenient };
+#[pyo3(signature = (path, *, lenient = false, axes = None))]
+pub fn read(
+    py: Python<'_>,
+    path: PathBuf,
+    lenient: bool,
+    axes: Option<&str>,
+) -> PyResult<Recording> {
+    let axes = axes
+        .map(|text| {
+            text.parse::<ArrayAxes>()
+                .map_err(|err| data_error(format!("axes={text:?}: {err}")))
+        })
+        .transpose()?;
+    let options = ReadOptions { lenient, axes };
     let parsed = detached(py, || read_recording_with(&path, &options))?.py_err()?;
     for warning in &parsed.warnings {
         warn(py, warning)?;

@@ -110,3 +110,13 @@ def test_fft1d_features_are_numpys_rfft_of_the_row_major_vector(sim_images):
     n = 1 << (image.size - 1).bit_length()
     theirs = np.abs(np.fft.rfft(image.reshape(-1), n=n))
     np.testing.assert_allclose(ours, theirs, rtol=1e-9, atol=1e-9 * theirs.max())
+
+
+def test_a_time_last_npy_reads_with_its_axes(tmp_path):
+    frames = np.random.default_rng(3).random((6, 5, 40))
+    np.save(tmp_path / "time-last.npy", frames)
+    rec = presrs.read(tmp_path / "time-last.npy", axes="rows,cols,frames")
+    assert rec.frames.shape == (40, 6, 5)
+    np.testing.assert_array_equal(rec.frames, np.moveaxis(frames, 2, 0))
+    with pytest.raises(presrs.DataError, match="axes"):
+        presrs.read(tmp_path / "time-last.npy", axes="rows,rows,frames")

@@ -18,7 +18,22 @@ use clap::{Parser, Subcommand};
 
 /// Terrain identification from high-resolution pressure images (PreSRS).
 #[derive(Debug, Parser)]
-#[command(name = "presrs", bin_name = "presrs", version, about, long_about = None)]
+#[command(
+    name = "presrs",
+    bin_name = "presrs",
+    version,
+    about,
+    long_about = None,
+    after_help = "Examples (a simulated data set, a model, its accuracy, a live stream; \
+docs/tutorial.md walks through them):
+  presrs simulate --out sim --seed 7 --hops-per-gait 6
+  presrs inspect sim/recordings/wood_G2_000.asf
+  presrs train --manifest sim/manifest.csv --out g2.model.json \\
+    --train-condition G2
+  presrs eval --manifest sim/manifest.csv --train-condition G2
+  presrs classify --model g2.model.json sim/recordings/wood_G1_000.asf
+  presrs stream --model g2.model.json < sim/recordings/wood_G2_000.asf"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -30,7 +45,11 @@ enum Command {
     #[command(after_help = "Example:\n  presrs simulate --out sim --seed 7")]
     Simulate(cmd::simulate::SimulateArgs),
     /// Describe a recording: sensor, size, frames, period, units, load and the stance phases found.
-    #[command(after_help = "Example:\n  presrs inspect ../shared/data/tekscan/FrasP01L.asf --json")]
+    #[command(
+        after_help = "Examples (sim/ made by `presrs simulate --out sim`; or any recording of yours):
+  presrs inspect sim/recordings/wood_G2_000.asf
+  presrs inspect my-walk.asf --json"
+    )]
     Inspect(cmd::inspect::InspectArgs),
     /// Print feature vectors of a recording's frames as CSV.
     Features(cmd::features::FeaturesArgs),
@@ -45,14 +64,15 @@ enum Command {
     /// Measure classification latency and batch throughput in this process.
     Bench(cmd::bench::BenchArgs),
     /// Classify a live frame stream online (stdin or TCP clients); JSON lines out.
-    #[command(
-        after_help = "Examples:\n  presrs stream --model g2.json --calibrate sim/manifest.csv < sim/recordings/wood_G2_000.asf\n  presrs stream --model g2.json --listen 127.0.0.1:7700"
-    )]
+    #[command(after_help = "Examples:
+  presrs stream --model g2.model.json --calibrate sim/manifest.csv \\
+    < sim/recordings/wood_G2_000.asf
+  presrs stream --model g2.model.json --listen 127.0.0.1:7700")]
     Stream(cmd::stream::StreamArgs),
     /// Send a recording to `presrs stream --listen` as a live stream.
-    #[command(
-        after_help = "Example:\n  presrs replay sim/recordings/grass_G2_000.asf --connect 127.0.0.1:7700 --rate 100"
-    )]
+    #[command(after_help = "Example (to a `presrs stream --listen 127.0.0.1:7700`):
+  presrs replay sim/recordings/grass_G2_000.asf \\
+    --connect 127.0.0.1:7700 --rate 100")]
     Replay(cmd::replay::ReplayArgs),
     /// Draw a pressure image (PNG/SVG heat map in physical units) or a recording's movie (GIF).
     Plot(cmd::plot::PlotArgs),
@@ -115,10 +135,116 @@ fn error_message(err: &anyhow::Error) -> String {
     message
 }
 
+/// Whether any cause of `err` is a closed pipe. serde_json's error hides the io error it wraps from the
+/// chain (its `source` skips it), so it is asked for the io error's kind itself.
 fn is_broken_pipe(err: &anyhow::Error) -> bool {
     err.chain().any(|cause| {
-        cause
-            .downcast_ref::<std::io::Error>()
-            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+        let kind = if let Some(io) = cause.downcast_ref::<std::io::Error>() {
+            Some(io.kind())
+        } else {
+            cause
+                .downcast_ref::<serde_json::Error>()
+                .and_then(serde_json::Error::io_error_kind)
+        };
+        kind == Some(std::io::ErrorKind::BrokenPipe)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+    use clap::CommandFactory;
+
+    use super::*;
+
+    /// The help of the program and of every subcommand, rendered for an 80-column terminal.
+    fn helps() -> Vec<(String, String)> {
+        let mut root = Cli::command().term_width(80);
+        root.build();
+        let mut helps = vec![("presrs".to_owned(), root.render_long_help().to_string())];
+        for sub in root.get_subcommands_mut() {
+            let name = sub.get_name().to_owned();
+            if name != "help" {
+                helps.push((name, sub.render_long_help().to_string()));
+            }
+        }
+        helps
+    }
+
+    /// The example commands of a help text: the indented lines under a heading that starts with
+    /// "Example", up to a blank line, with `\` continuations joined.
+    fn examples(help: &str) -> Vec<String> {
+        let mut commands = Vec::new();
+        let mut lines = help.lines();
+        while let Some(line) = lines.next() {
+            if !line.starts_with("Example") {
+                continue;
+            }
+            // The heading may wrap: it ends with its colon.
+            let mut heading = line.to_owned();
+            while !heading.trim_end().ends_with(':') {
+                heading = lines
+                    .next()
+                    .expect("an example heading ends with ':'")
+                    .to_owned();
+            }
+            let mut pending = String::new();
+            for line in lines.by_ref().take_while(|l| !l.trim().is_empty()) {
+                assert!(
+                    line.starts_with("  "),
+                    "an example line is not indented: {line:?}"
+                );
+                pending.push_str(line.trim());
+                match pending.strip_suffix('\\') {
+                    Some(head) => pending = head.to_owned(),
+                    None => commands.push(std::mem::take(&mut pending)),
+                }
+            }
+            assert!(
+                pending.is_empty(),
+                "an example ends with a continuation: {pending:?}"
+            );
+        }
+        commands
+    }
+
+    /// The arguments of an example command line: words up to a redirection, pipe or comment.
+    fn words(command: &str) -> Vec<&str> {
+        command
+            .split_whitespace()
+            .take_while(|w| !matches!(*w, "<" | ">" | "|" | "#"))
+            .collect()
+    }
+
+    #[test]
+    fn every_help_has_examples_that_are_complete_commands() {
+        for (name, help) in helps() {
+            let commands = examples(&help);
+            assert!(!commands.is_empty(), "{name}: no example in\n{help}");
+            for command in commands {
+                let words = words(&command);
+                assert_eq!(words.first(), Some(&"presrs"), "{name}: {command:?}");
+                if let Err(err) = Cli::try_parse_from(&words) {
+                    panic!("{name}: the example {command:?} does not parse: {err}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn help_points_to_nothing_a_user_does_not_have() {
+        for (name, help) in helps() {
+            assert!(!help.contains("../shared"), "{name}: {help}");
+        }
+    }
+
+    #[test]
+    fn a_closed_pipe_in_a_json_error_is_recognised() {
+        let closed = std::io::Error::from(std::io::ErrorKind::BrokenPipe);
+        let json = serde_json::Error::io(closed);
+        let err = anyhow::Error::from(json).context("cannot write JSON");
+        assert!(is_broken_pipe(&err));
+        let other = anyhow::Error::from(std::io::Error::other("disk full")).context("cannot write");
+        assert!(!is_broken_pipe(&other));
+    }
 }

@@ -753,3 +753,220 @@ fn inspect_and_frame_errors_read_well_on_a_single_float_image() {
         stderr(&out)
     );
 }
+
+/// Runs presrs with `stdin` (a file) or none, its stdout closed before it writes anything, as in
+/// `presrs ... | head -0`.
+fn with_closed_stdout(args: &[&str], stdin: Option<&Path>) -> std::process::Output {
+    let input = match stdin {
+        Some(path) => Stdio::from(std::fs::File::open(path).unwrap()),
+        None => Stdio::null(),
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_presrs"))
+        .args(args)
+        .stdin(input)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn every_writing_command_ends_quietly_on_a_closed_pipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    let model = model.to_str().unwrap();
+    let movie = dir.path().join("movie_grass.asf");
+    let movie_name = movie.display().to_string();
+    let fras = shared("FrasP01L.asf");
+    let runs: Vec<(Vec<&str>, Option<&Path>)> = vec![
+        (vec!["inspect", &fras], None),
+        (vec!["inspect", &fras, "--json"], None),
+        (vec!["features", &fras, "--stance-frame", "all"], None),
+        (vec!["classify", "--model", model, &movie_name], None),
+        (
+            vec!["classify", "--model", model, &movie_name, "--json"],
+            None,
+        ),
+        (vec!["stream", "--model", model], Some(movie.as_path())),
+    ];
+    for (args, stdin) in runs {
+        let out = with_closed_stdout(&args, stdin);
+        let code = out.status.code();
+        assert!(
+            matches!(code, Some(0 | 141)),
+            "{args:?}: {code:?} {}",
+            stderr(&out)
+        );
+        assert!(
+            !stderr(&out).contains("error:"),
+            "{args:?}: {}",
+            stderr(&out)
+        );
+    }
+}
+
+#[test]
+fn a_time_last_npy_is_named_and_read_with_axes() {
+    // rows x cols x frames = 20 x 10 x 90: read frames-first it would be 20 frames of 10 x 90.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("walk.npy");
+    let data: Vec<f64> = (0..20 * 10 * 90).map(|i| f64::from(i % 7)).collect();
+    let file = std::fs::File::create(&path).unwrap();
+    presrs_io::npy::write_npy_f64(file, &[20, 10, 90], &data).unwrap();
+    let name = path.to_str().unwrap();
+    let out = presrs(&["inspect", name, "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["frames"], 20);
+    let warnings = doc["warnings"].to_string();
+    assert!(warnings.contains("--axes rows,cols,frames"), "{warnings}");
+    let out = presrs(&["inspect", name, "--json", "--axes", "rows,cols,frames"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (&doc["frames"], &doc["rows"], &doc["cols"]),
+        (&90.into(), &20.into(), &10.into())
+    );
+    assert!(!doc["warnings"].to_string().contains("--axes"));
+    let out = presrs(&["inspect", name, "--axes", "rows,cols"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+}
+
+#[test]
+fn inspect_gives_the_load_in_the_recordings_unit_and_in_newtons() {
+    // kPa with a 5.08 mm pitch: the sum in kPa, and the force in newtons as plot --movie draws it.
+    let out = presrs(&["inspect", &shared("FrasP01L.asf")]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    let line = |start: &str| {
+        text.lines()
+            .find(|l| l.starts_with(start))
+            .unwrap_or_else(|| panic!("no {start:?} in {text}"))
+            .to_owned()
+    };
+    assert!(
+        line("total load")
+            .to_lowercase()
+            .contains("kpa summed over sensels"),
+        "{text}"
+    );
+    assert!(line("total force").ends_with("N (pressure x sensel area, as plot --movie draws it)"));
+    let out = presrs(&["inspect", &shared("FrasP01L.asf"), "--json"]);
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (load, force) = (
+        doc["load_max"].as_f64().unwrap(),
+        doc["force_max_n"].as_f64().unwrap(),
+    );
+    assert!(
+        (force - load * 5.08 * 5.08 * 1e-3).abs() < 1e-6 * force,
+        "{load} {force}"
+    );
+    // Raw counts, no pitch: the sum in raw counts and no force.
+    let out = presrs(&["inspect", &shared("example3.asf")]);
+    let text = stdout(&out);
+    assert!(text.contains("raw counts summed over sensels"), "{text}");
+    assert!(!text.contains("total force"), "{text}");
+}
+
+#[test]
+fn the_classify_table_stays_aligned_with_long_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    let deep = dir
+        .path()
+        .join("a-rather-long-folder-name-for-the-recordings/of/one/session");
+    std::fs::create_dir_all(&deep).unwrap();
+    let long = deep.join("movie_grass.asf");
+    std::fs::copy(dir.path().join("movie_grass.asf"), &long).unwrap();
+    let short = dir.path().join("img0.png");
+    let out = presrs(&[
+        "classify",
+        "--model",
+        model.to_str().unwrap(),
+        short.to_str().unwrap(),
+        long.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    // Every row's columns are where the header's are: the frame number ends under "frame", the label
+    // starts under "label".
+    let header = text.lines().next().unwrap();
+    let frame_end = header.find("frame").unwrap() + "frame".len();
+    let label_at = header.find("label").unwrap();
+    assert_eq!(text.lines().count(), 1 + 1 + 6, "{text}");
+    for line in text.lines().skip(1) {
+        let bytes = line.as_bytes();
+        assert!(bytes[frame_end - 1].is_ascii_digit(), "{text}");
+        assert_eq!(&line[frame_end..label_at], "  ", "{text}");
+        assert_ne!(bytes[label_at], b' ', "{text}");
+    }
+}
+
+#[test]
+fn the_feature_csv_header_names_what_each_column_is() {
+    let file = shared("example3.asf");
+    let header = |features: &str| {
+        let out = presrs(&["features", &file, "--frame", "3", "--features", features]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        stdout(&out).lines().next().unwrap().to_owned()
+    };
+    let fft1d = header("fft1d");
+    assert!(fft1d.starts_with("frame,fft1d_bin0,fft1d_bin1,"), "{fft1d}");
+    assert!(fft1d.ends_with(",fft1d_bin128"), "{fft1d}");
+    let both = header("fft2d_polar+glcm");
+    assert!(both.starts_with("frame,fft2d_polar_ring0,"), "{both}");
+    assert!(both.contains(",fft2d_polar_wedge0,"), "{both}");
+    assert!(both.ends_with(",glcm_entropy_d5"), "{both}");
+    assert!(header("fft2d").starts_with("frame,fft2d_r0_c0,fft2d_r0_c1,"));
+}
+
+#[test]
+fn a_report_on_a_users_images_speaks_of_that_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dataset(dir.path());
+    let model = quick_model(dir.path(), &manifest);
+    // The single images alone, without conditions.
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    let mut images = String::from("path,label\n");
+    for line in text.lines().skip(1).filter(|l| l.starts_with("img")) {
+        let fields: Vec<&str> = line.split(',').collect();
+        images.push_str(&format!("{},{}\n", fields[0], fields[1]));
+    }
+    let manifest = dir.path().join("images.csv");
+    std::fs::write(&manifest, images).unwrap();
+    let out_dir = dir.path().join("report");
+    let out = presrs(&[
+        "report",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--fault-repeats",
+        "0",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let html = std::fs::read_to_string(out_dir.join("index.html")).unwrap();
+    assert!(html.contains("96 single image(s)"), "what the data are");
+    for wrong in [
+        "stance of a movie",
+        "Fig. 5",
+        "Fig. 6",
+        "the paper's",
+        "Margins {",
+        "Window {",
+        "<th>overall</th>",
+    ] {
+        assert!(
+            !html.contains(wrong),
+            "{wrong:?} in the report on a user's images"
+        );
+    }
+    // One tested condition: one accuracy column.
+    assert!(html.contains("<th>evaluation</th><th>all</th></tr>"));
+}

@@ -462,7 +462,8 @@ fn stream_stdin(extra: &[&str], input: Vec<u8>) -> (Option<i32>, Vec<Value>, Str
     let mut stdin = child.stdin.take().unwrap();
     let writer = std::thread::spawn(move || stdin.write_all(&input));
     let out = child.wait_with_output().unwrap();
-    writer.join().unwrap().unwrap();
+    // A stream that stops on a fatal error reads no further: the rest may not be written.
+    let _ = writer.join().unwrap();
     let events = json_lines(&String::from_utf8(out.stdout).unwrap());
     (
         out.status.code(),
@@ -520,7 +521,7 @@ fn a_truncated_last_frame_or_a_bad_cell_on_stdin_exits_1_after_the_rest() {
 }
 
 #[test]
-fn frames_the_model_cannot_use_are_rejected_and_counted() {
+fn a_stream_the_model_cannot_use_gets_one_error_and_stops() {
     // A 60x21 foot-scan recording; the model was trained on 44x44 images.
     let path =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/tekscan/FrasP01L.asf");
@@ -528,17 +529,16 @@ fn frames_the_model_cannot_use_are_rejected_and_counted() {
         eprintln!("skipped: {} is not there", path.display());
         return;
     };
-    let frames = presrs_io::read_recording(&path).unwrap().frame_count() as u64;
     let (code, events, log) = stream_stdin(&[], text);
     assert_eq!(code, Some(1), "{log}");
+    // One fatal error, not one per frame (205 of them).
     let errors: Vec<&Value> = events.iter().filter(|e| e["event"] == "error").collect();
-    assert_eq!(errors.len() as u64, frames);
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert_eq!(errors[0]["fatal"], true);
+    let message = errors[0]["message"].as_str().unwrap();
     assert!(
-        errors[0]["message"]
-            .as_str()
-            .unwrap()
-            .starts_with("input frame 0 rejected: a 60x21 frame"),
-        "{errors:?}"
+        message.starts_with("input frame 0 rejected: a 60x21 frame") && message.contains("stops"),
+        "{message}"
     );
     assert_eq!(count(&events, "classification"), 0);
     let end = events.last().unwrap();
@@ -548,12 +548,146 @@ fn frames_the_model_cannot_use_are_rejected_and_counted() {
             end["rejected_frames"].as_u64(),
             end["errors"].as_u64()
         ),
-        (Some(0), Some(frames), Some(frames))
+        (Some(0), Some(1), Some(1))
     );
+    assert!(log.contains("1 rejected frames, 1 errors"), "{log}");
+}
+
+#[test]
+fn two_tekscan_files_on_stdin_are_one_stream_or_a_clear_error() {
+    let wood = std::fs::read_to_string(recording("wood")).unwrap();
+    let grass = std::fs::read_to_string(recording("grass")).unwrap();
+    let frames = |path: &Path| presrs_io::read_recording(path).unwrap().frame_count() as u64;
+    let (code, events, log) = stream_stdin(&[], format!("{wood}{grass}").into_bytes());
+    assert_eq!(code, Some(0), "{log}");
+    let end = events.last().unwrap();
+    assert_eq!(
+        end["frames"].as_u64(),
+        Some(frames(&recording("wood")) + frames(&recording("grass"))),
+        "{end}"
+    );
+    let labels: Vec<&str> = events
+        .iter()
+        .filter(|e| e["event"] == "classification")
+        .filter_map(|e| e["label"].as_str())
+        .collect();
+    assert!(labels.contains(&"grass"), "{labels:?}");
+
+    // A second file of another size: a fatal error naming both sizes, after the first file's frames.
+    let small = "ROWS 4\nCOLS 4\nASCII_DATA @@\nFrame 1\n0,0,0,0\n0,0,0,0\n0,0,0,0\n0,0,0,0\n@@\n";
+    let (code, events, log) = stream_stdin(&[], format!("{wood}{small}").into_bytes());
+    assert_eq!(code, Some(1), "{log}");
+    let errors: Vec<&Value> = events.iter().filter(|e| e["event"] == "error").collect();
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert_eq!(errors[0]["fatal"], true);
+    let message = errors[0]["message"].as_str().unwrap();
     assert!(
-        log.contains(&format!("{frames} rejected frames, {frames} errors")),
-        "{log}"
+        message.contains("4x4 frames where the first had 44x44"),
+        "{message}"
     );
+    assert_eq!(
+        events.last().unwrap()["frames"].as_u64(),
+        Some(frames(&recording("wood")))
+    );
+}
+
+#[test]
+fn a_client_whose_stream_ends_in_the_warm_up_is_told_why() {
+    let server = Server::start_with(&["--exit-after", "1"]);
+    let mut client = TcpStream::connect(&server.addr).unwrap();
+    let zeros = vec![0.0; 44 * 44];
+    for _ in 0..20 {
+        client
+            .write_all(&frame_bytes(44, 44, Dtype::U8, &zeros))
+            .unwrap();
+    }
+    client.shutdown(Shutdown::Write).unwrap();
+    let events = read_all_lines(client);
+    let end = events.last().unwrap();
+    assert_eq!(
+        (end["event"].as_str(), end["decisions"].as_u64()),
+        (Some("end"), Some(0))
+    );
+    assert_eq!(end["warmup_frames"].as_u64(), Some(20), "{end}");
+    let note = end["note"].as_str().unwrap_or_default();
+    assert!(
+        note.contains("ended during the warm-up calibration (20 frames)"),
+        "{end}"
+    );
+    server.finish();
+}
+
+/// Sends `signal` (INT or TERM) to `child`.
+fn send_signal(child: &Child, signal: &str) {
+    let status = Command::new("kill")
+        .args([&format!("-{signal}"), &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+#[test]
+fn sigint_on_stdin_writes_the_end_line_and_exits_cleanly() {
+    let (_, model) = fixture();
+    let mut child = presrs()
+        .args(["stream", "--model", model.to_str().unwrap()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // A whole movie, with the input left open (a live sensor that goes on).
+    let mut stdin = child.stdin.take().unwrap();
+    stdin
+        .write_all(&std::fs::read(recording("wood")).unwrap())
+        .unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    stdout.read_line(&mut first).unwrap();
+    assert!(first.contains("\"event\""), "{first}");
+    send_signal(&child, "INT");
+    let mut rest = String::new();
+    stdout.read_to_string(&mut rest).unwrap();
+    let status = child.wait().unwrap();
+    drop(stdin);
+    let mut log = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
+    assert_eq!(status.code(), Some(0), "{log}");
+    let events = json_lines(&rest);
+    let end = events.last().unwrap();
+    assert_eq!(end["event"], "end", "{rest}");
+    assert!(end["frames"].as_u64().unwrap() > 0);
+    assert!(log.contains("stopped by SIGINT"), "{log}");
+}
+
+#[test]
+fn sigterm_stops_the_server_with_a_final_summary() {
+    let mut server = Server::start_with(&[]);
+    let events = replay(&server.addr, &recording("wood"));
+    assert_eq!(events.last().unwrap()["event"], "end");
+    send_signal(&server.child, "TERM");
+    let mut rest = String::new();
+    server
+        .child
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut rest)
+        .unwrap();
+    let stopped = json_lines(&rest);
+    let last = stopped.last().unwrap();
+    assert_eq!(
+        (last["event"].as_str(), last["signal"].as_str()),
+        (Some("stopped"), Some("SIGTERM")),
+        "{rest}"
+    );
+    assert_eq!(last["connections"].as_u64(), Some(1));
+    server.finish();
 }
 
 #[test]
@@ -592,4 +726,43 @@ fn bad_addresses_gait_entries_and_limits_are_bad_usage() {
     let help = presrs().args(["replay", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
     assert_eq!(help.matches("[default: 100]").count(), 1, "{help}");
+}
+
+#[test]
+fn a_closed_stdout_ends_a_live_stream() {
+    // `presrs stream ... | head`: the input stays open (a live sensor), the reader of the decisions
+    // goes away; presrs must end by itself, quietly.
+    let (_, model) = fixture();
+    let mut child = presrs()
+        .args(["stream", "--model", model.to_str().unwrap()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let mut stdin = child.stdin.take().unwrap();
+    // presrs may be gone before all is written: that is the point.
+    let _ = stdin.write_all(&std::fs::read(recording("wood")).unwrap());
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("presrs stream went on with nobody reading its output");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    drop(stdin);
+    let mut log = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
+    assert_eq!(status.code(), Some(0), "{log}");
+    assert!(!log.contains("error:"), "{log}");
 }

@@ -4,10 +4,16 @@
 //! [`DeadSenselConfig::min_frames`] frames, it is *surrounded* by load: every present 4-neighbour
 //! (up, down, left, right) and at least [`DeadSenselConfig::neighbour_fraction`] of its present
 //! 8-neighbours (and at least three of them) read more than 0. A sensel on the edge of the contact area
-//! has an unloaded neighbour on its outer side and is not surrounded — on the border of the array too,
-//! where it has only five neighbours — and a sensel that is never near the load is never surrounded:
-//! neither is reported. A recording of fewer frames than `min_frames` asks every present neighbour to
-//! be loaded in every frame.
+//! has an unloaded neighbour on its outer side and is not surrounded, and a sensel that is never near
+//! the load is never surrounded: neither is reported.
+//!
+//! **Edge sensels.** A sensel without a present neighbour on each of its four sides — on the border of
+//! the array, or next to an absent sensel — cannot be seen surrounded: the load may end just beyond it
+//! (a contact cut by the array's border reads 0 there too). It is reported only on stronger evidence:
+//! at least three present sides, *every* present neighbour (all of its five, or fewer) loaded, in at
+//! least twice `min_frames` frames (6 by default; every frame of a shorter recording). A corner sensel
+//! (two sides) is never reported. A recording of fewer frames than `min_frames` asks every present
+//! neighbour to be loaded in every frame.
 //!
 //! [`correct_dead_sensels`] detects and fills them (each frame, from the sensel's present, live
 //! neighbours, with [`crate::preprocess::fill_dead_sensels`]); `presrs` does so for every recording it
@@ -38,6 +44,9 @@ impl Default for DeadSenselConfig {
         }
     }
 }
+
+/// How many times `min_frames` an edge sensel (a side without a present neighbour) must be surrounded.
+const EDGE_EVIDENCE: usize = 2;
 
 /// A sensel found dead.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -92,7 +101,15 @@ pub fn detect_dead_sensels(recording: &Recording, config: &DeadSenselConfig) -> 
             .copied()
             .filter(|&n| n / cols == r || n % cols == c)
             .collect();
-        let needed = ((fraction * neighbours.len() as f64).ceil() as usize).max(3);
+        // An edge sensel (a side missing) needs every neighbour loaded, in more frames.
+        let (needed, frames_needed) = match sides.len() {
+            4 => (
+                ((fraction * neighbours.len() as f64).ceil() as usize).max(3),
+                min_frames,
+            ),
+            3 => (neighbours.len(), (EDGE_EVIDENCE * min_frames).min(frames)),
+            _ => continue,
+        };
         let surrounded_frames = data
             .chunks_exact(cells)
             .filter(|frame| {
@@ -100,7 +117,7 @@ pub fn detect_dead_sensels(recording: &Recording, config: &DeadSenselConfig) -> 
                     && neighbours.iter().filter(|&&n| frame[n] > 0.0).count() >= needed
             })
             .count();
-        if surrounded_frames >= min_frames {
+        if surrounded_frames >= frames_needed {
             found.push(DeadSensel {
                 row: r,
                 col: c,
@@ -229,11 +246,16 @@ mod tests {
         present[5 * 12 + 5] = false; // the silent sensel is outside the sensor: not dead
         let rec = movie(data.clone(), 6, Some(present));
         assert!(detect_dead_sensels(&rec, &DeadSenselConfig::default()).is_empty());
-        // Absent neighbours do not count against a dead sensel.
+        // Absent neighbours do not count against a dead sensel; but with a side absent ((4, 5) above
+        // it) it is an edge sensel, reported on twice the evidence: 4 loaded frames are not enough, 8 are.
         let mut present = vec![true; 144];
         present[4 * 12 + 4] = false;
         present[4 * 12 + 5] = false;
-        let rec = movie(data, 6, Some(present));
+        let rec = movie(data, 6, Some(present.clone()));
+        assert!(detect_dead_sensels(&rec, &DeadSenselConfig::default()).is_empty());
+        let mut data = disc_movie(10);
+        kill(&mut data, 5, 5);
+        let rec = movie(data, 10, Some(present));
         let dead = detect_dead_sensels(&rec, &DeadSenselConfig::default());
         assert_eq!(dead.len(), 1);
         assert_eq!((dead[0].row, dead[0].col), (5, 5));
@@ -328,5 +350,37 @@ mod tests {
         let (same, none) = correct_dead_sensels(one.clone(), &DeadSenselConfig::default()).unwrap();
         assert!(none.is_empty());
         assert_eq!(same.data(), one.data());
+    }
+
+    /// A 12 x 12 movie of `frames` frames, loaded everywhere in frames `loaded`, with (0, 6) silent.
+    fn border_movie(frames: usize, loaded: std::ops::Range<usize>) -> Recording {
+        let mut data = Vec::new();
+        for f in 0..frames {
+            data.extend((0..144).map(|_| if loaded.contains(&f) { 5.0 } else { 0.0 }));
+        }
+        kill(&mut data, 0, 6);
+        movie(data, frames, None)
+    }
+
+    #[test]
+    fn an_edge_sensel_needs_every_neighbour_loaded_in_twice_the_frames() {
+        // On the border row, its five neighbours loaded in 3 frames: an interior sensel would be dead,
+        // an edge sensel is not (the load may end just beyond it).
+        let config = DeadSenselConfig::default();
+        assert!(detect_dead_sensels(&border_movie(10, 2..5), &config).is_empty());
+        // In 6 frames it is.
+        let dead = detect_dead_sensels(&border_movie(10, 2..8), &config);
+        assert_eq!(
+            dead,
+            [DeadSensel {
+                row: 0,
+                col: 6,
+                surrounded_frames: 6
+            }]
+        );
+        // A corner (two sides) never is.
+        let mut data: Vec<f64> = vec![5.0; 10 * 144];
+        kill(&mut data, 0, 0);
+        assert!(detect_dead_sensels(&movie(data, 10, None), &config).is_empty());
     }
 }

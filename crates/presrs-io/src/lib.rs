@@ -19,7 +19,7 @@ use presrs_core::Recording;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use error::IoError;
-pub use parsed::{Parsed, ReadOptions};
+pub use parsed::{ArrayAxes, Axis, Parsed, ReadOptions};
 pub use tekscan::{parse_tekscan, read_tekscan, write_tekscan, write_tekscan_file};
 
 /// How strictly to read.
@@ -48,7 +48,12 @@ pub fn read_recording_with(path: &Path, options: &ReadOptions) -> Result<Parsed,
         warnings: Vec::new(),
     };
     match detect_kind(path, &bytes)? {
-        FileKind::Npy => npy::parse_npy(&bytes, &name).map(plain),
+        FileKind::Npy => {
+            npy::parse_npy_with(&bytes, &name, options.axes).map(|(recording, warnings)| Parsed {
+                recording,
+                warnings,
+            })
+        }
         FileKind::Png => png::parse_png(&bytes, &name).map(plain),
         FileKind::TekScan => tekscan::parse_tekscan(&textutil::decode_text(&bytes), &name, options),
         FileKind::TextMatrix => {

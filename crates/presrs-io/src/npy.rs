@@ -4,6 +4,13 @@
 //! endian; `bool` as 0/1) and converted to `f64` (exactly, except as said next) (64-bit integers beyond 2^53 are rounded to the nearest `f64`). C and
 //! Fortran order are both read (Fortran-order arrays are transposed into the row-major layout). NaN and
 //! infinities are rejected, naming the element. The writers produce C-order little-endian `f8` or `u1`.
+//!
+//! **Axes.** A 3-D array is `frames x rows x cols` unless told otherwise ([`ArrayAxes`], `--axes` on the
+//! command line). Some exporters write the time axis last (`rows x cols x frames`); read as frames
+//! first, such a file gives a few very wide frames without an error. So, when nothing is said about the
+//! axes, a shape `(a, b, c)` whose last axis is at least 3 times the first and 4 times the middle one
+//! (frames read as `b x c`, at least 4 times wider than tall, an unlikely sensor) gets a warning naming
+//! `--axes rows,cols,frames`.
 
 use std::io::Write;
 use std::path::Path;
@@ -12,6 +19,7 @@ use npyz::{DType, NpyFile, TypeChar, WriterBuilder};
 use presrs_core::{Grid, Recording, SensorMeta};
 
 use crate::error::{IoError, display_name};
+use crate::parsed::{ArrayAxes, Axis};
 
 /// The first bytes of every `.npy` file.
 pub const NPY_MAGIC: &[u8] = b"\x93NUMPY";
@@ -22,8 +30,33 @@ pub fn read_npy(path: &Path) -> Result<Recording, IoError> {
     parse_npy(&bytes, &display_name(path))
 }
 
-/// Parses the bytes of a `.npy` file; `source_name` names it in error messages.
+/// Parses the bytes of a `.npy` file (a 3-D array as frames x rows x cols); `source_name` names it in
+/// error messages.
 pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> {
+    parse_npy_with(bytes, source_name, Some(ArrayAxes::default())).map(|(recording, _)| recording)
+}
+
+/// The warning for a 3-D shape that looks like rows x cols x frames read as frames x rows x cols.
+fn time_last_warning(file: &str, shape: &[u64]) -> Option<String> {
+    let &[a, b, c] = shape else {
+        return None;
+    };
+    (c >= 3 * a && c >= 4 * b).then(|| {
+        format!(
+            "{file}: read as {a} frames of {b} x {c} (axes frames,rows,cols); if its last axis is time \
+             (rows x cols x frames, as some exporters write: {c} frames of {a} x {b}), give \
+             --axes rows,cols,frames"
+        )
+    })
+}
+
+/// Parses the bytes of a `.npy` file, a 3-D array's axes in the order `axes` says (`None`: frames x
+/// rows x cols, with a warning when the shape looks otherwise). Returns the recording and the warnings.
+pub fn parse_npy_with(
+    bytes: &[u8],
+    source_name: &str,
+    axes: Option<ArrayAxes>,
+) -> Result<(Recording, Vec<String>), IoError> {
     let file = source_name;
     if !bytes.starts_with(NPY_MAGIC) {
         return Err(IoError::format(
@@ -45,9 +78,18 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
     let npy = NpyFile::new(bytes)
         .map_err(|err| IoError::format(file, format!("invalid .npy header: {err}")))?;
     let shape: Vec<u64> = npy.shape().to_vec();
+    let warnings: Vec<String> = match axes {
+        Some(_) => Vec::new(),
+        None => time_last_warning(file, &shape).into_iter().collect(),
+    };
+    let axes = axes.unwrap_or_default();
     let (frames, rows, cols) = match *shape.as_slice() {
         [rows, cols] => (1, rows, cols),
-        [frames, rows, cols] => (frames, rows, cols),
+        [..] if shape.len() == 3 => (
+            shape[axes.position(Axis::Frames)],
+            shape[axes.position(Axis::Rows)],
+            shape[axes.position(Axis::Cols)],
+        ),
         _ => {
             return Err(IoError::unsupported(
                 file,
@@ -122,14 +164,26 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
             ),
         ));
     }
-    // Gather into frames x rows x cols, row-major, whatever the storage order.
-    let data: Vec<f64> = if order == npyz::Order::C {
+    // Gather into frames x rows x cols, row-major, whatever the storage order and the axes' order.
+    let in_order = shape.len() == 2 || axes == ArrayAxes::default();
+    let data: Vec<f64> = if order == npyz::Order::C && in_order {
         stored
     } else {
-        let strides: Vec<usize> = strides.iter().map(|&s| s as usize).collect();
+        let strides: Vec<usize> = if order == npyz::Order::C {
+            let dims: Vec<usize> = shape.iter().map(|&n| n as usize).collect();
+            (0..dims.len())
+                .map(|i| dims[i + 1..].iter().product())
+                .collect()
+        } else {
+            strides.iter().map(|&s| s as usize).collect()
+        };
         let (sf, sr, sc) = match *strides.as_slice() {
             [sr, sc] => (0, sr, sc),
-            [sf, sr, sc] => (sf, sr, sc),
+            [..] if strides.len() == 3 => (
+                strides[axes.position(Axis::Frames)],
+                strides[axes.position(Axis::Rows)],
+                strides[axes.position(Axis::Cols)],
+            ),
             _ => (0, 0, 0),
         };
         let mut out = Vec::with_capacity(total);
@@ -158,7 +212,7 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
             ),
         ));
     }
-    Recording::new(
+    let recording = Recording::new(
         Grid::new(rows, cols),
         None,
         data,
@@ -168,7 +222,8 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
     .map_err(|source| IoError::Model {
         file: file.to_owned(),
         source,
-    })
+    })?;
+    Ok((recording, warnings))
 }
 
 /// The header dictionary text of a `.npy` file (versions 1 to 3), when it is all there.
@@ -627,5 +682,55 @@ mod tests {
         assert_eq!(back.data(), rec.data());
         assert_eq!(back.grid(), rec.grid());
         assert_eq!(back.frame_count(), 2);
+    }
+
+    #[test]
+    fn time_last_arrays_are_named_and_read_with_their_axes() {
+        // rows x cols x frames = 6 x 3 x 40, element [r, c, f] = 1000 f + 10 r + c.
+        let (rows, cols, frames) = (6, 3, 40);
+        let mut data = Vec::new();
+        for r in 0..rows {
+            for c in 0..cols {
+                for f in 0..frames {
+                    data.push(f64::from(1000 * f + 10 * r + c));
+                }
+            }
+        }
+        let bytes = npy_f64(&[rows as usize, cols as usize, frames as usize], &data);
+        // Nothing said: read as 6 frames of 3 x 40, with a warning that names --axes.
+        let (rec, warnings) = parse_npy_with(&bytes, "walk.npy", None).unwrap();
+        assert_eq!((rec.frame_count(), rec.grid()), (6, Grid::new(3, 40)));
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(
+            warnings[0].contains("--axes rows,cols,frames"),
+            "{warnings:?}"
+        );
+        assert!(warnings[0].contains("40 frames of 6 x 3"), "{warnings:?}");
+        // Told: 40 frames of 6 x 3, frame f row r col c where it should be; no warning.
+        let axes: ArrayAxes = "rows,cols,frames".parse().unwrap();
+        let (rec, warnings) = parse_npy_with(&bytes, "walk.npy", Some(axes)).unwrap();
+        assert!(warnings.is_empty());
+        assert_eq!((rec.frame_count(), rec.grid()), (40, Grid::new(6, 3)));
+        let frame = rec.frame(7).unwrap();
+        assert_eq!(frame.values()[2 * 3 + 1], 7021.0);
+        // An ordinary movie (frames first) is not warned about.
+        let movie = npy_f64(&[40, 6, 3], &data);
+        assert!(parse_npy_with(&movie, "m.npy", None).unwrap().1.is_empty());
+    }
+
+    #[test]
+    fn axes_are_three_different_names() {
+        assert_eq!(
+            "frames, rows, cols".parse::<ArrayAxes>(),
+            Ok(ArrayAxes::default())
+        );
+        assert_eq!(
+            "rows,cols,frames".parse::<ArrayAxes>().unwrap().to_string(),
+            "rows,cols,frames"
+        );
+        for bad in ["rows,cols", "rows,rows,frames", "x,y,t", ""] {
+            let err = bad.parse::<ArrayAxes>().unwrap_err();
+            assert!(err.contains("rows,cols,frames"), "{bad}: {err}");
+        }
     }
 }

@@ -6,7 +6,12 @@
 //! need it). Then frames: a `Frame N` line followed by `ROWS` data lines of `COLS` cells (numbers or `B`
 //! for no sensel), or, in files without `Frame` lines, every `ROWS` data lines. `Frame` lines are read
 //! as the whole-file reader reads them (`Frame 12, timestamp 728`, `Frame -2`, `Frame +3`; `Frame12` is
-//! not a `Frame` line). Blank and comma-only lines are skipped; `@@` ends the stream.
+//! not a `Frame` line). Blank and comma-only lines are skipped; `@@` ends a recording.
+//!
+//! **Recordings one after another** (`cat a.asf b.asf | presrs stream`): after `@@`, or where a
+//! `DATA_TYPE` line comes instead of the next frame, another header may follow. When its frames have the
+//! same size the stream goes on with them; otherwise that is an error and the stream stops
+//! ([`TekscanStream::stopped`]): one stream carries frames of one size.
 //!
 //! **Faults.** Lines are capped in length (a line without end cannot eat memory). Each fault is an error
 //! naming the line (and the frame, row and column when there are some), after which the stream can go
@@ -88,7 +93,11 @@ pub struct TekscanStream<R> {
     skip_rows: usize,
     /// The rest of an over-long line is still to be read and dropped.
     discard_line: bool,
+    /// The line in `self.line` is to be read again (the first line of a following recording's header).
+    replay_line: bool,
     ended: bool,
+    /// The stream stopped on an error it cannot go on from (a following recording of another size).
+    stopped: bool,
 }
 
 impl<R: BufRead> TekscanStream<R> {
@@ -105,8 +114,16 @@ impl<R: BufRead> TekscanStream<R> {
             resync: false,
             skip_rows: 0,
             discard_line: false,
+            replay_line: false,
             ended: false,
+            stopped: false,
         }
+    }
+
+    /// Whether the stream stopped on an error it cannot go on from: the header of a following
+    /// recording was unreadable or gave another frame size. Later calls give `Ok(None)`.
+    pub fn stopped(&self) -> bool {
+        self.stopped
     }
 
     pub fn header(&self) -> Option<StreamHeader> {
@@ -121,6 +138,10 @@ impl<R: BufRead> TekscanStream<R> {
     /// longer line is dropped before the next line is read); must be UTF-8. An error only when the
     /// input cannot be read.
     fn next_line(&mut self, limit: usize) -> Result<Line, IoError> {
+        if std::mem::take(&mut self.replay_line) {
+            self.line_no += 1;
+            return Ok(Line::Text);
+        }
         if self.discard_line {
             self.discard_rest_of_line()?;
         }
@@ -293,6 +314,15 @@ impl<R: BufRead> TekscanStream<R> {
                 if is_blank(line) {
                     continue;
                 }
+                let header_next = line.to_ascii_uppercase().starts_with("DATA_TYPE");
+                if current.is_none() && (line == "@@" || header_next) {
+                    // The end of a recording; another may follow.
+                    if self.next_recording(header.grid, header_next)? {
+                        continue;
+                    }
+                    self.ended = true;
+                    return Ok(None);
+                }
                 if line == "@@" {
                     self.ended = true;
                     let Some((number, _)) = current else {
@@ -387,6 +417,62 @@ impl<R: BufRead> TekscanStream<R> {
                 }));
             }
         }
+    }
+}
+
+impl<R: BufRead> TekscanStream<R> {
+    /// Makes the line in `self.line` the next one read again.
+    fn unread_line(&mut self) {
+        self.replay_line = true;
+        self.line_no -= 1;
+    }
+
+    /// After the end of a recording (`@@`, or a header line `again` in `self.line`): false at the end
+    /// of the input; true when another recording's header follows with frames of `grid`, whose frames
+    /// are then read on; an error, and the stream stopped, when it cannot be read or its frames have
+    /// another size.
+    fn next_recording(&mut self, grid: Grid, again: bool) -> Result<bool, IoError> {
+        if again {
+            self.unread_line();
+        }
+        loop {
+            match self.next_line(MAX_HEADER_LINE)? {
+                Line::End => return Ok(false),
+                Line::Text => {
+                    let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
+                    if !is_blank(line) && line != "@@" {
+                        break;
+                    }
+                }
+                Line::Bad(message) => {
+                    self.ended = true;
+                    self.stopped = true;
+                    let message = format!("after the end of a recording: {message}");
+                    return Err(IoError::parse(&self.source_name, self.line_no, message));
+                }
+            }
+        }
+        let first = self.header.take();
+        let line_no = self.line_no;
+        self.unread_line();
+        let next = self.read_header();
+        self.header = first;
+        let message = match next {
+            Ok(next) if next.grid == grid => {
+                self.framed = None;
+                self.counted = 0;
+                return Ok(true);
+            }
+            Ok(next) => format!(
+                "another recording follows with {} frames where the first had {grid}: one stream \
+                 carries frames of one size (stream each recording on its own)",
+                next.grid
+            ),
+            Err(err) => format!("another recording follows, but its header cannot be read: {err}"),
+        };
+        self.ended = true;
+        self.stopped = true;
+        Err(IoError::parse(&self.source_name, line_no, message))
     }
 }
 
@@ -737,5 +823,47 @@ mod tests {
             .next_frame(&mut values, &mut present)
             .unwrap_err();
         assert!(err.to_string().contains("longer than"), "{err}");
+    }
+
+    #[test]
+    fn recordings_one_after_another_go_on_when_their_sizes_agree() {
+        let second = MOVIE.replace("Frame 1\n0,1,2", "Frame 1\n6,7,8");
+        let joined = format!("{MOVIE}{second}");
+        let frames = drain(&joined);
+        assert_eq!(frames.len(), 4, "{frames:?}");
+        assert_eq!(frames[2], frame(1, &[6.0, 7.0, 8.0, 3.0, 4.0, 5.0]));
+        // Without the closing `@@` (a header where the next frame would be) too.
+        let joined = format!("{}{second}", MOVIE.trim_end_matches("@@\n"));
+        assert_eq!(drain(&joined).len(), 4, "{:?}", drain(&joined));
+    }
+
+    #[test]
+    fn a_recording_of_another_size_after_the_first_is_an_error_and_a_stop() {
+        let other = "ROWS 3\nCOLS 3\nASCII_DATA @@\nFrame 1\n1,1,1\n1,1,1\n1,1,1\n@@\n";
+        let joined = format!("{MOVIE}{other}");
+        let mut stream = TekscanStream::new(joined.as_bytes(), "stdin");
+        let (mut values, mut present) = (Vec::new(), Vec::new());
+        for _ in 0..2 {
+            assert!(
+                stream
+                    .next_frame(&mut values, &mut present)
+                    .unwrap()
+                    .is_some()
+            );
+        }
+        let err = stream.next_frame(&mut values, &mut present).unwrap_err();
+        let text = err.to_string();
+        assert!(
+            text.contains("line 15") && text.contains("3x3 frames where the first had 2x3"),
+            "{text}"
+        );
+        assert!(stream.stopped());
+        assert_eq!(stream.next_frame(&mut values, &mut present).unwrap(), None);
+        // Garbage after `@@` is not silence either.
+        let joined = format!("{MOVIE}this is not a header\n");
+        let frames = drain(&joined);
+        assert_eq!(frames.len(), 3, "{frames:?}");
+        let last = frames[2].clone().unwrap_err();
+        assert!(last.contains("header cannot be read"), "{last}");
     }
 }

@@ -12,7 +12,7 @@ use crate::charts::{LoadCurveData, draw_load_curve};
 use crate::format::num;
 // Re-exported here, its home before it moved to a leaf module.
 use crate::error::{ReportError, Result};
-use crate::render::{Figure, MASKED, font, render_rgb, save_gif, title_font, viridis};
+use crate::render::{Figure, MASKED, font, render_rgb, save_gif, title_font, title_width, viridis};
 pub use crate::scale::PressureScale;
 
 /// Sizes of the parts of a heat-map panel, pixels.
@@ -190,12 +190,19 @@ where
         .margin_right(4)
         .set_label_area_size(LabelAreaPosition::Right, style.y_area + 20)
         .build_cartesian_2d(0.0..1.0, 0.0..vmax)?;
+    // Round ticks, but none so close to the top that it would cover the maximum's label.
     chart
         .configure_mesh()
         .disable_mesh()
         .disable_x_axis()
         .y_labels(6)
-        .y_label_formatter(&|v| num(*v))
+        .y_label_formatter(&|v| {
+            if *v < MAX_LABEL_GAP * vmax {
+                num(*v)
+            } else {
+                String::new()
+            }
+        })
         .y_desc(unit)
         .axis_desc_style(font(style.label))
         .label_style(font(style.tick))
@@ -212,6 +219,16 @@ where
         [(0.0, 0.0), (1.0, vmax)],
         BLACK.stroke_width(1),
     )))?;
+    // The maximum, labelled at the top of the bar: the brightest colour can be read off.
+    let (x, y) = chart.backend_coord(&(1.0, vmax));
+    let (x0, y0) = bar_area.get_base_pixel();
+    let at = (x - x0, y - y0);
+    bar_area.draw(&PathElement::new(vec![at, (at.0 + 5, at.1)], BLACK))?;
+    bar_area.draw(&Text::new(
+        num(vmax),
+        (at.0 + 8, at.1 - (style.tick / 2.0) as i32),
+        font(style.tick),
+    ))?;
     if masked {
         let swatch = 16;
         legend_area.draw(&Rectangle::new(
@@ -234,6 +251,9 @@ where
     }
     Ok(())
 }
+
+/// Round colour-bar ticks above this fraction of the maximum are not labelled: the maximum's label is.
+const MAX_LABEL_GAP: f64 = 0.9;
 
 /// The largest shown value of `frames` (at least a tiny positive number).
 fn shown_max<'a>(frames: impl Iterator<Item = &'a FrameView<'a>>, scale: &PressureScale) -> f64 {
@@ -362,7 +382,9 @@ impl Figure for PressureGrid<'_> {
         let cols = self.col_names.len().max(1) as u32;
         let rows = self.row_names.len().max(1) as u32;
         (
-            (self.panel_w() * cols + Self::COLORBAR_W).max(420),
+            (self.panel_w() * cols + Self::COLORBAR_W)
+                .max(420)
+                .max(title_width(&self.title, 20.0)),
             rows * Self::PANEL_H + Self::TITLE_H,
         )
     }
@@ -587,5 +609,37 @@ mod tests {
             let path = std::path::Path::new(&dir).join("movie_frame.png");
             presrs_io::write_atomic(&path, |out| crate::render::encode_png(out, w, h, &a)).unwrap();
         }
+    }
+
+    #[test]
+    fn the_colour_bar_labels_its_maximum() {
+        let grid = Grid::new(3, 4);
+        let mut values = vec![10.0; grid.len()];
+        values[5] = 187.3;
+        let frame = presrs_core::Frame::new(grid, values).unwrap();
+        let figure = PressureFigure::new(frame.view(), PressureScale::default(), "one frame");
+        let svg = crate::render::render_svg(&figure).unwrap();
+        assert!(
+            svg.contains("\n187.3\n"),
+            "the maximum is not labelled: {svg}"
+        );
+    }
+
+    #[test]
+    fn a_grid_of_one_image_is_as_wide_as_its_title() {
+        let grid = Grid::new(44, 44);
+        let frame = presrs_core::Frame::new(grid, vec![1.0; grid.len()]).unwrap();
+        let title = "Example pressure images (the median-load sample of each label and condition)";
+        let figure = PressureGrid {
+            title: title.to_owned(),
+            row_names: vec!["wood".into()],
+            col_names: vec![String::new()],
+            cells: vec![vec![Some(frame.view())]],
+            scale: PressureScale::default(),
+            outline: None,
+        };
+        let needed = title_width(title, 20.0);
+        assert!(needed > 600, "{needed}");
+        assert!(figure.size().0 >= needed, "{} < {needed}", figure.size().0);
     }
 }

@@ -238,3 +238,14 @@ pub fn font(size: f64) -> TextStyle<'static> {
 pub fn title_font(size: f64) -> TextStyle<'static> {
     (FONT_FAMILY, size, FontStyle::Bold).into_font().into()
 }
+
+/// The width in pixels a figure needs for its title in the title font of `size` (and a margin each
+/// side), so that a long title is not clipped.
+pub fn title_width(title: &str, size: f64) -> u32 {
+    let measured = ensure_fonts()
+        .ok()
+        .and_then(|()| title_font(size).font.box_size(title).ok())
+        .map(|(w, _)| w);
+    // Without the font: about 0.6 of the size per character, a fair guess for sans-serif.
+    measured.unwrap_or((title.chars().count() as f64 * size * 0.6) as u32) + 40
+}

@@ -72,12 +72,19 @@ impl PressureScale {
     /// Axis label and factor for the total load of a frame (sum of stored values): force in newtons when
     /// the pressure unit and the sensel area are known, else the plain sum.
     pub fn load_axis(&self) -> (String, f64) {
+        match self.newtons_per_unit() {
+            Some(factor) => ("total force (N)".to_owned(), factor),
+            None => (format!("total load (sum of {})", self.unit), self.factor),
+        }
+    }
+
+    /// Newtons per stored value summed over sensels, when the pressure unit and the sensel area are
+    /// known (a frame's total load times it is the force on the sensor).
+    pub fn newtons_per_unit(&self) -> Option<f64> {
         match (self.unit.as_str(), self.row_pitch_mm, self.col_pitch_mm) {
-            ("kPa", Some(r), Some(c)) => {
-                // kPa x mm² = 1e3 N/m² x 1e-6 m² = 1e-3 N.
-                ("total force (N)".to_owned(), self.factor * r * c * 1e-3)
-            }
-            _ => (format!("total load (sum of {})", self.unit), self.factor),
+            // kPa x mm² = 1e3 N/m² x 1e-6 m² = 1e-3 N.
+            ("kPa", Some(r), Some(c)) => Some(self.factor * r * c * 1e-3),
+            _ => None,
         }
     }
 }

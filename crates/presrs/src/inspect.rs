@@ -46,6 +46,10 @@ pub struct InspectReport {
     /// Smallest and largest total load of a frame (sum of sensel values, in `units`).
     pub load_min: f64,
     pub load_max: f64,
+    /// The same as a force in newtons, when the unit is a pressure and the sensel pitch is known (what
+    /// `plot --movie` and the report draw).
+    pub force_min_n: Option<f64>,
+    pub force_max_n: Option<f64>,
     pub baseline_noise: f64,
     pub stances: Vec<StanceReport>,
     pub warnings: Vec<String>,
@@ -76,6 +80,11 @@ pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
     let grid = recording.grid();
     let dead_config = DeadSenselConfig::default();
     let dead_sensels = detect_dead_sensels(recording, &dead_config);
+    let newtons = presrs_report::PressureScale::from_meta(Some(&recording.meta)).newtons_per_unit();
+    let (load_min, load_max) = (
+        totals.iter().copied().fold(f64::INFINITY, f64::min),
+        totals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    );
     let dead_sensels_filled = !dead_sensels.is_empty()
         && options.dead_sensels.is_some()
         && correctable(recording.frame_count(), &dead_config);
@@ -95,8 +104,10 @@ pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
             .map_or(0, |mask| mask.iter().filter(|&&here| !here).count()),
         dead_sensels,
         dead_sensels_filled,
-        load_min: totals.iter().copied().fold(f64::INFINITY, f64::min),
-        load_max: totals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        load_min,
+        load_max,
+        force_min_n: newtons.map(|n| load_min * n),
+        force_max_n: newtons.map(|n| load_max * n),
         baseline_noise: segmentation.noise,
         stances,
         warnings: parsed.warnings,

@@ -504,6 +504,49 @@ fn simulate_outputs(dir: &Path) -> Option<(VelocityTable, SimConfig)> {
     ))
 }
 
+/// What the samples are, in words: single images, frames the manifest names, and stance frames of
+/// movies, each with its count (only the kinds there are).
+fn describe_samples(samples: &[Sample], options: &SampleOptions) -> String {
+    let mut per_source: BTreeMap<&Path, usize> = BTreeMap::new();
+    for s in samples {
+        *per_source.entry(s.source.as_path()).or_default() += 1;
+    }
+    let (mut single, mut named, mut stance) = (0, 0, 0);
+    let mut movies = BTreeSet::new();
+    for s in samples {
+        if s.columns.contains_key("frame") {
+            named += 1;
+        } else if s.frame_index == 0 && per_source.get(s.source.as_path()) == Some(&1) {
+            // One sample at frame 0 of its file: a single image (a movie's stance rarely starts at
+            // its first frame, and partial stances are left out unless asked for).
+            single += 1;
+        } else {
+            stance += 1;
+            movies.insert(s.source.as_path());
+        }
+    }
+    let partial = if options.include_partial {
+        "stance"
+    } else {
+        "complete stance"
+    };
+    let mut parts = Vec::new();
+    if single > 0 {
+        parts.push(format!("{single} single image(s)"));
+    }
+    if named > 0 {
+        parts.push(format!("{named} frame(s) named by the manifest"));
+    }
+    if stance > 0 {
+        parts.push(format!(
+            "{stance} {} frame(s) of each {partial} of {} movie(s)",
+            options.sample,
+            movies.len()
+        ));
+    }
+    parts.join(", ")
+}
+
 fn write_manifest_report(
     manifest_path: &Path,
     loaded: &Dataset,
@@ -539,10 +582,10 @@ fn write_manifest_report(
     let title = format!("presrs report: {}", manifest_path.display());
     let mut inputs = ReportInputs::new(title, samples);
     inputs.notes = vec![format!(
-        "{} images from {} ({} stance frame of each complete stance of a movie).",
+        "{} images from {}: {}.",
         samples.len(),
         manifest_path.display(),
-        sample_options.sample
+        describe_samples(samples, sample_options)
     )];
     inputs.sensor = meta.as_ref();
     inputs.model = model.as_ref().map(|m| m.0);

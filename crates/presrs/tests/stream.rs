@@ -16,7 +16,8 @@ use presrs::core::pipeline::{LabeledImage, TrainedModel, train};
 use presrs::core::{Frame, Grid};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
 use presrs::stream::{
-    InputFormat, ServerNotice, ServerOptions, SessionOptions, StreamServer, run_session,
+    InputFormat, ServerNotice, ServerOptions, SessionOptions, ShutdownHandle, StreamServer,
+    run_session,
 };
 use serde_json::Value;
 
@@ -243,5 +244,27 @@ fn a_session_runs_over_any_reader_and_writer() {
         "{error}"
     );
     assert_eq!(notices.into_inner().unwrap().len(), 1);
+    assert_eq!(events.last().unwrap()["event"], "end");
+}
+
+#[test]
+fn a_frame_cut_by_a_stop_is_the_end_not_an_error() {
+    // The same cut input, read after a stop (a signal ended the input mid-frame).
+    let (bytes, frames) = stream_bytes("furrows", 2);
+    let input = &bytes[..bytes.len() - 10];
+    let stop = ShutdownHandle::default();
+    stop.stop();
+    let options = SessionOptions {
+        format: InputFormat::Binary,
+        name: "memory".into(),
+        stop: Some(stop),
+        ..SessionOptions::default()
+    };
+    let mut output = Vec::new();
+    let summary = run_session(&model(), &profile(), input, &mut output, &options, &|_| {}).unwrap();
+    let events = events(&output);
+    assert_eq!(summary.stats.frames, frames as u64 - 1);
+    assert!(!summary.had_errors(), "{events:?}");
+    assert_eq!(count(&events, "error"), 0);
     assert_eq!(events.last().unwrap()["event"], "end");
 }

@@ -11,7 +11,12 @@ use super::common::{SampleArgs, TerminalProgress, write_json};
 /// Time one classification (features + PCA + classifier) and batch throughput, in this process.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Example:\n  presrs bench --json\n  presrs bench --model g2.model.json\n  presrs bench --model my.model.json --images my-data/manifest.csv   # your model on your images\n  presrs bench --export bench-inputs/   # model, images and predictions for bench/side_by_side.sh"
+    after_help = "Examples (the third times your model on your images; the fourth writes the model, \
+images and predictions for bench/side_by_side.sh):
+  presrs bench --json
+  presrs bench --model g2.model.json
+  presrs bench --model my.model.json --images my-data/manifest.csv
+  presrs bench --export bench-inputs/"
 )]
 pub struct BenchArgs {
     /// A model file; without one, the paper's setting is built on simulated 44x44 mid-stance images of

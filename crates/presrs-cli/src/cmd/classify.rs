@@ -18,7 +18,9 @@ files are still classified, and the exit code is then 1 (with --json, the docume
 `errors`).\n\nThe confidence is the posterior of the label (equal priors). Every classifier's posteriors are \
 calibrated when it is trained (a temperature fitted on held-out or leave-one-out scores), so that a confidence of 0.9 is \
 right about nine times in ten on data like the training data; `presrs eval` measures how well that holds \
-(mean confidence when right and when wrong, calibration error).\n\nExample:\n  presrs classify --model g2.model.json sim/recordings/wood_G1_000.asf foot.png --json"
+(mean confidence when right and when wrong, calibration error).\n\nExample:
+  presrs classify --model g2.model.json \\
+    sim/recordings/wood_G1_000.asf foot.png --json"
 )]
 pub struct ClassifyArgs {
     /// A model file written by `presrs train`.
@@ -60,10 +62,25 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let mut results = Vec::new();
     let mut errors = Vec::new();
     let mut fills = DeadSenselFills::default();
+    // Columns as wide as the longest file name and label: the table stays aligned with long paths.
+    let file_width = args
+        .files
+        .iter()
+        .map(|path| path.display().to_string().chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(4);
+    let label_width = model
+        .class_names()
+        .iter()
+        .map(|name| name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(5);
     if !args.json {
         writeln!(
             out,
-            "{:<40} {:>6}  {:<12} {:>10}",
+            "{:<file_width$} {:>6}  {:<label_width$} {:>10}",
             "file", "frame", "label", "confidence"
         )?;
     }
@@ -104,7 +121,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             } else {
                 writeln!(
                     out,
-                    "{:<40} {:>6}  {:<12} {:>10.4}",
+                    "{:<file_width$} {:>6}  {:<label_width$} {:>10.4}",
                     sample.file, sample.frame, sample.label, sample.confidence
                 )?;
             }

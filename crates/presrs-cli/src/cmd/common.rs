@@ -12,7 +12,7 @@ use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::SampleFrame;
-use presrs_io::ReadOptions;
+use presrs_io::{ArrayAxes, ReadOptions};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
 #[derive(Debug, Clone, clap::Args)]
@@ -96,6 +96,18 @@ pub struct SampleArgs {
     /// corrected, as one image cannot tell a dead sensel from a gap in the terrain.
     #[arg(long)]
     pub keep_dead_sensels: bool,
+    #[command(flatten)]
+    pub axes: AxesArg,
+}
+
+/// The `--axes` option of array (`.npy`) inputs.
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct AxesArg {
+    /// What the axes of a 3-D .npy array are, in the file's order: frames,rows,cols (the default) or
+    /// rows,cols,frames (time last, as some exporters write; a warning names this option when the
+    /// shape looks like it). Other files ignore it.
+    #[arg(long, value_name = "frames,rows,cols", value_parser = |t: &str| t.parse::<ArrayAxes>())]
+    pub axes: Option<ArrayAxes>,
 }
 
 impl SampleArgs {
@@ -103,9 +115,7 @@ impl SampleArgs {
         SampleOptions {
             sample: self.stance_frame,
             include_partial: self.include_partial,
-            read: ReadOptions {
-                lenient: self.lenient,
-            },
+            read: self.read_options(),
             dead_sensels: self.dead_sensels(),
             ..SampleOptions::default()
         }
@@ -131,6 +141,7 @@ impl SampleArgs {
     pub fn read_options(&self) -> ReadOptions {
         ReadOptions {
             lenient: self.lenient,
+            axes: self.axes.axes,
         }
     }
 }

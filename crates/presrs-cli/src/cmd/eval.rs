@@ -22,8 +22,10 @@ use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest, w
     after_help = "Besides accuracy and the confusion matrix it reports how far the confidences can be \
 trusted: the mean confidence when right and when wrong, and the expected calibration error over ten \
 confidence bins (0: calibrated; `calibration` in --json, the full tally under report.reliability).\n\n\
-Examples:\n  presrs eval --manifest sim/manifest.csv --train-condition G2 --per-class 20 \
---validation 7 --repeats 10\n  presrs eval --manifest walks.csv --leave-one-out subject --json"
+Examples:
+  presrs eval --manifest sim/manifest.csv --train-condition G2 \\
+    --per-class 20 --validation 7 --repeats 10
+  presrs eval --manifest walks.csv --leave-one-out subject --json"
 )]
 pub struct EvalArgs {
     /// The dataset manifest.

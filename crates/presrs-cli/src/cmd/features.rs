@@ -9,11 +9,17 @@ use presrs_core::pipeline::extract_features;
 
 use super::common::{CropArg, SampleArgs};
 
-/// Print feature vectors as CSV: a header `frame,f0,f1,...`, then one row per frame.
+/// Print feature vectors as CSV: a header `frame,` and the features' names, then one row per frame.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Examples:\n  presrs features walk.asf --frame 40 --features fft1d > f.csv\n  presrs features \
-walk.asf --features fft2d_polar+glcm > f.csv"
+    after_help = "The header names each column: fft1d_binK (|FFT| at frequency bin K), fft2d_rK_cL (2-D \
+|FFT| at row frequency bin K, column frequency bin L), fft2d_polar_ringI and fft2d_polar_wedgeJ (sums \
+over ring I and wedge J of the 2-D |FFT|), glcm_ATTRIBUTE_dD (a co-occurrence attribute at distance D, \
+averaged over the angles).
+
+Examples:
+  presrs features walk.asf --frame 40 --features fft1d > f.csv
+  presrs features walk.asf --features fft2d_polar+glcm > f.csv"
 )]
 pub struct FeaturesArgs {
     /// A recording file (TekScan ASCII, .npy, greyscale .png, text matrix).
@@ -67,6 +73,12 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     let crop = args.crop.crop.resolve(recording.grid());
     let config = FeatureConfig::combined(&args.features);
+    let image_grid = crop
+        .output_grid(recording.grid())
+        .with_context(|| format!("{name}: cannot crop"))?;
+    let names = config
+        .feature_names(image_grid)
+        .with_context(|| format!("{name}: {image_grid} images"))?;
     let mut header_written = false;
     for index in frames {
         let Some(frame) = recording.frame(index) else {
@@ -75,11 +87,7 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let features = extract_features(&frame, &crop, &config)
             .with_context(|| format!("{name}: frame {index}"))?;
         if !header_written {
-            write!(out, "frame")?;
-            for k in 0..features.len() {
-                write!(out, ",f{k}")?;
-            }
-            writeln!(out)?;
+            writeln!(out, "frame,{}", names.join(","))?;
             header_written = true;
         }
         write!(out, "{index}")?;

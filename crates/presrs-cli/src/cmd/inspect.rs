@@ -90,13 +90,26 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
             report.units
         )?;
     }
+    // The unit of every load below: the recording's unit summed over the sensels.
+    let unit = if report.units == "raw" {
+        "raw counts"
+    } else {
+        report.units.as_str()
+    };
+    let load_unit = format!("{unit} summed over sensels");
     writeln!(
         out,
-        "total load     {} .. {} (baseline noise {:.3})",
+        "total load     {} .. {} {load_unit} (baseline noise {:.3})",
         load_text(report.load_min),
         load_text(report.load_max),
         report.baseline_noise
     )?;
+    if let (Some(min), Some(max)) = (report.force_min_n, report.force_max_n) {
+        writeln!(
+            out,
+            "total force    {min:.1} .. {max:.1} N (pressure x sensel area, as plot --movie draws it)"
+        )?;
+    }
     for warning in &report.warnings {
         writeln!(out, "warning        {warning}")?;
     }
@@ -107,6 +120,7 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
         report.stances.len()
     )?;
     if !report.stances.is_empty() {
+        writeln!(out, "  (peak_load in {load_unit})")?;
         writeln!(out, "  #  start  len  peak_load  sample_frame  partial")?;
         for (i, stance) in report.stances.iter().enumerate() {
             writeln!(

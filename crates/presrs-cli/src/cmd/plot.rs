@@ -13,10 +13,10 @@ use presrs_report::{MovieOptions, PressureFigure, PressureScale, write_movie};
 /// bar, at the sensor's true aspect ratio; or, with --movie, an animation of the whole recording with its
 /// load curve.
 #[derive(Debug, clap::Args)]
-#[command(
-    after_help = "Examples:\n  presrs plot sim/recordings/wood_G2_000.asf --stance 3 --out wood.png\n  \
-presrs plot walk.asf --frame 120 --out frame.svg\n  presrs plot walk.asf --movie --out walk.gif"
-)]
+#[command(after_help = "Examples:
+  presrs plot sim/recordings/wood_G2_000.asf --stance 3 --out wood.png
+  presrs plot walk.asf --frame 120 --out frame.svg
+  presrs plot walk.asf --movie --out walk.gif")]
 pub struct PlotArgs {
     /// The recording (TekScan, .npy, PNG or text matrix).
     pub file: PathBuf,
@@ -51,11 +51,14 @@ pub struct PlotArgs {
     /// Accept a TekScan file whose last frame is truncated.
     #[arg(long)]
     pub lenient: bool,
+    #[command(flatten)]
+    pub axes: super::common::AxesArg,
 }
 
 pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let read = presrs_io::ReadOptions {
         lenient: args.lenient,
+        axes: args.axes.axes,
     };
     let parsed = read_recording_with(&args.file, &read)?;
     for warning in &parsed.warnings {

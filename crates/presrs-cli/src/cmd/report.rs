@@ -14,10 +14,9 @@ use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
 /// spectra (Fig. 6), load curves, principal components, validation curve, confusion matrix, accuracy
 /// per condition; Table I and the hopper's motion for `presrs simulate` output.
 #[derive(Debug, clap::Args)]
-#[command(
-    after_help = "Examples:\n  presrs report --manifest sim/manifest.csv --out report\n  presrs report \
---manifest walks.csv --model model.json --out report"
-)]
+#[command(after_help = "Examples:
+  presrs report --manifest sim/manifest.csv --out report
+  presrs report --manifest walks.csv --model model.json --out report")]
 pub struct ReportArgs {
     /// The dataset manifest.
     #[arg(long)]

@@ -34,8 +34,9 @@ makes its first trial, it says why and simulates afresh.
 Examples:
   presrs reproduce --out results --seed 1
   presrs reproduce --out results --seed 1 --resimulate
-  presrs simulate --out results/dataset --seed 1   # presrs reproduce --out results reuses it
-  presrs reproduce --out small --hops-per-gait 10 --per-class 8 --validation 3 --repeats 3"
+  presrs simulate --out results/dataset --seed 1   # reproduce reuses it
+  presrs reproduce --out small --hops-per-gait 10 --per-class 8 \\
+    --validation 3 --repeats 3"
 )]
 pub struct ReproduceArgs {
     /// Folder for results.json, results.md, the report and the simulated data sets (dataset/,

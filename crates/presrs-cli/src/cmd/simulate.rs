@@ -46,7 +46,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub print_config: bool,
     /// A terrain given as a greyscale height-map image, NAME=PNG (repeatable), e.g.
-    /// --terrain-image photo_grass=../shared/data/textures/grass.png. NAME must differ from the
+    /// --terrain-image photo_grass=grass.png. NAME must differ from the
     /// built-in terrains' names and from the other images'.
     #[arg(long, value_name = "NAME=PNG", value_parser = parse_terrain_image_arg)]
     pub terrain_image: Vec<TerrainImageArg>,

@@ -8,15 +8,25 @@
 //! JSON lines to stdout, or back to each client. A finite input (stdin) with any rejected frame or error
 //! exits with code 1 once it has been read to its end; the server (`--listen`) logs each connection's
 //! summary and keeps serving.
+//!
+//! SIGINT and SIGTERM end the run cleanly: on stdin the input is taken as ended (the session writes its
+//! `end` line), the server stops (each connection gets its `end` line, then a `stopped` line on stdout);
+//! a second signal ends the process at once.
 
-use std::io::Write;
+use std::io::{Read, Write};
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
+
+use anyhow::Context;
+use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::iterator::Signals;
 
 use presrs::stream::{
     ConnectionSummary, InputFormat, ProfileOverrides, ServerNotice, ServerOptions, SessionNotice,
-    SessionOptions, StreamServer, resolve_profile, run_session,
+    SessionOptions, ShutdownHandle, StreamServer, resolve_profile, run_session,
 };
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use presrs_io::model_file::load_model;
@@ -33,10 +43,13 @@ pub enum StreamFormat {
 
 /// Classify a live stream of pressure frames online.
 ///
-/// Bad frames are rejected (an error event each) and the stream goes on; reading stdin, the exit code is
+/// Bad frames are rejected (an error event each) and the stream goes on, but a stream whose first frame
+/// has a size the model cannot use stops at once (one error); reading stdin, the exit code is
 /// 1 when any frame was rejected or any error occurred (after the whole input, and the summary on
 /// stderr), 0 otherwise. Without a calibration the first frames (128) calibrate the detector: stances in
-/// them are not classified (stderr says how many frames it took).
+/// them are not classified (stderr says how many frames it took). Several TekScan files one after
+/// another on stdin are one stream when their frames have the same size. SIGINT or SIGTERM ends the run
+/// cleanly, with the final `end` line (and, with --listen, a `stopped` line).
 #[derive(Debug, clap::Args)]
 pub struct StreamArgs {
     /// Model file from `presrs train`.
@@ -122,8 +135,9 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         file.online.as_ref(),
         &args.overrides(),
     )?;
+    let signals = Signals::new([SIGINT, SIGTERM]).context("cannot handle SIGINT and SIGTERM")?;
     match args.listen {
-        None => run_stdin(args, &file.model, &profile, out),
+        None => run_stdin(args, &file.model, &profile, signals, out),
         Some(addr) => {
             let server = StreamServer::bind(addr, file.model, profile, args.server_options())?;
             let local = server.local_addr();
@@ -134,9 +148,125 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             )?;
             out.flush()?;
             stderr_line!("presrs stream: listening on {local}");
-            server.serve(&print_server_notice)?;
+            let stop = server.shutdown_handle();
+            let caught = Arc::new(Mutex::new(None));
+            let signal_thread = on_signal(signals, caught.clone(), move || stop.stop());
+            let served = server.serve(&print_server_notice)?;
+            signal_thread.close();
+            let caught = *caught.lock().unwrap_or_else(|p| p.into_inner());
+            if let Some(signal) = caught {
+                stderr_line!("presrs stream: stopped by {}", signal_name(signal));
+                let stopped = json!({
+                    "event": "stopped",
+                    "signal": signal_name(signal),
+                    "connections": served.connections,
+                    "with_errors": served.with_errors,
+                    "failed": served.failed,
+                    "refused": served.refused,
+                });
+                writeln!(out, "{stopped}")?;
+            }
             Ok(())
         }
+    }
+}
+
+/// Handles the first SIGINT or SIGTERM on a thread: notes it in `caught` and calls `stop`; a second one
+/// gets the default action (the process ends at once). The returned handle stops the thread.
+fn on_signal(
+    mut signals: Signals,
+    caught: Arc<Mutex<Option<i32>>>,
+    stop: impl FnOnce() + Send + 'static,
+) -> signal_hook::iterator::Handle {
+    let handle = signals.handle();
+    std::thread::spawn(move || {
+        let mut stop = Some(stop);
+        for signal in signals.forever() {
+            let mut first = caught.lock().unwrap_or_else(|p| p.into_inner());
+            if first.is_some() {
+                let _ = signal_hook::low_level::emulate_default_handler(signal);
+                continue;
+            }
+            *first = Some(signal);
+            drop(first);
+            if let Some(stop) = stop.take() {
+                stop();
+            }
+        }
+    });
+    handle
+}
+
+fn signal_name(signal: i32) -> &'static str {
+    match signal {
+        SIGINT => "SIGINT",
+        SIGTERM => "SIGTERM",
+        _ => "a signal",
+    }
+}
+
+/// What the stdin reader thread hands on.
+enum Chunk {
+    Data(Vec<u8>),
+    /// The end of the input, or a signal: read as the end of the input.
+    End,
+}
+
+/// Standard input read on a thread, so that a signal can end the input without waiting for a read
+/// that may never return: the session sees the end of the input and writes its `end` line.
+struct StoppableInput {
+    chunks: Receiver<Chunk>,
+    current: Vec<u8>,
+    at: usize,
+    ended: bool,
+}
+
+impl StoppableInput {
+    /// Starts the reader thread; the sender ends the input early.
+    fn start() -> (Self, SyncSender<Chunk>) {
+        let (sender, chunks) = sync_channel(16);
+        let feed = sender.clone();
+        std::thread::spawn(move || {
+            let mut stdin = std::io::stdin().lock();
+            loop {
+                let mut buf = vec![0u8; 64 * 1024];
+                match stdin.read(&mut buf) {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => {
+                        buf.truncate(n);
+                        if feed.send(Chunk::Data(buf)).is_err() {
+                            return;
+                        }
+                    }
+                }
+            }
+            let _ = feed.send(Chunk::End);
+        });
+        let input = Self {
+            chunks,
+            current: Vec::new(),
+            at: 0,
+            ended: false,
+        };
+        (input, sender)
+    }
+}
+
+impl Read for StoppableInput {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        while self.at == self.current.len() {
+            if self.ended {
+                return Ok(0);
+            }
+            match self.chunks.recv() {
+                Ok(Chunk::Data(data)) => (self.current, self.at) = (data, 0),
+                Ok(Chunk::End) | Err(_) => self.ended = true,
+            }
+        }
+        let n = buf.len().min(self.current.len() - self.at);
+        buf[..n].copy_from_slice(&self.current[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
     }
 }
 
@@ -145,16 +275,34 @@ fn run_stdin(
     args: &StreamArgs,
     model: &presrs::core::TrainedModel,
     profile: &presrs::core::online::OnlineProfile,
+    signals: Signals,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
+    let stop = ShutdownHandle::default();
     let options = SessionOptions {
         format: args.format.into(),
         name: "stdin".to_owned(),
         max_frame_bytes: args.max_frame_bytes,
+        stop: Some(stop.clone()),
     };
     let log = |notice: &SessionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
-    let summary = run_session(model, profile, std::io::stdin().lock(), out, &options, &log)?;
+    let (input, end_input) = StoppableInput::start();
+    let caught = Arc::new(Mutex::new(None));
+    let signal_thread = on_signal(signals, caught.clone(), move || {
+        // The flag first: the session must know the end it is about to read is a stop.
+        stop.stop();
+        let _ = end_input.send(Chunk::End);
+    });
+    let input = std::io::BufReader::with_capacity(64 * 1024, input);
+    let summary = run_session(model, profile, input, out, &options, &log)?;
+    signal_thread.close();
     let name = &options.name;
+    if let Some(signal) = *caught.lock().unwrap_or_else(|p| p.into_inner()) {
+        stderr_line!(
+            "presrs stream: stopped by {}: the input read so far was classified",
+            signal_name(signal)
+        );
+    }
     stderr_line!("presrs stream: {}", summary_text(name, &summary));
     if summary.fatal {
         anyhow::bail!("the input stream ended with an error (see above)");

@@ -17,9 +17,12 @@ use super::common::{PipelineArgs, SampleArgs, load_manifest};
 #[command(
     after_help = "By default the feature family and classifier are chosen automatically by validation \
 inside the training data (--features auto --classifier auto; --full-search for every family).\n\n\
-Example (the paper's method and protocol: 1-D |FFT| + Parzen window, 20 images per terrain from gait G2, \
-7 of them for choosing sigma):\n  presrs train --manifest sim/manifest.csv --out g2.model.json \
---features fft1d --classifier pwe --train-condition G2 --per-class 20 --validation 7 --seed 1"
+Examples (sim/ made by `presrs simulate --out sim`; the second is the paper's method and protocol: \
+1-D |FFT| + Parzen window, 20 images per terrain from gait G2, 7 of them for choosing sigma):
+  presrs train --manifest sim/manifest.csv --out g2.model.json
+  presrs train --manifest sim/manifest.csv --out g2.model.json \\
+    --features fft1d --classifier pwe --train-condition G2 \\
+    --per-class 20 --validation 7 --seed 1"
 )]
 pub struct TrainArgs {
     /// The dataset manifest.

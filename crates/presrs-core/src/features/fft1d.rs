@@ -63,6 +63,13 @@ impl Fft1dConfig {
     pub fn output_len(&self, grid: Grid) -> Result<usize> {
         self.resolved_len(grid).map(|len| len / 2 + 1)
     }
+
+    /// The name of each feature, in order: `fft1d_bin{k}`, the magnitude at frequency bin `k` of the
+    /// `N`-point transform (`k / N` cycles per sensel along the row-major image).
+    pub fn feature_names(&self, grid: Grid) -> Result<Vec<String>> {
+        let len = self.output_len(grid)?;
+        Ok((0..len).map(|k| format!("fft1d_bin{k}")).collect())
+    }
 }
 
 /// Computes 1-D |FFT| features of images of one grid. Holds the FFT plans and every buffer, so

@@ -127,6 +127,26 @@ impl Fft2dConfig {
         Ok((rows, cols))
     }
 
+    /// The name of each feature, in order. Half form: `fft2d_r{k}_c{l}`, the magnitude at row frequency
+    /// bin `k` and column frequency bin `l` of the `R x C` transform. Polar form: `fft2d_polar_ring{i}`
+    /// (sum over ring `i`, from the lowest frequencies out), then `fft2d_polar_wedge{j}` (sum over wedge
+    /// `j`, by direction).
+    pub fn feature_names(&self, grid: Grid) -> Result<Vec<String>> {
+        let (rows, cols) = self.resolved(grid)?;
+        Ok(match self.form {
+            // The order of `Fft2dExtractor::extract_into`.
+            Fft2dForm::Half => (0..rows)
+                .flat_map(|k| (0..cols / 2 + 1).map(move |l| (k, l)))
+                .filter(|&(k, l)| !(self_mirrored(l, cols) && k > rows / 2))
+                .map(|(k, l)| format!("fft2d_r{k}_c{l}"))
+                .collect(),
+            Fft2dForm::Polar => (0..self.radial_bins)
+                .map(|i| format!("fft2d_polar_ring{i}"))
+                .chain((0..self.angular_bins).map(|j| format!("fft2d_polar_wedge{j}")))
+                .collect(),
+        })
+    }
+
     /// Number of features for images of `grid`.
     pub fn output_len(&self, grid: Grid) -> Result<usize> {
         let (rows, cols) = self.resolved(grid)?;

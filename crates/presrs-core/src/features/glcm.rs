@@ -123,6 +123,30 @@ impl GlcmConfig {
         Ok(self.distances.len() * per_distance * GLCM_ATTRIBUTES)
     }
 
+    /// The name of each feature, in order: `glcm_{attribute}_d{distance}` (averaged over the angles) or
+    /// `glcm_{attribute}_d{distance}_a{angle}` (angle in degrees), distance-major.
+    pub fn feature_names(&self, grid: Grid) -> Result<Vec<String>> {
+        self.output_len(grid)?;
+        let mut names = Vec::new();
+        for &d in &self.distances {
+            let angles: Vec<Option<f64>> = if self.average_angles {
+                vec![None]
+            } else {
+                self.angles_deg.iter().copied().map(Some).collect()
+            };
+            for angle in angles {
+                for attribute in GLCM_ATTRIBUTE_NAMES {
+                    let attribute = attribute.to_ascii_lowercase();
+                    names.push(match angle {
+                        None => format!("glcm_{attribute}_d{d}"),
+                        Some(a) => format!("glcm_{attribute}_d{d}_a{a}"),
+                    });
+                }
+            }
+        }
+        Ok(names)
+    }
+
     /// The `(Δrow, Δcol)` offset of each (distance, angle), distance-major.
     pub fn offsets(&self) -> Vec<(isize, isize)> {
         let mut out = Vec::new();

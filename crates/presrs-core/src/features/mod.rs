@@ -169,6 +169,23 @@ impl FeatureConfig {
         }
     }
 
+    /// The name of each feature for images of `grid`, in order (each family's `feature_names`; the
+    /// parts of a combination one after another).
+    pub fn feature_names(&self, grid: Grid) -> Result<Vec<String>> {
+        match self {
+            Self::Fft1d(config) => config.feature_names(grid),
+            Self::Fft2d(config) => config.feature_names(grid),
+            Self::Glcm(config) => config.feature_names(grid),
+            Self::Combined(config) => {
+                let mut names = Vec::new();
+                for part in &config.parts {
+                    names.extend(part.feature_names(grid)?);
+                }
+                Ok(names)
+            }
+        }
+    }
+
     /// A reusable extractor for images of `grid`.
     pub fn extractor(&self, grid: Grid) -> Result<FeatureExtractor> {
         match self {
@@ -298,5 +315,63 @@ mod tests {
         );
         let default: FeatureConfig = serde_json::from_str(r#"{"kind":"fft1d"}"#).unwrap();
         assert_eq!(default, FeatureConfig::default());
+    }
+
+    #[test]
+    fn every_family_names_each_of_its_features() {
+        let grid = Grid::new(38, 41);
+        let mut combined = Vec::new();
+        for kind in FeatureKind::ALL {
+            let config = kind.default_config();
+            let names = config.feature_names(grid).unwrap();
+            assert_eq!(names.len(), config.output_len(grid).unwrap(), "{kind}");
+            let unique: std::collections::BTreeSet<&String> = names.iter().collect();
+            assert_eq!(unique.len(), names.len(), "{kind}: names repeat");
+            assert!(names.iter().all(|n| n.starts_with(kind.as_str())), "{kind}");
+            combined.extend(names);
+        }
+        assert_eq!(
+            FeatureConfig::combined(&FeatureKind::ALL)
+                .feature_names(grid)
+                .unwrap(),
+            combined
+        );
+        let fft2d = FeatureKind::Fft2d
+            .default_config()
+            .feature_names(grid)
+            .unwrap();
+        assert_eq!(&fft2d[..2], ["fft2d_r0_c0", "fft2d_r0_c1"]);
+        let polar = FeatureKind::Fft2dPolar
+            .default_config()
+            .feature_names(grid)
+            .unwrap();
+        assert_eq!(
+            (polar[0].as_str(), polar[24].as_str()),
+            ("fft2d_polar_ring0", "fft2d_polar_wedge0")
+        );
+        let glcm = FeatureKind::Glcm
+            .default_config()
+            .feature_names(grid)
+            .unwrap();
+        assert_eq!(&glcm[..2], ["glcm_contrast_d1", "glcm_dissimilarity_d1"]);
+    }
+
+    #[test]
+    fn half_spectrum_names_follow_the_extractors_order() {
+        // A single frequency (row bin 2, column bin 3) in a 8 x 8 image: its feature is the largest.
+        let grid = Grid::new(8, 8);
+        let image: Vec<f64> = (0..64)
+            .map(|i| {
+                let (r, c) = ((i / 8) as f64, (i % 8) as f64);
+                (2.0 * std::f64::consts::PI * (2.0 * r + 3.0 * c) / 8.0).cos()
+            })
+            .collect();
+        let config = FeatureKind::Fft2d.default_config();
+        let features = config.extractor(grid).unwrap().extract(&image).unwrap();
+        let names = config.feature_names(grid).unwrap();
+        let top = (0..features.len())
+            .max_by(|&a, &b| features[a].total_cmp(&features[b]))
+            .unwrap();
+        assert_eq!(names[top], "fft2d_r2_c3");
     }
 }

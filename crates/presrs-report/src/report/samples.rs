@@ -34,6 +34,9 @@ pub(super) struct Groups<'a> {
     pub(super) col_names: Vec<String>,
     /// Whether any sample names its condition.
     pub(super) has_conditions: bool,
+    /// Whether the data are the paper's experiment (simulated): only then do the headings name the
+    /// paper's figures. A report on a user's data speaks of that data.
+    pub(super) paper: bool,
 }
 
 impl<'a> Groups<'a> {
@@ -69,6 +72,7 @@ impl<'a> Groups<'a> {
             row_names,
             col_names,
             has_conditions,
+            paper: inputs.simulation.is_some(),
         })
     }
 
@@ -176,7 +180,7 @@ pub(super) fn data_section<'a>(inputs: &ReportInputs<'_>, g: &Groups<'a>) -> Sec
     if let Some(model) = inputs.model {
         let _ = write!(
             summary,
-            "<p>Model: classes {}; crop {:?} → {} image; {} principal components; Parzen σ = {}.{}</p>",
+            "<p>Model: classes {}; crop {} → {} image; {} principal components; Parzen σ = {}.{}</p>",
             esc(&model.class_names().join(", ")),
             model.crop(),
             model.image_grid(),
@@ -194,6 +198,15 @@ pub(super) fn data_section<'a>(inputs: &ReportInputs<'_>, g: &Groups<'a>) -> Sec
         intro: summary,
         figure: None,
         after: String::new(),
+    }
+}
+
+/// A heading, naming the paper's figure `figure` only for the paper's experiment.
+fn paper_figure(heading: &str, figure: &str, paper: bool) -> String {
+    if paper {
+        format!("{heading} (the paper's {figure})")
+    } else {
+        heading.to_owned()
     }
 }
 
@@ -250,7 +263,7 @@ pub(super) fn images_section<'a>(g: &Groups<'a>) -> Section<'a> {
     chosen_list.push_str("</ul></details>");
     Section {
         id: "images",
-        heading: "Pressure images per label and condition (the paper's Fig. 5)".into(),
+        heading: paper_figure("Pressure images per label and condition", "Fig. 5", g.paper),
         intro: String::new(),
         figure: Some((
             "fig5_pressure_images.png".into(),
@@ -346,7 +359,11 @@ pub(super) fn spectra_section<'a>(g: &Groups<'a>, features: &Features) -> Option
     }
     Some(Section {
         id: "spectra",
-        heading: "Feature spectra per label, conditions overlaid (the paper's Fig. 6)".into(),
+        heading: paper_figure(
+            "Feature spectra per label, conditions overlaid",
+            "Fig. 6",
+            g.paper,
+        ),
         intro: String::new(),
         figure: Some((
             "fig6_spectra.png".into(),
@@ -357,11 +374,13 @@ pub(super) fn spectra_section<'a>(g: &Groups<'a>, features: &Features) -> Option
                 y_label: format!("|F| ({} x sensels, log scale)", scale_unit_short(scale)),
                 panels,
             }),
-            "The classifier's features (the magnitude of the 1-D DFT of the cropped, row-major \
-             image), averaged over the images of each label and condition. Overlaid lines that \
-             coincide mean the terrain signature does not depend on the condition (the paper's \
-             claim); the spikes repeat at multiples of one over the row length."
-                .to_owned(),
+            format!(
+                "The classifier's features (the magnitude of the 1-D DFT of the cropped, row-major \
+                 image), averaged over the images of each label and condition. Overlaid lines that \
+                 coincide mean the terrain signature does not depend on the condition{}; the spikes \
+                 repeat at multiples of one over the row length.",
+                if g.paper { " (the paper's claim)" } else { "" }
+            ),
         )),
         after: String::new(),
     })

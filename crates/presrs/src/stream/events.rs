@@ -117,7 +117,7 @@ pub(super) fn error_line(message: &str, fatal: bool) -> String {
 /// The `end` line: the session's counters.
 pub(super) fn end_line(summary: &ConnectionSummary) -> String {
     let s = summary.stats;
-    json!({
+    let mut end = json!({
         "event": "end",
         "frames": s.frames,
         "stances": s.stances,
@@ -126,6 +126,10 @@ pub(super) fn end_line(summary: &ConnectionSummary) -> String {
         "rejected_frames": summary.rejected_frames,
         "errors": summary.errors,
         "dropped_events": summary.dropped_events,
-    })
-    .to_string()
+        "warmup_frames": summary.warmup_frames,
+    });
+    if let Some(note) = summary.note() {
+        end["note"] = note.into();
+    }
+    end.to_string()
 }

@@ -9,7 +9,8 @@
 //!
 //! A bad frame (unreadable, non-finite, or of a size the model cannot use) is rejected with an `error`
 //! event and the stream goes on; the `end` event and the [`ConnectionSummary`] count it among
-//! `rejected_frames` and `errors`.
+//! `rejected_frames` and `errors`. But when the first frame already has a size the model cannot use,
+//! the stream comes from another sensor: one fatal `error` ends it instead of one error per frame.
 //!
 //! Without a calibration (in the [`OnlineProfile`]) the detector calibrates on the stream's first frames
 //! (the warm-up, [`OnlineParams::warmup_frames`](presrs_core::online::OnlineParams)); stances in them
@@ -25,6 +26,7 @@ mod events;
 mod output;
 mod server;
 mod session;
+mod shutdown;
 mod summary;
 
 use std::path::Path;
@@ -35,10 +37,11 @@ use crate::error::{Error, Result};
 
 pub use events::event_values;
 pub use output::BoundedOutput;
-pub use server::{ServeSummary, ServerNotice, ServerOptions, ShutdownHandle, StreamServer};
+pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer};
 pub use session::{
     ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
 };
+pub use shutdown::ShutdownHandle;
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
 /// and `--gait`).

@@ -3,8 +3,8 @@
 use std::collections::HashMap;
 use std::io::{BufReader, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use presrs_core::online::OnlineProfile;
@@ -14,6 +14,7 @@ use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use super::events::error_line;
 use super::output::BoundedOutput;
 use super::session::{ConnectionSummary, SessionNotice, binary_source, run_connection};
+use super::shutdown::ShutdownHandle;
 use crate::error::{Error, Result};
 
 /// The server's limits.
@@ -88,23 +89,6 @@ pub struct ServeSummary {
     pub refused: usize,
 }
 
-/// Stops a [`StreamServer`] from another thread.
-#[derive(Clone, Debug)]
-pub struct ShutdownHandle(Arc<AtomicBool>);
-
-impl ShutdownHandle {
-    /// Asks the server to stop: it accepts no more clients, closes the open connections (their sessions
-    /// end as if the client had hung up, with an `end` line) and [`StreamServer::serve`] returns.
-    pub fn stop(&self) {
-        self.0.store(true, Ordering::SeqCst);
-    }
-
-    /// Whether [`stop`](Self::stop) was called.
-    pub fn is_stopped(&self) -> bool {
-        self.0.load(Ordering::SeqCst)
-    }
-}
-
 /// The stream server, bound and ready to [`serve`](Self::serve). The model is shared read-only by the
 /// sessions; each has its own detector and classifier.
 #[derive(Debug)]
@@ -145,7 +129,7 @@ impl StreamServer {
             model,
             profile,
             options,
-            stop: ShutdownHandle(Arc::new(AtomicBool::new(false))),
+            stop: ShutdownHandle::default(),
         })
     }
 

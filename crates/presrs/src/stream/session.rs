@@ -11,6 +11,7 @@ use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameRead
 use presrs_io::tekscan_stream::TekscanStream;
 
 use super::events::{end_line, error_line, event_lines};
+use super::shutdown::ShutdownHandle;
 pub use super::summary::ConnectionSummary;
 use crate::error::Result;
 
@@ -32,6 +33,10 @@ pub struct SessionOptions {
     pub name: String,
     /// Largest binary frame payload accepted, bytes (checked before it is read).
     pub max_frame_bytes: usize,
+    /// Set when the session is being stopped (a signal): the input then ends where it was cut, and a
+    /// frame cut short by the stop is dropped, not an error. Whoever stops it must also end the input
+    /// (the reader returns end of file).
+    pub stop: Option<ShutdownHandle>,
 }
 
 impl Default for SessionOptions {
@@ -40,6 +45,7 @@ impl Default for SessionOptions {
             format: InputFormat::Tekscan,
             name: "stdin".to_owned(),
             max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES,
+            stop: None,
         }
     }
 }
@@ -62,8 +68,9 @@ pub enum SessionNotice {
 pub const MAX_ERROR_NOTICES: u64 = 10;
 
 /// Runs one session: frames from `input` as `options` say, through the causal classifier, every JSON
-/// line written (and flushed) to `output` at once. A line that cannot be written is dropped and counted
-/// (a closed stdout is the reader's business). Returns when the input ends or cannot go on.
+/// line written (and flushed) to `output` at once. A line that cannot be written is dropped and counted;
+/// a closed output (a broken pipe) ends the session as the end of the input would. Returns when the
+/// input ends or cannot go on.
 pub fn run_session<R: BufRead>(
     model: &TrainedModel,
     profile: &OnlineProfile,
@@ -72,26 +79,37 @@ pub fn run_session<R: BufRead>(
     options: &SessionOptions,
     notify: &dyn Fn(&SessionNotice),
 ) -> Result<ConnectionSummary> {
+    // A closed output (`presrs stream | head`): nobody reads the decisions any more, so the session
+    // ends as if the input had (a live input may never end by itself).
+    let closed = std::cell::Cell::new(false);
     let mut emit = |line: String| -> bool {
-        writeln!(output, "{line}")
-            .and_then(|()| output.flush())
-            .is_ok()
+        let written = writeln!(output, "{line}").and_then(|()| output.flush());
+        if let Err(err) = &written {
+            closed.set(closed.get() || err.kind() == std::io::ErrorKind::BrokenPipe);
+        }
+        written.is_ok()
+    };
+    // After a stop, what is left of the input is not judged: the end of a cut frame is the end.
+    let until_stopped = |input: Input| match (&options.stop, input) {
+        _ if closed.get() => Input::End,
+        (Some(stop), Input::Skipped(_) | Input::Fatal(_)) if stop.is_stopped() => Input::End,
+        (_, input) => input,
     };
     match options.format {
-        InputFormat::Tekscan => run_connection(
-            model,
-            profile,
-            tekscan_source(input, &options.name),
-            &mut emit,
-            notify,
-        ),
-        InputFormat::Binary => run_connection(
-            model,
-            profile,
-            binary_source(input, &options.name, options.max_frame_bytes),
-            &mut emit,
-            notify,
-        ),
+        InputFormat::Tekscan => {
+            let mut source = tekscan_source(input, &options.name);
+            let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
+                until_stopped(source(values, present))
+            };
+            run_connection(model, profile, next, &mut emit, notify)
+        }
+        InputFormat::Binary => {
+            let mut source = binary_source(input, &options.name, options.max_frame_bytes);
+            let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
+                until_stopped(source(values, present))
+            };
+            run_connection(model, profile, next, &mut emit, notify)
+        }
     }
 }
 
@@ -141,7 +159,10 @@ impl Connection<'_, '_> {
         self.emit(error_line(message, fatal));
     }
 
-    /// Classifies one frame (input frame `index`, as it came), emitting its events or its error.
+    /// Classifies one frame (input frame `index`, as it came), emitting its events or its error. False
+    /// when the session cannot go on: the first frame has a size the model cannot use. A stream's frames
+    /// come from one sensor, so every later one would be rejected too: one fatal error instead of one
+    /// per frame. A later frame of another size (a glitch) is rejected alone.
     fn frame(
         &mut self,
         index: u64,
@@ -149,9 +170,19 @@ impl Connection<'_, '_> {
         frame: (&[f64], Option<&[bool]>),
         arrival: Instant,
         timestamp_us: Option<u64>,
-    ) {
+    ) -> bool {
         let frames_before = self.classifier.stats().frames;
         let pushed = match unusable_for_model(self.model, grid) {
+            Some(why) if frames_before == 0 => {
+                self.summary.rejected_frames += 1;
+                self.summary.fatal = true;
+                let message = format!(
+                    "input frame {index} rejected: {why}; the stream stops (its frames come from a \
+                     sensor this model was not trained on)"
+                );
+                self.error(&message, true);
+                return false;
+            }
             Some(why) => Err(why),
             None => match FrameView::new(grid, frame.0, frame.1)
                 .and_then(|view| self.classifier.push(&view))
@@ -175,7 +206,7 @@ impl Connection<'_, '_> {
             },
         };
         let message = match pushed {
-            Ok(()) => return,
+            Ok(()) => return true,
             // Not taken: the classifier's frame count did not move.
             Err(err) if self.classifier.stats().frames == frames_before => {
                 self.summary.rejected_frames += 1;
@@ -187,6 +218,7 @@ impl Connection<'_, '_> {
             }
         };
         self.error(&message, false);
+        true
     }
 }
 
@@ -228,8 +260,11 @@ pub(super) fn run_connection(
                 arrival,
             } => {
                 let mask = has_mask.then_some(present.as_slice());
-                conn.frame(received, grid, (&values, mask), arrival, timestamp_us);
+                let go_on = conn.frame(received, grid, (&values, mask), arrival, timestamp_us);
                 received += 1;
+                if !go_on {
+                    break;
+                }
                 if warming_up && !conn.classifier.segmenter().warming_up() {
                     warming_up = false;
                     conn.summary.warmup_frames = conn.classifier.stats().frames;
@@ -267,6 +302,7 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
     let frames = conn.summary.stats.frames;
     if warming_up && frames > 0 {
         conn.summary.warmup_frames = frames;
+        conn.summary.warmup_unfinished = true;
         (conn.notify)(&SessionNotice::WarmupUnfinished { frames });
     }
     let end = end_line(&conn.summary);
@@ -331,7 +367,7 @@ fn tekscan_source<R: BufRead>(
             }
         }
         Ok(None) => Input::End,
-        Err(err) if stream.header().is_none() => Input::Fatal(err.to_string()),
+        Err(err) if stream.header().is_none() || stream.stopped() => Input::Fatal(err.to_string()),
         Err(err) => {
             failures += 1;
             if failures > 1000 {

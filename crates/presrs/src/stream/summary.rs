@@ -19,9 +19,24 @@ pub struct ConnectionSummary {
     /// Frames the warm-up calibration used (0 with a calibration given); stances in them were not
     /// classified.
     pub warmup_frames: u64,
+    /// The input ended during the warm-up calibration: no stance was classified.
+    pub warmup_unfinished: bool,
 }
 
 impl ConnectionSummary {
+    /// Why the session made no decision, when that is not the input's fault: the input ended during
+    /// the warm-up calibration. The `end` line carries it to the client as `note`.
+    pub fn note(&self) -> Option<String> {
+        self.warmup_unfinished.then(|| {
+            format!(
+                "the stream ended during the warm-up calibration ({} frames): no stance was \
+                 classified; a calibration (presrs stream --calibrate MANIFEST or --profile, or a \
+                 model trained with --online-profile) classifies from the first frame",
+                self.warmup_frames
+            )
+        })
+    }
+
     /// Whether anything went wrong in the session (a rejected frame or an error).
     pub fn had_errors(&self) -> bool {
         self.errors > 0 || self.rejected_frames > 0 || self.fatal
