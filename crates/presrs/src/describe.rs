@@ -4,6 +4,7 @@
 
 use std::fmt::Write;
 
+use presrs_core::TrainedModel;
 use presrs_io::model_file::ModelFile;
 
 /// A description of `file`, one fact a line.
@@ -21,18 +22,7 @@ pub fn describe_model(file: &ModelFile) -> String {
         model.class_names().len(),
         model.class_names().join(", ")
     ));
-    line(format!(
-        "crop {} -> {} image, preprocessing {}, {} features ({}), PCA {} components{}",
-        model.crop(),
-        model.image_grid(),
-        model.preprocess(),
-        model.pca().n_features(),
-        model.features().name(),
-        model.pca().n_components(),
-        model
-            .sigma()
-            .map_or_else(String::new, |s| format!(", sigma {s:.4}"))
-    ));
+    line(pipeline_summary(model));
     if let Some(selection) = model.selection()
         && let Some(chosen) = selection.chosen()
     {
@@ -77,4 +67,21 @@ pub fn describe_model(file: &ModelFile) -> String {
     }
     line(origin);
     text
+}
+
+/// The image path of `model` in one line: crop, image size, preprocessing, features, PCA (and the
+/// Parzen window's sigma).
+pub fn pipeline_summary(model: &TrainedModel) -> String {
+    format!(
+        "crop {} -> {} image, preprocessing {}, {} features ({}), PCA {} components{}",
+        model.crop(),
+        model.image_grid(),
+        model.preprocess(),
+        model.pca().n_features(),
+        model.features().name(),
+        model.pca().n_components(),
+        model
+            .sigma()
+            .map_or_else(String::new, |s| format!(", sigma {s:.4}"))
+    )
 }

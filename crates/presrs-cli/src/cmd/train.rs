@@ -116,19 +116,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         model.class_names().len(),
         model.class_names().join(", ")
     )?;
-    writeln!(
-        out,
-        "crop {} -> {} image, preprocessing {}, {} features ({}), PCA {} components{}",
-        model.crop(),
-        model.image_grid(),
-        model.preprocess(),
-        model.pca().n_features(),
-        model.features().name(),
-        model.pca().n_components(),
-        model
-            .sigma()
-            .map_or_else(String::new, |s| format!(", sigma {s:.4}"))
-    )?;
+    writeln!(out, "{}", presrs::describe::pipeline_summary(model))?;
     if let Some(profile) = &file.online {
         let table: Vec<String> = profile
             .gait_table
