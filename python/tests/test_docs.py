@@ -29,7 +29,7 @@ def test_the_readmes_python_quick_start(tmp_path):
             [sys.executable, "-c", block], cwd=work, capture_output=True, text=True, check=False
         )
         assert done.returncode == 0, done.stderr
-    assert (work / "model.json").exists()
+    assert (work / "model.json").exists() and (work / "walk.npy").exists()
 
 
 def test_the_packages_readme_example(tmp_path):
