@@ -1,6 +1,6 @@
 """Type stubs of presrs's native module (the Rust extension behind `import presrs`)."""
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from os import PathLike
 from pathlib import Path
 from typing import Any, Literal, Optional, Union
@@ -160,6 +160,7 @@ def evaluate(
     dims: Optional[int] = None,
     crop: str = "auto",
     full_search: bool = False,
+    progress: Union[bool, Callable[[str, int, Optional[int]], Any], None] = None,
 ) -> Evaluation: ...
 def simulate(
     *,

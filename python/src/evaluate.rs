@@ -6,12 +6,13 @@ use std::path::PathBuf;
 use numpy::{PyArray1, PyArrayMethods};
 use presrs::core::evaluation::EvalReport;
 use presrs::evaluate::{CalibrationJson, EvalOptions, EvalSetup, Holdout};
-use presrs::{Dataset, Quiet, SampleOptions};
+use presrs::{Dataset, Progress, Quiet, SampleOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
 use crate::errors::{IntoPyResult, data_error};
 use crate::model::{dataset_of, method, validation_size, warn};
+use crate::progress::PyProgress;
 use crate::threads::detached;
 
 /// What an evaluation measured.
@@ -120,11 +121,13 @@ impl Evaluation {
 /// By default a model is trained on a random draw and tested on every other image (the paper's
 /// protocol), `repeats` times. `leave_one_out="group"` (or `"condition"`, or a manifest column) holds
 /// out each value in turn; `train_condition` trains on one condition only. The method options are
-/// `Model.train`'s.
+/// `Model.train`'s. `progress=True` writes a line to `sys.stderr` every few seconds; a callable is
+/// called with `(task, done, total)` instead.
 #[pyfunction]
 #[pyo3(signature = (data, labels = None, *, groups = None, conditions = None, leave_one_out = None,
     train_condition = None, per_class = None, validation = 0.35, repeats = 10, seed = 1,
-    features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false))]
+    features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false,
+    progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     py: Python<'_>,
@@ -143,7 +146,13 @@ pub fn evaluate(
     dims: Option<usize>,
     crop: &str,
     full_search: bool,
+    progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Evaluation> {
+    let reporter = PyProgress::from_arg(progress)?;
+    let progress: &dyn Progress = match &reporter {
+        Some(reporter) => reporter,
+        None => &Quiet,
+    };
     if repeats == 0 {
         return Err(data_error("repeats=0: give at least one repeat"));
     }
@@ -164,13 +173,13 @@ pub fn evaluate(
         seed,
         method: method(features, classifier, crop, dims, full_search)?,
     };
-    let dataset = load(py, data, labels, groups, conditions)?;
+    let dataset = load(py, data, labels, groups, conditions, progress)?;
     for warning in &dataset.warnings {
         warn(py, warning)?;
     }
     let setup = EvalSetup::new(&dataset, &options).py_err()?;
     let mut warnings = setup.warnings.clone();
-    let outcome = detached(py, || setup.evaluate(&Quiet))?.py_err()?;
+    let outcome = detached(py, || setup.evaluate(progress))?.py_err()?;
     warnings.extend(outcome.warnings);
     for warning in &warnings {
         warn(py, warning)?;
@@ -188,6 +197,7 @@ fn load(
     labels: Option<&Bound<'_, PyAny>>,
     groups: Option<&Bound<'_, PyAny>>,
     conditions: Option<&Bound<'_, PyAny>>,
+    progress: &dyn Progress,
 ) -> PyResult<Dataset> {
     let is_path = data.is_instance_of::<PyString>() || data.hasattr("__fspath__")?;
     if is_path {
@@ -198,7 +208,7 @@ fn load(
         }
         let path: PathBuf = data.extract()?;
         return detached(py, || {
-            Dataset::load(&path, &SampleOptions::default(), &Quiet)
+            Dataset::load(&path, &SampleOptions::default(), progress)
         })?
         .py_err();
     }

@@ -8,6 +8,7 @@ mod evaluate;
 mod json;
 mod model;
 mod online;
+mod progress;
 mod recording;
 mod simulate;
 mod threads;

@@ -62,3 +62,20 @@ def test_simulate_is_seeded_and_labelled():
     assert len(stances) >= 2
     with pytest.raises(presrs.DataError, match="moon"):
         presrs.simulate(terrains=["moon"], hops=1)
+
+
+def test_evaluate_reports_progress(sim_images, capsys):
+    images, labels, gaits = sim_images
+    seen = []
+    presrs.evaluate(
+        images, labels, conditions=gaits, train_condition="G2", per_class=3, repeats=2,
+        features="fft1d", classifier="pwe", progress=lambda task, done, total: seen.append((task, done, total)),
+    )
+    assert seen, "no progress was reported"
+    task, done, total = seen[-1]
+    assert total is not None and done == total
+    presrs.evaluate(
+        images, labels, conditions=gaits, train_condition="G2", per_class=3, repeats=1,
+        features="fft1d", classifier="pwe", progress=True,
+    )
+    assert "presrs: " in capsys.readouterr().err
