@@ -43,7 +43,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::offline::{Segmentation, Stance, ValidSegmentParams, segment};
+use super::modes::segment;
+use super::offline::{Segmentation, Stance, ValidSegmentParams};
 use super::robust::{MAD_TO_SIGMA, median};
 use crate::error::{CoreError, Result};
 
