@@ -8,7 +8,8 @@
 //!   "loaded" and the whole recording is one stance. The [`BaselineMode::Floor`] mode measures each
 //!   contact from the *local floor* instead: the load's prominent peaks and valleys are found by
 //!   hysteresis (a peak counts once the load has risen by the on level above the valley before it and
-//!   fallen by it again), the floor is the line through the valleys on either side of a peak, and the
+//!   fallen by it again), the floor is the valley before a peak on its rising side and the valley after
+//!   it on its falling side, and the
 //!   contact is the run of frames around the peak above that floor by more than the off level.
 //! - **A trial cut to one contact** (loaded from its first frame to its last, no swing in the file):
 //!   there is no unloaded frame to measure a baseline on. [`BaselineMode::Contact`] makes the whole
@@ -16,13 +17,13 @@
 //!   baseline is 0 (pressure readings are not negative), or the lowest reading if that is negative.
 //!
 //! [`BaselineMode::Auto`] (the default) decides from the data, in this order:
-//! 1. *one contact* when the drifting baseline finds no complete stance while the load stays above
+//! 1. *the floor* when a stance of the drifting baseline holds at least [`PRELOAD_PEAKS`] prominent
+//!    peaks whose valleys stay loaded (a foot's contact has at most two, heel and toe), or is longer
+//!    than [`SegmentParams::max_stance_frames`](super::SegmentParams::max_stance_frames);
+//! 2. *one contact* when the drifting baseline finds no complete stance while the load stays above
 //!    [`CONTACT_FRACTION`] of its range on every frame but a few at the ends (at most
 //!    [`CONTACT_END_FRACTION`] of the frames at each end, and at least [`MIN_CONTACT_FRAMES`] frames
 //!    loaded);
-//! 2. *the floor* when a stance of the drifting baseline holds at least [`PRELOAD_PEAKS`] prominent
-//!    peaks whose valleys stay loaded (a foot's contact has at most two, heel and toe), or is longer
-//!    than [`SegmentParams::max_stance_frames`](super::SegmentParams::max_stance_frames);
 //! 3. the drifting baseline otherwise (the paper's hopper, walking, the simulator: unchanged).
 
 use super::offline::{
@@ -69,6 +70,25 @@ pub fn segment_recording(
 
 fn segment_auto(total_load: &[f64], params: &ValidSegmentParams) -> Segmentation {
     let drifting = segment_drifting(total_load, params);
+    // Presses on a preload first: such a recording is loaded throughout too, but holds many contacts.
+    if let Some(reason) = preload(total_load, &drifting, params) {
+        return Segmentation {
+            mode_reason: Some(reason),
+            ..segment_floor_from(total_load, &drifting, params)
+        };
+    }
+    // A recording the drifting baseline found nothing in (it climbed onto the preload): the same test
+    // over the whole recording, measured from zero.
+    let whole = from_zero(total_load, &drifting, params);
+    if drifting.complete().next().is_none()
+        && one_contact(total_load).is_some()
+        && let Some(reason) = preload(total_load, &whole, params)
+    {
+        return Segmentation {
+            mode_reason: Some(reason),
+            ..segment_floor_from(total_load, &whole, params)
+        };
+    }
     if drifting.complete().next().is_none()
         && let Some(reason) = one_contact(total_load)
     {
@@ -77,13 +97,27 @@ fn segment_auto(total_load: &[f64], params: &ValidSegmentParams) -> Segmentation
             ..segment_contact(total_load)
         };
     }
-    if let Some(reason) = preload(total_load, &drifting, params) {
-        return Segmentation {
-            mode_reason: Some(reason),
-            ..segment_floor_from(total_load, &drifting, params)
-        };
-    }
     drifting
+}
+
+/// The whole recording as one stance measured from zero (or the lowest reading if negative), with
+/// levels from the load range alone: when no frame is unloaded, the drifting baseline's noise estimate
+/// measured loaded frames and means nothing.
+fn from_zero(
+    total_load: &[f64],
+    drifting: &Segmentation,
+    params: &ValidSegmentParams,
+) -> Segmentation {
+    let p = params.params();
+    let contact = segment_contact(total_load);
+    let range = contact.load_range;
+    Segmentation {
+        stances: contact.stances.clone(),
+        on_level: p.on_fraction * range,
+        off_level: p.off_fraction * range,
+        mode: drifting.mode,
+        ..contact
+    }
 }
 
 /// Why `total_load` is one contact, or `None` if it is not (see the module docs).
@@ -98,7 +132,8 @@ fn one_contact(total_load: &[f64]) -> Option<String> {
     let level = lowest + CONTACT_FRACTION * range;
     let first = total_load.iter().position(|&v| v > level)?;
     let last = total_load.iter().rposition(|&v| v > level)?;
-    let ends = (CONTACT_END_FRACTION * n as f64).floor() as usize;
+    // At least one frame at each end: the foot arriving and leaving.
+    let ends = ((CONTACT_END_FRACTION * n as f64).floor() as usize).max(1);
     let unbroken = total_load[first..=last].iter().all(|&v| v > level);
     let loaded = last + 1 - first;
     (unbroken && first <= ends && n - 1 - last <= ends && loaded >= MIN_CONTACT_FRAMES).then(|| {
@@ -244,16 +279,16 @@ fn segment_floor_from(
         Vec::new()
     };
     for (i, peak) in peaks.iter().enumerate() {
-        // The floor under this peak: the line through its valleys, never below the unloaded level.
+        // The floor under this peak: the valley before it on its rising side, the valley after it on its
+        // falling side (never below the unloaded level). A step, not a line through the valleys: a first
+        // press onto a preload starts from zero and ends on the preload, and a line between the two
+        // would leave its tail above the floor until the next press.
         let (a, b) = (peak.valley_before, peak.valley_after);
-        // Beyond the valleys (before the first, after the last) the floor stays at the valley's level.
         let level = |t: usize| {
-            let (ya, yb) = (above[a].max(0.0), above[b].max(0.0));
-            let t = t.clamp(a, b);
-            if b == a {
-                ya
+            if t <= peak.peak {
+                above[a].max(0.0)
             } else {
-                ya + (yb - ya) * (t - a) as f64 / (b - a) as f64
+                above[b].max(0.0)
             }
         };
         // Frames between this peak's valleys belong to it; the valley frames themselves are shared.
