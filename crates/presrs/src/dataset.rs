@@ -187,8 +187,14 @@ impl Dataset {
         progress.finish();
         let loaded = loaded?;
         if loaded.samples.is_empty() {
+            // The summary of the files that gave none says why (it is the last warning).
+            let why = loaded
+                .warnings
+                .last()
+                .filter(|w| w.contains("gave no sample"))
+                .map_or_else(String::new, |w| format!(": {w}"));
             return Err(Error::data(format!(
-                "{}: the manifest gives no samples",
+                "{}: the manifest gives no samples{why}",
                 manifest.source.display()
             )));
         }
@@ -425,14 +431,16 @@ impl EmptyFiles {
         }
         let most = |why: NoSample| self.files.iter().filter(|(_, w)| *w == why).count() * 2 > count;
         let hint = if most(NoSample::OneContact) {
-            "they are one contact each (loaded from the first frame to the last): try              --one-sample-per-file"
+            "they are one contact each (loaded from the first frame to the last): try \
+             --one-sample-per-file"
                 .to_owned()
         } else if most(NoSample::OnlyPartial) && !options.include_partial() {
             "their stances are cut by the start or end of the recording: try --include-partial"
                 .to_owned()
         } else {
             format!(
-                "no stance was found in them (baseline mode {}): see `presrs inspect FILE`, or give                  a `frame` column to use one frame anyway",
+                "no stance was found in them (baseline mode {}): see `presrs inspect FILE`, or give \
+                 a `frame` column to use one frame anyway",
                 options.segment.params().baseline
             )
         };

@@ -77,18 +77,6 @@ fn segment_auto(total_load: &[f64], params: &ValidSegmentParams) -> Segmentation
             ..segment_floor_from(total_load, &drifting, params)
         };
     }
-    // A recording the drifting baseline found nothing in (it climbed onto the preload): the same test
-    // over the whole recording, measured from zero.
-    let whole = from_zero(total_load, &drifting, params);
-    if drifting.complete().next().is_none()
-        && one_contact(total_load).is_some()
-        && let Some(reason) = preload(total_load, &whole, params)
-    {
-        return Segmentation {
-            mode_reason: Some(reason),
-            ..segment_floor_from(total_load, &whole, params)
-        };
-    }
     if drifting.complete().next().is_none()
         && let Some(reason) = one_contact(total_load)
     {
@@ -98,26 +86,6 @@ fn segment_auto(total_load: &[f64], params: &ValidSegmentParams) -> Segmentation
         };
     }
     drifting
-}
-
-/// The whole recording as one stance measured from zero (or the lowest reading if negative), with
-/// levels from the load range alone: when no frame is unloaded, the drifting baseline's noise estimate
-/// measured loaded frames and means nothing.
-fn from_zero(
-    total_load: &[f64],
-    drifting: &Segmentation,
-    params: &ValidSegmentParams,
-) -> Segmentation {
-    let p = params.params();
-    let contact = segment_contact(total_load);
-    let range = contact.load_range;
-    Segmentation {
-        stances: contact.stances.clone(),
-        on_level: p.on_fraction * range,
-        off_level: p.off_fraction * range,
-        mode: drifting.mode,
-        ..contact
-    }
 }
 
 /// Why `total_load` is one contact, or `None` if it is not (see the module docs).
