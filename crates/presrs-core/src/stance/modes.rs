@@ -6,20 +6,39 @@
 //! - **A standing preload with presses or steps on top** (a foot that never leaves the sensor): the load
 //!   between presses stays far above the unloaded level, so every frame after the first contact is
 //!   "loaded" and the whole recording is one stance. The [`BaselineMode::Floor`] mode measures each
-//!   contact from the *local floor* instead: the load's prominent peaks and valleys are found by
-//!   hysteresis (a peak counts once the load has risen by the on level above the valley before it and
-//!   fallen by it again), the floor is the valley before a peak on its rising side and the valley after
-//!   it on its falling side, and the
-//!   contact is the run of frames around the peak above that floor by more than the off level.
+//!   contact from the *local floor* instead:
+//!   1. the load's prominent peaks are found by hysteresis (a peak counts once the load has risen by
+//!      the on fraction of its range above the valley before it and fallen by it again);
+//!   2. in each valley (before the first peak, between two, after the last) the *rest* is the flat
+//!      stretch at its bottom: a line is fitted to the valley's frames within the off level of it,
+//!      refitted until the set is stable (so a preload that drifts is followed), and the rest is the
+//!      run of frames around the lowest one within the off level of that line (excursions shorter
+//!      than a stance that stay below the on level are noise, as in the drifting mode);
+//!   3. the noise is measured on the rests (their residuals to their lines), which sets the on and off
+//!      levels as in the drifting mode; a peak that does not rise the on level above the rests on both
+//!      sides is dropped, and the rests are found again;
+//!   4. a contact runs from the frame after the rest before its peak to the frame before the rest after
+//!      it; two contacts separated by a rest of at most `max_gap_frames` frames are one (a dropout). A
+//!      recording that starts or ends inside a contact (its first or last "rest" higher than the next
+//!      by the on level) gives a partial contact.
+//!
+//!   The floor (the segmentation's `baseline`) is each rest's line on its frames, and under a contact
+//!   the level of the rest before it on its rising side and of the rest after it on its falling side
+//!   (a first press onto a preload starts from zero and ends on the preload).
 //! - **A trial cut to one contact** (loaded from its first frame to its last, no swing in the file):
 //!   there is no unloaded frame to measure a baseline on. [`BaselineMode::Contact`] makes the whole
 //!   recording one stance, partial at both ends (its touchdown and lift-off are not in the file); the
 //!   baseline is 0 (pressure readings are not negative), or the lowest reading if that is negative.
 //!
 //! [`BaselineMode::Auto`] (the default) decides from the data, in this order:
-//! 1. *the floor* when a stance of the drifting baseline holds at least [`PRELOAD_PEAKS`] prominent
-//!    peaks whose valleys stay loaded (a foot's contact has at most two, heel and toe), or is longer
-//!    than [`SegmentParams::max_stance_frames`](super::SegmentParams::max_stance_frames);
+//! 1. *the floor* when the floor's contacts show presses on a preload (see `preload`): a stance of the
+//!    drifting baseline holds at least [`PRELOAD_PEAKS`] of them (a foot's contact splits into at
+//!    most two, heel and toe) or is longer than
+//!    [`SegmentParams::max_stance_frames`](super::SegmentParams::max_stance_frames); or the floor finds
+//!    at least [`PRELOAD_PEAKS`] complete contacts and the drifting baseline none; or
+//!    [`PRELOAD_PEAKS`] contacts in a row never unload between them (their rests above the lowest by
+//!    the off level) and the drifting baseline misses one of them by more than a frame (it took the
+//!    preload for its baseline in some windows);
 //! 2. *one contact* when the drifting baseline finds no complete stance while the load stays above
 //!    [`CONTACT_FRACTION`] of its range on every frame but a few at the ends (at most
 //!    [`CONTACT_END_FRACTION`] of the frames at each end, and at least [`MIN_CONTACT_FRAMES`] frames
@@ -29,6 +48,7 @@
 use super::offline::{
     BaselineMode, Segmentation, Stance, ValidSegmentParams, check_finite, segment_drifting,
 };
+use super::robust::median;
 use crate::error::Result;
 use crate::recording::Recording;
 
@@ -41,8 +61,8 @@ pub const CONTACT_FRACTION: f64 = 0.05;
 pub const CONTACT_END_FRACTION: f64 = 0.1;
 /// Fewest loaded frames of a one-contact recording.
 pub const MIN_CONTACT_FRAMES: usize = 3;
-/// A stance of the drifting baseline holding this many prominent peaks over loaded valleys is presses
-/// on a preload.
+/// This many contacts of the floor without an unloaded frame between them are presses on a preload (a
+/// walking foot's contact has at most two peaks, heel and toe).
 pub const PRELOAD_PEAKS: usize = 3;
 
 /// Finds the stance phases in a series of total loads (one value per frame), measured from what
@@ -71,10 +91,11 @@ pub fn segment_recording(
 fn segment_auto(total_load: &[f64], params: &ValidSegmentParams) -> Segmentation {
     let drifting = segment_drifting(total_load, params);
     // Presses on a preload first: such a recording is loaded throughout too, but holds many contacts.
-    if let Some(reason) = preload(total_load, &drifting, params) {
+    let floor = segment_floor_from(total_load, &drifting, params);
+    if let Some(reason) = preload(&drifting, &floor, params) {
         return Segmentation {
             mode_reason: Some(reason),
-            ..segment_floor_from(total_load, &drifting, params)
+            ..floor
         };
     }
     if drifting.complete().next().is_none()
@@ -113,14 +134,19 @@ fn one_contact(total_load: &[f64]) -> Option<String> {
     })
 }
 
-/// Why the drifting segmentation's stances look like presses on a preload, or `None`.
+/// Why the recording looks like presses on a preload, or `None`: a stance of the drifting baseline is
+/// longer than the longest allowed, or holds at least [`PRELOAD_PEAKS`] of the floor's contacts (a
+/// foot's contact splits into at most two, heel and toe), or the floor finds at least
+/// [`PRELOAD_PEAKS`] complete contacts and the drifting baseline finds none, or the rests between them
+/// stay loaded [`PRELOAD_PEAKS`] contacts in a row and the drifting baseline misses one of them by more
+/// than a frame.
 fn preload(
-    total_load: &[f64],
     drifting: &Segmentation,
+    floor: &Segmentation,
     params: &ValidSegmentParams,
 ) -> Option<String> {
     let max_len = params.params().max_stance_frames;
-    drifting.stances.iter().find_map(|stance| {
+    let merged = drifting.stances.iter().find_map(|stance| {
         if let Some(max) = max_len
             && stance.len > max
         {
@@ -130,27 +156,60 @@ fn preload(
                 stance.len, stance.start
             ));
         }
-        let above: Vec<f64> = (stance.start..stance.end())
-            .map(|t| total_load[t] - drifting.baseline[t])
-            .collect();
-        let peaks = zigzag_peaks(&above, drifting.on_level);
-        let loaded_valleys = peaks
-            .windows(2)
-            .filter(|pair| {
-                let valley = above[pair[0].peak..pair[1].peak]
-                    .iter()
-                    .copied()
-                    .fold(f64::INFINITY, f64::min);
-                valley > drifting.off_level
-            })
+        let inside = floor
+            .stances
+            .iter()
+            .filter(|press| press.start + 1 >= stance.start && press.end() <= stance.end() + 1)
             .count();
-        (loaded_valleys + 1 >= PRELOAD_PEAKS).then(|| {
+        (inside >= PRELOAD_PEAKS).then(|| {
             format!(
-                "the stance at frames {}..{} holds {} presses that never unload (the load between \
-                 them stays above the off level): contacts measured from the local floor",
+                "the stance at frames {}..{} holds {inside} presses that never unload (the load \
+                 between them stays above the off level): contacts measured from the local floor",
                 stance.start,
                 stance.end(),
-                loaded_valleys + 1
+            )
+        })
+    });
+    let complete = floor.complete().count();
+    if merged.is_some() || complete < PRELOAD_PEAKS {
+        return merged;
+    }
+    if drifting.complete().next().is_none() {
+        return Some(format!(
+            "no complete stance above the drifting baseline, but {complete} presses rise above a \
+             floor that never unloads: contacts measured from the local floor"
+        ));
+    }
+    // The load rests on a preload between the floor's contacts (above the lowest rest by more than the
+    // off level), and the drifting baseline puts a contact's edges elsewhere: it has taken the preload
+    // for its baseline in some windows, and a noise mixed from the unloaded and preloaded frames.
+    let lowest = floor.baseline.iter().copied().fold(f64::INFINITY, f64::min);
+    // The longest chain of contacts with loaded rests between them: a walking foot's heel and toe
+    // make two, with an unloaded swing before the next pair.
+    let (mut loaded_rests, mut chain) = (0, 0);
+    for pair in floor.stances.windows(2) {
+        chain = if floor.baseline[pair[0].end()] - lowest > floor.off_level {
+            chain + 1
+        } else {
+            0
+        };
+        loaded_rests = loaded_rests.max(chain);
+    }
+    if loaded_rests + 1 < PRELOAD_PEAKS {
+        return None;
+    }
+    floor.complete().find_map(|press| {
+        let matched = drifting.stances.iter().any(|stance| {
+            stance.start.abs_diff(press.start) <= 1 && stance.end().abs_diff(press.end()) <= 1
+        });
+        (!matched).then(|| {
+            format!(
+                "{} presses in a row never unload between them, and the drifting \
+                 baseline does not find the press at frames {}..{}: contacts measured from the \
+                 local floor",
+                loaded_rests + 1,
+                press.start,
+                press.end()
             )
         })
     })
@@ -223,9 +282,191 @@ fn segment_floor(total_load: &[f64], params: &ValidSegmentParams) -> Segmentatio
     segment_floor_from(total_load, &drifting, params)
 }
 
-/// Contacts as prominent rises above the local floor (see the module docs). The unloaded level, its
-/// noise and the load range (hence the on and off levels) are those of the drifting segmentation; the
-/// returned baseline is the floor.
+/// The flat stretch of load at the bottom of one valley between prominent peaks (or before the first
+/// peak, or after the last): frames `first..=last`, whose load stays within the off level of the line
+/// `level + slope x (t - centre)` fitted to them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Rest {
+    first: usize,
+    last: usize,
+    level: f64,
+    slope: f64,
+    centre: f64,
+}
+
+impl Rest {
+    fn at(&self, t: usize) -> f64 {
+        self.level + self.slope * (t as f64 - self.centre)
+    }
+
+    fn len(&self) -> usize {
+        self.last + 1 - self.first
+    }
+}
+
+/// Fewest frames a rest's floor is fitted as a line through (a constant, their median, for fewer). The line
+/// is only ever read within one frame of the frames it was fitted to.
+const MIN_LINE_FRAMES: usize = 3;
+/// Fewest rest frames the noise is measured on (else the drifting segmentation's is kept).
+const MIN_NOISE_FRAMES: usize = 12;
+
+/// The least-squares line through `(t, values[t])` for `t` in `frames` as `(level, slope, centre)`; a
+/// constant (the median) for fewer than [`MIN_LINE_FRAMES`] frames.
+fn fit_floor(values: &[f64], frames: &[usize]) -> (f64, f64, f64) {
+    if frames.len() < MIN_LINE_FRAMES {
+        let mut loads: Vec<f64> = frames.iter().map(|&t| values[t]).collect();
+        let centre = frames.iter().sum::<usize>() as f64 / frames.len().max(1) as f64;
+        return (median(&mut loads), 0.0, centre);
+    }
+    let count = frames.len() as f64;
+    let centre = frames.iter().map(|&t| t as f64).sum::<f64>() / count;
+    let mean = frames.iter().map(|&t| values[t]).sum::<f64>() / count;
+    let (sxy, sxx) = frames.iter().fold((0.0, 0.0), |(sxy, sxx), &t| {
+        let dt = t as f64 - centre;
+        (sxy + dt * (values[t] - mean), sxx + dt * dt)
+    });
+    (mean, if sxx > 0.0 { sxy / sxx } else { 0.0 }, centre)
+}
+
+/// The rest in `values[region]` (a non-empty range of frames between peaks): a line (or constant) is
+/// fitted to the frames within `2 off` of the lowest one (a drifting rest spans more than `off`), then, until the set stops changing, to the frames
+/// of the valley within `off` of that line (a set, not a run: a line fitted to the low frames of a
+/// drifting rest is tilted, and a run cut where it leaves the off level would keep the tilt); the rest is
+/// the run of frames around the lowest one within `off` of the last line, across excursions of fewer
+/// than `bridge` frames that stay below `on`.
+fn find_rest(
+    values: &[f64],
+    region: std::ops::Range<usize>,
+    (on, off): (f64, f64),
+    bridge: usize,
+) -> Rest {
+    let lowest = region.clone().fold(region.start, |best, t| {
+        if values[t] < values[best] { t } else { best }
+    });
+    let mut frames: Vec<usize> = region
+        .clone()
+        .filter(|&t| values[t] <= values[lowest] + 2.0 * off)
+        .collect();
+    let mut rest = Rest {
+        first: lowest,
+        last: lowest,
+        level: values[lowest],
+        slope: 0.0,
+        centre: lowest as f64,
+    };
+    for _ in 0..MAX_REST_ROUNDS {
+        let (level, slope, centre) = fit_floor(values, &frames);
+        rest = Rest {
+            level,
+            slope,
+            centre,
+            ..rest
+        };
+        let next: Vec<usize> = region
+            .clone()
+            .filter(|&t| (values[t] - rest.at(t)).abs() <= off || t == lowest)
+            .collect();
+        if next == frames {
+            break;
+        }
+        frames = next;
+    }
+    let line = rest;
+    let near = |t: usize| values[t] - line.at(t) <= off;
+    // An excursion above the off level of fewer than `bridge` frames that stays below the on level and
+    // comes back is noise, as in the drifting mode (it would be too short to be a stance).
+    let noise_only = |frames: &mut dyn Iterator<Item = usize>| {
+        let mut excursion = 0;
+        for t in frames {
+            if near(t) {
+                return Some(t);
+            }
+            excursion += 1;
+            if excursion >= bridge || values[t] - line.at(t) > on {
+                return None;
+            }
+        }
+        None
+    };
+    while rest.first > region.start
+        && let Some(t) = noise_only(&mut (region.start..rest.first).rev())
+    {
+        rest.first = t;
+    }
+    while rest.last + 1 < region.end
+        && let Some(t) = noise_only(&mut (rest.last + 1..region.end))
+    {
+        rest.last = t;
+    }
+    rest
+}
+
+/// Rounds of [`find_rest`]'s fit (it converges in a few).
+const MAX_REST_ROUNDS: usize = 8;
+
+/// The noise of the load on the rests: the larger of 1.4826 x the MAD of the residuals to their floor
+/// lines and the RMS of the residuals below their median (a rest is cut above, at the off level, never
+/// below, so its lower side is the whole noise); `None` for fewer than [`MIN_NOISE_FRAMES`] frames.
+fn rest_noise(values: &[f64], rests: &[Option<Rest>]) -> Option<f64> {
+    // Each residual scaled up for the degrees of freedom its rest's fit took (a line through 3 frames
+    // leaves a third of their spread).
+    let residuals: Vec<f64> = rests
+        .iter()
+        .flatten()
+        .flat_map(|rest| {
+            let fitted = if rest.len() >= MIN_LINE_FRAMES { 2 } else { 1 };
+            let scale =
+                (rest.len() as f64 / (rest.len().saturating_sub(fitted)).max(1) as f64).sqrt();
+            (rest.first..=rest.last)
+                .filter(move |_| rest.len() > fitted)
+                .map(move |t| scale * (values[t] - rest.at(t)))
+        })
+        .collect();
+    if residuals.len() < MIN_NOISE_FRAMES {
+        return None;
+    }
+    let (centre, sigma) = super::robust::median_and_sigma(&mut residuals.clone());
+    let (sum, count) = residuals
+        .iter()
+        .filter(|&&r| r < centre)
+        .fold((0.0, 0usize), |(sum, count), &r| {
+            (sum + (centre - r).powi(2), count + 1)
+        });
+    let lower = if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64).sqrt()
+    };
+    Some(sigma.max(lower))
+}
+
+/// The valleys around `peaks` (before the first, between each two, after the last; each possibly
+/// empty) and the rest in each non-empty one ([`find_rest`]).
+#[allow(clippy::type_complexity)]
+fn rests_between(
+    values: &[f64],
+    peaks: &[usize],
+    levels: (f64, f64),
+    bridge: usize,
+) -> (Vec<std::ops::Range<usize>>, Vec<Option<Rest>>) {
+    let regions: Vec<std::ops::Range<usize>> = (0..=peaks.len())
+        .map(|k| {
+            let start = if k == 0 { 0 } else { peaks[k - 1] + 1 };
+            let end = peaks.get(k).copied().unwrap_or(values.len());
+            start..end
+        })
+        .collect();
+    let rests = regions
+        .iter()
+        .map(|region| {
+            (!region.is_empty()).then(|| find_rest(values, region.clone(), levels, bridge))
+        })
+        .collect();
+    (regions, rests)
+}
+
+/// Contacts as prominent rises above the local floor (see the module docs). The noise starts from the
+/// drifting segmentation's and is then measured on the rests; the returned baseline is the floor.
 fn segment_floor_from(
     total_load: &[f64],
     drifting: &Segmentation,
@@ -233,83 +474,162 @@ fn segment_floor_from(
 ) -> Segmentation {
     let p = params.params();
     let n = total_load.len();
-    let above: Vec<f64> = total_load
-        .iter()
-        .zip(&drifting.baseline)
-        .map(|(load, base)| load - base)
-        .collect();
-    let (on, off) = (drifting.on_level, drifting.off_level);
-    let mut floor = vec![0.0; n];
-    let mut stances = Vec::new();
-    let peaks = if drifting.load_range > 0.0 {
-        zigzag_peaks(&above, on)
-    } else {
-        Vec::new()
+    let lowest = total_load.iter().copied().fold(f64::INFINITY, f64::min);
+    let range = total_load.iter().copied().fold(lowest, f64::max) - lowest;
+    let mut noise = drifting.noise;
+    let levels = |noise: f64| {
+        (
+            (p.on_noise * noise).max(p.on_fraction * range),
+            (p.off_noise * noise).max(p.off_fraction * range),
+        )
     };
-    for (i, peak) in peaks.iter().enumerate() {
-        // The floor under this peak: the valley before it on its rising side, the valley after it on its
-        // falling side (never below the unloaded level). A step, not a line through the valleys: a first
-        // press onto a preload starts from zero and ends on the preload, and a line between the two
-        // would leave its tail above the floor until the next press.
-        let (a, b) = (peak.valley_before, peak.valley_after);
-        let level = |t: usize| {
-            if t <= peak.peak {
-                above[a].max(0.0)
-            } else {
-                above[b].max(0.0)
-            }
-        };
-        // Frames between this peak's valleys belong to it; the valley frames themselves are shared.
-        let lo = if i == 0 { 0 } else { a };
-        let hi = if i + 1 == peaks.len() { n } else { b + 1 };
-        for (t, slot) in floor.iter_mut().enumerate().take(hi).skip(lo) {
-            *slot = level(t);
-        }
-        if above[peak.peak] - level(peak.peak) <= on {
-            continue;
-        }
-        let loaded = |t: usize| above[t] - level(t) > off;
-        let (mut start, mut end) = (peak.peak, peak.peak + 1);
-        // Grow the contact around the peak across dropouts of at most max_gap frames, within its valleys.
-        while let Some(next) = (1..=p.max_gap_frames + 1)
-            .filter_map(|step| start.checked_sub(step))
-            .filter(|&t| t >= lo)
-            .find(|&t| loaded(t))
-        {
-            start = next;
-        }
-        while let Some(next) = (end..(end + p.max_gap_frames + 1).min(hi)).find(|&t| loaded(t)) {
-            end = next + 1;
-        }
-        let len = end - start;
-        if len < p.min_stance_frames {
-            continue;
-        }
-        let peak_frame = (start..end).fold(start, |best, t| {
-            if total_load[t] > total_load[best] {
-                t
-            } else {
-                best
-            }
-        });
-        stances.push(Stance {
-            start,
-            len,
-            peak_load: total_load[peak_frame],
-            peak_frame,
-            partial: start == 0 || end == n,
-        });
-    }
-    Segmentation {
-        stances,
-        baseline: floor
-            .iter()
-            .zip(&drifting.baseline)
-            .map(|(f, base)| f + base)
-            .collect(),
+    let empty = Segmentation {
+        stances: Vec::new(),
         mode: BaselineMode::Floor,
         mode_reason: None,
         ..drifting.clone()
+    };
+    if n == 0 || range <= 0.0 {
+        return empty;
+    }
+    // The prominent peaks from the load range alone (the drifting segmentation's noise may be inflated
+    // by a preload it took for its baseline), the rests between them, the noise measured on the rests;
+    // then the peaks that do not rise the on level above the rests on both sides are dropped and the
+    // rests found again.
+    let mut peaks: Vec<usize> = zigzag_peaks(total_load, p.on_fraction * range)
+        .iter()
+        .map(|peak| peak.peak)
+        .collect();
+    let (_, mut rests) = rests_between(
+        total_load,
+        &peaks,
+        (p.on_fraction * range, p.off_fraction * range),
+        p.min_stance_frames,
+    );
+    // Twice: the first rests are cut at an off level from the range alone, which may be below the
+    // noise.
+    for _ in 0..2 {
+        if let Some(sigma) = rest_noise(total_load, &rests) {
+            noise = sigma;
+        }
+        rests = rests_between(total_load, &peaks, levels(noise), p.min_stance_frames).1;
+    }
+    let (on, off) = levels(noise);
+    peaks = peaks
+        .iter()
+        .enumerate()
+        .filter(|&(k, &peak)| {
+            let floors = [
+                rests[k].map(|r| r.at(r.last)),
+                rests[k + 1].map(|r| r.at(r.first)),
+            ];
+            floors
+                .iter()
+                .flatten()
+                .all(|&floor| total_load[peak] - floor > on)
+        })
+        .map(|(_, &peak)| peak)
+        .collect();
+    if peaks.is_empty() {
+        return empty;
+    }
+    let (regions, mut rests) = rests_between(total_load, &peaks, (on, off), p.min_stance_frames);
+    let (on, off) = levels(noise);
+    // A recording that starts (ends) rising into (falling from) a contact has no rest before (after)
+    // it: its first (last) "rest" is then higher than the next (previous) one by more than the on
+    // level, and that one's floor is used instead.
+    let last = rests.len() - 1;
+    if rests.len() >= 3 {
+        for (edge, inner, at_edge) in [(0, 1, true), (last, last - 1, false)] {
+            if let (Some(e), Some(i)) = (rests[edge], rests[inner]) {
+                let (edge_level, inner_level) = if at_edge {
+                    (e.at(e.last), i.at(i.first))
+                } else {
+                    (e.at(e.first), i.at(i.last))
+                };
+                if edge_level > inner_level + on {
+                    rests[edge] = None;
+                }
+            }
+        }
+    }
+    let mut floor = vec![0.0; n];
+    // Each press: from the frame after the rest before it to the frame before the rest after it.
+    let mut spans: Vec<(usize, usize)> = Vec::new();
+    // A recording that starts falling from a contact: no peak of its own, the frames before the first
+    // rest rise above it by the on level.
+    if let Some(rest) = rests[0]
+        && rest.first > 0
+        && (0..rest.first).any(|t| total_load[t] - rest.at(rest.first) > on)
+    {
+        spans.push((0, rest.first));
+        for slot in floor.iter_mut().take(rest.first) {
+            *slot = rest.at(rest.first);
+        }
+    }
+    for (k, &peak) in peaks.iter().enumerate() {
+        let before = rests[k];
+        let after = rests[k + 1];
+        let start = before.map_or(regions[k].start, |r| r.last + 1);
+        let end = after.map_or(regions[k + 1].end, |r| r.first);
+        let rising = before
+            .map(|r| r.at(r.last))
+            .or(after.map(|r| r.at(r.first)))
+            .unwrap_or(lowest);
+        let falling = after
+            .map(|r| r.at(r.first))
+            .or(before.map(|r| r.at(r.last)))
+            .unwrap_or(lowest);
+        for (t, slot) in floor.iter_mut().enumerate().take(end).skip(start) {
+            *slot = if t <= peak { rising } else { falling };
+        }
+        // A rest no longer than max_gap_frames is a dropout inside one contact.
+        match (spans.last_mut(), before) {
+            (Some(span), Some(rest)) if rest.len() <= p.max_gap_frames && span.1 == rest.first => {
+                span.1 = end;
+            }
+            _ => spans.push((start, end)),
+        }
+    }
+    for rest in rests.iter().flatten() {
+        for (t, slot) in floor
+            .iter_mut()
+            .enumerate()
+            .take(rest.last + 1)
+            .skip(rest.first)
+        {
+            *slot = rest.at(t);
+        }
+    }
+    let stances = spans
+        .into_iter()
+        .filter(|&(start, end)| end - start >= p.min_stance_frames)
+        .map(|(start, end)| {
+            let peak_frame = (start..end).fold(start, |best, t| {
+                if total_load[t] > total_load[best] {
+                    t
+                } else {
+                    best
+                }
+            });
+            Stance {
+                start,
+                len: end - start,
+                peak_load: total_load[peak_frame],
+                peak_frame,
+                partial: start == 0 || end == n,
+            }
+        })
+        .collect();
+    Segmentation {
+        stances,
+        baseline: floor,
+        noise,
+        load_range: range,
+        on_level: on,
+        off_level: off,
+        mode: BaselineMode::Floor,
+        mode_reason: None,
     }
 }
 
