@@ -176,20 +176,19 @@ pub fn split_images<'s>(
     (images(&split.train), images(&split.validation))
 }
 
-/// The online profile (detector calibration and sample frame) learned by segmenting, offline, every
-/// movie a manifest lists.
-pub fn learn_online_profile(manifest: &Path) -> Result<OnlineProfile> {
+/// The online profile (detector settings, calibration and sample frame) learned by segmenting, offline
+/// with `params` (those of training: the profile keeps them), every movie a manifest lists.
+pub fn learn_online_profile(manifest: &Path, params: &ValidSegmentParams) -> Result<OnlineProfile> {
     let manifest = presrs_io::manifest::read_manifest(manifest)?;
     let mut paths: Vec<&Path> = manifest.rows.iter().map(|row| row.path.as_path()).collect();
     paths.sort();
     paths.dedup();
-    let params = ValidSegmentParams::default();
     let mut segmentations = Vec::new();
     for path in paths {
         let recording = presrs_io::read_recording(path)?;
         if recording.frame_count() > 1 {
-            segmentations.push(segment(&recording.total_per_frame(), &params)?);
+            segmentations.push(segment(&recording.total_per_frame(), params)?);
         }
     }
-    Ok(OnlineProfile::learn(&segmentations))
+    Ok(OnlineProfile::learn_with(&segmentations, params))
 }
