@@ -206,6 +206,56 @@ impl Dataset {
         })
     }
 
+    /// Why a draw of `need` samples per class cannot be made, when that is the cause: every class of
+    /// the manifest's rows (of `condition`, if given) with fewer than `need` samples, with its count,
+    /// then why files gave no sample and the option to try (the data set's one-line summary), e.g.
+    /// `too few samples per class: "grass" has 1, "gravel" 0 (at least 3 needed); 599 of 600 files
+    /// gave no sample: ... ; they are one contact each: try --one-sample-per-file`. `None` when every
+    /// class has enough.
+    pub fn too_few_samples(&self, condition: Option<&str>, need: usize) -> Option<String> {
+        let mut classes: Vec<&str> = self
+            .manifest
+            .rows
+            .iter()
+            .filter(|row| condition.is_none() || row.condition.as_deref() == condition)
+            .filter_map(|row| row.label.as_deref())
+            .collect();
+        classes.sort_unstable();
+        classes.dedup();
+        let labels: Vec<&str> = self
+            .samples
+            .iter()
+            .filter(|sample| condition.is_none() || sample.condition.as_deref() == condition)
+            .filter_map(|sample| sample.label.as_deref())
+            .collect();
+        let short = presrs_core::split::classes_short_of(&labels, &classes, need);
+        if short.is_empty() {
+            return None;
+        }
+        let counts: Vec<String> = short
+            .iter()
+            .enumerate()
+            .map(|(i, (class, count))| {
+                if i == 0 {
+                    format!("{class:?} has {count}")
+                } else {
+                    format!("{class:?} {count}")
+                }
+            })
+            .collect();
+        let why = self
+            .warnings
+            .iter()
+            .rev()
+            .find(|w| w.contains("gave no sample"))
+            .map_or_else(String::new, |w| format!("; {w}"));
+        Some(format!(
+            "too few samples per class: {} (at least {need} needed, {} samples in all){why}",
+            counts.join(", "),
+            labels.len()
+        ))
+    }
+
     /// The manifest file.
     pub fn path(&self) -> &Path {
         &self.manifest.source
