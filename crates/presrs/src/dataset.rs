@@ -250,9 +250,10 @@ impl Dataset {
             .find(|w| w.contains("gave no sample"))
             .map_or_else(String::new, |w| format!("; {w}"));
         Some(format!(
-            "too few samples per class: {} (at least {need} needed, {} samples in all){why}",
+            "too few samples per class: {} (at least {need} needed, {} sample{} in all){why}",
             counts.join(", "),
-            labels.len()
+            labels.len(),
+            if labels.len() == 1 { "" } else { "s" }
         ))
     }
 

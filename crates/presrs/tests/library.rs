@@ -158,7 +158,7 @@ fn too_few_samples_of_a_class_is_named_before_the_validation_set() {
     assert!(
         message.contains(
             "cannot train: too few samples per class: \"fast\" has 0, \"normal\" 0, \"slow\" 1 \
-             (at least 3 needed, 1 samples in all); 5 of 6 files gave no sample: "
+             (at least 3 needed, 1 sample in all); 5 of 6 files gave no sample: "
         ),
         "{message}"
     );
