@@ -696,3 +696,45 @@ proptest! {
         }
     }
 }
+
+/// Walking with a heel and a toe peak per stance, on a swing baseline that drifts (up or down, up to
+/// half a count per frame, 0.05% of the stance load) under noise: the floor splits each stance at its heel-toe valley,
+/// and a drifting swing level rises above the recording's lowest, but the valleys do not chain (the foot
+/// unloads in every swing): the automatic choice stays with the drifting baseline and finds the stances.
+#[test]
+fn walking_with_heel_and_toe_on_a_drifting_baseline_stays_drifting() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for trial in 0..40 {
+        let mut truth = Vec::new();
+        let mut t = rng.random_range(5..15);
+        while t < 400 {
+            let len = rng.random_range(20..=28);
+            truth.push((t, len));
+            t += len + rng.random_range(10..=16);
+        }
+        let n = t;
+        // Up to half a count per frame: 6% of the stance load per baseline window.
+        let drift = rng.random_range(-0.5..0.5) * n as f64;
+        let sigma = rng.random_range(0.0..8.0);
+        let mut series: Vec<f64> = (0..n)
+            .map(|f| 200.0 + drift * f as f64 / n as f64 + sigma * gaussian(&mut rng))
+            .collect();
+        for &(start, len) in &truth {
+            let dip = rng.random_range(0.3..0.7);
+            for i in 0..len {
+                let x = (i as f64 + 0.5) / len as f64;
+                // Heel and toe humps with a valley between them (dip x the peak at mid-stance).
+                let shape = (PI * x).sin() * (1.0 - (1.0 - dip) * (PI * x).sin().powi(8));
+                series[start + i] += 1000.0 * shape;
+            }
+        }
+        let found = run(&series);
+        assert_eq!(
+            found.mode,
+            BaselineMode::Drifting,
+            "trial {trial}: {:?}",
+            found.mode_reason
+        );
+        assert_recovered(&found, &truth, 1);
+    }
+}

@@ -35,10 +35,14 @@
 //!    drifting baseline holds at least [`PRELOAD_PEAKS`] of them (a foot's contact splits into at
 //!    most two, heel and toe) or is longer than
 //!    [`SegmentParams::max_stance_frames`](super::SegmentParams::max_stance_frames); or the floor finds
-//!    at least [`PRELOAD_PEAKS`] complete contacts and the drifting baseline none; or
-//!    [`PRELOAD_PEAKS`] contacts in a row never unload between them (their rests above the lowest by
-//!    the off level) and the drifting baseline misses one of them by more than a frame (it took the
-//!    preload for its baseline in some windows);
+//!    at least [`PRELOAD_PEAKS`] complete contacts and the drifting baseline none; or the drifting
+//!    baseline found a rest between two contacts loaded (two or more of its frames in one of its
+//!    stances) and the next rest, at the same level within the on level, unloaded (it took a preload
+//!    for unloaded in some windows: a walking foot's heel-toe valley is far above the swing beside it);
+//!    or [`PRELOAD_PEAKS`] contacts in a row never unload between them (each rest above the drifting
+//!    baseline by the off level, or in one of its stances) and the drifting baseline misses one of them
+//!    by more than a frame. A rest above the recording's lowest load alone is not loaded: a swing level
+//!    that drifts is;
 //! 2. *one contact* when the drifting baseline finds no complete stance while the load stays above
 //!    [`CONTACT_FRACTION`] of its range on every frame but a few at the ends (at most
 //!    [`CONTACT_END_FRACTION`] of the frames at each end, and at least [`MIN_CONTACT_FRAMES`] frames
@@ -187,8 +191,53 @@ fn preload(
     // The longest chain of contacts with loaded rests between them: a walking foot's heel and toe
     // make two, with an unloaded swing before the next pair.
     let (mut loaded_rests, mut chain) = (0, 0);
+    // A rest is loaded when it is above the drifting baseline by the floor's off level, or lies in a
+    // stance of the drifting baseline (which found it loaded), or, when the drifting baseline mixed two
+    // levels (its off level more than twice the floor's), above the lowest rest. Not above the lowest
+    // rest alone: a swing level that drifts is above it too.
+    let mixed = drifting.off_level > 2.0 * floor.off_level;
+    // The middle frame of the rest between two of the floor's contacts.
+    let rest_frame = |pair: &[Stance]| (pair[0].end() + pair[1].start) / 2;
+    let in_stance = |t: usize| drifting.stances.iter().any(|stance| stance.contains(t));
+    // A rest the drifting baseline found loaded (in one of its stances) next to one it found unloaded at
+    // the same level (within the on level): it took the preload for unloaded there, not here. A walking
+    // foot's heel-toe valley is far above the swing level beside it.
+    // A rest counts as loaded for the drifting baseline when more than one of its frames lies in one of
+    // its stances (a boundary a frame off is not a disagreement).
+    let rests: Vec<(usize, bool)> = floor
+        .stances
+        .windows(2)
+        .map(|pair| {
+            let loaded = (pair[0].end()..pair[1].start)
+                .filter(|&t| in_stance(t))
+                .count()
+                > 1;
+            (rest_frame(pair), loaded)
+        })
+        .collect();
+    let contradiction = rests.windows(2).find_map(|pair| {
+        let ((a, a_loaded), (b, b_loaded)) = (pair[0], pair[1]);
+        let (inside, outside) = match (a_loaded, b_loaded) {
+            (true, false) => (a, b),
+            (false, true) => (b, a),
+            _ => return None,
+        };
+        let (level, beside) = (floor.baseline[inside], floor.baseline[outside]);
+        (level - lowest > floor.off_level && (level - beside).abs() < floor.on_level).then(|| {
+            format!(
+                "the load between presses rests at the same level at frames {inside} and \
+                 {outside}, loaded for the drifting baseline at one and unloaded at the other (a \
+                 preload): contacts measured from the local floor"
+            )
+        })
+    });
+    if contradiction.is_some() {
+        return contradiction;
+    }
     for pair in floor.stances.windows(2) {
-        chain = if floor.baseline[pair[0].end()] - lowest > floor.off_level {
+        let t = rest_frame(pair);
+        let above = |level: f64| floor.baseline[t] - level > floor.off_level;
+        chain = if above(drifting.baseline[t]) || in_stance(t) || mixed && above(lowest) {
             chain + 1
         } else {
             0
