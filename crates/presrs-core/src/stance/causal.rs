@@ -33,7 +33,7 @@
 //!   ([`CausalSegmenter::finish`]) is partial if it reached the last frame, as offline. A stream that
 //!   ends during the warm-up is segmented offline at `finish` and its stances reported then (a
 //!   recording that is one contact, loaded whole, gives its one partial stance, as offline).
-//! * **One sample per file** ([`BaselineMode::Contact`](super::BaselineMode::Contact)): the stream is one
+//! * **One sample per file** ([`BaselineMode::Contact`]): the stream is one
 //!   contact from frame 0 to its end, partial at both ends as offline but sampled: frame `k` is decided
 //!   as it arrives, the lift-off comes at `finish`. No warm-up, no fusion.
 //! * **Not done online:** the floor mode (presses on a preload). The causal detector measures from the

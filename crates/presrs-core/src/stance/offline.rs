@@ -55,7 +55,7 @@ const MIN_START_FRAMES: usize = 10;
 /// A block needs this many unloaded frames to get its own baseline correction (else the global one).
 const MIN_QUIET_PER_BLOCK: usize = 3;
 
-/// Settings of [`segment`], as written by a user (unchecked). Turn them into [`ValidSegmentParams`] with
+/// Settings of [`segment`](super::segment()), as written by a user (unchecked). Turn them into [`ValidSegmentParams`] with
 /// [`SegmentParams::check`] once; the segmentation functions only accept the checked type.
 ///
 /// The defaults work for both the paper's hopper (100 Hz, ~14-frame stances, ~20-frame flights) and
@@ -379,7 +379,7 @@ pub fn sample_frames(stance: &Stance, sample: SampleFrame) -> Result<Vec<usize>>
     }
 }
 
-/// The result of [`segment`].
+/// The result of [`segment`](super::segment()).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Segmentation {
     /// Every stance found, in time order, partial ones included (flagged).
