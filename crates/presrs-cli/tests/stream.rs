@@ -766,3 +766,85 @@ fn a_closed_stdout_ends_a_live_stream() {
     assert_eq!(status.code(), Some(0), "{log}");
     assert!(!log.contains("error:"), "{log}");
 }
+
+/// The stance settings of training (`--stance-threshold`, `--stance-hysteresis`) are stored in the
+/// model's online profile, and `stream` segments with them: its stances are those of the offline
+/// segmentation with the same settings, not with the defaults.
+#[test]
+fn a_model_trained_with_stance_options_streams_with_them() {
+    let (dir, _) = fixture();
+    let model = dir.join("model-stance-options.json");
+    run_ok(&[
+        "train",
+        "--manifest",
+        dir.join("manifest.csv").to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+        "--per-class",
+        "8",
+        "--validation",
+        "4",
+        "--dims",
+        "10",
+        "--online-profile",
+        "--stance-threshold",
+        "0.5",
+        "--stance-hysteresis",
+        "0.3",
+    ]);
+    let file: Value = serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let stored = &file["online"]["segment"];
+    assert_eq!(stored["on_fraction"], 0.5, "{stored}");
+    assert_eq!(stored["off_fraction"], 0.3, "{stored}");
+    assert_eq!(stored["baseline"], "auto", "{stored}");
+
+    let path = recording("grass");
+    let out = presrs()
+        .args(["stream", "--model", model.to_str().unwrap()])
+        .stdin(std::fs::File::open(&path).unwrap())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let events = json_lines(&String::from_utf8(out.stdout).unwrap());
+    let online: Vec<(u64, u64)> = events
+        .iter()
+        .filter(|e| e["event"] == "liftoff" && e["partial"] != true)
+        .map(|e| {
+            let start = e["touchdown_frame"].as_u64().unwrap();
+            (start, e["len"].as_u64().unwrap_or(0))
+        })
+        .collect();
+    let rec = presrs_io::read_recording(&path).unwrap();
+    let offline = |params: &presrs_core::stance::SegmentParams| -> Vec<(u64, u64)> {
+        presrs_core::stance::segment(&rec.total_per_frame(), &params.check().unwrap())
+            .unwrap()
+            .complete()
+            .map(|s| (s.start as u64, s.len as u64))
+            .collect()
+    };
+    let trained = offline(&presrs_core::stance::SegmentParams {
+        on_fraction: 0.5,
+        off_fraction: 0.3,
+        ..Default::default()
+    });
+    let default = offline(&Default::default());
+    assert!(trained.len() >= 10);
+    assert_ne!(
+        trained[1..],
+        default[1..],
+        "the options must change the stances"
+    );
+    assert_eq!(online.len(), trained.len(), "{online:?} vs {trained:?}");
+    // From the second stance on: before the first, the online load range is the calibration's prior
+    // (half the trained range), so the first touchdown may come a frame or two early.
+    for (&(start, len), &(want_start, want_len)) in online.iter().zip(&trained).skip(1) {
+        assert!(
+            start.abs_diff(want_start) <= 1 && (start + len).abs_diff(want_start + want_len) <= 1,
+            "online {online:?} vs offline with the trained options {trained:?}"
+        );
+    }
+}

@@ -40,6 +40,10 @@ pub use crate::stance::causal::{
 #[serde(default)]
 pub struct OnlineProfile {
     pub params: OnlineParams,
+    /// The stance detector's settings (baseline mode, levels, lengths, gaps) the model was trained
+    /// with: the online detector segments with them. Profiles written before they were stored load
+    /// with the defaults.
+    pub segment: ValidSegmentParams,
     /// Median stance length of the data `params.sample_offset` was learned from, frames.
     pub typical_stance_frames: Option<usize>,
     pub calibration: Option<Calibration>,
@@ -48,9 +52,15 @@ pub struct OnlineProfile {
 }
 
 impl OnlineProfile {
-    /// A profile learned from offline segmentations of training recordings: calibration (medians) and `k`
-    /// from the median length of their complete stances.
+    /// A profile learned from offline segmentations (with the default settings) of training recordings:
+    /// calibration (medians) and `k` from the median length of their complete stances.
     pub fn learn(segmentations: &[Segmentation]) -> Self {
+        Self::learn_with(segmentations, &ValidSegmentParams::default())
+    }
+
+    /// [`Self::learn`] from segmentations made with `segment`, which the profile keeps for the online
+    /// detector.
+    pub fn learn_with(segmentations: &[Segmentation], segment: &ValidSegmentParams) -> Self {
         let lengths: Vec<usize> = segmentations
             .iter()
             .flat_map(|seg| seg.complete().map(|stance| stance.len))
@@ -60,6 +70,7 @@ impl OnlineProfile {
                 sample_offset: sample_offset_for(&lengths),
                 ..OnlineParams::default()
             },
+            segment: segment.clone(),
             typical_stance_frames: typical_stance_frames(&lengths),
             calibration: Calibration::from_segmentations(segmentations),
             gait_table: BTreeMap::new(),
@@ -483,5 +494,33 @@ impl<'m> OnlineClassifier<'m> {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod profile_tests {
+    use super::*;
+    use crate::stance::{BaselineMode, SegmentParams};
+
+    /// A profile written before the detector settings were stored loads with the defaults; one
+    /// with them keeps them.
+    #[test]
+    fn the_detector_settings_are_kept_and_default_when_absent() {
+        let old: OnlineProfile =
+            serde_json::from_str(r#"{"params": {"sample_offset": 7}, "gait_table": {}}"#).unwrap();
+        assert_eq!(old.params.sample_offset, 7);
+        assert_eq!(old.segment, ValidSegmentParams::default());
+        let segment = SegmentParams {
+            baseline: BaselineMode::Floor,
+            min_stance_frames: 5,
+            ..SegmentParams::default()
+        }
+        .check()
+        .unwrap();
+        let profile = OnlineProfile::learn_with(&[], &segment);
+        let json = serde_json::to_string(&profile).unwrap();
+        let back: OnlineProfile = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.segment, segment);
+        assert!(json.contains(r#""baseline":"floor""#), "{json}");
     }
 }

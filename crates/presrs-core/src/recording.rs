@@ -221,6 +221,20 @@ impl Recording {
         self.frame_period_s
     }
 
+    /// Gives the recording a frame period when its format states none (`--frame-period`, a manifest's
+    /// `frame_period_s`); one the file states is kept. A period that is not a positive number of seconds
+    /// is an error.
+    pub fn set_frame_period_if_unknown(&mut self, period_s: f64) -> Result<()> {
+        if !(period_s.is_finite() && period_s > 0.0) {
+            return Err(CoreError::Param {
+                name: "frame_period_s",
+                reason: format!("must be a positive number of seconds, got {period_s}"),
+            });
+        }
+        self.frame_period_s.get_or_insert(period_s);
+        Ok(())
+    }
+
     pub fn present(&self) -> Option<&[bool]> {
         self.present.as_deref()
     }

@@ -145,6 +145,29 @@ pub fn stratified_split(
     Ok(split)
 }
 
+/// The fewest samples a class needs for a draw of `per_class` with `validation`: `per_class` when given,
+/// else one validation image and at least one training image (a count `c` of validation images needs
+/// `c + 1`; a fraction gives one only from 3 samples on: one for validation, two to train).
+pub fn min_samples_per_class(per_class: Option<usize>, validation: ValidationSize) -> usize {
+    per_class.unwrap_or(match validation {
+        ValidationSize::Count(count) => count.saturating_add(1),
+        ValidationSize::Fraction(_) => 3,
+    })
+}
+
+/// The classes of `classes` (every label expected, e.g. all those of a manifest, some perhaps without
+/// a sample) with fewer than `need` samples in `labels`, with their counts, in the order of `classes`.
+pub fn classes_short_of(labels: &[&str], classes: &[&str], need: usize) -> Vec<(String, usize)> {
+    classes
+        .iter()
+        .map(|&class| {
+            let count = labels.iter().filter(|&&label| label == class).count();
+            (class.to_owned(), count)
+        })
+        .filter(|&(_, count)| count < need)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -191,6 +214,25 @@ mod tests {
         let c = stratified_split(&labels, Some(20), ValidationSize::Count(7), 2).unwrap();
         assert_eq!(a, b);
         assert_ne!(a, c);
+    }
+
+    #[test]
+    fn classes_short_of_samples_are_named_with_their_counts() {
+        let labels = ["grass", "grass", "gravel", "grass"];
+        let short = classes_short_of(&labels, &["brick", "grass", "gravel"], 3);
+        assert_eq!(
+            short,
+            vec![("brick".to_owned(), 0), ("gravel".to_owned(), 1)]
+        );
+        assert_eq!(
+            min_samples_per_class(None, ValidationSize::Fraction(0.35)),
+            3
+        );
+        assert_eq!(min_samples_per_class(None, ValidationSize::Count(7)), 8);
+        assert_eq!(
+            min_samples_per_class(Some(20), ValidationSize::Count(7)),
+            20
+        );
     }
 
     #[test]

@@ -507,13 +507,15 @@ pub fn write_movie(recording: &Recording, options: &MovieOptions, path: &Path) -
         return Err(ReportError::Input("the recording has no frames".into()));
     }
     let scale = PressureScale::from_meta(Some(&recording.meta));
-    let curve = LoadCurveData::from_recording(
+    let mut curve = LoadCurveData::from_recording(
         "total load (shaded: detected stances; red: sampled frames)".to_owned(),
         recording,
         &scale,
         &options.segment,
         options.sample,
     )?;
+    // The grey line is named by what the detector measured from (a movie frame has no legend).
+    curve.name = curve.name_with_baseline();
     let max_frames = options.max_frames.max(1);
     let stride = options.stride.max(1).max(count.div_ceil(max_frames));
     let vmax = shown_max(recording.frames().collect::<Vec<_>>().iter(), &scale);
@@ -574,6 +576,38 @@ mod tests {
             ..SensorMeta::default()
         };
         Recording::new(grid, Some(0.032), data, Some(present), meta).unwrap()
+    }
+
+    /// The movie's load curve names its grey line by what the detector measured from.
+    #[test]
+    fn the_movie_names_the_detectors_line_by_its_mode() {
+        use presrs_core::stance::{BaselineMode, SegmentParams};
+        let recording = walking_like();
+        let scale = PressureScale::from_meta(Some(&recording.meta));
+        let curve = |baseline| {
+            let segment = SegmentParams {
+                baseline,
+                ..SegmentParams::default()
+            };
+            LoadCurveData::from_recording(
+                "load".into(),
+                &recording,
+                &scale,
+                &segment.check().unwrap(),
+                SampleFrame::default(),
+            )
+            .unwrap()
+        };
+        assert_eq!(curve(BaselineMode::Auto).baseline_label, "baseline");
+        assert_eq!(curve(BaselineMode::Drifting).baseline_label, "baseline");
+        assert_eq!(
+            curve(BaselineMode::Floor).name_with_baseline(),
+            "load; grey: floor"
+        );
+        assert_eq!(
+            curve(BaselineMode::Contact).baseline_label,
+            "baseline (one contact)"
+        );
     }
 
     #[test]

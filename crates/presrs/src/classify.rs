@@ -85,10 +85,10 @@ pub fn classify_recording(
         Some(frame) => vec![(frame, unloaded_frame_warning(recording, frame))],
         None if recording.frame_count() == 1 => vec![(0, unloaded_frame_warning(recording, 0))],
         None => {
-            let segmentation = segment_recording(recording, &ValidSegmentParams::default())
+            let segmentation = segment_recording(recording, &options.samples.segment_params())
                 .with_context(|| format!("{name}: cannot segment"))?;
             let frames = segmentation
-                .samples(options.samples.sample, options.samples.include_partial)
+                .samples(options.samples.sample, options.samples.include_partial())
                 .context(name)?;
             if frames.is_empty() {
                 warnings.push(format!(

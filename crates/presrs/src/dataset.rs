@@ -13,7 +13,9 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sensels};
-use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
+use presrs_core::stance::{
+    BaselineMode, SampleFrame, SegmentParams, Segmentation, ValidSegmentParams, segment_recording,
+};
 use presrs_core::{Grid, Recording};
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
@@ -36,6 +38,12 @@ pub struct SampleOptions {
     /// Find dead sensels in each recording and fill them from their neighbours (the default, with
     /// the default thresholds); `None` keeps the recordings as read.
     pub dead_sensels: Option<DeadSenselConfig>,
+    /// Every movie is one contact (a trial cut to one foot contact): one sample from each, whatever
+    /// the segmentation would find (the stance is the whole recording, [`BaselineMode::Contact`]).
+    pub one_sample_per_file: bool,
+    /// Frame period, in seconds, of recordings whose format states none (a manifest's
+    /// `frame_period_s` column overrides it per row).
+    pub frame_period_s: Option<f64>,
 }
 
 impl Default for SampleOptions {
@@ -46,7 +54,30 @@ impl Default for SampleOptions {
             include_partial: false,
             read: ReadOptions::default(),
             dead_sensels: Some(DeadSenselConfig::default()),
+            one_sample_per_file: false,
+            frame_period_s: None,
         }
+    }
+}
+
+impl SampleOptions {
+    /// The segmentation settings a row uses: the whole recording as one contact with
+    /// [`Self::one_sample_per_file`], else [`Self::segment`].
+    pub fn segment_params(&self) -> ValidSegmentParams {
+        if !self.one_sample_per_file {
+            return self.segment.clone();
+        }
+        let params = SegmentParams {
+            baseline: BaselineMode::Contact,
+            ..self.segment.params().clone()
+        };
+        // Only the mode changed, and every mode is valid with valid settings.
+        params.check().unwrap_or_else(|_| self.segment.clone())
+    }
+
+    /// Whether stances cut by the recording are sampled (always with one sample per file).
+    pub fn include_partial(&self) -> bool {
+        self.include_partial || self.one_sample_per_file
     }
 }
 
@@ -157,8 +188,14 @@ impl Dataset {
         progress.finish();
         let loaded = loaded?;
         if loaded.samples.is_empty() {
+            // The summary of the files that gave none says why (it is the last warning).
+            let why = loaded
+                .warnings
+                .last()
+                .filter(|w| w.contains("gave no sample"))
+                .map_or_else(String::new, |w| format!(": {w}"));
             return Err(Error::data(format!(
-                "{}: the manifest gives no samples",
+                "{}: the manifest gives no samples{why}",
                 manifest.source.display()
             )));
         }
@@ -214,6 +251,57 @@ impl Dataset {
             warnings: Vec::new(),
             dead_sensels: DeadSenselFills::default(),
         })
+    }
+
+    /// Why a draw of `need` samples per class cannot be made, when that is the cause: every class of
+    /// the manifest's rows (of `condition`, if given) with fewer than `need` samples, with its count,
+    /// then why files gave no sample and the option to try (the data set's one-line summary), e.g.
+    /// `too few samples per class: "grass" has 1, "gravel" 0 (at least 3 needed); 599 of 600 files
+    /// gave no sample: ... ; they are one contact each: try --one-sample-per-file`. `None` when every
+    /// class has enough.
+    pub fn too_few_samples(&self, condition: Option<&str>, need: usize) -> Option<String> {
+        let mut classes: Vec<&str> = self
+            .manifest
+            .rows
+            .iter()
+            .filter(|row| condition.is_none() || row.condition.as_deref() == condition)
+            .filter_map(|row| row.label.as_deref())
+            .collect();
+        classes.sort_unstable();
+        classes.dedup();
+        let labels: Vec<&str> = self
+            .samples
+            .iter()
+            .filter(|sample| condition.is_none() || sample.condition.as_deref() == condition)
+            .filter_map(|sample| sample.label.as_deref())
+            .collect();
+        let short = presrs_core::split::classes_short_of(&labels, &classes, need);
+        if short.is_empty() {
+            return None;
+        }
+        let counts: Vec<String> = short
+            .iter()
+            .enumerate()
+            .map(|(i, (class, count))| {
+                if i == 0 {
+                    format!("{class:?} has {count}")
+                } else {
+                    format!("{class:?} {count}")
+                }
+            })
+            .collect();
+        let why = self
+            .warnings
+            .iter()
+            .rev()
+            .find(|w| w.contains("gave no sample"))
+            .map_or_else(String::new, |w| format!("; {w}"));
+        Some(format!(
+            "too few samples per class: {} (at least {need} needed, {} sample{} in all){why}",
+            counts.join(", "),
+            labels.len(),
+            if labels.len() == 1 { "" } else { "s" }
+        ))
     }
 
     /// The manifest file.
@@ -319,10 +407,17 @@ pub fn load_samples(
                 None => err,
             }
         })?;
-        let (parsed, filled) = parsed;
+        let (mut parsed, filled) = parsed;
+        if let Some(period) = options.frame_period_s {
+            parsed
+                .recording
+                .set_frame_period_if_unknown(period)
+                .map_err(|err| IoError::format(&path.display().to_string(), err.to_string()))?;
+        }
         fills.add(path.clone(), filled);
         by_path.insert(path, parsed);
     }
+    apply_frame_period_column(manifest, &mut by_path)?;
     let mut loaded = LoadedSamples {
         dead_sensels: fills,
         ..LoadedSamples::default()
@@ -331,17 +426,12 @@ pub fn load_samples(
         loaded.warnings.extend(parsed.warnings.iter().cloned());
     }
     loaded.warnings.sort();
+    let mut empty = EmptyFiles::default();
     for row in &manifest.rows {
         let Some(parsed) = by_path.get(&row.path) else {
             continue;
         };
-        let frames = row_frames(
-            manifest,
-            row,
-            &parsed.recording,
-            options,
-            &mut loaded.warnings,
-        )?;
+        let frames = row_frames(manifest, row, &parsed.recording, options, &mut empty)?;
         for frame_index in frames {
             let Some(view) = parsed.recording.frame(frame_index) else {
                 continue;
@@ -359,7 +449,105 @@ pub fn load_samples(
             });
         }
     }
+    loaded
+        .warnings
+        .extend(empty.summary(manifest.rows.len(), options));
     Ok(loaded)
+}
+
+/// Sets the frame period of the recordings whose rows give a `frame_period_s` (when the file states
+/// none); a value that is not a positive number is an error naming the line.
+fn apply_frame_period_column(
+    manifest: &Manifest,
+    by_path: &mut HashMap<&PathBuf, Parsed>,
+) -> std::result::Result<(), IoError> {
+    for row in &manifest.rows {
+        let Some(text) = row.column("frame_period_s") else {
+            continue;
+        };
+        let period: f64 = text.trim().parse().map_err(|_| {
+            manifest.row_error(
+                row,
+                format!("field `frame_period_s` must be a number of seconds, got {text:?}"),
+            )
+        })?;
+        if let Some(parsed) = by_path.get_mut(&row.path) {
+            parsed
+                .recording
+                .set_frame_period_if_unknown(period)
+                .map_err(|err| manifest.row_error(row, format!("field `frame_period_s`: {err}")))?;
+        }
+    }
+    Ok(())
+}
+
+/// Why a movie gave no sample, for the one-line summary of [`EmptyFiles`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum NoSample {
+    /// Loaded from the first frame to the last: one contact, partial at both ends.
+    OneContact,
+    /// Stances found, all cut by the start or end of the recording.
+    OnlyPartial,
+    /// No stance at all.
+    NoStance,
+}
+
+/// The movies that gave no sample, summarised in one line rather than one warning a file.
+#[derive(Debug, Default)]
+struct EmptyFiles {
+    files: Vec<(String, NoSample)>,
+}
+
+impl EmptyFiles {
+    fn add(&mut self, path_text: &str, segmentation: &Segmentation) {
+        let why = if segmentation.mode == BaselineMode::Contact {
+            NoSample::OneContact
+        } else if segmentation.stances.is_empty() {
+            NoSample::NoStance
+        } else {
+            NoSample::OnlyPartial
+        };
+        self.files.push((path_text.to_owned(), why));
+    }
+
+    /// `412 of 600 files gave no sample: a.npy, b.npy, ... ; they are one contact each: try
+    /// --one-sample-per-file`, or `None` when every file gave one. `rows` is the manifest's row count.
+    fn summary(&self, rows: usize, options: &SampleOptions) -> Option<String> {
+        const NAMED: usize = 5;
+        let count = self.files.len();
+        if count == 0 {
+            return None;
+        }
+        let mut names: Vec<&str> = self
+            .files
+            .iter()
+            .take(NAMED)
+            .map(|(p, _)| p.as_str())
+            .collect();
+        if count > NAMED {
+            names.push("...");
+        }
+        let most = |why: NoSample| self.files.iter().filter(|(_, w)| *w == why).count() * 2 > count;
+        let hint = if most(NoSample::OneContact) {
+            "they are one contact each (loaded from the first frame to the last): try \
+             --one-sample-per-file"
+                .to_owned()
+        } else if most(NoSample::OnlyPartial) && !options.include_partial() {
+            "their stances are cut by the start or end of the recording: try --include-partial"
+                .to_owned()
+        } else {
+            format!(
+                "no stance was found in them (baseline mode {}): see `presrs inspect FILE`, or give \
+                 a `frame` column to use one frame anyway",
+                options.segment.params().baseline
+            )
+        };
+        Some(format!(
+            "{count} of {rows} file{} gave no sample: {} ; {hint}",
+            if rows == 1 { "" } else { "s" },
+            names.join(", ")
+        ))
+    }
 }
 
 /// A manifest row's fields as written, by column name (empty ones left out).
@@ -411,7 +599,7 @@ fn row_frames(
     row: &ManifestRow,
     recording: &Recording,
     options: &SampleOptions,
-    warnings: &mut Vec<String>,
+    empty: &mut EmptyFiles,
 ) -> std::result::Result<Vec<usize>, IoError> {
     let count = recording.frame_count();
     if let Some(frame) = row.frame {
@@ -429,20 +617,14 @@ fn row_frames(
     if count == 1 {
         return Ok(vec![0]);
     }
-    let segmentation = segment_recording(recording, &options.segment).map_err(|err| {
+    let segmentation = segment_recording(recording, &options.segment_params()).map_err(|err| {
         manifest.row_error(row, format!("cannot segment `{}`: {err}", row.path_text))
     })?;
     let frames = segmentation
-        .samples(options.sample, options.include_partial)
+        .samples(options.sample, options.include_partial())
         .map_err(|err| manifest.row_error(row, format!("`{}`: {err}", row.path_text)))?;
     if frames.is_empty() {
-        warnings.push(format!(
-            "{} line {}: `{}` has {count} frames but no complete stance phase; it gives no sample \
-             (give a `frame` to use one anyway)",
-            manifest.source.display(),
-            row.line,
-            row.path_text
-        ));
+        empty.add(&row.path_text, &segmentation);
     }
     Ok(frames)
 }

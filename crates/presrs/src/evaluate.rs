@@ -111,6 +111,22 @@ impl<'d> EvalSetup<'d> {
                 dataset.manifest.columns.join(", ")
             )));
         }
+        // Too few samples of a class for the draws: the real cause of any later complaint about the
+        // validation set, so said first (with why files gave none).
+        let needs_validation = options.per_class.is_some()
+            || matches!(options.validation, ValidationSize::Count(count) if count > 0)
+            || options
+                .method
+                .check_validation_set(options.validation, 0)
+                .is_err();
+        let training_condition = match &options.holdout {
+            Holdout::TrainCondition(condition) => condition.as_deref(),
+            Holdout::LeaveOneOut(_) => None,
+        };
+        let need = presrs_core::split::min_samples_per_class(options.per_class, options.validation);
+        if needs_validation && let Some(cause) = dataset.too_few_samples(training_condition, need) {
+            return Err(Error::data(format!("{name}: cannot evaluate: {cause}")));
+        }
         let mut samples = Vec::with_capacity(dataset.samples.len());
         for sample in &dataset.samples {
             let label = sample.label.as_deref().ok_or_else(|| {

@@ -11,7 +11,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
-use presrs_core::stance::ValidSegmentParams;
 use presrs_core::{FrameView, Grid};
 use presrs_io::model_file::load_model;
 use presrs_sim::track::{
@@ -418,7 +417,7 @@ pub fn compare_on_track(
             let mut policy = AdaptivePolicy {
                 classifier: OnlineClassifier::new(
                     model,
-                    &ValidSegmentParams::default(),
+                    &profile.segment,
                     &profile.params,
                     profile.calibration,
                 )?,

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correctable, detect_dead_sensels};
-use presrs_core::stance::{ValidSegmentParams, sample_frames, segment_recording};
+use presrs_core::stance::{BaselineMode, Segmentation, sample_frames, segment_recording};
 use presrs_io::read_recording_with;
 use serde::Serialize;
 
@@ -51,18 +51,33 @@ pub struct InspectReport {
     pub force_min_n: Option<f64>,
     pub force_max_n: Option<f64>,
     pub baseline_noise: f64,
+    /// What the stances were measured from: drifting, floor or contact (see `--stance-baseline`).
+    pub stance_mode: BaselineMode,
+    /// Why that mode, when it was chosen automatically and is not the drifting baseline.
+    pub stance_mode_reason: Option<String>,
+    /// The level each frame's load was measured from (the baseline, or the local floor).
+    pub stance_floor: Vec<f64>,
     pub stances: Vec<StanceReport>,
+    /// Why a recording that carries load gave no stance, or suspiciously few, with the option to try.
+    pub stance_notes: Vec<String>,
     pub warnings: Vec<String>,
 }
 
 /// Reads `path` as `options` say and describes it (the stance sample frame is `options.sample`; dead
 /// sensels are reported, and said to be filled unless `options.dead_sensels` is `None`).
 pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
-    let parsed = read_recording_with(path, &options.read)?;
+    let mut parsed = read_recording_with(path, &options.read)?;
+    if let Some(period) = options.frame_period_s {
+        parsed
+            .recording
+            .set_frame_period_if_unknown(period)
+            .map_err(|err| Error::invalid(format!("--frame-period: {err}")))?;
+    }
     let recording = &parsed.recording;
     let totals = recording.total_per_frame();
-    let segmentation = segment_recording(recording, &ValidSegmentParams::default())
+    let segmentation = segment_recording(recording, &options.segment_params())
         .map_err(|err| Error::data(format!("{}: cannot segment: {err}", path.display())))?;
+    let stance_notes = stance_notes(&totals, &segmentation, options);
     let stances = segmentation
         .stances
         .iter()
@@ -109,7 +124,82 @@ pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
         force_min_n: newtons.map(|n| load_min * n),
         force_max_n: newtons.map(|n| load_max * n),
         baseline_noise: segmentation.noise,
+        stance_mode: segmentation.mode,
+        stance_mode_reason: segmentation.mode_reason.clone(),
+        stance_floor: segmentation.baseline.clone(),
         stances,
+        stance_notes,
         warnings: parsed.warnings,
     })
+}
+
+/// A stance covering more than this fraction of a recording of several times its length is suspicious
+/// in the drifting mode: a foot that never unloads.
+const LONG_STANCE_FRACTION: f64 = 0.5;
+
+/// Why a recording that carries load gave no sample, or suspiciously few stances, and what to try.
+fn stance_notes(
+    totals: &[f64],
+    segmentation: &Segmentation,
+    options: &SampleOptions,
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    let n = totals.len();
+    let lowest = totals.iter().copied().fold(f64::INFINITY, f64::min);
+    let highest = totals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if n < 2 || highest <= lowest {
+        return notes;
+    }
+    let sampled = segmentation
+        .stances
+        .iter()
+        .filter(|stance| options.include_partial() || !stance.partial)
+        .count();
+    let mode = segmentation.mode;
+    if segmentation.stances.is_empty() {
+        notes.push(format!(
+            "the load varies ({lowest} .. {highest}) but no stance was found measuring from the {} \
+             (on level {:.1} above it): try --stance-baseline floor (presses on a preload) or \
+             contact (one contact from the first frame to the last), or a lower --stance-threshold",
+            mode_noun(mode),
+            segmentation.on_level
+        ));
+    } else if sampled == 0 && mode == BaselineMode::Contact {
+        notes.push(
+            "the recording is one contact from its first frame to its last: its stance is partial \
+             at both ends and gives no sample without --include-partial (--one-sample-per-file for \
+             a data set of such trials)"
+                .to_owned(),
+        );
+    } else if sampled == 0 {
+        notes.push(
+            "every stance found is cut by the start or end of the recording: it gives no sample \
+             without --include-partial"
+                .to_owned(),
+        );
+    }
+    if mode == BaselineMode::Drifting
+        && let Some(long) = segmentation
+            .stances
+            .iter()
+            .find(|stance| stance.len as f64 > LONG_STANCE_FRACTION * n as f64)
+        && segmentation.stances.len() <= 2
+        && n >= 4 * options.segment.params().min_stance_frames
+    {
+        notes.push(format!(
+            "{} stance(s) only, one covering {} of {n} frames: if the foot never unloads (a standing \
+             preload with presses on top), try --stance-baseline floor",
+            segmentation.stances.len(),
+            long.len
+        ));
+    }
+    notes
+}
+
+fn mode_noun(mode: BaselineMode) -> &'static str {
+    match mode {
+        BaselineMode::Floor => "local floor",
+        BaselineMode::Contact => "zero level",
+        BaselineMode::Auto | BaselineMode::Drifting => "baseline",
+    }
 }

@@ -7,12 +7,12 @@ use std::path::Path;
 use presrs_core::TrainedModel;
 use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::{LabeledImage, train as train_pipeline};
-use presrs_core::split::{Split, ValidationSize, stratified_split};
+use presrs_core::split::{Split, ValidationSize, min_samples_per_class, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
 use crate::dataset::{Dataset, Sample, sample_labels};
-use crate::error::{Context, Result};
+use crate::error::{Context, Error, Result};
 use crate::method::Method;
 
 /// What to train on and how.
@@ -106,9 +106,20 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         &pool,
         "training needs a label for every sample",
     )?;
-    let split = stratified_split(&labels, options.per_class, options.validation, options.seed)
-        .with_context(|| format!("{name}: cannot draw the training set"))?;
     let method = &options.method;
+    let split = stratified_split(&labels, options.per_class, options.validation, options.seed);
+    let validation_check = split
+        .as_ref()
+        .map(|split| method.check_validation_set(options.validation, split.validation.len()));
+    // When the draw or its validation set fails, too few samples of a class is the real cause, if
+    // it is one: say that first (with why files gave none).
+    if !matches!(validation_check, Ok(Ok(()))) {
+        let need = min_samples_per_class(options.per_class, options.validation);
+        if let Some(cause) = dataset.too_few_samples(options.condition.as_deref(), need) {
+            return Err(Error::data(format!("{name}: cannot train: {cause}")));
+        }
+    }
+    let split = split.with_context(|| format!("{name}: cannot draw the training set"))?;
     method
         .check_validation_set(options.validation, split.validation.len())
         .with_context(|| format!("{name}: cannot train"))?;
@@ -176,20 +187,19 @@ pub fn split_images<'s>(
     (images(&split.train), images(&split.validation))
 }
 
-/// The online profile (detector calibration and sample frame) learned by segmenting, offline, every
-/// movie a manifest lists.
-pub fn learn_online_profile(manifest: &Path) -> Result<OnlineProfile> {
+/// The online profile (detector settings, calibration and sample frame) learned by segmenting, offline
+/// with `params` (those of training: the profile keeps them), every movie a manifest lists.
+pub fn learn_online_profile(manifest: &Path, params: &ValidSegmentParams) -> Result<OnlineProfile> {
     let manifest = presrs_io::manifest::read_manifest(manifest)?;
     let mut paths: Vec<&Path> = manifest.rows.iter().map(|row| row.path.as_path()).collect();
     paths.sort();
     paths.dedup();
-    let params = ValidSegmentParams::default();
     let mut segmentations = Vec::new();
     for path in paths {
         let recording = presrs_io::read_recording(path)?;
         if recording.frame_count() > 1 {
-            segmentations.push(segment(&recording.total_per_frame(), &params)?);
+            segmentations.push(segment(&recording.total_per_frame(), params)?);
         }
     }
-    Ok(OnlineProfile::learn(&segmentations))
+    Ok(OnlineProfile::learn_with(&segmentations, params))
 }

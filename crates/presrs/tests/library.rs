@@ -127,3 +127,64 @@ fn data_that_do_not_fit_are_errors_that_say_where_and_what_to_try() {
         )
     );
 }
+
+/// A manifest of one-contact movies (real plantar-pressure trials, `jiku-walk`), of which only one
+/// row gives a sample (it names its frame): training and evaluation say that classes have too few
+/// samples, with their counts and why the files gave none (and the option to try), before anything
+/// about the validation set.
+#[test]
+fn too_few_samples_of_a_class_is_named_before_the_validation_set() {
+    let jiku = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real/jiku-walk");
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("m.csv");
+    let mut text = String::from("path,label,frame\n");
+    text.push_str(&format!("{},slow,20\n", jiku.join("s00_t01.npy").display()));
+    for (file, label) in [
+        ("s00_t00.npy", "fast"),
+        ("s00_t02.npy", "slow"),
+        ("s00_t03.npy", "normal"),
+        ("s00_t04.npy", "fast"),
+        ("s00_t05.npy", "normal"),
+    ] {
+        text.push_str(&format!("{},{label},\n", jiku.join(file).display()));
+    }
+    std::fs::write(&manifest, text).unwrap();
+    let dataset = Dataset::load(&manifest, &SampleOptions::default(), &Quiet).unwrap();
+    assert_eq!(dataset.samples.len(), 1);
+
+    let err = train(&dataset, &TrainOptions::default()).unwrap_err();
+    let message = err.to_string();
+    assert!(matches!(err, Error::Data(_)), "{message}");
+    assert!(
+        message.contains(
+            "cannot train: too few samples per class: \"fast\" has 0, \"normal\" 0, \"slow\" 1 \
+             (at least 3 needed, 1 sample in all); 5 of 6 files gave no sample: "
+        ),
+        "{message}"
+    );
+    assert!(message.ends_with("try --one-sample-per-file"), "{message}");
+    assert!(!message.contains("validation"), "{message}");
+
+    let err = EvalSetup::new(&dataset, &EvalOptions::default()).unwrap_err();
+    let message = err.to_string();
+    assert!(
+        message.contains("cannot evaluate: too few samples per class: \"fast\" has 0"),
+        "{message}"
+    );
+    assert!(message.ends_with("try --one-sample-per-file"), "{message}");
+
+    // Asked for 2 per class with one sample per file: every movie gives one, and "slow" (2 of them)
+    // has enough; the others have 2 too.
+    let one_each = SampleOptions {
+        one_sample_per_file: true,
+        ..SampleOptions::default()
+    };
+    let dataset = Dataset::load(&manifest, &one_each, &Quiet).unwrap();
+    assert_eq!(dataset.samples.len(), 6);
+    assert!(dataset.too_few_samples(None, 2).is_none());
+    assert_eq!(
+        dataset.too_few_samples(None, 3).unwrap(),
+        "too few samples per class: \"fast\" has 2, \"normal\" 2, \"slow\" 2 (at least 3 needed, 6 \
+         samples in all)"
+    );
+}

@@ -64,7 +64,7 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = BenchOptions {
         model: args.model.clone(),
         images: args.images.clone(),
-        samples: args.samples.options(),
+        samples: args.samples.options()?,
         synthetic: args.synthetic,
         iterations: args.iterations,
         batch: args.batch,

@@ -88,7 +88,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let name = path.display().to_string();
         let options = ClassifyOptions {
             frame: args.frame,
-            samples: args.samples.options(),
+            samples: args.samples.options()?,
         };
         let classification = classify_file(model, &mut session, path, &options, &mut fills);
         let samples = match classification {

@@ -11,7 +11,7 @@ use presrs::{Dataset, Progress};
 use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::preprocess::Preprocess;
-use presrs_core::stance::SampleFrame;
+use presrs_core::stance::{BaselineMode, SampleFrame, SegmentParams, ValidSegmentParams};
 use presrs_io::{ArrayAxes, ReadOptions};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
@@ -98,6 +98,8 @@ pub struct SampleArgs {
     pub keep_dead_sensels: bool,
     #[command(flatten)]
     pub axes: AxesArg,
+    #[command(flatten)]
+    pub stance: StanceArgs,
 }
 
 /// The `--axes` option of array (`.npy`) inputs.
@@ -110,15 +112,75 @@ pub struct AxesArg {
     pub axes: Option<ArrayAxes>,
 }
 
+/// How stance phases are found in movies (the detector's settings; `train` stores them in the model).
+#[derive(Debug, Clone, clap::Args)]
+pub struct StanceArgs {
+    /// What a stance's load rises above: auto (chosen from the data, and said by `inspect`), drifting
+    /// (the unloaded level between stances, non-zero or drifting), floor (the local floor: presses or
+    /// steps on a standing preload), contact (the whole recording is one contact).
+    #[arg(long, value_name = "MODE", default_value = "auto", value_parser = parse_baseline_mode)]
+    pub stance_baseline: BaselineMode,
+    /// A stance must somewhere exceed this fraction of the load range above the baseline (or floor)
+    /// [default: 0.10].
+    #[arg(long, value_name = "FRACTION", value_parser = parse_fraction)]
+    pub stance_threshold: Option<f64>,
+    /// Hysteresis: a frame belongs to a stance while its load exceeds this fraction of the load range
+    /// above the baseline (or floor), at most --stance-threshold [default: 0.01].
+    #[arg(long, value_name = "FRACTION", value_parser = parse_fraction)]
+    pub stance_hysteresis: Option<f64>,
+    /// Shortest stance kept, in frames [default: 3].
+    #[arg(long, value_name = "FRAMES", value_parser = parse_positive)]
+    pub stance_min_frames: Option<usize>,
+    /// Longest stance kept, in frames (default: no limit); with --stance-baseline auto a longer one
+    /// is taken for a standing preload and measured from the local floor.
+    #[arg(long, value_name = "FRAMES", value_parser = parse_positive)]
+    pub stance_max_frames: Option<usize>,
+    /// Fewest unloaded frames between two stances: a shorter dropout inside a stance is bridged
+    /// [default: 3].
+    #[arg(long, value_name = "FRAMES", value_parser = parse_positive)]
+    pub stance_min_gap: Option<usize>,
+    /// Every movie is one contact (trials cut to one foot contact, loaded from the first frame to the
+    /// last): one sample from each, the whole recording being its stance.
+    #[arg(long)]
+    pub one_sample_per_file: bool,
+    /// Frame period in seconds of files whose format states none (.npy, text, PNG); a manifest's
+    /// `frame_period_s` column gives it per file.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_period)]
+    pub frame_period: Option<f64>,
+}
+
+impl StanceArgs {
+    /// The detector's settings these options give (the defaults for those not given).
+    pub fn segment_params(&self) -> anyhow::Result<ValidSegmentParams> {
+        let default = SegmentParams::default();
+        let params = SegmentParams {
+            baseline: self.stance_baseline,
+            on_fraction: self.stance_threshold.unwrap_or(default.on_fraction),
+            off_fraction: self.stance_hysteresis.unwrap_or(default.off_fraction),
+            min_stance_frames: self.stance_min_frames.unwrap_or(default.min_stance_frames),
+            max_stance_frames: self.stance_max_frames,
+            max_gap_frames: self
+                .stance_min_gap
+                .map_or(default.max_gap_frames, |gap| gap - 1),
+            ..default
+        };
+        params
+            .check()
+            .context("the --stance-* options do not fit together")
+    }
+}
+
 impl SampleArgs {
-    pub fn options(&self) -> SampleOptions {
-        SampleOptions {
+    pub fn options(&self) -> anyhow::Result<SampleOptions> {
+        Ok(SampleOptions {
             sample: self.stance_frame,
             include_partial: self.include_partial,
             read: self.read_options(),
             dead_sensels: self.dead_sensels(),
-            ..SampleOptions::default()
-        }
+            segment: self.stance.segment_params()?,
+            one_sample_per_file: self.stance.one_sample_per_file,
+            frame_period_s: self.stance.frame_period,
+        })
     }
 
     /// The dead-sensel correction to apply (`None` with `--keep-dead-sensels`).
@@ -148,7 +210,7 @@ impl SampleArgs {
 
 /// Reads a manifest and all its samples (a spinner meanwhile); warnings go to stderr.
 pub fn load_manifest(path: &Path, samples: &SampleArgs) -> anyhow::Result<Dataset> {
-    let dataset = Dataset::load(path, &samples.options(), &TerminalProgress::default())?;
+    let dataset = Dataset::load(path, &samples.options()?, &TerminalProgress::default())?;
     for warning in &dataset.warnings {
         stderr_line!("warning: {warning}");
     }
@@ -269,4 +331,26 @@ pub fn parse_positive(text: &str) -> Result<usize, String> {
 
 fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {
     text.parse::<SampleFrame>().map_err(|err| err.to_string())
+}
+
+fn parse_baseline_mode(text: &str) -> Result<BaselineMode, String> {
+    text.parse::<BaselineMode>().map_err(|err| err.to_string())
+}
+
+/// A fraction in (0, 1] (`--stance-threshold`, `--stance-hysteresis`).
+fn parse_fraction(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(value) if value > 0.0 && value <= 1.0 => Ok(value),
+        _ => Err(format!("expected a fraction in (0, 1], got {text:?}")),
+    }
+}
+
+/// A positive, finite number of seconds (`--frame-period`).
+fn parse_period(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(value) if value.is_finite() && value > 0.0 => Ok(value),
+        _ => Err(format!(
+            "expected a positive number of seconds, got {text:?}"
+        )),
+    }
 }

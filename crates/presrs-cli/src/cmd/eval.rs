@@ -211,7 +211,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             &dataset,
             (&report, &name),
             &config,
-            &args.samples.options(),
+            &args.samples.options()?,
             &fault_results(&perturbed, options.method.is_auto()),
             dir,
         )?;

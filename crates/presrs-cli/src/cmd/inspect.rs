@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::inspect::{InspectReport, inspect};
+use presrs_core::stance::BaselineMode;
 
 use super::common::{SampleArgs, write_json};
 
@@ -20,7 +21,7 @@ pub struct InspectArgs {
 }
 
 pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let report = inspect(&args.file, &args.samples.options())?;
+    let report = inspect(&args.file, &args.samples.options()?)?;
     if args.json {
         return write_json(out, &report);
     }
@@ -116,9 +117,21 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
     let complete = report.stances.iter().filter(|s| !s.partial).count();
     writeln!(
         out,
-        "stances        {} found, {complete} complete",
-        report.stances.len()
+        "stances        {} found, {complete} complete, measured from the {}",
+        report.stances.len(),
+        match report.stance_mode {
+            BaselineMode::Floor => "local floor (--stance-baseline floor)",
+            BaselineMode::Contact =>
+                "zero level: the recording is one contact (--stance-baseline contact)",
+            BaselineMode::Auto | BaselineMode::Drifting => "baseline (--stance-baseline drifting)",
+        }
     )?;
+    if let Some(reason) = &report.stance_mode_reason {
+        writeln!(out, "               chosen automatically: {reason}")?;
+    }
+    for note in &report.stance_notes {
+        writeln!(out, "note           {note}")?;
+    }
     if !report.stances.is_empty() {
         writeln!(out, "  (peak_load in {load_unit})")?;
         writeln!(out, "  #  start  len  peak_load  sample_frame  partial")?;
@@ -133,11 +146,20 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
                 stance
                     .sample_frame
                     .map_or_else(|| "-".to_owned(), |f| f.to_string()),
-                if stance.partial { "yes" } else { "no" }
+                partial_text(stance, report.frames)
             )?;
         }
     }
     Ok(())
+}
+
+/// `no`, `yes`, or `both ends` for a stance that is the whole recording.
+fn partial_text(stance: &presrs::inspect::StanceReport, frames: usize) -> &'static str {
+    match (stance.partial, stance.start == 0 && stance.len == frames) {
+        (false, _) => "no",
+        (true, false) => "yes",
+        (true, true) => "both ends",
+    }
 }
 
 /// A total load for the table: whole numbers as they are (raw counts), others to a precision that

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
+use presrs_core::stance::{SampleFrame, segment_recording};
 use presrs_io::read_recording_with;
 use presrs_report::render::{Format, save_figure};
 use presrs_report::{MovieOptions, PressureFigure, PressureScale, write_movie};
@@ -53,6 +53,8 @@ pub struct PlotArgs {
     pub lenient: bool,
     #[command(flatten)]
     pub axes: super::common::AxesArg,
+    #[command(flatten)]
+    pub stance_options: super::common::StanceArgs,
 }
 
 pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
@@ -83,7 +85,7 @@ pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let options = MovieOptions {
             stride: args.stride,
             max_frames: args.max_frames,
-            segment: ValidSegmentParams::default(),
+            segment: args.stance_options.segment_params()?,
             sample: args.stance_frame,
             title: name,
         };
@@ -107,7 +109,8 @@ pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             (frame, format!("frame {frame}"))
         }
         (None, Some(n)) => {
-            let segmentation = segment_recording(&recording, &ValidSegmentParams::default())?;
+            let segmentation =
+                segment_recording(&recording, &args.stance_options.segment_params()?)?;
             let stances: Vec<_> = segmentation.complete().collect();
             let stance = stances.get(n).with_context(|| {
                 format!(

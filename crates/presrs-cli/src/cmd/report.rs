@@ -68,7 +68,7 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         fault_repeats: args.fault_repeats,
         seed: args.seed,
         method: args.pipeline.method(),
-        samples: args.samples.options(),
+        samples: args.samples.options()?,
     };
     let index = report_dataset(&dataset, &options, &args.out, &TerminalProgress::default())?;
     writeln!(

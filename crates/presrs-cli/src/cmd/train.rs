@@ -94,7 +94,8 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         Some(std::env::args().collect::<Vec<_>>().join(" ")),
     );
     if args.online_profile || args.gait_table.is_some() {
-        let mut profile = learn_online_profile(&args.manifest).with_context(|| {
+        let segment = args.samples.options()?.segment_params();
+        let mut profile = learn_online_profile(&args.manifest, &segment).with_context(|| {
             format!(
                 "{}: cannot learn the online profile",
                 args.manifest.display()

@@ -30,7 +30,15 @@
 //!   run join it.
 //! * **Partial stances.** A stance already under way at the first frame the detector judges (frame 0, or
 //!   the end of the warm-up) is partial: reported, never sampled. One still open when the stream ends
-//!   ([`CausalSegmenter::finish`]) is partial if it reached the last frame, as offline.
+//!   ([`CausalSegmenter::finish`]) is partial if it reached the last frame, as offline. A stream that
+//!   ends during the warm-up is segmented offline at `finish` and its stances reported then (a
+//!   recording that is one contact, loaded whole, gives its one partial stance, as offline).
+//! * **One sample per file** ([`BaselineMode::Contact`]): the stream is one
+//!   contact from frame 0 to its end, partial at both ends as offline but sampled: frame `k` is decided
+//!   as it arrives, the lift-off comes at `finish`. No warm-up, no fusion.
+//! * **Not done online:** the floor mode (presses on a preload). The causal detector measures from the
+//!   baseline only; a profile with `baseline: floor` calibrates its levels from the floor segmentation
+//!   of its warm-up but then judges frames against one baseline.
 //!
 //! **The sample frame** is chosen without the future: the `k`-th frame after touchdown
 //! ([`OnlineParams::sample_offset`]). The paper samples the mid-stance frame `(len - 1) / 2`, which
@@ -43,7 +51,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::offline::{Segmentation, Stance, ValidSegmentParams, segment};
+use super::modes::{MIN_CONTACT_FRAMES, segment};
+use super::offline::{BaselineMode, Segmentation, Stance, ValidSegmentParams};
 use super::robust::{MAD_TO_SIGMA, median};
 use crate::error::{CoreError, Result};
 
@@ -351,6 +360,8 @@ pub struct CausalSegmenter {
     run: Option<Run>,
     group: Option<Group>,
     next_id: u64,
+    /// [`BaselineMode::Contact`]: the whole stream is one contact (see [`Self::push_contact`]).
+    contact: bool,
 }
 
 impl CausalSegmenter {
@@ -390,6 +401,7 @@ impl CausalSegmenter {
             run: None,
             group: None,
             next_id: 0,
+            contact: params.params().baseline == BaselineMode::Contact,
         };
         match calibration {
             Some(cal) => segmenter.apply_calibration(cal),
@@ -476,6 +488,9 @@ impl CausalSegmenter {
                     self.t
                 ),
             });
+        }
+        if self.contact {
+            return Ok(self.push_contact(total));
         }
         let mut events = SegEvents::EMPTY;
         let t = self.t;
@@ -673,15 +688,97 @@ impl CausalSegmenter {
         }));
     }
 
+    /// [`BaselineMode::Contact`] (one sample per file): the stream is one contact from its first frame,
+    /// as offline, partial at both ends but sampled all the same (that is what the mode is for). It is
+    /// confirmed once it is `min_stance_frames` (and [`MIN_CONTACT_FRAMES`]) long with some load; its
+    /// sample is frame `k` (held until the confirmation if it comes first); it ends with the stream
+    /// ([`Self::finish`]). No fusion, no warm-up: there is no baseline to learn.
+    fn push_contact(&mut self, total: f64) -> SegEvents {
+        let mut events = SegEvents::EMPTY;
+        let t = self.t;
+        self.t += 1;
+        let min_len = self
+            .params
+            .params()
+            .min_stance_frames
+            .max(MIN_CONTACT_FRAMES);
+        let k = self.online.sample_offset;
+        let group = self.group.get_or_insert(Group {
+            id: 0,
+            start: 0,
+            end: 0,
+            reached_on: false,
+            peak_load: total,
+            peak_frame: 0,
+            confirmed: false,
+            partial: true,
+            sample_done: false,
+            fused: 0,
+            fusion_done: true,
+        });
+        self.next_id = 1;
+        group.end = t + 1;
+        if total > group.peak_load {
+            group.peak_load = total;
+            group.peak_frame = t;
+        }
+        // Some load: a reading above zero, as offline.
+        group.reached_on = group.peak_load > 0.0;
+        if t == k && !group.confirmed {
+            events.push(SegEvent::HoldCurrent { stance_id: 0 });
+        }
+        if !group.confirmed && group.end >= min_len && group.reached_on {
+            group.confirmed = true;
+            events.push(SegEvent::Touchdown(Touchdown {
+                stance_id: 0,
+                touchdown_frame: 0,
+                frame: t,
+                partial: true,
+            }));
+        }
+        if group.confirmed && !group.sample_done && k < group.end {
+            group.sample_done = true;
+            events.push(SegEvent::ClassifySample {
+                stance_id: 0,
+                touchdown_frame: 0,
+                frame: k,
+                held: t != k,
+            });
+        }
+        events
+    }
+
     /// The stream ended: closes the open stance (partial if it reached the last frame). While still
-    /// warming up, calibrates on what was seen and judges it (so a short stream is not lost).
+    /// warming up, calibrates on what was seen and judges it, offline, and reports its stances (so a
+    /// short stream is not lost: a one-contact recording gives its one partial stance); they are not
+    /// sampled (their frames have passed). At most `MAX_SEG_EVENTS / 2` of them are reported.
     pub fn finish(&mut self) -> Result<SegEvents> {
         let mut events = SegEvents::EMPTY;
-        if self.calibration.is_none() {
+        if self.calibration.is_none() && !self.contact {
             if self.warmup.is_empty() {
                 return Ok(events);
             }
-            self.finish_warmup()?;
+            let seen = self.warmup.len();
+            let seg = self.finish_warmup()?;
+            let last = seen.saturating_sub(1);
+            for stance in seg.stances.iter().take(MAX_SEG_EVENTS / 2) {
+                let stance_id = self.next_id;
+                self.next_id += 1;
+                events.push(SegEvent::Touchdown(Touchdown {
+                    stance_id,
+                    touchdown_frame: stance.start,
+                    frame: last,
+                    partial: stance.partial,
+                }));
+                events.push(SegEvent::Liftoff(Liftoff {
+                    stance_id,
+                    stance: *stance,
+                    frame: last,
+                    sampled: false,
+                }));
+            }
+            self.run = None;
+            return Ok(events);
         }
         let last = self.t.saturating_sub(1);
         self.close_group(last, true, &mut events);
@@ -690,7 +787,7 @@ impl CausalSegmenter {
     }
 
     /// Calibrates on the warm-up totals with the offline segmentation; detection starts at the next frame.
-    fn finish_warmup(&mut self) -> Result<()> {
+    fn finish_warmup(&mut self) -> Result<Segmentation> {
         let seg = segment(&self.warmup, &self.params)?;
         let mut base = seg.baseline.clone();
         let baseline = median(&mut base);
@@ -723,7 +820,7 @@ impl CausalSegmenter {
                 peak_frame: self.t,
             });
         }
-        Ok(())
+        Ok(seg)
     }
 }
 

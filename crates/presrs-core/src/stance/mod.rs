@@ -1,7 +1,9 @@
 //! Stance detection: which frames of a recording or stream are stances, and which frame of each to
 //! classify.
 //!
-//! - [`offline`]: a whole recording at once (the paper's method; [`segment`], [`segment_recording`]).
+//! - [`offline`]: a whole recording at once (the paper's method, from a drifting baseline).
+//! - [`modes`]: what the stances rise above (drifting baseline, local floor, one contact) and the
+//!   automatic choice ([`segment`], [`segment_recording`]).
 //! - [`causal`]: one total load at a time, without looking ahead ([`CausalSegmenter`]), with the offline
 //!   method's rules and levels learned from offline segmentations ([`Calibration`]).
 //!
@@ -9,13 +11,15 @@
 //! one private module. The offline items are also nameable here (`stance::segment`), as before the split.
 
 pub mod causal;
+pub mod modes;
 pub mod offline;
 mod robust;
 
 pub use causal::{
     Calibration, CausalSegmenter, Levels, Liftoff, OnlineParams, SegEvent, SegEvents, Touchdown,
 };
+pub use modes::{segment, segment_recording};
 pub use offline::{
-    SampleFrame, SegmentParams, Segmentation, Stance, ValidSegmentParams, sample_frames, segment,
-    segment_recording,
+    BaselineMode, SampleFrame, SegmentParams, Segmentation, Stance, ValidSegmentParams,
+    sample_frames,
 };

@@ -38,7 +38,6 @@ use serde::{Deserialize, Serialize};
 
 use super::robust::{median, median_and_sigma, quantile};
 use crate::error::{CoreError, Result};
-use crate::recording::Recording;
 
 /// Residuals further than this many noise sigmas from the baseline are not "unloaded" frames.
 const CLIP_SIGMAS: f64 = 4.0;
@@ -56,7 +55,7 @@ const MIN_START_FRAMES: usize = 10;
 /// A block needs this many unloaded frames to get its own baseline correction (else the global one).
 const MIN_QUIET_PER_BLOCK: usize = 3;
 
-/// Settings of [`segment`], as written by a user (unchecked). Turn them into [`ValidSegmentParams`] with
+/// Settings of [`segment`](super::segment()), as written by a user (unchecked). Turn them into [`ValidSegmentParams`] with
 /// [`SegmentParams::check`] once; the segmentation functions only accept the checked type.
 ///
 /// The defaults work for both the paper's hopper (100 Hz, ~14-frame stances, ~20-frame flights) and
@@ -92,6 +91,59 @@ pub struct SegmentParams {
     /// The quantile of a block's loads used as its first baseline guess (default 0.10, in (0, 0.5]).
     /// Tolerates stance duty factors up to ~85%.
     pub baseline_quantile: f64,
+    /// What the stances rise above (default [`BaselineMode::Auto`]: chosen from the data, see
+    /// [`segment`](super::segment())).
+    pub baseline: BaselineMode,
+    /// Longest stance, in frames (default none). A longer one is dropped in the drifting mode, and with
+    /// [`BaselineMode::Auto`] is taken as a sign of a standing preload (the floor mode is tried).
+    pub max_stance_frames: Option<usize>,
+}
+
+/// What a stance's load is measured from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BaselineMode {
+    /// Chosen from the data: one contact if the recording never unloads, the floor if a contact holds
+    /// several presses over a standing preload, the drifting baseline otherwise.
+    #[default]
+    Auto,
+    /// The unloaded level between stances, a baseline that may be non-zero and drift slowly (the
+    /// method of the module docs; right when the foot fully unloads between contacts).
+    Drifting,
+    /// The local floor: contacts are rises above the lowest load around them (prominence, then
+    /// hysteresis relative to that floor), for presses or steps on a standing preload.
+    Floor,
+    /// The whole recording is one contact, loaded from its first frame to its last (a trial cut to one
+    /// foot contact): one stance, partial at both ends.
+    Contact,
+}
+
+impl FromStr for BaselineMode {
+    type Err = CoreError;
+
+    fn from_str(text: &str) -> Result<Self> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(Self::Auto),
+            "drifting" => Ok(Self::Drifting),
+            "floor" => Ok(Self::Floor),
+            "contact" | "one-contact" => Ok(Self::Contact),
+            _ => Err(CoreError::Param {
+                name: "baseline mode",
+                reason: format!("expected auto, drifting, floor or contact, got {text:?}"),
+            }),
+        }
+    }
+}
+
+impl fmt::Display for BaselineMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Auto => "auto",
+            Self::Drifting => "drifting",
+            Self::Floor => "floor",
+            Self::Contact => "contact",
+        })
+    }
 }
 
 impl Default for SegmentParams {
@@ -105,6 +157,8 @@ impl Default for SegmentParams {
             max_gap_frames: 2,
             baseline_window_frames: 128,
             baseline_quantile: 0.10,
+            baseline: BaselineMode::Auto,
+            max_stance_frames: None,
         }
     }
 }
@@ -162,6 +216,17 @@ impl SegmentParams {
             return bad(
                 "baseline_quantile",
                 format!("must be in (0, 0.5], got {}", self.baseline_quantile),
+            );
+        }
+        if let Some(max) = self.max_stance_frames
+            && max < self.min_stance_frames
+        {
+            return bad(
+                "max_stance_frames",
+                format!(
+                    "must be at least min_stance_frames = {}, got {max}",
+                    self.min_stance_frames
+                ),
             );
         }
         Ok(ValidSegmentParams(self.clone()))
@@ -314,7 +379,7 @@ pub fn sample_frames(stance: &Stance, sample: SampleFrame) -> Result<Vec<usize>>
     }
 }
 
-/// The result of [`segment`].
+/// The result of [`segment`](super::segment()).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Segmentation {
     /// Every stance found, in time order, partial ones included (flagged).
@@ -329,6 +394,17 @@ pub struct Segmentation {
     pub on_level: f64,
     /// Load above baseline that a frame had to exceed to be part of a stance.
     pub off_level: f64,
+    /// What the stances were measured from (never [`BaselineMode::Auto`]: the mode chosen). With
+    /// [`BaselineMode::Floor`], `baseline` is the local floor.
+    #[serde(default = "drifting")]
+    pub mode: BaselineMode,
+    /// Why the mode was chosen, when it was chosen automatically and is not the drifting baseline.
+    #[serde(default)]
+    pub mode_reason: Option<String>,
+}
+
+fn drifting() -> BaselineMode {
+    BaselineMode::Drifting
 }
 
 impl Segmentation {
@@ -352,19 +428,24 @@ impl Segmentation {
     }
 }
 
-/// Finds the stance phases in a series of total loads (one value per frame). See the module docs for the
-/// method. Empty input, or a recording without contact, gives no stances; a non-finite load is an error.
-pub fn segment(total_load: &[f64], params: &ValidSegmentParams) -> Result<Segmentation> {
-    if let Some((frame, value)) = total_load
+/// An error naming the first non-finite load, if any.
+pub(crate) fn check_finite(total_load: &[f64]) -> Result<()> {
+    match total_load
         .iter()
         .enumerate()
         .find(|(_, value)| !value.is_finite())
     {
-        return Err(CoreError::Param {
+        Some((frame, value)) => Err(CoreError::Param {
             name: "total load",
             reason: format!("frame {frame} has load {value}; total loads must be finite"),
-        });
+        }),
+        None => Ok(()),
     }
+}
+
+/// The stance phases measured from a drifting baseline (the method of the module docs), whatever
+/// `params.baseline` says. Loads must be finite ([`check_finite`]).
+pub(crate) fn segment_drifting(total_load: &[f64], params: &ValidSegmentParams) -> Segmentation {
     let p = params.params();
     let (baseline, noise) = estimate_baseline(
         total_load,
@@ -387,9 +468,11 @@ pub fn segment(total_load: &[f64], params: &ValidSegmentParams) -> Result<Segmen
         load_range,
         on_level,
         off_level,
+        mode: BaselineMode::Drifting,
+        mode_reason: None,
     };
     if load_range <= 0.0 {
-        return Ok(segmentation);
+        return segmentation;
     }
 
     // Maximal runs of frames above the off level, [start, end).
@@ -443,15 +526,7 @@ pub fn segment(total_load: &[f64], params: &ValidSegmentParams) -> Result<Segmen
             partial: start == 0 || end == n,
         });
     }
-    Ok(segmentation)
-}
-
-/// [`segment`] on a recording's total load per frame.
-pub fn segment_recording(
-    recording: &Recording,
-    params: &ValidSegmentParams,
-) -> Result<Segmentation> {
-    segment(&recording.total_per_frame(), params)
+    segmentation
 }
 
 /// Per-frame baseline and the baseline noise sigma (see the module docs). `values` must be finite.
@@ -508,6 +583,7 @@ fn estimate_baseline(
     let floor = 1e-12 * values.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
     let mut baseline = fit.coarse.clone();
     let mut sigma = 0.0;
+    let mut lower_bound = 0.0;
     // Two phases. Growing: a low tail's MAD underestimates the noise (the tail is narrower than the
     // cluster), so a symmetric 3-sigma clip can stall at the bottom; instead every frame below
     // median + GROW_SIGMAS x sigma (or below the off level) joins the set (nothing real lies below the
@@ -533,16 +609,24 @@ fn estimate_baseline(
             let centre;
             (centre, sigma) = median_and_sigma(&mut scratch);
             let next: Vec<bool> = if grow {
+                // While growing, the set is the low tail of the unloaded cluster, cut at its top: its MAD
+                // underestimates the noise, badly so for the few frames of a short recording (a 53-frame
+                // movie grew to 15 of its 42 unloaded frames and stalled with a noise of 2 for a true 9,
+                // and noise frames beside the stance then joined it). The tail's lower side is not cut
+                // (nothing real lies below the baseline), so its spread below the median bounds the
+                // noise from below too.
+                let spread = sigma.max(lower_sigma(&residual, &quiet, centre, sigma));
                 // Anything below the off level is unloaded by definition, whatever the noise estimate:
                 // this lets the set grow across a drift much larger than the noise.
                 let range = residual.iter().fold(0.0, |m: f64, &r| m.max(r - centre));
-                let limit = centre + (GROW_SIGMAS * sigma.max(floor)).max(off_fraction * range);
+                let limit = centre + (GROW_SIGMAS * spread.max(floor)).max(off_fraction * range);
                 residual
                     .iter()
                     .zip(&quiet)
                     .map(|(&r, &q)| q || r <= limit)
                     .collect()
             } else {
+                lower_bound = lower_sigma(&residual, &quiet, centre, sigma);
                 let width = CLIP_SIGMAS * sigma.max(floor);
                 residual
                     .iter()
@@ -569,6 +653,10 @@ fn estimate_baseline(
                 if !scratch.is_empty() {
                     sigma = median_and_sigma(&mut scratch).1;
                 }
+                // The MAD of a few dozen frames varies by a quarter either way, and noise frames beside
+                // a stance then join it when it comes out low; the RMS below the centre varies half as
+                // much and cannot hold a stance's edge.
+                sigma = sigma.max(lower_bound);
                 break;
             }
         }
@@ -581,6 +669,26 @@ fn estimate_baseline(
         *level = level.max(lowest);
     }
     (baseline, sigma)
+}
+
+/// The noise sigma measured on the frames flagged `quiet` below `centre` only, as the root mean square
+/// of their distances below it: loads only add to a frame, so the unloaded frames below the centre are
+/// noise alone, neither cut by a clip above nor lifted by a stance's edge. Distances beyond
+/// `2 x CLIP_SIGMAS x mad_sigma` (a glitch reading far below zero) are left out; 0 without frames.
+fn lower_sigma(residual: &[f64], quiet: &[bool], centre: f64, mad_sigma: f64) -> f64 {
+    let limit = 2.0 * CLIP_SIGMAS * mad_sigma;
+    let (sum, count) = residual
+        .iter()
+        .zip(quiet)
+        .filter(|&(&r, &q)| q && r < centre && centre - r <= limit)
+        .fold((0.0, 0usize), |(sum, count), (&r, _)| {
+            (sum + (centre - r).powi(2), count + 1)
+        });
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64).sqrt()
+    }
 }
 
 /// The pieces of a baseline estimate: blocks, their centres and low-quantile levels, and the coarse

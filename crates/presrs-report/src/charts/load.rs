@@ -3,7 +3,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use presrs_core::Recording;
-use presrs_core::stance::{SampleFrame, ValidSegmentParams, segment_recording};
+use presrs_core::stance::{BaselineMode, SampleFrame, ValidSegmentParams, segment_recording};
 
 use super::common::{TITLE, draw_legend, finite_range, numeric_axes, padded};
 use crate::error::Result;
@@ -28,6 +28,9 @@ pub struct LoadCurveData {
     pub sampled: Vec<usize>,
     /// The segmentation's baseline (same unit as `load`).
     pub baseline: Vec<f64>,
+    /// What `baseline` is, by the segmentation's mode: "floor" (the local floor of presses on a
+    /// preload), "baseline" (the unloaded level), "baseline (one contact)".
+    pub baseline_label: &'static str,
 }
 
 impl LoadCurveData {
@@ -61,7 +64,13 @@ impl LoadCurveData {
             partial,
             sampled,
             baseline: segmentation.baseline.iter().map(|v| v * factor).collect(),
+            baseline_label: baseline_label(segmentation.mode),
         })
+    }
+
+    /// The curve's title, with what its grey line is: `name; grey: floor` (movie frames have no legend).
+    pub fn name_with_baseline(&self) -> String {
+        format!("{}; grey: {}", self.name, self.baseline_label)
     }
 
     fn time(&self, frame: f64) -> f64 {
@@ -74,6 +83,15 @@ impl LoadCurveData {
         } else {
             "frame"
         }
+    }
+}
+
+/// What the line a segmentation in `mode` measures stances from is called.
+pub fn baseline_label(mode: BaselineMode) -> &'static str {
+    match mode {
+        BaselineMode::Floor => "floor",
+        BaselineMode::Contact => "baseline (one contact)",
+        BaselineMode::Drifting | BaselineMode::Auto => "baseline",
     }
 }
 
@@ -149,7 +167,7 @@ where
                     .map(|(i, &v)| (data.time(i as f64), v)),
                 RGBColor(120, 120, 120).stroke_width(1),
             ))?
-            .label("baseline")
+            .label(data.baseline_label)
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], RGBColor(120, 120, 120)));
     }
     let line = category_color(0);

@@ -67,7 +67,9 @@ pub fn resolve_profile(
     let mut profile = if let Some(path) = profile_file {
         read_profile(path)?
     } else if let Some(manifest) = calibrate {
-        crate::train::learn_online_profile(manifest)?
+        // With the detector settings the model was trained with, if it says.
+        let segment = model_profile.map(|profile| profile.segment.clone());
+        crate::train::learn_online_profile(manifest, &segment.unwrap_or_default())?
     } else {
         model_profile.cloned().unwrap_or_default()
     };

@@ -5,7 +5,6 @@ use std::time::Instant;
 
 use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
 use presrs_core::pipeline::TrainedModel;
-use presrs_core::stance::ValidSegmentParams;
 use presrs_core::{FrameView, Grid};
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
 use presrs_io::tekscan_stream::TekscanStream;
@@ -233,7 +232,7 @@ pub(super) fn run_connection(
 ) -> Result<ConnectionSummary> {
     let classifier = OnlineClassifier::new(
         model,
-        &ValidSegmentParams::default(),
+        &profile.segment,
         &profile.params,
         profile.calibration,
     )?;
