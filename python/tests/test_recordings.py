@@ -120,3 +120,24 @@ def test_a_time_last_npy_reads_with_its_axes(tmp_path):
     np.testing.assert_array_equal(rec.frames, np.moveaxis(frames, 2, 0))
     with pytest.raises(presrs.DataError, match="axes"):
         presrs.read(tmp_path / "time-last.npy", axes="rows,rows,frames")
+
+
+def test_the_detectors_modes_from_python():
+    rec = presrs.read(WALK)
+    assert presrs.segment_params()["baseline"] == "auto"
+    assert len(presrs.segment(rec, baseline="drifting")) == 6
+    whole = presrs.segment(rec, baseline="contact")
+    assert len(whole) == 1 and whole[0].partial and whole[0].length == len(rec)
+    with pytest.raises(presrs.DataError, match="sideways"):
+        presrs.segment(rec, baseline="sideways")
+
+
+def test_a_one_contact_movie_is_one_stance():
+    movies = sorted((SHARED / "data" / "real" / "jiku-walk").glob("*.npy"))[:5]
+    assert movies
+    for movie in movies:
+        rec = presrs.read(movie)
+        stances = presrs.segment(rec)
+        assert len(stances) == 1 and stances[0].partial, movie
+        images, kept = presrs.stance_images(rec, include_partial=True)
+        assert images.shape == (1,) + rec.shape
