@@ -148,7 +148,7 @@ impl<'d> EvalSetup<'d> {
             },
         };
         let never_trained = presrs_core::evaluation::labels_never_trained(&samples, &protocol);
-        let warnings = never_trained
+        let mut warnings: Vec<String> = never_trained
             .iter()
             .map(|(held_out, labels)| {
                 let tested = match column {
@@ -162,6 +162,23 @@ impl<'d> EvalSetup<'d> {
                 )
             })
             .collect();
+        let capped = presrs_core::evaluation::per_class_capped(&samples, &protocol);
+        if let Some(per_class) = options.per_class
+            && !capped.is_empty()
+        {
+            let held = column.is_some();
+            warnings.push(format!(
+                "{name}: {}",
+                crate::train::per_class_warning(
+                    per_class,
+                    capped.iter().flat_map(|(held_out, classes)| {
+                        classes.iter().map(move |(class, &n)| {
+                            (held.then_some(held_out.as_str()), class.as_str(), n)
+                        })
+                    }),
+                )
+            ));
+        }
         Ok(Self {
             dataset,
             samples,

@@ -7,7 +7,7 @@ use std::path::Path;
 use presrs_core::TrainedModel;
 use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::{LabeledImage, train as train_pipeline};
-use presrs_core::split::{Split, ValidationSize, stratified_split};
+use presrs_core::split::{Split, ValidationSize, stratified_split_capped};
 use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
@@ -106,8 +106,9 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         &pool,
         "training needs a label for every sample",
     )?;
-    let split = stratified_split(&labels, options.per_class, options.validation, options.seed)
-        .with_context(|| format!("{name}: cannot draw the training set"))?;
+    let split =
+        stratified_split_capped(&labels, options.per_class, options.validation, options.seed)
+            .with_context(|| format!("{name}: cannot draw the training set"))?;
     let method = &options.method;
     method
         .check_validation_set(options.validation, split.validation.len())
@@ -139,6 +140,17 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     }
     .with_context(|| format!("{name}: training failed"))?;
     let mut warnings = Vec::new();
+    if let Some(per_class) = options.per_class
+        && !split.capped.is_empty()
+    {
+        warnings.push(per_class_warning(
+            per_class,
+            split
+                .capped
+                .iter()
+                .map(|(class, &n)| (None, class.as_str(), n)),
+        ));
+    }
     let kept = model.pca().n_components();
     if let Some(dims) = method.dims
         && kept < dims
@@ -164,6 +176,29 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         validation_counts: count(&split.validation),
         warnings,
     })
+}
+
+/// The one warning line for a `--per-class` that some classes cannot give: `short` lists (held-out
+/// value, class, images it has) and the line names the fewest.
+pub fn per_class_warning<'a>(
+    per_class: usize,
+    short: impl Iterator<Item = (Option<&'a str>, &'a str, usize)>,
+) -> String {
+    let short: Vec<_> = short.collect();
+    let classes: std::collections::BTreeSet<&str> = short.iter().map(|s| s.1).collect();
+    let fewest = short.iter().min_by_key(|s| s.2);
+    let fewest = match fewest {
+        Some((Some(held_out), class, n)) => {
+            format!("; fewest: {n} of class {class} with {held_out} held out")
+        }
+        Some((None, class, n)) => format!("; fewest: {n} of class {class}"),
+        None => String::new(),
+    };
+    format!(
+        "--per-class {per_class}: capped to the images there are for {} class(es) ({}){fewest}",
+        classes.len(),
+        classes.into_iter().collect::<Vec<_>>().join(", ")
+    )
 }
 
 /// The training and validation images of a draw: `image(i)` is the image at index `i` of what was

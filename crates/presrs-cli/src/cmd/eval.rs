@@ -38,7 +38,8 @@ pub struct EvalArgs {
     /// not label: a held-out class could never be recognised).
     #[arg(long, value_parser = parse_leave_one_out)]
     pub leave_one_out: Option<String>,
-    /// Random samples drawn per class for training + validation, at least 1 (default: all available).
+    /// Random samples drawn per class for training + validation, at least 1 (default: all available);
+    /// a class (or held-out fold) with fewer gives all it has, with one warning.
     #[arg(long, value_parser = super::common::parse_positive)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).

@@ -34,7 +34,8 @@ pub struct TrainArgs {
     /// Train only on samples of this condition (the manifest's `condition` column, e.g. a gait).
     #[arg(long)]
     pub train_condition: Option<String>,
-    /// Random samples drawn per class, at least 1 (default: every sample).
+    /// Random samples drawn per class, at least 1 (default: every sample); a class with fewer gives
+    /// all it has, with one warning.
     #[arg(long, value_parser = super::common::parse_positive)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).
