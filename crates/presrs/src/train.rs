@@ -211,6 +211,12 @@ pub fn split_images<'s>(
     (images(&split.train), images(&split.validation))
 }
 
+/// Whether `dataset` holds samples taken from movies (a stance's frame past the first): a model trained
+/// on it is meant for a stream, so `train` writes an online profile by default.
+pub fn trained_on_movies(dataset: &Dataset) -> bool {
+    dataset.samples.iter().any(|sample| sample.frame_index > 0)
+}
+
 /// The online profile (detector calibration and sample frame) learned by segmenting, offline, every
 /// movie a manifest lists.
 pub fn learn_online_profile(manifest: &Path) -> Result<OnlineProfile> {

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs::train::{TrainOptions, learn_online_profile};
+use presrs::train::{TrainOptions, learn_online_profile, trained_on_movies};
 use presrs_core::selection::Selection;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
@@ -44,11 +44,16 @@ pub struct TrainArgs {
     /// Seed of the random draw.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Also write an online profile into the model file (calibration and sample frame learned from the
-    /// manifest's recordings by offline segmentation), for `presrs stream` and `presrs simulate --adaptive`.
-    /// Off by default: it reads every recording of the manifest once more.
+    /// Write an online profile into the model file (calibration and sample frame learned from the
+    /// manifest's recordings by offline segmentation), for `presrs stream` and `presrs simulate --adaptive`:
+    /// a stream then classifies from its first stance, with no warm-up. The default when the training
+    /// samples come from movies (it reads them once more); this flag asks for it on other data too, and
+    /// fails if it cannot be learned.
     #[arg(long)]
     pub online_profile: bool,
+    /// Write no online profile, even when the training samples come from movies.
+    #[arg(long, conflicts_with_all = ["online_profile", "gait_table"])]
+    pub no_online_profile: bool,
     /// Terrain-to-gait table for the online profile (implies --online-profile): `sim` measures, with the
     /// simulator, the fastest gait that never fell on each terrain of the model, in steady runs or
     /// stepping onto another terrain, with a margin in `beta_des` (`presrs_sim::track::gait_table`, over
@@ -94,7 +99,17 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         !args.samples.keep_dead_sensels,
         Some(std::env::args().collect::<Vec<_>>().join(" ")),
     );
-    if args.online_profile || args.gait_table.is_some() {
+    let asked = args.online_profile || args.gait_table.is_some();
+    if !asked && !args.no_online_profile && trained_on_movies(&dataset) {
+        match learn_online_profile(&args.manifest) {
+            Ok(profile) => file.online = Some(profile),
+            Err(err) => stderr_line!(
+                "warning: {}: no online profile written (a stream will warm up first): {err:#}",
+                args.manifest.display()
+            ),
+        }
+    }
+    if asked {
         let mut profile = learn_online_profile(&args.manifest).with_context(|| {
             format!(
                 "{}: cannot learn the online profile",
