@@ -81,3 +81,123 @@ fn per_class_beyond_the_data_is_capped_with_one_warning() {
         stderr(&enough)
     );
 }
+
+/// The internal estimate of `train`, validated by the given way; (estimate in %, the words).
+fn train_estimate(manifest: &str, out: &std::path::Path, extra: &[&str]) -> (f64, String) {
+    let train = presrs(
+        &[
+            &[
+                "train",
+                "--manifest",
+                manifest,
+                "--out",
+                out.to_str().unwrap(),
+                "--features",
+                "fft2d_polar",
+                "--dims",
+                "6",
+            ][..],
+            extra,
+        ]
+        .concat(),
+    );
+    assert!(train.status.success(), "{}", stderr(&train));
+    let text = stdout(&train);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("internal estimate: "))
+        .unwrap_or_else(|| panic!("{text}"));
+    let percent: f64 = line["internal estimate: ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let how = line.split(", validated by ").nth(1).unwrap().to_owned();
+    (percent, how)
+}
+
+/// On data whose groups differ (each group's images scaled and shifted its own way), the automatic
+/// choice validates by group by default: its internal estimate is leave-one-group-out, lower than what
+/// stratified splits (which mix the groups) claim; `eval` reports it next to the test result.
+#[test]
+fn the_automatic_choice_validates_by_group_and_eval_reports_its_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (16, 16), 3, 24, 4, 1.3, 21);
+    let manifest = manifest.to_str().unwrap();
+    let model = dir.path().join("m.json");
+    let (by_group, how) = train_estimate(manifest, &model, &[]);
+    assert!(
+        how.starts_with("leave one group out inside the training data (g0, g1, g2, g3)"),
+        "{how}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let scores = json["model"]["selection"]["scores"][0]["per_fold"].clone();
+    assert!(scores["g3"].is_number(), "{scores}");
+    let (by_split, how) = train_estimate(manifest, &model, &["--validate-by", "split"]);
+    assert!(how.starts_with("three stratified"), "{how}");
+    assert!(
+        by_split > by_group,
+        "splits mix the groups and claim more: {by_split} vs {by_group}"
+    );
+    // One condition only: validating by condition is refused, saying why.
+    let refused = presrs(&[
+        "train",
+        "--manifest",
+        manifest,
+        "--out",
+        model.to_str().unwrap(),
+        "--validate-by",
+        "condition",
+    ]);
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("validating by condition needs at least two conditions"),
+        "{}",
+        stderr(&refused)
+    );
+
+    let eval = |json: bool| {
+        let mut args = vec![
+            "eval",
+            "--manifest",
+            manifest,
+            "--leave-one-out",
+            "group",
+            "--repeats",
+            "1",
+            "--features",
+            "fft2d_polar",
+            "--dims",
+            "6",
+        ];
+        if json {
+            args.push("--json");
+        }
+        presrs(&args)
+    };
+    let out = eval(true);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let internal = &json["internal_estimate"];
+    assert_eq!(internal["models"], 4, "{internal}");
+    assert!(
+        internal["validated_by"]
+            .as_str()
+            .unwrap()
+            .starts_with("leave one group out"),
+        "{internal}"
+    );
+    assert!(
+        internal["accuracy"]["mean"].as_f64().unwrap() > 0.0,
+        "{internal}"
+    );
+    let out = eval(false);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("internal estimate (validation inside the training data): "),
+        "{}",
+        stdout(&out)
+    );
+}

@@ -98,8 +98,8 @@ pub enum Models<'c> {
     /// With this configuration (the paper's method, or any other).
     Config(&'c CheckedTrainConfig),
     /// Chosen among these candidates by [`crate::selection::train_auto`] on the fold's training data
-    /// only (leave-one-condition-out inside it when it spans several conditions).
-    Auto(&'c [CheckedTrainConfig]),
+    /// only, validated as the [`ValidateBy`](crate::selection::ValidateBy) says.
+    Auto(&'c [CheckedTrainConfig], crate::selection::ValidateBy),
 }
 
 /// What [`Evaluation::run_each`] found.
@@ -166,19 +166,14 @@ impl Evaluation<'_, '_> {
                     selections: Vec::new(),
                 })
             }
-            Models::Auto(candidates) => {
+            Models::Auto(candidates, by) => {
                 let selections = std::sync::Mutex::new(Vec::new());
                 let reports =
                     self.run_with(perturbs, &|train_set, validation_set, fold_seed| {
-                        let conditions: Option<Vec<&str>> = train_set
-                            .iter()
-                            .chain(validation_set)
-                            .map(|&i| samples[i].condition)
-                            .collect();
                         let model = crate::selection::train_auto(
                             &images(train_set),
                             &images(validation_set),
-                            conditions.as_deref(),
+                            by,
                             candidates,
                             fold_seed,
                         )?;
@@ -977,7 +972,10 @@ mod tests {
         };
         let candidates = [paper_config_with_dims(5), paper_config_with_dims(10)];
         let run = evaluation(&samples, &protocol, 2, 7)
-            .run_each(Models::Auto(&candidates), &[None])
+            .run_each(
+                Models::Auto(&candidates, crate::selection::ValidateBy::Auto),
+                &[None],
+            )
             .unwrap();
         // one model per held-out value and repeat, each with its selection
         assert_eq!(run.selections.len(), 3 * 2);
@@ -992,7 +990,10 @@ mod tests {
         assert_eq!(total as usize, 2 * samples.len());
         // `run` is `run_each` on the images as they are
         let alone = evaluation(&samples, &protocol, 2, 7)
-            .run(Models::Auto(&candidates))
+            .run(Models::Auto(
+                &candidates,
+                crate::selection::ValidateBy::Auto,
+            ))
             .unwrap();
         assert_eq!(alone.confusion, report.confusion);
         assert_eq!(alone.per_condition, report.per_condition);

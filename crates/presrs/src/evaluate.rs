@@ -79,6 +79,35 @@ pub struct EvalOutcome {
     pub warnings: Vec<String>,
 }
 
+/// What the automatic choice expected of its chosen candidates, inside the training data: to set next
+/// to the test result, to see how honest its validation was.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InternalEstimate {
+    /// Mean and spread over the trained models of the chosen candidate's validation accuracy.
+    pub accuracy: presrs_core::metrics::MeanStd,
+    /// How the candidates were validated (the first model's words).
+    pub validated_by: String,
+    /// Models it is the mean of.
+    pub models: usize,
+}
+
+impl EvalOutcome {
+    /// The automatic choice's own estimate, over every trained model (`None` for a fixed method).
+    pub fn internal_estimate(&self) -> Option<InternalEstimate> {
+        let chosen: Vec<f64> = self
+            .selections
+            .iter()
+            .filter_map(|s| s.chosen().map(|c| c.accuracy.mean))
+            .collect();
+        let first = self.selections.first()?;
+        Some(InternalEstimate {
+            accuracy: presrs_core::metrics::MeanStd::of(&chosen),
+            validated_by: first.method.clone(),
+            models: chosen.len(),
+        })
+    }
+}
+
 /// Accuracy of one method with the test images perturbed.
 #[derive(Clone, Debug, Serialize)]
 pub struct PerturbationRow {
@@ -126,7 +155,8 @@ impl<'d> EvalSetup<'d> {
                         sample.origin(dataset.path())
                     ))
                 })?),
-                None => None,
+                // The automatic choice validates by the manifest's groups.
+                None => sample.group.as_deref(),
             };
             samples.push(LabeledImage {
                 frame: sample.frame.view(),
@@ -359,7 +389,7 @@ fn models<'c>(
     candidates: &'c [CheckedTrainConfig],
 ) -> Models<'c> {
     if method.is_auto() {
-        Models::Auto(candidates)
+        Models::Auto(candidates, method.validate_by)
     } else {
         Models::Config(config)
     }

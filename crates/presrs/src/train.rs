@@ -114,20 +114,17 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         .check_validation_set(options.validation, split.validation.len())
         .with_context(|| format!("{name}: cannot train"))?;
     let grid = pool[0].frame.grid();
-    let (train_images, validation_images) = split_images(&split, |i| {
-        LabeledImage::new(pool[i].frame.view(), labels[i])
+    let (train_images, validation_images) = split_images(&split, |i| LabeledImage {
+        frame: pool[i].frame.view(),
+        label: labels[i],
+        condition: pool[i].condition.as_deref(),
+        group: pool[i].group.as_deref(),
     });
     let model = if method.is_auto() {
-        let conditions: Option<Vec<&str>> = split
-            .train
-            .iter()
-            .chain(&split.validation)
-            .map(|&i| pool[i].condition.as_deref())
-            .collect();
         presrs_core::selection::train_auto(
             &train_images,
             &validation_images,
-            conditions.as_deref(),
+            method.validate_by,
             &method.candidates(grid, false)?,
             options.seed,
         )

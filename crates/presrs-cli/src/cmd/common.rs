@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs::dataset::{DeadSenselFills, SampleOptions, read_corrected};
-use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method};
+use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
@@ -20,7 +20,7 @@ pub struct PipelineArgs {
     /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
     /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes); join
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
-    /// leave one condition out when it spans several, among fft1d, fft2d and fft2d_polar; --full-search
+    /// by group or condition (--validate-by), among fft1d, fft2d and fft2d_polar; --full-search
     /// adds glcm and fft2d_polar+glcm). `--features fft1d --classifier pwe` is the paper's method.
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<FeatureChoice>())]
     pub features: FeatureChoice,
@@ -45,6 +45,12 @@ pub struct PipelineArgs {
     /// clusters) instead of reading them as 0. Stored in the model.
     #[arg(long)]
     pub fill_absent: bool,
+    /// With auto: how the candidates are validated inside the training data: group (leave one of the
+    /// manifest's `group` out), condition (leave one condition out), split (three stratified 70/30
+    /// splits), or auto (group when the training data hold 3 or more groups, else condition when they
+    /// hold several, else split).
+    #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ValidateBy>())]
+    pub validate_by: ValidateBy,
     #[command(flatten)]
     pub crop: CropArg,
 }
@@ -72,6 +78,7 @@ impl PipelineArgs {
                 fill_absent: self.fill_absent,
             },
             crop: self.crop.crop,
+            validate_by: self.validate_by,
         }
     }
 }

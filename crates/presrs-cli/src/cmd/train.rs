@@ -198,6 +198,13 @@ fn print_selection(selection: &Selection, out: &mut dyn Write) -> anyhow::Result
             "chosen: {} + {} (the paper's method: --features fft1d --classifier pwe)",
             chosen.features, chosen.classifier
         )?;
+        writeln!(
+            out,
+            "internal estimate: {:.2} % +- {:.2}, validated by {}",
+            100.0 * chosen.accuracy.mean,
+            100.0 * chosen.accuracy.std,
+            selection.method
+        )?;
     }
     Ok(())
 }
