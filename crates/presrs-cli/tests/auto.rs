@@ -201,3 +201,55 @@ fn the_automatic_choice_validates_by_group_and_eval_reports_its_estimate() {
         stdout(&out)
     );
 }
+
+/// With stderr not a terminal (a log), a long run writes `progress: ...` lines (every
+/// PRESRS_PROGRESS_SECONDS, 5 s by default), in train and eval; stdout is untouched.
+#[test]
+fn progress_lines_go_to_stderr_when_it_is_not_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (16, 16), 3, 12, 3, 0.5, 2);
+    let manifest = manifest.to_str().unwrap();
+    let model = dir.path().join("m.json");
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_presrs"))
+            .args(args)
+            .env("PRESRS_PROGRESS_SECONDS", "0.001")
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap()
+    };
+    let train = run(&[
+        "train",
+        "--manifest",
+        manifest,
+        "--out",
+        model.to_str().unwrap(),
+        "--dims",
+        "5",
+    ]);
+    assert!(train.status.success(), "{}", stderr(&train));
+    assert!(
+        stderr(&train).contains("progress: training: "),
+        "{}",
+        stderr(&train)
+    );
+    assert!(!stdout(&train).contains("progress:"));
+    let eval = run(&[
+        "eval",
+        "--manifest",
+        manifest,
+        "--leave-one-out",
+        "group",
+        "--repeats",
+        "2",
+        "--dims",
+        "5",
+    ]);
+    assert!(eval.status.success(), "{}", stderr(&eval));
+    let err = stderr(&eval);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("progress: ") && l.contains("/6 (")),
+        "{err}"
+    );
+}

@@ -15,6 +15,7 @@
 
 use std::collections::BTreeMap;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
@@ -184,47 +185,12 @@ pub fn select(
             });
         }
     }
-    let mut scores = Vec::with_capacity(candidates.len());
-    for candidate in candidates {
-        let config = candidate.config();
-        let mut per_fold = BTreeMap::new();
-        let mut error = None;
-        for fold in &folds {
-            let pick = |indices: &[usize]| indices.iter().map(|&i| images[i]).collect::<Vec<_>>();
-            match train(&pick(&fold.train), &pick(&fold.validation), candidate) {
-                Ok(model) => {
-                    let mut session = model.session();
-                    let mut correct = 0usize;
-                    for &i in &fold.test {
-                        if session.classify(&images[i].frame)?.label == images[i].label {
-                            correct += 1;
-                        }
-                    }
-                    per_fold.insert(
-                        fold.name.clone(),
-                        correct as f64 / fold.test.len().max(1) as f64,
-                    );
-                }
-                Err(err) => {
-                    error = Some(err.to_string());
-                    break;
-                }
-            }
-        }
-        let accuracy = if error.is_some() {
-            MeanStd::default()
-        } else {
-            MeanStd::of(&per_fold.values().copied().collect::<Vec<_>>())
-        };
-        scores.push(CandidateScore {
-            features: config.features.name(),
-            classifier: config.classifier.kind().as_str().to_owned(),
-            config: config.clone(),
-            accuracy,
-            per_fold,
-            error,
-        });
-    }
+    // Candidates are scored in parallel (rayon; each one's folds in order): the scores, and so the
+    // choice, do not depend on the number of threads.
+    let scores: Vec<CandidateScore> = candidates
+        .par_iter()
+        .map(|candidate| score_candidate(images, &folds, candidate))
+        .collect::<Result<_>>()?;
     let mut chosen = 0;
     for (i, score) in scores.iter().enumerate() {
         if score.error.is_none()
@@ -253,6 +219,53 @@ pub fn select(
         method,
         chosen,
         scores,
+    })
+}
+
+/// One candidate's accuracy on every fold (in fold order; the first fold it cannot be trained on ends
+/// it, with the reason).
+fn score_candidate(
+    images: &[LabeledImage<'_>],
+    folds: &[InnerFold],
+    candidate: &CheckedTrainConfig,
+) -> Result<CandidateScore> {
+    let config = candidate.config();
+    let mut per_fold = BTreeMap::new();
+    let mut error = None;
+    for fold in folds {
+        let pick = |indices: &[usize]| indices.iter().map(|&i| images[i]).collect::<Vec<_>>();
+        match train(&pick(&fold.train), &pick(&fold.validation), candidate) {
+            Ok(model) => {
+                let mut session = model.session();
+                let mut correct = 0usize;
+                for &i in &fold.test {
+                    if session.classify(&images[i].frame)?.label == images[i].label {
+                        correct += 1;
+                    }
+                }
+                per_fold.insert(
+                    fold.name.clone(),
+                    correct as f64 / fold.test.len().max(1) as f64,
+                );
+            }
+            Err(err) => {
+                error = Some(err.to_string());
+                break;
+            }
+        }
+    }
+    let accuracy = if error.is_some() {
+        MeanStd::default()
+    } else {
+        MeanStd::of(&per_fold.values().copied().collect::<Vec<_>>())
+    };
+    Ok(CandidateScore {
+        features: config.features.name(),
+        classifier: config.classifier.kind().as_str().to_owned(),
+        config: config.clone(),
+        accuracy,
+        per_fold,
+        error,
     })
 }
 

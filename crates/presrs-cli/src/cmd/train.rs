@@ -10,7 +10,9 @@ use presrs_core::selection::Selection;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
-use super::common::{PipelineArgs, SampleArgs, load_manifest};
+use presrs::Progress;
+
+use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
@@ -85,7 +87,12 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         seed: args.seed,
         method: args.pipeline.method(),
     };
-    let training = presrs::train::train(&dataset, &options)?;
+    // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
+    let progress = TerminalProgress::default();
+    progress.start("training", None);
+    let training = presrs::train::train(&dataset, &options);
+    progress.finish();
+    let training = training?;
     for warning in &training.warnings {
         stderr_line!("warning: {warning}");
     }
