@@ -157,7 +157,8 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         String::from_utf8_lossy(&train.stderr)
     );
     let text = String::from_utf8_lossy(&train.stdout);
-    assert!(text.contains("leave one condition out"), "{text}");
+    // The simulator's groups are its recordings (6 here): validated by leaving one out.
+    assert!(text.contains("leave one group out"), "{text}");
     // --full-search tries the texture families too, and the choice is printed
     assert!(text.contains("fft2d_polar+glcm"), "{text}");
     assert!(text.contains("chosen: "), "{text}");
@@ -166,4 +167,39 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         saved.contains("\"selection\""),
         "the choice is recorded in the model"
     );
+}
+
+/// Images larger than the polar form's 64 x 64 padding (60 x 75, like a real fingertip array): every
+/// combination of `--compare` runs, the transform grown to fit instead of aborting.
+#[test]
+fn compare_runs_on_images_larger_than_the_default_padding() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (60, 75), 3, 8, 1, 0.0, 5);
+    let out = presrs(&[
+        "eval",
+        "--compare",
+        "--json",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--per-class",
+        "5",
+        "--validation",
+        "2",
+        "--repeats",
+        "1",
+        "--dims",
+        "5",
+    ]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = json["comparison"].as_array().unwrap();
+    assert_eq!(rows.len(), 5 * 5, "every feature x classifier combination");
+    for row in rows {
+        assert!(row.get("error").is_none(), "{row}");
+    }
+    let polar = rows
+        .iter()
+        .find(|row| row["features"] == "fft2d_polar" && row["classifier"] == "lda")
+        .expect("the polar row");
+    assert!(polar["overall_accuracy"].as_f64().unwrap() > 0.5, "{polar}");
 }

@@ -60,6 +60,8 @@ fn fixture() -> &'static (PathBuf, PathBuf) {
             "4",
             "--dims",
             "10",
+            // These tests show the warm-up: a model without a profile.
+            "--no-online-profile",
         ]);
         (dir, model)
     })
@@ -847,4 +849,49 @@ fn a_model_trained_with_stance_options_streams_with_them() {
             "online {online:?} vs offline with the trained options {trained:?}"
         );
     }
+}
+
+/// `train` on movies, without flags, writes the online profile: a stream started with the fresh model
+/// classifies every complete stance of a movie, its first one included, with no warm-up.
+#[test]
+fn a_model_trained_on_movies_streams_from_its_first_stance() {
+    let (dir, _) = fixture();
+    let model = dir.join("fresh.model.json");
+    run_ok(&[
+        "train",
+        "--manifest",
+        dir.join("manifest.csv").to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+        "--features",
+        "fft1d",
+        "--classifier",
+        "lda",
+        "--per-class",
+        "8",
+        "--dims",
+        "10",
+    ]);
+    let file: Value = serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert!(
+        file["online"]["calibration"].is_object(),
+        "{}",
+        file["online"]
+    );
+    let path = recording("clay");
+    let out = presrs()
+        .args(["stream", "--model", model.to_str().unwrap()])
+        .stdin(std::fs::File::open(&path).unwrap())
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{log}");
+    assert!(!log.contains("warm-up"), "{log}");
+    let events = json_lines(&String::from_utf8(out.stdout).unwrap());
+    let singles = events
+        .iter()
+        .filter(|e| e["event"] == "classification" && e["kind"] == "single")
+        .count();
+    assert_eq!(singles, offline_stances(&path), "{events:?}");
+    assert_eq!(events.last().unwrap()["warmup_frames"], 0, "{events:?}");
 }

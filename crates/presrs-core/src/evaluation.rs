@@ -22,7 +22,7 @@ use crate::frame::{Frame, FrameView};
 use crate::metrics::ratio;
 use crate::pipeline::{CheckedTrainConfig, LabeledImage, Selection, train};
 use crate::reliability::Reliability;
-use crate::split::{ValidationSize, stratified_split};
+use crate::split::{ValidationSize, per_class_shortfall, stratified_split_capped};
 
 // The summaries an [`EvalReport`] is made of, nameable from here as before they moved to the leaf module.
 pub use crate::metrics::{Confusion, MeanStd};
@@ -98,8 +98,8 @@ pub enum Models<'c> {
     /// With this configuration (the paper's method, or any other).
     Config(&'c CheckedTrainConfig),
     /// Chosen among these candidates by [`crate::selection::train_auto`] on the fold's training data
-    /// only (leave-one-condition-out inside it when it spans several conditions).
-    Auto(&'c [CheckedTrainConfig]),
+    /// only, validated as the [`ValidateBy`](crate::selection::ValidateBy) says.
+    Auto(&'c [CheckedTrainConfig], crate::selection::ValidateBy),
 }
 
 /// What [`Evaluation::run_each`] found.
@@ -166,19 +166,14 @@ impl Evaluation<'_, '_> {
                     selections: Vec::new(),
                 })
             }
-            Models::Auto(candidates) => {
+            Models::Auto(candidates, by) => {
                 let selections = std::sync::Mutex::new(Vec::new());
                 let reports =
                     self.run_with(perturbs, &|train_set, validation_set, fold_seed| {
-                        let conditions: Option<Vec<&str>> = train_set
-                            .iter()
-                            .chain(validation_set)
-                            .map(|&i| samples[i].condition)
-                            .collect();
                         let model = crate::selection::train_auto(
                             &images(train_set),
                             &images(validation_set),
-                            conditions.as_deref(),
+                            by,
                             candidates,
                             fold_seed,
                         )?;
@@ -452,6 +447,50 @@ pub struct ComparisonRow {
     pub train_seconds: MeanStd,
 }
 
+/// The classes whose training pool holds fewer images than the protocol's `per_class`, with how many
+/// it holds, by held-out value (leave-one-out) or as `"all"` (a training condition): their draws are
+/// capped to what there is. Empty when every draw is as asked.
+pub fn per_class_capped(
+    samples: &[LabeledImage<'_>],
+    protocol: &Protocol,
+) -> BTreeMap<String, BTreeMap<String, usize>> {
+    let shortfall = |keep: &dyn Fn(&LabeledImage<'_>) -> bool, per_class: Option<usize>| {
+        let labels: Vec<&str> = samples
+            .iter()
+            .filter(|s| keep(s))
+            .map(|s| s.label)
+            .collect();
+        per_class_shortfall(&labels, per_class)
+    };
+    let mut out = BTreeMap::new();
+    match protocol {
+        Protocol::TrainCondition {
+            condition,
+            per_class,
+            ..
+        } => {
+            let short = shortfall(
+                &|s| condition.as_deref().is_none_or(|c| s.condition == Some(c)),
+                *per_class,
+            );
+            if !short.is_empty() {
+                out.insert("all".to_owned(), short);
+            }
+        }
+        Protocol::LeaveOneOut { per_class, .. } => {
+            let values: std::collections::BTreeSet<&str> =
+                samples.iter().filter_map(|s| s.group).collect();
+            for value in values {
+                let short = shortfall(&|s| s.group != Some(value), *per_class);
+                if !short.is_empty() {
+                    out.insert(value.to_owned(), short);
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The labels a protocol tests that its training sets can never hold, by held-out value (leave-one-out)
 /// or as `"all"` (a training condition): such samples are wrong whatever the model, e.g. a group that is
 /// one terrain's only trial. Empty when every tested label can be trained. Sorted.
@@ -543,7 +582,7 @@ fn folds(samples: &[LabeledImage<'_>], protocol: &Protocol, seed: u64) -> Result
                 )));
             }
             let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
-            let split = stratified_split(&labels, *per_class, *validation, seed)?;
+            let split = stratified_split_capped(&labels, *per_class, *validation, seed)?;
             let in_pool = |indices: &[usize]| indices.iter().map(|&k| pool[k]).collect::<Vec<_>>();
             let (train, validation) = (in_pool(&split.train), in_pool(&split.validation));
             let mut used = vec![false; samples.len()];
@@ -589,7 +628,7 @@ fn folds(samples: &[LabeledImage<'_>], protocol: &Protocol, seed: u64) -> Result
                         .filter(|&i| values[i] != *held_out)
                         .collect();
                     let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
-                    let split = stratified_split(
+                    let split = stratified_split_capped(
                         &labels,
                         *per_class,
                         *validation,
@@ -933,7 +972,10 @@ mod tests {
         };
         let candidates = [paper_config_with_dims(5), paper_config_with_dims(10)];
         let run = evaluation(&samples, &protocol, 2, 7)
-            .run_each(Models::Auto(&candidates), &[None])
+            .run_each(
+                Models::Auto(&candidates, crate::selection::ValidateBy::Auto),
+                &[None],
+            )
             .unwrap();
         // one model per held-out value and repeat, each with its selection
         assert_eq!(run.selections.len(), 3 * 2);
@@ -948,7 +990,10 @@ mod tests {
         assert_eq!(total as usize, 2 * samples.len());
         // `run` is `run_each` on the images as they are
         let alone = evaluation(&samples, &protocol, 2, 7)
-            .run(Models::Auto(&candidates))
+            .run(Models::Auto(
+                &candidates,
+                crate::selection::ValidateBy::Auto,
+            ))
             .unwrap();
         assert_eq!(alone.confusion, report.confusion);
         assert_eq!(alone.per_condition, report.per_condition);

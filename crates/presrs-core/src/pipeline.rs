@@ -105,7 +105,8 @@ pub struct LabeledImage<'a> {
     pub label: &'a str,
     /// The operating condition (e.g. gait) the image was recorded in.
     pub condition: Option<&'a str>,
-    /// The value of the leave-one-out column, when that protocol is used.
+    /// The image's group (e.g. a person or a trial; with a leave-one-out protocol, the held-out column's
+    /// value): the automatic choice validates by leaving one out.
     pub group: Option<&'a str>,
 }
 

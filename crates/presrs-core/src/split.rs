@@ -4,6 +4,8 @@
 //! tests on everything else. [`stratified_split`] does that for any labels: per class, shuffle with a seeded
 //! RNG, take `per_class` (or all), and put `validation` of those aside.
 
+use std::collections::BTreeMap;
+
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
@@ -89,6 +91,37 @@ pub struct Split {
     pub validation: Vec<usize>,
     /// Everything not picked (the test set in the paper's protocol).
     pub rest: Vec<usize>,
+    /// Classes that had fewer samples than `per_class` asked for, with the samples they had (all
+    /// picked): filled by [`stratified_split_capped`] only.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub capped: BTreeMap<String, usize>,
+}
+
+/// The classes of `labels` with fewer than `per_class` samples, with their counts (empty for `None`).
+pub fn per_class_shortfall(labels: &[&str], per_class: Option<usize>) -> BTreeMap<String, usize> {
+    let Some(per_class) = per_class else {
+        return BTreeMap::new();
+    };
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for &label in labels {
+        *counts.entry(label).or_insert(0) += 1;
+    }
+    counts
+        .into_iter()
+        .filter(|&(_, n)| n < per_class)
+        .map(|(label, n)| (label.to_owned(), n))
+        .collect()
+}
+
+/// [`stratified_split`], except that a class with fewer samples than `per_class` gives every sample it
+/// has (listed in [`Split::capped`]) instead of failing. The draw of the other classes is the same.
+pub fn stratified_split_capped(
+    labels: &[&str],
+    per_class: Option<usize>,
+    validation: ValidationSize,
+    seed: u64,
+) -> Result<Split> {
+    split_per_class(labels, per_class, validation, seed, true)
 }
 
 /// Splits `labels` (one per sample) per class. `per_class: None` picks every sample of every class.
@@ -99,6 +132,16 @@ pub fn stratified_split(
     validation: ValidationSize,
     seed: u64,
 ) -> Result<Split> {
+    split_per_class(labels, per_class, validation, seed, false)
+}
+
+fn split_per_class(
+    labels: &[&str],
+    per_class: Option<usize>,
+    validation: ValidationSize,
+    seed: u64,
+    cap: bool,
+) -> Result<Split> {
     let mut classes: Vec<&str> = labels.to_vec();
     classes.sort_unstable();
     classes.dedup();
@@ -107,7 +150,11 @@ pub fn stratified_split(
     for class in classes {
         let mut members: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == class).collect();
         members.shuffle(&mut rng);
-        let picked = per_class.unwrap_or(members.len());
+        let mut picked = per_class.unwrap_or(members.len());
+        if cap && picked > members.len() {
+            split.capped.insert(class.to_owned(), members.len());
+            picked = members.len();
+        }
         if picked > members.len() {
             return Err(CoreError::NotEnoughData(format!(
                 "class {class:?} has {} samples, fewer than the {picked} per class asked for",
@@ -252,6 +299,27 @@ mod tests {
         assert_eq!(
             "7".parse::<ValidationSize>().unwrap(),
             ValidationSize::Count(7)
+        );
+    }
+
+    /// A class short of `per_class` gives all it has and is listed; the others draw as the strict split.
+    #[test]
+    fn capped_split_takes_what_a_short_class_has() {
+        let full = labels();
+        let labels = &full[..100]; // grass keeps 10 of its 30
+        assert!(stratified_split(labels, Some(20), ValidationSize::Count(7), 3).is_err());
+        let capped =
+            stratified_split_capped(labels, Some(20), ValidationSize::Count(7), 3).unwrap();
+        assert_eq!(capped.capped, BTreeMap::from([("grass".to_owned(), 10)]));
+        assert_eq!(per_class_shortfall(labels, Some(20)), capped.capped);
+        assert!(per_class_shortfall(labels, None).is_empty());
+        let grass = |indices: &[usize]| indices.iter().filter(|&&i| labels[i] == "grass").count();
+        assert_eq!((grass(&capped.train), grass(&capped.validation)), (3, 7));
+        assert_eq!(capped.train.len(), 3 * 13 + 3);
+        // Enough samples: the capped split is the strict one.
+        assert_eq!(
+            stratified_split_capped(&full, Some(20), ValidationSize::Count(7), 3).unwrap(),
+            stratified_split(&full, Some(20), ValidationSize::Count(7), 3).unwrap()
         );
     }
 }

@@ -262,3 +262,44 @@ fn kinds_parse_and_combine() {
         assert!(features.iter().all(|v| v.is_finite()));
     }
 }
+
+/// A configured padding shorter than the image grows to the next power of two at least each side (the
+/// polar form's 64 x 64 on a 60 x 75 image: 64 x 128), and the grown transform is still the DFT; a
+/// padding that fits (64 x 64 on the simulator's 44 x 44) is kept as configured.
+#[test]
+fn fft2d_padding_grows_to_fit_larger_images() {
+    assert_eq!(
+        Fft2dConfig::POLAR.resolved(Grid::new(44, 44)).unwrap(),
+        (64, 64)
+    );
+    assert_eq!(
+        Fft2dConfig::POLAR.resolved(Grid::new(60, 75)).unwrap(),
+        (64, 128)
+    );
+    assert_eq!(
+        Fft2dConfig::POLAR.resolved(Grid::new(130, 20)).unwrap(),
+        (256, 64)
+    );
+    let extractor = Fft2dExtractor::new(Grid::new(60, 75), &Fft2dConfig::POLAR).unwrap();
+    assert_eq!(extractor.transform_size(), (64, 128));
+    // The half form with a too-small padding: the grown transform against the naive DFT.
+    let grid = Grid::new(5, 6);
+    let config = Fft2dConfig {
+        pad_rows: Some(3),
+        pad_cols: Some(4),
+        ..Fft2dConfig::HALF
+    };
+    let image = test_image(grid.rows, grid.cols);
+    let mut extractor = Fft2dExtractor::new(grid, &config).unwrap();
+    assert_eq!(extractor.transform_size(), (8, 8));
+    let mut out = vec![0.0; extractor.output_len()];
+    extractor.extract_into(&image, &mut out).unwrap();
+    let naive = naive_magnitude(&image, grid, 8, 8);
+    // The first kept entries are row k = 0, columns l = 0 ..= 4.
+    for (l, value) in out.iter().take(5).enumerate() {
+        assert!(
+            (value - naive[0][l]).abs() < 1e-9 * (1.0 + naive[0][l]),
+            "l = {l}"
+        );
+    }
+}

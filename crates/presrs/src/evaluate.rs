@@ -79,6 +79,35 @@ pub struct EvalOutcome {
     pub warnings: Vec<String>,
 }
 
+/// What the automatic choice expected of its chosen candidates, inside the training data: to set next
+/// to the test result, to see how honest its validation was.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InternalEstimate {
+    /// Mean and spread over the trained models of the chosen candidate's validation accuracy.
+    pub accuracy: presrs_core::metrics::MeanStd,
+    /// How the candidates were validated (the first model's words).
+    pub validated_by: String,
+    /// Models it is the mean of.
+    pub models: usize,
+}
+
+impl EvalOutcome {
+    /// The automatic choice's own estimate, over every trained model (`None` for a fixed method).
+    pub fn internal_estimate(&self) -> Option<InternalEstimate> {
+        let chosen: Vec<f64> = self
+            .selections
+            .iter()
+            .filter_map(|s| s.chosen().map(|c| c.accuracy.mean))
+            .collect();
+        let first = self.selections.first()?;
+        Some(InternalEstimate {
+            accuracy: presrs_core::metrics::MeanStd::of(&chosen),
+            validated_by: first.method.clone(),
+            models: chosen.len(),
+        })
+    }
+}
+
 /// Accuracy of one method with the test images perturbed.
 #[derive(Clone, Debug, Serialize)]
 pub struct PerturbationRow {
@@ -142,7 +171,8 @@ impl<'d> EvalSetup<'d> {
                         sample.origin(dataset.path())
                     ))
                 })?),
-                None => None,
+                // The automatic choice validates by the manifest's groups.
+                None => sample.group.as_deref(),
             };
             samples.push(LabeledImage {
                 frame: sample.frame.view(),
@@ -164,7 +194,7 @@ impl<'d> EvalSetup<'d> {
             },
         };
         let never_trained = presrs_core::evaluation::labels_never_trained(&samples, &protocol);
-        let warnings = never_trained
+        let mut warnings: Vec<String> = never_trained
             .iter()
             .map(|(held_out, labels)| {
                 let tested = match column {
@@ -178,6 +208,23 @@ impl<'d> EvalSetup<'d> {
                 )
             })
             .collect();
+        let capped = presrs_core::evaluation::per_class_capped(&samples, &protocol);
+        if let Some(per_class) = options.per_class
+            && !capped.is_empty()
+        {
+            let held = column.is_some();
+            warnings.push(format!(
+                "{name}: {}",
+                crate::train::per_class_warning(
+                    per_class,
+                    capped.iter().flat_map(|(held_out, classes)| {
+                        classes.iter().map(move |(class, &n)| {
+                            (held.then_some(held_out.as_str()), class.as_str(), n)
+                        })
+                    }),
+                )
+            ));
+        }
         Ok(Self {
             dataset,
             samples,
@@ -358,7 +405,7 @@ fn models<'c>(
     candidates: &'c [CheckedTrainConfig],
 ) -> Models<'c> {
     if method.is_auto() {
-        Models::Auto(candidates)
+        Models::Auto(candidates, method.validate_by)
     } else {
         Models::Config(config)
     }

@@ -7,6 +7,7 @@ use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::Preprocess;
+pub use presrs_core::selection::ValidateBy;
 use presrs_core::split::ValidationSize;
 use presrs_core::{CoreError, Crop, Grid};
 
@@ -81,6 +82,9 @@ pub struct Method {
     pub dims: Option<usize>,
     pub preprocess: Preprocess,
     pub crop: CropChoice,
+    /// How an automatic choice validates its candidates inside the training data (by group, condition
+    /// or stratified splits; `auto`: the most honest the data allow).
+    pub validate_by: ValidateBy,
 }
 
 impl Method {

@@ -7,7 +7,7 @@ use std::path::Path;
 use presrs_core::TrainedModel;
 use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::{LabeledImage, train as train_pipeline};
-use presrs_core::split::{Split, ValidationSize, min_samples_per_class, stratified_split};
+use presrs_core::split::{Split, ValidationSize, min_samples_per_class, stratified_split_capped};
 use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
@@ -107,7 +107,8 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         "training needs a label for every sample",
     )?;
     let method = &options.method;
-    let split = stratified_split(&labels, options.per_class, options.validation, options.seed);
+    let split =
+        stratified_split_capped(&labels, options.per_class, options.validation, options.seed);
     let validation_check = split
         .as_ref()
         .map(|split| method.check_validation_set(options.validation, split.validation.len()));
@@ -124,20 +125,17 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         .check_validation_set(options.validation, split.validation.len())
         .with_context(|| format!("{name}: cannot train"))?;
     let grid = pool[0].frame.grid();
-    let (train_images, validation_images) = split_images(&split, |i| {
-        LabeledImage::new(pool[i].frame.view(), labels[i])
+    let (train_images, validation_images) = split_images(&split, |i| LabeledImage {
+        frame: pool[i].frame.view(),
+        label: labels[i],
+        condition: pool[i].condition.as_deref(),
+        group: pool[i].group.as_deref(),
     });
     let model = if method.is_auto() {
-        let conditions: Option<Vec<&str>> = split
-            .train
-            .iter()
-            .chain(&split.validation)
-            .map(|&i| pool[i].condition.as_deref())
-            .collect();
         presrs_core::selection::train_auto(
             &train_images,
             &validation_images,
-            conditions.as_deref(),
+            method.validate_by,
             &method.candidates(grid, false)?,
             options.seed,
         )
@@ -150,6 +148,17 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     }
     .with_context(|| format!("{name}: training failed"))?;
     let mut warnings = Vec::new();
+    if let Some(per_class) = options.per_class
+        && !split.capped.is_empty()
+    {
+        warnings.push(per_class_warning(
+            per_class,
+            split
+                .capped
+                .iter()
+                .map(|(class, &n)| (None, class.as_str(), n)),
+        ));
+    }
     let kept = model.pca().n_components();
     if let Some(dims) = method.dims
         && kept < dims
@@ -177,6 +186,29 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     })
 }
 
+/// The one warning line for a `--per-class` that some classes cannot give: `short` lists (held-out
+/// value, class, images it has) and the line names the fewest.
+pub fn per_class_warning<'a>(
+    per_class: usize,
+    short: impl Iterator<Item = (Option<&'a str>, &'a str, usize)>,
+) -> String {
+    let short: Vec<_> = short.collect();
+    let classes: std::collections::BTreeSet<&str> = short.iter().map(|s| s.1).collect();
+    let fewest = short.iter().min_by_key(|s| s.2);
+    let fewest = match fewest {
+        Some((Some(held_out), class, n)) => {
+            format!("; fewest: {n} of class {class} with {held_out} held out")
+        }
+        Some((None, class, n)) => format!("; fewest: {n} of class {class}"),
+        None => String::new(),
+    };
+    format!(
+        "--per-class {per_class}: capped to the images there are for {} class(es) ({}){fewest}",
+        classes.len(),
+        classes.into_iter().collect::<Vec<_>>().join(", ")
+    )
+}
+
 /// The training and validation images of a draw: `image(i)` is the image at index `i` of what was
 /// drawn from.
 pub fn split_images<'s>(
@@ -185,6 +217,12 @@ pub fn split_images<'s>(
 ) -> (Vec<LabeledImage<'s>>, Vec<LabeledImage<'s>>) {
     let images = |indices: &[usize]| indices.iter().map(|&i| image(i)).collect();
     (images(&split.train), images(&split.validation))
+}
+
+/// Whether `dataset` holds samples taken from movies (a stance's frame past the first): a model trained
+/// on it is meant for a stream, so `train` writes an online profile by default.
+pub fn trained_on_movies(dataset: &Dataset) -> bool {
+    dataset.samples.iter().any(|sample| sample.frame_index > 0)
 }
 
 /// The online profile (detector settings, calibration and sample frame) learned by segmenting, offline

@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs::dataset::{DeadSenselFills, SampleOptions, read_corrected};
-use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method};
+use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
@@ -20,7 +20,7 @@ pub struct PipelineArgs {
     /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
     /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes); join
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
-    /// leave one condition out when it spans several, among fft1d, fft2d and fft2d_polar; --full-search
+    /// by group or condition (--validate-by), among fft1d, fft2d and fft2d_polar; --full-search
     /// adds glcm and fft2d_polar+glcm). `--features fft1d --classifier pwe` is the paper's method.
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<FeatureChoice>())]
     pub features: FeatureChoice,
@@ -45,6 +45,12 @@ pub struct PipelineArgs {
     /// clusters) instead of reading them as 0. Stored in the model.
     #[arg(long)]
     pub fill_absent: bool,
+    /// With auto: how the candidates are validated inside the training data: group (leave one of the
+    /// manifest's `group` out), condition (leave one condition out), split (three stratified 70/30
+    /// splits), or auto (group when the training data hold 3 or more groups, else condition when they
+    /// hold several, else split).
+    #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ValidateBy>())]
+    pub validate_by: ValidateBy,
     #[command(flatten)]
     pub crop: CropArg,
 }
@@ -72,6 +78,7 @@ impl PipelineArgs {
                 fill_absent: self.fill_absent,
             },
             crop: self.crop.crop,
+            validate_by: self.validate_by,
         }
     }
 }
@@ -228,10 +235,48 @@ pub fn note_dead_sensels(fills: &DeadSenselFills) {
 }
 
 /// The library's progress on stderr: a bar (or a spinner for a task of unknown length) when stderr is a
-/// terminal, nothing otherwise; warnings as `warning: ...` lines.
+/// terminal; otherwise (logs, CI) a `progress: ...` line every [`progress_interval`] while a task runs;
+/// warnings as `warning: ...` lines.
 #[derive(Debug, Default)]
 pub struct TerminalProgress {
     bar: std::sync::Mutex<Option<ProgressBar>>,
+    /// The task running, for the progress lines when stderr is not a terminal.
+    log: std::sync::Arc<std::sync::Mutex<Option<LoggedTask>>>,
+}
+
+/// A task whose progress is logged as lines.
+#[derive(Debug)]
+struct LoggedTask {
+    task: String,
+    total: Option<u64>,
+    done: u64,
+    started: std::time::Instant,
+}
+
+/// How often a progress line is written when stderr is not a terminal: `PRESRS_PROGRESS_SECONDS`
+/// (seconds, e.g. 0.5), else 5 s.
+pub fn progress_interval() -> std::time::Duration {
+    std::env::var("PRESRS_PROGRESS_SECONDS")
+        .ok()
+        .and_then(|text| text.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .map_or(std::time::Duration::from_secs(5), |s| {
+            std::time::Duration::from_secs_f64(s.min(1e6))
+        })
+}
+
+/// One progress line: `TASK: DONE/TOTAL (N s)`, or `TASK: N s` for a task of unknown length.
+fn progress_line(
+    task: &str,
+    done: u64,
+    total: Option<u64>,
+    elapsed: std::time::Duration,
+) -> String {
+    let seconds = elapsed.as_secs_f64();
+    match total {
+        Some(total) => format!("{task}: {done}/{total} ({seconds:.0} s)"),
+        None => format!("{task}: {seconds:.0} s"),
+    }
 }
 
 impl TerminalProgress {
@@ -239,6 +284,39 @@ impl TerminalProgress {
         self.bar
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Starts logging `task` as lines (stderr is not a terminal): a thread writes a line every
+    /// [`progress_interval`] until the task is finished or replaced.
+    fn log_task(&self, task: &str, total: Option<u64>) {
+        let started = std::time::Instant::now();
+        let logged = LoggedTask {
+            task: task.to_owned(),
+            total,
+            done: 0,
+            started,
+        };
+        *self
+            .log
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner()) = Some(logged);
+        let log = std::sync::Arc::downgrade(&self.log);
+        let interval = progress_interval();
+        std::thread::spawn(move || {
+            loop {
+                std::thread::sleep(interval);
+                let Some(log) = log.upgrade() else { return };
+                let guard = log.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+                match guard.as_ref() {
+                    // This thread's task, still running.
+                    Some(t) if t.started == started => stderr_line!(
+                        "progress: {}",
+                        progress_line(&t.task, t.done, t.total, t.started.elapsed())
+                    ),
+                    _ => return,
+                }
+            }
+        });
     }
 }
 
@@ -254,6 +332,9 @@ impl TerminalProgress {
 
 impl Progress for TerminalProgress {
     fn start(&self, task: &str, total: Option<u64>) {
+        if !std::io::stderr().is_terminal() {
+            self.log_task(task, total);
+        }
         let bar = match total {
             Some(total) => progress_bar(total, task),
             None => spinner(task),
@@ -267,9 +348,21 @@ impl Progress for TerminalProgress {
         if let Some(bar) = self.bar().as_ref() {
             bar.inc(steps);
         }
+        if let Some(task) = self
+            .log
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .as_mut()
+        {
+            task.done += steps;
+        }
     }
 
     fn finish(&self) {
+        self.log
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .take();
         if let Some(bar) = self.bar().take() {
             bar.finish_and_clear();
         }
@@ -352,5 +445,20 @@ fn parse_period(text: &str) -> Result<f64, String> {
         _ => Err(format!(
             "expected a positive number of seconds, got {text:?}"
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn progress_lines_say_how_far_and_how_long() {
+        let ten = std::time::Duration::from_secs(10);
+        assert_eq!(
+            progress_line("training", 3, Some(40), ten),
+            "training: 3/40 (10 s)"
+        );
+        assert_eq!(progress_line("training", 0, None, ten), "training: 10 s");
     }
 }

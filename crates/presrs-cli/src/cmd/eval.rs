@@ -38,7 +38,8 @@ pub struct EvalArgs {
     /// not label: a held-out class could never be recognised).
     #[arg(long, value_parser = parse_leave_one_out)]
     pub leave_one_out: Option<String>,
-    /// Random samples drawn per class for training + validation, at least 1 (default: all available).
+    /// Random samples drawn per class for training + validation, at least 1 (default: all available);
+    /// a class (or held-out fold) with fewer gives all it has, with one warning.
     #[arg(long, value_parser = super::common::parse_positive)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).
@@ -92,6 +93,10 @@ pub struct EvalJson<'r> {
     /// The automatic choice of every trained model (with `--features auto` or `--classifier auto`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub selections: Vec<presrs_core::selection::Selection>,
+    /// With an automatic choice: its own estimate inside the training data (the chosen candidates'
+    /// validation accuracy) and how it validated, to compare with `overall_accuracy`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub internal_estimate: Option<presrs::evaluate::InternalEstimate>,
     /// Tested labels no training set of the protocol holds, by held-out value (`all` for a training
     /// condition); those samples are wrong whatever the model.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
@@ -156,6 +161,7 @@ impl<'r> EvalJson<'r> {
                 .collect(),
             report,
             selections: Vec::new(),
+            internal_estimate: None,
             labels_never_trained: BTreeMap::new(),
         }
     }
@@ -188,11 +194,13 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
         return print_comparison(&rows, out);
     }
+    let outcome = setup.evaluate(&progress)?;
+    let internal = outcome.internal_estimate();
     let EvalOutcome {
         report,
         selections,
         warnings,
-    } = setup.evaluate(&progress)?;
+    } = outcome;
     for warning in &warnings {
         stderr_line!("warning: {warning}");
     }
@@ -220,6 +228,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.json {
         let mut json = EvalJson::new(&report);
         json.selections = selections;
+        json.internal_estimate = internal;
         json.labels_never_trained = setup.never_trained.clone();
         if !perturbed.is_empty() {
             return write_json(
@@ -252,6 +261,15 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         for (name, count) in chosen {
             writeln!(out, "  {name}: {count}")?;
         }
+    }
+    if let Some(internal) = &internal {
+        writeln!(
+            out,
+            "internal estimate (validation inside the training data): {:.2} % +- {:.2}; test: {:.2} %",
+            100.0 * internal.accuracy.mean,
+            100.0 * internal.accuracy.std,
+            100.0 * report.overall.mean
+        )?;
     }
     Ok(())
 }

@@ -5,12 +5,14 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs::train::{TrainOptions, learn_online_profile};
+use presrs::train::{TrainOptions, learn_online_profile, trained_on_movies};
 use presrs_core::selection::Selection;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
-use super::common::{PipelineArgs, SampleArgs, load_manifest};
+use presrs::Progress;
+
+use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
@@ -34,7 +36,8 @@ pub struct TrainArgs {
     /// Train only on samples of this condition (the manifest's `condition` column, e.g. a gait).
     #[arg(long)]
     pub train_condition: Option<String>,
-    /// Random samples drawn per class, at least 1 (default: every sample).
+    /// Random samples drawn per class, at least 1 (default: every sample); a class with fewer gives
+    /// all it has, with one warning.
     #[arg(long, value_parser = super::common::parse_positive)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).
@@ -43,11 +46,16 @@ pub struct TrainArgs {
     /// Seed of the random draw.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Also write an online profile into the model file (calibration and sample frame learned from the
-    /// manifest's recordings by offline segmentation), for `presrs stream` and `presrs simulate --adaptive`.
-    /// Off by default: it reads every recording of the manifest once more.
+    /// Write an online profile into the model file (calibration and sample frame learned from the
+    /// manifest's recordings by offline segmentation), for `presrs stream` and `presrs simulate --adaptive`:
+    /// a stream then classifies from its first stance, with no warm-up. The default when the training
+    /// samples come from movies (it reads them once more); this flag asks for it on other data too, and
+    /// fails if it cannot be learned.
     #[arg(long)]
     pub online_profile: bool,
+    /// Write no online profile, even when the training samples come from movies.
+    #[arg(long, conflicts_with_all = ["online_profile", "gait_table"])]
+    pub no_online_profile: bool,
     /// Terrain-to-gait table for the online profile (implies --online-profile): `sim` measures, with the
     /// simulator, the fastest gait that never fell on each terrain of the model, in steady runs or
     /// stepping onto another terrain, with a margin in `beta_des` (`presrs_sim::track::gait_table`, over
@@ -79,7 +87,12 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         seed: args.seed,
         method: args.pipeline.method(),
     };
-    let training = presrs::train::train(&dataset, &options)?;
+    // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
+    let progress = TerminalProgress::default();
+    progress.start("training", None);
+    let training = presrs::train::train(&dataset, &options);
+    progress.finish();
+    let training = training?;
     for warning in &training.warnings {
         stderr_line!("warning: {warning}");
     }
@@ -93,8 +106,18 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         !args.samples.keep_dead_sensels,
         Some(std::env::args().collect::<Vec<_>>().join(" ")),
     );
-    if args.online_profile || args.gait_table.is_some() {
-        let segment = args.samples.options()?.segment_params();
+    let segment = args.samples.options()?.segment_params();
+    let asked = args.online_profile || args.gait_table.is_some();
+    if !asked && !args.no_online_profile && trained_on_movies(&dataset) {
+        match learn_online_profile(&args.manifest, &segment) {
+            Ok(profile) => file.online = Some(profile),
+            Err(err) => stderr_line!(
+                "warning: {}: no online profile written (a stream will warm up first): {err:#}",
+                args.manifest.display()
+            ),
+        }
+    }
+    if asked {
         let mut profile = learn_online_profile(&args.manifest, &segment).with_context(|| {
             format!(
                 "{}: cannot learn the online profile",
@@ -170,6 +193,13 @@ fn print_selection(selection: &Selection, out: &mut dyn Write) -> anyhow::Result
             out,
             "chosen: {} + {} (the paper's method: --features fft1d --classifier pwe)",
             chosen.features, chosen.classifier
+        )?;
+        writeln!(
+            out,
+            "internal estimate: {:.2} % +- {:.2}, validated by {}",
+            100.0 * chosen.accuracy.mean,
+            100.0 * chosen.accuracy.std,
+            selection.method
         )?;
     }
     Ok(())

@@ -3,7 +3,10 @@
 //!
 //! Each pair of classes `(i, j)`, `i < j`, is a binary problem with `y = +1` for class `i`, solved exactly
 //! (to the KKT tolerance `tol`) by an SMO solver with libsvm's second-order working-set selection; the bias
-//! is libsvm's `rho`. The decision `f(x) = Σ α_t y_t K(x_t, x) - rho > 0` votes for `i`, otherwise for
+//! is libsvm's `rho`. The solver stops at the tolerance or after [`SMO_ITERATIONS_PER_VECTOR`] iterations
+//! per vector of the pair (at least [`SMO_MIN_ITERATIONS`]), whichever comes first: a large C on classes
+//! that overlap can otherwise take millions of iterations for no gain in accuracy, and the capped
+//! solution is still feasible (its bias is computed the same way). The decision `f(x) = Σ α_t y_t K(x_t, x) - rho > 0` votes for `i`, otherwise for
 //! `j`; the most votes win, ties to the lower class index (libsvm's rule).
 //!
 //! Hyper-parameters: every kernel of [`SvmConfig::kernels`], every `C` of `c_grid` and (RBF) every
@@ -277,15 +280,28 @@ impl TryFrom<SvmFields> for SvmModel {
     }
 }
 
+/// The solver's iteration cap per training vector of a binary problem.
+pub const SMO_ITERATIONS_PER_VECTOR: usize = 100;
+/// The solver's iteration cap for small problems.
+pub const SMO_MIN_ITERATIONS: usize = 20_000;
+
 /// Solves the C-SVC dual for labels `y` (±1) with kernel matrix `k` (`n x n`); returns (α, rho).
 fn smo(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64) {
+    let (alpha, rho, _) = smo_counted(k, y, c, tol);
+    (alpha, rho)
+}
+
+/// [`smo`], with the iterations it took.
+fn smo_counted(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64, usize) {
     let n = y.len();
     let mut alpha = vec![0.0; n];
     let mut grad = vec![-1.0; n];
     let q = |i: usize, j: usize| y[i] * y[j] * k[i * n + j];
-    let max_iter = (100 * n).max(10_000_000);
+    let max_iter = (SMO_ITERATIONS_PER_VECTOR * n).max(SMO_MIN_ITERATIONS);
     let tau = 1e-12;
+    let mut iterations = 0;
     for _ in 0..max_iter {
+        iterations += 1;
         // select i: max over I_up of -y G
         let mut gmax = f64::NEG_INFINITY;
         let mut i_sel = usize::MAX;
@@ -424,7 +440,7 @@ fn smo(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64) {
     } else {
         (ub + lb) / 2.0
     };
-    (alpha, rho)
+    (alpha, rho, iterations)
 }
 
 impl SvmModel {
@@ -751,4 +767,44 @@ pub struct SvmScratch {
     decisions: Vec<f64>,
     votes: Vec<usize>,
     scores: Vec<f64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// Classes that overlap completely with a huge C: the solver stops at its cap, with a feasible
+    /// solution (0 <= alpha <= C, sum of alpha y = 0); a separable problem converges well before it.
+    #[test]
+    fn the_solver_is_capped_and_stays_feasible() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let n = 300;
+        let x: Vec<[f64; 2]> = (0..n)
+            .map(|_| [rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)])
+            .collect();
+        let gram = |kernel: Kernel, x: &[[f64; 2]]| -> Vec<f64> {
+            x.iter()
+                .flat_map(|a| x.iter().map(move |b| kernel.eval(a, b)))
+                .collect()
+        };
+        let rbf = Kernel::Rbf { gamma: 50.0 };
+        let k = gram(rbf, &x);
+        let noise: Vec<f64> = (0..n)
+            .map(|_| if rng.random_bool(0.5) { 1.0 } else { -1.0 })
+            .collect();
+        let c = 1e6;
+        let (alpha, rho, iterations) = smo_counted(&k, &noise, c, 1e-3);
+        assert!(iterations <= SMO_MIN_ITERATIONS.max(SMO_ITERATIONS_PER_VECTOR * n));
+        assert!(rho.is_finite());
+        assert!(alpha.iter().all(|&a| (0.0..=c).contains(&a)));
+        let balance: f64 = alpha.iter().zip(&noise).map(|(a, y)| a * y).sum();
+        assert!(balance.abs() < 1e-6 * c, "{balance}");
+        let separable: Vec<f64> = x
+            .iter()
+            .map(|p| if p[0] > 0.0 { 1.0 } else { -1.0 })
+            .collect();
+        let (_, _, iterations) = smo_counted(&gram(Kernel::Linear, &x), &separable, 10.0, 1e-3);
+        assert!(iterations < SMO_MIN_ITERATIONS, "{iterations}");
+    }
 }

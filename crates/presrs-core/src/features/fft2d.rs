@@ -41,10 +41,12 @@ pub enum Fft2dForm {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Fft2dConfig {
-    /// Transform size along the rows (`None`: the image's row count, no padding).
+    /// Transform size along the rows (`None`: the image's row count, no padding). A size smaller than
+    /// the image's rows grows to the next power of two at least that count, so a padded transform fits
+    /// any image.
     #[serde(default)]
     pub pad_rows: Option<usize>,
-    /// Transform size along the columns (`None`: the image's column count).
+    /// Transform size along the columns (`None`: the image's column count); grown like `pad_rows`.
     #[serde(default)]
     pub pad_cols: Option<usize>,
     #[serde(default)]
@@ -81,7 +83,8 @@ impl Fft2dConfig {
         angular_bins: 12,
     };
 
-    /// 24 rings and 12 wedges, padded to 64 x 64 (finer frequency sampling).
+    /// 24 rings and 12 wedges, padded to 64 x 64 (finer frequency sampling); a side longer than 64 is
+    /// padded to the next power of two at least its length (a 60 x 75 image: 64 x 128).
     pub const POLAR: Self = Self {
         pad_rows: Some(64),
         pad_cols: Some(64),
@@ -107,7 +110,8 @@ impl Fft2dConfig {
         Ok(())
     }
 
-    /// The transform size `(R, C)` for images of `grid`.
+    /// The transform size `(R, C)` for images of `grid`: the configured padding, grown to the next power
+    /// of two at least the image's side where it is shorter; the image's size where none is configured.
     pub fn resolved(&self, grid: Grid) -> Result<(usize, usize)> {
         self.check()?;
         if grid.is_empty() {
@@ -116,15 +120,12 @@ impl Fft2dConfig {
                 reason: format!("the image grid {grid} has no sensels"),
             });
         }
-        let rows = self.pad_rows.unwrap_or(grid.rows);
-        let cols = self.pad_cols.unwrap_or(grid.cols);
-        if rows < grid.rows || cols < grid.cols {
-            return Err(CoreError::Param {
-                name: "fft2d padding",
-                reason: format!("the transform {rows} x {cols} is smaller than the {grid} image"),
-            });
-        }
-        Ok((rows, cols))
+        let fit = |pad: Option<usize>, side: usize| match pad {
+            None => side,
+            Some(pad) if pad >= side => pad,
+            Some(_) => side.next_power_of_two(),
+        };
+        Ok((fit(self.pad_rows, grid.rows), fit(self.pad_cols, grid.cols)))
     }
 
     /// The name of each feature, in order. Half form: `fft2d_r{k}_c{l}`, the magnitude at row frequency

@@ -1,0 +1,255 @@
+//! Drawing and validating on small or grouped data sets: `--per-class` capped with one warning, and the
+//! automatic choice validated by group.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+use common::{presrs, stderr, stdout};
+
+/// A `--per-class` larger than a class (or a held-out fold) can give is capped, with one warning line,
+/// in train and eval alike; a size every class can give warns nothing.
+#[test]
+fn per_class_beyond_the_data_is_capped_with_one_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    // 3 classes x 8 images in 4 groups: 8 per class in all, 6 with a group held out.
+    let manifest = common::write_image_set(dir.path(), (20, 24), 3, 8, 4, 0.0, 9);
+    let manifest = manifest.to_str().unwrap();
+    let model = dir.path().join("m.json");
+    let fixed = ["--features", "fft1d", "--classifier", "lda", "--dims", "4"];
+    let train = presrs(
+        &[
+            &[
+                "train",
+                "--manifest",
+                manifest,
+                "--per-class",
+                "20",
+                "--out",
+                model.to_str().unwrap(),
+            ][..],
+            &fixed[..],
+        ]
+        .concat(),
+    );
+    assert!(train.status.success(), "{}", stderr(&train));
+    let err = stderr(&train);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("--per-class")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains("--per-class 20: capped"), "{err}");
+    assert!(lines[0].contains("fewest: 8 of class"), "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let counts = &json["provenance"]["train_counts"];
+    let validation = &json["provenance"]["validation_counts"];
+    for class in ["t0", "t1", "t2"] {
+        let all = counts[class].as_u64().unwrap() + validation[class].as_u64().unwrap();
+        assert_eq!(all, 8, "{json}");
+    }
+
+    let eval = |per_class: &str| {
+        presrs(
+            &[
+                &[
+                    "eval",
+                    "--manifest",
+                    manifest,
+                    "--leave-one-out",
+                    "group",
+                    "--per-class",
+                    per_class,
+                    "--repeats",
+                    "1",
+                ][..],
+                &fixed[..],
+            ]
+            .concat(),
+        )
+    };
+    let capped = eval("7");
+    assert!(capped.status.success(), "{}", stderr(&capped));
+    let err = stderr(&capped);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("--per-class")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains("--per-class 7: capped"), "{err}");
+    assert!(lines[0].contains("held out"), "{err}");
+    assert!(stdout(&capped).contains("overall"), "{}", stdout(&capped));
+    let enough = eval("6");
+    assert!(enough.status.success(), "{}", stderr(&enough));
+    assert!(
+        !stderr(&enough).contains("--per-class"),
+        "{}",
+        stderr(&enough)
+    );
+}
+
+/// The internal estimate of `train`, validated by the given way; (estimate in %, the words).
+fn train_estimate(manifest: &str, out: &std::path::Path, extra: &[&str]) -> (f64, String) {
+    let train = presrs(
+        &[
+            &[
+                "train",
+                "--manifest",
+                manifest,
+                "--out",
+                out.to_str().unwrap(),
+                "--features",
+                "fft2d_polar",
+                "--dims",
+                "6",
+            ][..],
+            extra,
+        ]
+        .concat(),
+    );
+    assert!(train.status.success(), "{}", stderr(&train));
+    let text = stdout(&train);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("internal estimate: "))
+        .unwrap_or_else(|| panic!("{text}"));
+    let percent: f64 = line["internal estimate: ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let how = line.split(", validated by ").nth(1).unwrap().to_owned();
+    (percent, how)
+}
+
+/// On data whose groups differ (each group's images scaled and shifted its own way), the automatic
+/// choice validates by group by default: its internal estimate is leave-one-group-out, lower than what
+/// stratified splits (which mix the groups) claim; `eval` reports it next to the test result.
+#[test]
+fn the_automatic_choice_validates_by_group_and_eval_reports_its_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (16, 16), 3, 24, 4, 1.3, 21);
+    let manifest = manifest.to_str().unwrap();
+    let model = dir.path().join("m.json");
+    let (by_group, how) = train_estimate(manifest, &model, &[]);
+    assert!(
+        how.starts_with("leave one group out inside the training data (g0, g1, g2, g3)"),
+        "{how}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let scores = json["model"]["selection"]["scores"][0]["per_fold"].clone();
+    assert!(scores["g3"].is_number(), "{scores}");
+    let (by_split, how) = train_estimate(manifest, &model, &["--validate-by", "split"]);
+    assert!(how.starts_with("three stratified"), "{how}");
+    assert!(
+        by_split > by_group,
+        "splits mix the groups and claim more: {by_split} vs {by_group}"
+    );
+    // One condition only: validating by condition is refused, saying why.
+    let refused = presrs(&[
+        "train",
+        "--manifest",
+        manifest,
+        "--out",
+        model.to_str().unwrap(),
+        "--validate-by",
+        "condition",
+    ]);
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("validating by condition needs at least two conditions"),
+        "{}",
+        stderr(&refused)
+    );
+
+    let eval = |json: bool| {
+        let mut args = vec![
+            "eval",
+            "--manifest",
+            manifest,
+            "--leave-one-out",
+            "group",
+            "--repeats",
+            "1",
+            "--features",
+            "fft2d_polar",
+            "--dims",
+            "6",
+        ];
+        if json {
+            args.push("--json");
+        }
+        presrs(&args)
+    };
+    let out = eval(true);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let internal = &json["internal_estimate"];
+    assert_eq!(internal["models"], 4, "{internal}");
+    assert!(
+        internal["validated_by"]
+            .as_str()
+            .unwrap()
+            .starts_with("leave one group out"),
+        "{internal}"
+    );
+    assert!(
+        internal["accuracy"]["mean"].as_f64().unwrap() > 0.0,
+        "{internal}"
+    );
+    let out = eval(false);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("internal estimate (validation inside the training data): "),
+        "{}",
+        stdout(&out)
+    );
+}
+
+/// With stderr not a terminal (a log), a long run writes `progress: ...` lines (every
+/// PRESRS_PROGRESS_SECONDS, 5 s by default), in train and eval; stdout is untouched.
+#[test]
+fn progress_lines_go_to_stderr_when_it_is_not_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (16, 16), 3, 12, 3, 0.5, 2);
+    let manifest = manifest.to_str().unwrap();
+    let model = dir.path().join("m.json");
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_presrs"))
+            .args(args)
+            .env("PRESRS_PROGRESS_SECONDS", "0.001")
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap()
+    };
+    let train = run(&[
+        "train",
+        "--manifest",
+        manifest,
+        "--out",
+        model.to_str().unwrap(),
+        "--dims",
+        "5",
+    ]);
+    assert!(train.status.success(), "{}", stderr(&train));
+    assert!(
+        stderr(&train).contains("progress: training: "),
+        "{}",
+        stderr(&train)
+    );
+    assert!(!stdout(&train).contains("progress:"));
+    let eval = run(&[
+        "eval",
+        "--manifest",
+        manifest,
+        "--leave-one-out",
+        "group",
+        "--repeats",
+        "2",
+        "--dims",
+        "5",
+    ]);
+    assert!(eval.status.success(), "{}", stderr(&eval));
+    let err = stderr(&eval);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("progress: ") && l.contains("/6 (")),
+        "{err}"
+    );
+}
