@@ -79,6 +79,7 @@ class Model:
         validation: float = 0.35,
         crop: str = "auto",
         full_search: bool = False,
+        validate_by: str = "auto",
     ) -> Model: ...
     @staticmethod
     def load(path: _Path) -> Model: ...
@@ -160,6 +161,7 @@ def evaluate(
     dims: Optional[int] = None,
     crop: str = "auto",
     full_search: bool = False,
+    validate_by: str = "auto",
     progress: Union[bool, Callable[[str, int, Optional[int]], Any], None] = None,
 ) -> Evaluation: ...
 def simulate(

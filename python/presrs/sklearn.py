@@ -24,7 +24,8 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
     Parameters are those of :meth:`presrs.Model.train`: ``features`` and ``classifier`` take the
     command line's names (``"auto"`` chooses by validation), ``dims`` the principal components kept,
     ``validation`` the share (or count) of each class that validates the hyper-parameters, ``seed`` the
-    random draw. ``image_shape`` says how to unflatten a 2-D ``X``.
+    random draw. ``image_shape`` says how to unflatten a 2-D ``X``; ``validate_by`` how the automatic
+    choice validates (``auto``, ``group``, ``condition``, ``split``; give ``groups`` to ``fit``).
     """
 
     def __init__(
@@ -37,6 +38,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         full_search=False,
         seed=0,
         image_shape=None,
+        validate_by="auto",
     ):
         self.features = features
         self.classifier = classifier
@@ -46,6 +48,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         self.full_search = full_search
         self.seed = seed
         self.image_shape = image_shape
+        self.validate_by = validate_by
 
     def _images(self, X):
         """``X`` as images ``(n, rows, cols)`` float64."""
@@ -85,6 +88,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
             crop=self.crop,
             full_search=self.full_search,
             seed=self.seed,
+            validate_by=self.validate_by,
             groups=groups,
             conditions=conditions,
         )

@@ -120,10 +120,12 @@ impl Model {
     /// `glcm`, combinations with `+`; `auto`, `pwe`, `lda`, `svm`, `knn`, ...). `groups` and
     /// `conditions` (one per image) are kept with the samples: the automatic choice validates across
     /// conditions. `validation` is a share of each class (0 < v < 1) or a count per class (>= 1).
+    /// `validate_by` (`auto`, `group`, `condition`, `split`): how the automatic choice validates its
+    /// candidates; `auto` leaves one group out when there are 3 or more groups, else one condition.
     #[staticmethod]
     #[pyo3(signature = (images, labels, *, features = "auto", classifier = "auto", groups = None,
         conditions = None, seed = 0, dims = None, per_class = None, validation = 0.35, crop = "auto",
-        full_search = false))]
+        full_search = false, validate_by = "auto"))]
     #[allow(clippy::too_many_arguments)]
     fn train(
         py: Python<'_>,
@@ -139,8 +141,9 @@ impl Model {
         validation: f64,
         crop: &str,
         full_search: bool,
+        validate_by: &str,
     ) -> PyResult<Self> {
-        let method = method(features, classifier, crop, dims, full_search)?;
+        let method = method(features, classifier, crop, dims, full_search, validate_by)?;
         let dataset = dataset_of(images, labels, groups, conditions)?;
         let options = TrainOptions {
             condition: None,
@@ -282,8 +285,12 @@ pub fn method(
     crop: &str,
     dims: Option<usize>,
     full_search: bool,
+    validate_by: &str,
 ) -> PyResult<Method> {
     Ok(Method {
+        validate_by: validate_by
+            .parse()
+            .map_err(|err| data_error(format!("validate_by={validate_by:?}: {err}")))?,
         features: FeatureChoice::from_str(features)
             .map_err(|err| data_error(format!("features={features:?}: {err}")))?,
         classifier: ClassifierChoice::from_str(classifier)

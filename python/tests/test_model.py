@@ -138,3 +138,13 @@ def test_auto_chooses_and_says_what(sim_images):
     images, labels, gaits = sim_images
     model = presrs.Model.train(images, labels, conditions=gaits, seed=1)
     assert "chosen automatically" in model.describe()
+
+
+def test_auto_validates_by_the_groups_asked_for(sim_images):
+    images, labels, gaits = sim_images
+    model = presrs.Model.train(
+        images, labels, groups=gaits, validate_by="group", features="fft1d", seed=1
+    )
+    assert "group" in model.describe()
+    with pytest.raises(presrs.DataError, match="validate_by"):
+        presrs.Model.train(images, labels, validate_by="sideways")
