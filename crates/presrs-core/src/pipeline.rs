@@ -628,17 +628,7 @@ pub fn extract_features_with(
     preprocess: Preprocess,
     features: &FeatureConfig,
 ) -> Result<Vec<f64>> {
-    features.check()?;
-    let image_grid = crop.output_grid(frame.grid())?;
-    let mut preprocessor = Preprocessor::new(
-        *crop,
-        preprocess,
-        image_grid,
-        features.extractor(image_grid)?,
-    );
-    let mut out = vec![0.0; preprocessor.extractor.output_len()];
-    preprocessor.features_into(frame, &mut out, Precision::Exact)?;
-    Ok(out)
+    Ok(extract_features_many(std::slice::from_ref(frame), crop, preprocess, features)?.0)
 }
 
 /// [`extract_features_with`] for many images of one grid, row-major `frames.len() x n_features` (the
