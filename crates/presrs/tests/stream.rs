@@ -16,8 +16,8 @@ use presrs::core::pipeline::{LabeledImage, TrainedModel, train};
 use presrs::core::{Frame, Grid};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
 use presrs::stream::{
-    InputFormat, ServerNotice, ServerOptions, SessionOptions, ShutdownHandle, StreamServer,
-    run_session,
+    InputFormat, ServerNotice, ServerOptions, SessionOptions, SessionTap, ShutdownHandle,
+    StreamServer, run_session, run_session_tapped,
 };
 use serde_json::Value;
 
@@ -267,4 +267,70 @@ fn a_frame_cut_by_a_stop_is_the_end_not_an_error() {
     assert!(!summary.had_errors(), "{events:?}");
     assert_eq!(count(&events, "error"), 0);
     assert_eq!(events.last().unwrap()["event"], "end");
+}
+
+/// Keeps what a tap saw.
+#[derive(Default)]
+struct Seen {
+    frames: Vec<(u64, Grid, Vec<f64>)>,
+    lines: Vec<String>,
+}
+
+impl SessionTap for Seen {
+    fn frame(
+        &mut self,
+        index: u64,
+        grid: Grid,
+        values: &[f64],
+        _: Option<&[bool]>,
+        _: Option<u64>,
+    ) {
+        self.frames.push((index, grid, values.to_vec()));
+    }
+    fn line(&mut self, line: &str) {
+        self.lines.push(line.to_owned());
+    }
+}
+
+#[test]
+fn a_tap_sees_every_frame_and_exactly_the_lines_written() {
+    let (bytes, frames) = stream_bytes("ridges", 2);
+    let options = SessionOptions {
+        format: InputFormat::Binary,
+        name: "memory".into(),
+        ..SessionOptions::default()
+    };
+    let mut output = Vec::new();
+    let mut seen = Seen::default();
+    let (model, profile) = (model(), profile());
+    let summary = run_session_tapped(
+        &model,
+        &profile,
+        &bytes[..],
+        &mut output,
+        &options,
+        &|_| {},
+        &mut seen,
+    )
+    .unwrap();
+    assert_eq!(seen.frames.len(), frames);
+    assert_eq!(summary.stats.frames, frames as u64);
+    let indices: Vec<u64> = seen.frames.iter().map(|(index, _, _)| *index).collect();
+    assert_eq!(indices, (0..frames as u64).collect::<Vec<_>>());
+    assert!(
+        seen.frames
+            .iter()
+            .all(|(_, grid, values)| *grid == GRID && values.len() == 256)
+    );
+    let written: Vec<String> = String::from_utf8(output)
+        .unwrap()
+        .lines()
+        .map(str::to_owned)
+        .collect();
+    assert_eq!(seen.lines, written);
+    assert!(
+        seen.lines
+            .iter()
+            .any(|line| line.contains("\"classification\""))
+    );
 }

@@ -28,6 +28,7 @@ mod server;
 mod session;
 mod shutdown;
 mod summary;
+mod tap;
 
 use std::path::Path;
 
@@ -40,8 +41,10 @@ pub use output::BoundedOutput;
 pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer};
 pub use session::{
     ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
+    run_session_tapped,
 };
 pub use shutdown::ShutdownHandle;
+pub use tap::{NoTap, SessionTap};
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
 /// and `--gait`).

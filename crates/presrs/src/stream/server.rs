@@ -15,6 +15,7 @@ use super::events::error_line;
 use super::output::BoundedOutput;
 use super::session::{ConnectionSummary, SessionNotice, binary_source, run_connection};
 use super::shutdown::ShutdownHandle;
+use super::tap::NoTap;
 use crate::error::{Error, Result};
 
 /// The server's limits.
@@ -253,6 +254,7 @@ impl StreamServer {
             binary_source(reader, name, self.options.max_frame_bytes),
             &mut emit,
             &session_notice,
+            &mut NoTap,
         );
         let dropped_in_writer = output.dropped();
         output.close();

@@ -12,6 +12,7 @@ use presrs_io::tekscan_stream::TekscanStream;
 use super::events::{end_line, error_line, event_lines};
 use super::shutdown::ShutdownHandle;
 pub use super::summary::ConnectionSummary;
+use super::tap::{NoTap, SessionTap};
 use crate::error::Result;
 
 /// How the frames of a session are encoded.
@@ -78,6 +79,19 @@ pub fn run_session<R: BufRead>(
     options: &SessionOptions,
     notify: &dyn Fn(&SessionNotice),
 ) -> Result<ConnectionSummary> {
+    run_session_tapped(model, profile, input, output, options, notify, &mut NoTap)
+}
+
+/// [`run_session`] with a [`SessionTap`] that sees every frame read and every line emitted.
+pub fn run_session_tapped<R: BufRead>(
+    model: &TrainedModel,
+    profile: &OnlineProfile,
+    input: R,
+    output: &mut dyn Write,
+    options: &SessionOptions,
+    notify: &dyn Fn(&SessionNotice),
+    tap: &mut dyn SessionTap,
+) -> Result<ConnectionSummary> {
     // A closed output (`presrs stream | head`): nobody reads the decisions any more, so the session
     // ends as if the input had (a live input may never end by itself).
     let closed = std::cell::Cell::new(false);
@@ -100,14 +114,14 @@ pub fn run_session<R: BufRead>(
             let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
                 until_stopped(source(values, present))
             };
-            run_connection(model, profile, next, &mut emit, notify)
+            run_connection(model, profile, next, &mut emit, notify, tap)
         }
         InputFormat::Binary => {
             let mut source = binary_source(input, &options.name, options.max_frame_bytes);
             let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
                 until_stopped(source(values, present))
             };
-            run_connection(model, profile, next, &mut emit, notify)
+            run_connection(model, profile, next, &mut emit, notify, tap)
         }
     }
 }
@@ -135,12 +149,14 @@ struct Connection<'a, 'm> {
     summary: ConnectionSummary,
     emit: &'a mut dyn FnMut(String) -> bool,
     notify: &'a dyn Fn(&SessionNotice),
+    tap: &'a mut dyn SessionTap,
     /// Errors reported so far (the first few are noticed).
     reported: u64,
 }
 
 impl Connection<'_, '_> {
     fn emit(&mut self, line: String) {
+        self.tap.line(&line);
         if !(self.emit)(line) {
             self.summary.dropped_events += 1;
         }
@@ -170,6 +186,7 @@ impl Connection<'_, '_> {
         arrival: Instant,
         timestamp_us: Option<u64>,
     ) -> bool {
+        self.tap.frame(index, grid, frame.0, frame.1, timestamp_us);
         let frames_before = self.classifier.stats().frames;
         let pushed = match unusable_for_model(self.model, grid) {
             Some(why) if frames_before == 0 => {
@@ -229,6 +246,7 @@ pub(super) fn run_connection(
     mut next: impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input,
     emit: &mut dyn FnMut(String) -> bool,
     notify: &dyn Fn(&SessionNotice),
+    tap: &mut dyn SessionTap,
 ) -> Result<ConnectionSummary> {
     let classifier = OnlineClassifier::new(
         model,
@@ -244,6 +262,7 @@ pub(super) fn run_connection(
         summary: ConnectionSummary::default(),
         emit,
         notify,
+        tap,
         reported: 0,
     };
     let (mut values, mut present) = (Vec::new(), Vec::new());

@@ -1,0 +1,35 @@
+//! A tap on a session: what else sees its frames and its decisions besides the output (a bag being
+//! recorded, a live viewer in a browser).
+
+use presrs_core::Grid;
+
+/// Sees every frame a session reads and every JSON line it emits, in order, as they happen.
+///
+/// Frames come as they were read (before the model's crop), rejected ones included, so a recording of
+/// the session holds what the sensor sent; lines are exactly those written to the session's output
+/// (`touchdown`, `classification`, `liftoff`, `error`, `end`). A tap must not block for long: the
+/// session waits for it.
+pub trait SessionTap {
+    /// Input frame `index` (counting every frame read), row-major `values`, `present` false where a
+    /// sensel is absent (`None`: all present), the sender's timestamp when it gave one.
+    fn frame(
+        &mut self,
+        index: u64,
+        grid: Grid,
+        values: &[f64],
+        present: Option<&[bool]>,
+        timestamp_us: Option<u64>,
+    );
+
+    /// One JSON line the session emitted.
+    fn line(&mut self, line: &str);
+}
+
+/// The tap that sees nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoTap;
+
+impl SessionTap for NoTap {
+    fn frame(&mut self, _: u64, _: Grid, _: &[f64], _: Option<&[bool]>, _: Option<u64>) {}
+    fn line(&mut self, _: &str) {}
+}
