@@ -405,3 +405,111 @@ fn report_on_one_condition_with_few_images_tests_on_held_out_images() {
         "the evaluation is in the report"
     );
 }
+
+/// The headline `presrs report` prints (`NAME, N repeat(s): A % +- S`), split into its name and figures.
+fn headline(stdout: &str) -> (String, String) {
+    let line = stdout
+        .lines()
+        .find(|l| l.contains(" repeat(s): "))
+        .unwrap_or_else(|| panic!("no headline in {stdout}"));
+    let (name, figures) = line.split_once(": ").unwrap();
+    (name.to_owned(), figures.to_owned())
+}
+
+/// The report evaluates what `presrs eval` evaluates with the same options: the same figures, the
+/// protocol named, the model shown is the evaluation's first, and the report says when, by what and how.
+#[test]
+fn report_agrees_with_eval_and_states_its_provenance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let manifest = sim_dir().join("manifest.csv");
+    let options = [
+        "--leave-one-out",
+        "group",
+        "--features",
+        "fft1d",
+        "--classifier",
+        "pwe",
+        "--per-class",
+        "8",
+        "--validation",
+        "3",
+        "--repeats",
+        "2",
+    ];
+    let stdout = run_ok(
+        presrs()
+            .args(["report", "--manifest", manifest.to_str().unwrap()])
+            .args(options)
+            .args(["--fault-repeats", "0", "--out", out.to_str().unwrap()]),
+    );
+    let json = run_ok(
+        presrs()
+            .args(["eval", "--manifest", manifest.to_str().unwrap(), "--json"])
+            .args(options),
+    );
+    let doc: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let (name, figures) = headline(&stdout);
+    assert_eq!(name, "leave one group out, 2 repeat(s)");
+    let expected = format!(
+        "{:.2} % +- {:.2}",
+        100.0 * doc["overall_accuracy"].as_f64().unwrap(),
+        100.0 * doc["overall_accuracy_std"].as_f64().unwrap()
+    );
+    assert_eq!(figures, expected, "report and eval disagree");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("leave one group out"),
+        "the protocol is named"
+    );
+    assert!(
+        html.contains("first model (leave one group out, seed 1, holding out"),
+        "the model shown is the evaluation's first"
+    );
+    assert!(html.contains(&format!("Made by presrs {}", env!("CARGO_PKG_VERSION"))));
+    assert!(
+        html.contains("report --manifest"),
+        "the command line is stated"
+    );
+    assert!(html.contains(" UTC"), "the date is stated");
+}
+
+/// Without options, a data set with groups (and no G2 condition) is evaluated leaving one group out,
+/// with the automatic choice, and the report shows what it chose.
+#[test]
+fn default_report_on_groups_leaves_one_group_out_with_the_automatic_choice() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = sim_dir();
+    // The simulator's manifest with its gaits renamed (no G2: not the paper's experiment), beside it so
+    // that its relative paths still resolve.
+    let text = std::fs::read_to_string(sim.join("manifest.csv")).unwrap();
+    let manifest = sim.join("renamed-gaits.csv");
+    std::fs::write(
+        &manifest,
+        text.replace(",G1,", ",slow,").replace(",G2,", ",fast,"),
+    )
+    .unwrap();
+    let out = dir.path().join("report");
+    let stdout = run_ok(presrs().args([
+        "report",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--per-class",
+        "6",
+        "--validation",
+        "2",
+        "--repeats",
+        "1",
+        "--fault-repeats",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let (name, _) = headline(&stdout);
+    assert_eq!(name, "leave one group out, 1 repeat(s)");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("Chosen automatically"),
+        "the auto choice is shown"
+    );
+}

@@ -110,6 +110,22 @@ pub struct Evaluated {
     /// The selection of every automatically chosen model, in training order (empty for
     /// [`Models::Config`]).
     pub selections: Vec<Selection>,
+    /// The first model trained (the first repeat's first fold): a report shows it as the model that
+    /// was evaluated.
+    pub first_model: Option<FirstModel>,
+}
+
+/// The first model an evaluation trained, and on what.
+#[derive(Clone, Debug)]
+pub struct FirstModel {
+    pub model: crate::pipeline::TrainedModel,
+    /// The repeat's seed.
+    pub seed: u64,
+    /// The held-out value of its fold (leave-one-out), `None` for the other protocol.
+    pub held_out: Option<String>,
+    pub n_train: usize,
+    pub n_validation: usize,
+    pub n_test: usize,
 }
 
 /// An evaluation: `protocol` on `samples`, run `repeats` times with the seeds `seed`, `seed + 1`, ...;
@@ -158,17 +174,19 @@ impl Evaluation<'_, '_> {
             |set: &[usize]| -> Vec<LabeledImage<'_>> { set.iter().map(|&i| samples[i]).collect() };
         match models {
             Models::Config(config) => {
-                let reports = self.run_with(perturbs, &|train_set, validation_set, _| {
-                    train(&images(train_set), &images(validation_set), config)
-                })?;
+                let (reports, first_model) =
+                    self.run_with(perturbs, &|train_set, validation_set, _| {
+                        train(&images(train_set), &images(validation_set), config)
+                    })?;
                 Ok(Evaluated {
                     reports,
                     selections: Vec::new(),
+                    first_model,
                 })
             }
             Models::Auto(candidates, by) => {
                 let selections = std::sync::Mutex::new(Vec::new());
-                let reports =
+                let (reports, first_model) =
                     self.run_with(perturbs, &|train_set, validation_set, fold_seed| {
                         let model = crate::selection::train_auto(
                             &images(train_set),
@@ -187,6 +205,7 @@ impl Evaluation<'_, '_> {
                 Ok(Evaluated {
                     reports,
                     selections: selections.into_inner().unwrap_or_default(),
+                    first_model,
                 })
             }
         }
@@ -233,12 +252,12 @@ impl Evaluation<'_, '_> {
     }
 
     /// The engine behind every run: the folds of each repeat, each fold's model from `trainer`, its
-    /// test images classified under each of `perturbs`.
+    /// test images classified under each of `perturbs`. Also returns the first model trained.
     fn run_with(
         &self,
         perturbs: &[Option<&TestTransform<'_>>],
         trainer: &Trainer<'_>,
-    ) -> Result<Vec<EvalReport>> {
+    ) -> Result<(Vec<EvalReport>, Option<FirstModel>)> {
         let Self {
             samples,
             protocol,
@@ -276,6 +295,7 @@ impl Evaluation<'_, '_> {
                 reliability: Reliability::default(),
             })
             .collect();
+        let mut first_model = None;
         for repeat in 0..repeats {
             let repeat_seed = seed.wrapping_add(repeat as u64);
             let folds = folds(samples, protocol, repeat_seed)?;
@@ -295,6 +315,20 @@ impl Evaluation<'_, '_> {
                 let start = Instant::now();
                 let model = trainer(&fold.train, &fold.validation, repeat_seed)?;
                 result.train_seconds += start.elapsed().as_secs_f64();
+                if first_model.is_none() {
+                    first_model = Some(FirstModel {
+                        model: model.clone(),
+                        seed: repeat_seed,
+                        held_out: fold
+                            .by_group
+                            .then(|| fold.test.first().and_then(|&i| samples[i].group))
+                            .flatten()
+                            .map(str::to_owned),
+                        n_train: fold.train.len(),
+                        n_validation: fold.validation.len(),
+                        n_test: fold.test.len(),
+                    });
+                }
                 result.sigmas.extend(model.sigma());
                 result.n_train += fold.train.len();
                 result.n_validation += fold.validation.len();
@@ -378,7 +412,7 @@ impl Evaluation<'_, '_> {
                 tally.results.push(result);
             }
         }
-        Ok(tallies
+        let reports = tallies
             .into_iter()
             .map(|tally| {
                 let mut report =
@@ -387,7 +421,8 @@ impl Evaluation<'_, '_> {
                 report.reliability = tally.reliability;
                 report
             })
-            .collect())
+            .collect();
+        Ok((reports, first_model))
     }
 }
 

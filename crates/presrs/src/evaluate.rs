@@ -30,6 +30,17 @@ pub enum Holdout {
     LeaveOneOut(String),
 }
 
+impl Holdout {
+    /// The protocol in a few words: `trained on G2`, `leave one group out`, `random draw`.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::LeaveOneOut(column) => format!("leave one {column} out"),
+            Self::TrainCondition(Some(condition)) => format!("trained on {condition}"),
+            Self::TrainCondition(None) => "random draw".to_owned(),
+        }
+    }
+}
+
 /// How an evaluation is run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EvalOptions {
@@ -77,6 +88,8 @@ pub struct EvalOutcome {
     pub selections: Vec<presrs_core::selection::Selection>,
     /// What the user should know (fewer principal components than asked).
     pub warnings: Vec<String>,
+    /// The first model trained (first repeat, first fold), as a report shows it.
+    pub first_model: Option<presrs_core::evaluation::FirstModel>,
 }
 
 /// What the automatic choice expected of its chosen candidates, inside the training data: to set next
@@ -276,6 +289,7 @@ impl<'d> EvalSetup<'d> {
         let Evaluated {
             reports,
             selections,
+            first_model,
         } = self.run("training", 1, progress, |evaluation| {
             evaluation.run_each(models, &[None])
         })?;
@@ -302,6 +316,7 @@ impl<'d> EvalSetup<'d> {
             report,
             selections,
             warnings,
+            first_model,
         })
     }
 

@@ -5,10 +5,13 @@
 //! re-exported here.
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use presrs_core::evaluation::{Confusion, EvalReport, MeanStd, Models, Protocol, RepeatResult};
+use presrs_core::evaluation::{
+    Confusion, EvalReport, FirstModel, MeanStd, Models, Protocol, RepeatResult,
+};
 use presrs_core::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
 use presrs_core::reliability::Reliability;
 use presrs_core::split::{ValidationSize, stratified_split};
@@ -27,7 +30,7 @@ pub use presrs_report::{
 
 use crate::dataset::{Dataset, Sample, SampleOptions};
 use crate::error::{Context, Error, Result};
-use crate::evaluate::run_counted;
+use crate::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, run_counted};
 use crate::method::Method;
 use crate::progress::Progress;
 use crate::train::split_images;
@@ -51,8 +54,10 @@ pub struct ReportOptions {
     /// A trained model to show (crop, PCA, validation curve) and to test on every image. Without it,
     /// a model is trained on the data set (the paper's protocol) and evaluated with repeats.
     pub model: Option<PathBuf>,
-    /// Train on this condition (default: G2 when present, else every condition).
+    /// Train on this condition, test on the others (see [`report_holdout`] for the default).
     pub train_condition: Option<String>,
+    /// Hold out each value of this manifest column in turn (see [`report_holdout`] for the default).
+    pub leave_one_out: Option<String>,
     /// Images drawn per class for training + validation (fewer if a class has fewer).
     pub per_class: usize,
     pub validation: ValidationSize,
@@ -65,6 +70,8 @@ pub struct ReportOptions {
     /// How the data set's samples were taken (the report says which stance frame, and reads movies
     /// for load curves the same way).
     pub samples: SampleOptions,
+    /// The command line the report was made with, stated in it.
+    pub command_line: Option<String>,
 }
 
 impl Default for ReportOptions {
@@ -72,6 +79,7 @@ impl Default for ReportOptions {
         Self {
             model: None,
             train_condition: None,
+            leave_one_out: None,
             per_class: 20,
             validation: ValidationSize::Count(7),
             repeats: 5,
@@ -79,6 +87,7 @@ impl Default for ReportOptions {
             seed: 1,
             method: Method::default(),
             samples: SampleOptions::default(),
+            command_line: None,
         }
     }
 }
@@ -272,12 +281,15 @@ pub fn write_simulation_report(
         "presrs reproduce: the paper's experiment on the simulator",
         samples,
     );
-    inputs.notes = vec![format!(
-        "Simulated hopper on {} terrains x {} gaits, seed {seed}: the mid-stance frame of every \
-         complete stance the segmentation found.",
-        table.terrains.len(),
-        table.gaits.len()
-    )];
+    inputs.notes = vec![
+        format!(
+            "Simulated hopper on {} terrains x {} gaits, seed {seed}: the mid-stance frame of every \
+             complete stance the segmentation found.",
+            table.terrains.len(),
+            table.gaits.len()
+        ),
+        provenance(None),
+    ];
     inputs.sensor = data.sensor.as_ref();
     inputs.model_note = model.as_ref().map(|m| m.1.clone());
     inputs.model = model.as_ref().map(|m| &m.0);
@@ -327,45 +339,26 @@ fn first_seconds(recording: &Recording, seconds: f64) -> Result<Recording> {
     )?)
 }
 
-/// The report of `presrs eval`: the manifest's samples, the evaluation (named `evaluation_name`), a
-/// model trained like one repeat of it (for the PCA and validation-curve figures) and the load curves of
-/// up to four movies; with `faults` (from `--perturb`), accuracy against fault level.
-// Called by `reproduce` and `eval` once they write reports.
+/// The report of `presrs eval`: the manifest's samples, the evaluation `outcome` of `options`, the model
+/// it trained first (for the PCA and validation-curve figures) and the load curves of up to four
+/// movies; with `faults` (from `--perturb`), accuracy against fault level.
 pub fn write_eval_report(
-    manifest_path: &Path,
-    loaded: &Dataset,
-    (report, evaluation_name): (&EvalReport, &str),
-    config: &CheckedTrainConfig,
-    sample_options: &SampleOptions,
+    dataset: &Dataset,
+    options: &EvalOptions,
+    outcome: &EvalOutcome,
     faults: &[FaultResult],
+    sample_options: &SampleOptions,
+    command_line: Option<&str>,
     out_dir: &Path,
 ) -> Result<PathBuf> {
-    let (condition, per_class, validation) = match &report.protocol {
-        Protocol::TrainCondition {
-            condition,
-            per_class,
-            validation,
-        } => (condition.clone(), *per_class, *validation),
-        Protocol::LeaveOneOut {
-            per_class,
-            validation,
-            ..
-        } => (None, *per_class, *validation),
-    };
-    let seed = report.repeats.first().map_or(1, |r| r.seed);
-    let model = labelled(&loaded.samples).and_then(|triples| {
-        train_report_model(
-            &triples,
-            condition.as_deref(),
-            per_class.unwrap_or(usize::MAX),
-            validation,
-            seed,
-            config,
-        )
-        .ok()
-    });
+    let evaluation_name = options.holdout.describe();
+    let report = &outcome.report;
+    let model = outcome
+        .first_model
+        .as_ref()
+        .map(|first| (&first.model, first_model_note(first, options)));
     let evaluations = vec![Evaluation {
-        name: evaluation_name.to_owned(),
+        name: evaluation_name.clone(),
         report,
         reference: BTreeMap::new(),
     }];
@@ -374,12 +367,12 @@ pub fn write_eval_report(
         report.repeats.len()
     );
     write_manifest_report(
-        manifest_path,
-        loaded,
-        model.as_ref().map(|(m, note)| (m, note.clone())),
+        dataset,
+        model,
         evaluations,
         sample_options,
         (faults, fault_note),
+        &provenance(command_line),
         out_dir,
     )
 }
@@ -548,14 +541,15 @@ fn describe_samples(samples: &[Sample], options: &SampleOptions) -> String {
 }
 
 fn write_manifest_report(
-    manifest_path: &Path,
     loaded: &Dataset,
     model: Option<(&TrainedModel, String)>,
     evaluations: Vec<Evaluation<'_>>,
     sample_options: &SampleOptions,
     (faults, fault_note): (&[FaultResult], String),
+    provenance: &str,
     out_dir: &Path,
 ) -> Result<PathBuf> {
+    let manifest_path = loaded.path();
     let samples = &loaded.samples;
     let conditions: BTreeSet<&str> = loaded
         .samples
@@ -581,12 +575,15 @@ fn write_manifest_report(
         .unwrap_or_default();
     let title = format!("presrs report: {}", manifest_path.display());
     let mut inputs = ReportInputs::new(title, samples);
-    inputs.notes = vec![format!(
-        "{} images from {}: {}.",
-        samples.len(),
-        manifest_path.display(),
-        describe_samples(samples, sample_options)
-    )];
+    inputs.notes = vec![
+        format!(
+            "{} images from {}: {}.",
+            samples.len(),
+            manifest_path.display(),
+            describe_samples(samples, sample_options)
+        ),
+        provenance.to_owned(),
+    ];
     inputs.sensor = meta.as_ref();
     inputs.model = model.as_ref().map(|m| m.0);
     inputs.model_note = model.map(|m| m.1);
@@ -679,78 +676,106 @@ fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> Result<EvalRepo
     })
 }
 
+/// What `presrs report` wrote and the figures it shows.
+#[derive(Clone, Debug)]
+pub struct ReportSummary {
+    /// The page (`index.html`).
+    pub index: PathBuf,
+    /// The evaluation the report shows, with its name (`leave one group out`, `trained on G2`, the
+    /// given model on every image); `None` with `--repeats 0` and no model.
+    pub evaluation: Option<(String, EvalReport)>,
+    /// What the user should know about the run (capped draws, labels no training set holds).
+    pub warnings: Vec<String>,
+}
+
+/// The protocol of the report's evaluation: as asked (`--train-condition`, `--leave-one-out`); else
+/// the paper's (trained on G2) on data with a G2 condition (the simulator's); else leave one group out
+/// when the manifest has two or more groups (a person, a trial, a session: the same one never in
+/// training and test); else a random draw from every condition.
+pub fn report_holdout(dataset: &Dataset, options: &ReportOptions) -> Holdout {
+    if let Some(column) = &options.leave_one_out {
+        return Holdout::LeaveOneOut(column.clone());
+    }
+    if let Some(condition) = &options.train_condition {
+        return Holdout::TrainCondition(Some(condition.clone()));
+    }
+    let has = |condition: &str| {
+        dataset
+            .samples
+            .iter()
+            .any(|s| s.condition.as_deref() == Some(condition))
+    };
+    if has("G2") {
+        return Holdout::TrainCondition(Some("G2".to_owned()));
+    }
+    let groups: BTreeSet<&str> = dataset
+        .samples
+        .iter()
+        .filter_map(|s| s.group.as_deref())
+        .collect();
+    if groups.len() >= 2 && dataset.samples.iter().all(|s| s.group.is_some()) {
+        Holdout::LeaveOneOut("group".to_owned())
+    } else {
+        Holdout::TrainCondition(None)
+    }
+}
+
 /// `presrs report`: the report of a data set in `out_dir` (`index.html` and its figures), with a
-/// model (given, or trained on it), its evaluations and the sensor-fault sweep as `options` say.
-/// Returns the page's path.
+/// model (given, or the first one its evaluation trained), its evaluation and the sensor-fault sweep as
+/// `options` say. The evaluation is `presrs eval`'s with the same options (the method, auto by default,
+/// and the protocol of [`report_holdout`]), so the two agree.
 pub fn report_dataset(
     dataset: &Dataset,
     options: &ReportOptions,
     out_dir: &Path,
     progress: &dyn Progress,
-) -> Result<PathBuf> {
+) -> Result<ReportSummary> {
     let name = dataset.path().display();
-    let loaded = dataset;
-    let conditions: BTreeSet<&str> = loaded
-        .samples
-        .iter()
-        .filter_map(|s| s.condition.as_deref())
-        .collect();
-    let train_condition = options
-        .train_condition
-        .clone()
-        .or_else(|| conditions.contains("G2").then(|| "G2".to_owned()));
-    if let Some(c) = &train_condition
-        && !conditions.contains(c.as_str())
-    {
-        return Err(Error::data(format!(
-            "{name}: --train-condition {c}: no sample has that condition (conditions: {})",
-            conditions.iter().copied().collect::<Vec<_>>().join(", ")
-        )));
-    }
-    let grid = loaded.samples[0].frame.grid();
-    let config = options.method.train_config(grid)?;
-    let triples = labelled(&loaded.samples);
-    let mut reports: Vec<(String, EvalReport)> = Vec::new();
-    let model: Option<(TrainedModel, String)> = match (&options.model, &triples) {
-        (Some(path), _) => {
+    let mut evaluation: Option<(String, EvalReport)> = None;
+    let mut warnings = Vec::new();
+    let mut faults = (Vec::new(), String::new());
+    let model: Option<(TrainedModel, String)> = match &options.model {
+        Some(path) => {
             let file = load_model(path)?;
-            if triples.is_some() {
-                let report = model_on_samples(&file.model, &loaded.samples)?;
-                reports.push((format!("model {} on every image", path.display()), report));
+            if labelled(&dataset.samples).is_some() {
+                let report = model_on_samples(&file.model, &dataset.samples)?;
+                evaluation = Some((format!("model {} on every image", path.display()), report));
             }
             Some((file.model, format!("Loaded from {}.", path.display())))
         }
-        (None, Some(triples)) => {
-            let condition = train_condition.as_deref();
-            let model = report_model(triples, condition, options, &config, progress)
-                .with_context(|| format!("{name}: cannot train the report's model"))?;
+        None if labelled(&dataset.samples).is_some() => {
+            let (eval_options, notes) = report_eval_options(dataset, options);
+            notes.iter().for_each(|note| progress.note(note));
+            let setup = EvalSetup::new(dataset, &eval_options)?;
+            warnings.extend(setup.warnings.iter().cloned());
+            let outcome = setup.evaluate(progress).map_err(|err| {
+                Error::data(format!(
+                    "{name}: cannot evaluate the method for the report: {err}"
+                ))
+            })?;
+            warnings.extend(outcome.warnings.iter().cloned());
             if options.repeats > 0 {
-                let report = report_evaluation(triples, condition, options, &config, progress)
-                    .map_err(|err| {
-                        Error::data(format!(
-                            "{name}: cannot evaluate the model for the report (--repeats 0 leaves \
-                             the evaluation out): {err}"
-                        ))
-                    })?;
-                let title = format!("trained on {}", condition.unwrap_or("all conditions"));
-                reports.push((title, report));
+                evaluation = Some((eval_options.holdout.describe(), outcome.report));
             }
-            Some(model)
+            if options.fault_repeats > 0 {
+                let config = options.method.train_config(dataset.grid())?;
+                faults = fault_sweep(
+                    options,
+                    setup.samples(),
+                    setup.protocol(),
+                    &config,
+                    progress,
+                )
+                .with_context(|| format!("{name}: fault sweep"))?;
+            }
+            outcome.first_model.map(|first| {
+                let note = first_model_note(&first, &eval_options);
+                (first.model, note)
+            })
         }
-        (None, None) => None,
+        None => None,
     };
-    let (faults, fault_note) = match &triples {
-        Some(triples) if options.fault_repeats > 0 => fault_sweep(
-            options,
-            triples,
-            train_condition.as_deref(),
-            &config,
-            progress,
-        )
-        .with_context(|| format!("{name}: fault sweep"))?,
-        _ => (Vec::new(), String::new()),
-    };
-    let evaluations: Vec<Evaluation<'_>> = reports
+    let evaluations: Vec<Evaluation<'_>> = evaluation
         .iter()
         .map(|(title, report)| Evaluation {
             name: title.clone(),
@@ -763,15 +788,147 @@ pub fn report_dataset(
             },
         })
         .collect();
-    write_manifest_report(
-        dataset.path(),
-        loaded,
+    let index = write_manifest_report(
+        dataset,
         model.as_ref().map(|(m, note)| (m, note.clone())),
         evaluations,
         &options.samples,
-        (&faults, fault_note),
+        (&faults.0, faults.1),
+        &provenance(options.command_line.as_deref()),
         out_dir,
+    )?;
+    Ok(ReportSummary {
+        index,
+        evaluation,
+        warnings,
+    })
+}
+
+/// The evaluation options `presrs report` runs with (`presrs eval` with these gives the same figures),
+/// and notes on how the draw was adapted. With the paper's protocol the draw shrinks when a class has
+/// fewer images than asked, and when the training condition covers every sample, so that every class
+/// keeps images to test on.
+pub fn report_eval_options(
+    dataset: &Dataset,
+    options: &ReportOptions,
+) -> (EvalOptions, Vec<String>) {
+    let holdout = report_holdout(dataset, options);
+    let mut notes = Vec::new();
+    let (per_class, validation) = match &holdout {
+        Holdout::TrainCondition(condition) => {
+            let triples = labelled(&dataset.samples).unwrap_or_default();
+            let samples = eval_samples(&triples);
+            let condition = condition.as_deref();
+            let smallest = smallest_class(&samples, condition);
+            let (per_class, validation, held_out) =
+                evaluation_draw(&samples, condition, options.per_class, options.validation);
+            if held_out {
+                notes.push(format!(
+                    "the evaluations draw {per_class} image(s) per class for training + validation \
+                     and test on the rest (every condition trains, and a class has too few images to \
+                     draw --per-class {} and keep some)",
+                    options.per_class
+                ));
+            } else if smallest < options.per_class {
+                notes.push(format!(
+                    "a class has only {smallest} image(s){}, fewer than --per-class {}: drawing \
+                     {per_class} per class, {} of them for validation",
+                    condition.map_or_else(String::new, |c| format!(" of condition {c}")),
+                    options.per_class,
+                    match validation {
+                        ValidationSize::Count(count) => count.to_string(),
+                        ValidationSize::Fraction(f) => format!("a fraction {f}"),
+                    }
+                ));
+            }
+            (per_class, validation)
+        }
+        Holdout::LeaveOneOut(_) => (options.per_class, options.validation),
+    };
+    let eval_options = EvalOptions {
+        holdout,
+        per_class: Some(per_class),
+        validation,
+        // The model shown is the evaluation's first: one repeat when no evaluation is shown.
+        repeats: options.repeats.max(1),
+        seed: options.seed,
+        method: options.method.clone(),
+    };
+    (eval_options, notes)
+}
+
+/// How the model the report shows was trained, in a sentence or two.
+fn first_model_note(first: &FirstModel, eval_options: &EvalOptions) -> String {
+    let fold = first
+        .held_out
+        .as_ref()
+        .map_or_else(String::new, |value| format!(", holding out {value}"));
+    let mut note = format!(
+        "The evaluation's first model ({}, seed {}{fold}): {} training + {} validation images, tested \
+         on {}. {}.",
+        eval_options.holdout.describe(),
+        first.seed,
+        first.n_train,
+        first.n_validation,
+        first.n_test,
+        crate::describe::pipeline_summary(&first.model)
+    );
+    if let Some(selection) = first.model.selection()
+        && let Some(chosen) = selection.chosen()
+    {
+        let _ = write!(
+            note,
+            " Chosen automatically ({}) among {} candidates: {} + {}, validation accuracy {:.1} %.",
+            selection.method,
+            selection.scores.len(),
+            chosen.features,
+            chosen.classifier,
+            100.0 * chosen.accuracy.mean
+        );
+    }
+    note
+}
+
+/// When, by what and how a report was made: presrs's version, the time (UTC) and the command line.
+pub fn provenance(command_line: Option<&str>) -> String {
+    let mut text = format!(
+        "Made by presrs {} on {}",
+        env!("CARGO_PKG_VERSION"),
+        utc_now()
+    );
+    if let Some(command) = command_line {
+        let _ = write!(text, " with `{command}`");
+    }
+    text.push('.');
+    text
+}
+
+/// The current time, `YYYY-MM-DD HH:MM UTC`.
+fn utc_now() -> String {
+    let seconds = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (year, month, day) = civil_from_days((seconds / 86_400) as i64);
+    let minute_of_day = seconds % 86_400 / 60;
+    format!(
+        "{year:04}-{month:02}-{day:02} {:02}:{:02} UTC",
+        minute_of_day / 60,
+        minute_of_day % 60
     )
+}
+
+/// The proleptic Gregorian date of `days` since 1970-01-01 (Howard Hinnant's `civil_from_days`).
+fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    (year, month, day)
 }
 
 /// The paper's Table II values for the conditions `report` tested (and overall).
@@ -781,77 +938,6 @@ fn paper_reference(report: &EvalReport) -> BTreeMap<String, f64> {
         .filter(|(c, _)| *c == "overall" || report.per_condition.contains_key(*c))
         .map(|(c, v)| ((*c).to_owned(), *v))
         .collect()
-}
-
-/// The model the report shows, trained on `condition` with the options' draw (shrunk, with a note,
-/// when a class has fewer images).
-fn report_model(
-    triples: &[(&Frame, &str, Option<&str>)],
-    condition: Option<&str>,
-    options: &ReportOptions,
-    config: &CheckedTrainConfig,
-    progress: &dyn Progress,
-) -> Result<(TrainedModel, String)> {
-    let smallest = smallest_class(&eval_samples(triples), condition);
-    if smallest < options.per_class {
-        let (per_class, validation) = shrink_draw(smallest, options.per_class, options.validation);
-        progress.note(&format!(
-            "a class has only {smallest} image(s){}, fewer than --per-class {}: drawing {per_class} \
-             per class, {} of them for validation",
-            condition.map_or_else(String::new, |c| format!(" of condition {c}")),
-            options.per_class,
-            match validation {
-                ValidationSize::Count(count) => count.to_string(),
-                ValidationSize::Fraction(f) => format!("a fraction {f}"),
-            }
-        ));
-    }
-    train_report_model(
-        triples,
-        condition,
-        options.per_class,
-        options.validation,
-        options.seed,
-        config,
-    )
-}
-
-/// The report's evaluation: the paper's protocol on `condition`, with the report's draw.
-fn report_evaluation(
-    triples: &[(&Frame, &str, Option<&str>)],
-    condition: Option<&str>,
-    options: &ReportOptions,
-    config: &CheckedTrainConfig,
-    progress: &dyn Progress,
-) -> std::result::Result<EvalReport, presrs_core::CoreError> {
-    let eval_samples = eval_samples(triples);
-    let (per_class, validation, held_out) = evaluation_draw(
-        &eval_samples,
-        condition,
-        options.per_class,
-        options.validation,
-    );
-    if held_out {
-        progress.note(&format!(
-            "the evaluations draw {per_class} image(s) per class for training + validation and test \
-             on the rest (every condition trains, and a class has too few images to draw --per-class \
-             {} and keep some)",
-            options.per_class
-        ));
-    }
-    let protocol = Protocol::TrainCondition {
-        condition: condition.map(str::to_owned),
-        per_class: Some(per_class),
-        validation,
-    };
-    run_counted(
-        &eval_samples,
-        &protocol,
-        (options.repeats, options.seed),
-        ("evaluating", options.repeats as u64),
-        progress,
-        |evaluation| evaluation.run(Models::Config(config)),
-    )
 }
 
 /// How many images per class the report's evaluations draw for training + validation: `per_class`, or
@@ -905,30 +991,32 @@ fn eval_samples<'a>(triples: &[(&'a Frame, &'a str, Option<&'a str>)]) -> Vec<La
         .collect()
 }
 
-/// `presrs report`'s sensor-fault sweep: the paper's protocol (trained on `condition`, `per_class`
-/// images per class or fewer when a class has fewer) with every test image perturbed at each level of
+/// The words for `protocol`: `trained on G2`, `leave one group out`, `random draw`.
+fn protocol_words(protocol: &Protocol) -> String {
+    match protocol {
+        Protocol::TrainCondition { condition, .. } => {
+            Holdout::TrainCondition(condition.clone()).describe()
+        }
+        Protocol::LeaveOneOut { column, .. } => Holdout::LeaveOneOut(column.clone()).describe(),
+    }
+}
+
+/// `presrs report`'s sensor-fault sweep: the evaluation's protocol and draws with every test image
+/// perturbed at each level of
 /// [`Perturbation::default_sweep`](presrs_core::perturb::Perturbation::default_sweep), for the configured
 /// pipeline `config`, or with auto options for the paper's method (whatever the fixed part says) and the
 /// automatic choice; each model is trained once per repeat and tested under every perturbation. Also
 /// returns a note on how it was run.
 pub fn fault_sweep(
     options: &ReportOptions,
-    triples: &[(&Frame, &str, Option<&str>)],
-    condition: Option<&str>,
+    samples: &[LabeledImage<'_>],
+    protocol: &Protocol,
     config: &CheckedTrainConfig,
     progress: &dyn Progress,
 ) -> Result<(Vec<FaultResult>, String)> {
     use presrs_core::evaluation::TestTransform;
     use presrs_core::perturb::Perturbation;
     let started = Instant::now();
-    let samples = eval_samples(triples);
-    let (per_class, validation, _) =
-        evaluation_draw(&samples, condition, options.per_class, options.validation);
-    let protocol = Protocol::TrainCondition {
-        condition: condition.map(str::to_owned),
-        per_class: Some(per_class),
-        validation,
-    };
     let sweep = Perturbation::default_sweep();
     let transforms: Vec<_> = sweep.iter().map(Perturbation::transform).collect();
     let mut each: Vec<Option<&TestTransform<'_>>> = vec![None];
@@ -955,8 +1043,8 @@ pub fn fault_sweep(
         options.fault_repeats
     ));
     let (paper_reports, auto_reports) = run_counted(
-        &samples,
-        &protocol,
+        samples,
+        protocol,
         (options.fault_repeats, options.seed),
         ("fault sweep", (methods * options.fault_repeats) as u64),
         progress,
@@ -994,12 +1082,17 @@ pub fn fault_sweep(
     }
     let seconds = started.elapsed().as_secs_f64();
     progress.note(&format!("fault sweep: {seconds:.1} s"));
+    let per_class = match protocol {
+        Protocol::TrainCondition { per_class, .. } | Protocol::LeaveOneOut { per_class, .. } => {
+            per_class.map_or_else(
+                || "every image".to_owned(),
+                |n| format!("{n} images per class"),
+            )
+        }
+    };
     let note = format!(
-        "Trained on {} ({per_class} images per class), {} repeat(s), seed {}; the sweep took {seconds:.1} s.",
-        condition.map_or_else(
-            || "every condition".to_owned(),
-            |c| format!("condition {c}")
-        ),
+        "{} ({per_class}), {} repeat(s), seed {}; the sweep took {seconds:.1} s.",
+        protocol_words(protocol),
         options.fault_repeats,
         options.seed
     );
@@ -1014,6 +1107,34 @@ mod tests {
     use crate::progress::Quiet;
     use presrs_core::Grid;
     use presrs_sim::{DatasetSpec, simulate_dataset};
+
+    #[test]
+    fn dates_are_gregorian() {
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(59), (1970, 3, 1));
+        assert_eq!(civil_from_days(11_016), (2000, 2, 29));
+        assert_eq!(civil_from_days(20_417), (2025, 11, 25));
+        assert_eq!(civil_from_days(-1), (1969, 12, 31));
+        // Against a day-by-day count from 1970.
+        let mut date = (1970i64, 1u32, 1u32);
+        let leap = |y: i64| (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+        for days in 0..30_000 {
+            assert_eq!(civil_from_days(days), date, "day {days}");
+            let length = match date.1 {
+                2 if leap(date.0) => 29,
+                2 => 28,
+                4 | 6 | 9 | 11 => 30,
+                _ => 31,
+            };
+            date = if date.2 < length {
+                (date.0, date.1, date.2 + 1)
+            } else if date.1 < 12 {
+                (date.0, date.1 + 1, 1)
+            } else {
+                (date.0 + 1, 1, 1)
+            };
+        }
+    }
 
     #[test]
     fn a_short_class_shrinks_the_whole_draw() {
@@ -1146,8 +1267,18 @@ mod tests {
         let triples: Vec<(&Frame, &str, Option<&str>)> =
             frames.iter().map(|(f, l, c)| (f, *l, Some(*c))).collect();
         let config = args.method.train_config(Grid::new(44, 44)).unwrap();
-        let (faults, note) = fault_sweep(&args, &triples, Some("G2"), &config, &Quiet).unwrap();
+        let samples = eval_samples(&triples);
+        let protocol = Protocol::TrainCondition {
+            condition: Some("G2".into()),
+            per_class: Some(8), // 8 images per class of G2: fewer than --per-class 10
+            validation: ValidationSize::Fraction(0.3), // --validation 3 of 10, scaled
+        };
+        let (faults, note) = fault_sweep(&args, &samples, &protocol, &config, &Quiet).unwrap();
         assert!(note.contains("2 repeat(s)"), "{note}");
+        assert!(
+            note.starts_with("trained on G2 (8 images per class)"),
+            "{note}"
+        );
         let sweep = Perturbation::default_sweep();
         assert_eq!(
             faults.len(),
@@ -1155,12 +1286,6 @@ mod tests {
             "one method, the clean run and every level"
         );
 
-        let samples = eval_samples(&triples);
-        let protocol = Protocol::TrainCondition {
-            condition: Some("G2".into()),
-            per_class: Some(8), // 8 images per class of G2: fewer than --per-class 10
-            validation: ValidationSize::Fraction(0.3), // --validation 3 of 10, scaled
-        };
         let dead = Perturbation::Dead(0.1);
         let transform = |i: usize, frame: presrs_core::FrameView<'_>, seed: u64| {
             Ok(dead.apply(frame, seed, i as u64))
@@ -1198,7 +1323,7 @@ mod tests {
         let mle_args = parse(FeatureChoice::Auto, ClassifierKind::Mle);
         let mle_config = mle_args.method.train_config(Grid::new(44, 44)).unwrap();
         let (auto_faults, _) =
-            fault_sweep(&mle_args, &triples, Some("G2"), &mle_config, &Quiet).unwrap();
+            fault_sweep(&mle_args, &samples, &protocol, &mle_config, &Quiet).unwrap();
         let paper: Vec<_> = auto_faults
             .iter()
             .filter(|f| f.method == PAPER_METHOD)

@@ -196,35 +196,25 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let outcome = setup.evaluate(&progress)?;
     let internal = outcome.internal_estimate();
-    let EvalOutcome {
-        report,
-        selections,
-        warnings,
-    } = outcome;
-    for warning in &warnings {
+    for warning in &outcome.warnings {
         stderr_line!("warning: {warning}");
     }
-    let perturbed = setup.perturbed(&args.perturb, &report, &progress)?;
+    let perturbed = setup.perturbed(&args.perturb, &outcome.report, &progress)?;
     if let Some(dir) = &args.report {
-        let name = match &args.leave_one_out {
-            Some(column) => format!("leave one {column} out"),
-            None => args
-                .train_condition
-                .as_ref()
-                .map_or_else(|| "random draw".to_owned(), |c| format!("trained on {c}")),
-        };
-        let config = options.method.train_config(dataset.grid())?;
         let path = presrs::report::write_eval_report(
-            &args.manifest,
             &dataset,
-            (&report, &name),
-            &config,
-            &args.samples.options()?,
+            &options,
+            &outcome,
             &fault_results(&perturbed, options.method.is_auto()),
+            &args.samples.options()?,
+            Some(&std::env::args().collect::<Vec<_>>().join(" ")),
             dir,
         )?;
         stderr_line!("report written to {}", path.display());
     }
+    let EvalOutcome {
+        report, selections, ..
+    } = outcome;
     if args.json {
         let mut json = EvalJson::new(&report);
         json.selections = selections;
@@ -474,7 +464,7 @@ impl<'r> CompareJson<'r> {
 }
 
 /// `--leave-one-out`: any column but `label` (holding out a class leaves none of its samples to train on).
-fn parse_leave_one_out(text: &str) -> Result<String, String> {
+pub(crate) fn parse_leave_one_out(text: &str) -> Result<String, String> {
     if text.trim() == "label" {
         return Err(
             "cannot hold out `label`: the held-out class would have no training samples, so none of \

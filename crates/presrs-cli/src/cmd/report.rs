@@ -16,21 +16,28 @@ use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
 #[derive(Debug, clap::Args)]
 #[command(after_help = "Examples:
   presrs report --manifest sim/manifest.csv --out report
-  presrs report --manifest walks.csv --model model.json --out report")]
+  presrs report --manifest walks.csv --model model.json --out report
+  presrs report --manifest walks.csv --leave-one-out group --features auto --out report")]
 pub struct ReportArgs {
     /// The dataset manifest.
     #[arg(long)]
     pub manifest: PathBuf,
-    /// A trained model to show (crop, PCA, validation curve) and to test on every image. Without it, a
-    /// model is trained on the manifest (paper protocol) and evaluated with repeats.
+    /// A trained model to show (crop, PCA, validation curve) and to test on every image. Without it,
+    /// the method (--features/--classifier, auto by default) is evaluated as `presrs eval` would with
+    /// the same options, and the report shows the evaluation's first model.
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Output folder (index.html and the figures).
     #[arg(long)]
     pub out: PathBuf,
-    /// Train on this condition (default: G2 when present, else every condition).
-    #[arg(long)]
+    /// Train on this condition, test on every other sample. Default: G2 when present (the paper's
+    /// protocol); else leave one group out when the manifest has two or more groups; else a random
+    /// draw from every condition.
+    #[arg(long, conflicts_with = "leave_one_out")]
     pub train_condition: Option<String>,
+    /// Hold out each value of this manifest column in turn (e.g. group, condition; not label).
+    #[arg(long, value_parser = super::eval::parse_leave_one_out)]
+    pub leave_one_out: Option<String>,
     /// Images drawn per class for training + validation, at least 1 (fewer if a class has fewer; when
     /// every condition trains and a class has no more than this, the evaluations draw two thirds of it
     /// and test on the rest).
@@ -62,6 +69,7 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = ReportOptions {
         model: args.model.clone(),
         train_condition: args.train_condition.clone(),
+        leave_one_out: args.leave_one_out.clone(),
         per_class: args.per_class,
         validation: args.validation,
         repeats: args.repeats,
@@ -69,12 +77,25 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         seed: args.seed,
         method: args.pipeline.method(),
         samples: args.samples.options()?,
+        command_line: Some(std::env::args().collect::<Vec<_>>().join(" ")),
     };
-    let index = report_dataset(&dataset, &options, &args.out, &TerminalProgress::default())?;
+    let summary = report_dataset(&dataset, &options, &args.out, &TerminalProgress::default())?;
+    for warning in &summary.warnings {
+        stderr_line!("warning: {warning}");
+    }
+    if let Some((name, report)) = &summary.evaluation {
+        writeln!(
+            out,
+            "{name}, {} repeat(s): {:.2} % +- {:.2}",
+            report.repeats.len(),
+            100.0 * report.overall.mean,
+            100.0 * report.overall.std
+        )?;
+    }
     writeln!(
         out,
         "wrote {} ({:.1} s)",
-        index.display(),
+        summary.index.display(),
         started.elapsed().as_secs_f64()
     )?;
     Ok(())
