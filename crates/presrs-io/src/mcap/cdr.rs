@@ -270,7 +270,7 @@ impl Encoder {
     }
 
     fn align(&mut self, size: usize) {
-        while !(self.bytes.len() - 4).is_multiple_of(size) {
+        while (self.bytes.len() - 4) % size != 0 {
             self.bytes.push(0);
         }
     }
