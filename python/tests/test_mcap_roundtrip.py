@@ -149,6 +149,29 @@ def test_presrs_bags_open_in_the_python_reader(cli, sim_dir, tmp_path):
     assert [d for _, d in messages["/presrs/decisions"]] == lines
 
 
+def test_classify_bags_hold_frames_and_decisions(cli, sim_dir, tmp_path):
+    cli("train", "--manifest", sim_dir / "manifest.csv", "--out", tmp_path / "m.json", "--seed", 1)
+    movies = sorted((sim_dir / "recordings").glob("*.asf"))[:2]
+    bag = tmp_path / "classified.mcap"
+    doc = json.loads(cli("classify", "--model", tmp_path / "m.json", "--json", "--mcap", bag, *movies))
+    messages = read_bag(bag)
+    frames = np.stack([image_array(m) for _, m in messages["/presrs/frames"]])
+    np.testing.assert_array_equal(frames, np.concatenate([presrs.read(m).frames for m in movies]))
+    decisions = [d for _, d in messages["/presrs/decisions"]]
+    classified = [d for d in decisions if d["event"] == "classification"]
+    assert [(d["file"], d["frame"], d["label"]) for d in classified] == [
+        (r["file"], r["frame"], r["label"]) for r in doc["results"]
+    ]
+    for d, r in zip(classified, doc["results"]):
+        assert d["posteriors"] == pytest.approx(r["posteriors"], abs=0)
+    touchdowns = [d for d in decisions if d["event"] == "touchdown"]
+    liftoffs = [d for d in decisions if d["event"] == "liftoff"]
+    assert len(touchdowns) == len(liftoffs) >= len(classified)
+    # Each decision is logged at its frame's time.
+    stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for _, m in messages["/presrs/frames"]]
+    assert stamps == sorted(stamps)
+
+
 def test_float_frames_round_trip_exactly_through_32fc1(cli, tmp_path):
     # Values exact in f32 (multiples of 1/128) are written as 32FC1 and come back exactly.
     rng = np.random.default_rng(24)

@@ -343,3 +343,58 @@ fn bad_bags_and_outputs_are_clear_errors_and_write_nothing() {
     assert_eq!(back.data(), original.data());
     assert_eq!(back.frame_period_s(), Some(0.01));
 }
+
+#[test]
+fn classify_writes_its_frames_and_decisions_to_a_bag() {
+    let d = data();
+    let model = d.dir.join("classify.model.json");
+    train(&d.asf_manifest, &model);
+    let files: Vec<PathBuf> = recordings("asf").into_iter().take(2).collect();
+    let bag = d.dir.join("classified.mcap");
+    let mut args = vec![
+        "classify",
+        "--model",
+        s(&model),
+        "--json",
+        "--mcap",
+        s(&bag),
+    ];
+    args.extend(files.iter().map(|f| s(f)));
+    let doc: Value = serde_json::from_str(&run_ok(&args)).unwrap();
+    let results = doc["results"].as_array().unwrap().len() as u64;
+    assert!(results >= 2);
+    let frames: usize = files
+        .iter()
+        .map(|f| presrs_io::read_recording(f).unwrap().frame_count())
+        .sum();
+    let stances: usize = files
+        .iter()
+        .map(|f| {
+            let rec = presrs_io::read_recording(f).unwrap();
+            presrs_core::stance::segment_recording(
+                &rec,
+                &presrs_core::stance::ValidSegmentParams::default(),
+            )
+            .unwrap()
+            .stances
+            .len()
+        })
+        .sum();
+    let topics = list_topics(std::fs::File::open(&bag).unwrap(), "classified.mcap").unwrap();
+    let counts: Vec<(&str, u64)> = topics
+        .iter()
+        .map(|t| (t.topic.as_str(), t.messages))
+        .collect();
+    assert_eq!(
+        counts,
+        [
+            ("/presrs/decisions", results + 2 * stances as u64),
+            ("/presrs/frames", frames as u64)
+        ]
+    );
+    // The frames follow each other: the first file's, then the second's.
+    let back = presrs_io::read_recording(&bag).unwrap();
+    let first = presrs_io::read_recording(&files[0]).unwrap();
+    assert_eq!(back.frame_count(), frames);
+    assert_eq!(&back.data()[..first.data().len()], first.data());
+}

@@ -30,8 +30,9 @@ pub const DECISIONS_SCHEMA: &str = r#"{
   "type": "object",
   "properties": {
     "event": {"type": "string", "enum": ["touchdown", "classification", "liftoff", "error", "end"]},
+    "file": {"type": "string", "description": "classify --mcap: the recording"},
     "kind": {"type": "string"},
-    "stance": {"type": "integer"},
+    "stance": {"type": ["integer", "null"]},
     "frame": {"type": "integer"},
     "touchdown_frame": {"type": "integer"},
     "sample_frame": {"type": "integer"},
