@@ -258,3 +258,25 @@ fn mutated_bags_never_panic() {
     // Some mutations land in padding or unchecked bytes and still read.
     assert!(read_ok > 0);
 }
+
+/// A real TekScan export (read in place from `shared/`) through a bag: values, period, unit, pitch and
+/// outline (absent sensels) all come back.
+#[test]
+fn a_real_tekscan_file_keeps_everything_through_a_bag() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/tekscan/FrasP01L.asf");
+    let original = presrs_io::read_recording(&path).unwrap();
+    let mut bytes = Vec::new();
+    write_recording_mcap(&mut bytes, "f.mcap", &original, "/presrs/frames").unwrap();
+    let back = parse_mcap(bytes.as_slice(), "f.mcap", None).unwrap();
+    assert!(back.warnings.is_empty(), "{:?}", back.warnings);
+    let back = back.recording;
+    assert_eq!(back.data(), original.data());
+    assert_eq!(back.frame_period_s(), original.frame_period_s());
+    assert_eq!(back.present(), original.present());
+    assert_eq!(back.meta.units, original.meta.units);
+    assert_eq!(back.meta.sensor, original.meta.sensor);
+    assert_eq!(back.meta.row_pitch_mm, original.meta.row_pitch_mm);
+    assert_eq!(back.meta.col_pitch_mm, original.meta.col_pitch_mm);
+    assert!(original.meta.units.is_some() || original.present().is_some());
+}

@@ -12,7 +12,9 @@
 //! **Writing** ([`BagWriter`], [`write_recording_mcap`]): frames as `sensor_msgs/msg/Image` in CDR
 //! (little endian), `mono16` when every value is an integer in 0..=65535, else `32FC1` (the `f64`
 //! values rounded to `f32`), with the ROS 2 message definition as the schema; other messages as JSON
-//! with a JSON schema. Both kinds open in Foxglove and in the `mcap` Python readers.
+//! with a JSON schema. Both kinds open in Foxglove and in the `mcap` Python readers. The sensor's unit,
+//! pitch and outline (absent sensels) go in the image channel's metadata ([`sensor_metadata`]) and are
+//! read back.
 
 mod cdr;
 mod reader;
@@ -22,7 +24,7 @@ pub use cdr::{IMAGE_MSGDEF, Image, Stamp, decode_image, encode_image};
 pub use reader::{
     BagFrame, BagFrames, FrameType, TopicInfo, decode_frame, frame_timing, list_topics, parse_mcap,
 };
-pub use writer::{BagWriter, ImageEncoding, frame_time_ns, write_recording_mcap};
+pub use writer::{BagWriter, ImageEncoding, frame_time_ns, sensor_metadata, write_recording_mcap};
 
 /// The first bytes of every MCAP file.
 pub const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";

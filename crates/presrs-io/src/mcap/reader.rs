@@ -5,7 +5,7 @@ use std::io::Read;
 use std::sync::Arc;
 
 use mcap::sans_io::LinearReaderOptions;
-use presrs_core::{Grid, Recording, SensorMeta};
+use presrs_core::{Grid, PressureUnit, Recording, SensorMeta};
 
 use super::cdr::{self, ArrayElement};
 use crate::error::IoError;
@@ -83,6 +83,7 @@ pub struct BagFrames<R: Read> {
     topics: BTreeMap<String, TopicInfo>,
     count: u64,
     failed: bool,
+    metadata: BTreeMap<String, String>,
 }
 
 impl<R: Read> std::fmt::Debug for BagFrames<R> {
@@ -109,12 +110,19 @@ impl<R: Read> BagFrames<R> {
             topics: BTreeMap::new(),
             count: 0,
             failed: false,
+            metadata: BTreeMap::new(),
         }
     }
 
     /// The topics seen so far (all of them once [`Self::next_frame`] returned `None`).
     pub fn topics(&self) -> Vec<TopicInfo> {
         self.topics.values().cloned().collect()
+    }
+
+    /// The metadata of the topic's channel (what presrs writes about the sensor: see
+    /// [`super::sensor_metadata`]).
+    pub fn channel_metadata(&self) -> &BTreeMap<String, String> {
+        &self.metadata
     }
 
     /// The topic being read, once known.
@@ -200,6 +208,7 @@ impl<R: Read> BagFrames<R> {
             };
             if self.chosen.is_none() {
                 self.chosen = Some((topic.to_owned(), kind));
+                self.metadata = channel.metadata.clone();
             }
             let index = self.count;
             self.count += 1;
@@ -415,13 +424,37 @@ pub fn parse_mcap<R: Read>(reader: R, name: &str, topic: Option<&str>) -> Result
     }
     let topic = frames.topic().unwrap_or_default().to_owned();
     let grid = grid.ok_or_else(|| IoError::format(name, format!("topic {topic} has no frames")))?;
-    let (period, warnings) = frame_timing(name, &topic, &times);
+    let (period, mut warnings) = frame_timing(name, &topic, &times);
+    let metadata = frames.channel_metadata();
+    let number = |key: &str| {
+        metadata
+            .get(key)
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|v| v.is_finite() && *v > 0.0)
+    };
     let meta = SensorMeta {
-        extra: vec![("MCAP_TOPIC".to_owned(), topic)],
+        sensor: metadata.get("presrs.sensor").cloned(),
+        units: metadata.get("presrs.units").map(|u| PressureUnit::parse(u)),
+        row_pitch_mm: number("presrs.row_pitch_mm"),
+        col_pitch_mm: number("presrs.col_pitch_mm"),
+        extra: vec![("MCAP_TOPIC".to_owned(), topic.clone())],
         ..SensorMeta::default()
     };
+    let present = match metadata.get("presrs.present") {
+        Some(mask) if mask.len() == grid.len() && mask.bytes().all(|b| b == b'0' || b == b'1') => {
+            Some(mask.bytes().map(|b| b == b'1').collect())
+        }
+        Some(_) => {
+            warnings.push(format!(
+                "{name}: topic {topic}: channel metadata `presrs.present` is not one 0 or 1 per \
+                 sensel of a {grid} frame; ignored (every sensel taken as present)"
+            ));
+            None
+        }
+        None => None,
+    };
     let recording =
-        Recording::new(grid, period, data, None, meta).map_err(|source| IoError::Model {
+        Recording::new(grid, period, data, present, meta).map_err(|source| IoError::Model {
             file: name.to_owned(),
             source,
         })?;

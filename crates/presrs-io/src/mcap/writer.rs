@@ -1,6 +1,7 @@
 //! Writing MCAP files: pressure frames as `sensor_msgs/msg/Image` (ROS 2, CDR) and JSON messages with a
 //! JSON schema (what Foxglove shows as they are).
 
+use std::collections::BTreeMap;
 use std::io::Write;
 
 use mcap::write::NoSeek;
@@ -81,6 +82,15 @@ impl<W: Write> BagWriter<W> {
 
     /// Adds a topic of `sensor_msgs/msg/Image` messages; returns its channel id.
     pub fn add_image_topic(&mut self, topic: &str) -> Result<u16, IoError> {
+        self.add_image_topic_with(topic, &BTreeMap::new())
+    }
+
+    /// [`Self::add_image_topic`] with channel metadata (see [`sensor_metadata`]).
+    pub fn add_image_topic_with(
+        &mut self,
+        topic: &str,
+        metadata: &BTreeMap<String, String>,
+    ) -> Result<u16, IoError> {
         let schema = match self.image_schema {
             Some(id) => id,
             None => {
@@ -97,7 +107,7 @@ impl<W: Write> BagWriter<W> {
             }
         };
         self.writer
-            .add_channel(schema, topic, "cdr", &Default::default())
+            .add_channel(schema, topic, "cdr", metadata)
             .map_err(|err| mcap_error(&self.name, err))
     }
 
@@ -182,6 +192,32 @@ impl<W: Write> BagWriter<W> {
     }
 }
 
+/// What a recording's metadata says about its sensor, as channel metadata of its image topic (keys
+/// `presrs.sensor`, `presrs.units`, `presrs.row_pitch_mm`, `presrs.col_pitch_mm`, and `presrs.present`:
+/// one `1` or `0` per sensel, row-major, when some are absent), so that a converted recording keeps its
+/// unit, pitch and outline. The reader takes them back ([`super::parse_mcap`]).
+pub fn sensor_metadata(recording: &Recording) -> BTreeMap<String, String> {
+    let meta = &recording.meta;
+    let mut out = BTreeMap::new();
+    if let Some(sensor) = &meta.sensor {
+        out.insert("presrs.sensor".to_owned(), sensor.clone());
+    }
+    if let Some(units) = &meta.units {
+        out.insert("presrs.units".to_owned(), units.as_tekscan().to_owned());
+    }
+    if let Some(pitch) = meta.row_pitch_mm {
+        out.insert("presrs.row_pitch_mm".to_owned(), pitch.to_string());
+    }
+    if let Some(pitch) = meta.col_pitch_mm {
+        out.insert("presrs.col_pitch_mm".to_owned(), pitch.to_string());
+    }
+    if let Some(present) = recording.present() {
+        let mask = present.iter().map(|&p| if p { '1' } else { '0' }).collect();
+        out.insert("presrs.present".to_owned(), mask);
+    }
+    out
+}
+
 /// Nanoseconds of frame `index` of a recording: `index` frame periods (1 s when it has none).
 pub fn frame_time_ns(recording: &Recording, index: usize) -> u64 {
     let period = recording.frame_period_s().unwrap_or(1.0);
@@ -190,7 +226,8 @@ pub fn frame_time_ns(recording: &Recording, index: usize) -> u64 {
 
 /// Writes `recording` as an MCAP file of `sensor_msgs/msg/Image` messages on `topic` (encoding chosen
 /// by [`ImageEncoding::for_values`]), frame `i` stamped `i` frame periods after time 0 (1 s apart when
-/// the period is unknown). Absent sensels are written as 0.
+/// the period is unknown). Absent sensels are written as 0 (and listed in the channel metadata, with
+/// the unit and pitch: [`sensor_metadata`]).
 pub fn write_recording_mcap(
     writer: &mut dyn Write,
     name: &str,
@@ -199,7 +236,7 @@ pub fn write_recording_mcap(
 ) -> Result<ImageEncoding, IoError> {
     let encoding = ImageEncoding::for_values(recording.data().iter());
     let mut bag = BagWriter::new(writer, name)?;
-    let channel = bag.add_image_topic(topic)?;
+    let channel = bag.add_image_topic_with(topic, &sensor_metadata(recording))?;
     for (index, frame) in recording.frames().enumerate() {
         let time = frame_time_ns(recording, index);
         bag.write_image(channel, time, recording.grid(), frame.values(), encoding)?;
