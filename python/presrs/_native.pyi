@@ -133,7 +133,9 @@ class OnlineClassifier:
     @property
     def stats(self) -> dict[str, int]: ...
 
-def read(path: _Path, *, lenient: bool = False, axes: Optional[str] = None) -> Recording: ...
+def read(
+    path: _Path, *, lenient: bool = False, axes: Optional[str] = None, topic: Optional[str] = None
+) -> Recording: ...
 def segment(
     recording: Union[Recording, _Images],
     *,

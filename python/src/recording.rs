@@ -165,17 +165,19 @@ impl Recording {
     }
 }
 
-/// Reads a recording in any format the CLI reads (TekScan ASCII, NPY, PNG, text matrices), told
-/// apart by content. `lenient`: drop a truncated last frame (with a warning) instead of failing.
+/// Reads a recording in any format the CLI reads (TekScan ASCII, NPY, PNG, MCAP bags, text matrices),
+/// told apart by content. `lenient`: drop a truncated last frame (with a warning) instead of failing.
 /// `axes`: what the axes of a 3-D `.npy` are, in the file's order (`"rows,cols,frames"` for an array
-/// whose time axis is last; default `"frames,rows,cols"`).
+/// whose time axis is last; default `"frames,rows,cols"`). `topic`: the topic of an MCAP file (a ROS 2
+/// bag) to read (default: the only topic holding frames).
 #[pyfunction]
-#[pyo3(signature = (path, *, lenient = false, axes = None))]
+#[pyo3(signature = (path, *, lenient = false, axes = None, topic = None))]
 pub fn read(
     py: Python<'_>,
     path: PathBuf,
     lenient: bool,
     axes: Option<&str>,
+    topic: Option<String>,
 ) -> PyResult<Recording> {
     let axes = axes
         .map(|text| {
@@ -183,7 +185,11 @@ pub fn read(
                 .map_err(|err| data_error(format!("axes={text:?}: {err}")))
         })
         .transpose()?;
-    let options = ReadOptions { lenient, axes };
+    let options = ReadOptions {
+        lenient,
+        axes,
+        topic,
+    };
     let parsed = detached(py, || read_recording_with(&path, &options))?.py_err()?;
     for warning in &parsed.warnings {
         warn(py, warning)?;

@@ -78,6 +78,8 @@ enum Command {
     Plot(cmd::plot::PlotArgs),
     /// Write an HTML report with figures (pressure images, spectra, load curves, PCA, accuracy).
     Report(cmd::report::ReportArgs),
+    /// Convert a recording to a ROS 2 bag (MCAP) of sensor_msgs/msg/Image.
+    Convert(cmd::convert::ConvertArgs),
 }
 
 fn main() -> ExitCode {
@@ -97,6 +99,7 @@ fn main() -> ExitCode {
         Command::Replay(args) => cmd::replay::run(args, &mut out),
         Command::Plot(args) => cmd::plot::run(args, &mut out),
         Command::Report(args) => cmd::report::run(args, &mut out),
+        Command::Convert(args) => cmd::convert::run(args, &mut out),
     }
     .and_then(|()| out.flush().map_err(anyhow::Error::from));
     match result {

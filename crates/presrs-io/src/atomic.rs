@@ -68,6 +68,64 @@ pub fn write_atomic_with<T, E: From<IoError>>(
     Ok(value)
 }
 
+/// A file written over time (a recording in progress) that appears under its final name only when
+/// [`AtomicFile::commit`] is called: until then it is a hidden temporary file next to it, removed if
+/// the `AtomicFile` is dropped uncommitted.
+#[derive(Debug)]
+pub struct AtomicFile {
+    temp: tempfile::NamedTempFile,
+    path: std::path::PathBuf,
+}
+
+impl AtomicFile {
+    /// Creates the temporary file for `path`; returns it and a handle to write through.
+    pub fn create(path: &Path) -> Result<(Self, File), IoError> {
+        let dir = match path.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent,
+            _ => Path::new("."),
+        };
+        let file_name = path
+            .file_name()
+            .ok_or_else(|| IoError::format(&path.display().to_string(), "not a file name"))?;
+        let prefix = format!(".{}.", file_name.to_string_lossy());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let temp = builder
+            .tempfile_in(dir)
+            .map_err(|source| IoError::io("create a temporary file in", dir, source))?;
+        let handle = temp
+            .as_file()
+            .try_clone()
+            .map_err(|source| IoError::io("open", temp.path(), source))?;
+        Ok((
+            Self {
+                temp,
+                path: path.to_path_buf(),
+            },
+            handle,
+        ))
+    }
+
+    /// The final path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Syncs the file and renames it to its final name (flush the writing handle first).
+    pub fn commit(self) -> Result<(), IoError> {
+        sync(self.temp.as_file()).map_err(|source| IoError::io("sync", &self.path, source))?;
+        self.temp
+            .persist(&self.path)
+            .map_err(|err| IoError::io("rename a temporary file to", &self.path, err.error))?;
+        Ok(())
+    }
+}
+
 fn sync(file: &File) -> std::io::Result<()> {
     file.sync_all()
 }

@@ -4,6 +4,7 @@ pub mod atomic;
 pub mod error;
 pub mod frame_protocol;
 pub mod manifest;
+pub mod mcap;
 pub mod model_file;
 pub mod npy;
 mod parsed;
@@ -30,6 +31,8 @@ pub enum FileKind {
     Npy,
     Png,
     TextMatrix,
+    /// An MCAP file (a ROS 2 bag).
+    Mcap,
 }
 
 /// Reads any supported recording file strictly (see [`read_recording_with`]).
@@ -38,9 +41,15 @@ pub fn read_recording(path: &Path) -> Result<Recording, IoError> {
 }
 
 /// Reads any supported recording file: a TekScan ASCII movie or snapshot, a `.npy` array, a greyscale
-/// PNG or a plain text matrix. The format is chosen by content first (NumPy and PNG magic bytes, a
-/// TekScan header), then by extension (see [`detect_kind`]).
+/// PNG, an MCAP file (a ROS 2 bag: one topic, [`ReadOptions::topic`]; see [`mcap`]) or a plain text
+/// matrix. The format is chosen by content first (NumPy, PNG and MCAP magic bytes, a TekScan header), then by extension (see [`detect_kind`]).
 pub fn read_recording_with(path: &Path, options: &ReadOptions) -> Result<Parsed, IoError> {
+    if is_mcap_file(path)? {
+        // Read message by message: a bag may be much larger than the frames of one topic.
+        let file = std::fs::File::open(path).map_err(|source| IoError::io("read", path, source))?;
+        let reader = std::io::BufReader::with_capacity(1 << 16, file);
+        return mcap::parse_mcap(reader, &error::display_name(path), options.topic.as_deref());
+    }
     let bytes = std::fs::read(path).map_err(|source| IoError::io("read", path, source))?;
     let name = error::display_name(path);
     let plain = |recording| Parsed {
@@ -59,13 +68,25 @@ pub fn read_recording_with(path: &Path, options: &ReadOptions) -> Result<Parsed,
         FileKind::TextMatrix => {
             text::parse_text_matrix(&textutil::decode_text(&bytes), &name).map(plain)
         }
+        FileKind::Mcap => mcap::parse_mcap(bytes.as_slice(), &name, options.topic.as_deref()),
     }
+}
+
+/// Whether the file at `path` starts with the MCAP magic bytes (read without loading the file).
+pub fn is_mcap_file(path: &Path) -> Result<bool, IoError> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|source| IoError::io("read", path, source))?;
+    let mut head = Vec::with_capacity(mcap::MCAP_MAGIC.len());
+    file.take(mcap::MCAP_MAGIC.len() as u64)
+        .read_to_end(&mut head)
+        .map_err(|source| IoError::io("read", path, source))?;
+    Ok(head == mcap::MCAP_MAGIC)
 }
 
 /// Decides the format of a file from its content and extension:
 ///
-/// 1. NumPy or PNG magic bytes win whatever the extension says;
-/// 2. a file named `.npy` or `.png` without the matching magic bytes is an error (it is not what its
+/// 1. NumPy, PNG or MCAP magic bytes win whatever the extension says;
+/// 2. a file named `.npy`, `.png` or `.mcap` without the matching magic bytes is an error (it is not what its
 ///    name says: a clearer message than a parse error from another format);
 /// 3. text with a TekScan header (`DATA_TYPE` or `ASCII_DATA` among the first lines) is TekScan, as is
 ///    any `.asf` file (which then gets TekScan's error messages);
@@ -76,6 +97,9 @@ pub fn detect_kind(path: &Path, bytes: &[u8]) -> Result<FileKind, IoError> {
     }
     if bytes.starts_with(png::PNG_MAGIC) {
         return Ok(FileKind::Png);
+    }
+    if bytes.starts_with(mcap::MCAP_MAGIC) {
+        return Ok(FileKind::Mcap);
     }
     let ext = path
         .extension()
@@ -95,6 +119,12 @@ pub fn detect_kind(path: &Path, bytes: &[u8]) -> Result<FileKind, IoError> {
                 "named .png but not a PNG image (the PNG signature is missing)",
             ));
         }
+        "mcap" => {
+            return Err(IoError::format(
+                &name,
+                "named .mcap but not an MCAP file (it does not start with the \\x89MCAP0 magic bytes)",
+            ));
+        }
         _ => {}
     }
     // Only the start of the file is needed to recognise a TekScan header.
@@ -107,7 +137,7 @@ pub fn detect_kind(path: &Path, bytes: &[u8]) -> Result<FileKind, IoError> {
         return Err(IoError::unsupported(
             &name,
             "binary file of unknown format; expected a TekScan ASCII file (.asf), a NumPy array (.npy), \
-             a greyscale PNG or a text matrix (.txt, .dat)",
+             a greyscale PNG, an MCAP file (.mcap) or a text matrix (.txt, .dat)",
         ));
     }
     Ok(FileKind::TextMatrix)

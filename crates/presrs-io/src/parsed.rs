@@ -12,6 +12,8 @@ pub struct ReadOptions {
     /// What the axes of a 3-D array (`.npy`) are, in the file's order. `None`: frames x rows x cols,
     /// with a warning when the shape looks like rows x cols x frames (see [`crate::npy`]).
     pub axes: Option<ArrayAxes>,
+    /// The topic of an MCAP file to read (`None`: the only topic holding frames).
+    pub topic: Option<String>,
 }
 
 impl ReadOptions {

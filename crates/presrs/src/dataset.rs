@@ -384,22 +384,33 @@ pub fn load_samples(
     manifest: &Manifest,
     options: &SampleOptions,
 ) -> std::result::Result<LoadedSamples, IoError> {
-    let mut unique: Vec<&PathBuf> = manifest.rows.iter().map(|row| &row.path).collect();
+    // A recording is a file and, for a bag, the topic of the row's `topic` column (else the options').
+    let mut unique: Vec<RecordingKey<'_>> = manifest.rows.iter().map(row_key).collect();
     unique.sort();
     unique.dedup();
     type Read = std::result::Result<(Parsed, Vec<DeadSensel>), IoError>;
-    let recordings: Vec<(&PathBuf, Read)> = unique
+    let recordings: Vec<(RecordingKey<'_>, Read)> = unique
         .par_iter()
-        .map(|&path| {
-            let read = read_corrected(path, &options.read, options.dead_sensels.as_ref());
-            (path, read)
+        .map(|&(path, topic)| {
+            let read = match topic {
+                Some(topic) => {
+                    let read = ReadOptions {
+                        topic: Some(topic.to_owned()),
+                        ..options.read.clone()
+                    };
+                    read_corrected(path, &read, options.dead_sensels.as_ref())
+                }
+                None => read_corrected(path, &options.read, options.dead_sensels.as_ref()),
+            };
+            ((path, topic), read)
         })
         .collect();
-    let mut by_path: HashMap<&PathBuf, Parsed> = HashMap::with_capacity(recordings.len());
+    let mut by_path: HashMap<RecordingKey<'_>, Parsed> = HashMap::with_capacity(recordings.len());
     let mut fills = DeadSenselFills::default();
-    for (path, parsed) in recordings {
+    for (key, parsed) in recordings {
+        let path = key.0;
         let parsed = parsed.map_err(|err| {
-            let row = manifest.rows.iter().find(|row| &row.path == path);
+            let row = manifest.rows.iter().find(|row| row_key(row) == key);
             match row {
                 Some(row) => {
                     manifest.row_error(row, format!("cannot use `{}`: {err}", row.path_text))
@@ -415,7 +426,7 @@ pub fn load_samples(
                 .map_err(|err| IoError::format(&path.display().to_string(), err.to_string()))?;
         }
         fills.add(path.clone(), filled);
-        by_path.insert(path, parsed);
+        by_path.insert(key, parsed);
     }
     apply_frame_period_column(manifest, &mut by_path)?;
     let mut loaded = LoadedSamples {
@@ -428,7 +439,7 @@ pub fn load_samples(
     loaded.warnings.sort();
     let mut empty = EmptyFiles::default();
     for row in &manifest.rows {
-        let Some(parsed) = by_path.get(&row.path) else {
+        let Some(parsed) = by_path.get(&row_key(row)) else {
             continue;
         };
         let frames = row_frames(manifest, row, &parsed.recording, options, &mut empty)?;
@@ -455,11 +466,18 @@ pub fn load_samples(
     Ok(loaded)
 }
 
+/// A recording of a manifest: a file, and the topic of its row's `topic` column (a bag's).
+type RecordingKey<'m> = (&'m PathBuf, Option<&'m str>);
+
+fn row_key(row: &ManifestRow) -> RecordingKey<'_> {
+    (&row.path, row.column("topic"))
+}
+
 /// Sets the frame period of the recordings whose rows give a `frame_period_s` (when the file states
 /// none); a value that is not a positive number is an error naming the line.
-fn apply_frame_period_column(
-    manifest: &Manifest,
-    by_path: &mut HashMap<&PathBuf, Parsed>,
+fn apply_frame_period_column<'m>(
+    manifest: &'m Manifest,
+    by_path: &mut HashMap<RecordingKey<'m>, Parsed>,
 ) -> std::result::Result<(), IoError> {
     for row in &manifest.rows {
         let Some(text) = row.column("frame_period_s") else {
@@ -471,7 +489,7 @@ fn apply_frame_period_column(
                 format!("field `frame_period_s` must be a number of seconds, got {text:?}"),
             )
         })?;
-        if let Some(parsed) = by_path.get_mut(&row.path) {
+        if let Some(parsed) = by_path.get_mut(&row_key(row)) {
             parsed
                 .recording
                 .set_frame_period_if_unknown(period)

@@ -5,7 +5,8 @@ use std::path::Path;
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correctable, detect_dead_sensels};
 use presrs_core::stance::{BaselineMode, Segmentation, sample_frames, segment_recording};
-use presrs_io::read_recording_with;
+use presrs_io::mcap::list_topics;
+use presrs_io::{IoError, read_recording_with};
 use serde::Serialize;
 
 use crate::dataset::SampleOptions;
@@ -22,9 +23,26 @@ pub struct StanceReport {
     pub partial: bool,
 }
 
+/// One topic of an MCAP file.
+#[derive(Debug, Serialize)]
+pub struct TopicReport {
+    pub topic: String,
+    /// The message type (schema name), e.g. `sensor_msgs/msg/Image`.
+    #[serde(rename = "type")]
+    pub schema: String,
+    pub messages: u64,
+    /// Whether presrs reads frames from it.
+    pub frames: bool,
+}
+
 #[derive(Debug, Serialize)]
 pub struct InspectReport {
     pub file: String,
+    /// An MCAP file's topics (empty for other formats), and the one described.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub topics: Vec<TopicReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub topic: Option<String>,
     pub sensor: Option<String>,
     pub rows: usize,
     pub cols: usize,
@@ -65,8 +83,35 @@ pub struct InspectReport {
 
 /// Reads `path` as `options` say and describes it (the stance sample frame is `options.sample`; dead
 /// sensels are reported, and said to be filled unless `options.dead_sensels` is `None`).
+///
+/// An MCAP file's topics are listed; the one described is `options.read.topic`, else the first topic
+/// holding frames (where the other commands ask for one when there are several).
 pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
-    let mut parsed = read_recording_with(path, &options.read)?;
+    let mut read = options.read.clone();
+    let mut topics = Vec::new();
+    if presrs_io::is_mcap_file(path)? {
+        let file = std::fs::File::open(path).map_err(|source| IoError::io("read", path, source))?;
+        let listed = list_topics(
+            std::io::BufReader::new(file),
+            &presrs_io::error::display_name(path),
+        )?;
+        if read.topic.is_none() {
+            read.topic = listed
+                .iter()
+                .find(|t| t.has_frames())
+                .map(|t| t.topic.clone());
+        }
+        topics = listed
+            .into_iter()
+            .map(|t| TopicReport {
+                frames: t.has_frames(),
+                topic: t.topic,
+                schema: t.schema,
+                messages: t.messages,
+            })
+            .collect();
+    }
+    let mut parsed = read_recording_with(path, &read)?;
     if let Some(period) = options.frame_period_s {
         parsed
             .recording
@@ -105,6 +150,8 @@ pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
         && correctable(recording.frame_count(), &dead_config);
     Ok(InspectReport {
         file: path.display().to_string(),
+        topics,
+        topic: read.topic,
         sensor: recording.meta.sensor.clone(),
         rows: grid.rows,
         cols: grid.cols,

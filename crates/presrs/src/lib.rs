@@ -2,6 +2,8 @@
 
 pub mod bench;
 pub mod classify;
+pub mod classify_bag;
+pub mod convert;
 pub mod dataset;
 pub mod describe;
 pub mod error;

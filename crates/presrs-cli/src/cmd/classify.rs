@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::classify::{Classified, ClassifyOptions, classify_file};
+use presrs::classify_bag::ClassifyBag;
 use presrs::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
 use serde::Serialize;
@@ -36,6 +37,12 @@ pub struct ClassifyArgs {
     /// Print one JSON document instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Also write the classified recordings as a ROS 2 bag (MCAP): their frames on /presrs/frames
+    /// (sensor_msgs/msg/Image) and each stance's touchdown and liftoff and each sample's classification
+    /// (file, frame, label, confidence, posteriors, gait) on /presrs/decisions (JSON with a JSON schema).
+    /// Recordings follow each other in time. Written when every file is done.
+    #[arg(long, value_name = "OUT.mcap")]
+    pub mcap: Option<PathBuf>,
     #[command(flatten)]
     pub samples: SampleArgs,
 }
@@ -62,6 +69,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let mut results = Vec::new();
     let mut errors = Vec::new();
     let mut fills = DeadSenselFills::default();
+    let mut bag = args.mcap.as_deref().map(ClassifyBag::create).transpose()?;
     // Columns as wide as the longest file name and label: the table stays aligned with long paths.
     let file_width = args
         .files
@@ -97,6 +105,10 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                     out.flush()?;
                     stderr_line!("warning: {warning}");
                 }
+                if let Some(bag) = &mut bag {
+                    let gaits = model_file.online.as_ref().map(|p| &p.gait_table);
+                    bag.add(path, &options, &classification.frames, gaits)?;
+                }
                 classification.frames
             }
             Err(err) => {
@@ -128,6 +140,10 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
     }
     note_dead_sensels(&fills);
+    if let Some(bag) = bag {
+        let path = bag.finish()?;
+        stderr_line!("wrote {}", path.display());
+    }
     let failed = errors.len();
     if args.json {
         write_json(

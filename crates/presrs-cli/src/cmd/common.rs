@@ -109,14 +109,20 @@ pub struct SampleArgs {
     pub stance: StanceArgs,
 }
 
-/// The `--axes` option of array (`.npy`) inputs.
-#[derive(Debug, Clone, Copy, clap::Args)]
+/// The options of some formats: `--axes` of array (`.npy`) inputs, `--topic` of ROS 2 bags (`.mcap`).
+#[derive(Debug, Clone, clap::Args)]
 pub struct AxesArg {
     /// What the axes of a 3-D .npy array are, in the file's order: frames,rows,cols (the default) or
     /// rows,cols,frames (time last, as some exporters write; a warning names this option when the
     /// shape looks like it). Other files ignore it.
     #[arg(long, value_name = "frames,rows,cols", value_parser = |t: &str| t.parse::<ArrayAxes>())]
     pub axes: Option<ArrayAxes>,
+    /// The topic of an MCAP file (a ROS 2 bag) to read frames from: sensor_msgs/msg/Image (mono8,
+    /// mono16, 16UC1, 32FC1) or std_msgs/msg/Float32MultiArray / UInt16MultiArray with a 2-D layout
+    /// [default: the only topic holding frames; `presrs inspect FILE.mcap` lists them]. A manifest's
+    /// `topic` column gives it per row. Other files ignore it.
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
 }
 
 /// How stance phases are found in movies (the detector's settings; `train` stores them in the model).
@@ -211,6 +217,7 @@ impl SampleArgs {
         ReadOptions {
             lenient: self.lenient,
             axes: self.axes.axes,
+            topic: self.axes.topic.clone(),
         }
     }
 }

@@ -11,7 +11,8 @@ use super::common::{SampleArgs, write_json};
 /// Describe a recording: sensor, size, frames, period, units, load range and stance phases.
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
-    /// A TekScan ASCII movie/snapshot, .npy, greyscale .png or text matrix.
+    /// A TekScan ASCII movie/snapshot, .npy, greyscale .png, MCAP bag (its topics are listed) or text
+    /// matrix.
     pub file: PathBuf,
     /// Print one JSON document instead of a table.
     #[arg(long)]
@@ -31,6 +32,22 @@ pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()> {
     let or_unknown = |value: Option<String>| value.unwrap_or_else(|| "unknown".to_owned());
     writeln!(out, "file           {}", report.file)?;
+    if !report.topics.is_empty() {
+        for t in &report.topics {
+            let mark = if report.topic.as_deref() == Some(t.topic.as_str()) {
+                " (described below)"
+            } else if t.frames {
+                " (frames: --topic to describe it)"
+            } else {
+                ""
+            };
+            writeln!(
+                out,
+                "topic          {}  {}  {} messages{mark}",
+                t.topic, t.schema, t.messages
+            )?;
+        }
+    }
     writeln!(out, "sensor         {}", or_unknown(report.sensor.clone()))?;
     writeln!(
         out,

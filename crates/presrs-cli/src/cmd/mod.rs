@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod classify;
 pub mod common;
+pub mod convert;
 pub mod eval;
 pub mod features;
 pub mod inspect;

@@ -61,6 +61,7 @@ pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let read = presrs_io::ReadOptions {
         lenient: args.lenient,
         axes: args.axes.axes,
+        topic: args.axes.topic.clone(),
     };
     let parsed = read_recording_with(&args.file, &read)?;
     for warning in &parsed.warnings {

@@ -25,8 +25,9 @@ use signal_hook::consts::{SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
 
 use presrs::stream::{
-    ConnectionSummary, InputFormat, ProfileOverrides, ServerNotice, ServerOptions, SessionNotice,
-    SessionOptions, ShutdownHandle, StreamServer, resolve_profile, run_session,
+    BagRecorder, ConnectionSummary, InputFormat, ProfileOverrides, ServerNotice, ServerOptions,
+    SessionNotice, SessionOptions, ShutdownHandle, StreamServer, resolve_profile, run_session,
+    run_session_tapped,
 };
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use presrs_io::model_file::load_model;
@@ -39,6 +40,8 @@ pub enum StreamFormat {
     Tekscan,
     /// The binary frame protocol of docs/stream-protocol.md.
     Binary,
+    /// An MCAP file (a ROS 2 bag): the frames of --topic, message by message.
+    Mcap,
 }
 
 /// Classify a live stream of pressure frames online.
@@ -96,6 +99,14 @@ pub struct StreamArgs {
     /// Exit after this many connections have ended (demos and tests) [default: serve forever].
     #[arg(long)]
     pub exit_after: Option<usize>,
+    /// With --format mcap: the topic to read [default: the only topic holding frames].
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
+    /// Record the session (stdin) to this MCAP file: the frames on /presrs/frames
+    /// (sensor_msgs/msg/Image) and every JSON line on /presrs/decisions (JSON, with a JSON schema); the
+    /// file appears when the stream ends.
+    #[arg(long, value_name = "OUT.mcap", conflicts_with = "listen")]
+    pub record: Option<PathBuf>,
 }
 
 impl From<StreamFormat> for InputFormat {
@@ -103,6 +114,7 @@ impl From<StreamFormat> for InputFormat {
         match format {
             StreamFormat::Tekscan => Self::Tekscan,
             StreamFormat::Binary => Self::Binary,
+            StreamFormat::Mcap => Self::Mcap,
         }
     }
 }
@@ -284,6 +296,7 @@ fn run_stdin(
         name: "stdin".to_owned(),
         max_frame_bytes: args.max_frame_bytes,
         stop: Some(stop.clone()),
+        topic: args.topic.clone(),
     };
     let log = |notice: &SessionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
     let (input, end_input) = StoppableInput::start();
@@ -294,7 +307,21 @@ fn run_stdin(
         let _ = end_input.send(Chunk::End);
     });
     let input = std::io::BufReader::with_capacity(64 * 1024, input);
-    let summary = run_session(model, profile, input, out, &options, &log)?;
+    let summary = match &args.record {
+        None => run_session(model, profile, input, out, &options, &log)?,
+        Some(path) => {
+            let mut bag = BagRecorder::create(path)?;
+            let summary = run_session_tapped(model, profile, input, out, &options, &log, &mut bag)?;
+            let recorded = bag.finish()?;
+            stderr_line!(
+                "presrs stream: recorded {} frames and {} lines to {}",
+                recorded.frames,
+                recorded.lines,
+                recorded.path.display()
+            );
+            summary
+        }
+    };
     signal_thread.close();
     let name = &options.name;
     if let Some(signal) = *caught.lock().unwrap_or_else(|p| p.into_inner()) {

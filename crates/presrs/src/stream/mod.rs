@@ -22,6 +22,7 @@
 //! number of clients is capped, idle connections are closed. Nothing here prints: what a person should
 //! see comes back through the notice callbacks and the summaries.
 
+mod bag;
 mod events;
 mod output;
 mod server;
@@ -36,6 +37,10 @@ use presrs_core::online::OnlineProfile;
 
 use crate::error::{Error, Result};
 
+pub use bag::{
+    BagRecorder, DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, FRAMES_TOPIC,
+    RecordedBag,
+};
 pub use events::event_values;
 pub use output::BoundedOutput;
 pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer};

@@ -7,6 +7,7 @@ use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
 use presrs_core::pipeline::TrainedModel;
 use presrs_core::{FrameView, Grid};
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
+use presrs_io::mcap::BagFrames;
 use presrs_io::tekscan_stream::TekscanStream;
 
 use super::events::{end_line, error_line, event_lines};
@@ -23,6 +24,9 @@ pub enum InputFormat {
     Tekscan,
     /// The binary frame protocol of `docs/stream-protocol.md`.
     Binary,
+    /// An MCAP file (a ROS 2 bag), read message by message: the frames of one topic
+    /// ([`SessionOptions::topic`]; see [`presrs_io::mcap`]), stamped with their header stamps.
+    Mcap,
 }
 
 /// How to read one session.
@@ -37,6 +41,8 @@ pub struct SessionOptions {
     /// frame cut short by the stop is dropped, not an error. Whoever stops it must also end the input
     /// (the reader returns end of file).
     pub stop: Option<ShutdownHandle>,
+    /// The topic of an MCAP input (`None`: the only topic holding frames).
+    pub topic: Option<String>,
 }
 
 impl Default for SessionOptions {
@@ -46,6 +52,7 @@ impl Default for SessionOptions {
             name: "stdin".to_owned(),
             max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES,
             stop: None,
+            topic: None,
         }
     }
 }
@@ -118,6 +125,13 @@ pub fn run_session_tapped<R: BufRead>(
         }
         InputFormat::Binary => {
             let mut source = binary_source(input, &options.name, options.max_frame_bytes);
+            let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
+                until_stopped(source(values, present))
+            };
+            run_connection(model, profile, next, &mut emit, notify, tap)
+        }
+        InputFormat::Mcap => {
+            let mut source = mcap_source(input, &options.name, options.topic.as_deref());
             let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
                 until_stopped(source(values, present))
             };
@@ -360,6 +374,26 @@ pub(super) fn binary_source<R: Read>(
         },
         Ok(None) => Input::End,
         Err(err @ FrameError::Skipped { .. }) => Input::Skipped(err.to_string()),
+        Err(err) => Input::Fatal(err.to_string()),
+    }
+}
+
+/// An MCAP source over any reader: the frames of one topic, their stamps as timestamps (µs). A damaged
+/// file or a frame of another size ends the stream (the bag's own error names the topic and message).
+fn mcap_source<R: Read>(
+    reader: R,
+    name: &str,
+    topic: Option<&str>,
+) -> impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input {
+    let mut frames = BagFrames::new(reader, name, topic);
+    move |values, _present| match frames.next_frame(values) {
+        Ok(Some(frame)) => Input::Frame {
+            grid: frame.grid,
+            has_mask: false,
+            timestamp_us: Some(frame.time_ns / 1000),
+            arrival: Instant::now(),
+        },
+        Ok(None) => Input::End,
         Err(err) => Input::Fatal(err.to_string()),
     }
 }

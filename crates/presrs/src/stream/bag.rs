@@ -1,0 +1,175 @@
+//! Recording a stream session as a ROS 2 bag (MCAP): the frames read on [`FRAMES_TOPIC`] and every JSON
+//! line the session emitted on [`DECISIONS_TOPIC`], written as the session runs and renamed into place
+//! when it ends ([`BagRecorder::finish`]); a session that fails or is dropped leaves no file behind.
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use presrs_core::Grid;
+use presrs_io::IoError;
+use presrs_io::atomic::AtomicFile;
+use presrs_io::mcap::{BagWriter, ImageEncoding};
+
+use super::tap::SessionTap;
+use crate::error::Result;
+
+/// The topic of the frames (`sensor_msgs/msg/Image`, `mono16` for integer counts, else `32FC1`).
+pub const FRAMES_TOPIC: &str = "/presrs/frames";
+/// The topic of the session's JSON lines (`touchdown`, `classification`, `liftoff`, `error`, `end`),
+/// JSON messages with the schema [`DECISIONS_SCHEMA`].
+pub const DECISIONS_TOPIC: &str = "/presrs/decisions";
+/// The schema name of [`DECISIONS_TOPIC`].
+pub const DECISIONS_SCHEMA_NAME: &str = "presrs/Decision";
+
+/// The JSON Schema of the decision lines (`docs/interface.md` describes each event's fields).
+pub const DECISIONS_SCHEMA: &str = r#"{
+  "title": "presrs decision",
+  "description": "One JSON line of presrs stream: touchdown, classification, liftoff, error or end.",
+  "type": "object",
+  "properties": {
+    "event": {"type": "string", "enum": ["touchdown", "classification", "liftoff", "error", "end"]},
+    "file": {"type": "string", "description": "classify --mcap: the recording"},
+    "kind": {"type": "string"},
+    "stance": {"type": ["integer", "null"]},
+    "frame": {"type": "integer"},
+    "touchdown_frame": {"type": "integer"},
+    "sample_frame": {"type": "integer"},
+    "end_frame": {"type": "integer"},
+    "peak_frame": {"type": "integer"},
+    "peak_load": {"type": "number"},
+    "len": {"type": "integer"},
+    "partial": {"type": "boolean"},
+    "sampled": {"type": "boolean"},
+    "label": {"type": "string"},
+    "class": {"type": "integer"},
+    "confidence": {"type": "number"},
+    "posteriors": {"type": "object", "additionalProperties": {"type": "number"}},
+    "frames_used": {"type": "integer"},
+    "latency_us": {"type": "number"},
+    "timestamp_us": {"type": ["integer", "null"]},
+    "gait": {"type": ["string", "null"]},
+    "message": {"type": "string"},
+    "fatal": {"type": "boolean"}
+  },
+  "required": ["event"]
+}"#;
+
+/// What a recorded bag holds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RecordedBag {
+    pub path: PathBuf,
+    pub frames: u64,
+    pub lines: u64,
+}
+
+/// A [`SessionTap`] writing a bag. Frames are stamped with the sender's timestamp when it gives one,
+/// else the wall clock when they are read; each line is logged at the time of the frame before it. A
+/// write that fails stops the recording; [`BagRecorder::finish`] then reports it.
+pub struct BagRecorder {
+    bag: BagWriter<BufWriter<File>>,
+    file: AtomicFile,
+    frames_channel: u16,
+    decisions_channel: u16,
+    time_ns: u64,
+    frames: u64,
+    lines: u64,
+    failed: Option<IoError>,
+}
+
+impl std::fmt::Debug for BagRecorder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BagRecorder")
+            .field("path", &self.file.path())
+            .field("frames", &self.frames)
+            .field("lines", &self.lines)
+            .finish_non_exhaustive()
+    }
+}
+
+fn now_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
+}
+
+impl BagRecorder {
+    /// Starts recording to `path` (a hidden temporary file beside it until [`Self::finish`]).
+    pub fn create(path: &Path) -> Result<Self> {
+        let (file, handle) = AtomicFile::create(path)?;
+        let name = presrs_io::error::display_name(path);
+        let mut bag = BagWriter::new(BufWriter::with_capacity(1 << 16, handle), &name)?;
+        let frames_channel = bag.add_image_topic(FRAMES_TOPIC)?;
+        let decisions_channel =
+            bag.add_json_topic(DECISIONS_TOPIC, DECISIONS_SCHEMA_NAME, DECISIONS_SCHEMA)?;
+        Ok(Self {
+            bag,
+            file,
+            frames_channel,
+            decisions_channel,
+            time_ns: 0,
+            frames: 0,
+            lines: 0,
+            failed: None,
+        })
+    }
+
+    /// Ends the bag (its summary and footer) and renames it into place; the first write error, if any,
+    /// instead (and no file).
+    pub fn finish(self) -> Result<RecordedBag> {
+        if let Some(err) = self.failed {
+            return Err(err.into());
+        }
+        let path = self.file.path().to_path_buf();
+        let buffered = self.bag.finish()?;
+        buffered
+            .into_inner()
+            .map_err(|err| IoError::io("write", &path, err.into_error()))?;
+        self.file.commit()?;
+        Ok(RecordedBag {
+            path,
+            frames: self.frames,
+            lines: self.lines,
+        })
+    }
+
+    fn keep(&mut self, written: std::result::Result<(), IoError>) {
+        if let Err(err) = written {
+            self.failed.get_or_insert(err);
+        }
+    }
+}
+
+impl SessionTap for BagRecorder {
+    fn frame(
+        &mut self,
+        _index: u64,
+        grid: Grid,
+        values: &[f64],
+        _present: Option<&[bool]>,
+        timestamp_us: Option<u64>,
+    ) {
+        if self.failed.is_some() {
+            return;
+        }
+        self.time_ns = timestamp_us.map_or_else(now_ns, |us| us.saturating_mul(1000));
+        let encoding = ImageEncoding::for_values(values.iter());
+        let written =
+            self.bag
+                .write_image(self.frames_channel, self.time_ns, grid, values, encoding);
+        self.frames += 1;
+        self.keep(written);
+    }
+
+    fn line(&mut self, line: &str) {
+        if self.failed.is_some() {
+            return;
+        }
+        let written = self
+            .bag
+            .write_json(self.decisions_channel, self.time_ns, line);
+        self.lines += 1;
+        self.keep(written);
+    }
+}
