@@ -25,7 +25,7 @@ use crate::error::{CoreError, Result};
 use crate::frame::{FrameView, Grid};
 use crate::pipeline::{Session, TrainedModel};
 use crate::stance::causal::MAX_SEG_EVENTS;
-use crate::stance::{Segmentation, ValidSegmentParams};
+use crate::stance::{BaselineMode, SegmentParams, Segmentation, ValidSegmentParams};
 // The causal detector's types, which this module's API speaks in, nameable from here as before they
 // moved beside the offline segmentation.
 pub use crate::stance::causal::{
@@ -59,8 +59,25 @@ impl OnlineProfile {
     }
 
     /// [`Self::learn`] from segmentations made with `segment`, which the profile keeps for the online
-    /// detector.
+    /// detector. With [`BaselineMode::Auto`], the mode the automatic choice made on most of the
+    /// segmentations is stored if it is the floor (presses on a preload): a calibrated detector has
+    /// no warm-up to choose on, and judges the stream from its profile's mode.
     pub fn learn_with(segmentations: &[Segmentation], segment: &ValidSegmentParams) -> Self {
+        let floors = segmentations
+            .iter()
+            .filter(|seg| seg.mode == BaselineMode::Floor)
+            .count();
+        let mut segment = segment.clone();
+        if segment.params().baseline == BaselineMode::Auto && 2 * floors > segmentations.len() {
+            let floor = SegmentParams {
+                baseline: BaselineMode::Floor,
+                ..segment.params().clone()
+            };
+            if let Ok(valid) = floor.check() {
+                segment = valid;
+            }
+        }
+        let segment = &segment;
         let lengths: Vec<usize> = segmentations
             .iter()
             .flat_map(|seg| seg.complete().map(|stance| stance.len))
@@ -500,7 +517,6 @@ impl<'m> OnlineClassifier<'m> {
 #[cfg(test)]
 mod profile_tests {
     use super::*;
-    use crate::stance::{BaselineMode, SegmentParams};
 
     /// A profile written before the detector settings were stored loads with the defaults; one
     /// with them keeps them.
@@ -522,5 +538,42 @@ mod profile_tests {
         let back: OnlineProfile = serde_json::from_str(&json).unwrap();
         assert_eq!(back.segment, segment);
         assert!(json.contains(r#""baseline":"floor""#), "{json}");
+    }
+
+    /// A profile learned with the automatic choice from recordings segmented from the floor stores the
+    /// floor (a calibrated stream has no warm-up to choose on); from others it stays automatic.
+    #[test]
+    fn a_profile_trained_on_preload_data_stores_the_floor() {
+        let seg = |mode| Segmentation {
+            stances: Vec::new(),
+            baseline: vec![100.0; 10],
+            noise: 1.0,
+            load_range: 500.0,
+            on_level: 50.0,
+            off_level: 5.0,
+            mode,
+            mode_reason: None,
+        };
+        let auto = ValidSegmentParams::default();
+        let floor = [
+            seg(BaselineMode::Floor),
+            seg(BaselineMode::Floor),
+            seg(BaselineMode::Drifting),
+        ];
+        let profile = OnlineProfile::learn_with(&floor, &auto);
+        assert_eq!(profile.segment.params().baseline, BaselineMode::Floor);
+        assert_eq!(profile.segment.params().min_stance_frames, 3);
+        let walking = [seg(BaselineMode::Floor), seg(BaselineMode::Drifting)];
+        let profile = OnlineProfile::learn_with(&walking, &auto);
+        assert_eq!(profile.segment.params().baseline, BaselineMode::Auto);
+        // Asked for explicitly, the mode is kept.
+        let drifting = SegmentParams {
+            baseline: BaselineMode::Drifting,
+            ..SegmentParams::default()
+        }
+        .check()
+        .unwrap();
+        let profile = OnlineProfile::learn_with(&floor, &drifting);
+        assert_eq!(profile.segment.params().baseline, BaselineMode::Drifting);
     }
 }

@@ -703,8 +703,40 @@ proptest! {
 /// unloads in every swing): the automatic choice stays with the drifting baseline and finds the stances.
 #[test]
 fn walking_with_heel_and_toe_on_a_drifting_baseline_stays_drifting() {
-    let mut rng = ChaCha8Rng::seed_from_u64(11);
-    for trial in 0..40 {
+    walking_trials(11, 40);
+}
+
+/// The automatic choice over many walks (30 seeds of 40 trials): it should never take walking whose
+/// drifting baseline finds every stance for presses on a preload. **Open (ignored):** it does on 12 of
+/// the 30 seeds (about 1 trial in 40): the edges of a swing lie in the drifting baseline's stances
+/// beside it (two frames or more), so `preload`'s "rest found loaded next to one found unloaded at the
+/// same level" fires on two swings. Judging a rest by its middle frame fixes every walk but makes
+/// `random_presses_on_a_preload_are_recovered` fail more often (at 20000 cases under every seed tried),
+/// so it is not done. Trials where the drifting baseline itself misses (a strong drift at the
+/// recording's end lowers its last block's baseline below the swing level; 4 of 1200) are skipped.
+/// Run with `--ignored` to reproduce.
+#[test]
+#[ignore]
+fn walking_over_many_seeds_stays_drifting() {
+    let skipped: usize = (0..30)
+        .map(|seed| walking_trials_checked(seed, 40, true))
+        .sum();
+    assert!(
+        skipped <= 8,
+        "{skipped} trials where the drifting baseline misses"
+    );
+}
+
+fn walking_trials(seed: u64, trials: usize) {
+    walking_trials_checked(seed, trials, false);
+}
+
+/// `trials` walks from `seed`; with `skip_missed`, a trial whose drifting segmentation does not find
+/// its stances (within a frame) is skipped (and counted) instead of failing.
+fn walking_trials_checked(seed: u64, trials: usize, skip_missed: bool) -> usize {
+    let mut skipped = 0;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for trial in 0..trials {
         let mut truth = Vec::new();
         let mut t = rng.random_range(5..15);
         while t < 400 {
@@ -728,6 +760,23 @@ fn walking_with_heel_and_toe_on_a_drifting_baseline_stays_drifting() {
                 series[start + i] += 1000.0 * shape;
             }
         }
+        if skip_missed {
+            let drifting = SegmentParams {
+                baseline: BaselineMode::Drifting,
+                ..SegmentParams::default()
+            }
+            .check()
+            .unwrap();
+            let alone = segment(&series, &drifting).unwrap();
+            let recovered = alone.stances.len() == truth.len()
+                && alone.stances.iter().zip(&truth).all(|(s, &(start, len))| {
+                    s.start.abs_diff(start) <= 1 && s.end().abs_diff(start + len) <= 1
+                });
+            if !recovered {
+                skipped += 1;
+                continue;
+            }
+        }
         let found = run(&series);
         assert_eq!(
             found.mode,
@@ -737,4 +786,26 @@ fn walking_with_heel_and_toe_on_a_drifting_baseline_stays_drifting() {
         );
         assert_recovered(&found, &truth, 1);
     }
+    skipped
+}
+
+/// The rare failure of `random_layouts_are_recovered` (`PROPTEST_RNG_SEED=5`, 20000 cases): one
+/// 23-frame stance in a 50-frame movie, noise 8.2. By chance 9 of its 27 unloaded frames lie within 1.5
+/// of each other at the bottom; the growth of the unloaded set stalled on that cluster (its MAD said a
+/// noise of 1.5, and the frames below it were left out as glitches), so noise frames after the stance
+/// joined it (found 14..48). A layout the issue's definition recovers: a detector fault, fixed.
+#[test]
+fn a_chance_cluster_of_low_frames_does_not_set_the_noise() {
+    let synth = Synth {
+        frames: 50,
+        stances: vec![(14, 23)],
+        amplitude: 1000.0,
+        offset: 0.0,
+        drift: 0.0,
+        sigma: 0.008_174_716_376_350_35 * 1000.0,
+        seed: 4_058_022_688_811_925_243,
+    };
+    let found = run(&synth.series());
+    assert_recovered(&found, &[(14, 23)], 1);
+    assert!(found.noise > 0.5 * synth.sigma, "noise {}", found.noise);
 }

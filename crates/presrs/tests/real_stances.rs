@@ -106,3 +106,53 @@ fn the_jiku_walk_data_set_gives_one_sample_a_file_when_asked_and_says_why_not_ot
     );
     assert!(message.ends_with("try --one-sample-per-file"), "{message}");
 }
+
+/// The causal (online) detector on the walking F-Scan file, with the profile `train` would learn from
+/// it (the automatic choice keeps the drifting baseline: walking unloads in every swing): the same five
+/// complete stances as offline, each within a frame, none invented.
+#[test]
+fn the_walking_f_scan_file_online_has_the_same_five_stances() {
+    use presrs::core::online::{CausalSegmenter, OnlineProfile, SegEvent};
+    use presrs::core::stance::{ValidSegmentParams, segment};
+    let recording = presrs::io::read_recording(&shared("tekscan/FrasP01L.asf")).unwrap();
+    let totals = recording.total_per_frame();
+    let params = ValidSegmentParams::default();
+    let offline = segment(&totals, &params).unwrap();
+    let profile = OnlineProfile::learn_with(std::slice::from_ref(&offline), &params);
+    assert_eq!(profile.segment.params().baseline, BaselineMode::Auto);
+    let mut seg =
+        CausalSegmenter::new(&profile.segment, &profile.params, profile.calibration).unwrap();
+    let mut online = Vec::new();
+    for &total in &totals {
+        for event in seg.push(total).unwrap().iter() {
+            if let SegEvent::Liftoff(l) = event {
+                online.push(l.stance);
+            }
+        }
+    }
+    for event in seg.finish().unwrap().iter() {
+        if let SegEvent::Liftoff(l) = event {
+            online.push(l.stance);
+        }
+    }
+    let complete = |stances: &mut dyn Iterator<Item = (usize, usize)>| stances.collect::<Vec<_>>();
+    let offline_complete = complete(&mut offline.complete().map(|s| (s.start, s.end())));
+    let online_complete = complete(
+        &mut online
+            .iter()
+            .filter(|s| !s.partial)
+            .map(|s| (s.start, s.end())),
+    );
+    assert_eq!(offline_complete.len(), 5);
+    assert_eq!(
+        online_complete.len(),
+        5,
+        "online {online_complete:?} offline {offline_complete:?}"
+    );
+    for (a, b) in online_complete.iter().zip(&offline_complete) {
+        assert!(
+            a.0.abs_diff(b.0) <= 1 && a.1.abs_diff(b.1) <= 1,
+            "online {online_complete:?} offline {offline_complete:?}"
+        );
+    }
+}

@@ -334,3 +334,103 @@ fn a_tap_sees_every_frame_and_exactly_the_lines_written() {
             .any(|line| line.contains("\"classification\""))
     );
 }
+
+/// Presses on a standing preload (the foot never leaves the sensor after the first): 20 unloaded frames,
+/// then `presses` presses (2 frames up, 10 at full load, 2 down) from a preload at 35% of the full load,
+/// `rest` frames at the preload after each.
+fn preload_loads(presses: usize, rest: usize) -> Vec<f64> {
+    let press = [
+        0.5, 0.8, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.8, 0.5,
+    ];
+    let mut loads = vec![0.0; 20];
+    for _ in 0..presses {
+        loads.extend(press);
+        loads.extend(std::iter::repeat_n(0.35, rest));
+    }
+    loads
+}
+
+fn encode_loads(terrain: &str, loads: &[f64]) -> (Vec<u8>, Vec<f64>) {
+    let (mut bytes, mut frame, mut totals) = (Vec::new(), Vec::new(), Vec::new());
+    for (t, &scale) in loads.iter().enumerate() {
+        let values: Vec<f64> = image(terrain, 1)
+            .iter()
+            .map(|v| (v * scale).round())
+            .collect();
+        totals.push(values.iter().sum());
+        encode_frame(&mut frame, 16, 16, Dtype::U8, t as u64 * 10_000, &values).unwrap();
+        bytes.extend_from_slice(&frame);
+    }
+    (bytes, totals)
+}
+
+/// A profile learned (as `train` learns it) from a preload recording stores the floor mode, and a stream
+/// of presses on a preload through a session classifies every press; with the baseline mode the same
+/// stream is one long stance.
+#[test]
+fn a_floor_profile_classifies_every_press_on_a_preload() {
+    use presrs::core::stance::{BaselineMode, SegmentParams, ValidSegmentParams, segment};
+    let (_, training) = encode_loads("ridges", &preload_loads(6, 9));
+    let auto = ValidSegmentParams::default();
+    let offline = segment(&training, &auto).unwrap();
+    assert_eq!(
+        offline.mode,
+        BaselineMode::Floor,
+        "{:?}",
+        offline.mode_reason
+    );
+    assert_eq!(offline.complete().count(), 6);
+    let mut profile = OnlineProfile::learn_with(&[offline], &auto);
+    assert_eq!(profile.segment.params().baseline, BaselineMode::Floor);
+    profile.gait_table.insert("ridges".into(), "G3".into());
+
+    let (bytes, _) = encode_loads("ridges", &preload_loads(9, 7));
+    let options = SessionOptions {
+        format: InputFormat::Binary,
+        name: "preload".into(),
+        ..SessionOptions::default()
+    };
+    let mut output = Vec::new();
+    let summary = run_session(
+        &model(),
+        &profile,
+        &bytes[..],
+        &mut output,
+        &options,
+        &|_| {},
+    )
+    .unwrap();
+    assert!(!summary.had_errors());
+    let found = events(&output);
+    assert_eq!(count(&found, "classification"), 9, "{found:?}");
+    assert!(
+        found
+            .iter()
+            .filter(|e| e["event"] == "classification")
+            .all(|e| e["label"] == "ridges"),
+        "{found:?}"
+    );
+
+    // The same stream judged from one baseline: the presses never unload, so they are not 9 stances.
+    let drifting = SegmentParams {
+        baseline: BaselineMode::Drifting,
+        ..SegmentParams::default()
+    }
+    .check()
+    .unwrap();
+    let baseline_profile = OnlineProfile {
+        segment: drifting,
+        ..profile
+    };
+    let mut output = Vec::new();
+    run_session(
+        &model(),
+        &baseline_profile,
+        &bytes[..],
+        &mut output,
+        &options,
+        &|_| {},
+    )
+    .unwrap();
+    assert!(count(&events(&output), "classification") < 9);
+}

@@ -36,9 +36,29 @@
 //! * **One sample per file** ([`BaselineMode::Contact`]): the stream is one
 //!   contact from frame 0 to its end, partial at both ends as offline but sampled: frame `k` is decided
 //!   as it arrives, the lift-off comes at `finish`. No warm-up, no fusion.
-//! * **Not done online:** the floor mode (presses on a preload). The causal detector measures from the
-//!   baseline only; a profile with `baseline: floor` calibrates its levels from the floor segmentation
-//!   of its warm-up but then judges frames against one baseline.
+//! * **The floor mode** ([`BaselineMode::Floor`], presses or steps on a standing preload): each contact
+//!   is measured from the *rest* before it, not from one baseline. At rest the floor is the rest's mean
+//!   moved along a slope pooled within the recent rests (a drifting preload is followed; a preload that
+//!   steps between rests does not tilt it). A rise of more than the off level above the floor starts a
+//!   candidate; it is a contact (touchdown at its first frame) once it is `min_stance_frames` long and
+//!   has risen more than the on level above the floor; it was noise if it comes back within the off
+//!   level first. A contact ends when the next rest begins: `m = max(max_gap_frames + 1,`
+//!   [`MIN_REST_FRAMES`]`)` frames after its peak within the off level of their mean, more than the on
+//!   level below the peak (a shorter pause is a dropout inside the contact, as offline); its end is the
+//!   first of those flat frames, and the lift-off is reported at the rest's `m`-th frame, i.e.
+//!   `max_gap_frames` frames after the end with the defaults (as in the drifting mode), later only if
+//!   the rest's first frames were found by looking back. On and off levels use the calibrated noise
+//!   and the stream's load range (highest minus lowest total, as offline, at least
+//!   [`RANGE_PRIOR_FRACTION`] of the calibrated range). On synthetic preload movies it agrees with the
+//!   offline floor segmentation contact by contact (tests `causal_floor`). Limits: a contact that
+//!   pauses flat for `m` frames more than the on level below its peak ends there (offline looks at the
+//!   whole valley); a stream that starts inside a contact, with a calibration and no warm-up, does not
+//!   report that partial contact.
+//! * **The automatic choice online** ([`BaselineMode::Auto`]): the warm-up's offline segmentation
+//!   decides. If it chose the floor, the stream is judged in the floor mode; otherwise with the
+//!   baseline, as before. With a calibration (no warm-up) the profile's mode is used as it is:
+//!   [`OnlineProfile::learn_with`](crate::online::OnlineProfile::learn_with) stores the floor when the
+//!   training recordings were segmented from the floor.
 //!
 //! **The sample frame** is chosen without the future: the `k`-th frame after touchdown
 //! ([`OnlineParams::sample_offset`]). The paper samples the mid-stance frame `(len - 1) / 2`, which
@@ -335,6 +355,146 @@ pub struct Levels {
     pub off_level: f64,
 }
 
+/// Fewest frames of a rest in the floor mode online: a rest this long ends a contact (at least
+/// `max_gap_frames + 1`: a shorter rest is a dropout inside one contact, as offline).
+pub const MIN_REST_FRAMES: usize = 3;
+/// Recent totals the floor mode keeps to look back over when a rest is found (the rest's first frames
+/// are found from its last ones).
+const FLOOR_LOOKBACK: usize = 64;
+/// The floor's slope counts as if a level rest of this many frames had been seen.
+const SLOPE_PRIOR_FRAMES: f64 = 8.0;
+/// Weight the slope evidence of earlier rests keeps each time a new rest starts.
+const SLOPE_MEMORY: f64 = 0.75;
+
+/// Least-squares sums of `(t, load)` over frames (times from `origin`, so that they stay small).
+#[derive(Clone, Copy, Debug, Default)]
+struct LineSums {
+    origin: usize,
+    n: f64,
+    st: f64,
+    sx: f64,
+    stt: f64,
+    stx: f64,
+}
+
+impl LineSums {
+    fn add(&mut self, t: usize, load: f64) {
+        if self.n == 0.0 {
+            self.origin = t;
+        }
+        let dt = t as f64 - self.origin as f64;
+        self.n += 1.0;
+        self.st += dt;
+        self.sx += load;
+        self.stt += dt * dt;
+        self.stx += dt * load;
+    }
+
+    /// Spread of the times about their mean (the slope's denominator).
+    fn sxx(&self) -> f64 {
+        if self.n == 0.0 {
+            0.0
+        } else {
+            self.stt - self.st * self.st / self.n
+        }
+    }
+
+    /// Co-spread of times and loads (the slope's numerator).
+    fn sxy(&self) -> f64 {
+        if self.n == 0.0 {
+            0.0
+        } else {
+            self.stx - self.st * self.sx / self.n
+        }
+    }
+}
+
+/// What the floor mode knows of the local floor (see [`CausalSegmenter::push_floor`]).
+#[derive(Clone, Debug)]
+struct FloorState {
+    /// The current (or last) rest's frames.
+    rest: LineSums,
+    /// Slope evidence (`sxy`, `sxx`) of the earlier rests, each weighted [`SLOPE_MEMORY`] per rest
+    /// since: slopes are pooled *within* rests, so a preload that steps between rests does not tilt them.
+    pool_sxy: f64,
+    pool_sxx: f64,
+    /// The last [`FLOOR_LOOKBACK`] totals, frame `t` at `t % FLOOR_LOOKBACK`.
+    recent: Vec<f64>,
+    /// Lowest and highest total seen (the load range is their difference, as offline).
+    lowest: f64,
+    highest: f64,
+    /// Frames in a row more than the off level below the floor.
+    below: usize,
+}
+
+impl FloorState {
+    fn new(seen: Option<(f64, f64)>) -> Self {
+        let (lowest, highest) = seen.unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
+        Self {
+            rest: LineSums::default(),
+            pool_sxy: 0.0,
+            pool_sxx: 0.0,
+            recent: vec![0.0; FLOOR_LOOKBACK],
+            lowest,
+            highest,
+            below: 0,
+        }
+    }
+
+    /// The floor's slope, shrunk towards level by the spread of [`SLOPE_PRIOR_FRAMES`] flat frames (the
+    /// two or three frames of a short rest alone would tilt it by their noise).
+    fn slope(&self) -> f64 {
+        let prior = SLOPE_PRIOR_FRAMES * (SLOPE_PRIOR_FRAMES * SLOPE_PRIOR_FRAMES - 1.0) / 12.0;
+        let sxx = self.pool_sxx + self.rest.sxx() + prior;
+        if sxx > 0.0 {
+            (self.pool_sxy + self.rest.sxy()) / sxx
+        } else {
+            0.0
+        }
+    }
+
+    /// The floor at frame `t`: the current rest's mean, moved along the pooled slope; `None` before any
+    /// rest.
+    fn at(&self, t: usize) -> Option<f64> {
+        let rest = &self.rest;
+        (rest.n > 0.0).then(|| {
+            let centre = rest.origin as f64 + rest.st / rest.n;
+            rest.sx / rest.n + self.slope() * (t as f64 - centre)
+        })
+    }
+
+    /// Ends the current rest (its slope evidence joins the pool) and starts a new one on frames
+    /// `first..=last` (all within the lookback).
+    fn start_rest(&mut self, first: usize, last: usize) {
+        self.close_rest();
+        self.below = 0;
+        for f in first..=last {
+            self.rest.add(f, self.recent[f % FLOOR_LOOKBACK]);
+        }
+    }
+
+    fn close_rest(&mut self) {
+        if self.rest.n >= MIN_REST_FRAMES as f64 {
+            self.pool_sxy = SLOPE_MEMORY * self.pool_sxy + self.rest.sxy();
+            self.pool_sxx = SLOPE_MEMORY * self.pool_sxx + self.rest.sxx();
+        }
+        self.rest = LineSums::default();
+    }
+
+    /// Whether the `m` frames ending at `t` lie within `off` of their mean, and that mean.
+    fn flat(&self, t: usize, m: usize, off: f64) -> Option<f64> {
+        if m == 0 || m > FLOOR_LOOKBACK || t + 1 < m {
+            return None;
+        }
+        let window = (t + 1 - m..=t).map(|f| self.recent[f % FLOOR_LOOKBACK]);
+        let mean = window.clone().sum::<f64>() / m as f64;
+        window
+            .clone()
+            .all(|v| (v - mean).abs() <= off)
+            .then_some(mean)
+    }
+}
+
 /// The causal stance detector (see the module docs). One [`push`](Self::push) per frame, O(1) amortised,
 /// no allocation after construction (the warm-up calibration, if any, allocates once).
 #[derive(Clone, Debug)]
@@ -362,6 +522,9 @@ pub struct CausalSegmenter {
     next_id: u64,
     /// [`BaselineMode::Contact`]: the whole stream is one contact (see [`Self::push_contact`]).
     contact: bool,
+    /// The floor mode's state: [`BaselineMode::Floor`], or [`BaselineMode::Auto`] once the warm-up chose
+    /// the floor (see [`Self::push_floor`]).
+    floor: Option<Box<FloorState>>,
 }
 
 impl CausalSegmenter {
@@ -402,7 +565,11 @@ impl CausalSegmenter {
             group: None,
             next_id: 0,
             contact: params.params().baseline == BaselineMode::Contact,
+            floor: None,
         };
+        if params.params().baseline == BaselineMode::Floor && calibration.is_some() {
+            segmenter.floor = Some(Box::new(FloorState::new(None)));
+        }
         match calibration {
             Some(cal) => segmenter.apply_calibration(cal),
             None => segmenter.warmup = Vec::with_capacity(online.warmup_frames),
@@ -503,65 +670,13 @@ impl CausalSegmenter {
             return Ok(events);
         }
 
-        let above = total - self.levels.baseline;
-        if above > self.max_above {
-            self.max_above = above;
-            self.update_levels();
-        }
-        let (off, on) = (self.levels.off_level, self.levels.on_level);
-        let p = self.params.params();
-        let (min_len, max_gap) = (p.min_stance_frames, p.max_gap_frames);
-        let loaded = above > off && self.levels.load_range > 0.0;
+        let loaded = if self.floor.is_some() {
+            self.push_floor(total, t, &mut events)
+        } else {
+            self.push_drifting(total, t, &mut events)
+        };
 
-        if loaded {
-            let run = self.run.get_or_insert(Run {
-                start: t,
-                reached_on: false,
-                peak_load: total,
-                peak_frame: t,
-            });
-            run.reached_on |= above > on;
-            if total > run.peak_load {
-                run.peak_load = total;
-                run.peak_frame = t;
-            }
-            let run = *run;
-            if t + 1 - run.start >= min_len || run.reached_on {
-                // The run is kept: it joins the open stance or starts one.
-                match &mut self.group {
-                    Some(group) if run.start <= group.end + max_gap => {
-                        group.end = t + 1;
-                        group.reached_on |= run.reached_on;
-                    }
-                    Some(_) => {
-                        self.close_group(t, false, &mut events);
-                        self.open_group(run, t);
-                    }
-                    None => self.open_group(run, t),
-                }
-            }
-        } else if let Some(run) = self.run.take() {
-            // The run ended at t; fold its peak into its stance if it was kept.
-            if let Some(group) = &mut self.group
-                && group.end == t
-                && run.start >= group.start
-                && run.peak_load > group.peak_load
-            {
-                group.peak_load = run.peak_load;
-                group.peak_frame = run.peak_frame;
-            }
-        }
-
-        // Close the stance once no later run can join it.
-        if let Some(group) = self.group {
-            let pending = self
-                .run
-                .is_some_and(|run| run.start <= group.end + max_gap && run.start >= group.end);
-            if t + 1 > group.end + max_gap && !pending {
-                self.close_group(t, false, &mut events);
-            }
-        }
-
+        let min_len = self.params.params().min_stance_frames;
         let k = self.online.sample_offset;
         // A copy of the sample frame is kept in case it cannot be decided now (stance not yet confirmed,
         // or a dropout frame); the candidate stance may still be a run that is not yet kept.
@@ -624,10 +739,204 @@ impl CausalSegmenter {
         }
 
         // Quiet frames feed the baseline and noise estimate.
-        if !loaded && self.run.is_none() && self.group.is_none() {
+        if self.floor.is_none() && !loaded && self.run.is_none() && self.group.is_none() {
             self.add_quiet(total);
         }
         Ok(events)
+    }
+
+    /// The floor mode for frame `t` (see the module docs); whether the frame is in a contact.
+    ///
+    /// * **At rest** the floor is the current rest's mean moved along the slope pooled within the recent
+    ///   rests. A frame more than `off` above it starts a candidate contact; `m` flat frames in a row
+    ///   more than `off` below it start a new (lower) rest; otherwise it joins the rest.
+    /// * **A candidate** becomes a contact (touchdown at its first frame) once it is
+    ///   `min_stance_frames` long and has risen more than `on` above the floor. One that comes back
+    ///   within `off` first was noise (the rest goes on, as offline); one that settles flat without
+    ///   reaching `on` is a new rest.
+    /// * **A contact** ends when a rest begins after its peak: the last `m = max(max_gap_frames + 1,`
+    ///   [`MIN_REST_FRAMES`]`)` frames within `off` of their mean, which is more than `on` below the
+    ///   peak. The rest (and the stance's end) starts at the first of the frames after the peak that
+    ///   stay within `off` of that mean; the lift-off is reported at its `m`-th frame normally.
+    fn push_floor(&mut self, total: f64, t: usize, events: &mut SegEvents) -> bool {
+        let p = self.params.params();
+        let (min_len, max_gap) = (p.min_stance_frames, p.max_gap_frames);
+        let m = (max_gap + 1).max(MIN_REST_FRAMES);
+        let prior = self.calibration.map_or(0.0, |c| c.load_range) * RANGE_PRIOR_FRACTION;
+        let Some(floor) = self.floor.as_deref_mut() else {
+            return false;
+        };
+        floor.recent[t % FLOOR_LOOKBACK] = total;
+        floor.lowest = floor.lowest.min(total);
+        floor.highest = floor.highest.max(total);
+        let range = prior.max(floor.highest - floor.lowest);
+        let noise = self.levels.noise;
+        let on = (p.on_noise * noise).max(p.on_fraction * range);
+        let off = (p.off_noise * noise).max(p.off_fraction * range);
+        self.levels.load_range = range;
+        self.levels.on_level = on;
+        self.levels.off_level = off;
+
+        if let Some(group) = &mut self.group {
+            group.end = t + 1;
+            if total > group.peak_load {
+                group.peak_load = total;
+                group.peak_frame = t;
+            }
+            let after_peak = t + 1 >= m && t + 1 - m > group.peak_frame;
+            let rest = floor
+                .flat(t, m, off)
+                .filter(|&mean| group.peak_load - mean > on);
+            if let (true, Some(mean)) = (after_peak, rest) {
+                let mut first = t + 1 - m;
+                while first > group.peak_frame + 1
+                    && t + 1 - first < FLOOR_LOOKBACK
+                    && (floor.recent[(first - 1) % FLOOR_LOOKBACK] - mean).abs() <= off
+                {
+                    first -= 1;
+                }
+                group.end = first;
+                floor.start_rest(first, t);
+                self.levels.baseline = floor.at(t).unwrap_or(mean);
+                self.close_group(t, false, events);
+                return false;
+            }
+            return true;
+        }
+
+        let Some(level) = floor.at(t) else {
+            floor.start_rest(t, t);
+            self.levels.baseline = total;
+            return false;
+        };
+        self.levels.baseline = level;
+        let rise = total - level;
+        if let Some(run) = &mut self.run {
+            if rise > off {
+                run.reached_on |= rise > on;
+                if total > run.peak_load {
+                    run.peak_load = total;
+                    run.peak_frame = t;
+                }
+                let run = *run;
+                if t + 1 - run.start >= min_len && run.reached_on {
+                    self.run = None;
+                    self.open_group(run, t);
+                    if let Some(group) = &mut self.group {
+                        group.peak_load = run.peak_load;
+                        group.peak_frame = run.peak_frame;
+                    }
+                    return true;
+                }
+                // A new level, flat, that never rose to `on`: the floor moved.
+                if !run.reached_on
+                    && t + 1 - run.start >= min_len + m
+                    && floor.flat(t, m, off).is_some()
+                {
+                    self.run = None;
+                    floor.start_rest(t + 1 - m, t);
+                    return false;
+                }
+                return true;
+            }
+            // Back within `off` before it became a contact: noise, the rest goes on.
+            self.run = None;
+        }
+        if rise < -off {
+            // The floor fell (a lighter preload, or the end of a slow unloading) once `m` frames in a
+            // row are below it and flat; one low frame is noise.
+            floor.below += 1;
+            if floor.below >= m && floor.flat(t, m, off).is_some() {
+                floor.below = 0;
+                floor.start_rest(t + 1 - m, t);
+            }
+            return false;
+        }
+        floor.below = 0;
+        if rise > off {
+            let run = Run {
+                start: t,
+                reached_on: rise > on,
+                peak_load: total,
+                peak_frame: t,
+            };
+            if min_len <= 1 && run.reached_on {
+                self.open_group(run, t);
+                if let Some(group) = &mut self.group {
+                    group.peak_load = total;
+                }
+                return true;
+            }
+            self.run = Some(run);
+            return true;
+        } else {
+            floor.rest.add(t, total);
+        }
+        false
+    }
+
+    /// The drifting (and fixed) baseline's runs, gaps and closing for frame `t`; whether it is loaded.
+    fn push_drifting(&mut self, total: f64, t: usize, events: &mut SegEvents) -> bool {
+        let above = total - self.levels.baseline;
+        if above > self.max_above {
+            self.max_above = above;
+            self.update_levels();
+        }
+        let (off, on) = (self.levels.off_level, self.levels.on_level);
+        let p = self.params.params();
+        let (min_len, max_gap) = (p.min_stance_frames, p.max_gap_frames);
+        let loaded = above > off && self.levels.load_range > 0.0;
+
+        if loaded {
+            let run = self.run.get_or_insert(Run {
+                start: t,
+                reached_on: false,
+                peak_load: total,
+                peak_frame: t,
+            });
+            run.reached_on |= above > on;
+            if total > run.peak_load {
+                run.peak_load = total;
+                run.peak_frame = t;
+            }
+            let run = *run;
+            if t + 1 - run.start >= min_len || run.reached_on {
+                // The run is kept: it joins the open stance or starts one.
+                match &mut self.group {
+                    Some(group) if run.start <= group.end + max_gap => {
+                        group.end = t + 1;
+                        group.reached_on |= run.reached_on;
+                    }
+                    Some(_) => {
+                        self.close_group(t, false, events);
+                        self.open_group(run, t);
+                    }
+                    None => self.open_group(run, t),
+                }
+            }
+        } else if let Some(run) = self.run.take() {
+            // The run ended at t; fold its peak into its stance if it was kept.
+            if let Some(group) = &mut self.group
+                && group.end == t
+                && run.start >= group.start
+                && run.peak_load > group.peak_load
+            {
+                group.peak_load = run.peak_load;
+                group.peak_frame = run.peak_frame;
+            }
+        }
+
+        // Close the stance once no later run can join it.
+        if let Some(group) = self.group {
+            let pending = self
+                .run
+                .is_some_and(|run| run.start <= group.end + max_gap && run.start >= group.end);
+            if t + 1 > group.end + max_gap && !pending {
+                self.close_group(t, false, events);
+            }
+        }
+
+        loaded
     }
 
     fn open_group(&mut self, run: Run, t: usize) {
@@ -786,6 +1095,62 @@ impl CausalSegmenter {
         Ok(events)
     }
 
+    /// The floor mode's state after a warm-up segmented (offline) with `seg`: the recent totals, the
+    /// lowest and highest, the slope of each rest (the frames outside stances within the off level of
+    /// the floor), the last rest as the current one, or the contact under way at its end as a partial
+    /// stance.
+    fn seed_floor(&mut self, warmup: &[f64], seg: &Segmentation) {
+        let lowest = warmup.iter().copied().fold(f64::INFINITY, f64::min);
+        let highest = warmup.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mut floor = FloorState::new(Some((lowest, highest)));
+        for (frame, &value) in warmup.iter().enumerate() {
+            floor.recent[frame % FLOOR_LOOKBACK] = value;
+        }
+        let off = seg.off_level;
+        let mut rest = LineSums::default();
+        for (frame, &value) in warmup.iter().enumerate() {
+            if seg.stances.iter().any(|s| s.contains(frame)) {
+                if rest.n > 0.0 {
+                    floor.rest = rest;
+                    floor.close_rest();
+                    rest = LineSums::default();
+                }
+                continue;
+            }
+            let base = seg.baseline.get(frame).copied().unwrap_or(value);
+            if (value - base).abs() <= off {
+                rest.add(frame, value);
+            }
+        }
+        floor.rest = rest;
+        let n = warmup.len();
+        match seg.stances.last() {
+            Some(last) if last.end() == n => {
+                let (peak_load, peak_frame) = (last.peak_load, self.t);
+                self.group = Some(Group {
+                    id: self.next_id,
+                    start: self.t,
+                    end: self.t,
+                    reached_on: true,
+                    peak_load,
+                    peak_frame,
+                    confirmed: false,
+                    partial: true,
+                    sample_done: false,
+                    fused: 0,
+                    fusion_done: false,
+                });
+                self.next_id += 1;
+            }
+            _ if floor.rest.n == 0.0 && n > 0 => floor.start_rest(n - 1, n - 1),
+            _ => {}
+        }
+        self.levels.baseline = floor
+            .at(n.saturating_sub(1))
+            .unwrap_or(self.levels.baseline);
+        self.floor = Some(Box::new(floor));
+    }
+
     /// Calibrates on the warm-up totals with the offline segmentation; detection starts at the next frame.
     fn finish_warmup(&mut self) -> Result<Segmentation> {
         let seg = segment(&self.warmup, &self.params)?;
@@ -803,6 +1168,13 @@ impl CausalSegmenter {
         self.max_above = seg.load_range;
         self.update_levels();
         self.detect_from = self.t;
+        let mode = self.params.params().baseline;
+        if mode == BaselineMode::Floor
+            || mode == BaselineMode::Auto && seg.mode == BaselineMode::Floor
+        {
+            self.seed_floor(&warmup, &seg);
+            return Ok(seg);
+        }
         for (frame, &value) in warmup.iter().enumerate() {
             let in_stance = seg.stances.iter().any(|s| s.contains(frame));
             if !in_stance && value - self.levels.baseline <= self.levels.off_level {

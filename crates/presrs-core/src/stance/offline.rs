@@ -615,10 +615,15 @@ fn estimate_baseline(
                 // and noise frames beside the stance then joined it). The tail's lower side is not cut
                 // (nothing real lies below the baseline), so its spread below the median bounds the
                 // noise from below too.
-                let spread = sigma.max(lower_sigma(&residual, &quiet, centre, sigma));
                 // Anything below the off level is unloaded by definition, whatever the noise estimate:
                 // this lets the set grow across a drift much larger than the noise.
                 let range = residual.iter().fold(0.0, |m: f64, &r| m.max(r - centre));
+                // A frame less than twice the off level below the centre is noise, not a glitch, even
+                // when the tail's MAD says otherwise: a chance cluster of low frames (9 of the 27
+                // unloaded frames of a 50-frame movie within 1.5 of each other, true noise 8) has a
+                // tiny MAD, and leaving out the frames below it stalled the growth at the cluster.
+                let glitch = (2.0 * CLIP_SIGMAS * sigma).max(2.0 * off_fraction * range);
+                let spread = sigma.max(lower_sigma_within(&residual, &quiet, centre, glitch));
                 let limit = centre + (GROW_SIGMAS * spread.max(floor)).max(off_fraction * range);
                 residual
                     .iter()
@@ -676,7 +681,11 @@ fn estimate_baseline(
 /// noise alone, neither cut by a clip above nor lifted by a stance's edge. Distances beyond
 /// `2 x CLIP_SIGMAS x mad_sigma` (a glitch reading far below zero) are left out; 0 without frames.
 fn lower_sigma(residual: &[f64], quiet: &[bool], centre: f64, mad_sigma: f64) -> f64 {
-    let limit = 2.0 * CLIP_SIGMAS * mad_sigma;
+    lower_sigma_within(residual, quiet, centre, 2.0 * CLIP_SIGMAS * mad_sigma)
+}
+
+/// [`lower_sigma`] over the distances below `centre` of at most `limit`.
+fn lower_sigma_within(residual: &[f64], quiet: &[bool], centre: f64, limit: f64) -> f64 {
     let (sum, count) = residual
         .iter()
         .zip(quiet)
