@@ -280,3 +280,18 @@ fn a_real_tekscan_file_keeps_everything_through_a_bag() {
     assert_eq!(back.meta.col_pitch_mm, original.meta.col_pitch_mm);
     assert!(original.meta.units.is_some() || original.present().is_some());
 }
+
+/// Inputs the `parse_mcap` fuzz target flagged (`tests/fuzz_regressions/parse_mcap/`, the first byte
+/// picks the topic as in the target): each is an error, not a panic. `header_string_length_1_8_gb`
+/// claims a 1.8 GB string in the header record; the `mcap` crate reserves it (virtual memory, never
+/// touched) before finding the record short, which libFuzzer's `-malloc_limit_mb` reports.
+#[test]
+fn fuzz_findings_are_errors() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/parse_mcap");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let bytes = std::fs::read(entry.unwrap().path()).unwrap();
+        let rest = &bytes[1..];
+        assert!(parse_mcap(rest, "f.mcap", None).is_err());
+        assert!(list_topics(rest, "f.mcap").is_err());
+    }
+}
