@@ -57,7 +57,11 @@ def chosen(document: dict) -> str:
         scores = selection.get("scores", [])
         index = selection.get("chosen")
         if isinstance(index, int) and 0 <= index < len(scores):
-            key = f"{scores[index]['features']} + {scores[index]['classifier']}"
+            score = scores[index]
+            key = f"{score['features']} + {score['classifier']}"
+            intensity = (score.get("config", {}).get("preprocess") or {}).get("intensity")
+            if intensity and intensity != "none":
+                key = f"{intensity} {key}"
             counts[key] = counts.get(key, 0) + 1
     return "chose " + ", ".join(f"{k} x{v}" for k, v in sorted(counts.items(), key=lambda kv: -kv[1]))
 
