@@ -53,7 +53,7 @@ def pca_lda(x_train, y_train, x_val, y_val):
     y = np.concatenate([y_train, y_val])
     # at most n - classes: the within-class scatter of more dimensions would be singular
     dims = max(1, min(51, len(x) - len(np.unique(y)), x.shape[1]))
-    model = make_pipeline(PCA(n_components=dims), LinearDiscriminantAnalysis())
+    model = make_pipeline(PCA(n_components=dims, random_state=0), LinearDiscriminantAnalysis())
     return model.fit(x, y)
 
 
