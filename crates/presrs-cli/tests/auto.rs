@@ -253,3 +253,113 @@ fn progress_lines_go_to_stderr_when_it_is_not_a_terminal() {
         "{err}"
     );
 }
+
+/// `eval --export-draws` writes the images as evaluated and the folds the evaluation used: each test set
+/// is one held-out group, the drawn sets hold `--per-class` images per class from the other groups, the
+/// counts agree with the evaluation's own, and the same seed gives the same draws.
+#[test]
+fn eval_exports_its_images_and_draws() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (20, 24), 3, 8, 4, 0.0, 9);
+    let manifest = manifest.to_str().unwrap();
+    let run = |out: &std::path::Path| {
+        let output = presrs(&[
+            "eval",
+            "--manifest",
+            manifest,
+            "--leave-one-out",
+            "group",
+            "--per-class",
+            "5",
+            "--repeats",
+            "2",
+            "--features",
+            "fft1d",
+            "--classifier",
+            "lda",
+            "--dims",
+            "4",
+            "--json",
+            "--export-draws",
+            out.to_str().unwrap(),
+        ]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let report: serde_json::Value = serde_json::from_str(&stdout(&output)).unwrap();
+        let draws: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("draws.json")).unwrap())
+                .unwrap();
+        (report, draws)
+    };
+    let (report, draws) = run(&dir.path().join("export"));
+    assert_eq!(draws["format"], "presrs-eval-draws");
+    let labels: Vec<&str> = draws["labels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    let groups: Vec<&str> = draws["groups"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g.as_str().unwrap())
+        .collect();
+    assert_eq!(labels.len(), 24);
+    // the manifest's rows, in order
+    let rows: Vec<String> = std::fs::read_to_string(manifest)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(str::to_owned)
+        .collect();
+    for (k, row) in rows.iter().enumerate() {
+        let fields: Vec<&str> = row.split(',').collect();
+        assert_eq!((fields[1], fields[3]), (labels[k], groups[k]), "row {k}");
+    }
+    let npy = std::fs::read(dir.path().join("export/images.npy")).unwrap();
+    let recording = presrs_io::npy::parse_npy_with(&npy, "images.npy", None)
+        .unwrap()
+        .0;
+    assert_eq!(recording.frame_count(), 24);
+    let list = draws["draws"].as_array().unwrap();
+    assert_eq!(list.len(), 2 * 4, "2 repeats x 4 groups");
+    let indices = |draw: &serde_json::Value, key: &str| -> Vec<usize> {
+        draw[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|i| i.as_u64().unwrap() as usize)
+            .collect()
+    };
+    for draw in list {
+        let held_out = draw["held_out"].as_str().unwrap();
+        let test = indices(draw, "test");
+        let expected: Vec<usize> = (0..24).filter(|&i| groups[i] == held_out).collect();
+        assert_eq!(test, expected);
+        let mut drawn = indices(draw, "train");
+        drawn.extend(indices(draw, "validation"));
+        for class in ["t0", "t1", "t2"] {
+            let n = drawn.iter().filter(|&&i| labels[i] == class).count();
+            assert_eq!(n, 5, "{draw}");
+        }
+        assert!(drawn.iter().all(|&i| groups[i] != held_out));
+    }
+    for (repeat, result) in report["report"]["repeats"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        let of = |key: &str| -> u64 {
+            list.iter()
+                .filter(|d| d["repeat"] == repeat)
+                .map(|d| d[key].as_array().unwrap().len() as u64)
+                .sum()
+        };
+        assert_eq!(of("train"), result["n_train"].as_u64().unwrap());
+        assert_eq!(of("validation"), result["n_validation"].as_u64().unwrap());
+        assert_eq!(of("test"), result["n_test"].as_u64().unwrap());
+    }
+    let (_, again) = run(&dir.path().join("again"));
+    assert_eq!(again["draws"], draws["draws"]);
+}

@@ -211,6 +211,33 @@ impl Evaluation<'_, '_> {
         }
     }
 
+    /// The draws [`run`](Self::run) makes, fold by fold and repeat by repeat (indices into `samples`), so
+    /// that another implementation can be evaluated on exactly the same training, validation and test
+    /// sets.
+    pub fn draws(&self) -> Result<Vec<Draw>> {
+        let mut out = Vec::new();
+        for repeat in 0..self.repeats {
+            let repeat_seed = self.seed.wrapping_add(repeat as u64);
+            for fold in folds(self.samples, self.protocol, repeat_seed)? {
+                let held_out = match (self.protocol, fold.test.first()) {
+                    (Protocol::LeaveOneOut { .. }, Some(&i)) => {
+                        self.samples[i].group.map(str::to_owned)
+                    }
+                    _ => None,
+                };
+                out.push(Draw {
+                    repeat,
+                    seed: repeat_seed,
+                    held_out,
+                    train: fold.train,
+                    validation: fold.validation,
+                    test: fold.test,
+                });
+            }
+        }
+        Ok(out)
+    }
+
     /// Evaluates every configuration of `configs` with the same draws (so every combination sees the same
     /// training sets). A combination that cannot be trained (e.g. too few samples per class for its
     /// classifier) is reported with its error instead of stopping the comparison.
@@ -576,6 +603,20 @@ pub fn labels_never_trained(
     out
 }
 
+/// One fold of one repeat of an evaluation ([`Evaluation::draws`]): indices into its samples.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Draw {
+    /// The repeat, from 0.
+    pub repeat: usize,
+    /// The repeat's seed (the evaluation's seed + repeat).
+    pub seed: u64,
+    /// With leave-one-out, the held-out value.
+    pub held_out: Option<String>,
+    pub train: Vec<usize>,
+    pub validation: Vec<usize>,
+    pub test: Vec<usize>,
+}
+
 /// One train/test partition.
 struct Fold {
     train: Vec<usize>,
@@ -882,6 +923,58 @@ mod tests {
         );
         assert_eq!(report.repeats[0].n_test, samples.len());
         assert_eq!(report.repeats[0].sigmas.len(), 3);
+    }
+
+    #[test]
+    fn draws_are_the_sets_the_evaluation_trains_and_tests_on() {
+        let data = data();
+        let samples = samples(&data);
+        let config = paper_config_with_dims(10);
+        for protocol in [
+            Protocol::LeaveOneOut {
+                column: "condition".into(),
+                per_class: Some(8),
+                validation: ValidationSize::Count(3),
+            },
+            g2_protocol(),
+        ] {
+            let evaluation = evaluation(&samples, &protocol, 2, 5);
+            let seen = std::sync::Mutex::new(Vec::new());
+            let reports = evaluation
+                .run_with(&[None], &|train_set, validation_set, seed| {
+                    seen.lock()
+                        .unwrap()
+                        .push((seed, train_set.to_vec(), validation_set.to_vec()));
+                    let images = |set: &[usize]| -> Vec<LabeledImage<'_>> {
+                        set.iter().map(|&i| samples[i]).collect()
+                    };
+                    train(&images(train_set), &images(validation_set), &config)
+                })
+                .unwrap();
+            let draws = evaluation.draws().unwrap();
+            let seen = seen.into_inner().unwrap();
+            assert_eq!(draws.len(), seen.len());
+            for (draw, (seed, train_set, validation_set)) in draws.iter().zip(&seen) {
+                assert_eq!(
+                    (draw.seed, &draw.train, &draw.validation),
+                    (*seed, train_set, validation_set)
+                );
+                // the test set is every sample outside the training pool's draw (leave-one-out: the
+                // held-out value's samples)
+                for &i in &draw.test {
+                    assert!(!draw.train.contains(&i) && !draw.validation.contains(&i));
+                    if let Some(held_out) = &draw.held_out {
+                        assert_eq!(samples[i].group, Some(held_out.as_str()));
+                    }
+                }
+            }
+            for (repeat, result) in reports[0].repeats.iter().enumerate() {
+                let of_repeat = draws.iter().filter(|d| d.repeat == repeat);
+                let n_test: usize = of_repeat.map(|d| d.test.len()).sum();
+                assert_eq!(n_test, result.n_test);
+            }
+            assert_eq!(draws.last().unwrap().repeat, 1);
+        }
     }
 
     #[test]

@@ -543,6 +543,7 @@ impl Preprocessor {
                 &mut self.fill,
             )?;
         }
+        self.preprocess.intensity.apply(&mut self.cropped);
         if self.preprocess.normalise_load {
             normalise_load(&mut self.cropped);
         }
@@ -555,12 +556,13 @@ impl Preprocessor {
 
 impl Preprocessor {
     /// The common case of classification: the 1-D |FFT| reads the crop straight from the frame (no
-    /// absent sensels, no load normalisation) and gives its features in f32, as the fixed-point PCA reads
+    /// absent sensels, no load normalisation, no intensity transform) and gives its features in f32, as the fixed-point PCA reads
     /// them. `None` when the case does not apply.
     fn fast_f32_features(&mut self, frame: &FrameView<'_>) -> Result<Option<&[f32]>> {
         if let FeatureExtractor::Fft1d(extractor) = &mut self.extractor
             && frame.present().is_none()
             && !self.preprocess.normalise_load
+            && self.preprocess.intensity.is_none()
         {
             let start = crop_start(&self.crop, self.image_grid, frame)?;
             return extractor

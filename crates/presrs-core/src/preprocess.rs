@@ -8,6 +8,10 @@
 //!   by the robot's load gives the same features without knowing the load (the paper scales by the known
 //!   load instead).
 //!
+//! - **an intensity transform** ([`Intensity`]): none, square root or log1p of each value (sign kept),
+//!   applied after the fill and before the load normalisation; it compresses the range of real pressure
+//!   images, where a few sensels under a hard edge can dominate the features.
+//!
 //! - **fill dead sensels** ([`fill_dead_sensels`]): the same filling for sensels found dead
 //!   ([`crate::dead_sensels`]), leaving absent sensels alone; applied when recordings are read from
 //!   files, before any frame is taken from them.
@@ -28,6 +32,74 @@ pub struct Preprocess {
     pub normalise_load: bool,
     /// Fill absent (masked) sensels from their neighbours instead of reading them as 0.
     pub fill_absent: bool,
+    /// Transform each value before the features (not written when none, so model files without it, and
+    /// files written without it, read alike).
+    #[serde(skip_serializing_if = "Intensity::is_none")]
+    pub intensity: Intensity,
+}
+
+/// A transform of every value of the image, applied before the features. The sign is kept, so that
+/// negative values (after a baseline subtraction) stay ordered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Intensity {
+    /// The values as they are (the paper's method).
+    #[default]
+    None,
+    /// `sign(v) * sqrt(|v|)`.
+    Sqrt,
+    /// `sign(v) * ln(1 + |v|)`.
+    Log1p,
+}
+
+impl Intensity {
+    /// Every transform, the identity first.
+    pub const ALL: [Self; 3] = [Self::None, Self::Sqrt, Self::Log1p];
+
+    pub fn is_none(&self) -> bool {
+        *self == Self::None
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Sqrt => "sqrt",
+            Self::Log1p => "log1p",
+        }
+    }
+
+    /// Transforms `values` in place.
+    pub fn apply(self, values: &mut [f64]) {
+        match self {
+            Self::None => {}
+            Self::Sqrt => values
+                .iter_mut()
+                .for_each(|v| *v = v.abs().sqrt().copysign(*v)),
+            Self::Log1p => values
+                .iter_mut()
+                .for_each(|v| *v = v.abs().ln_1p().copysign(*v)),
+        }
+    }
+}
+
+impl std::fmt::Display for Intensity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for Intensity {
+    type Err = CoreError;
+
+    fn from_str(text: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|i| i.as_str().eq_ignore_ascii_case(text.trim()))
+            .ok_or_else(|| CoreError::Param {
+                name: "intensity",
+                reason: format!("{text:?} is not one of none, sqrt, log1p"),
+            })
+    }
 }
 
 impl Preprocess {
@@ -35,6 +107,7 @@ impl Preprocess {
     pub const NONE: Self = Self {
         normalise_load: false,
         fill_absent: false,
+        intensity: Intensity::None,
     };
 
     /// Whether every step is off.
@@ -42,13 +115,23 @@ impl Preprocess {
         *self == Self::NONE
     }
 
-    /// Short description (`none`, `normalise-load`, `fill-absent`, `fill-absent+normalise-load`).
+    /// Short description, the steps in the order they run (`none`, `normalise-load`, `fill-absent`,
+    /// `fill-absent+normalise-load`, `sqrt`, `fill-absent+log1p+normalise-load`, ...).
     pub fn name(&self) -> String {
-        match (self.fill_absent, self.normalise_load) {
-            (false, false) => "none".to_owned(),
-            (false, true) => "normalise-load".to_owned(),
-            (true, false) => "fill-absent".to_owned(),
-            (true, true) => "fill-absent+normalise-load".to_owned(),
+        let mut steps = Vec::new();
+        if self.fill_absent {
+            steps.push("fill-absent");
+        }
+        if !self.intensity.is_none() {
+            steps.push(self.intensity.as_str());
+        }
+        if self.normalise_load {
+            steps.push("normalise-load");
+        }
+        if steps.is_empty() {
+            "none".to_owned()
+        } else {
+            steps.join("+")
         }
     }
 }
@@ -315,8 +398,68 @@ mod tests {
         let both = Preprocess {
             normalise_load: true,
             fill_absent: true,
+            ..Preprocess::NONE
         };
         assert_eq!(both.to_string(), "fill-absent+normalise-load");
+        let all = Preprocess {
+            intensity: Intensity::Log1p,
+            ..both
+        };
+        assert_eq!(all.to_string(), "fill-absent+log1p+normalise-load");
+        let sqrt = Preprocess {
+            intensity: Intensity::Sqrt,
+            ..Preprocess::NONE
+        };
+        assert_eq!(sqrt.to_string(), "sqrt");
+        assert!(!sqrt.is_none());
+    }
+
+    /// Against the obvious formulas, value by value, signs included.
+    #[test]
+    fn intensity_transforms_match_their_formulas() {
+        let values = [0.0, 1.0, 4.0, 2.5, 1e6, -9.0, -0.25];
+        for intensity in Intensity::ALL {
+            let mut out = values;
+            intensity.apply(&mut out);
+            for (&v, &got) in values.iter().zip(&out) {
+                let want = match intensity {
+                    Intensity::None => v,
+                    Intensity::Sqrt if v < 0.0 => -((-v).sqrt()),
+                    Intensity::Sqrt => v.sqrt(),
+                    Intensity::Log1p if v < 0.0 => -((1.0 - v).ln()),
+                    Intensity::Log1p => (1.0 + v).ln(),
+                };
+                assert!(
+                    (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+                    "{intensity} {v}: {got} vs {want}"
+                );
+            }
+            assert_eq!(intensity.as_str().parse::<Intensity>().unwrap(), intensity);
+        }
+        assert_eq!("SQRT".parse::<Intensity>().unwrap(), Intensity::Sqrt);
+        assert!("cube".parse::<Intensity>().is_err());
+    }
+
+    /// Model files written before the transform existed (no `intensity`) read as none, and a file
+    /// written without one has no `intensity` key; one with a transform round-trips.
+    #[test]
+    fn intensity_in_stored_preprocessing() {
+        let old: Preprocess =
+            serde_json::from_str(r#"{"normalise_load":true,"fill_absent":false}"#).unwrap();
+        assert_eq!(old.intensity, Intensity::None);
+        assert!(old.normalise_load);
+        assert!(
+            !serde_json::to_string(&Preprocess::NONE)
+                .unwrap()
+                .contains("intensity")
+        );
+        let log = Preprocess {
+            intensity: Intensity::Log1p,
+            ..Preprocess::NONE
+        };
+        let text = serde_json::to_string(&log).unwrap();
+        assert!(text.contains(r#""intensity":"log1p""#), "{text}");
+        assert_eq!(serde_json::from_str::<Preprocess>(&text).unwrap(), log);
     }
 
     #[test]

@@ -82,6 +82,7 @@ fn steady_state_classification_does_not_allocate() {
     let fill = Preprocess {
         normalise_load: true,
         fill_absent: true,
+        intensity: presrs_core::preprocess::Intensity::Log1p,
     };
     let mut cases = Vec::new();
     for classifier in ClassifierKind::ALL {

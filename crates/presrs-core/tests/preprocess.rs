@@ -8,7 +8,9 @@ use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{
     LabeledImage, TrainConfig, TrainedModel, extract_features_with, train,
 };
-use presrs_core::preprocess::{FillScratch, Preprocess, fill_from_neighbours, normalise_load};
+use presrs_core::preprocess::{
+    FillScratch, Intensity, Preprocess, fill_from_neighbours, normalise_load,
+};
 use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
 use presrs_core::{Crop, Frame, Grid};
 use rand::SeedableRng;
@@ -16,11 +18,12 @@ use rand_chacha::ChaCha8Rng;
 
 const NORMALISE: Preprocess = Preprocess {
     normalise_load: true,
-    fill_absent: false,
+    ..Preprocess::NONE
 };
 const BOTH: Preprocess = Preprocess {
     normalise_load: true,
     fill_absent: true,
+    ..Preprocess::NONE
 };
 
 fn labeled_set(per_class: usize, seed: u64) -> Vec<(Frame, &'static str)> {
@@ -221,8 +224,8 @@ fn the_pipeline_fills_masked_sensels_before_the_features() {
     let full = Frame::new(grid, truth).unwrap();
     let features = FeatureConfig::default();
     let fill = Preprocess {
-        normalise_load: false,
         fill_absent: true,
+        ..Preprocess::NONE
     };
     let want = extract_features_with(&full.view(), &Crop::PAPER, fill, &features).unwrap();
     let got = extract_features_with(&masked.view(), &Crop::PAPER, fill, &features).unwrap();
@@ -285,4 +288,92 @@ fn models_round_trip_with_their_preprocessing_and_old_files_load() {
         1,
     );
     assert!(serde_json::from_str::<TrainedModel>(&bad).is_err());
+}
+
+/// The pipeline's intensity transform is the transform of the image and then the plain features (the
+/// oracle: the image transformed value by value beforehand), in training and classification alike; a
+/// model stores it, and a model file round-trips it.
+#[test]
+fn intensity_transforms_run_in_the_pipeline_and_round_trip_in_models() {
+    let set = labeled_set(6, 60);
+    let features = FeatureConfig::default();
+    for intensity in [Intensity::Sqrt, Intensity::Log1p] {
+        let preprocess = Preprocess {
+            intensity,
+            ..Preprocess::NONE
+        };
+        for (frame, _) in &set[..4] {
+            let mut transformed = frame.clone();
+            intensity.apply(transformed.values_mut());
+            let want = extract_features_with(
+                &transformed.view(),
+                &Crop::PAPER,
+                Preprocess::NONE,
+                &features,
+            )
+            .unwrap();
+            let got =
+                extract_features_with(&frame.view(), &Crop::PAPER, preprocess, &features).unwrap();
+            assert_close(&want, &got, 1e-12);
+        }
+        let config = TrainConfig {
+            dims: 12,
+            preprocess,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap();
+        let validation_set = labeled_set(3, 61);
+        let model = train(&images(&set), &images(&validation_set), &config).unwrap();
+        // the same model trained on images transformed beforehand, without the step, classifies the
+        // transformed images as this one classifies the raw ones
+        let transformed = |set: &[(Frame, &'static str)]| -> Vec<(Frame, &'static str)> {
+            set.iter()
+                .map(|(frame, label)| {
+                    let mut frame = frame.clone();
+                    intensity.apply(frame.values_mut());
+                    (frame, *label)
+                })
+                .collect()
+        };
+        let oracle_config = TrainConfig {
+            dims: 12,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap();
+        let oracle = train(
+            &images(&transformed(&set)),
+            &images(&transformed(&validation_set)),
+            &oracle_config,
+        )
+        .unwrap();
+        let json = serde_json::to_string(&model).unwrap();
+        assert!(
+            json.contains(&format!("\"intensity\":\"{intensity}\"")),
+            "{json}"
+        );
+        let loaded: TrainedModel = serde_json::from_str(&json).unwrap();
+        assert_eq!(loaded.preprocess(), preprocess);
+        let test = labeled_set(2, 62);
+        let test_transformed = transformed(&test);
+        let (mut a, mut b, mut c) = (model.session(), loaded.session(), oracle.session());
+        for ((frame, _), (frame_t, _)) in test.iter().zip(&test_transformed) {
+            let got = a.classify(&frame.view()).unwrap();
+            assert_eq!(
+                got.posteriors,
+                b.classify(&frame.view()).unwrap().posteriors
+            );
+            let want = c.classify(&frame_t.view()).unwrap();
+            assert_eq!(got.class, want.class);
+            for (p, q) in got.posteriors.iter().zip(want.posteriors.iter()) {
+                assert!(
+                    (p - q).abs() < 1e-6,
+                    "{:?} vs {:?}",
+                    got.posteriors,
+                    want.posteriors
+                );
+            }
+        }
+    }
 }

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 
 use presrs_core::evaluation::{
-    ComparisonRow, EvalReport, Evaluated, Evaluation, Models, Protocol, TestTransform,
+    ComparisonRow, Draw, EvalReport, Evaluated, Evaluation, Models, Protocol, TestTransform,
 };
 use presrs_core::perturb::Perturbation;
 use presrs_core::pipeline::LabeledImage;
@@ -394,6 +394,73 @@ impl<'d> EvalSetup<'d> {
 
     /// Runs `f` on the engine with progress counted in trained models (`methods` x folds x repeats),
     /// its errors naming the manifest.
+    /// The draws [`evaluate`](Self::evaluate) and [`compare`](Self::compare) make (every repeat's
+    /// folds: training, validation and test indices into [`samples`](Self::samples)).
+    pub fn draws(&self) -> Result<Vec<Draw>> {
+        let noop = || {};
+        Evaluation {
+            samples: &self.samples,
+            protocol: &self.protocol,
+            repeats: self.options.repeats,
+            seed: self.options.seed,
+            progress: &noop,
+        }
+        .draws()
+        .with_context(|| self.dataset.path().display().to_string())
+    }
+
+    /// Writes into `dir` (created if needed) the samples as the evaluation sees them and its draws, so
+    /// that another implementation can be evaluated on the same images with the same training and test
+    /// sets: `images.npy` (samples x rows x cols, f64, absent sensels as 0) and `draws.json` (each
+    /// sample's label, condition and group, and every repeat's folds as indices into the samples).
+    pub fn export_draws(&self, dir: &std::path::Path) -> Result<()> {
+        let grid = self.samples[0].frame.grid();
+        let mut images = Vec::with_capacity(self.samples.len() * grid.len());
+        for (i, sample) in self.samples.iter().enumerate() {
+            let frame = sample.frame;
+            if frame.grid() != grid {
+                return Err(Error::data(format!(
+                    "{}: sample {i} is {}x{}, the first {}x{}: the samples of one export share a size",
+                    self.dataset.path().display(),
+                    frame.grid().rows,
+                    frame.grid().cols,
+                    grid.rows,
+                    grid.cols
+                )));
+            }
+            match frame.present() {
+                None => images.extend_from_slice(frame.values()),
+                Some(mask) => images.extend(
+                    frame
+                        .values()
+                        .iter()
+                        .zip(mask)
+                        .map(|(&value, &here)| if here { value } else { 0.0 }),
+                ),
+            }
+        }
+        let draws = self.draws()?;
+        std::fs::create_dir_all(dir)?;
+        presrs_io::atomic::write_atomic(&dir.join("images.npy"), |w| {
+            presrs_io::npy::write_npy_f64(w, &[self.samples.len(), grid.rows, grid.cols], &images)
+        })?;
+        let document = DrawsExport {
+            format: "presrs-eval-draws",
+            presrs_version: env!("CARGO_PKG_VERSION"),
+            manifest: self.dataset.path().display().to_string(),
+            images: "images.npy",
+            labels: self.samples.iter().map(|s| s.label).collect(),
+            conditions: self.samples.iter().map(|s| s.condition).collect(),
+            groups: self.samples.iter().map(|s| s.group).collect(),
+            draws,
+        };
+        presrs_io::atomic::write_atomic(&dir.join("draws.json"), |w| {
+            serde_json::to_writer(&mut *w, &document).map_err(std::io::Error::from)?;
+            std::io::Write::write_all(w, b"\n")
+        })?;
+        Ok(())
+    }
+
     fn run<T>(
         &self,
         task: &str,
@@ -411,6 +478,19 @@ impl<'d> EvalSetup<'d> {
         )
         .with_context(|| self.dataset.path().display().to_string())
     }
+}
+
+/// `draws.json` of [`EvalSetup::export_draws`].
+#[derive(Serialize)]
+struct DrawsExport<'s> {
+    format: &'static str,
+    presrs_version: &'static str,
+    manifest: String,
+    images: &'static str,
+    labels: Vec<&'s str>,
+    conditions: Vec<Option<&'s str>>,
+    groups: Vec<Option<&'s str>>,
+    draws: Vec<Draw>,
 }
 
 /// The models each fold trains: the configuration, or the automatic choice among `candidates`.

@@ -6,7 +6,7 @@ use std::str::FromStr;
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
-use presrs_core::preprocess::Preprocess;
+use presrs_core::preprocess::{Intensity, Preprocess};
 pub use presrs_core::selection::ValidateBy;
 use presrs_core::split::ValidationSize;
 use presrs_core::{CoreError, Crop, Grid};
@@ -158,6 +158,32 @@ impl Method {
                 out.push(self.config(grid, feature.clone(), classifier.default_config())?);
             }
         }
+        // The intensity transforms, when the features are chosen and no transform is given: with every
+        // family in a full search, with the paper's (the cheapest) otherwise, so that the default search
+        // grows by a third, not threefold.
+        if !all && self.features == FeatureChoice::Auto && self.preprocess.intensity.is_none() {
+            for intensity in [Intensity::Sqrt, Intensity::Log1p] {
+                let method = Self {
+                    preprocess: Preprocess {
+                        intensity,
+                        ..self.preprocess
+                    },
+                    ..self.clone()
+                };
+                for feature in &features {
+                    if !self.full_search && !matches!(feature, FeatureConfig::Fft1d(_)) {
+                        continue;
+                    }
+                    for &classifier in &classifiers {
+                        out.push(method.config(
+                            grid,
+                            feature.clone(),
+                            classifier.default_config(),
+                        )?);
+                    }
+                }
+            }
+        }
         Ok(out)
     }
 
@@ -292,7 +318,8 @@ mod tests {
         assert!(auto.is_auto());
         assert_eq!(
             auto.candidates(grid, false).unwrap().len(),
-            FAST_CANDIDATE_FEATURES.len() * ClassifierKind::ALL.len()
+            // the fast families, and the paper's with the two intensity transforms
+            (FAST_CANDIDATE_FEATURES.len() + 2) * ClassifierKind::ALL.len()
         );
         let full = Method {
             full_search: true,
@@ -300,6 +327,30 @@ mod tests {
         };
         assert_eq!(
             full.candidates(grid, false).unwrap().len(),
+            3 * CANDIDATE_FEATURES.len() * ClassifierKind::ALL.len()
+        );
+        let intensities = |method: &Method| -> Vec<Intensity> {
+            let mut seen: Vec<Intensity> = method
+                .candidates(grid, false)
+                .unwrap()
+                .iter()
+                .map(|c| c.config().preprocess.intensity)
+                .collect();
+            seen.dedup();
+            seen
+        };
+        assert_eq!(intensities(&full), Intensity::ALL);
+        // a transform given is kept, not searched; a comparison does not multiply its rows
+        let given = Method {
+            preprocess: Preprocess {
+                intensity: Intensity::Sqrt,
+                ..Preprocess::NONE
+            },
+            ..Method::default()
+        };
+        assert_eq!(intensities(&given), [Intensity::Sqrt]);
+        assert_eq!(
+            Method::default().candidates(grid, true).unwrap().len(),
             CANDIDATE_FEATURES.len() * ClassifierKind::ALL.len()
         );
         let paper = Method::paper();

@@ -45,6 +45,10 @@ pub struct PipelineArgs {
     /// clusters) instead of reading them as 0. Stored in the model.
     #[arg(long)]
     pub fill_absent: bool,
+    /// Transform each image value before the features: none, sqrt or log1p (the sign kept); stored in
+    /// the model. With --features auto and none, the automatic choice tries sqrt and log1p as well.
+    #[arg(long, default_value = "none", value_parser = |t: &str| t.parse::<presrs_core::preprocess::Intensity>().map_err(|e| e.to_string()))]
+    pub intensity: presrs_core::preprocess::Intensity,
     /// With auto: how the candidates are validated inside the training data: group (leave one of the
     /// manifest's `group` out), condition (leave one condition out), split (three stratified 70/30
     /// splits), or auto (group when the training data hold 3 or more groups, else condition when they
@@ -76,6 +80,7 @@ impl PipelineArgs {
             preprocess: Preprocess {
                 normalise_load: self.normalise_load,
                 fill_absent: self.fill_absent,
+                intensity: self.intensity,
             },
             crop: self.crop.crop,
             validate_by: self.validate_by,

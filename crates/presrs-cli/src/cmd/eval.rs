@@ -70,6 +70,12 @@ pub struct EvalArgs {
     /// auto).
     #[arg(long, value_name = "KIND=LEVEL", value_parser = |t: &str| t.parse::<presrs_core::perturb::Perturbation>().map_err(|e| e.to_string()))]
     pub perturb: Vec<presrs_core::perturb::Perturbation>,
+    /// Also write into this folder the samples as evaluated (`images.npy`: samples x rows x cols, absent
+    /// sensels as 0) and the draws (`draws.json`: each sample's label, condition and group, and every
+    /// repeat's folds as training, validation and test indices), so another implementation can be
+    /// evaluated on the same images with the same draws (bench/real/ does).
+    #[arg(long, value_name = "DIR")]
+    pub export_draws: Option<PathBuf>,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -183,6 +189,9 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let setup = EvalSetup::new(&dataset, &options)?;
     for warning in &setup.warnings {
         stderr_line!("warning: {warning}");
+    }
+    if let Some(dir) = &args.export_draws {
+        setup.export_draws(dir)?;
     }
     let progress = TerminalProgress::default();
     if args.compare {
