@@ -968,7 +968,7 @@ mod tests {
                     }
                 }
             }
-            for (repeat, result) in reports[0].repeats.iter().enumerate() {
+            for (repeat, result) in reports.0[0].repeats.iter().enumerate() {
                 let of_repeat = draws.iter().filter(|d| d.repeat == repeat);
                 let n_test: usize = of_repeat.map(|d| d.test.len()).sum();
                 assert_eq!(n_test, result.n_test);
