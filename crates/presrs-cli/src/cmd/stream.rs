@@ -24,9 +24,10 @@ use anyhow::Context;
 use signal_hook::consts::{SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
 
+use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
 use presrs::stream::{
     ConnectionSummary, InputFormat, ProfileOverrides, ServerNotice, ServerOptions, SessionNotice,
-    SessionOptions, ShutdownHandle, StreamServer, resolve_profile, run_session,
+    SessionOptions, SessionTap, ShutdownHandle, StreamServer, resolve_profile, run_session_tapped,
 };
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use presrs_io::model_file::load_model;
@@ -96,6 +97,50 @@ pub struct StreamArgs {
     /// Exit after this many connections have ended (demos and tests) [default: serve forever].
     #[arg(long)]
     pub exit_after: Option<usize>,
+    #[command(flatten)]
+    pub http: HttpArgs,
+    /// The unit of the frame values, shown on the live view's colour scale (the stream does not say).
+    #[arg(long, default_value = "raw", requires = "http")]
+    pub units: String,
+}
+
+/// The live view in the browser (`presrs stream` and `presrs view`).
+#[derive(Debug, clap::Args)]
+pub struct HttpArgs {
+    /// Serve the live view (the pressure image, the load trace, the terrain, gait and decision log) on
+    /// this loopback address, e.g. 127.0.0.1:7800 (port 0 picks one); its URL goes to stderr. With
+    /// --listen it shows one client at a time.
+    #[arg(long, value_name = "IP:PORT", value_parser = super::usage::loopback_addr)]
+    pub http: Option<SocketAddr>,
+    /// Most frames a second sent to each viewer of the live view.
+    #[arg(long, default_value_t = 30.0, value_parser = super::usage::positive_number)]
+    pub http_fps: f64,
+    /// Most viewers of the live view at once.
+    #[arg(long, default_value_t = 16, value_parser = super::usage::positive_count)]
+    pub http_viewers: usize,
+}
+
+impl HttpArgs {
+    /// Starts the live view on `addr` (printing its URL), or nothing without one.
+    pub fn start(
+        &self,
+        addr: Option<SocketAddr>,
+        info: LiveInfo,
+        command: &str,
+    ) -> anyhow::Result<Option<(LiveHub, LiveServer)>> {
+        let Some(addr) = addr else {
+            return Ok(None);
+        };
+        let hub = LiveHub::new(info);
+        let options = LiveOptions {
+            max_fps: self.http_fps,
+            max_viewers: self.http_viewers,
+            ..LiveOptions::default()
+        };
+        let server = LiveServer::start(addr, hub.clone(), options)?;
+        stderr_line!("presrs {command}: live view: {}", server.url());
+        Ok(Some((hub, server)))
+    }
 }
 
 impl From<StreamFormat> for InputFormat {
@@ -136,10 +181,34 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         &args.overrides(),
     )?;
     let signals = Signals::new([SIGINT, SIGTERM]).context("cannot handle SIGINT and SIGTERM")?;
+    let info = LiveInfo {
+        source: if args.listen.is_some() {
+            "no client yet"
+        } else {
+            "stdin"
+        }
+        .to_owned(),
+        units: args.units.clone(),
+        classes: file.model.class_names().to_vec(),
+    };
+    let live = args.http.start(args.http.http, info, "stream")?;
     match args.listen {
-        None => run_stdin(args, &file.model, &profile, signals, out),
+        None => {
+            let mut tap = live.as_ref().map(|(hub, _)| hub.tap());
+            let tap: &mut dyn SessionTap = match tap.as_mut() {
+                Some(tap) => tap,
+                None => &mut presrs::stream::NoTap,
+            };
+            run_stdin(args, &file.model, &profile, signals, tap, out)
+        }
         Some(addr) => {
-            let server = StreamServer::bind(addr, file.model, profile, args.server_options())?;
+            let mut server = StreamServer::bind(addr, file.model, profile, args.server_options())?;
+            if let Some((hub, _)) = &live {
+                let hub = hub.clone();
+                server = server.with_taps(Arc::new(move |peer: &str| {
+                    Box::new(hub.exclusive_tap(peer)) as Box<dyn SessionTap + Send>
+                }));
+            }
             let local = server.local_addr();
             writeln!(
                 out,
@@ -173,7 +242,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 
 /// Handles the first SIGINT or SIGTERM on a thread: notes it in `caught` and calls `stop`; a second one
 /// gets the default action (the process ends at once). The returned handle stops the thread.
-fn on_signal(
+pub(super) fn on_signal(
     mut signals: Signals,
     caught: Arc<Mutex<Option<i32>>>,
     stop: impl FnOnce() + Send + 'static,
@@ -197,7 +266,7 @@ fn on_signal(
     handle
 }
 
-fn signal_name(signal: i32) -> &'static str {
+pub(super) fn signal_name(signal: i32) -> &'static str {
     match signal {
         SIGINT => "SIGINT",
         SIGTERM => "SIGTERM",
@@ -276,6 +345,7 @@ fn run_stdin(
     model: &presrs::core::TrainedModel,
     profile: &presrs::core::online::OnlineProfile,
     signals: Signals,
+    tap: &mut dyn SessionTap,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
     let stop = ShutdownHandle::default();
@@ -294,7 +364,7 @@ fn run_stdin(
         let _ = end_input.send(Chunk::End);
     });
     let input = std::io::BufReader::with_capacity(64 * 1024, input);
-    let summary = run_session(model, profile, input, out, &options, &log)?;
+    let summary = run_session_tapped(model, profile, input, out, &options, &log, tap)?;
     signal_thread.close();
     let name = &options.name;
     if let Some(signal) = *caught.lock().unwrap_or_else(|p| p.into_inner()) {
@@ -339,7 +409,7 @@ fn print_server_notice(notice: &ServerNotice<'_>) {
 }
 
 /// A session's notice as the stderr line says it.
-fn notice_text(notice: &SessionNotice) -> String {
+pub(super) fn notice_text(notice: &SessionNotice) -> String {
     match notice {
         SessionNotice::Error(message) => message.clone(),
         SessionNotice::ErrorsMuted => "further errors are counted, not logged".to_owned(),
@@ -357,7 +427,7 @@ fn notice_text(notice: &SessionNotice) -> String {
     }
 }
 
-fn summary_text(name: &str, s: &ConnectionSummary) -> String {
+pub(super) fn summary_text(name: &str, s: &ConnectionSummary) -> String {
     format!(
         "{name}: {} frames, {} stances, {} decisions ({} fused), {} rejected frames, {} errors, {} dropped events",
         s.stats.frames,

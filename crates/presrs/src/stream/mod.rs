@@ -38,7 +38,7 @@ use crate::error::{Error, Result};
 
 pub use events::event_values;
 pub use output::BoundedOutput;
-pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer};
+pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer, TapFactory};
 pub use session::{
     ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
     run_session_tapped,
