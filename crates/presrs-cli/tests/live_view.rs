@@ -110,7 +110,7 @@ fn feed(stdin: &mut impl Write, path: &Path, chunks: usize, time: Duration) {
 /// Labels from the stream's classification lines until `want` comes (or 30 s pass).
 fn labels_until(lines: &Receiver<Value>, seen: &mut Vec<String>, want: &str) {
     let end = Instant::now() + Duration::from_secs(30);
-    while !seen.last().is_some_and(|l| l == want) {
+    while seen.last().is_none_or(|l| l != want) {
         let left = end.saturating_duration_since(Instant::now());
         let line = lines
             .recv_timeout(left)

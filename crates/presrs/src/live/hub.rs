@@ -23,7 +23,7 @@ pub struct LiveHub {
 #[derive(Debug)]
 struct Shared {
     state: Mutex<State>,
-    /// Viewers connected now: with none, frames are not copied.
+    /// Viewers connected now.
     viewers: AtomicUsize,
 }
 
@@ -233,8 +233,8 @@ impl Drop for ViewerGuard {
     }
 }
 
-/// The [`SessionTap`] of a live view: it never waits for a viewer. Each frame costs its total load and,
-/// while a viewer is connected, a copy into the hub's one frame slot (the viewers take the latest
+/// The [`SessionTap`] of a live view: it never waits for a viewer. Each frame costs its total load and
+/// a copy into the hub's one frame slot (the viewers take the latest
 /// frame, skipping those in between); lines go to a bounded history.
 #[derive(Debug)]
 pub struct LiveTap {
@@ -278,7 +278,6 @@ impl SessionTap for LiveTap {
                 }
             }
         }
-        let copy = self.hub.viewers() > 0;
         let mut state = self.hub.lock();
         if !state.admit(self.id, &self.source) {
             return;
@@ -295,18 +294,17 @@ impl SessionTap for LiveTap {
             state.loads.pop_front();
         }
         state.loads.push_back((seq, session, index, load));
-        if copy {
-            let frame = &mut state.frame;
-            frame.session = session;
-            frame.index = index;
-            frame.grid = grid;
-            frame.scale_max = scale_max;
-            frame.values.clear();
-            frame.values.extend_from_slice(values);
-            frame.present.clear();
-            if let Some(mask) = present {
-                frame.present.extend_from_slice(mask);
-            }
+        // Copied even with no viewer: one who comes while the stream pauses must see its last frame.
+        let frame = &mut state.frame;
+        frame.session = session;
+        frame.index = index;
+        frame.grid = grid;
+        frame.scale_max = scale_max;
+        frame.values.clear();
+        frame.values.extend_from_slice(values);
+        frame.present.clear();
+        if let Some(mask) = present {
+            frame.present.extend_from_slice(mask);
         }
     }
 
@@ -379,8 +377,7 @@ mod tests {
         assert_eq!(update.loads.len(), LOAD_HISTORY);
         assert_eq!(update.lines.len(), LINE_HISTORY);
         assert_eq!(update.loads[0].1, 2 * LOAD_HISTORY as u64);
-        // No viewer was connected: no frame was copied.
-        assert!(update.frame.is_none());
+        assert_eq!(update.frame.unwrap().index, 3 * LOAD_HISTORY as u64 - 1);
     }
 
     #[test]

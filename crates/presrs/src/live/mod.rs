@@ -4,7 +4,7 @@
 //!
 //! - [`LiveHub`] holds what the viewers are shown; its [`LiveTap`] (a
 //!   [`SessionTap`](crate::stream::SessionTap)) feeds it from a session and never waits for a viewer:
-//!   the latest frame goes to one slot (copied only while someone watches), the total loads and the
+//!   the latest frame goes to one slot, the total loads and the
 //!   JSON lines to bounded histories.
 //! - [`LiveServer`] serves it over HTTP/1.1 on its own threads: `GET /` the page (HTML, JavaScript
 //!   and CSS built into the binary, no CDN), `GET /events` server-sent events (`hello`, then `frame`,
