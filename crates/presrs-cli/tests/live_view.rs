@@ -88,6 +88,62 @@ fn wait_for(child: &mut Child, what: &str, limit: Duration) {
     }
 }
 
+/// A small simulated data set and a model trained on it (with its online profile), once per binary.
+fn fixture() -> &'static (PathBuf, PathBuf) {
+    static FIXTURE: std::sync::OnceLock<(PathBuf, PathBuf)> = std::sync::OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("presrs-live-test-{}", std::process::id()));
+        let dir_s = dir.to_str().unwrap();
+        run_ok(&[
+            "simulate",
+            "--out",
+            dir_s,
+            "--seed",
+            "5",
+            "--gaits",
+            "G2",
+            "--hops-per-gait",
+            "12",
+        ]);
+        let model = dir.join("model.json");
+        let manifest = dir.join("manifest.csv");
+        run_ok(&[
+            "train",
+            "--manifest",
+            manifest.to_str().unwrap(),
+            "--out",
+            model.to_str().unwrap(),
+            "--per-class",
+            "8",
+            "--validation",
+            "4",
+            "--dims",
+            "10",
+        ]);
+        (dir, model)
+    })
+}
+
+/// The URL a command prints on stderr (`... live view: URL`), read on a thread that drains the rest.
+fn live_url(stderr: std::process::ChildStderr) -> String {
+    let (url_tx, url_rx) = channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if let Some(url) = line.split("live view: ").nth(1) {
+                let _ = url_tx.send(url.to_owned());
+            }
+        }
+    });
+    let url = url_rx
+        .recv_timeout(Duration::from_secs(60))
+        .expect("the live view's URL on stderr");
+    assert!(
+        url.starts_with("http://127.0.0.1:") && !url.ends_with(":0/"),
+        "{url}"
+    );
+    url
+}
+
 fn get_state(url: &str) -> Value {
     let addr = url.trim_start_matches("http://").trim_end_matches('/');
     let mut stream = TcpStream::connect(addr).unwrap();
@@ -135,35 +191,8 @@ fn attribute(dom: &str, name: &str) -> String {
 #[test]
 fn the_live_page_draws_the_image_and_its_label_follows_the_terrain() {
     let Some(browser) = chromium() else { return };
-    let work = tempfile::tempdir().unwrap();
-    let dir = work.path();
-    let dir_s = dir.to_str().unwrap();
-    run_ok(&[
-        "simulate",
-        "--out",
-        dir_s,
-        "--seed",
-        "5",
-        "--gaits",
-        "G2",
-        "--hops-per-gait",
-        "12",
-    ]);
-    let model = dir.join("model.json");
-    let manifest = dir.join("manifest.csv");
-    run_ok(&[
-        "train",
-        "--manifest",
-        manifest.to_str().unwrap(),
-        "--out",
-        model.to_str().unwrap(),
-        "--per-class",
-        "8",
-        "--validation",
-        "4",
-        "--dims",
-        "10",
-    ]);
+    let (dir, model) = fixture();
+    let dir = dir.as_path();
 
     let mut stream = presrs()
         .args([
@@ -181,15 +210,7 @@ fn the_live_page_draws_the_image_and_its_label_follows_the_terrain() {
         .spawn()
         .unwrap();
     let mut stdin = stream.stdin.take().unwrap();
-    let stderr = BufReader::new(stream.stderr.take().unwrap());
-    let (url_tx, url_rx) = channel();
-    std::thread::spawn(move || {
-        for line in stderr.lines().map_while(Result::ok) {
-            if let Some(url) = line.split("live view: ").nth(1) {
-                let _ = url_tx.send(url.to_owned());
-            }
-        }
-    });
+    let url = live_url(stream.stderr.take().unwrap());
     let stdout = BufReader::new(stream.stdout.take().unwrap());
     let (lines_tx, lines) = channel();
     std::thread::spawn(move || {
@@ -197,13 +218,6 @@ fn the_live_page_draws_the_image_and_its_label_follows_the_terrain() {
             let _ = lines_tx.send(serde_json::from_str::<Value>(&line).unwrap());
         }
     });
-    let url = url_rx
-        .recv_timeout(Duration::from_secs(30))
-        .expect("the live view's URL on stderr");
-    assert!(
-        url.starts_with("http://127.0.0.1:") && !url.ends_with(":0/"),
-        "{url}"
-    );
 
     // The browser watches from before the first frame until the page has shown wood.
     let mut page = headless(&browser, &dir.join("browser"))
@@ -291,4 +305,131 @@ fn the_live_page_draws_the_image_and_its_label_follows_the_terrain() {
     wait_for(&mut stream, "presrs stream", Duration::from_secs(30));
     assert!(stream.wait().unwrap().success());
     eprintln!("live_view: screenshot in {}", shot.display());
+}
+
+#[test]
+fn view_replays_a_file_through_the_classifier_and_serves_the_page() {
+    let (dir, model) = fixture();
+    let file = dir.join("recordings/wood_G2_000.asf");
+    let mut view = presrs()
+        .args([
+            "view",
+            file.to_str().unwrap(),
+            "--model",
+            model.to_str().unwrap(),
+        ])
+        .args(["--http", "127.0.0.1:0", "--speed", "4", "--delay", "0.5"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let url = live_url(view.stderr.take().unwrap());
+    let state = get_state(&url);
+    assert_eq!(state["classes"].as_array().unwrap().len(), 4, "{state}");
+    assert!(
+        state["source"]
+            .as_str()
+            .unwrap()
+            .ends_with("wood_G2_000.asf"),
+        "{state}"
+    );
+    let mut out = String::new();
+    view.stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut out)
+        .unwrap();
+    wait_for(&mut view, "presrs view", Duration::from_secs(60));
+    assert!(view.wait().unwrap().success());
+    let lines: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let labels: Vec<&str> = lines
+        .iter()
+        .filter(|l| l["event"] == "classification")
+        .map(|l| l["label"].as_str().unwrap())
+        .collect();
+    assert!(labels.len() >= 5, "{out}");
+    assert!(
+        labels.iter().filter(|&&l| l == "wood").count() * 2 > labels.len(),
+        "{labels:?}"
+    );
+    assert_eq!(lines.last().unwrap()["event"], "end");
+}
+
+#[test]
+fn a_servers_clients_are_shown_and_non_loopback_is_refused() {
+    let (dir, model) = fixture();
+    let mut server = presrs()
+        .args([
+            "stream",
+            "--model",
+            model.to_str().unwrap(),
+            "--listen",
+            "127.0.0.1:0",
+        ])
+        .args(["--http", "127.0.0.1:0", "--exit-after", "2"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let url = live_url(server.stderr.take().unwrap());
+    let mut stdout = BufReader::new(server.stdout.take().unwrap());
+    let mut first = String::new();
+    stdout.read_line(&mut first).unwrap();
+    let addr = serde_json::from_str::<Value>(&first).unwrap()["addr"]
+        .as_str()
+        .unwrap()
+        .to_owned();
+    let file = dir.join("recordings/grass_G2_000.asf");
+    let replay = || {
+        let out = presrs()
+            .args([
+                "replay",
+                file.to_str().unwrap(),
+                "--connect",
+                &addr,
+                "--rate",
+                "max",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    replay();
+    let state = get_state(&url);
+    assert_eq!(state["frames"], 620, "{state}");
+    assert!(
+        state["source"].as_str().unwrap().starts_with("127.0.0.1:"),
+        "{state}"
+    );
+    assert_eq!(
+        state["classification"]["event"], "classification",
+        "{state}"
+    );
+    replay();
+    wait_for(
+        &mut server,
+        "presrs stream --listen",
+        Duration::from_secs(60),
+    );
+    assert!(server.wait().unwrap().success());
+
+    let out = presrs()
+        .args([
+            "stream",
+            "--model",
+            model.to_str().unwrap(),
+            "--http",
+            "0.0.0.0:0",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("only loopback"));
 }
