@@ -7,7 +7,8 @@
 //! (`--listen 127.0.0.1:PORT`, several clients at once; protocol in `docs/stream-protocol.md`). Output:
 //! JSON lines to stdout, or back to each client. A finite input (stdin) with any rejected frame or error
 //! exits with code 1 once it has been read to its end; the server (`--listen`) logs each connection's
-//! summary and keeps serving.
+//! summary and keeps serving. `--http ADDR` also serves the live view in the browser
+//! ([`presrs::live`]; [`HttpArgs`] is shared with `presrs view`).
 //!
 //! SIGINT and SIGTERM end the run cleanly: on stdin the input is taken as ended (the session writes its
 //! `end` line), the server stops (each connection gets its `end` line, then a `stopped` line on stdout);
