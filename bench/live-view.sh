@@ -3,7 +3,7 @@
 # classifies a long TekScan stream on stdin as fast as it can be read, (a) alone, (b) with `--http` and a
 # viewer (`curl -N .../events`) connected throughout. Prints, per run, frames/s and the decision latency
 # (p50/p99 of the `latency_us` of the classification lines), then the medians of each setting.
-# Usage: bench/live-view.sh [ROUNDS]   (release build: cargo build --release -p presrs-cli)
+# Usage: [COPIES=8] bench/live-view.sh [ROUNDS]   (release build: cargo build --release -p presrs-cli)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rounds="${1:-5}"
@@ -12,8 +12,8 @@ work="$(mktemp -d)"
 trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
 "$presrs" simulate --out "$work/sim" --seed 3 --gaits G2 --hops-per-gait 24 >/dev/null 2>&1
 "$presrs" train --manifest "$work/sim/manifest.csv" --out "$work/model.json" --per-class 10 --dims 10 >/dev/null 2>&1
-# One long stream: every recording, eight times over (same size: one stream).
-for _ in 1 2 3 4 5 6 7 8; do cat "$work"/sim/recordings/*.asf; done > "$work/stream.asf"
+# One long stream: every recording, COPIES (8) times over (same size: one stream).
+for _ in $(seq "${COPIES:-8}"); do cat "$work"/sim/recordings/*.asf; done > "$work/stream.asf"
 
 run() { # $1: alone|viewer -> "frames_per_s p50_us p99_us"
   local out="$work/out.jsonl" port=$((7900 + RANDOM % 90))
@@ -23,7 +23,7 @@ run() { # $1: alone|viewer -> "frames_per_s p50_us p99_us"
     local pid=$!
     exec 3>"$work/in"
     for _ in $(seq 100); do curl -s "http://127.0.0.1:$port/state" >/dev/null 2>&1 && break; sleep 0.05; done
-    curl -sN "http://127.0.0.1:$port/events" >"$work/events.txt" &
+    curl -sN "http://127.0.0.1:$port/events" >"$work/events.txt" 3>&- &
     local viewer=$!
     sleep 0.5
     local t0; t0=$(date +%s.%N)
