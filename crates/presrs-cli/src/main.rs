@@ -74,6 +74,8 @@ enum Command {
   presrs replay sim/recordings/grass_G2_000.asf \\
     --connect 127.0.0.1:7700 --rate 100")]
     Replay(cmd::replay::ReplayArgs),
+    /// Replay a recording in the live view in the browser (through the online classifier with --model).
+    View(cmd::view::ViewArgs),
     /// Draw a pressure image (PNG/SVG heat map in physical units) or a recording's movie (GIF).
     Plot(cmd::plot::PlotArgs),
     /// Write an HTML report with figures (pressure images, spectra, load curves, PCA, accuracy).
@@ -97,6 +99,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => cmd::bench::run(args, &mut out),
         Command::Stream(args) => cmd::stream::run(args, &mut out),
         Command::Replay(args) => cmd::replay::run(args, &mut out),
+        Command::View(args) => cmd::view::run(args, &mut out),
         Command::Plot(args) => cmd::plot::run(args, &mut out),
         Command::Report(args) => cmd::report::run(args, &mut out),
         Command::Convert(args) => cmd::convert::run(args, &mut out),

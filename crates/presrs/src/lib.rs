@@ -10,6 +10,7 @@ pub mod error;
 pub mod evaluate;
 pub mod gait;
 pub mod inspect;
+pub mod live;
 pub mod method;
 pub mod progress;
 pub mod report;

@@ -15,3 +15,4 @@ pub mod simulate;
 pub mod stream;
 pub mod train;
 pub mod usage;
+pub mod view;

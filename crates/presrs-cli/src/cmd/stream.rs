@@ -7,7 +7,8 @@
 //! (`--listen 127.0.0.1:PORT`, several clients at once; protocol in `docs/stream-protocol.md`). Output:
 //! JSON lines to stdout, or back to each client. A finite input (stdin) with any rejected frame or error
 //! exits with code 1 once it has been read to its end; the server (`--listen`) logs each connection's
-//! summary and keeps serving.
+//! summary and keeps serving. `--http ADDR` also serves the live view in the browser
+//! ([`presrs::live`]; [`HttpArgs`] is shared with `presrs view`).
 //!
 //! SIGINT and SIGTERM end the run cleanly: on stdin the input is taken as ended (the session writes its
 //! `end` line), the server stops (each connection gets its `end` line, then a `stopped` line on stdout);
@@ -24,9 +25,10 @@ use anyhow::Context;
 use signal_hook::consts::{SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
 
+use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
 use presrs::stream::{
     BagRecorder, ConnectionSummary, InputFormat, ProfileOverrides, ServerNotice, ServerOptions,
-    SessionNotice, SessionOptions, ShutdownHandle, StreamServer, resolve_profile, run_session,
+    SessionNotice, SessionOptions, SessionTap, ShutdownHandle, StreamServer, Taps, resolve_profile,
     run_session_tapped,
 };
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
@@ -107,6 +109,50 @@ pub struct StreamArgs {
     /// file appears when the stream ends.
     #[arg(long, value_name = "OUT.mcap", conflicts_with = "listen")]
     pub record: Option<PathBuf>,
+    #[command(flatten)]
+    pub http: HttpArgs,
+    /// The unit of the frame values, shown on the live view's colour scale (the stream does not say).
+    #[arg(long, default_value = "raw", requires = "http")]
+    pub units: String,
+}
+
+/// The live view in the browser (`presrs stream` and `presrs view`).
+#[derive(Debug, clap::Args)]
+pub struct HttpArgs {
+    /// Serve the live view (the pressure image, the load trace, the terrain, gait and decision log) on
+    /// this loopback address, e.g. 127.0.0.1:7800 (port 0 picks one); its URL goes to stderr. With
+    /// --listen it shows one client at a time.
+    #[arg(long, value_name = "IP:PORT", value_parser = super::usage::loopback_addr)]
+    pub http: Option<SocketAddr>,
+    /// Most frames a second sent to each viewer of the live view.
+    #[arg(long, default_value_t = 30.0, value_parser = super::usage::positive_number)]
+    pub http_fps: f64,
+    /// Most viewers of the live view at once.
+    #[arg(long, default_value_t = 16, value_parser = super::usage::positive_count)]
+    pub http_viewers: usize,
+}
+
+impl HttpArgs {
+    /// Starts the live view on `addr` (printing its URL), or nothing without one.
+    pub fn start(
+        &self,
+        addr: Option<SocketAddr>,
+        info: LiveInfo,
+        command: &str,
+    ) -> anyhow::Result<Option<(LiveHub, LiveServer)>> {
+        let Some(addr) = addr else {
+            return Ok(None);
+        };
+        let hub = LiveHub::new(info);
+        let options = LiveOptions {
+            max_fps: self.http_fps,
+            max_viewers: self.http_viewers,
+            ..LiveOptions::default()
+        };
+        let server = LiveServer::start(addr, hub.clone(), options)?;
+        stderr_line!("presrs {command}: live view: {}", server.url());
+        Ok(Some((hub, server)))
+    }
 }
 
 impl From<StreamFormat> for InputFormat {
@@ -148,10 +194,34 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         &args.overrides(),
     )?;
     let signals = Signals::new([SIGINT, SIGTERM]).context("cannot handle SIGINT and SIGTERM")?;
+    let info = LiveInfo {
+        source: if args.listen.is_some() {
+            "no client yet"
+        } else {
+            "stdin"
+        }
+        .to_owned(),
+        units: args.units.clone(),
+        classes: file.model.class_names().to_vec(),
+    };
+    let live = args.http.start(args.http.http, info, "stream")?;
     match args.listen {
-        None => run_stdin(args, &file.model, &profile, signals, out),
+        None => {
+            let mut tap = live.as_ref().map(|(hub, _)| hub.tap());
+            let tap: &mut dyn SessionTap = match tap.as_mut() {
+                Some(tap) => tap,
+                None => &mut presrs::stream::NoTap,
+            };
+            run_stdin(args, &file.model, &profile, signals, tap, out)
+        }
         Some(addr) => {
-            let server = StreamServer::bind(addr, file.model, profile, args.server_options())?;
+            let mut server = StreamServer::bind(addr, file.model, profile, args.server_options())?;
+            if let Some((hub, _)) = &live {
+                let hub = hub.clone();
+                server = server.with_taps(Arc::new(move |peer: &str| {
+                    Box::new(hub.exclusive_tap(peer)) as Box<dyn SessionTap + Send>
+                }));
+            }
             let local = server.local_addr();
             writeln!(
                 out,
@@ -185,7 +255,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 
 /// Handles the first SIGINT or SIGTERM on a thread: notes it in `caught` and calls `stop`; a second one
 /// gets the default action (the process ends at once). The returned handle stops the thread.
-fn on_signal(
+pub(super) fn on_signal(
     mut signals: Signals,
     caught: Arc<Mutex<Option<i32>>>,
     stop: impl FnOnce() + Send + 'static,
@@ -209,7 +279,7 @@ fn on_signal(
     handle
 }
 
-fn signal_name(signal: i32) -> &'static str {
+pub(super) fn signal_name(signal: i32) -> &'static str {
     match signal {
         SIGINT => "SIGINT",
         SIGTERM => "SIGTERM",
@@ -288,6 +358,7 @@ fn run_stdin(
     model: &presrs::core::TrainedModel,
     profile: &presrs::core::online::OnlineProfile,
     signals: Signals,
+    tap: &mut dyn SessionTap,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
     let stop = ShutdownHandle::default();
@@ -308,10 +379,13 @@ fn run_stdin(
     });
     let input = std::io::BufReader::with_capacity(64 * 1024, input);
     let summary = match &args.record {
-        None => run_session(model, profile, input, out, &options, &log)?,
+        None => run_session_tapped(model, profile, input, out, &options, &log, tap)?,
         Some(path) => {
             let mut bag = BagRecorder::create(path)?;
-            let summary = run_session_tapped(model, profile, input, out, &options, &log, &mut bag)?;
+            let summary = {
+                let mut taps = Taps(vec![tap, &mut bag]);
+                run_session_tapped(model, profile, input, out, &options, &log, &mut taps)?
+            };
             let recorded = bag.finish()?;
             stderr_line!(
                 "presrs stream: recorded {} frames and {} lines to {}",
@@ -366,7 +440,7 @@ fn print_server_notice(notice: &ServerNotice<'_>) {
 }
 
 /// A session's notice as the stderr line says it.
-fn notice_text(notice: &SessionNotice) -> String {
+pub(super) fn notice_text(notice: &SessionNotice) -> String {
     match notice {
         SessionNotice::Error(message) => message.clone(),
         SessionNotice::ErrorsMuted => "further errors are counted, not logged".to_owned(),
@@ -384,7 +458,7 @@ fn notice_text(notice: &SessionNotice) -> String {
     }
 }
 
-fn summary_text(name: &str, s: &ConnectionSummary) -> String {
+pub(super) fn summary_text(name: &str, s: &ConnectionSummary) -> String {
     format!(
         "{name}: {} frames, {} stances, {} decisions ({} fused), {} rejected frames, {} errors, {} dropped events",
         s.stats.frames,

@@ -43,13 +43,13 @@ pub use bag::{
 };
 pub use events::event_values;
 pub use output::BoundedOutput;
-pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer};
+pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer, TapFactory};
 pub use session::{
     ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
     run_session_tapped,
 };
 pub use shutdown::ShutdownHandle;
-pub use tap::{NoTap, SessionTap};
+pub use tap::{NoTap, SessionTap, Taps};
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
 /// and `--gait`).

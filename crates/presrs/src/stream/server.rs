@@ -3,8 +3,8 @@
 use std::collections::HashMap;
 use std::io::{BufReader, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use presrs_core::online::OnlineProfile;
@@ -15,7 +15,7 @@ use super::events::error_line;
 use super::output::BoundedOutput;
 use super::session::{ConnectionSummary, SessionNotice, binary_source, run_connection};
 use super::shutdown::ShutdownHandle;
-use super::tap::NoTap;
+use super::tap::{NoTap, SessionTap};
 use crate::error::{Error, Result};
 
 /// The server's limits.
@@ -90,9 +90,12 @@ pub struct ServeSummary {
     pub refused: usize,
 }
 
+/// Makes the [`SessionTap`] of each client's session, given the client's name (its address): what
+/// else sees the sessions of a server (a live view).
+pub type TapFactory = Arc<dyn Fn(&str) -> Box<dyn SessionTap + Send> + Send + Sync>;
+
 /// The stream server, bound and ready to [`serve`](Self::serve). The model is shared read-only by the
 /// sessions; each has its own detector and classifier.
-#[derive(Debug)]
 pub struct StreamServer {
     listener: TcpListener,
     local: SocketAddr,
@@ -100,6 +103,17 @@ pub struct StreamServer {
     profile: OnlineProfile,
     options: ServerOptions,
     stop: ShutdownHandle,
+    taps: Option<TapFactory>,
+}
+
+impl std::fmt::Debug for StreamServer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StreamServer")
+            .field("local", &self.local)
+            .field("options", &self.options)
+            .field("taps", &self.taps.is_some())
+            .finish_non_exhaustive()
+    }
 }
 
 /// How often the accept loop looks at the stop flag and the connection count.
@@ -131,7 +145,15 @@ impl StreamServer {
             profile,
             options,
             stop: ShutdownHandle::default(),
+            taps: None,
         })
+    }
+
+    /// Gives each client's session the tap `taps` makes for it.
+    #[must_use]
+    pub fn with_taps(mut self, taps: TapFactory) -> Self {
+        self.taps = Some(taps);
+        self
     }
 
     /// The address clients connect to.
@@ -248,13 +270,17 @@ impl StreamServer {
             notify(&ServerNotice::Session { peer: name, notice });
         };
         let mut emit = |line: String| output.send(line);
+        let mut tap: Box<dyn SessionTap + Send> = match &self.taps {
+            Some(taps) => taps(name),
+            None => Box::new(NoTap),
+        };
         let result = run_connection(
             &self.model,
             &self.profile,
             binary_source(reader, name, self.options.max_frame_bytes),
             &mut emit,
             &session_notice,
-            &mut NoTap,
+            tap.as_mut(),
         );
         let dropped_in_writer = output.dropped();
         output.close();

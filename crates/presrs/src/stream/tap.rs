@@ -33,3 +33,33 @@ impl SessionTap for NoTap {
     fn frame(&mut self, _: u64, _: Grid, _: &[f64], _: Option<&[bool]>, _: Option<u64>) {}
     fn line(&mut self, _: &str) {}
 }
+
+/// Several taps, each seeing everything in turn (a bag being recorded and a live viewer).
+pub struct Taps<'a>(pub Vec<&'a mut dyn SessionTap>);
+
+impl std::fmt::Debug for Taps<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Taps({})", self.0.len())
+    }
+}
+
+impl SessionTap for Taps<'_> {
+    fn frame(
+        &mut self,
+        index: u64,
+        grid: Grid,
+        values: &[f64],
+        present: Option<&[bool]>,
+        timestamp_us: Option<u64>,
+    ) {
+        for tap in &mut self.0 {
+            tap.frame(index, grid, values, present, timestamp_us);
+        }
+    }
+
+    fn line(&mut self, line: &str) {
+        for tap in &mut self.0 {
+            tap.line(line);
+        }
+    }
+}
