@@ -120,7 +120,8 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         "{text}"
     );
 
-    // auto is the default: the cheap feature families (fft1d, fft2d, fft2d_polar) x every classifier
+    // auto is the default: the cheap feature families (fft1d, fft2d, fft2d_polar) x every classifier,
+    // and fft1d after the square root and log1p intensity transforms x every classifier
     let auto = presrs(&[&["eval", "--json"][..], &common[..]].concat());
     assert!(
         auto.status.success(),
@@ -130,8 +131,8 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     let json: serde_json::Value = serde_json::from_slice(&auto.stdout).unwrap();
     let selection = &json["selections"][0];
     let scores = selection["scores"].as_array().unwrap();
-    assert_eq!(scores.len(), 15);
-    assert!(selection["chosen"].as_u64().unwrap() < 15);
+    assert_eq!(scores.len(), 25);
+    assert!(selection["chosen"].as_u64().unwrap() < 25);
     assert!(scores.iter().all(|s| s["features"] != "glcm"));
 
     let model = format!("{out}/auto.model.json");

@@ -17,7 +17,7 @@ use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
 #[command(after_help = "Examples:
   presrs report --manifest sim/manifest.csv --out report
   presrs report --manifest walks.csv --model model.json --out report
-  presrs report --manifest walks.csv --leave-one-out group --features auto --out walks-report")]
+  presrs report --manifest walks.csv --leave-one-out group --out report")]
 pub struct ReportArgs {
     /// The dataset manifest.
     #[arg(long)]
