@@ -36,8 +36,9 @@
 //!    most two, heel and toe) or is longer than
 //!    [`SegmentParams::max_stance_frames`](super::SegmentParams::max_stance_frames); or the floor finds
 //!    at least [`PRELOAD_PEAKS`] complete contacts and the drifting baseline none; or the drifting
-//!    baseline found a rest between two contacts loaded (two or more of its frames in one of its
-//!    stances) and the next rest, at the same level within the on level, unloaded (it took a preload
+//!    baseline found a rest between two contacts (or after the last) loaded (one of its frames, but
+//!    its first and last, in one of its stances: a walking swing may lose a frame to the stance on
+//!    each side) and the next rest, at the same level within the on level, unloaded (it took a preload
 //!    for unloaded in some windows: a walking foot's heel-toe valley is far above the swing beside it);
 //!    or [`PRELOAD_PEAKS`] contacts in a row never unload between them (each rest above the drifting
 //!    baseline by the off level, or in one of its stances) and the drifting baseline misses one of them
@@ -202,19 +203,27 @@ fn preload(
     // A rest the drifting baseline found loaded (in one of its stances) next to one it found unloaded at
     // the same level (within the on level): it took the preload for unloaded there, not here. A walking
     // foot's heel-toe valley is far above the swing level beside it.
-    // A rest counts as loaded for the drifting baseline when more than one of its frames lies in one of
-    // its stances (a boundary a frame off is not a disagreement).
-    let rests: Vec<(usize, bool)> = floor
+    // A rest counts as loaded for the drifting baseline when one of its frames but the first and the
+    // last lies in one of its stances: each boundary may be a frame off (a walking swing often loses a
+    // frame to the stance on each side, two frames that are not a disagreement).
+    let mut rests: Vec<(usize, bool)> = floor
         .stances
         .windows(2)
         .map(|pair| {
-            let loaded = (pair[0].end()..pair[1].start)
-                .filter(|&t| in_stance(t))
-                .count()
-                > 1;
+            let loaded = (pair[0].end() + 1..pair[1].start.saturating_sub(1)).any(in_stance);
             (rest_frame(pair), loaded)
         })
         .collect();
+    // The rest after the last contact too: a drifting stance that runs on into it has stretched the
+    // last press over a preload it took for loaded.
+    let n = floor.baseline.len();
+    if let Some(last) = floor.stances.last()
+        && !last.partial
+        && last.end() + 2 < n
+    {
+        let loaded = (last.end() + 1..n - 1).any(in_stance);
+        rests.push(((last.end() + n) / 2, loaded));
+    }
     let contradiction = rests.windows(2).find_map(|pair| {
         let ((a, a_loaded), (b, b_loaded)) = (pair[0], pair[1]);
         let (inside, outside) = match (a_loaded, b_loaded) {
