@@ -1,29 +1,22 @@
 //! `presrs classify --mcap OUT.mcap`: the classified recordings as one ROS 2 bag — their frames on
-//! [`FRAMES_TOPIC`] and, on [`DECISIONS_TOPIC`], each stance's `touchdown` and `liftoff` and each sample's
+//! [`FRAMES_TOPIC`](crate::stream::FRAMES_TOPIC) and, on [`DECISIONS_TOPIC`](crate::stream::DECISIONS_TOPIC), each stance's `touchdown` and `liftoff` and each sample's
 //! `classification` (file, frame, label, confidence, posteriors, gait), stamped with their frames.
 
 use std::collections::BTreeMap;
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use presrs_core::stance::segment_recording;
-use presrs_io::IoError;
-use presrs_io::atomic::AtomicFile;
-use presrs_io::mcap::{BagWriter, ImageEncoding};
+use presrs_io::mcap::ImageEncoding;
 use serde_json::json;
 
 use crate::classify::{Classified, ClassifyOptions};
 use crate::dataset::read_corrected;
 use crate::error::{Error, Result};
-use crate::stream::{DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, FRAMES_TOPIC};
+use crate::stream::DecisionBag;
 
 /// A bag of classified recordings being written; it appears under its name at [`Self::finish`].
 pub struct ClassifyBag {
-    bag: BagWriter<BufWriter<File>>,
-    file: AtomicFile,
-    frames_channel: u16,
-    decisions_channel: u16,
+    bag: DecisionBag,
     /// Where the next recording starts, ns (recordings follow each other, one period apart).
     next_ns: u64,
     recordings: usize,
@@ -32,7 +25,7 @@ pub struct ClassifyBag {
 impl std::fmt::Debug for ClassifyBag {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ClassifyBag")
-            .field("path", &self.file.path())
+            .field("path", &self.bag.path())
             .field("recordings", &self.recordings)
             .finish_non_exhaustive()
     }
@@ -41,17 +34,8 @@ impl std::fmt::Debug for ClassifyBag {
 impl ClassifyBag {
     /// Starts the bag at `path` (a hidden temporary file beside it until [`Self::finish`]).
     pub fn create(path: &Path) -> Result<Self> {
-        let (file, handle) = AtomicFile::create(path)?;
-        let name = presrs_io::error::display_name(path);
-        let mut bag = BagWriter::new(BufWriter::with_capacity(1 << 16, handle), &name)?;
-        let frames_channel = bag.add_image_topic(FRAMES_TOPIC)?;
-        let decisions_channel =
-            bag.add_json_topic(DECISIONS_TOPIC, DECISIONS_SCHEMA_NAME, DECISIONS_SCHEMA)?;
         Ok(Self {
-            bag,
-            file,
-            frames_channel,
-            decisions_channel,
+            bag: DecisionBag::create(path)?,
             next_ns: 0,
             recordings: 0,
         })
@@ -117,16 +101,10 @@ impl ClassifyBag {
         for (index, frame) in recording.frames().enumerate() {
             let values = frame.values();
             let encoding = ImageEncoding::for_values(values.iter());
-            self.bag.write_image(
-                self.frames_channel,
-                time(index),
-                recording.grid(),
-                values,
-                encoding,
-            )?;
+            self.bag
+                .write_image(time(index), recording.grid(), values, encoding)?;
             for line in events.remove(&index).unwrap_or_default() {
-                self.bag
-                    .write_json(self.decisions_channel, time(index), &line)?;
+                self.bag.write_json(time(index), &line)?;
             }
         }
         self.next_ns = time(recording.frame_count());
@@ -136,12 +114,6 @@ impl ClassifyBag {
 
     /// Ends the bag and renames it into place; returns its path.
     pub fn finish(self) -> Result<PathBuf> {
-        let path = self.file.path().to_path_buf();
-        let buffered = self.bag.finish()?;
-        buffered
-            .into_inner()
-            .map_err(|err| IoError::io("write", &path, err.into_error()))?;
-        self.file.commit()?;
-        Ok(path)
+        self.bag.finish()
     }
 }

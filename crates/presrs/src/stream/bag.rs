@@ -68,10 +68,7 @@ pub struct RecordedBag {
 /// else the wall clock when they are read; each line is logged at the time of the frame before it. A
 /// write that fails stops the recording; [`BagRecorder::finish`] then reports it.
 pub struct BagRecorder {
-    bag: BagWriter<BufWriter<File>>,
-    file: AtomicFile,
-    frames_channel: u16,
-    decisions_channel: u16,
+    bag: DecisionBag,
     time_ns: u64,
     frames: u64,
     lines: u64,
@@ -81,7 +78,7 @@ pub struct BagRecorder {
 impl std::fmt::Debug for BagRecorder {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("BagRecorder")
-            .field("path", &self.file.path())
+            .field("path", &self.bag.path())
             .field("frames", &self.frames)
             .field("lines", &self.lines)
             .finish_non_exhaustive()
@@ -97,17 +94,8 @@ fn now_ns() -> u64 {
 impl BagRecorder {
     /// Starts recording to `path` (a hidden temporary file beside it until [`Self::finish`]).
     pub fn create(path: &Path) -> Result<Self> {
-        let (file, handle) = AtomicFile::create(path)?;
-        let name = presrs_io::error::display_name(path);
-        let mut bag = BagWriter::new(BufWriter::with_capacity(1 << 16, handle), &name)?;
-        let frames_channel = bag.add_image_topic(FRAMES_TOPIC)?;
-        let decisions_channel =
-            bag.add_json_topic(DECISIONS_TOPIC, DECISIONS_SCHEMA_NAME, DECISIONS_SCHEMA)?;
         Ok(Self {
-            bag,
-            file,
-            frames_channel,
-            decisions_channel,
+            bag: DecisionBag::create(path)?,
             time_ns: 0,
             frames: 0,
             lines: 0,
@@ -121,14 +109,8 @@ impl BagRecorder {
         if let Some(err) = self.failed {
             return Err(err.into());
         }
-        let path = self.file.path().to_path_buf();
-        let buffered = self.bag.finish()?;
-        buffered
-            .into_inner()
-            .map_err(|err| IoError::io("write", &path, err.into_error()))?;
-        self.file.commit()?;
         Ok(RecordedBag {
-            path,
+            path: self.bag.finish()?,
             frames: self.frames,
             lines: self.lines,
         })
@@ -155,9 +137,7 @@ impl SessionTap for BagRecorder {
         }
         self.time_ns = timestamp_us.map_or_else(now_ns, |us| us.saturating_mul(1000));
         let encoding = ImageEncoding::for_values(values.iter());
-        let written =
-            self.bag
-                .write_image(self.frames_channel, self.time_ns, grid, values, encoding);
+        let written = self.bag.write_image(self.time_ns, grid, values, encoding);
         self.frames += 1;
         self.keep(written);
     }
@@ -166,10 +146,68 @@ impl SessionTap for BagRecorder {
         if self.failed.is_some() {
             return;
         }
-        let written = self
-            .bag
-            .write_json(self.decisions_channel, self.time_ns, line);
+        let written = self.bag.write_json(self.time_ns, line);
         self.lines += 1;
         self.keep(written);
+    }
+}
+
+/// A bag with the frames and decisions topics, written to a hidden temporary file that takes its name
+/// at [`DecisionBag::finish`]: what `stream --record` and `classify --mcap` write.
+pub(crate) struct DecisionBag {
+    bag: BagWriter<BufWriter<File>>,
+    file: AtomicFile,
+    frames_channel: u16,
+    decisions_channel: u16,
+}
+
+impl DecisionBag {
+    pub(crate) fn create(path: &Path) -> Result<Self> {
+        let (file, handle) = AtomicFile::create(path)?;
+        let name = presrs_io::error::display_name(path);
+        let mut bag = BagWriter::new(BufWriter::with_capacity(1 << 16, handle), &name)?;
+        let frames_channel = bag.add_image_topic(FRAMES_TOPIC)?;
+        let decisions_channel =
+            bag.add_json_topic(DECISIONS_TOPIC, DECISIONS_SCHEMA_NAME, DECISIONS_SCHEMA)?;
+        Ok(Self {
+            bag,
+            file,
+            frames_channel,
+            decisions_channel,
+        })
+    }
+
+    pub(crate) fn path(&self) -> &Path {
+        self.file.path()
+    }
+
+    pub(crate) fn write_image(
+        &mut self,
+        time_ns: u64,
+        grid: Grid,
+        values: &[f64],
+        encoding: ImageEncoding,
+    ) -> std::result::Result<(), IoError> {
+        self.bag
+            .write_image(self.frames_channel, time_ns, grid, values, encoding)
+    }
+
+    pub(crate) fn write_json(
+        &mut self,
+        time_ns: u64,
+        line: &str,
+    ) -> std::result::Result<(), IoError> {
+        self.bag.write_json(self.decisions_channel, time_ns, line)
+    }
+
+    /// Ends the bag (its summary and footer) and renames it into place; returns its path.
+    pub(crate) fn finish(self) -> Result<PathBuf> {
+        let path = self.file.path().to_path_buf();
+        let buffered = self.bag.finish()?;
+        buffered
+            .into_inner()
+            .map_err(|err| IoError::io("write", &path, err.into_error()))?;
+        self.file.commit()?;
+        Ok(path)
     }
 }

@@ -37,6 +37,7 @@ use presrs_core::online::OnlineProfile;
 
 use crate::error::{Error, Result};
 
+pub(crate) use bag::DecisionBag;
 pub use bag::{
     BagRecorder, DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, FRAMES_TOPIC,
     RecordedBag,
