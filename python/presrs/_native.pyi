@@ -80,6 +80,7 @@ class Model:
         crop: str = "auto",
         full_search: bool = False,
         validate_by: str = "auto",
+        budget: Optional[float] = 60.0,
     ) -> Model: ...
     @staticmethod
     def load(path: _Path) -> Model: ...
@@ -164,6 +165,7 @@ def evaluate(
     crop: str = "auto",
     full_search: bool = False,
     validate_by: str = "auto",
+    budget: Optional[float] = 60.0,
     progress: Union[bool, Callable[[str, int, Optional[int]], Any], None] = None,
 ) -> Evaluation: ...
 def simulate(

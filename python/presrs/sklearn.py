@@ -25,7 +25,8 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
     command line's names (``"auto"`` chooses by validation), ``dims`` the principal components kept,
     ``validation`` the share (or count) of each class that validates the hyper-parameters, ``seed`` the
     random draw. ``image_shape`` says how to unflatten a 2-D ``X``; ``validate_by`` how the automatic
-    choice validates (``auto``, ``group``, ``condition``, ``split``; give ``groups`` to ``fit``).
+    choice validates (``auto``, ``group``, ``condition``, ``split``; give ``groups`` to ``fit``);
+    ``budget`` the seconds it may spend (``None``: no limit, the choice independent of the machine).
     """
 
     def __init__(
@@ -39,6 +40,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         seed=0,
         image_shape=None,
         validate_by="auto",
+        budget=60.0,
     ):
         self.features = features
         self.classifier = classifier
@@ -49,6 +51,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         self.seed = seed
         self.image_shape = image_shape
         self.validate_by = validate_by
+        self.budget = budget
 
     def _images(self, X):
         """``X`` as images ``(n, rows, cols)`` float64."""
@@ -89,6 +92,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
             full_search=self.full_search,
             seed=self.seed,
             validate_by=self.validate_by,
+            budget=self.budget,
             groups=groups,
             conditions=conditions,
         )

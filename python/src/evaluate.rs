@@ -127,7 +127,7 @@ impl Evaluation {
 #[pyo3(signature = (data, labels = None, *, groups = None, conditions = None, leave_one_out = None,
     train_condition = None, per_class = None, validation = 0.35, repeats = 10, seed = 1,
     features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false,
-    validate_by = "auto", progress = None))]
+    validate_by = "auto", budget = Some(60.0), progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     py: Python<'_>,
@@ -147,6 +147,7 @@ pub fn evaluate(
     crop: &str,
     full_search: bool,
     validate_by: &str,
+    budget: Option<f64>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Evaluation> {
     let reporter = PyProgress::from_arg(progress)?;
@@ -172,7 +173,15 @@ pub fn evaluate(
         validation: validation_size(validation)?,
         repeats,
         seed,
-        method: method(features, classifier, crop, dims, full_search, validate_by)?,
+        method: method(
+            features,
+            classifier,
+            crop,
+            dims,
+            full_search,
+            validate_by,
+            budget,
+        )?,
     };
     let dataset = load(py, data, labels, groups, conditions, progress)?;
     for warning in &dataset.warnings {

@@ -122,10 +122,12 @@ impl Model {
     /// conditions. `validation` is a share of each class (0 < v < 1) or a count per class (>= 1).
     /// `validate_by` (`auto`, `group`, `condition`, `split`): how the automatic choice validates its
     /// candidates; `auto` leaves one group out when there are 3 or more groups, else one condition.
+    /// `budget`: seconds the automatic choice may spend scoring candidates (the texture families,
+    /// scored last, are cut first, with a warning); `None` or 0: no limit.
     #[staticmethod]
     #[pyo3(signature = (images, labels, *, features = "auto", classifier = "auto", groups = None,
         conditions = None, seed = 0, dims = None, per_class = None, validation = 0.35, crop = "auto",
-        full_search = false, validate_by = "auto"))]
+        full_search = false, validate_by = "auto", budget = Some(60.0)))]
     #[allow(clippy::too_many_arguments)]
     fn train(
         py: Python<'_>,
@@ -142,8 +144,17 @@ impl Model {
         crop: &str,
         full_search: bool,
         validate_by: &str,
+        budget: Option<f64>,
     ) -> PyResult<Self> {
-        let method = method(features, classifier, crop, dims, full_search, validate_by)?;
+        let method = method(
+            features,
+            classifier,
+            crop,
+            dims,
+            full_search,
+            validate_by,
+            budget,
+        )?;
         let dataset = dataset_of(images, labels, groups, conditions)?;
         let options = TrainOptions {
             condition: None,
@@ -286,8 +297,19 @@ pub fn method(
     dims: Option<usize>,
     full_search: bool,
     validate_by: &str,
+    budget: Option<f64>,
 ) -> PyResult<Method> {
+    let budget = match budget {
+        Some(seconds) if !seconds.is_finite() || !(0.0..=1e12).contains(&seconds) => {
+            return Err(data_error(format!(
+                "budget={seconds}: give seconds, 0 or more (None or 0: no limit)"
+            )));
+        }
+        Some(seconds) if seconds > 0.0 => Some(std::time::Duration::from_secs_f64(seconds)),
+        _ => None,
+    };
     Ok(Method {
+        budget,
         validate_by: validate_by
             .parse()
             .map_err(|err| data_error(format!("validate_by={validate_by:?}: {err}")))?,

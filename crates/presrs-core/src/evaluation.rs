@@ -97,9 +97,9 @@ pub type TestTransform<'f> = dyn Fn(usize, FrameView<'_>, u64) -> Result<Frame> 
 pub enum Models<'c> {
     /// With this configuration (the paper's method, or any other).
     Config(&'c CheckedTrainConfig),
-    /// Chosen among these candidates by [`crate::selection::train_auto`] on the fold's training data
-    /// only, validated as the [`ValidateBy`](crate::selection::ValidateBy) says.
-    Auto(&'c [CheckedTrainConfig], crate::selection::ValidateBy),
+    /// Chosen as the [`AutoChoice`](crate::selection::AutoChoice) says by
+    /// [`crate::selection::train_auto`], on the fold's training data only (its budget is each model's).
+    Auto(crate::selection::AutoChoice<'c>),
 }
 
 /// What [`Evaluation::run_each`] found.
@@ -184,15 +184,14 @@ impl Evaluation<'_, '_> {
                     first_model,
                 })
             }
-            Models::Auto(candidates, by) => {
+            Models::Auto(choice) => {
                 let selections = std::sync::Mutex::new(Vec::new());
                 let (reports, first_model) =
                     self.run_with(perturbs, &|train_set, validation_set, fold_seed| {
                         let model = crate::selection::train_auto(
                             &images(train_set),
                             &images(validation_set),
-                            by,
-                            candidates,
+                            &choice,
                             fold_seed,
                         )?;
                         if let (Some(selection), Ok(mut list)) =
@@ -1101,7 +1100,10 @@ mod tests {
         let candidates = [paper_config_with_dims(5), paper_config_with_dims(10)];
         let run = evaluation(&samples, &protocol, 2, 7)
             .run_each(
-                Models::Auto(&candidates, crate::selection::ValidateBy::Auto),
+                Models::Auto(crate::selection::AutoChoice::new(
+                    &candidates,
+                    crate::selection::ValidateBy::Auto,
+                )),
                 &[None],
             )
             .unwrap();
@@ -1118,10 +1120,10 @@ mod tests {
         assert_eq!(total as usize, 2 * samples.len());
         // `run` is `run_each` on the images as they are
         let alone = evaluation(&samples, &protocol, 2, 7)
-            .run(Models::Auto(
+            .run(Models::Auto(crate::selection::AutoChoice::new(
                 &candidates,
                 crate::selection::ValidateBy::Auto,
-            ))
+            )))
             .unwrap();
         assert_eq!(alone.confusion, report.confusion);
         assert_eq!(alone.per_condition, report.per_condition);

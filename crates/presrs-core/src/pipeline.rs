@@ -143,6 +143,26 @@ pub struct CandidateScore {
     pub per_fold: BTreeMap<String, f64>,
     /// Why the candidate could not be trained, if it could not.
     pub error: Option<String>,
+    /// Not scored: the automatic choice's time budget was spent before its turn (`error` says so).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub skipped: bool,
+}
+
+impl CandidateScore {
+    /// The candidate in words: its features (after an intensity transform, if any) + its classifier,
+    /// and its principal components (`fft1d (sqrt) + pwe, 51 dims`).
+    pub fn name(&self) -> String {
+        let intensity = self.config.preprocess.intensity;
+        let transform = if intensity.is_none() {
+            String::new()
+        } else {
+            format!(" ({intensity})")
+        };
+        format!(
+            "{}{transform} + {}, {} dims",
+            self.features, self.classifier, self.config.dims
+        )
+    }
 }
 
 /// What the automatic choice ([`crate::selection::select`]) did: plain data, stored in the model.
@@ -348,67 +368,25 @@ pub fn train(
     let first = train
         .first()
         .ok_or_else(|| CoreError::NotEnoughData("no training images".into()))?;
-    let mut class_names: Vec<String> = train.iter().map(|image| image.label.to_owned()).collect();
-    class_names.sort();
-    class_names.dedup();
-    if class_names.len() < 2 {
-        return Err(CoreError::NotEnoughData(format!(
-            "training needs at least two classes, got {class_names:?}"
-        )));
-    }
-    let class_of = |image: &LabeledImage<'_>| -> Result<usize> {
-        class_names
-            .binary_search_by(|name| name.as_str().cmp(image.label))
-            .map_err(|_| CoreError::Param {
-                name: "validation label",
-                reason: format!(
-                    "{:?} is not among the training classes {class_names:?}",
-                    image.label
-                ),
-            })
-    };
-    let train_classes = train.iter().map(class_of).collect::<Result<Vec<_>>>()?;
-    let validation_classes = validation
-        .iter()
-        .map(class_of)
-        .collect::<Result<Vec<_>>>()?;
+    let class_names = class_names_of(train)?;
+    let train_classes = class_indices(&class_names, train)?;
+    let validation_classes = class_indices(&class_names, validation)?;
 
-    let image_grid = config.crop.output_grid(first.frame.grid())?;
-    // The limits loading applies, so that every trained model can be read back.
-    check_sizes(&config.features, image_grid)?;
-    let preprocessor = Preprocessor::new(
-        config.crop,
-        config.preprocess,
-        image_grid,
-        config.features.extractor(image_grid)?,
-    );
+    let preprocessor = preprocessor_for(config, first.frame.grid())?;
+    let image_grid = preprocessor.image_grid;
     let n_features = preprocessor.extractor.output_len();
-    let train_features = features_of(train, &preprocessor)?;
-    let validation_features = features_of(validation, &preprocessor)?;
+    let train_features = features_of(train, &preprocessor, Precision::Exact)?;
+    let validation_features = features_of(validation, &preprocessor, Precision::Exact)?;
 
     let pca = Pca::fit(&train_features, n_features, config.dims)?;
     let dims = pca.n_components();
-    // The same projection as a session's (f32), so training and classification see the same vectors.
-    let project_all = |features: &[f64]| -> Result<Vec<f64>> {
-        let mut reduced = vec![0.0; features.len() / n_features * dims];
-        let mut scratch = pca.scratch();
-        for (x, out) in features
-            .chunks_exact(n_features)
-            .zip(reduced.chunks_exact_mut(dims))
-        {
-            pca.project_fast_into(x, &mut scratch, out)?;
-        }
-        Ok(reduced)
-    };
-    let train_reduced = project_all(&train_features)?;
-    let validation_reduced = project_all(&validation_features)?;
     let classifier = config.classifier.fit(
         LabeledVectors {
-            vectors: &train_reduced,
+            vectors: &project_rows(&pca, &train_features)?,
             classes: &train_classes,
         },
         LabeledVectors {
-            vectors: &validation_reduced,
+            vectors: &project_rows(&pca, &validation_features)?,
             classes: &validation_classes,
         },
         class_names.len(),
@@ -441,8 +419,127 @@ pub fn train(
     })
 }
 
+/// The classes of a training set: its distinct labels, sorted; at least two.
+pub(crate) fn class_names_of(train: &[LabeledImage<'_>]) -> Result<Vec<String>> {
+    let mut class_names: Vec<String> = train.iter().map(|image| image.label.to_owned()).collect();
+    class_names.sort();
+    class_names.dedup();
+    if class_names.len() < 2 {
+        return Err(CoreError::NotEnoughData(format!(
+            "training needs at least two classes, got {class_names:?}"
+        )));
+    }
+    Ok(class_names)
+}
+
+/// The class index of every image; a label outside `class_names` is an error.
+pub(crate) fn class_indices(
+    class_names: &[String],
+    images: &[LabeledImage<'_>],
+) -> Result<Vec<usize>> {
+    images
+        .iter()
+        .map(|image| {
+            class_names
+                .binary_search_by(|name| name.as_str().cmp(image.label))
+                .map_err(|_| CoreError::Param {
+                    name: "validation label",
+                    reason: format!(
+                        "{:?} is not among the training classes {class_names:?}",
+                        image.label
+                    ),
+                })
+        })
+        .collect()
+}
+
+/// The crop, preprocessing and feature extractor of `config` for images of `frame_grid`, with the size
+/// limits loading applies checked first (so that every trained model can be read back).
+fn preprocessor_for(config: &TrainConfig, frame_grid: Grid) -> Result<Preprocessor> {
+    let image_grid = config.crop.output_grid(frame_grid)?;
+    check_sizes(&config.features, image_grid)?;
+    Ok(Preprocessor::new(
+        config.crop,
+        config.preprocess,
+        image_grid,
+        config.features.extractor(image_grid)?,
+    ))
+}
+
+/// Projects feature rows (`n x pca.n_features()`) with the PCA's fixed-point projection: the one a
+/// session uses, so that training and classification see the same vectors.
+pub(crate) fn project_rows(pca: &Pca, features: &[f64]) -> Result<Vec<f64>> {
+    let n_features = pca.n_features();
+    let dims = pca.n_components();
+    let mut reduced = vec![0.0; features.len() / n_features * dims];
+    let mut scratch = pca.scratch();
+    for (x, out) in features
+        .chunks_exact(n_features)
+        .zip(reduced.chunks_exact_mut(dims))
+    {
+        pca.project_fast_into(x, &mut scratch, out)?;
+    }
+    Ok(reduced)
+}
+
+/// The features of many images under one configuration: exact (as training computes them) and, when
+/// classification computes them otherwise (the 1-D |FFT| in single precision), as classification
+/// does. What the automatic choice computes once and reuses over its folds and classifiers.
+pub(crate) struct FeatureTable {
+    pub n_features: usize,
+    /// Row-major `n x n_features`.
+    pub exact: Vec<f64>,
+    /// As a session computes them, when that differs from `exact`.
+    pub fast: Option<Vec<f64>>,
+}
+
+impl FeatureTable {
+    /// The features of `images` (all of one grid) under `config`'s crop, preprocessing and features.
+    pub fn of(images: &[LabeledImage<'_>], config: &TrainConfig) -> Result<Self> {
+        let first = images
+            .first()
+            .ok_or_else(|| CoreError::NotEnoughData("no images".into()))?;
+        let preprocessor = preprocessor_for(config, first.frame.grid())?;
+        let exact = features_of(images, &preprocessor, Precision::Exact)?;
+        let fast = if config.features.has_fast_path() {
+            Some(features_of(images, &preprocessor, Precision::Fast)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            n_features: preprocessor.extractor.output_len(),
+            exact,
+            fast,
+        })
+    }
+
+    /// Image `index`'s features as training computes them.
+    pub fn exact_row(&self, index: usize) -> &[f64] {
+        &self.exact[index * self.n_features..(index + 1) * self.n_features]
+    }
+
+    /// Image `index`'s features as a classification session computes them.
+    pub fn fast_row(&self, index: usize) -> &[f64] {
+        let table = self.fast.as_ref().unwrap_or(&self.exact);
+        &table[index * self.n_features..(index + 1) * self.n_features]
+    }
+
+    /// The exact rows of `indices`, in order.
+    pub fn exact_rows(&self, indices: &[usize]) -> Vec<f64> {
+        let mut rows = Vec::with_capacity(indices.len() * self.n_features);
+        for &index in indices {
+            rows.extend_from_slice(self.exact_row(index));
+        }
+        rows
+    }
+}
+
 /// Features of many images (`n x n_features`, row-major), in parallel.
-fn features_of(images: &[LabeledImage<'_>], preprocessor: &Preprocessor) -> Result<Vec<f64>> {
+fn features_of(
+    images: &[LabeledImage<'_>],
+    preprocessor: &Preprocessor,
+    precision: Precision,
+) -> Result<Vec<f64>> {
     let n_features = preprocessor.extractor.output_len();
     let mut features = vec![0.0; images.len() * n_features];
     features
@@ -453,7 +550,7 @@ fn features_of(images: &[LabeledImage<'_>], preprocessor: &Preprocessor) -> Resu
             || preprocessor.clone(),
             |preprocessor, (index, (out, image))| {
                 preprocessor
-                    .features_into(&image.frame, out, Precision::Exact)
+                    .features_into(&image.frame, out, precision)
                     .map_err(|err| match err {
                         CoreError::Shape {
                             what,

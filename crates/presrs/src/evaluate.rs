@@ -312,6 +312,7 @@ impl<'d> EvalSetup<'d> {
                 n_train.saturating_sub(1)
             ));
         }
+        warnings.extend(crate::method::budget_warning(&selections));
         Ok(EvalOutcome {
             report,
             selections,
@@ -500,7 +501,7 @@ fn models<'c>(
     candidates: &'c [CheckedTrainConfig],
 ) -> Models<'c> {
     if method.is_auto() {
-        Models::Auto(candidates, method.validate_by)
+        Models::Auto(method.auto_choice(candidates))
     } else {
         Models::Config(config)
     }

@@ -2,11 +2,13 @@
 //! or chosen automatically by validation. The one definition of `auto` and of the paper's method.
 
 use std::str::FromStr;
+use std::time::Duration;
 
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::{Intensity, Preprocess};
+use presrs_core::selection::AutoChoice;
 pub use presrs_core::selection::ValidateBy;
 use presrs_core::split::ValidationSize;
 use presrs_core::{CoreError, Crop, Grid};
@@ -16,15 +18,31 @@ use crate::error::{Error, Result};
 /// Principal components kept unless told otherwise (the paper's 51).
 pub const DEFAULT_DIMS: usize = 51;
 
-/// The feature families an automatic choice tries by default: the cheap ones (a GLCM image costs 2-3x
-/// an FFT one, and glcm never won on the simulated data).
+/// The cheap feature families, which an automatic choice scores first.
 pub const FAST_CANDIDATE_FEATURES: [&[FeatureKind]; 3] = [
     &[FeatureKind::Fft1d],
     &[FeatureKind::Fft2d],
     &[FeatureKind::Fft2dPolar],
 ];
 
-/// The feature families a full automatic choice or a comparison tries.
+/// The texture families (a GLCM image costs 2-3x an FFT one), scored after the cheap ones and the
+/// intensity transforms, so that a time budget cuts them first.
+pub const TEXTURE_CANDIDATE_FEATURES: [&[FeatureKind]; 2] = [
+    &[FeatureKind::Glcm],
+    &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
+];
+
+/// How long an automatic choice may score candidates by default, per model trained: the whole default
+/// search of a few hundred images fits in it on a 2-core machine; on larger sets it cuts the texture
+/// families first (and says so).
+pub const DEFAULT_BUDGET: Duration = Duration::from_secs(60);
+
+/// The numbers of principal components the best few candidates of an automatic choice are scored again
+/// with, when `--dims` is not given: half and twice the paper's 51 (real sets differ in how many
+/// components carry the classes; more than the training images allow are lowered to that).
+pub const REFINED_DIMS: [usize; 2] = [25, 102];
+
+/// Every feature family: what a comparison tries.
 pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
     &[FeatureKind::Fft1d],
     &[FeatureKind::Fft2d],
@@ -71,12 +89,16 @@ pub enum ClassifierChoice {
 
 /// How a model is built: crop, features, reduction, classifier and preprocessing. The default is the
 /// automatic choice; [`Method::paper`] is the paper's 1-D |FFT| + Parzen window.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Method {
     pub features: FeatureChoice,
     pub classifier: ClassifierChoice,
-    /// With `auto`: try every feature family, the slow texture ones too.
+    /// With `auto`: try every intensity transform with every feature family (by default only with the
+    /// paper's 1-D |FFT|).
     pub full_search: bool,
+    /// With `auto`: how long scoring the candidates of one model may take (`None`: no limit, every
+    /// candidate scored). Not part of `Default`'s equality of intent: see [`DEFAULT_BUDGET`].
+    pub budget: Option<Duration>,
     /// Principal components kept (at most the training images minus one, and the features) [default:
     /// [`DEFAULT_DIMS`]].
     pub dims: Option<usize>,
@@ -85,6 +107,22 @@ pub struct Method {
     /// How an automatic choice validates its candidates inside the training data (by group, condition
     /// or stratified splits; `auto`: the most honest the data allow).
     pub validate_by: ValidateBy,
+}
+
+impl Default for Method {
+    /// The automatic choice, with the default budget.
+    fn default() -> Self {
+        Self {
+            features: FeatureChoice::Auto,
+            classifier: ClassifierChoice::Auto,
+            full_search: false,
+            budget: Some(DEFAULT_BUDGET),
+            dims: None,
+            preprocess: Preprocess::default(),
+            crop: CropChoice::Auto,
+            validate_by: ValidateBy::Auto,
+        }
+    }
 }
 
 impl Method {
@@ -132,37 +170,33 @@ impl Method {
         )
     }
 
-    /// Every configuration an automatic choice tries (auto parts run over the candidates — the cheap
-    /// feature families unless `full_search` — fixed parts stay), or, with `all`, every feature x
-    /// classifier combination (for a comparison).
+    /// Every configuration an automatic choice tries, in the order it scores them (auto parts run over
+    /// the candidates, fixed parts stay), or, with `all`, every feature x classifier combination (for a
+    /// comparison). The order: the cheap families (the paper's first), then the intensity transforms
+    /// (with the paper's features, or with every cheap family in a full search), then the texture
+    /// families (with the transforms in a full search): a time budget cuts from the end.
     pub fn candidates(&self, grid: Grid, all: bool) -> Result<Vec<CheckedTrainConfig>> {
-        let families: &[&[FeatureKind]] = if all || self.full_search {
-            &CANDIDATE_FEATURES
-        } else {
-            &FAST_CANDIDATE_FEATURES
-        };
-        let features: Vec<FeatureConfig> = match &self.features {
-            FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
-            _ => families
-                .iter()
-                .map(|kinds| FeatureConfig::combined(kinds))
-                .collect(),
-        };
         let classifiers: Vec<ClassifierKind> = match self.classifier {
             ClassifierChoice::Kind(kind) if !all => vec![kind],
             _ => ClassifierKind::ALL.to_vec(),
         };
-        let mut out = Vec::with_capacity(features.len() * classifiers.len());
-        for feature in &features {
-            for &classifier in &classifiers {
-                out.push(self.config(grid, feature.clone(), classifier.default_config())?);
-            }
-        }
-        // The intensity transforms, when the features are chosen and no transform is given: with every
-        // family in a full search, with the paper's (the cheapest) otherwise, so that the default search
-        // grows by a third, not threefold.
-        if !all && self.features == FeatureChoice::Auto && self.preprocess.intensity.is_none() {
-            for intensity in [Intensity::Sqrt, Intensity::Log1p] {
+        let families: Vec<FeatureConfig> = match &self.features {
+            FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
+            _ => CANDIDATE_FEATURES
+                .iter()
+                .map(|kinds| FeatureConfig::combined(kinds))
+                .collect(),
+        };
+        let given = self.preprocess.intensity;
+        let intensities: &[Intensity] =
+            if !all && self.features == FeatureChoice::Auto && given.is_none() {
+                &Intensity::ALL
+            } else {
+                std::slice::from_ref(&given)
+            };
+        let mut out = Vec::new();
+        for texture in [false, true] {
+            for &intensity in intensities {
                 let method = Self {
                     preprocess: Preprocess {
                         intensity,
@@ -170,8 +204,12 @@ impl Method {
                     },
                     ..self.clone()
                 };
-                for feature in &features {
-                    if !self.full_search && !matches!(feature, FeatureConfig::Fft1d(_)) {
+                for feature in families.iter().filter(|f| is_texture(f) == texture) {
+                    // Transforms multiply the default search by a third, not threefold.
+                    let tried = intensity == given
+                        || self.full_search
+                        || matches!(feature, FeatureConfig::Fft1d(_));
+                    if !tried {
                         continue;
                     }
                     for &classifier in &classifiers {
@@ -185,6 +223,20 @@ impl Method {
             }
         }
         Ok(out)
+    }
+
+    /// How the automatic choice picks among `candidates` (from [`candidates`](Self::candidates)): this
+    /// method's validation and budget, and, unless `dims` is given, the best candidates tried again
+    /// with [`REFINED_DIMS`] components.
+    pub fn auto_choice<'c>(&self, candidates: &'c [CheckedTrainConfig]) -> AutoChoice<'c> {
+        let refine: &'static [usize] = if self.dims.is_none() {
+            &REFINED_DIMS
+        } else {
+            &[]
+        };
+        AutoChoice::new(candidates, self.validate_by)
+            .with_budget(self.budget)
+            .with_refined_dims(refine)
     }
 
     fn config(
@@ -232,6 +284,57 @@ impl Method {
             ))),
             ClassifierChoice::Kind(_) => Ok(()),
         }
+    }
+}
+
+/// The warning for selections whose time budget cut candidates (`None` when none was cut): how many
+/// models, which candidates, and what to do.
+pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Option<String> {
+    let cut: Vec<_> = selections
+        .iter()
+        .filter(|selection| selection.scores.iter().any(|score| score.skipped))
+        .collect();
+    let first = cut.first()?;
+    let skipped: Vec<&presrs_core::selection::CandidateScore> =
+        first.scores.iter().filter(|score| score.skipped).collect();
+    let mut families: Vec<String> = skipped
+        .iter()
+        .map(|score| {
+            let intensity = score.config.preprocess.intensity;
+            if intensity.is_none() {
+                score.features.clone()
+            } else {
+                format!("{} ({intensity})", score.features)
+            }
+        })
+        .collect();
+    families.dedup();
+    let budget = skipped[0]
+        .error
+        .as_deref()
+        .unwrap_or("the time budget was spent");
+    let models = if selections.len() == 1 {
+        String::new()
+    } else {
+        format!("in {} of {} models, ", cut.len(), selections.len())
+    };
+    Some(format!(
+        "{models}the automatic choice was cut short ({}): {} of {} candidates not tried ({}); \
+         give --budget a larger value in seconds, or --budget 0 for no limit (the choice then \
+         does not depend on the machine's speed)",
+        budget.trim_start_matches("not tried: "),
+        skipped.len(),
+        first.scores.len(),
+        families.join(", ")
+    ))
+}
+
+/// Whether `features` holds a texture family (the costly ones, scored last).
+fn is_texture(features: &FeatureConfig) -> bool {
+    match features {
+        FeatureConfig::Glcm(_) => true,
+        FeatureConfig::Combined(config) => config.parts.iter().any(is_texture),
+        _ => false,
     }
 }
 
@@ -312,22 +415,33 @@ mod tests {
     use super::*;
 
     #[test]
-    fn auto_tries_the_fast_families_with_every_classifier_and_paper_is_fft1d_pwe() {
+    fn auto_tries_every_family_with_every_classifier_cheap_first_and_paper_is_fft1d_pwe() {
         let grid = Grid::new(44, 44);
         let auto = Method::default();
         assert!(auto.is_auto());
+        let candidates = auto.candidates(grid, false).unwrap();
+        let n_classifiers = ClassifierKind::ALL.len();
+        // every family, and the paper's features with the two intensity transforms
         assert_eq!(
-            auto.candidates(grid, false).unwrap().len(),
-            // the fast families, and the paper's with the two intensity transforms
-            (FAST_CANDIDATE_FEATURES.len() + 2) * ClassifierKind::ALL.len()
+            candidates.len(),
+            (CANDIDATE_FEATURES.len() + 2) * n_classifiers
         );
+        // the paper's method first; the texture families last, where a budget cuts
+        assert_eq!(candidates[0], auto.paper_config(grid).unwrap());
+        let texture = |c: &CheckedTrainConfig| is_texture(&c.config().features);
+        let first_texture = candidates.iter().position(texture).unwrap();
+        assert_eq!(
+            first_texture,
+            candidates.len() - TEXTURE_CANDIDATE_FEATURES.len() * n_classifiers
+        );
+        assert!(candidates[first_texture..].iter().all(texture));
         let full = Method {
             full_search: true,
             ..Method::default()
         };
         assert_eq!(
             full.candidates(grid, false).unwrap().len(),
-            3 * CANDIDATE_FEATURES.len() * ClassifierKind::ALL.len()
+            3 * CANDIDATE_FEATURES.len() * n_classifiers
         );
         let intensities = |method: &Method| -> Vec<Intensity> {
             let mut seen: Vec<Intensity> = method
@@ -339,7 +453,11 @@ mod tests {
             seen.dedup();
             seen
         };
-        assert_eq!(intensities(&full), Intensity::ALL);
+        // the cheap families under each transform, then the texture ones
+        assert_eq!(
+            intensities(&full),
+            [Intensity::ALL, Intensity::ALL].concat()
+        );
         // a transform given is kept, not searched; a comparison does not multiply its rows
         let given = Method {
             preprocess: Preprocess {

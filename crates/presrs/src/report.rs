@@ -1052,7 +1052,7 @@ pub fn fault_sweep(
             let paper = evaluation.run_each(Models::Config(paper), &each)?.reports;
             let auto = if auto {
                 evaluation
-                    .run_each(Models::Auto(&candidates, options.method.validate_by), &each)?
+                    .run_each(Models::Auto(options.method.auto_choice(&candidates)), &each)?
                     .reports
             } else {
                 Vec::new()

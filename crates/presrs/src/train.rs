@@ -135,8 +135,7 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         presrs_core::selection::train_auto(
             &train_images,
             &validation_images,
-            method.validate_by,
-            &method.candidates(grid, false)?,
+            &method.auto_choice(&method.candidates(grid, false)?),
             options.seed,
         )
     } else {
@@ -159,6 +158,9 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
                 .map(|(class, &n)| (None, class.as_str(), n)),
         ));
     }
+    warnings.extend(crate::method::budget_warning(
+        model.selection().cloned().as_slice(),
+    ));
     let kept = model.pca().n_components();
     if let Some(dims) = method.dims
         && kept < dims

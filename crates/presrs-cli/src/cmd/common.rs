@@ -20,8 +20,9 @@ pub struct PipelineArgs {
     /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
     /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes); join
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
-    /// by group or condition (--validate-by), among fft1d, fft2d and fft2d_polar; --full-search
-    /// adds glcm and fft2d_polar+glcm). `--features fft1d --classifier pwe` is the paper's method.
+    /// by group or condition (--validate-by), among every family: the FFT ones first, then fft1d after
+    /// sqrt and log1p, then glcm and fft2d_polar+glcm, as far as --budget allows).
+    /// `--features fft1d --classifier pwe` is the paper's method.
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<FeatureChoice>())]
     pub features: FeatureChoice,
     /// Classifier: pwe (Parzen window, the paper's), mle (Gaussian, shrunk full covariance per class),
@@ -29,10 +30,15 @@ pub struct PipelineArgs {
     /// or auto (the default: chosen by validation inside the training data among all five).
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
-    /// With auto: try every feature family, the slow texture ones (glcm, fft2d_polar+glcm) too (about
-    /// twice the time of the default search; they did not win on the simulated data).
+    /// With auto: try the intensity transforms (sqrt, log1p) with every feature family, not only with
+    /// fft1d (about twice the time of the default search).
     #[arg(long)]
     pub full_search: bool,
+    /// With auto: seconds the automatic choice may spend scoring its candidates, per model trained (in
+    /// eval, per fold and repeat); the texture families, scored last, are cut first, with a warning.
+    /// 0: no limit (every candidate is tried, and the choice does not depend on the machine's speed).
+    #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_budget)]
+    pub budget: f64,
     /// Principal components kept, at least 1 (at most the number of training images minus one, and the
     /// number of features: a larger value is lowered to that, with a warning when given) [default: 51].
     #[arg(long, value_name = "DIMS", value_parser = parse_positive)]
@@ -76,6 +82,7 @@ impl PipelineArgs {
             features: self.features.clone(),
             classifier: self.classifier,
             full_search: self.full_search,
+            budget: (self.budget > 0.0).then(|| std::time::Duration::from_secs_f64(self.budget)),
             dims: self.dims,
             preprocess: Preprocess {
                 normalise_load: self.normalise_load,
@@ -86,6 +93,21 @@ impl PipelineArgs {
             validate_by: self.validate_by,
         }
     }
+}
+
+/// A time budget in seconds (a non-negative number; 0: no limit).
+fn parse_budget(text: &str) -> Result<f64, String> {
+    let seconds: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number of seconds (e.g. 60, or 0 for no limit)"))?;
+    // (a finite limit: `Duration` holds at most about 1.8e19 s)
+    if !seconds.is_finite() || !(0.0..=1e12).contains(&seconds) {
+        return Err(format!(
+            "the budget must be a number of seconds, 0 or more (0: no limit); got {text}"
+        ));
+    }
+    Ok(seconds)
 }
 
 /// How samples are taken from movies.

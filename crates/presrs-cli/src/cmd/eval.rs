@@ -246,9 +246,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         let mut chosen: BTreeMap<String, usize> = BTreeMap::new();
         for selection in &selections {
             if let Some(score) = selection.chosen() {
-                *chosen
-                    .entry(format!("{} + {}", score.features, score.classifier))
-                    .or_default() += 1;
+                *chosen.entry(score.name()).or_default() += 1;
             }
         }
         writeln!(

@@ -175,24 +175,20 @@ fn print_selection(selection: &Selection, out: &mut dyn Write) -> anyhow::Result
         match &score.error {
             None => writeln!(
                 out,
-                "{mark} {:<18} {:<5} {:6.2} % +- {:.2}",
-                score.features,
-                score.classifier,
+                "{mark} {:<40} {:6.2} % +- {:.2}",
+                score.name(),
                 100.0 * score.accuracy.mean,
                 100.0 * score.accuracy.std
             )?,
-            Some(err) => writeln!(
-                out,
-                "{mark} {:<18} {:<5} failed: {err}",
-                score.features, score.classifier
-            )?,
+            Some(err) if score.skipped => writeln!(out, "{mark} {:<40} {err}", score.name())?,
+            Some(err) => writeln!(out, "{mark} {:<40} failed: {err}", score.name())?,
         }
     }
     if let Some(chosen) = selection.chosen() {
         writeln!(
             out,
-            "chosen: {} + {} (the paper's method: --features fft1d --classifier pwe)",
-            chosen.features, chosen.classifier
+            "chosen: {} (the paper's method: --features fft1d --classifier pwe)",
+            chosen.name()
         )?;
         writeln!(
             out,

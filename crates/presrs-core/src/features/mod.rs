@@ -124,6 +124,16 @@ impl FeatureConfig {
         }
     }
 
+    /// Whether classification computes these features otherwise than training ([`Precision::Fast`]:
+    /// the 1-D |FFT| in single precision, alone or as a part).
+    pub fn has_fast_path(&self) -> bool {
+        match self {
+            Self::Fft1d(_) => true,
+            Self::Fft2d(_) | Self::Glcm(_) => false,
+            Self::Combined(config) => config.parts.iter().any(Self::has_fast_path),
+        }
+    }
+
     /// A short name: the family, or the parts joined with `+`.
     pub fn name(&self) -> String {
         match self {

@@ -1,0 +1,272 @@
+//! Automatic choice of the feature family and classifier, by validation inside the training data only.
+//!
+//! Every candidate [`TrainConfig`](crate::pipeline::TrainConfig) is scored on folds made from the training + validation images alone,
+//! as [`ValidateBy`] says (by default the most honest the data allow):
+//! - **leave one group out** (the images' `group`, e.g. a person or a trial): train on the other groups
+//!   (their own 35 % validating the classifier's hyper-parameters), test on the held-out one — what users
+//!   of grouped data need is accuracy on groups the model has not seen; the default with 3 or more groups;
+//! - **leave one condition out** (e.g. a gait), the same way; the default with fewer groups and 2 or more
+//!   conditions;
+//! - otherwise three seeded stratified splits: 70 % to train (of which 35 % validate), 30 % to test.
+//!
+//! The candidate with the highest mean fold accuracy wins; ties go to the earlier candidate (callers list
+//! the paper's fft1d + Parzen window first). The winner is then trained on the given training and validation
+//! images and the [`Selection`] (every candidate's scores) is stored in the model.
+//!
+//! Candidates that share their features (crop, preprocessing, feature family) are scored together: the
+//! features of every image once, each fold's PCA once, then every classifier on them (`scoring`). A
+//! time budget ([`AutoChoice::budget`]) stops before a feature group that would end past it; callers list
+//! the cheap and likely candidates first.
+
+mod folds;
+mod scoring;
+#[cfg(test)]
+mod tests;
+
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+use crate::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
+
+// The record of a selection is plain data kept in the trained model (`pipeline`); the procedure lives
+// here. Re-exported so `select`'s result type is nameable beside it.
+pub use crate::pipeline::{CandidateScore, Selection};
+
+/// How the automatic choice validates its candidates inside the training data.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ValidateBy {
+    /// Group when the images span 3 or more groups, else condition when they span 2 or more, else
+    /// stratified splits.
+    #[default]
+    Auto,
+    /// Leave one group out (at least two groups needed).
+    Group,
+    /// Leave one condition out (at least two conditions needed).
+    Condition,
+    /// Three stratified 70/30 splits.
+    Split,
+}
+
+impl ValidateBy {
+    pub const NAMES: [&'static str; 4] = ["auto", "group", "condition", "split"];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Group => "group",
+            Self::Condition => "condition",
+            Self::Split => "split",
+        }
+    }
+
+    /// What `Auto` means for images with these distinct groups and conditions (counts).
+    pub fn resolve(self, groups: usize, conditions: usize) -> Self {
+        match self {
+            Self::Auto if groups >= 3 => Self::Group,
+            Self::Auto if conditions >= 2 => Self::Condition,
+            Self::Auto => Self::Split,
+            other => other,
+        }
+    }
+}
+
+impl std::fmt::Display for ValidateBy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for ValidateBy {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(Self::Auto),
+            "group" => Ok(Self::Group),
+            "condition" => Ok(Self::Condition),
+            "split" => Ok(Self::Split),
+            _ => Err(format!(
+                "unknown validation {text:?} (known: {})",
+                Self::NAMES.join(", ")
+            )),
+        }
+    }
+}
+
+/// What an automatic choice chooses among, and how.
+#[derive(Clone, Copy, Debug)]
+pub struct AutoChoice<'c> {
+    /// In order of preference: ties go to the earlier, and a budget cuts from the end.
+    pub candidates: &'c [CheckedTrainConfig],
+    pub by: ValidateBy,
+    /// Time for scoring the candidates; `None`: no limit (every candidate is scored, and the choice is
+    /// deterministic in the seed).
+    pub budget: Option<Duration>,
+    /// Numbers of principal components the best [`REFINED`] candidates are scored again with, once
+    /// every candidate has been scored (empty: the candidates' own only).
+    pub refine_dims: &'c [usize],
+}
+
+/// How many of the best candidates are scored again with other numbers of principal components.
+pub const REFINED: usize = 3;
+
+impl<'c> AutoChoice<'c> {
+    /// Every candidate scored, validated as `by` says.
+    pub fn new(candidates: &'c [CheckedTrainConfig], by: ValidateBy) -> Self {
+        Self {
+            candidates,
+            by,
+            budget: None,
+            refine_dims: &[],
+        }
+    }
+
+    /// With a time budget.
+    pub fn with_budget(self, budget: Option<Duration>) -> Self {
+        Self { budget, ..self }
+    }
+
+    /// With the best candidates scored again with these numbers of principal components.
+    pub fn with_refined_dims(self, refine_dims: &'c [usize]) -> Self {
+        Self {
+            refine_dims,
+            ..self
+        }
+    }
+}
+
+/// Scores the candidates on folds of `images` (training + validation images together), made as
+/// `choice.by` says from the images' `group` and `condition`, and picks the best. With a budget,
+/// feature groups that would end past it are not scored (see [`CandidateScore::skipped`]); without
+/// one, every candidate is scored and the result is deterministic in `seed`.
+pub fn select(
+    images: &[LabeledImage<'_>],
+    choice: &AutoChoice<'_>,
+    seed: u64,
+) -> Result<Selection> {
+    let AutoChoice {
+        candidates,
+        by,
+        budget,
+        refine_dims,
+    } = *choice;
+    let started = std::time::Instant::now();
+    if candidates.is_empty() {
+        return Err(CoreError::Param {
+            name: "candidates",
+            reason: "the automatic choice needs at least one candidate".into(),
+        });
+    }
+    let (folds, method) = folds::make_folds(images, by, seed)?;
+    // Each candidate's folds in order, classifiers in parallel: the scores, and so the choice, do not
+    // depend on the number of threads.
+    let mut scores = scoring::score_candidates(images, &folds, candidates, budget)?;
+    let variants = dims_variants(&scores, refine_dims)?;
+    if !variants.is_empty() {
+        let left = budget.map(|budget| budget.saturating_sub(started.elapsed()));
+        if left == Some(Duration::ZERO) {
+            scores.extend(
+                variants
+                    .iter()
+                    .map(|v| scoring::skipped(v, budget.unwrap_or_default())),
+            );
+        } else {
+            scores.extend(scoring::score_candidates(images, &folds, &variants, left)?);
+        }
+    }
+    let mut chosen = 0;
+    for (i, score) in scores.iter().enumerate() {
+        if score.error.is_none()
+            && (scores[chosen].error.is_some()
+                || score.accuracy.mean > scores[chosen].accuracy.mean)
+        {
+            chosen = i;
+        }
+    }
+    if let Some(error) = &scores[chosen].error {
+        // Every candidate failed; the first one's reason stands for them.
+        let name = format!(
+            "{} + {}",
+            scores[chosen].features, scores[chosen].classifier
+        );
+        return Err(CoreError::NotEnoughData(if scores.len() == 1 {
+            format!("{name} could not be trained ({error})")
+        } else {
+            format!(
+                "none of the {} candidates could be trained ({name}: {error})",
+                scores.len()
+            )
+        }));
+    }
+    Ok(Selection {
+        method,
+        chosen,
+        scores,
+    })
+}
+
+/// The best [`REFINED`] scored candidates (by mean accuracy, ties to the earlier) with each of `dims`
+/// they do not already have, best first.
+fn dims_variants(scores: &[CandidateScore], dims: &[usize]) -> Result<Vec<CheckedTrainConfig>> {
+    if dims.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut ranked: Vec<&CandidateScore> = scores
+        .iter()
+        .filter(|score| score.error.is_none())
+        .collect();
+    // (a stable sort: ties keep the candidates' order)
+    ranked.sort_by(|a, b| b.accuracy.mean.total_cmp(&a.accuracy.mean));
+    let mut variants = Vec::new();
+    for score in ranked.into_iter().take(REFINED) {
+        for &d in dims.iter().filter(|&&d| d != score.config.dims) {
+            variants.push(
+                crate::pipeline::TrainConfig {
+                    dims: d,
+                    ..score.config.clone()
+                }
+                .check()?,
+            );
+        }
+    }
+    Ok(variants)
+}
+
+/// [`select`] on training + validation images, then [`train`] of the winner on them; the model records
+/// the selection.
+pub fn train_auto(
+    train_images: &[LabeledImage<'_>],
+    validation_images: &[LabeledImage<'_>],
+    choice: &AutoChoice<'_>,
+    seed: u64,
+) -> Result<TrainedModel> {
+    let candidates = choice.candidates;
+    // The winner is trained on the given split: a candidate that cannot be trained without validation
+    // images is refused now, not after every candidate has been scored.
+    if validation_images.is_empty()
+        && let Some(config) = candidates
+            .iter()
+            .map(CheckedTrainConfig::config)
+            .find(|config| config.classifier.needs_validation())
+    {
+        return Err(CoreError::NotEnoughData(format!(
+            "the candidate {} + {} chooses its parameters on validation images, and there are none: \
+             keep some for validation, or leave it out of the candidates (or give it a fixed sigma)",
+            config.features.name(),
+            config.classifier.kind().as_str()
+        )));
+    }
+    let all: Vec<LabeledImage<'_>> = train_images
+        .iter()
+        .chain(validation_images)
+        .copied()
+        .collect();
+    let selection = select(&all, choice, seed)?;
+    // (the winner may be a candidate refined with other dims: its configuration is in its score)
+    let config = selection.scores[selection.chosen].config.clone().check()?;
+    let model = train(train_images, validation_images, &config)?;
+    Ok(model.with_selection(selection))
+}

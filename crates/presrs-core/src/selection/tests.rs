@@ -1,0 +1,321 @@
+use super::*;
+use std::collections::BTreeMap;
+
+use crate::frame::{Frame, Grid};
+use crate::pipeline::TrainConfig;
+
+/// Four images of `frame`, labelled a, b, a, b.
+fn blank_images(frame: &Frame) -> Vec<LabeledImage<'_>> {
+    ["a", "b", "a", "b"]
+        .iter()
+        .map(|label| LabeledImage::new(frame.view(), label))
+        .collect()
+}
+
+/// Images of the four synthetic classes, each with a group (of 4) and a condition (of 2).
+fn grouped(frames: &[Frame]) -> Vec<LabeledImage<'_>> {
+    const GROUPS: [&str; 4] = ["g0", "g1", "g2", "g3"];
+    frames
+        .iter()
+        .enumerate()
+        .map(|(i, frame)| LabeledImage {
+            frame: frame.view(),
+            label: crate::testing::SYNTHETIC_CLASSES[i % 4],
+            condition: Some(["c0", "c1"][(i / 4) % 2]),
+            group: Some(GROUPS[(i / 8) % 4]),
+        })
+        .collect()
+}
+
+/// The folds follow `ValidateBy`: auto is leave-one-group-out with 3 or more groups, else by
+/// condition, else splits; a validation the data cannot give is an error that says why.
+#[test]
+fn validation_follows_the_groups_then_the_conditions() {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let frames: Vec<Frame> = (0..64)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let lda = TrainConfig {
+        classifier: crate::classifier::ClassifierKind::Lda.default_config(),
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let candidates = std::slice::from_ref(&lda);
+    let folds = |selection: &Selection| -> Vec<String> {
+        selection.scores[0].per_fold.keys().cloned().collect()
+    };
+    let auto = select(&images, &AutoChoice::new(candidates, ValidateBy::Auto), 1).unwrap();
+    assert_eq!(folds(&auto), ["g0", "g1", "g2", "g3"]);
+    assert!(
+        auto.method.starts_with("leave one group out"),
+        "{}",
+        auto.method
+    );
+    let by_condition = select(
+        &images,
+        &AutoChoice::new(candidates, ValidateBy::Condition),
+        1,
+    )
+    .unwrap();
+    assert_eq!(folds(&by_condition), ["c0", "c1"]);
+    let split = select(&images, &AutoChoice::new(candidates, ValidateBy::Split), 1).unwrap();
+    assert_eq!(folds(&split), ["split 0", "split 1", "split 2"]);
+    // Two groups only: auto falls back to the conditions; without either, to splits.
+    let two: Vec<LabeledImage<'_>> = images
+        .iter()
+        .filter(|i| matches!(i.group, Some("g0" | "g1")))
+        .copied()
+        .collect();
+    let auto = select(&two, &AutoChoice::new(candidates, ValidateBy::Auto), 1).unwrap();
+    assert_eq!(folds(&auto), ["c0", "c1"]);
+    let plain: Vec<LabeledImage<'_>> = images
+        .iter()
+        .map(|i| LabeledImage::new(i.frame, i.label))
+        .collect();
+    let auto = select(&plain, &AutoChoice::new(candidates, ValidateBy::Auto), 1).unwrap();
+    assert_eq!(folds(&auto), ["split 0", "split 1", "split 2"]);
+    let err = select(&plain, &AutoChoice::new(candidates, ValidateBy::Group), 1).unwrap_err();
+    assert!(
+        matches!(&err, CoreError::NotEnoughData(reason) if reason.contains("validating by group")),
+        "{err}"
+    );
+    assert_eq!("Group".parse::<ValidateBy>(), Ok(ValidateBy::Group));
+    assert!(
+        "person"
+            .parse::<ValidateBy>()
+            .unwrap_err()
+            .contains("known: auto")
+    );
+}
+
+/// When every candidate fails, the error names the first and gives its reason, once.
+#[test]
+fn every_candidate_failing_names_the_first_and_its_reason() {
+    let frame = Frame::zeros(Grid::new(44, 44));
+    let labels = ["a", "b"].repeat(6);
+    let images: Vec<_> = labels
+        .iter()
+        .map(|label| LabeledImage::new(frame.view(), label))
+        .collect();
+    // Identical images: the Parzen window cannot scale σ to their distances.
+    let pwe = TrainConfig::default().check().unwrap();
+    let err = select(
+        &images,
+        &AutoChoice::new(std::slice::from_ref(&pwe), ValidateBy::Auto),
+        1,
+    )
+    .unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.starts_with("not enough data: fft1d + pwe could not be trained (not enough data: "),
+        "{text}"
+    );
+    let err = select(
+        &images,
+        &AutoChoice::new(&[pwe.clone(), pwe], ValidateBy::Auto),
+        1,
+    )
+    .unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.starts_with(
+            "not enough data: none of the 2 candidates could be trained (fft1d + pwe: "
+        ),
+        "{text}"
+    );
+}
+
+/// Without validation images, a candidate that needs them (the Parzen window choosing σ) is refused
+/// before any candidate is scored; with a fixed σ the same candidate trains.
+#[test]
+fn candidates_needing_validation_images_are_refused_up_front() {
+    let frame = Frame::zeros(Grid::new(44, 44));
+    let images = blank_images(&frame);
+    let candidates = [TrainConfig::default().check().unwrap()];
+    let err = train_auto(
+        &images,
+        &[],
+        &AutoChoice::new(&candidates, ValidateBy::Auto),
+        1,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&err, CoreError::NotEnoughData(reason) if reason.contains("fft1d + pwe")),
+        "{err}"
+    );
+    let fixed = TrainConfig {
+        classifier: crate::classifier::ClassifierConfig::Pwe(crate::classifier::ParzenConfig {
+            sigma: crate::classifier::SigmaChoice::Fixed { sigma: 1.0 },
+        }),
+        ..TrainConfig::default()
+    };
+    let trained = train_auto(
+        &images,
+        &[],
+        &AutoChoice::new(&[fixed.check().unwrap()], ValidateBy::Auto),
+        1,
+    );
+    assert!(trained.is_ok(), "{:?}", trained.err());
+}
+
+/// The slow, obvious oracle of `scoring`: each candidate trained on each fold with [`train`] and the
+/// held-out images classified by a session, the first fold it cannot be trained on ending it.
+fn score_by_training_each(
+    images: &[LabeledImage<'_>],
+    folds: &[folds::InnerFold],
+    candidate: &CheckedTrainConfig,
+) -> (Vec<(String, f64)>, Option<String>) {
+    let mut per_fold = Vec::new();
+    for fold in folds {
+        let pick = |indices: &[usize]| indices.iter().map(|&i| images[i]).collect::<Vec<_>>();
+        match train(&pick(&fold.train), &pick(&fold.validation), candidate) {
+            Ok(model) => {
+                let mut session = model.session();
+                let correct = fold
+                    .test
+                    .iter()
+                    .filter(|&&i| {
+                        session.classify(&images[i].frame).unwrap().label == images[i].label
+                    })
+                    .count();
+                per_fold.push((fold.name.clone(), correct as f64 / fold.test.len() as f64));
+            }
+            Err(err) => return (per_fold, Some(err.to_string())),
+        }
+    }
+    (per_fold, None)
+}
+
+/// Features computed once per feature group and PCA once per fold and dims give, candidate for
+/// candidate and fold for fold, what training each candidate on each fold gives: the same accuracies
+/// (bit for bit) and the same failures. Candidates cover the fast 1-D path, 2-D and texture features,
+/// an intensity transform, every classifier, and two numbers of components in one group.
+#[test]
+fn cached_scores_equal_training_each_candidate_on_each_fold() {
+    use crate::classifier::ClassifierKind;
+    use crate::features::FeatureKind;
+    use crate::preprocess::{Intensity, Preprocess};
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let frames: Vec<Frame> = (0..64)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let config = |features: &[FeatureKind], classifier: ClassifierKind, dims, intensity| {
+        TrainConfig {
+            features: crate::features::FeatureConfig::combined(features),
+            classifier: classifier.default_config(),
+            dims,
+            preprocess: Preprocess {
+                intensity,
+                ..Preprocess::NONE
+            },
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    let mut candidates = Vec::new();
+    for classifier in ClassifierKind::ALL {
+        candidates.push(config(
+            &[FeatureKind::Fft1d],
+            classifier,
+            12,
+            Intensity::None,
+        ));
+    }
+    candidates.push(config(
+        &[FeatureKind::Fft1d],
+        ClassifierKind::Lda,
+        5,
+        Intensity::None,
+    ));
+    candidates.push(config(
+        &[FeatureKind::Fft2d],
+        ClassifierKind::Svm,
+        12,
+        Intensity::None,
+    ));
+    candidates.push(config(
+        &[FeatureKind::Fft1d],
+        ClassifierKind::Pwe,
+        12,
+        Intensity::Sqrt,
+    ));
+    candidates.push(config(
+        &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
+        ClassifierKind::Knn,
+        8,
+        Intensity::None,
+    ));
+    for by in [ValidateBy::Group, ValidateBy::Split] {
+        let (folds, _) = folds::make_folds(&images, by, 5).unwrap();
+        let cached = scoring::score_candidates(&images, &folds, &candidates, None).unwrap();
+        assert_eq!(cached.len(), candidates.len());
+        for (candidate, score) in candidates.iter().zip(&cached) {
+            let (per_fold, error) = score_by_training_each(&images, &folds, candidate);
+            let name = format!("{} + {} ({by})", score.features, score.classifier);
+            assert_eq!(score.error, error, "{name}");
+            assert!(!score.skipped);
+            if error.is_none() {
+                let expected: BTreeMap<String, f64> = per_fold.into_iter().collect();
+                assert_eq!(score.per_fold, expected, "{name}");
+            }
+        }
+    }
+}
+
+/// A budget of nothing scores the first feature group only (the paper's method is never skipped) and
+/// marks the rest skipped, saying why; the choice is among the scored.
+#[test]
+fn a_spent_budget_scores_the_first_feature_group_only() {
+    use crate::classifier::ClassifierKind;
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let frames: Vec<Frame> = (0..48)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let with = |features: crate::features::FeatureConfig, classifier: ClassifierKind| {
+        TrainConfig {
+            features,
+            classifier: classifier.default_config(),
+            dims: 8,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    let fft2d = crate::features::FeatureKind::Fft2d.default_config();
+    let candidates = [
+        with(
+            crate::features::FeatureConfig::default(),
+            ClassifierKind::Pwe,
+        ),
+        with(fft2d.clone(), ClassifierKind::Lda),
+        with(
+            crate::features::FeatureConfig::default(),
+            ClassifierKind::Lda,
+        ),
+        with(fft2d, ClassifierKind::Svm),
+    ];
+    let choice = AutoChoice::new(&candidates, ValidateBy::Auto).with_budget(Some(Duration::ZERO));
+    let selection = select(&images, &choice, 1).unwrap();
+    let skipped: Vec<bool> = selection.scores.iter().map(|s| s.skipped).collect();
+    assert_eq!(skipped, [false, true, false, true]);
+    let reason = selection.scores[1].error.as_deref().unwrap();
+    assert!(reason.contains("time budget"), "{reason}");
+    assert!(matches!(selection.chosen, 0 | 2));
+    let unlimited = select(&images, &AutoChoice::new(&candidates, ValidateBy::Auto), 1).unwrap();
+    assert!(
+        unlimited
+            .scores
+            .iter()
+            .all(|s| !s.skipped && s.error.is_none())
+    );
+    assert_eq!(unlimited.scores[0], selection.scores[0]);
+}
