@@ -285,18 +285,13 @@ pub const SMO_ITERATIONS_PER_VECTOR: usize = 100;
 /// The solver's iteration cap for small problems.
 pub const SMO_MIN_ITERATIONS: usize = 20_000;
 
-/// Solves the C-SVC dual for labels `y` (±1) with kernel matrix `k` (`n x n`); returns (α, rho).
-fn smo(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64) {
-    let (alpha, rho, _) = smo_counted(k, y, c, tol);
-    (alpha, rho)
-}
-
-/// [`smo`], with the iterations it took.
+/// Solves the C-SVC dual for labels `y` (±1) with the symmetric kernel matrix `k` (`n x n`); returns
+/// (α, rho, iterations).
 fn smo_counted(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64, usize) {
     let n = y.len();
+    let q = |i: usize, j: usize| y[i] * y[j] * k[i * n + j];
     let mut alpha = vec![0.0; n];
     let mut grad = vec![-1.0; n];
-    let q = |i: usize, j: usize| y[i] * y[j] * k[i * n + j];
     let max_iter = (SMO_ITERATIONS_PER_VECTOR * n).max(SMO_MIN_ITERATIONS);
     let tau = 1e-12;
     let mut iterations = 0;
@@ -409,8 +404,10 @@ fn smo_counted(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64, usize)
             }
         }
         let (di, dj) = (alpha[i] - old_i, alpha[j] - old_j);
+        // Q(t, i) read along row i (k is symmetric): contiguous, where column i strides by n.
+        let (row_i, row_j) = (&k[i * n..(i + 1) * n], &k[j * n..(j + 1) * n]);
         for t in 0..n {
-            grad[t] += q(t, i) * di + q(t, j) * dj;
+            grad[t] += y[t] * y[i] * row_i[t] * di + y[t] * y[j] * row_j[t] * dj;
         }
     }
     // rho (libsvm's calculate_rho)
@@ -443,6 +440,21 @@ fn smo_counted(k: &[f64], y: &[f64], c: f64, tol: f64) -> (Vec<f64>, f64, usize)
     (alpha, rho, iterations)
 }
 
+/// The kernel matrix (`n x n`, symmetric) of the row-major vectors (`n x dims`).
+fn gram_of(vectors: &[f64], dims: usize, kernel: Kernel) -> Vec<f64> {
+    let rows: Vec<&[f64]> = vectors.chunks_exact(dims).collect();
+    let n = rows.len();
+    let mut gram = vec![0.0; n * n];
+    for a in 0..n {
+        for b in 0..=a {
+            let value = kernel.eval(rows[a], rows[b]);
+            gram[a * n + b] = value;
+            gram[b * n + a] = value;
+        }
+    }
+    gram
+}
+
 impl SvmModel {
     /// Fits one-vs-one machines with a fixed kernel and `C` on `data` (no search, no calibration).
     pub fn fit_fixed(
@@ -455,16 +467,28 @@ impl SvmModel {
     ) -> Result<Self> {
         check_vectors(&data, "svm training vectors", dims, n_classes)?;
         require_per_class(&data, n_classes, 1)?;
+        let gram = gram_of(data.vectors, dims, kernel);
+        Ok(Self::fit_on_gram(
+            data,
+            &gram,
+            n_classes,
+            dims,
+            (kernel, c),
+            tol,
+        ))
+    }
+
+    /// [`fit_fixed`](Self::fit_fixed) on the kernel matrix `gram` of `data` (checked by the caller).
+    fn fit_on_gram(
+        data: LabeledVectors<'_>,
+        gram: &[f64],
+        n_classes: usize,
+        dims: usize,
+        (kernel, c): (Kernel, f64),
+        tol: f64,
+    ) -> Self {
         let n = data.classes.len();
         let rows: Vec<&[f64]> = data.vectors.chunks_exact(dims).collect();
-        let mut gram = vec![0.0; n * n];
-        for a in 0..n {
-            for b in 0..=a {
-                let value = kernel.eval(rows[a], rows[b]);
-                gram[a * n + b] = value;
-                gram[b * n + a] = value;
-            }
-        }
         let mut used = vec![usize::MAX; n];
         let mut stored = Vec::new();
         let mut machines = Vec::new();
@@ -484,7 +508,7 @@ impl SvmModel {
                         k[a * m + b] = gram[ta * n + tb];
                     }
                 }
-                let (alpha, rho) = smo(&k, &y, c, tol);
+                let (alpha, rho, _) = smo_counted(&k, &y, c, tol);
                 let mut machine = PairMachine {
                     support: Vec::new(),
                     coefs: Vec::new(),
@@ -507,7 +531,7 @@ impl SvmModel {
             .iter()
             .flat_map(|&t| rows[t].iter().copied())
             .collect();
-        Ok(Self {
+        Self {
             dims,
             n_classes,
             kernel,
@@ -516,7 +540,7 @@ impl SvmModel {
             machines,
             temperature: 1.0,
             candidates: Vec::new(),
-        })
+        }
     }
 
     /// Trains with the hyper-parameter search of the module documentation.
@@ -555,27 +579,29 @@ impl SvmModel {
                 }
             }
         }
-        let mut grid = Vec::new();
-        for kernel in &kernels {
-            for &c in &config.c_grid {
-                grid.push((*kernel, c));
-            }
-        }
         let mut candidates = Vec::new();
-        let (mut kernel, mut c) = grid[0];
+        let (mut kernel, mut c) = (kernels[0], config.c_grid[0]);
         // The chosen candidate's validation scores: the temperature's fallback (see below).
         let mut validation_scores = None;
         if !validation.classes.is_empty() {
             let mut best_accuracy = f64::NEG_INFINITY;
-            for &(candidate_kernel, candidate_c) in &grid {
-                let model = Self::fit_fixed(
+            // Each kernel's matrix once, for its whole C grid.
+            let mut gram = (kernels[0], gram_of(train.vectors, dims, kernels[0]));
+            for (candidate_kernel, candidate_c) in kernels
+                .iter()
+                .flat_map(|&kernel| config.c_grid.iter().map(move |&c| (kernel, c)))
+            {
+                if gram.0 != candidate_kernel {
+                    gram = (candidate_kernel, gram_of(train.vectors, dims, candidate_kernel));
+                }
+                let model = Self::fit_on_gram(
                     train,
+                    &gram.1,
                     n_classes,
                     dims,
-                    candidate_kernel,
-                    candidate_c,
+                    (candidate_kernel, candidate_c),
                     config.tol,
-                )?;
+                );
                 let scores = model.scores_of(validation.vectors)?;
                 let mut scratch = model.scratch();
                 let mut posteriors = vec![0.0; n_classes];

@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# The cost of the automatic choice (issue #23's timing goals), side by side for one or more presrs
+# binaries, rounds interleaved so that a noisy machine weighs on every binary alike.
+#
+#   bench/auto-cost.sh                         # this checkout's release build
+#   bench/auto-cost.sh OLD_PRESRS NEW_PRESRS   # several binaries, one column each
+#   ROUNDS=5 bench/auto-cost.sh ...
+#
+# Workloads (real data from ../shared/data/real; the issue's own sets are not shared, so the nearest):
+#   train600: `train` auto on 600 one-contact plantar frames of 63 x 33 (jiku-walk, every stance frame,
+#             200 per class) — the issue's "600 images of 63 x 33 in under 15 s";
+#   eval-tais22: `eval` auto, leave one group out (5 groups) x 3 repeats, 20 per class, on tais22
+#             (28 x 50) — the nearest to "465 images of 64 x 27, 8 groups x 3 repeats, under 60 s".
+# Prints the median wall time of each workload and binary, and the ratio to the first binary.
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+root=$(cd "$here/.." && pwd)
+data=${DATA:-$root/../shared/data/real}
+rounds=${ROUNDS:-3}
+binaries=("$@")
+if [ ${#binaries[@]} -eq 0 ]; then
+    (cd "$root" && cargo build --release --locked -p presrs-cli >&2)
+    binaries=("${CARGO_TARGET_DIR:-$root/target}/release/presrs")
+fi
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+run() {
+    local binary=$1 workload=$2
+    case $workload in
+        train600) "$binary" train --manifest "$data/jiku-walk/manifest.csv" --one-sample-per-file \
+            --stance-frame all --per-class 200 --out "$tmp/model.json" ;;
+        eval-tais22) "$binary" eval --manifest "$data/tais22/manifest.csv" --leave-one-out group \
+            --per-class 20 --repeats 3 --seed 1 ;;
+    esac
+}
+
+declare -A times
+workloads=(train600 eval-tais22)
+for round in $(seq "$rounds"); do
+    for workload in "${workloads[@]}"; do
+        for i in "${!binaries[@]}"; do
+            start=$(date +%s.%N)
+            run "${binaries[$i]}" "$workload" > "$tmp/out.$i.$workload" 2> "$tmp/err"
+            end=$(date +%s.%N)
+            seconds=$(awk "BEGIN { printf \"%.2f\", $end - $start }")
+            times[$workload.$i]="${times[$workload.$i]:-} $seconds"
+            echo "round $round $workload binary $i: $seconds s (load $(cut -d' ' -f1 /proc/loadavg))" >&2
+        done
+    done
+done
+
+median() { tr ' ' '\n' | grep . | sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+echo "| workload | $(for i in "${!binaries[@]}"; do printf 'binary %s (s) | ' "$i"; done)ratio to binary 0 |"
+echo "| --- | $(for _ in "${binaries[@]}"; do printf -- '--- | '; done)--- |"
+for workload in "${workloads[@]}"; do
+    row="| $workload |"
+    base=$(echo "${times[$workload.0]}" | median)
+    ratios=""
+    for i in "${!binaries[@]}"; do
+        m=$(echo "${times[$workload.$i]}" | median)
+        row="$row $m |"
+        ratios="$ratios $(awk "BEGIN { printf \"%.2f\", $m / $base }")"
+    done
+    echo "$row$ratios |"
+done
+for i in "${!binaries[@]}"; do echo "binary $i: ${binaries[$i]}"; done
