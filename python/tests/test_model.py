@@ -1,5 +1,6 @@
 """Training, classifying and storing models from Python."""
 
+import json
 import pickle
 from concurrent.futures import ProcessPoolExecutor
 
@@ -148,3 +149,22 @@ def test_auto_validates_by_the_groups_asked_for(sim_images):
     assert "group" in model.describe()
     with pytest.raises(presrs.DataError, match="validate_by"):
         presrs.Model.train(images, labels, validate_by="sideways")
+
+
+def test_auto_budget_cuts_from_the_end_and_none_is_no_limit(sim_images):
+    images, labels, gaits = sim_images
+    # fixed classifier: one candidate per feature group; a budget spent at once scores the first only
+    with pytest.warns(UserWarning, match="cut short"):
+        cut = presrs.Model.train(
+            images, labels, conditions=gaits, classifier="lda", budget=1e-9, seed=1
+        )
+    scores = json.loads(cut.to_json())["selection"]["scores"]
+    assert [s.get("skipped", False) for s in scores][:2] == [False, True]
+    full = presrs.Model.train(
+        images, labels, conditions=gaits, classifier="lda", budget=None, seed=1
+    )
+    assert not any(
+        s.get("skipped", False) for s in json.loads(full.to_json())["selection"]["scores"]
+    )
+    with pytest.raises(presrs.DataError, match="budget"):
+        presrs.Model.train(images, labels, budget=-1.0)

@@ -281,9 +281,9 @@ impl TryFrom<SvmFields> for SvmModel {
 }
 
 /// The solver's iteration cap per training vector of a binary problem.
-pub const SMO_ITERATIONS_PER_VECTOR: usize = 100;
+pub const SMO_ITERATIONS_PER_VECTOR: usize = 25;
 /// The solver's iteration cap for small problems.
-pub const SMO_MIN_ITERATIONS: usize = 20_000;
+pub const SMO_MIN_ITERATIONS: usize = 5_000;
 
 /// Solves the C-SVC dual for labels `y` (±1) with the symmetric kernel matrix `k` (`n x n`); returns
 /// (α, rho, iterations).
