@@ -158,13 +158,13 @@ def test_auto_budget_cuts_from_the_end_and_none_is_no_limit(sim_images):
         cut = presrs.Model.train(
             images, labels, conditions=gaits, classifier="lda", budget=1e-9, seed=1
         )
-    scores = json.loads(cut.to_json())["selection"]["scores"]
+    scores = json.loads(cut.to_json())["model"]["selection"]["scores"]
     assert [s.get("skipped", False) for s in scores][:2] == [False, True]
     full = presrs.Model.train(
         images, labels, conditions=gaits, classifier="lda", budget=None, seed=1
     )
     assert not any(
-        s.get("skipped", False) for s in json.loads(full.to_json())["selection"]["scores"]
+        s.get("skipped", False) for s in json.loads(full.to_json())["model"]["selection"]["scores"]
     )
     with pytest.raises(presrs.DataError, match="budget"):
         presrs.Model.train(images, labels, budget=-1.0)

@@ -301,11 +301,15 @@ pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Optio
         .iter()
         .map(|score| {
             let intensity = score.config.preprocess.intensity;
-            if intensity.is_none() {
-                score.features.clone()
-            } else {
-                format!("{} ({intensity})", score.features)
+            let mut name = score.features.clone();
+            if !intensity.is_none() {
+                name.push_str(&format!(" ({intensity})"));
             }
+            // (the refinement of the best candidates' dims)
+            if score.config.dims != first.scores[0].config.dims {
+                name.push_str(&format!(", {} dims", score.config.dims));
+            }
+            name
         })
         .collect();
     families.dedup();
