@@ -142,7 +142,11 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     // a budget spent at once: only the first feature group (the paper's features) is scored, the rest
     // is marked skipped, and a warning says so and what to do
     let cut = presrs(&[&["eval", "--json", "--budget", "0.000001"][..], &common[..]].concat());
-    assert!(cut.status.success(), "{}", String::from_utf8_lossy(&cut.stderr));
+    assert!(
+        cut.status.success(),
+        "{}",
+        String::from_utf8_lossy(&cut.stderr)
+    );
     let stderr = String::from_utf8_lossy(&cut.stderr);
     assert!(
         stderr.contains("the automatic choice was cut short (the time budget of")

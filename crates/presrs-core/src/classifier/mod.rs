@@ -155,6 +155,26 @@ impl ClassifierConfig {
     }
 }
 
+impl ClassifierConfig {
+    /// [`fit`](Self::fit) for counting right answers only: the same decisions, its posteriors possibly
+    /// uncalibrated (the SVM skips the cross-validation that fits its temperature).
+    pub(crate) fn fit_for_decisions(
+        &self,
+        train: LabeledVectors<'_>,
+        validation: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+    ) -> Result<ClassifierModel> {
+        match self {
+            Self::Svm(config) => {
+                SvmModel::fit_with(train, validation, n_classes, dims, config, false)
+                    .map(ClassifierModel::Svm)
+            }
+            _ => self.fit(train, validation, n_classes, dims),
+        }
+    }
+}
+
 /// A trained classifier.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]

@@ -551,6 +551,20 @@ impl SvmModel {
         dims: usize,
         config: &SvmConfig,
     ) -> Result<Self> {
+        Self::fit_with(train, validation, n_classes, dims, config, true)
+    }
+
+    /// [`fit`](Self::fit), with the posterior temperature fitted or left at 1 (`calibrate`): the
+    /// classes it decides are the same either way (the voted class holds the top posterior), so an
+    /// automatic choice that only counts right answers skips the calibration's cross-validation.
+    pub(crate) fn fit_with(
+        train: LabeledVectors<'_>,
+        validation: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        config: &SvmConfig,
+        calibrate: bool,
+    ) -> Result<Self> {
         config.check()?;
         check_vectors(&train, "svm training vectors", dims, n_classes)?;
         check_vectors(&validation, "svm validation vectors", dims, n_classes)?;
@@ -592,7 +606,10 @@ impl SvmModel {
                 .flat_map(|&kernel| config.c_grid.iter().map(move |&c| (kernel, c)))
             {
                 if gram.0 != candidate_kernel {
-                    gram = (candidate_kernel, gram_of(train.vectors, dims, candidate_kernel));
+                    gram = (
+                        candidate_kernel,
+                        gram_of(train.vectors, dims, candidate_kernel),
+                    );
                 }
                 let model = Self::fit_on_gram(
                     train,
@@ -602,7 +619,6 @@ impl SvmModel {
                     (candidate_kernel, candidate_c),
                     config.tol,
                 );
-                let scores = model.scores_of(validation.vectors)?;
                 let mut scratch = model.scratch();
                 let mut posteriors = vec![0.0; n_classes];
                 let accuracy = validation_accuracy(&validation, dims, |x| {
@@ -615,7 +631,10 @@ impl SvmModel {
                 });
                 if accuracy > best_accuracy {
                     best_accuracy = accuracy;
-                    validation_scores = Some(scores);
+                    // (only the best's scores are kept: the temperature's fallback)
+                    validation_scores = calibrate
+                        .then(|| model.scores_of(validation.vectors))
+                        .transpose()?;
                     (kernel, c) = (candidate_kernel, candidate_c);
                 }
             }

@@ -209,7 +209,7 @@ fn score_fold(
         let scored: Vec<(usize, std::result::Result<f64, String>)> = members
             .par_iter()
             .map(|&m| {
-                let fitted = configs[m].classifier.fit(
+                let fitted = configs[m].classifier.fit_for_decisions(
                     LabeledVectors {
                         vectors: &train,
                         classes: &train_classes,
