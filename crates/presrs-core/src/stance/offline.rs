@@ -44,6 +44,9 @@ const CLIP_SIGMAS: f64 = 4.0;
 /// While growing the set of unloaded frames from the low tail, frames up to this many (underestimated)
 /// noise sigmas above the median join it.
 const GROW_SIGMAS: f64 = 5.0;
+/// Below this many frames, the growth of the unloaded set takes its RMS spread into account too (see
+/// `estimate_baseline`).
+const SMALL_SET_FRAMES: usize = 3 * MIN_START_FRAMES;
 /// Sigma clipping normally converges in a handful of rounds; this bounds a (rare) oscillation.
 const MAX_CLIP_ROUNDS: usize = 32;
 /// Fewest frames the baseline is fitted to: a line through fewer is mostly noise, and a fit that passes
@@ -623,7 +626,21 @@ fn estimate_baseline(
                 // unloaded frames of a 50-frame movie within 1.5 of each other, true noise 8) has a
                 // tiny MAD, and leaving out the frames below it stalled the growth at the cluster.
                 let glitch = (2.0 * CLIP_SIGMAS * sigma).max(2.0 * off_fraction * range);
-                let spread = sigma.max(lower_sigma_within(&residual, &quiet, centre, glitch));
+                // The MAD of a dozen frames is no better than a guess: 8 of the 10 lowest frames of a
+                // 46-frame movie (28 unloaded, true noise 8.2) lay within 3 of each other, the set
+                // stalled at those 10 with a noise of 1.6, and noise frames beside the stance joined
+                // it. A small set's spread is also its RMS distance from its median (which sees the
+                // set's frames above the median, not just the middle half), at most three times its
+                // MAD: a set that much wider than its MAD mixes two levels (a lead at zero and a
+                // preload), and the MAD holds to the larger.
+                let set_rms = if quiet.iter().filter(|&&q| q).count() < SMALL_SET_FRAMES {
+                    rms_within(&residual, &quiet, centre, glitch).min(3.0 * sigma)
+                } else {
+                    0.0
+                };
+                let spread = sigma
+                    .max(lower_sigma_within(&residual, &quiet, centre, glitch))
+                    .max(set_rms);
                 let limit = centre + (GROW_SIGMAS * spread.max(floor)).max(off_fraction * range);
                 residual
                     .iter()
@@ -692,6 +709,23 @@ fn lower_sigma_within(residual: &[f64], quiet: &[bool], centre: f64, limit: f64)
         .filter(|&(&r, &q)| q && r < centre && centre - r <= limit)
         .fold((0.0, 0usize), |(sum, count), (&r, _)| {
             (sum + (centre - r).powi(2), count + 1)
+        });
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64).sqrt()
+    }
+}
+
+/// The root mean square distance from `centre` of the frames flagged `quiet`, those more than `limit`
+/// below it left out (glitches); 0 without frames.
+fn rms_within(residual: &[f64], quiet: &[bool], centre: f64, limit: f64) -> f64 {
+    let (sum, count) = residual
+        .iter()
+        .zip(quiet)
+        .filter(|&(&r, &q)| q && centre - r <= limit)
+        .fold((0.0, 0usize), |(sum, count), (&r, _)| {
+            (sum + (r - centre).powi(2), count + 1)
         });
     if count == 0 {
         0.0
