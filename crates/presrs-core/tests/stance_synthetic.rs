@@ -709,70 +709,59 @@ fn walking_with_heel_and_toe_on_a_drifting_baseline_stays_drifting() {
 /// The automatic choice over many walks (30 seeds of 40 trials): it never takes walking whose drifting
 /// baseline finds every stance for presses on a preload. It used to on 12 of the 30 seeds (about 1 trial
 /// in 40): a swing lost a frame to the drifting baseline's stance on each side, and `preload` counted
-/// those two frames as a rest found loaded (now a rest's first and last frames do not count). Trials
-/// where the drifting baseline itself misses (a strong drift at the recording's end lowers its last
-/// block's baseline below the swing level; 4 of 1200) are skipped.
+/// those two frames as a rest found loaded (now a rest's first and last frames do not count). No trial
+/// is skipped: the 4 of 1200 where a strong drift made the drifting baseline miss are found since
+/// every block starts with its own lowest frames
+/// (`a_strong_downward_drift_does_not_merge_the_last_stances`).
 #[test]
 fn walking_over_many_seeds_stays_drifting() {
-    let skipped: usize = (0..30)
-        .map(|seed| walking_trials_checked(seed, 40, true))
-        .sum();
-    assert!(
-        skipped <= 8,
-        "{skipped} trials where the drifting baseline misses"
-    );
+    for seed in 0..30 {
+        walking_trials(seed, 40);
+    }
 }
 
+/// The walks where a strong downward drift (0.43-0.49 a frame, noise below 0.7) put the drifting
+/// baseline's last block below all its swings (30 counts low at its centre): the block got none of the
+/// lowest frames the unloaded set starts from, kept the other blocks' correction, and its last 3-4
+/// stances merged into one (seed 13 trial 32: found 268..406 for four stances; also seed 18 trial 5,
+/// seed 19 trial 4, seed 20 trial 27). They were skipped by `walking_over_many_seeds_stays_drifting`.
+#[test]
+fn a_strong_downward_drift_does_not_merge_the_last_stances() {
+    for (seed, trial) in [(13, 32), (18, 5), (19, 4), (20, 27)] {
+        let (series, truth) = walking_trial(seed, trial);
+        let drifting = SegmentParams {
+            baseline: BaselineMode::Drifting,
+            ..SegmentParams::default()
+        }
+        .check()
+        .unwrap();
+        assert_recovered(&segment(&series, &drifting).unwrap(), &truth, 1);
+        let found = run(&series);
+        assert_eq!(
+            found.mode,
+            BaselineMode::Drifting,
+            "{:?}",
+            found.mode_reason
+        );
+        assert_recovered(&found, &truth, 1);
+    }
+}
+
+/// Trial `trial` (0-based) of [`walking_trials`]`(seed, ..)`: its series and stances.
+fn walking_trial(seed: u64, trial: usize) -> (Vec<f64>, Vec<(usize, usize)>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut walk = walk_from(&mut rng);
+    for _ in 0..trial {
+        walk = walk_from(&mut rng);
+    }
+    walk
+}
+
+/// `trials` walks from `seed`: the automatic choice stays drifting and finds every stance within a frame.
 fn walking_trials(seed: u64, trials: usize) {
-    walking_trials_checked(seed, trials, false);
-}
-
-/// `trials` walks from `seed`; with `skip_missed`, a trial whose drifting segmentation does not find
-/// its stances (within a frame) is skipped (and counted) instead of failing.
-fn walking_trials_checked(seed: u64, trials: usize, skip_missed: bool) -> usize {
-    let mut skipped = 0;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     for trial in 0..trials {
-        let mut truth = Vec::new();
-        let mut t = rng.random_range(5..15);
-        while t < 400 {
-            let len = rng.random_range(20..=28);
-            truth.push((t, len));
-            t += len + rng.random_range(10..=16);
-        }
-        let n = t;
-        // Up to half a count per frame: 6% of the stance load per baseline window.
-        let drift = rng.random_range(-0.5..0.5) * n as f64;
-        let sigma = rng.random_range(0.0..8.0);
-        let mut series: Vec<f64> = (0..n)
-            .map(|f| 200.0 + drift * f as f64 / n as f64 + sigma * gaussian(&mut rng))
-            .collect();
-        for &(start, len) in &truth {
-            let dip = rng.random_range(0.3..0.7);
-            for i in 0..len {
-                let x = (i as f64 + 0.5) / len as f64;
-                // Heel and toe humps with a valley between them (dip x the peak at mid-stance).
-                let shape = (PI * x).sin() * (1.0 - (1.0 - dip) * (PI * x).sin().powi(8));
-                series[start + i] += 1000.0 * shape;
-            }
-        }
-        if skip_missed {
-            let drifting = SegmentParams {
-                baseline: BaselineMode::Drifting,
-                ..SegmentParams::default()
-            }
-            .check()
-            .unwrap();
-            let alone = segment(&series, &drifting).unwrap();
-            let recovered = alone.stances.len() == truth.len()
-                && alone.stances.iter().zip(&truth).all(|(s, &(start, len))| {
-                    s.start.abs_diff(start) <= 1 && s.end().abs_diff(start + len) <= 1
-                });
-            if !recovered {
-                skipped += 1;
-                continue;
-            }
-        }
+        let (series, truth) = walk_from(&mut rng);
         let found = run(&series);
         assert_eq!(
             found.mode,
@@ -782,7 +771,35 @@ fn walking_trials_checked(seed: u64, trials: usize, skip_missed: bool) -> usize 
         );
         assert_recovered(&found, &truth, 1);
     }
-    skipped
+}
+
+/// One walk of ~400 frames drawn from `rng`: heel-and-toe stances of 20-28 frames, swings of 10-16, on
+/// a swing level of 200 drifting by up to half a count a frame, under noise of up to 8.
+fn walk_from(rng: &mut ChaCha8Rng) -> (Vec<f64>, Vec<(usize, usize)>) {
+    let mut truth = Vec::new();
+    let mut t = rng.random_range(5..15);
+    while t < 400 {
+        let len = rng.random_range(20..=28);
+        truth.push((t, len));
+        t += len + rng.random_range(10..=16);
+    }
+    let n = t;
+    // Up to half a count per frame: 6% of the stance load per baseline window.
+    let drift = rng.random_range(-0.5..0.5) * n as f64;
+    let sigma = rng.random_range(0.0..8.0);
+    let mut series: Vec<f64> = (0..n)
+        .map(|f| 200.0 + drift * f as f64 / n as f64 + sigma * gaussian(rng))
+        .collect();
+    for &(start, len) in &truth {
+        let dip = rng.random_range(0.3..0.7);
+        for i in 0..len {
+            let x = (i as f64 + 0.5) / len as f64;
+            // Heel and toe humps with a valley between them (dip x the peak at mid-stance).
+            let shape = (PI * x).sin() * (1.0 - (1.0 - dip) * (PI * x).sin().powi(8));
+            series[start + i] += 1000.0 * shape;
+        }
+    }
+    (series, truth)
 }
 
 /// The rare failure of `random_layouts_are_recovered` (`PROPTEST_RNG_SEED=5`, 20000 cases): one

@@ -582,6 +582,30 @@ fn estimate_baseline(
     let start_count = ((quantile_level * n as f64).ceil() as usize).max(MIN_START_FRAMES);
     let start_cut = scratch[start_count.min(n) - 1];
     let mut quiet: Vec<bool> = residual.iter().map(|&r| r <= start_cut).collect();
+    // Every block starts with its own lowest frames: under a strong drift the coarse baseline of the
+    // last block (its low quantile taken at the block's low end, then extrapolated) lay below all its
+    // swings (a walk drifting down 0.49 a frame: 30 counts low at its centre); the block got no frame
+    // of the global start set, its level was corrected by the other blocks' median, the growth never
+    // reached its swings (they stayed above the limit), and its last stances merged into one.
+    if fit.bounds.len() > 1 {
+        for &(start, end) in &fit.bounds {
+            if (start..end).filter(|&t| quiet[t]).count() >= MIN_QUIET_PER_BLOCK {
+                continue;
+            }
+            let count = ((quantile_level * (end - start) as f64).ceil() as usize)
+                .max(MIN_QUIET_PER_BLOCK)
+                .min(end - start);
+            scratch.clear();
+            scratch.extend_from_slice(&residual[start..end]);
+            let cut = quantile(
+                &mut scratch,
+                (count - 1) as f64 / (end - start - 1).max(1) as f64,
+            );
+            for t in start..end {
+                quiet[t] |= residual[t] <= cut;
+            }
+        }
+    }
     // Rounding noise of an exactly linear baseline must not count as structure.
     let floor = 1e-12 * values.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
     let mut baseline = fit.coarse.clone();
