@@ -9,10 +9,10 @@
 //!    [`SegmentParams::baseline_window_frames`] frames; a low quantile of each block is a first baseline
 //!    (robust as long as every block has a few unloaded frames, which holds when the window spans a few
 //!    strides), interpolated linearly between block centres so that a linear drift is followed exactly. The
-//!    unloaded frames are then found by sigma clipping the residuals (grown from the low tail upwards, then
-//!    one pass of median +- 4 x 1.4826 x MAD), refitting the baseline to them as the set changes: their
-//!    median corrects each block's level (a recording shorter than ~1.5 windows gets a least-squares line
-//!    instead) and their MAD is the noise. Drift is followed at the time scale of the window: within one
+//!    unloaded frames are then found by sigma clipping the residuals (grown upwards from the low tail of
+//!    the recording and of every block, then one pass of median +- 4 x 1.4826 x MAD), refitting the
+//!    baseline to them as the set changes: their median corrects each block's level (a recording shorter
+//!    than ~1.5 windows gets a least-squares line instead) and their MAD is the noise. Drift is followed at the time scale of the window: within one
 //!    window it should stay small against the off level. Cost: O(n) per clipping round.
 //! 2. **Hysteresis.** A frame is *loaded* when its load above the baseline exceeds the *off* level and a
 //!    stance must reach the higher *on* level somewhere. Each level is the larger of a multiple of the
