@@ -709,70 +709,59 @@ fn walking_with_heel_and_toe_on_a_drifting_baseline_stays_drifting() {
 /// The automatic choice over many walks (30 seeds of 40 trials): it never takes walking whose drifting
 /// baseline finds every stance for presses on a preload. It used to on 12 of the 30 seeds (about 1 trial
 /// in 40): a swing lost a frame to the drifting baseline's stance on each side, and `preload` counted
-/// those two frames as a rest found loaded (now a rest's first and last frames do not count). Trials
-/// where the drifting baseline itself misses (a strong drift at the recording's end lowers its last
-/// block's baseline below the swing level; 4 of 1200) are skipped.
+/// those two frames as a rest found loaded (now a rest's first and last frames do not count). No trial
+/// is skipped: the 4 of 1200 where a strong drift made the drifting baseline miss are found since
+/// every block starts with its own lowest frames
+/// (`a_strong_downward_drift_does_not_merge_the_last_stances`).
 #[test]
 fn walking_over_many_seeds_stays_drifting() {
-    let skipped: usize = (0..30)
-        .map(|seed| walking_trials_checked(seed, 40, true))
-        .sum();
-    assert!(
-        skipped <= 8,
-        "{skipped} trials where the drifting baseline misses"
-    );
+    for seed in 0..30 {
+        walking_trials(seed, 40);
+    }
 }
 
+/// The walks where a strong downward drift (0.43-0.49 a frame, noise below 0.7) put the drifting
+/// baseline's last block below all its swings (30 counts low at its centre): the block got none of the
+/// lowest frames the unloaded set starts from, kept the other blocks' correction, and its last 3-4
+/// stances merged into one (seed 13 trial 32: found 268..406 for four stances; also seed 18 trial 5,
+/// seed 19 trial 4, seed 20 trial 27). They were skipped by `walking_over_many_seeds_stays_drifting`.
+#[test]
+fn a_strong_downward_drift_does_not_merge_the_last_stances() {
+    for (seed, trial) in [(13, 32), (18, 5), (19, 4), (20, 27)] {
+        let (series, truth) = walking_trial(seed, trial);
+        let drifting = SegmentParams {
+            baseline: BaselineMode::Drifting,
+            ..SegmentParams::default()
+        }
+        .check()
+        .unwrap();
+        assert_recovered(&segment(&series, &drifting).unwrap(), &truth, 1);
+        let found = run(&series);
+        assert_eq!(
+            found.mode,
+            BaselineMode::Drifting,
+            "{:?}",
+            found.mode_reason
+        );
+        assert_recovered(&found, &truth, 1);
+    }
+}
+
+/// Trial `trial` (0-based) of [`walking_trials`]`(seed, ..)`: its series and stances.
+fn walking_trial(seed: u64, trial: usize) -> (Vec<f64>, Vec<(usize, usize)>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut walk = walk_from(&mut rng);
+    for _ in 0..trial {
+        walk = walk_from(&mut rng);
+    }
+    walk
+}
+
+/// `trials` walks from `seed`: the automatic choice stays drifting and finds every stance within a frame.
 fn walking_trials(seed: u64, trials: usize) {
-    walking_trials_checked(seed, trials, false);
-}
-
-/// `trials` walks from `seed`; with `skip_missed`, a trial whose drifting segmentation does not find
-/// its stances (within a frame) is skipped (and counted) instead of failing.
-fn walking_trials_checked(seed: u64, trials: usize, skip_missed: bool) -> usize {
-    let mut skipped = 0;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     for trial in 0..trials {
-        let mut truth = Vec::new();
-        let mut t = rng.random_range(5..15);
-        while t < 400 {
-            let len = rng.random_range(20..=28);
-            truth.push((t, len));
-            t += len + rng.random_range(10..=16);
-        }
-        let n = t;
-        // Up to half a count per frame: 6% of the stance load per baseline window.
-        let drift = rng.random_range(-0.5..0.5) * n as f64;
-        let sigma = rng.random_range(0.0..8.0);
-        let mut series: Vec<f64> = (0..n)
-            .map(|f| 200.0 + drift * f as f64 / n as f64 + sigma * gaussian(&mut rng))
-            .collect();
-        for &(start, len) in &truth {
-            let dip = rng.random_range(0.3..0.7);
-            for i in 0..len {
-                let x = (i as f64 + 0.5) / len as f64;
-                // Heel and toe humps with a valley between them (dip x the peak at mid-stance).
-                let shape = (PI * x).sin() * (1.0 - (1.0 - dip) * (PI * x).sin().powi(8));
-                series[start + i] += 1000.0 * shape;
-            }
-        }
-        if skip_missed {
-            let drifting = SegmentParams {
-                baseline: BaselineMode::Drifting,
-                ..SegmentParams::default()
-            }
-            .check()
-            .unwrap();
-            let alone = segment(&series, &drifting).unwrap();
-            let recovered = alone.stances.len() == truth.len()
-                && alone.stances.iter().zip(&truth).all(|(s, &(start, len))| {
-                    s.start.abs_diff(start) <= 1 && s.end().abs_diff(start + len) <= 1
-                });
-            if !recovered {
-                skipped += 1;
-                continue;
-            }
-        }
+        let (series, truth) = walk_from(&mut rng);
         let found = run(&series);
         assert_eq!(
             found.mode,
@@ -782,7 +771,35 @@ fn walking_trials_checked(seed: u64, trials: usize, skip_missed: bool) -> usize 
         );
         assert_recovered(&found, &truth, 1);
     }
-    skipped
+}
+
+/// One walk of ~400 frames drawn from `rng`: heel-and-toe stances of 20-28 frames, swings of 10-16, on
+/// a swing level of 200 drifting by up to half a count a frame, under noise of up to 8.
+fn walk_from(rng: &mut ChaCha8Rng) -> (Vec<f64>, Vec<(usize, usize)>) {
+    let mut truth = Vec::new();
+    let mut t = rng.random_range(5..15);
+    while t < 400 {
+        let len = rng.random_range(20..=28);
+        truth.push((t, len));
+        t += len + rng.random_range(10..=16);
+    }
+    let n = t;
+    // Up to half a count per frame: 6% of the stance load per baseline window.
+    let drift = rng.random_range(-0.5..0.5) * n as f64;
+    let sigma = rng.random_range(0.0..8.0);
+    let mut series: Vec<f64> = (0..n)
+        .map(|f| 200.0 + drift * f as f64 / n as f64 + sigma * gaussian(rng))
+        .collect();
+    for &(start, len) in &truth {
+        let dip = rng.random_range(0.3..0.7);
+        for i in 0..len {
+            let x = (i as f64 + 0.5) / len as f64;
+            // Heel and toe humps with a valley between them (dip x the peak at mid-stance).
+            let shape = (PI * x).sin() * (1.0 - (1.0 - dip) * (PI * x).sin().powi(8));
+            series[start + i] += 1000.0 * shape;
+        }
+    }
+    (series, truth)
 }
 
 /// The rare failure of `random_layouts_are_recovered` (`PROPTEST_RNG_SEED=5`, 20000 cases): one
@@ -804,4 +821,133 @@ fn a_chance_cluster_of_low_frames_does_not_set_the_noise() {
     let found = run(&synth.series());
     assert_recovered(&found, &[(14, 23)], 1);
     assert!(found.noise > 0.5 * synth.sigma, "noise {}", found.noise);
+}
+
+/// A failure of `random_presses_on_a_preload_are_recovered` (`PROPTEST_RNG_SEED=1`, 20000 cases): eight
+/// presses after a 15-frame unloaded lead, on a preload of 229 that drifts down by 0.88 a frame to
+/// about 7 at the end. The drifting baseline (two blocks, one line) sat between the lead and the
+/// preload, 230 above the lead and ~15 below the rests, so no rest chained as loaded and the automatic
+/// choice stayed drifting; there the last press ran 5 frames into the rest after it (found 227..256).
+/// The drifting baseline lying above a rest of the floor (the lead) by more than its off level now
+/// tells that it took the preload for its baseline.
+#[test]
+fn presses_on_a_preload_that_drifts_down_to_zero_are_found_from_the_floor() {
+    let preload = Preload {
+        lead: 15,
+        presses: vec![
+            (24, 9),
+            (23, 16),
+            (13, 3),
+            (19, 3),
+            (29, 10),
+            (9, 12),
+            (28, 14),
+            (24, 17),
+        ],
+        preload: 0.229_084_059_532_145_25 * 1000.0,
+        drift_per_frame: -0.879_050_019_749_021,
+        amplitude: 1000.0,
+        sigma: 0.003_926_552_230_711_038 * 1000.0,
+        seed: 10_463_593_274_048_121_643,
+    };
+    let (series, truth) = preload.build();
+    let found = run(&series);
+    assert_eq!(found.mode, BaselineMode::Floor, "{:?}", found.mode_reason);
+    assert!(
+        found.mode_reason.as_deref().unwrap().contains("lies above"),
+        "{:?}",
+        found.mode_reason
+    );
+    assert_recovered(&found, &truth, 1);
+}
+
+/// A failure of `random_presses_on_a_preload_are_recovered` (`PROPTEST_RNG_SEED=13`, 20000 cases): six
+/// presses after a 6-frame lead at zero, on a preload rising from 100 to 270. The drifting baseline (a
+/// line through lead and rests) put the lead 100 below it and mixed the two levels into a noise of 51
+/// (true 4.9): every press came out a frame short at each end (2 frames from the truth), but within a
+/// frame of the floor's, so `preload` saw no press missed. As above, the drifting baseline lying above
+/// the lead now chooses the floor.
+#[test]
+fn presses_on_a_rising_preload_after_an_unloaded_lead_are_not_shortened() {
+    let preload = Preload {
+        lead: 6,
+        presses: vec![(19, 10), (30, 9), (11, 8), (29, 3), (14, 9), (16, 20)],
+        preload: 100.0,
+        drift_per_frame: 0.945_803_534_865_380_8,
+        amplitude: 1000.0,
+        sigma: 0.004_887_533_314_826_409 * 1000.0,
+        seed: 8_778_558_774_864_676_333,
+    };
+    let (series, truth) = preload.build();
+    let found = run(&series);
+    assert_eq!(found.mode, BaselineMode::Floor, "{:?}", found.mode_reason);
+    assert_recovered(&found, &truth, 1);
+}
+
+/// Failures of `random_layouts_are_recovered` (20000 cases; `PROPTEST_RNG_SEED` 9, 11 and 12, the
+/// last twice: before and after a first fix): one stance in a movie of 41 to 46 frames with 13 to 28
+/// unloaded frames and noise of 0.8-0.9% of the stance load. The growth of the unloaded set started
+/// from the 10 lowest frames, most of which lay by chance within a few counts of each other (MAD
+/// noise 1.6 for a true 8-9); it stalled there, the noise came out at 1-3, and noise frames beside the
+/// stance joined it (found up to 4 frames long). A small set's RMS spread (at most three MADs) now
+/// lets the growth reach the other unloaded frames. A layout the definition recovers: a
+/// detector fault, fixed.
+#[test]
+fn a_short_movie_whose_lowest_frames_cluster_by_chance_keeps_its_edges() {
+    // (lead, stance length, flight, drift per frame, noise, seed)
+    let cases = [
+        (
+            3,
+            27,
+            11,
+            0.046_326_477_675_569_945,
+            9.435_836_252_758_982,
+            4_305_224_834_500_459_808,
+        ),
+        (
+            5,
+            29,
+            8,
+            0.0,
+            8.580_187_653_577_22,
+            9_201_017_802_457_212_005,
+        ),
+        (
+            18,
+            17,
+            8,
+            0.0,
+            8.208_846_869_827_842,
+            15_291_367_076_092_581_150,
+        ),
+        (
+            18,
+            18,
+            10,
+            0.0,
+            8.208_846_869_827_842,
+            15_291_367_076_092_581_150,
+        ),
+    ];
+    for (lead, len, flight, drift_per_frame, sigma, seed) in cases {
+        let frames = lead + len + flight;
+        let synth = Synth {
+            frames,
+            stances: vec![(lead, len)],
+            amplitude: 1000.0,
+            offset: 0.0,
+            drift: drift_per_frame * frames as f64,
+            sigma,
+            seed,
+        };
+        let found = run(&synth.series());
+        assert_eq!(found.mode, BaselineMode::Drifting);
+        assert_recovered(&found, &[(lead, len)], 1);
+        assert!(!found.stances[0].partial);
+        assert!(
+            found.noise > 0.5 * sigma,
+            "noise {} for {sigma}",
+            found.noise
+        );
+    }
 }

@@ -42,8 +42,13 @@
 //!    for unloaded in some windows: a walking foot's heel-toe valley is far above the swing beside it);
 //!    or [`PRELOAD_PEAKS`] contacts in a row never unload between them (each rest above the drifting
 //!    baseline by the off level, or in one of its stances) and the drifting baseline misses one of them
-//!    by more than a frame. A rest above the recording's lowest load alone is not loaded: a swing level
-//!    that drifts is;
+//!    by more than a frame, or lies above a rest of the floor (its median load, over at least a
+//!    stance's frames, below the drifting baseline by more than the floor's off level: nothing real
+//!    lies below the unloaded level, so the drifting baseline took a preload for its baseline, e.g.
+//!    an unloaded lead before the first press for glitches, and its levels and edges are biased). A
+//!    rest above the recording's lowest load alone is not loaded (a swing level that drifts is), unless
+//!    the drifting baseline mixed two levels (its off level more than twice the floor's, or it lies
+//!    above a rest);
 //! 2. *one contact* when the drifting baseline finds no complete stance while the load stays above
 //!    [`CONTACT_FRACTION`] of its range on every frame but a few at the ends (at most
 //!    [`CONTACT_END_FRACTION`] of the frames at each end, and at least [`MIN_CONTACT_FRAMES`] frames
@@ -97,7 +102,7 @@ fn segment_auto(total_load: &[f64], params: &ValidSegmentParams) -> Segmentation
     let drifting = segment_drifting(total_load, params);
     // Presses on a preload first: such a recording is loaded throughout too, but holds many contacts.
     let floor = segment_floor_from(total_load, &drifting, params);
-    if let Some(reason) = preload(&drifting, &floor, params) {
+    if let Some(reason) = preload(total_load, &drifting, &floor, params) {
         return Segmentation {
             mode_reason: Some(reason),
             ..floor
@@ -146,6 +151,7 @@ fn one_contact(total_load: &[f64]) -> Option<String> {
 /// stay loaded [`PRELOAD_PEAKS`] contacts in a row and the drifting baseline misses one of them by more
 /// than a frame.
 fn preload(
+    total_load: &[f64],
     drifting: &Segmentation,
     floor: &Segmentation,
     params: &ValidSegmentParams,
@@ -196,7 +202,18 @@ fn preload(
     // stance of the drifting baseline (which found it loaded), or, when the drifting baseline mixed two
     // levels (its off level more than twice the floor's), above the lowest rest. Not above the lowest
     // rest alone: a swing level that drifts is above it too.
-    let mixed = drifting.off_level > 2.0 * floor.off_level;
+    let mut mixed = drifting.off_level > 2.0 * floor.off_level;
+    // The drifting baseline above a rest of the floor (the median load of a rest at least a stance
+    // long below it by more than the floor's off level): nothing real lies below the unloaded level,
+    // so it took a preload for its baseline there and the unloaded frames (a lead before the first
+    // press) for glitches, and its levels and edges are biased. Its levels mixed two floors too.
+    let sunk = sunk_rest(
+        total_load,
+        drifting,
+        floor,
+        params.params().min_stance_frames,
+    );
+    mixed |= sunk.is_some();
     // The middle frame of the rest between two of the floor's contacts.
     let rest_frame = |pair: &[Stance]| (pair[0].end() + pair[1].start) / 2;
     let in_stance = |t: usize| drifting.stances.iter().any(|stance| stance.contains(t));
@@ -256,6 +273,14 @@ fn preload(
     if loaded_rests + 1 < PRELOAD_PEAKS {
         return None;
     }
+    if let Some((first, last)) = sunk {
+        return Some(format!(
+            "{} presses in a row never unload between them, and the drifting baseline lies above \
+             the rest at frames {first}..{last} (it took the preload for its baseline): contacts \
+             measured from the local floor",
+            loaded_rests + 1
+        ));
+    }
     floor.complete().find_map(|press| {
         let matched = drifting.stances.iter().any(|stance| {
             stance.start.abs_diff(press.start) <= 1 && stance.end().abs_diff(press.end()) <= 1
@@ -270,6 +295,34 @@ fn preload(
                 press.end()
             )
         })
+    })
+}
+
+/// The first rest of the floor (the frames before its first contact, between two, or after its last;
+/// at least `min_len` of them) whose median load lies below the drifting baseline by more than the
+/// floor's off level, as `(first, last)` frames (exclusive end), or `None`.
+fn sunk_rest(
+    total_load: &[f64],
+    drifting: &Segmentation,
+    floor: &Segmentation,
+    min_len: usize,
+) -> Option<(usize, usize)> {
+    let n = total_load.len();
+    let mut edges = vec![0];
+    for stance in &floor.stances {
+        edges.push(stance.start);
+        edges.push(stance.end());
+    }
+    edges.push(n);
+    edges.chunks_exact(2).find_map(|gap| {
+        let (first, last) = (gap[0], gap[1]);
+        if last < first + min_len.max(1) {
+            return None;
+        }
+        let mut below: Vec<f64> = (first..last)
+            .map(|t| total_load[t] - drifting.baseline[t])
+            .collect();
+        (median(&mut below) < -floor.off_level).then_some((first, last))
     })
 }
 

@@ -9,10 +9,10 @@
 //!    [`SegmentParams::baseline_window_frames`] frames; a low quantile of each block is a first baseline
 //!    (robust as long as every block has a few unloaded frames, which holds when the window spans a few
 //!    strides), interpolated linearly between block centres so that a linear drift is followed exactly. The
-//!    unloaded frames are then found by sigma clipping the residuals (grown from the low tail upwards, then
-//!    one pass of median +- 4 x 1.4826 x MAD), refitting the baseline to them as the set changes: their
-//!    median corrects each block's level (a recording shorter than ~1.5 windows gets a least-squares line
-//!    instead) and their MAD is the noise. Drift is followed at the time scale of the window: within one
+//!    unloaded frames are then found by sigma clipping the residuals (grown upwards from the low tail of
+//!    the recording and of every block, then one pass of median +- 4 x 1.4826 x MAD), refitting the
+//!    baseline to them as the set changes: their median corrects each block's level (a recording shorter
+//!    than ~1.5 windows gets a least-squares line instead) and their MAD is the noise. Drift is followed at the time scale of the window: within one
 //!    window it should stay small against the off level. Cost: O(n) per clipping round.
 //! 2. **Hysteresis.** A frame is *loaded* when its load above the baseline exceeds the *off* level and a
 //!    stance must reach the higher *on* level somewhere. Each level is the larger of a multiple of the
@@ -44,6 +44,9 @@ const CLIP_SIGMAS: f64 = 4.0;
 /// While growing the set of unloaded frames from the low tail, frames up to this many (underestimated)
 /// noise sigmas above the median join it.
 const GROW_SIGMAS: f64 = 5.0;
+/// Below this many frames, the growth of the unloaded set takes its RMS spread into account too (see
+/// `estimate_baseline`).
+const SMALL_SET_FRAMES: usize = 3 * MIN_START_FRAMES;
 /// Sigma clipping normally converges in a handful of rounds; this bounds a (rare) oscillation.
 const MAX_CLIP_ROUNDS: usize = 32;
 /// Fewest frames the baseline is fitted to: a line through fewer is mostly noise, and a fit that passes
@@ -579,6 +582,30 @@ fn estimate_baseline(
     let start_count = ((quantile_level * n as f64).ceil() as usize).max(MIN_START_FRAMES);
     let start_cut = scratch[start_count.min(n) - 1];
     let mut quiet: Vec<bool> = residual.iter().map(|&r| r <= start_cut).collect();
+    // Every block starts with its own lowest frames: under a strong drift the coarse baseline of the
+    // last block (its low quantile taken at the block's low end, then extrapolated) lay below all its
+    // swings (a walk drifting down 0.49 a frame: 30 counts low at its centre); the block got no frame
+    // of the global start set, its level was corrected by the other blocks' median, the growth never
+    // reached its swings (they stayed above the limit), and its last stances merged into one.
+    if fit.bounds.len() > 1 {
+        for &(start, end) in &fit.bounds {
+            if (start..end).filter(|&t| quiet[t]).count() >= MIN_QUIET_PER_BLOCK {
+                continue;
+            }
+            let count = ((quantile_level * (end - start) as f64).ceil() as usize)
+                .max(MIN_QUIET_PER_BLOCK)
+                .min(end - start);
+            scratch.clear();
+            scratch.extend_from_slice(&residual[start..end]);
+            let cut = quantile(
+                &mut scratch,
+                (count - 1) as f64 / (end - start - 1).max(1) as f64,
+            );
+            for t in start..end {
+                quiet[t] |= residual[t] <= cut;
+            }
+        }
+    }
     // Rounding noise of an exactly linear baseline must not count as structure.
     let floor = 1e-12 * values.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
     let mut baseline = fit.coarse.clone();
@@ -623,7 +650,21 @@ fn estimate_baseline(
                 // unloaded frames of a 50-frame movie within 1.5 of each other, true noise 8) has a
                 // tiny MAD, and leaving out the frames below it stalled the growth at the cluster.
                 let glitch = (2.0 * CLIP_SIGMAS * sigma).max(2.0 * off_fraction * range);
-                let spread = sigma.max(lower_sigma_within(&residual, &quiet, centre, glitch));
+                // The MAD of a dozen frames is no better than a guess: 8 of the 10 lowest frames of a
+                // 46-frame movie (28 unloaded, true noise 8.2) lay within 3 of each other, the set
+                // stalled at those 10 with a noise of 1.6, and noise frames beside the stance joined
+                // it. A small set's spread is also its RMS distance from its median (which sees the
+                // set's frames above the median, not just the middle half), at most three times its
+                // MAD: a set that much wider than its MAD mixes two levels (a lead at zero and a
+                // preload), and the MAD holds to the larger.
+                let set_rms = if quiet.iter().filter(|&&q| q).count() < SMALL_SET_FRAMES {
+                    rms_within(&residual, &quiet, centre, glitch).min(3.0 * sigma)
+                } else {
+                    0.0
+                };
+                let spread = sigma
+                    .max(lower_sigma_within(&residual, &quiet, centre, glitch))
+                    .max(set_rms);
                 let limit = centre + (GROW_SIGMAS * spread.max(floor)).max(off_fraction * range);
                 residual
                     .iter()
@@ -692,6 +733,23 @@ fn lower_sigma_within(residual: &[f64], quiet: &[bool], centre: f64, limit: f64)
         .filter(|&(&r, &q)| q && r < centre && centre - r <= limit)
         .fold((0.0, 0usize), |(sum, count), (&r, _)| {
             (sum + (centre - r).powi(2), count + 1)
+        });
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64).sqrt()
+    }
+}
+
+/// The root mean square distance from `centre` of the frames flagged `quiet`, those more than `limit`
+/// below it left out (glitches); 0 without frames.
+fn rms_within(residual: &[f64], quiet: &[bool], centre: f64, limit: f64) -> f64 {
+    let (sum, count) = residual
+        .iter()
+        .zip(quiet)
+        .filter(|&(&r, &q)| q && centre - r <= limit)
+        .fold((0.0, 0usize), |(sum, count), (&r, _)| {
+            (sum + (r - centre).powi(2), count + 1)
         });
     if count == 0 {
         0.0
