@@ -747,6 +747,24 @@ fn a_strong_downward_drift_does_not_merge_the_last_stances() {
     }
 }
 
+/// A walk where the automatic choice took the floor (seed 76 trial 3 of `walking_trials`, found over
+/// 300 seeds; old and new code alike): the floor's contact ended a frame early (307) and the drifting
+/// stance a frame late (309), so the swing's second frame lay in a drifting stance and `preload` took
+/// that swing for a rest found loaded beside one found unloaded at the same level (a preload). A rest
+/// is now loaded only by a frame past its first two and last two; the floor split three stances.
+#[test]
+fn edges_a_frame_off_each_way_do_not_make_walking_a_preload() {
+    let (series, truth) = walking_trial(76, 3);
+    let found = run(&series);
+    assert_eq!(
+        found.mode,
+        BaselineMode::Drifting,
+        "{:?}",
+        found.mode_reason
+    );
+    assert_recovered(&found, &truth, 1);
+}
+
 /// Trial `trial` (0-based) of [`walking_trials`]`(seed, ..)`: its series and stances.
 fn walking_trial(seed: u64, trial: usize) -> (Vec<f64>, Vec<(usize, usize)>) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

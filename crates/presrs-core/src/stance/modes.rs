@@ -37,8 +37,8 @@
 //!    [`SegmentParams::max_stance_frames`](super::SegmentParams::max_stance_frames); or the floor finds
 //!    at least [`PRELOAD_PEAKS`] complete contacts and the drifting baseline none; or the drifting
 //!    baseline found a rest between two contacts (or after the last) loaded (one of its frames, but
-//!    its first and last, in one of its stances: a walking swing may lose a frame to the stance on
-//!    each side) and the next rest, at the same level within the on level, unloaded (it took a preload
+//!    its first two and last two, in one of its stances: each segmentation's edge may be a frame off,
+//!    and a walking swing may lose a frame to the stance on each side) and the next rest, at the same level within the on level, unloaded (it took a preload
 //!    for unloaded in some windows: a walking foot's heel-toe valley is far above the swing beside it);
 //!    or [`PRELOAD_PEAKS`] contacts in a row never unload between them (each rest above the drifting
 //!    baseline by the off level, or in one of its stances) and the drifting baseline misses one of them
@@ -220,14 +220,16 @@ fn preload(
     // A rest the drifting baseline found loaded (in one of its stances) next to one it found unloaded at
     // the same level (within the on level): it took the preload for unloaded there, not here. A walking
     // foot's heel-toe valley is far above the swing level beside it.
-    // A rest counts as loaded for the drifting baseline when one of its frames but the first and the
-    // last lies in one of its stances: each boundary may be a frame off (a walking swing often loses a
-    // frame to the stance on each side, two frames that are not a disagreement).
+    // A rest counts as loaded for the drifting baseline when one of its frames but the first two and
+    // the last two lies in one of its stances: each segmentation's boundary may be a frame off, so the
+    // two may differ by two (a walking swing often loses a frame to the stance on each side; a floor
+    // contact that ended a frame early and a drifting stance that ended a frame late made a swing
+    // "loaded" on its second frame and walking a preload).
     let mut rests: Vec<(usize, bool)> = floor
         .stances
         .windows(2)
         .map(|pair| {
-            let loaded = (pair[0].end() + 1..pair[1].start.saturating_sub(1)).any(in_stance);
+            let loaded = (pair[0].end() + 2..pair[1].start.saturating_sub(2)).any(in_stance);
             (rest_frame(pair), loaded)
         })
         .collect();
@@ -238,7 +240,7 @@ fn preload(
         && !last.partial
         && last.end() + 2 < n
     {
-        let loaded = (last.end() + 1..n - 1).any(in_stance);
+        let loaded = (last.end() + 2..n - 1).any(in_stance);
         rests.push(((last.end() + n) / 2, loaded));
     }
     let contradiction = rests.windows(2).find_map(|pair| {
