@@ -81,6 +81,7 @@ class Model:
         full_search: bool = False,
         validate_by: str = "auto",
         budget: Optional[float] = 60.0,
+        choose: str = "best",
     ) -> Model: ...
     @staticmethod
     def load(path: _Path) -> Model: ...
@@ -166,6 +167,7 @@ def evaluate(
     full_search: bool = False,
     validate_by: str = "auto",
     budget: Optional[float] = 60.0,
+    choose: str = "best",
     progress: Union[bool, Callable[[str, int, Optional[int]], Any], None] = None,
 ) -> Evaluation: ...
 def simulate(

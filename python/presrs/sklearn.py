@@ -26,7 +26,8 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
     ``validation`` the share (or count) of each class that validates the hyper-parameters, ``seed`` the
     random draw. ``image_shape`` says how to unflatten a 2-D ``X``; ``validate_by`` how the automatic
     choice validates (``auto``, ``group``, ``condition``, ``split``; give ``groups`` to ``fit``);
-    ``budget`` the seconds it may spend (``None``: no limit, the choice independent of the machine).
+    ``budget`` the seconds it may spend (``None``: no limit, the choice independent of the machine);
+    ``choose`` how it picks (``best``, or ``one-se``: the earliest candidate within one standard error).
     """
 
     def __init__(
@@ -41,6 +42,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         image_shape=None,
         validate_by="auto",
         budget=60.0,
+        choose="best",
     ):
         self.features = features
         self.classifier = classifier
@@ -52,6 +54,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         self.image_shape = image_shape
         self.validate_by = validate_by
         self.budget = budget
+        self.choose = choose
 
     def _images(self, X):
         """``X`` as images ``(n, rows, cols)`` float64."""
@@ -93,6 +96,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
             seed=self.seed,
             validate_by=self.validate_by,
             budget=self.budget,
+            choose=self.choose,
             groups=groups,
             conditions=conditions,
         )

@@ -127,7 +127,7 @@ impl Evaluation {
 #[pyo3(signature = (data, labels = None, *, groups = None, conditions = None, leave_one_out = None,
     train_condition = None, per_class = None, validation = 0.35, repeats = 10, seed = 1,
     features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false,
-    validate_by = "auto", budget = Some(60.0), progress = None))]
+    validate_by = "auto", budget = Some(60.0), choose = "best", progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     py: Python<'_>,
@@ -148,6 +148,7 @@ pub fn evaluate(
     full_search: bool,
     validate_by: &str,
     budget: Option<f64>,
+    choose: &str,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Evaluation> {
     let reporter = PyProgress::from_arg(progress)?;
@@ -181,6 +182,7 @@ pub fn evaluate(
             full_search,
             validate_by,
             budget,
+            choose,
         )?,
     };
     let dataset = load(py, data, labels, groups, conditions, progress)?;

@@ -123,11 +123,12 @@ impl Model {
     /// `validate_by` (`auto`, `group`, `condition`, `split`): how the automatic choice validates its
     /// candidates; `auto` leaves one group out when there are 3 or more groups, else one condition.
     /// `budget`: seconds the automatic choice may spend scoring candidates (the texture families,
-    /// scored last, are cut first, with a warning); `None` or 0: no limit.
+    /// scored last, are cut first, with a warning); `None` or 0: no limit. `choose`: `best` (the
+    /// highest validation mean) or `one-se` (the earliest candidate within one standard error of it).
     #[staticmethod]
     #[pyo3(signature = (images, labels, *, features = "auto", classifier = "auto", groups = None,
         conditions = None, seed = 0, dims = None, per_class = None, validation = 0.35, crop = "auto",
-        full_search = false, validate_by = "auto", budget = Some(60.0)))]
+        full_search = false, validate_by = "auto", budget = Some(60.0), choose = "best"))]
     #[allow(clippy::too_many_arguments)]
     fn train(
         py: Python<'_>,
@@ -290,6 +291,7 @@ impl Model {
 }
 
 /// A method from the CLI's option values.
+#[allow(clippy::too_many_arguments)]
 pub fn method(
     features: &str,
     classifier: &str,
@@ -298,6 +300,7 @@ pub fn method(
     full_search: bool,
     validate_by: &str,
     budget: Option<f64>,
+    choose: &str,
 ) -> PyResult<Method> {
     let budget = match budget {
         Some(seconds) if !seconds.is_finite() || !(0.0..=1e12).contains(&seconds) => {
@@ -310,6 +313,9 @@ pub fn method(
     };
     Ok(Method {
         budget,
+        choose: choose
+            .parse()
+            .map_err(|err| data_error(format!("choose={choose:?}: {err}")))?,
         validate_by: validate_by
             .parse()
             .map_err(|err| data_error(format!("validate_by={validate_by:?}: {err}")))?,

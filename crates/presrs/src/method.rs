@@ -8,6 +8,7 @@ use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::{Intensity, Preprocess};
+pub use presrs_core::selection::ChoiceRule;
 use presrs_core::selection::AutoChoice;
 pub use presrs_core::selection::ValidateBy;
 use presrs_core::split::ValidationSize;
@@ -107,6 +108,8 @@ pub struct Method {
     /// How an automatic choice validates its candidates inside the training data (by group, condition
     /// or stratified splits; `auto`: the most honest the data allow).
     pub validate_by: ValidateBy,
+    /// How an automatic choice picks its winner from the validation scores.
+    pub choose: ChoiceRule,
 }
 
 impl Default for Method {
@@ -121,6 +124,7 @@ impl Default for Method {
             preprocess: Preprocess::default(),
             crop: CropChoice::Auto,
             validate_by: ValidateBy::Auto,
+            choose: ChoiceRule::default(),
         }
     }
 }
@@ -237,6 +241,7 @@ impl Method {
         AutoChoice::new(candidates, self.validate_by)
             .with_budget(self.budget)
             .with_refined_dims(refine)
+            .with_rule(self.choose)
     }
 
     fn config(

@@ -39,6 +39,11 @@ pub struct PipelineArgs {
     /// 0: no limit (every candidate is tried, and the choice does not depend on the machine's speed).
     #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_budget)]
     pub budget: f64,
+    /// With auto: how the winner is picked from the validation scores: best (the highest mean) or
+    /// one-se (the earliest candidate in the search order, which lists the paper's method first and the
+    /// costlier families last, within one standard error of the best: steadier on small validation sets).
+    #[arg(long, default_value = "best", value_parser = |t: &str| t.parse::<presrs::method::ChoiceRule>())]
+    pub choose: presrs::method::ChoiceRule,
     /// Principal components kept, at least 1 (at most the number of training images minus one, and the
     /// number of features: a larger value is lowered to that, with a warning when given) [default: 51].
     #[arg(long, value_name = "DIMS", value_parser = parse_positive)]
@@ -91,6 +96,7 @@ impl PipelineArgs {
             },
             crop: self.crop.crop,
             validate_by: self.validate_by,
+            choose: self.choose,
         }
     }
 }

@@ -108,6 +108,49 @@ pub struct AutoChoice<'c> {
     /// Numbers of principal components the best [`REFINED`] candidates are scored again with, once
     /// every candidate has been scored (empty: the candidates' own only).
     pub refine_dims: &'c [usize],
+    pub rule: ChoiceRule,
+}
+
+/// How the winner is picked from the candidates' fold accuracies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChoiceRule {
+    /// The highest mean (ties to the earlier candidate).
+    #[default]
+    Best,
+    /// The earliest candidate (the search lists the paper's method first and the costlier families
+    /// last) whose mean is within one standard error of the best's (its folds' spread over the square
+    /// root of their number): on small validation sets, differences inside that are noise.
+    OneStandardError,
+}
+
+impl ChoiceRule {
+    pub const NAMES: [&'static str; 2] = ["best", "one-se"];
+}
+
+impl std::str::FromStr for ChoiceRule {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "best" => Ok(Self::Best),
+            "one-se" | "1se" => Ok(Self::OneStandardError),
+            _ => Err(format!(
+                "unknown choice rule {text:?} (known: {})",
+                Self::NAMES.join(", ")
+            )),
+        }
+    }
+}
+
+/// The earliest scored candidate within one standard error of `best`'s mean.
+fn one_standard_error(scores: &[CandidateScore], best: usize) -> usize {
+    let folds = scores[best].per_fold.len().max(1) as f64;
+    let threshold = scores[best].accuracy.mean - scores[best].accuracy.std / folds.sqrt();
+    scores
+        .iter()
+        .position(|score| score.error.is_none() && score.accuracy.mean >= threshold)
+        .unwrap_or(best)
 }
 
 /// How many of the best candidates are scored again with other numbers of principal components.
@@ -121,7 +164,13 @@ impl<'c> AutoChoice<'c> {
             by,
             budget: None,
             refine_dims: &[],
+            rule: ChoiceRule::Best,
         }
+    }
+
+    /// With the winner picked by `rule`.
+    pub fn with_rule(self, rule: ChoiceRule) -> Self {
+        Self { rule, ..self }
     }
 
     /// With a time budget.
@@ -152,6 +201,7 @@ pub fn select(
         by,
         budget,
         refine_dims,
+        rule: _,
     } = *choice;
     let started = std::time::Instant::now();
     if candidates.is_empty() {
@@ -185,6 +235,9 @@ pub fn select(
         {
             chosen = i;
         }
+    }
+    if choice.rule == ChoiceRule::OneStandardError && scores[chosen].error.is_none() {
+        chosen = one_standard_error(&scores, chosen);
     }
     if let Some(error) = &scores[chosen].error {
         // Every candidate failed; the first one's reason stands for them.

@@ -319,3 +319,32 @@ fn a_spent_budget_scores_the_first_feature_group_only() {
     );
     assert_eq!(unlimited.scores[0], selection.scores[0]);
 }
+
+/// The one-standard-error rule picks the earliest candidate whose mean is within the best's standard
+/// error (spread over the square root of the folds); failed candidates never; the best itself when
+/// nothing earlier is close; and the rules parse by name.
+#[test]
+fn one_standard_error_picks_the_earliest_close_candidate() {
+    let score = |mean: f64, std: f64, error: Option<&str>| CandidateScore {
+        features: "fft1d".into(),
+        classifier: "pwe".into(),
+        config: TrainConfig::default(),
+        accuracy: crate::metrics::MeanStd { mean, std },
+        per_fold: (0..4).map(|k| (format!("g{k}"), mean)).collect(),
+        error: error.map(str::to_owned),
+        skipped: false,
+    };
+    // best: 0.95 with std 0.04 over 4 folds -> standard error 0.02, threshold 0.93
+    let scores = [
+        score(0.0, 0.0, Some("failed")),
+        score(0.90, 0.10, None),
+        score(0.93, 0.02, None),
+        score(0.95, 0.04, None),
+    ];
+    assert_eq!(one_standard_error(&scores, 3), 2);
+    let far = [score(0.80, 0.0, None), score(0.95, 0.01, None)];
+    assert_eq!(one_standard_error(&far, 1), 1);
+    assert_eq!("one-se".parse::<ChoiceRule>(), Ok(ChoiceRule::OneStandardError));
+    assert_eq!("BEST".parse::<ChoiceRule>(), Ok(ChoiceRule::Best));
+    assert!("median".parse::<ChoiceRule>().unwrap_err().contains("known: best, one-se"));
+}
