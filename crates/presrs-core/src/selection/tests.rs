@@ -344,7 +344,15 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
     assert_eq!(one_standard_error(&scores, 3), 2);
     let far = [score(0.80, 0.0, None), score(0.95, 0.01, None)];
     assert_eq!(one_standard_error(&far, 1), 1);
-    assert_eq!("one-se".parse::<ChoiceRule>(), Ok(ChoiceRule::OneStandardError));
+    assert_eq!(
+        "one-se".parse::<ChoiceRule>(),
+        Ok(ChoiceRule::OneStandardError)
+    );
     assert_eq!("BEST".parse::<ChoiceRule>(), Ok(ChoiceRule::Best));
-    assert!("median".parse::<ChoiceRule>().unwrap_err().contains("known: best, one-se"));
+    assert!(
+        "median"
+            .parse::<ChoiceRule>()
+            .unwrap_err()
+            .contains("known: best, one-se")
+    );
 }
