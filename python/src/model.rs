@@ -146,6 +146,7 @@ impl Model {
         full_search: bool,
         validate_by: &str,
         budget: Option<f64>,
+        choose: &str,
     ) -> PyResult<Self> {
         let method = method(
             features,
@@ -155,6 +156,7 @@ impl Model {
             full_search,
             validate_by,
             budget,
+            choose,
         )?;
         let dataset = dataset_of(images, labels, groups, conditions)?;
         let options = TrainOptions {
