@@ -305,13 +305,9 @@ pub fn method(
     choose: &str,
 ) -> PyResult<Method> {
     let budget = match budget {
-        Some(seconds) if !seconds.is_finite() || !(0.0..=1e12).contains(&seconds) => {
-            return Err(data_error(format!(
-                "budget={seconds}: give seconds, 0 or more (None or 0: no limit)"
-            )));
-        }
-        Some(seconds) if seconds > 0.0 => Some(std::time::Duration::from_secs_f64(seconds)),
-        _ => None,
+        Some(seconds) => presrs::method::budget_from_seconds(seconds)
+            .map_err(|err| data_error(format!("budget={seconds}: {err} (or None)")))?,
+        None => None,
     };
     Ok(Method {
         budget,

@@ -163,6 +163,20 @@ impl<'a> FrameView<'a> {
         self.values[self.grid.index(row, col)]
     }
 
+    /// Appends the values to `out`, absent sensels as 0 (how the pipeline reads them, whatever a
+    /// view's values hold there).
+    pub fn extend_absent_as_zero(&self, out: &mut Vec<f64>) {
+        match self.present {
+            None => out.extend_from_slice(self.values),
+            Some(mask) => out.extend(
+                self.values
+                    .iter()
+                    .zip(mask)
+                    .map(|(&value, &here)| if here { value } else { 0.0 }),
+            ),
+        }
+    }
+
     /// Whether sensel `(row, col)` exists.
     pub fn is_present(&self, row: usize, col: usize) -> bool {
         self.present

@@ -436,16 +436,7 @@ fn export(
     // Absent sensels as 0, which is how the pipeline reads them.
     let mut images = Vec::with_capacity(frames.len() * grid.len());
     for frame in frames {
-        match frame.present() {
-            None => images.extend_from_slice(frame.values()),
-            Some(mask) => images.extend(
-                frame
-                    .values()
-                    .iter()
-                    .zip(mask)
-                    .map(|(&value, &here)| if here { value } else { 0.0 }),
-            ),
-        }
+        frame.view().extend_absent_as_zero(&mut images);
     }
     let mut session = model.session();
     let (n_features, n_components) = (model.pca().n_features(), model.pca().n_components());

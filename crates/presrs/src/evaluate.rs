@@ -429,16 +429,7 @@ impl<'d> EvalSetup<'d> {
                     grid.cols
                 )));
             }
-            match frame.present() {
-                None => images.extend_from_slice(frame.values()),
-                Some(mask) => images.extend(
-                    frame
-                        .values()
-                        .iter()
-                        .zip(mask)
-                        .map(|(&value, &here)| if here { value } else { 0.0 }),
-                ),
-            }
+            frame.extend_absent_as_zero(&mut images);
         }
         let draws = self.draws()?;
         std::fs::create_dir_all(dir)?;

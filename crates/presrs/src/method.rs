@@ -19,20 +19,6 @@ use crate::error::{Error, Result};
 /// Principal components kept unless told otherwise (the paper's 51).
 pub const DEFAULT_DIMS: usize = 51;
 
-/// The cheap feature families, which an automatic choice scores first.
-pub const FAST_CANDIDATE_FEATURES: [&[FeatureKind]; 3] = [
-    &[FeatureKind::Fft1d],
-    &[FeatureKind::Fft2d],
-    &[FeatureKind::Fft2dPolar],
-];
-
-/// The texture families (a GLCM image costs 2-3x an FFT one), scored after the cheap ones and the
-/// intensity transforms, so that a time budget cuts them first.
-pub const TEXTURE_CANDIDATE_FEATURES: [&[FeatureKind]; 2] = [
-    &[FeatureKind::Glcm],
-    &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
-];
-
 /// How long an automatic choice may score candidates by default, per model trained: the whole default
 /// search of a few hundred images fits in it on a 2-core machine; on larger sets it cuts the texture
 /// families first (and says so).
@@ -43,7 +29,9 @@ pub const DEFAULT_BUDGET: Duration = Duration::from_secs(60);
 /// components carry the classes; more than the training images allow are lowered to that).
 pub const REFINED_DIMS: [usize; 2] = [25, 102];
 
-/// Every feature family: what a comparison tries.
+/// Every feature family: what a comparison tries, and what an automatic choice tries, the texture ones
+/// ([`is_texture`]: a GLCM image costs 2-3x an FFT one) after the cheap ones and the intensity
+/// transforms, so that a time budget cuts them first.
 pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
     &[FeatureKind::Fft1d],
     &[FeatureKind::Fft2d],
@@ -98,7 +86,7 @@ pub struct Method {
     /// paper's 1-D |FFT|).
     pub full_search: bool,
     /// With `auto`: how long scoring the candidates of one model may take (`None`: no limit, every
-    /// candidate scored). Not part of `Default`'s equality of intent: see [`DEFAULT_BUDGET`].
+    /// candidate scored) [default: [`DEFAULT_BUDGET`]].
     pub budget: Option<Duration>,
     /// Principal components kept (at most the training images minus one, and the features) [default:
     /// [`DEFAULT_DIMS`]].
@@ -292,6 +280,18 @@ impl Method {
     }
 }
 
+/// A time budget from seconds: 0 means no limit; negative, non-finite or absurd values are refused
+/// with the reason (the one check the command line and the Python package share).
+pub fn budget_from_seconds(seconds: f64) -> std::result::Result<Option<Duration>, String> {
+    // (a finite limit: `Duration` holds at most about 1.8e19 s)
+    if !seconds.is_finite() || !(0.0..=1e12).contains(&seconds) {
+        return Err(format!(
+            "the budget must be a number of seconds, 0 or more (0: no limit); got {seconds}"
+        ));
+    }
+    Ok((seconds > 0.0).then(|| Duration::from_secs_f64(seconds)))
+}
+
 /// The warning for selections whose time budget cut candidates (`None` when none was cut): how many
 /// models, which candidates, and what to do.
 pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Option<String> {
@@ -439,10 +439,7 @@ mod tests {
         assert_eq!(candidates[0], auto.paper_config(grid).unwrap());
         let texture = |c: &CheckedTrainConfig| is_texture(&c.config().features);
         let first_texture = candidates.iter().position(texture).unwrap();
-        assert_eq!(
-            first_texture,
-            candidates.len() - TEXTURE_CANDIDATE_FEATURES.len() * n_classifiers
-        );
+        assert_eq!(first_texture, candidates.len() - 2 * n_classifiers);
         assert!(candidates[first_texture..].iter().all(texture));
         let full = Method {
             full_search: true,
@@ -511,6 +508,21 @@ mod tests {
             "paper".parse::<CropChoice>(),
             Ok(CropChoice::Fixed(Crop::PAPER))
         );
+    }
+
+    #[test]
+    fn budgets_are_seconds_and_zero_is_no_limit() {
+        assert_eq!(budget_from_seconds(0.0), Ok(None));
+        assert_eq!(
+            budget_from_seconds(1.5),
+            Ok(Some(Duration::from_millis(1500)))
+        );
+        for bad in [-1.0, f64::NAN, f64::INFINITY, 1e13] {
+            assert!(
+                budget_from_seconds(bad).unwrap_err().contains("0 or more"),
+                "{bad}"
+            );
+        }
     }
 
     #[test]

@@ -38,7 +38,7 @@ pub struct PipelineArgs {
     /// eval, per fold and repeat); the texture families, scored last, are cut first, with a warning.
     /// 0: no limit (every candidate is tried, and the choice does not depend on the machine's speed).
     #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_budget)]
-    pub budget: f64,
+    pub budget: Budget,
     /// With auto: how the winner is picked from the validation scores: best (the highest mean) or
     /// one-se (the earliest candidate in the search order, which lists the paper's method first and the
     /// costlier families last, within one standard error of the best: steadier on small validation sets).
@@ -87,7 +87,7 @@ impl PipelineArgs {
             features: self.features.clone(),
             classifier: self.classifier,
             full_search: self.full_search,
-            budget: (self.budget > 0.0).then(|| std::time::Duration::from_secs_f64(self.budget)),
+            budget: self.budget.0,
             dims: self.dims,
             preprocess: Preprocess {
                 normalise_load: self.normalise_load,
@@ -101,19 +101,17 @@ impl PipelineArgs {
     }
 }
 
+/// A time budget (`None`: no limit), as clap keeps it.
+#[derive(Debug, Clone, Copy)]
+pub struct Budget(Option<std::time::Duration>);
+
 /// A time budget in seconds (a non-negative number; 0: no limit).
-fn parse_budget(text: &str) -> Result<f64, String> {
+fn parse_budget(text: &str) -> Result<Budget, String> {
     let seconds: f64 = text
         .trim()
         .parse()
         .map_err(|_| format!("{text:?} is not a number of seconds (e.g. 60, or 0 for no limit)"))?;
-    // (a finite limit: `Duration` holds at most about 1.8e19 s)
-    if !seconds.is_finite() || !(0.0..=1e12).contains(&seconds) {
-        return Err(format!(
-            "the budget must be a number of seconds, 0 or more (0: no limit); got {text}"
-        ));
-    }
-    Ok(seconds)
+    presrs::method::budget_from_seconds(seconds).map(Budget)
 }
 
 /// How samples are taken from movies.

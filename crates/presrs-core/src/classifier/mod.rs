@@ -134,6 +134,20 @@ impl ClassifierConfig {
         n_classes: usize,
         dims: usize,
     ) -> Result<ClassifierModel> {
+        self.fit_with(train, validation, n_classes, dims, true)
+    }
+
+    /// [`fit`](Self::fit), or, without `calibrate`, for counting right answers only: the same
+    /// decisions, the posteriors possibly uncalibrated (the SVM skips the cross-validation that fits
+    /// its temperature).
+    pub(crate) fn fit_with(
+        &self,
+        train: LabeledVectors<'_>,
+        validation: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        calibrate: bool,
+    ) -> Result<ClassifierModel> {
         match self {
             Self::Pwe(config) => ParzenModel::fit(train, validation, n_classes, dims, config)
                 .map(ClassifierModel::Pwe),
@@ -146,31 +160,12 @@ impl ClassifierConfig {
                     .map(ClassifierModel::Lda)
             }
             Self::Svm(config) => {
-                SvmModel::fit(train, validation, n_classes, dims, config).map(ClassifierModel::Svm)
+                SvmModel::fit_with(train, validation, n_classes, dims, config, calibrate)
+                    .map(ClassifierModel::Svm)
             }
             Self::Knn(config) => {
                 KnnModel::fit(train, validation, n_classes, dims, config).map(ClassifierModel::Knn)
             }
-        }
-    }
-}
-
-impl ClassifierConfig {
-    /// [`fit`](Self::fit) for counting right answers only: the same decisions, its posteriors possibly
-    /// uncalibrated (the SVM skips the cross-validation that fits its temperature).
-    pub(crate) fn fit_for_decisions(
-        &self,
-        train: LabeledVectors<'_>,
-        validation: LabeledVectors<'_>,
-        n_classes: usize,
-        dims: usize,
-    ) -> Result<ClassifierModel> {
-        match self {
-            Self::Svm(config) => {
-                SvmModel::fit_with(train, validation, n_classes, dims, config, false)
-                    .map(ClassifierModel::Svm)
-            }
-            _ => self.fit(train, validation, n_classes, dims),
         }
     }
 }

@@ -172,8 +172,9 @@ fn score_fold(
     configs: &[&TrainConfig],
 ) -> Result<Vec<std::result::Result<f64, String>>> {
     let pick = |indices: &[usize]| indices.iter().map(|&i| images[i]).collect::<Vec<_>>();
-    let classes = class_names_of(&pick(&fold.train)).and_then(|names| {
-        let train = class_indices(&names, &pick(&fold.train))?;
+    let train_images = pick(&fold.train);
+    let classes = class_names_of(&train_images).and_then(|names| {
+        let train = class_indices(&names, &train_images)?;
         let validation = class_indices(&names, &pick(&fold.validation))?;
         Ok((names, train, validation))
     });
@@ -209,7 +210,7 @@ fn score_fold(
         let scored: Vec<(usize, std::result::Result<f64, String>)> = members
             .par_iter()
             .map(|&m| {
-                let fitted = configs[m].classifier.fit_for_decisions(
+                let fitted = configs[m].classifier.fit_with(
                     LabeledVectors {
                         vectors: &train,
                         classes: &train_classes,
@@ -220,6 +221,7 @@ fn score_fold(
                     },
                     class_names.len(),
                     dims,
+                    false,
                 );
                 let classifier = match fitted {
                     Ok(classifier) => classifier,
