@@ -30,7 +30,7 @@ pub const DEFAULT_BUDGET: Duration = Duration::from_secs(60);
 pub const REFINED_DIMS: [usize; 2] = [25, 102];
 
 /// Every feature family: what a comparison tries, and what an automatic choice tries, the texture ones
-/// ([`is_texture`]: a GLCM image costs 2-3x an FFT one) after the cheap ones and the intensity
+/// (glcm, alone or combined: a GLCM image costs 2-3x an FFT one) after the cheap ones and the intensity
 /// transforms, so that a time budget cuts them first.
 pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
     &[FeatureKind::Fft1d],
