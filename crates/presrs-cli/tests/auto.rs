@@ -133,7 +133,9 @@ fn the_automatic_choice_validates_by_group_and_eval_reports_its_estimate() {
     );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
-    let scores = json["model"]["selection"]["scores"][0]["per_fold"].clone();
+    let selection = &json["model"]["selection"];
+    let chosen = selection["chosen"].as_u64().unwrap() as usize;
+    let scores = selection["scores"][chosen]["per_fold"].clone();
     assert!(scores["g3"].is_number(), "{scores}");
     let (by_split, how) = train_estimate(manifest, &model, &["--validate-by", "split"]);
     assert!(how.starts_with("three stratified"), "{how}");

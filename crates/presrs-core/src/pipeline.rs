@@ -146,9 +146,18 @@ pub struct CandidateScore {
     /// Not scored: the automatic choice's time budget was spent before its turn (`error` says so).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub skipped: bool,
+    /// Scored on the first folds only: it was clearly behind the best there, and the race
+    /// ([`crate::selection::RACE_FOLDS`]) left it out of the other folds. Never chosen.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub dropped_early: bool,
 }
 
 impl CandidateScore {
+    /// Scored on every fold: it can be chosen.
+    pub fn is_contender(&self) -> bool {
+        self.error.is_none() && !self.dropped_early
+    }
+
     /// The candidate in words: its features (after an intensity transform, if any) + its classifier,
     /// and its principal components (`fft1d (sqrt) + pwe, 51 dims`).
     pub fn name(&self) -> String {

@@ -170,9 +170,23 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 /// The automatic choice's table: every candidate's validation accuracy, the chosen one marked.
 fn print_selection(selection: &Selection, out: &mut dyn Write) -> anyhow::Result<()> {
     writeln!(out, "automatic choice ({}):", selection.method)?;
+    let folds = selection
+        .scores
+        .iter()
+        .filter(|score| score.is_contender())
+        .map(|score| score.per_fold.len())
+        .max()
+        .unwrap_or(0);
     for (i, score) in selection.scores.iter().enumerate() {
         let mark = if i == selection.chosen { "*" } else { " " };
         match &score.error {
+            None if score.dropped_early => writeln!(
+                out,
+                "{mark} {:<40} {:6.2} % on the first {} of {folds} folds: clearly behind, dropped",
+                score.name(),
+                100.0 * score.accuracy.mean,
+                score.per_fold.len()
+            )?,
             None => writeln!(
                 out,
                 "{mark} {:<40} {:6.2} % +- {:.2}",

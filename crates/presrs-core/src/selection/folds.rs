@@ -79,9 +79,18 @@ pub(super) fn make_folds(
     if distinct.len() > LISTED {
         listed.push_str(&format!(", ... {} in all", distinct.len()));
     }
-    let method = format!("leave one {what} out inside the training data ({listed})");
-    for (k, held_out) in distinct.iter().enumerate() {
-        let held = |i: usize| key(&images[i]) == Some(*held_out);
+    let held_out_sets = whole_groups_in_folds(images, distinct, key);
+    let method = if held_out_sets.len() == distinct.len() {
+        format!("leave one {what} out inside the training data ({listed})")
+    } else {
+        format!(
+            "{} folds of whole {what}s inside the training data ({listed}; {} {what}s)",
+            held_out_sets.len(),
+            distinct.len()
+        )
+    };
+    for (k, held_out) in held_out_sets.iter().enumerate() {
+        let held = |i: usize| key(&images[i]).is_some_and(|value| held_out.contains(&value));
         let pool: Vec<usize> = (0..images.len()).filter(|&i| !held(i)).collect();
         let pool_labels: Vec<&str> = pool.iter().map(|&i| labels[i]).collect();
         let split = stratified_split(
@@ -91,11 +100,46 @@ pub(super) fn make_folds(
             seed.wrapping_add(k as u64),
         )?;
         folds.push(InnerFold {
-            name: (*held_out).to_owned(),
+            name: held_out.join("+"),
             train: split.train.iter().map(|&j| pool[j]).collect(),
             validation: split.validation.iter().map(|&j| pool[j]).collect(),
             test: (0..images.len()).filter(|&i| held(i)).collect(),
         });
     }
     Ok((folds, method))
+}
+
+/// At most this many folds when validating by group or condition: more values are merged, whole, into
+/// this many folds (as scikit-learn's `GroupKFold`, 5 folds by default). Each fold costs a training of
+/// every candidate, and five folds of whole groups are as honest as one per group.
+pub const MAX_INNER_FOLDS: usize = 5;
+
+/// The values held out together in each fold: one per fold up to [`MAX_INNER_FOLDS`]; beyond, the
+/// values by decreasing number of images (ties by name), each to the fold with the fewest images so
+/// far (ties to the first), so that the folds are about equal in size. Each fold's values sorted.
+fn whole_groups_in_folds<'a>(
+    images: &[LabeledImage<'a>],
+    distinct: &[&'a str],
+    key: Key,
+) -> Vec<Vec<&'a str>> {
+    if distinct.len() <= MAX_INNER_FOLDS {
+        return distinct.iter().map(|&value| vec![value]).collect();
+    }
+    let size = |value: &str| images.iter().filter(|i| key(i) == Some(value)).count();
+    let mut by_size: Vec<(usize, &str)> = distinct.iter().map(|&v| (size(v), v)).collect();
+    by_size.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(b.1)));
+    let mut folds: Vec<(usize, Vec<&str>)> = vec![(0, Vec::new()); MAX_INNER_FOLDS];
+    for (count, value) in by_size {
+        let smallest = (0..folds.len())
+            .min_by_key(|&f| (folds[f].0, f))
+            .unwrap_or(0);
+        folds[smallest].0 += count;
+        folds[smallest].1.push(value);
+    }
+    let mut folds: Vec<Vec<&str>> = folds.into_iter().map(|(_, values)| values).collect();
+    for values in &mut folds {
+        values.sort_unstable();
+    }
+    folds.sort();
+    folds
 }

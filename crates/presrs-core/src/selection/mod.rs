@@ -9,6 +9,8 @@
 //!   conditions;
 //! - otherwise three seeded stratified splits: 70 % to train (of which 35 % validate), 30 % to test.
 //!
+//! More than [`MAX_INNER_FOLDS`] groups (or conditions) are merged, whole, into that many folds.
+//!
 //! The candidate with the highest mean fold accuracy wins; ties go to the earlier candidate (callers list
 //! the paper's fft1d + Parzen window first). The winner is then trained on the given training and validation
 //! images and the [`Selection`] (every candidate's scores) is stored in the model.
@@ -16,7 +18,9 @@
 //! Candidates that share their features (crop, preprocessing, feature family) are scored together: the
 //! features of every image once, each fold's PCA once, then every classifier on them (`scoring`). A
 //! time budget ([`AutoChoice::budget`]) stops before a feature group that would end past it; callers list
-//! the cheap and likely candidates first.
+//! the cheap and likely candidates first. With [`RACE_MIN_FOLDS`] folds or more, candidates race: each is
+//! scored on the first [`RACE_FOLDS`] folds, and those clearly behind the best there are not scored on the
+//! others ([`CandidateScore::dropped_early`]; never chosen).
 
 mod folds;
 mod scoring;
@@ -33,6 +37,8 @@ use crate::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
 // The record of a selection is plain data kept in the trained model (`pipeline`); the procedure lives
 // here. Re-exported so `select`'s result type is nameable beside it.
 pub use crate::pipeline::{CandidateScore, Selection};
+pub use folds::MAX_INNER_FOLDS;
+pub use scoring::{RACE_FOLDS, RACE_MIN_FOLDS, RACE_Z};
 
 /// How the automatic choice validates its candidates inside the training data.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -149,7 +155,7 @@ fn one_standard_error(scores: &[CandidateScore], best: usize) -> usize {
     let threshold = scores[best].accuracy.mean - scores[best].accuracy.std / folds.sqrt();
     scores
         .iter()
-        .position(|score| score.error.is_none() && score.accuracy.mean >= threshold)
+        .position(|score| score.is_contender() && score.accuracy.mean >= threshold)
         .unwrap_or(best)
 }
 
@@ -213,7 +219,7 @@ pub fn select(
     let (folds, method) = folds::make_folds(images, by, seed)?;
     // Each candidate's folds in order, classifiers in parallel: the scores, and so the choice, do not
     // depend on the number of threads.
-    let mut scores = scoring::score_candidates(images, &folds, candidates, budget)?;
+    let mut scores = scoring::score_candidates(images, &folds, candidates, budget, true)?;
     let variants = dims_variants(&scores, refine_dims)?;
     if !variants.is_empty() {
         let left = budget.map(|budget| budget.saturating_sub(started.elapsed()));
@@ -224,27 +230,32 @@ pub fn select(
                     .map(|v| scoring::skipped(v, budget.unwrap_or_default())),
             );
         } else {
-            scores.extend(scoring::score_candidates(images, &folds, &variants, left)?);
+            scores.extend(scoring::score_candidates(
+                images, &folds, &variants, left, true,
+            )?);
         }
     }
     let mut chosen = 0;
     for (i, score) in scores.iter().enumerate() {
-        if score.error.is_none()
-            && (scores[chosen].error.is_some()
+        if score.is_contender()
+            && (!scores[chosen].is_contender()
                 || score.accuracy.mean > scores[chosen].accuracy.mean)
         {
             chosen = i;
         }
     }
-    if choice.rule == ChoiceRule::OneStandardError && scores[chosen].error.is_none() {
+    if choice.rule == ChoiceRule::OneStandardError && scores[chosen].is_contender() {
         chosen = one_standard_error(&scores, chosen);
     }
-    if let Some(error) = &scores[chosen].error {
-        // Every candidate failed; the first one's reason stands for them.
-        let name = format!(
-            "{} + {}",
-            scores[chosen].features, scores[chosen].classifier
-        );
+    if !scores[chosen].is_contender() {
+        // Every candidate failed (or, in a race, failed on a later fold after the others were
+        // dropped); the first failure's reason stands for them.
+        let failed = scores
+            .iter()
+            .find(|score| score.error.is_some())
+            .unwrap_or(&scores[chosen]);
+        let error = failed.error.as_deref().unwrap_or("dropped early");
+        let name = format!("{} + {}", failed.features, failed.classifier);
         return Err(CoreError::NotEnoughData(if scores.len() == 1 {
             format!("{name} could not be trained ({error})")
         } else {
@@ -267,10 +278,8 @@ fn dims_variants(scores: &[CandidateScore], dims: &[usize]) -> Result<Vec<Checke
     if dims.is_empty() {
         return Ok(Vec::new());
     }
-    let mut ranked: Vec<&CandidateScore> = scores
-        .iter()
-        .filter(|score| score.error.is_none())
-        .collect();
+    let mut ranked: Vec<&CandidateScore> =
+        scores.iter().filter(|score| score.is_contender()).collect();
     // (a stable sort: ties keep the candidates' order)
     ranked.sort_by(|a, b| b.accuracy.mean.total_cmp(&a.accuracy.mean));
     let mut variants = Vec::new();

@@ -49,17 +49,20 @@ fn feature_groups(candidates: &[CheckedTrainConfig]) -> Vec<FeatureGroup> {
 
 /// Scores every candidate on `folds`, feature group by feature group in order. With a `budget`, a group
 /// that would end past it (judged from the slowest candidate scored so far) is not scored, nor any
-/// after it: its candidates are marked `skipped`. The first group is always scored.
+/// after it: its candidates are marked `skipped`. The first group is always scored. With `race` (and
+/// enough folds), candidates clearly behind on the first folds are not scored on the rest ([`Race`]).
 pub(super) fn score_candidates(
     images: &[LabeledImage<'_>],
     folds: &[InnerFold],
     candidates: &[CheckedTrainConfig],
     budget: Option<Duration>,
+    race: bool,
 ) -> Result<Vec<CandidateScore>> {
     let started = Instant::now();
     let mut scores: Vec<Option<CandidateScore>> = vec![None; candidates.len()];
     let mut slowest_per_candidate = Duration::ZERO;
     let mut out_of_budget = false;
+    let mut race = if race { Race::of(folds) } else { None };
     for (g, group) in feature_groups(candidates).iter().enumerate() {
         if let Some(budget) = budget
             && g > 0
@@ -74,7 +77,7 @@ pub(super) fn score_candidates(
             continue;
         }
         let group_started = Instant::now();
-        let scored = score_group(images, folds, candidates, &group.members)?;
+        let scored = score_group(images, folds, candidates, &group.members, race.as_mut())?;
         slowest_per_candidate =
             slowest_per_candidate.max(group_started.elapsed() / group.members.len().max(1) as u32);
         for (index, score) in group.members.iter().zip(scored) {
@@ -84,6 +87,41 @@ pub(super) fn score_candidates(
     Ok(scores.into_iter().flatten().collect())
 }
 
+/// Folds scored first, before the rest, when there are at least [`RACE_MIN_FOLDS`].
+pub const RACE_FOLDS: usize = 2;
+/// The fewest folds for which candidates race (with fewer, every candidate is scored on every fold).
+pub const RACE_MIN_FOLDS: usize = 4;
+/// How many standard errors behind the best a candidate must be on the first folds to be dropped.
+pub const RACE_Z: f64 = 2.0;
+
+/// A race (Maron and Moore's Hoeffding races, with a normal bound): every candidate is scored on the
+/// first [`RACE_FOLDS`] folds; one that is clearly behind the best there, by more than [`RACE_Z`]
+/// standard errors of the difference of two accuracies on those folds' held-out images, is not scored
+/// on the others (it is `dropped_early`). The bound treats the two accuracies as independent; they are
+/// measured on the same images, so it is wide, and only clear losers are dropped.
+struct Race {
+    /// Held-out images in the first folds.
+    images: usize,
+    /// The best mean accuracy on the first folds so far.
+    best: f64,
+}
+
+impl Race {
+    fn of(folds: &[InnerFold]) -> Option<Self> {
+        (folds.len() >= RACE_MIN_FOLDS).then(|| Self {
+            images: folds[..RACE_FOLDS].iter().map(|f| f.test.len()).sum(),
+            best: f64::NEG_INFINITY,
+        })
+    }
+
+    /// Whether a candidate with this mean accuracy on the first folds is clearly behind the best.
+    fn clearly_behind(&self, accuracy: f64) -> bool {
+        let spread = |p: f64| p * (1.0 - p);
+        let n = self.images.max(1) as f64;
+        let error = ((spread(self.best) + spread(accuracy)) / n).sqrt();
+        self.best - accuracy > RACE_Z * error
+    }
+}
 /// A candidate not scored for lack of time.
 pub(super) fn skipped(candidate: &CheckedTrainConfig, budget: Duration) -> CandidateScore {
     let reason = format!(
@@ -113,15 +151,18 @@ fn candidate_score(
         per_fold,
         error,
         skipped: false,
+        dropped_early: false,
     }
 }
 
-/// The scores of the candidates `members` (sharing their features) on every fold.
+/// The scores of the candidates `members` (sharing their features) on every fold, or, in a race, on
+/// the first folds and then, for those not clearly behind, on the others.
 fn score_group(
     images: &[LabeledImage<'_>],
     folds: &[InnerFold],
     candidates: &[CheckedTrainConfig],
     members: &[usize],
+    race: Option<&mut Race>,
 ) -> Result<Vec<CandidateScore>> {
     let configs: Vec<&TrainConfig> = members.iter().map(|&i| candidates[i].config()).collect();
     let table = match FeatureTable::of(images, configs[0]) {
@@ -134,32 +175,76 @@ fn score_group(
                 .collect());
         }
     };
-    // fold -> member -> accuracy, or why the member could not be trained on that fold
-    let per_fold: Vec<Vec<std::result::Result<f64, String>>> = folds
-        .par_iter()
-        .map(|fold| score_fold(images, fold, &table, &configs))
-        .collect::<Result<_>>()?;
-    Ok(configs
+    let score_on = |folds: &[InnerFold], configs: &[&TrainConfig]| {
+        folds
+            .par_iter()
+            .map(|fold| score_fold(images, fold, &table, configs))
+            .collect::<Result<Vec<_>>>()
+    };
+    let Some(race) = race else {
+        let per_fold = score_on(folds, &configs)?;
+        return Ok(configs
+            .iter()
+            .enumerate()
+            .map(|(m, config)| {
+                fold_scores(config, folds.iter().zip(&per_fold).map(|(f, r)| (f, &r[m])))
+            })
+            .collect());
+    };
+    let (first, rest) = folds.split_at(RACE_FOLDS);
+    let first_results = score_on(first, &configs)?;
+    let mut scores: Vec<CandidateScore> = configs
         .iter()
         .enumerate()
         .map(|(m, config)| {
-            // As training each candidate fold by fold would: the first fold it fails on ends it.
-            let mut accuracies = BTreeMap::new();
-            let mut error = None;
-            for (fold, results) in folds.iter().zip(&per_fold) {
-                match &results[m] {
-                    Ok(accuracy) => {
-                        accuracies.insert(fold.name.clone(), *accuracy);
-                    }
-                    Err(reason) => {
-                        error = Some(reason.clone());
-                        break;
-                    }
-                }
-            }
-            candidate_score(config, accuracies, error)
+            fold_scores(
+                config,
+                first.iter().zip(&first_results).map(|(f, r)| (f, &r[m])),
+            )
         })
-        .collect())
+        .collect();
+    for score in scores.iter().filter(|score| score.error.is_none()) {
+        race.best = race.best.max(score.accuracy.mean);
+    }
+    let going_on: Vec<usize> = (0..configs.len())
+        .filter(|&m| scores[m].error.is_none() && !race.clearly_behind(scores[m].accuracy.mean))
+        .collect();
+    let going_on_configs: Vec<&TrainConfig> = going_on.iter().map(|&m| configs[m]).collect();
+    let rest_results = score_on(rest, &going_on_configs)?;
+    for (position, &m) in going_on.iter().enumerate() {
+        let all = first
+            .iter()
+            .zip(&first_results)
+            .map(|(f, r)| (f, &r[m]))
+            .chain(
+                rest.iter()
+                    .zip(&rest_results)
+                    .map(|(f, r)| (f, &r[position])),
+            );
+        scores[m] = fold_scores(configs[m], all);
+    }
+    for (m, score) in scores.iter_mut().enumerate() {
+        score.dropped_early = score.error.is_none() && !going_on.contains(&m);
+    }
+    Ok(scores)
+}
+
+/// A candidate's score from its result on each fold, in order: as training it fold by fold would, the
+/// first fold it fails on ends it.
+fn fold_scores<'f>(
+    config: &TrainConfig,
+    results: impl Iterator<Item = (&'f InnerFold, &'f std::result::Result<f64, String>)>,
+) -> CandidateScore {
+    let mut accuracies = BTreeMap::new();
+    for (fold, result) in results {
+        match result {
+            Ok(accuracy) => {
+                accuracies.insert(fold.name.clone(), *accuracy);
+            }
+            Err(reason) => return candidate_score(config, accuracies, Some(reason.clone())),
+        }
+    }
+    candidate_score(config, accuracies, None)
 }
 
 /// Every member's accuracy on one fold: one PCA per number of components, shared by the classifiers.

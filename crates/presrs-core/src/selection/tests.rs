@@ -254,7 +254,7 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
     ));
     for by in [ValidateBy::Group, ValidateBy::Split] {
         let (folds, _) = folds::make_folds(&images, by, 5).unwrap();
-        let cached = scoring::score_candidates(&images, &folds, &candidates, None).unwrap();
+        let cached = scoring::score_candidates(&images, &folds, &candidates, None, false).unwrap();
         assert_eq!(cached.len(), candidates.len());
         for (candidate, score) in candidates.iter().zip(&cached) {
             let (per_fold, error) = score_by_training_each(&images, &folds, candidate);
@@ -333,6 +333,7 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
         per_fold: (0..4).map(|k| (format!("g{k}"), mean)).collect(),
         error: error.map(str::to_owned),
         skipped: false,
+        dropped_early: false,
     };
     // best: 0.95 with std 0.04 over 4 folds -> standard error 0.02, threshold 0.93
     let scores = [
@@ -342,6 +343,10 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
         score(0.95, 0.04, None),
     ];
     assert_eq!(one_standard_error(&scores, 3), 2);
+    // a candidate dropped early in a race is never picked, however close its first folds were
+    let mut raced = scores.clone();
+    raced[2].dropped_early = true;
+    assert_eq!(one_standard_error(&raced, 3), 3);
     let far = [score(0.80, 0.0, None), score(0.95, 0.01, None)];
     assert_eq!(one_standard_error(&far, 1), 1);
     assert_eq!(
@@ -355,4 +360,118 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
             .unwrap_err()
             .contains("known: best, one-se")
     );
+}
+
+/// With 4 or more folds the candidates race: one clearly behind on the first two folds is scored on
+/// those only (the same accuracies as scoring it on every fold) and marked `dropped_early`; the others
+/// get every fold's score, as without the race; the choice is the same.
+#[test]
+fn a_race_drops_clear_losers_after_the_first_folds_only() {
+    use crate::classifier::ClassifierKind;
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let frames: Vec<Frame> = (0..96)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let config = |classifier: ClassifierKind, dims| {
+        TrainConfig {
+            classifier: classifier.default_config(),
+            dims,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    // One component cannot tell four classes apart.
+    let candidates = [
+        config(ClassifierKind::Pwe, 12),
+        config(ClassifierKind::Lda, 1),
+        config(ClassifierKind::Knn, 12),
+    ];
+    let (folds, _) = folds::make_folds(&images, ValidateBy::Group, 1).unwrap();
+    assert_eq!(folds.len(), 4);
+    let full = scoring::score_candidates(&images, &folds, &candidates, None, false).unwrap();
+    let raced = scoring::score_candidates(&images, &folds, &candidates, None, true).unwrap();
+    assert!(full.iter().all(|score| score.is_contender()));
+    assert!(raced[1].dropped_early, "{:?}", raced[1].accuracy);
+    let first: BTreeMap<String, f64> = folds[..RACE_FOLDS]
+        .iter()
+        .map(|fold| (fold.name.clone(), full[1].per_fold[&fold.name]))
+        .collect();
+    assert_eq!(raced[1].per_fold, first);
+    for m in [0, 2] {
+        assert_eq!(raced[m], full[m]);
+    }
+    let choice = AutoChoice::new(&candidates, ValidateBy::Group);
+    let selection = select(&images, &choice, 1).unwrap();
+    assert_eq!(selection.scores[1], raced[1]);
+    let best_full = (0..3)
+        .max_by(|&a, &b| {
+            full[a]
+                .accuracy
+                .mean
+                .total_cmp(&full[b].accuracy.mean)
+                .then(b.cmp(&a))
+        })
+        .unwrap();
+    assert_eq!(selection.chosen, best_full);
+}
+
+/// More groups than [`MAX_INNER_FOLDS`] are merged, whole, into that many folds of about equal size:
+/// every group held out exactly once, never split across folds, and the method says so.
+#[test]
+fn many_groups_are_merged_whole_into_five_folds() {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+    let frames: Vec<Frame> = (0..84)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    const GROUPS: [&str; 7] = ["p0", "p1", "p2", "p3", "p4", "p5", "p6"];
+    let images: Vec<LabeledImage<'_>> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, frame)| LabeledImage {
+            frame: frame.view(),
+            label: crate::testing::SYNTHETIC_CLASSES[i % 4],
+            condition: None,
+            group: Some(GROUPS[(i / 4) % 7]),
+        })
+        .collect();
+    let (folds, method) = folds::make_folds(&images, ValidateBy::Auto, 1).unwrap();
+    assert_eq!(folds.len(), MAX_INNER_FOLDS);
+    assert!(method.starts_with("5 folds of whole groups"), "{method}");
+    assert!(method.contains("7 groups"), "{method}");
+    let mut held_out = Vec::new();
+    for fold in &folds {
+        let groups: std::collections::BTreeSet<&str> = fold
+            .test
+            .iter()
+            .map(|&i| images[i].group.unwrap())
+            .collect();
+        assert_eq!(
+            fold.name,
+            groups.iter().copied().collect::<Vec<_>>().join("+")
+        );
+        for &i in fold.train.iter().chain(&fold.validation) {
+            assert!(
+                !groups.contains(images[i].group.unwrap()),
+                "a group split across a fold"
+            );
+        }
+        held_out.extend(groups);
+        // 12 images per group: two merged groups at most
+        assert!((12..=24).contains(&fold.test.len()), "{}", fold.test.len());
+    }
+    held_out.sort_unstable();
+    assert_eq!(held_out, GROUPS);
+    // Five groups or fewer: one fold each, as before.
+    let five: Vec<LabeledImage<'_>> = images
+        .iter()
+        .filter(|i| !matches!(i.group, Some("p5" | "p6")))
+        .copied()
+        .collect();
+    let (folds, method) = folds::make_folds(&five, ValidateBy::Auto, 1).unwrap();
+    assert_eq!(folds.len(), 5);
+    assert!(method.starts_with("leave one group out"), "{method}");
 }
