@@ -185,8 +185,12 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         String::from_utf8_lossy(&train.stderr)
     );
     let text = String::from_utf8_lossy(&train.stdout);
-    // The simulator's groups are its recordings (6 here): validated by leaving one out.
-    assert!(text.contains("leave one group out"), "{text}");
+    // The simulator's groups are its recordings (6 here): validated by group, merged whole into 5 folds.
+    assert!(
+        text.contains("5 folds of whole groups inside the training data")
+            && text.contains("6 groups"),
+        "{text}"
+    );
     // --full-search tries the texture families too, and the choice is printed
     assert!(text.contains("fft2d_polar+glcm"), "{text}");
     assert!(text.contains("chosen: "), "{text}");
