@@ -15,7 +15,9 @@
 #   eval-8groups: `eval` auto, leave one group out x 3 repeats on the 120 jiku-walk movies put in 8
 #             groups (row number mod 8), every stance frame, 135 per class (405 training images of
 #             63 x 33 per fold) — the nearest to the issue's "465 images of 64 x 27, 8 groups x 3
-#             repeats, under 60 s" (its set is not shared).
+#             repeats, under 60 s" (its set is not shared);
+#   eval-8groups-2c: the same with the issue's shape: 2 classes (fast and slow), images cropped to
+#             63 x 27, 203 per class (406 training images per fold).
 # Prints the median wall time of each workload and binary, and the ratio to the first binary.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -39,15 +41,19 @@ run() {
             --per-class 20 --repeats 3 --seed 1 ;;
         eval-8groups) "$binary" eval --manifest "$tmp/eight-groups.csv" --one-sample-per-file \
             --stance-frame all --leave-one-out group --per-class 135 --repeats 3 --seed 1 ;;
+        eval-8groups-2c) "$binary" eval --manifest "$tmp/eight-groups-2c.csv" --one-sample-per-file \
+            --stance-frame all --crop 0:3:63:27 --leave-one-out group --per-class 203 --repeats 3 \
+            --seed 1 ;;
     esac
 }
 
 # jiku-walk's movies in 8 groups (absolute paths: the manifest lives in $tmp).
 awk -F, -v dir="$data/jiku-walk" 'NR == 1 { print; next } { print dir "/" $1 "," $2 "," $3 ",g" (NR - 2) % 8 }' \
     "$data/jiku-walk/manifest.csv" > "$tmp/eight-groups.csv"
+awk -F, 'NR == 1 || $2 != "normal"' "$tmp/eight-groups.csv" > "$tmp/eight-groups-2c.csv"
 
 declare -A times
-workloads=(${WORKLOADS:-train600 eval-tais22 eval-8groups})
+workloads=(${WORKLOADS:-train600 eval-tais22 eval-8groups eval-8groups-2c})
 for round in $(seq "$rounds"); do
     for workload in "${workloads[@]}"; do
         for i in "${!binaries[@]}"; do

@@ -84,7 +84,8 @@ pub struct EvalReport {
 }
 
 /// A function that trains a model from training and validation sample indices (and a seed).
-type Trainer<'f> = dyn Fn(&[usize], &[usize], u64) -> Result<crate::pipeline::TrainedModel> + 'f;
+type Trainer<'f> =
+    dyn Fn(&[usize], &[usize], u64) -> Result<crate::pipeline::TrainedModel> + Sync + 'f;
 
 /// Changes a test image before it is classified: `(sample index, image, repeat seed) -> image` (fault
 /// injection, see [`crate::perturb`]). Training and validation images are never changed. A changed image
@@ -337,10 +338,21 @@ impl Evaluation<'_, '_> {
                 n_test: 0,
                 train_seconds: 0.0,
             };
-            for fold in folds {
-                let start = Instant::now();
-                let model = trainer(&fold.train, &fold.validation, repeat_seed)?;
-                result.train_seconds += start.elapsed().as_secs_f64();
+            // The folds' models trained in parallel (each its own training, deterministic whatever
+            // the threads: the cores stay busy through each model's sequential parts), then tested
+            // in fold order; the first fold that cannot be trained is the error.
+            let trained: Vec<(Result<crate::pipeline::TrainedModel>, f64)> = folds
+                .par_iter()
+                .map(|fold| {
+                    let start = Instant::now();
+                    let model = trainer(&fold.train, &fold.validation, repeat_seed);
+                    progress();
+                    (model, start.elapsed().as_secs_f64())
+                })
+                .collect();
+            for (fold, (model, seconds)) in folds.into_iter().zip(trained) {
+                let model = model?;
+                result.train_seconds += seconds;
                 if first_model.is_none() {
                     first_model = Some(FirstModel {
                         model: model.clone(),
@@ -416,7 +428,6 @@ impl Evaluation<'_, '_> {
                         tally.reliability.add(confidence, right);
                     }
                 }
-                progress();
             }
             for (tally, correct) in tallies.iter_mut().zip(correct_by_condition) {
                 let (hits, total) = correct

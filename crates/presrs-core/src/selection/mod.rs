@@ -219,7 +219,10 @@ pub fn select(
     let (folds, method) = folds::make_folds(images, by, seed)?;
     // Each candidate's folds in order, classifiers in parallel: the scores, and so the choice, do not
     // depend on the number of threads.
-    let mut scores = scoring::score_candidates(images, &folds, candidates, budget, true)?;
+    // One race for the candidates and their refinements: a refinement clearly behind the best
+    // candidate is dropped too.
+    let mut race = scoring::Race::of(&folds);
+    let mut scores = scoring::score_candidates(images, &folds, candidates, budget, &mut race)?;
     let variants = dims_variants(&scores, refine_dims)?;
     if !variants.is_empty() {
         let left = budget.map(|budget| budget.saturating_sub(started.elapsed()));
@@ -231,7 +234,7 @@ pub fn select(
             );
         } else {
             scores.extend(scoring::score_candidates(
-                images, &folds, &variants, left, true,
+                images, &folds, &variants, left, &mut race,
             )?);
         }
     }

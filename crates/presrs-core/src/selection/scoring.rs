@@ -49,20 +49,20 @@ fn feature_groups(candidates: &[CheckedTrainConfig]) -> Vec<FeatureGroup> {
 
 /// Scores every candidate on `folds`, feature group by feature group in order. With a `budget`, a group
 /// that would end past it (judged from the slowest candidate scored so far) is not scored, nor any
-/// after it: its candidates are marked `skipped`. The first group is always scored. With `race` (and
-/// enough folds), candidates clearly behind on the first folds are not scored on the rest ([`Race`]).
+/// after it: its candidates are marked `skipped`. The first group is always scored. In a `race` (from
+/// [`Race::of`], kept across calls), candidates clearly behind the best so far on the first folds are
+/// not scored on the rest.
 pub(super) fn score_candidates(
     images: &[LabeledImage<'_>],
     folds: &[InnerFold],
     candidates: &[CheckedTrainConfig],
     budget: Option<Duration>,
-    race: bool,
+    race: &mut Option<Race>,
 ) -> Result<Vec<CandidateScore>> {
     let started = Instant::now();
     let mut scores: Vec<Option<CandidateScore>> = vec![None; candidates.len()];
     let mut slowest_per_candidate = Duration::ZERO;
     let mut out_of_budget = false;
-    let mut race = if race { Race::of(folds) } else { None };
     for (g, group) in feature_groups(candidates).iter().enumerate() {
         if let Some(budget) = budget
             && g > 0
@@ -99,7 +99,7 @@ pub const RACE_Z: f64 = 2.0;
 /// standard errors of the difference of two accuracies on those folds' held-out images, is not scored
 /// on the others (it is `dropped_early`). The bound treats the two accuracies as independent; they are
 /// measured on the same images, so it is wide, and only clear losers are dropped.
-struct Race {
+pub(super) struct Race {
     /// Held-out images in the first folds.
     images: usize,
     /// The best mean accuracy on the first folds so far.
@@ -107,7 +107,8 @@ struct Race {
 }
 
 impl Race {
-    fn of(folds: &[InnerFold]) -> Option<Self> {
+    /// The race of `folds`: none with fewer than [`RACE_MIN_FOLDS`].
+    pub(super) fn of(folds: &[InnerFold]) -> Option<Self> {
         (folds.len() >= RACE_MIN_FOLDS).then(|| Self {
             images: folds[..RACE_FOLDS].iter().map(|f| f.test.len()).sum(),
             best: f64::NEG_INFINITY,

@@ -254,7 +254,8 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
     ));
     for by in [ValidateBy::Group, ValidateBy::Split] {
         let (folds, _) = folds::make_folds(&images, by, 5).unwrap();
-        let cached = scoring::score_candidates(&images, &folds, &candidates, None, false).unwrap();
+        let cached =
+            scoring::score_candidates(&images, &folds, &candidates, None, &mut None).unwrap();
         assert_eq!(cached.len(), candidates.len());
         for (candidate, score) in candidates.iter().zip(&cached) {
             let (per_fold, error) = score_by_training_each(&images, &folds, candidate);
@@ -391,8 +392,15 @@ fn a_race_drops_clear_losers_after_the_first_folds_only() {
     ];
     let (folds, _) = folds::make_folds(&images, ValidateBy::Group, 1).unwrap();
     assert_eq!(folds.len(), 4);
-    let full = scoring::score_candidates(&images, &folds, &candidates, None, false).unwrap();
-    let raced = scoring::score_candidates(&images, &folds, &candidates, None, true).unwrap();
+    let full = scoring::score_candidates(&images, &folds, &candidates, None, &mut None).unwrap();
+    let raced = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        None,
+        &mut scoring::Race::of(&folds),
+    )
+    .unwrap();
     assert!(full.iter().all(|score| score.is_contender()));
     assert!(raced[1].dropped_early, "{:?}", raced[1].accuracy);
     let first: BTreeMap<String, f64> = folds[..RACE_FOLDS]

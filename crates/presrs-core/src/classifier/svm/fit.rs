@@ -26,10 +26,17 @@ fn gram_of(vectors: &[f64], dims: usize, kernel: Kernel) -> Vec<f64> {
 /// [`SvmModel::classify_into`] computes it (`eval(training vector, query)`), so that decisions read
 /// from it are the same, bit for bit.
 fn cross_kernel_of(queries: &[f64], train: &[f64], dims: usize, kernel: Kernel) -> Vec<f64> {
-    queries
+    let n_train = train.len() / dims;
+    let mut cross = vec![0.0; queries.len() / dims * n_train];
+    for (x, row) in queries
         .chunks_exact(dims)
-        .flat_map(|x| train.chunks_exact(dims).map(move |t| kernel.eval(t, x)))
-        .collect()
+        .zip(cross.chunks_exact_mut(n_train.max(1)))
+    {
+        for (value, t) in row.iter_mut().zip(train.chunks_exact(dims)) {
+            *value = kernel.eval(t, x);
+        }
+    }
+    cross
 }
 
 /// A machine fitted on training vectors, with the training index of each stored vector.

@@ -41,6 +41,8 @@ impl Smo {
         let q = |i: usize, j: usize| y[i] * y[j] * k[i * n + j];
         let max_iter = (SMO_ITERATIONS_PER_VECTOR * n).max(SMO_MIN_ITERATIONS);
         let tau = 1e-12;
+        // The diagonal read contiguously (K_tt strides by n + 1 in `k`).
+        let diag: Vec<f64> = (0..n).map(|t| k[t * n + t]).collect();
         let mut iterations = 0;
         for _ in 0..max_iter {
             iterations += 1;
@@ -62,6 +64,7 @@ impl Smo {
                 break;
             }
             let i = i_sel;
+            let row_i = &k[i * n..(i + 1) * n];
             let mut gmax2 = f64::NEG_INFINITY;
             let mut j_sel = usize::MAX;
             let mut obj_min = f64::INFINITY;
@@ -78,7 +81,8 @@ impl Smo {
                 gmax2 = gmax2.max(yg);
                 let b = gmax + yg;
                 if b > 0.0 {
-                    let mut a = k[i * n + i] + k[t * n + t] - 2.0 * y[i] * y[t] * q(i, t);
+                    // (= K_ii + K_tt - 2 y_i y_t Q_it exactly: y is ±1)
+                    let mut a = diag[i] + diag[t] - 2.0 * row_i[t];
                     if a <= 0.0 {
                         a = tau;
                     }
@@ -152,7 +156,7 @@ impl Smo {
             }
             let (di, dj) = (alpha[i] - old_i, alpha[j] - old_j);
             // Q(t, i) read along row i (k is symmetric): contiguous, where column i strides by n.
-            let (row_i, row_j) = (&k[i * n..(i + 1) * n], &k[j * n..(j + 1) * n]);
+            let row_j = &k[j * n..(j + 1) * n];
             for t in 0..n {
                 grad[t] += y[t] * y[i] * row_i[t] * di + y[t] * y[j] * row_j[t] * dj;
             }
