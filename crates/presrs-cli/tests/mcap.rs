@@ -50,7 +50,10 @@ struct Data {
 fn data() -> &'static Data {
     static DATA: OnceLock<Data> = OnceLock::new();
     DATA.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("presrs-mcap-test-{}", std::process::id()));
+        // (under cargo's target/tmp, not the system's temp dir: a static is never dropped, so it
+        // cannot hold a self-removing temp dir, and these used to pile up in /tmp)
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("presrs-mcap-test-{}", std::process::id()));
         run_ok(&[
             "simulate",
             "--out",

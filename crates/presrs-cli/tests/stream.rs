@@ -33,7 +33,10 @@ fn run_ok(args: &[&str]) -> String {
 fn fixture() -> &'static (PathBuf, PathBuf) {
     static FIXTURE: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
     FIXTURE.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("presrs-stream-test-{}", std::process::id()));
+        // (under cargo's target/tmp, not the system's temp dir: a static is never dropped, so it
+        // cannot hold a self-removing temp dir, and these used to pile up in /tmp)
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("presrs-stream-test-{}", std::process::id()));
         let dir_s = dir.to_str().unwrap();
         run_ok(&[
             "simulate",
