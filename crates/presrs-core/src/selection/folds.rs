@@ -1,6 +1,6 @@
 //! The folds an automatic choice validates its candidates on, made from the training data alone.
 
-use super::ValidateBy;
+use super::{MAX_INNER_FOLDS, ValidateBy};
 use crate::error::{CoreError, Result};
 use crate::pipeline::LabeledImage;
 use crate::split::{ValidationSize, stratified_split};
@@ -108,11 +108,6 @@ pub(super) fn make_folds(
     }
     Ok((folds, method))
 }
-
-/// At most this many folds when validating by group or condition: more values are merged, whole, into
-/// this many folds (as scikit-learn's `GroupKFold`, 5 folds by default). Each fold costs a training of
-/// every candidate, and five folds of whole groups are as honest as one per group.
-pub const MAX_INNER_FOLDS: usize = 5;
 
 /// The values held out together in each fold: one per fold up to [`MAX_INNER_FOLDS`]; beyond, the
 /// values by decreasing number of images (ties by name), each to the fold with the fewest images so

@@ -37,8 +37,18 @@ use crate::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
 // The record of a selection is plain data kept in the trained model (`pipeline`); the procedure lives
 // here. Re-exported so `select`'s result type is nameable beside it.
 pub use crate::pipeline::{CandidateScore, Selection};
-pub use folds::MAX_INNER_FOLDS;
-pub use scoring::{RACE_FOLDS, RACE_MIN_FOLDS, RACE_Z};
+
+/// At most this many folds when validating by group or condition: more values are merged, whole, into
+/// this many folds (as scikit-learn's `GroupKFold`, 5 folds by default). Each fold costs a training of
+/// every candidate, and five folds of whole groups are as honest as one per group.
+pub const MAX_INNER_FOLDS: usize = 5;
+
+/// Folds scored first, before the rest, when there are at least [`RACE_MIN_FOLDS`].
+pub const RACE_FOLDS: usize = 2;
+/// The fewest folds for which candidates race (with fewer, every candidate is scored on every fold).
+pub const RACE_MIN_FOLDS: usize = 4;
+/// How many standard errors behind the best a candidate must be on the first folds to be dropped.
+pub const RACE_Z: f64 = 2.0;
 
 /// How the automatic choice validates its candidates inside the training data.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

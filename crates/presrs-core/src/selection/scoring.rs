@@ -11,6 +11,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::folds::InnerFold;
+use super::{RACE_FOLDS, RACE_MIN_FOLDS, RACE_Z};
 use crate::classifier::LabeledVectors;
 use crate::error::{CoreError, Result};
 use crate::metrics::MeanStd;
@@ -86,13 +87,6 @@ pub(super) fn score_candidates(
     }
     Ok(scores.into_iter().flatten().collect())
 }
-
-/// Folds scored first, before the rest, when there are at least [`RACE_MIN_FOLDS`].
-pub const RACE_FOLDS: usize = 2;
-/// The fewest folds for which candidates race (with fewer, every candidate is scored on every fold).
-pub const RACE_MIN_FOLDS: usize = 4;
-/// How many standard errors behind the best a candidate must be on the first folds to be dropped.
-pub const RACE_Z: f64 = 2.0;
 
 /// A race (Maron and Moore's Hoeffding races, with a normal bound): every candidate is scored on the
 /// first [`RACE_FOLDS`] folds; one that is clearly behind the best there, by more than [`RACE_Z`]
