@@ -117,6 +117,7 @@ impl Race {
         self.best - accuracy > RACE_Z * error
     }
 }
+
 /// A candidate not scored for lack of time.
 pub(super) fn skipped(candidate: &CheckedTrainConfig, budget: Duration) -> CandidateScore {
     let reason = format!(
@@ -176,33 +177,32 @@ fn score_group(
             .map(|fold| score_fold(images, fold, &table, configs))
             .collect::<Result<Vec<_>>>()
     };
-    let Some(race) = race else {
-        let per_fold = score_on(folds, &configs)?;
-        return Ok(configs
-            .iter()
-            .enumerate()
-            .map(|(m, config)| {
-                fold_scores(config, folds.iter().zip(&per_fold).map(|(f, r)| (f, &r[m])))
-            })
-            .collect());
-    };
-    let (first, rest) = folds.split_at(RACE_FOLDS);
+    // Without a race every fold is scored at once and nobody is dropped.
+    let (first, rest) = folds.split_at(if race.is_some() {
+        RACE_FOLDS
+    } else {
+        folds.len()
+    });
     let first_results = score_on(first, &configs)?;
-    let mut scores: Vec<CandidateScore> = configs
-        .iter()
-        .enumerate()
-        .map(|(m, config)| {
+    let mut scores: Vec<CandidateScore> = (0..configs.len())
+        .map(|m| {
             fold_scores(
-                config,
+                configs[m],
                 first.iter().zip(&first_results).map(|(f, r)| (f, &r[m])),
             )
         })
         .collect();
+    let Some(race) = race else {
+        return Ok(scores);
+    };
     for score in scores.iter().filter(|score| score.error.is_none()) {
         race.best = race.best.max(score.accuracy.mean);
     }
+    for score in &mut scores {
+        score.dropped_early = score.error.is_none() && race.clearly_behind(score.accuracy.mean);
+    }
     let going_on: Vec<usize> = (0..configs.len())
-        .filter(|&m| scores[m].error.is_none() && !race.clearly_behind(scores[m].accuracy.mean))
+        .filter(|&m| scores[m].is_contender())
         .collect();
     let going_on_configs: Vec<&TrainConfig> = going_on.iter().map(|&m| configs[m]).collect();
     let rest_results = score_on(rest, &going_on_configs)?;
@@ -217,9 +217,6 @@ fn score_group(
                     .map(|(f, r)| (f, &r[position])),
             );
         scores[m] = fold_scores(configs[m], all);
-    }
-    for (m, score) in scores.iter_mut().enumerate() {
-        score.dropped_early = score.error.is_none() && !going_on.contains(&m);
     }
     Ok(scores)
 }
