@@ -10,6 +10,7 @@
 //! Both measure the baseline and its noise with the same robust statistics (median, 1.4826 x MAD) from
 //! one private module. The offline items are also nameable here (`stance::segment`), as before the split.
 
+mod baseline;
 pub mod causal;
 pub mod modes;
 pub mod offline;
