@@ -285,181 +285,262 @@ impl Evaluation<'_, '_> {
         perturbs: &[Option<&TestTransform<'_>>],
         trainer: &Trainer<'_>,
     ) -> Result<(Vec<EvalReport>, Option<FirstModel>)> {
-        let Self {
-            samples,
-            protocol,
-            repeats,
-            seed,
-            progress,
-        } = *self;
-        if repeats == 0 {
+        if self.repeats == 0 {
             return Err(CoreError::Param {
                 name: "repeats",
                 reason: "at least one repeat is needed".into(),
             });
         }
-        if samples.is_empty() {
+        if self.samples.is_empty() {
             return Err(CoreError::NotEnoughData("no samples to evaluate on".into()));
         }
-        let mut labels: Vec<String> = samples.iter().map(|s| s.label.to_owned()).collect();
+        let mut labels: Vec<String> = self.samples.iter().map(|s| s.label.to_owned()).collect();
         labels.sort();
         labels.dedup();
-        /// What one perturbation's tests have found so far.
-        struct Tally {
-            confusion: Confusion,
-            times_ns: Vec<u64>,
-            results: Vec<RepeatResult>,
-            unclassified: u64,
-            reliability: Reliability,
-        }
         let mut tallies: Vec<Tally> = perturbs
             .iter()
-            .map(|_| Tally {
-                confusion: Confusion::new(labels.clone()),
-                times_ns: Vec::new(),
-                results: Vec::with_capacity(repeats),
-                unclassified: 0,
-                reliability: Reliability::default(),
-            })
+            .map(|_| Tally::new(labels.clone(), self.repeats))
             .collect();
         let mut first_model = None;
-        for repeat in 0..repeats {
-            let repeat_seed = seed.wrapping_add(repeat as u64);
-            let folds = folds(samples, protocol, repeat_seed)?;
-            let mut correct_by_condition: Vec<BTreeMap<String, (u64, u64)>> =
-                vec![BTreeMap::new(); perturbs.len()];
-            let mut result = RepeatResult {
-                seed: repeat_seed,
-                overall_accuracy: 0.0,
-                per_condition: BTreeMap::new(),
-                sigmas: Vec::new(),
-                n_train: 0,
-                n_validation: 0,
-                n_test: 0,
-                train_seconds: 0.0,
-            };
-            // The folds' models trained in parallel (each its own training, deterministic whatever
-            // the threads: the cores stay busy through each model's sequential parts), then tested
-            // in fold order; the first fold that cannot be trained is the error.
-            let trained: Vec<(Result<crate::pipeline::TrainedModel>, f64)> = folds
-                .par_iter()
-                .map(|fold| {
-                    let start = Instant::now();
-                    let model = trainer(&fold.train, &fold.validation, repeat_seed);
-                    progress();
-                    (model, start.elapsed().as_secs_f64())
-                })
-                .collect();
-            for (fold, (model, seconds)) in folds.into_iter().zip(trained) {
-                let model = model?;
-                result.train_seconds += seconds;
-                if first_model.is_none() {
-                    first_model = Some(FirstModel {
-                        model: model.clone(),
-                        seed: repeat_seed,
-                        held_out: fold
-                            .by_group
-                            .then(|| fold.test.first().and_then(|&i| samples[i].group))
-                            .flatten()
-                            .map(str::to_owned),
-                        n_train: fold.train.len(),
-                        n_validation: fold.validation.len(),
-                        n_test: fold.test.len(),
-                    });
-                }
-                result.sigmas.extend(model.sigma());
-                result.n_train += fold.train.len();
-                result.n_validation += fold.validation.len();
-                result.n_test += fold.test.len();
-                for ((perturb, tally), correct) in perturbs
-                    .iter()
-                    .zip(tallies.iter_mut())
-                    .zip(correct_by_condition.iter_mut())
-                {
-                    // `Ok(None)`: a perturbed image the model could not classify.
-                    let outcomes: Vec<Result<Option<(usize, f64, u64)>>> = fold
-                        .test
-                        .par_iter()
-                        .map_init(
-                            || model.session(),
-                            |session, &i| {
-                                let perturbed = perturb
-                                    .map(|p| p(i, samples[i].frame, repeat_seed))
-                                    .transpose()?;
-                                let frame =
-                                    perturbed.as_ref().map_or(samples[i].frame, Frame::view);
-                                let start = Instant::now();
-                                match session.classify(&frame) {
-                                    Ok(prediction) => Ok(Some((
-                                        prediction.class,
-                                        prediction.confidence,
-                                        start.elapsed().as_nanos() as u64,
-                                    ))),
-                                    Err(_) if perturbed.is_some() => Ok(None),
-                                    Err(err) => Err(err),
-                                }
-                            },
-                        )
-                        .collect();
-                    let confusion = &mut tally.confusion;
-                    for (&i, outcome) in fold.test.iter().zip(outcomes) {
-                        let Some((predicted, confidence, ns)) = outcome? else {
-                            // A wrong answer, with no predicted class for the confusion matrix.
-                            tally.unclassified += 1;
-                            correct.entry(fold.key_of(&samples[i])).or_default().1 += 1;
-                            continue;
-                        };
-                        tally.times_ns.push(ns);
-                        let predicted_label = &model.class_names()[predicted];
-                        let truth = confusion
-                            .labels
-                            .binary_search_by(|l| l.as_str().cmp(samples[i].label));
-                        let guess = confusion.labels.binary_search(predicted_label);
-                        if let (Ok(t), Ok(g)) = (truth, guess) {
-                            confusion.counts[t][g] += 1;
-                        }
-                        let key = fold.key_of(&samples[i]);
-                        let entry = correct.entry(key).or_default();
-                        entry.1 += 1;
-                        let right = predicted_label == samples[i].label;
-                        if right {
-                            entry.0 += 1;
-                        }
-                        tally.reliability.add(confidence, right);
-                    }
-                }
-            }
-            for (tally, correct) in tallies.iter_mut().zip(correct_by_condition) {
-                let (hits, total) = correct
-                    .values()
-                    .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
-                if total == 0 {
-                    return Err(CoreError::NotEnoughData(
-                        "no sample is left to test on: the training set took every sample (draw fewer \
-                         per class, or train on one condition and test on the others)"
-                            .into(),
-                    ));
-                }
-                let mut result = result.clone();
-                result.overall_accuracy = ratio(hits, total);
-                result.per_condition = correct
-                    .into_iter()
-                    .map(|(key, (c, t))| (key, ratio(c, t)))
-                    .collect();
-                tally.results.push(result);
-            }
+        for repeat in 0..self.repeats {
+            let repeat_seed = self.seed.wrapping_add(repeat as u64);
+            self.run_repeat(
+                repeat_seed,
+                perturbs,
+                trainer,
+                &mut tallies,
+                &mut first_model,
+            )?;
         }
         let reports = tallies
             .into_iter()
-            .map(|tally| {
-                let mut report =
-                    report_of(protocol, tally.results, tally.confusion, tally.times_ns);
-                report.unclassified = tally.unclassified;
-                report.reliability = tally.reliability;
-                report
-            })
+            .map(|tally| tally.into_report(self.protocol))
             .collect();
         Ok((reports, first_model))
+    }
+
+    /// One repeat of [`run_with`](Self::run_with), with the seed `repeat_seed`: its folds trained and
+    /// tested, each perturbation's outcomes added to its tally (and the first model kept, if none was).
+    fn run_repeat(
+        &self,
+        repeat_seed: u64,
+        perturbs: &[Option<&TestTransform<'_>>],
+        trainer: &Trainer<'_>,
+        tallies: &mut [Tally],
+        first_model: &mut Option<FirstModel>,
+    ) -> Result<()> {
+        let samples = self.samples;
+        let folds = folds(samples, self.protocol, repeat_seed)?;
+        let mut correct_by_condition: Vec<BTreeMap<String, (u64, u64)>> =
+            vec![BTreeMap::new(); perturbs.len()];
+        let mut result = RepeatResult {
+            seed: repeat_seed,
+            overall_accuracy: 0.0,
+            per_condition: BTreeMap::new(),
+            sigmas: Vec::new(),
+            n_train: 0,
+            n_validation: 0,
+            n_test: 0,
+            train_seconds: 0.0,
+        };
+        let trained = train_folds(&folds, trainer, repeat_seed, self.progress);
+        for (fold, (model, seconds)) in folds.into_iter().zip(trained) {
+            let model = model?;
+            result.train_seconds += seconds;
+            if first_model.is_none() {
+                *first_model = Some(FirstModel::of(&model, &fold, samples, repeat_seed));
+            }
+            result.sigmas.extend(model.sigma());
+            result.n_train += fold.train.len();
+            result.n_validation += fold.validation.len();
+            result.n_test += fold.test.len();
+            for ((perturb, tally), correct) in perturbs
+                .iter()
+                .zip(tallies.iter_mut())
+                .zip(correct_by_condition.iter_mut())
+            {
+                let outcomes =
+                    classify_test_set(&model, &fold.test, samples, *perturb, repeat_seed);
+                tally.add_fold(correct, &fold, samples, &model, outcomes)?;
+            }
+        }
+        for (tally, correct) in tallies.iter_mut().zip(correct_by_condition) {
+            tally.add_repeat(&result, correct)?;
+        }
+        Ok(())
+    }
+}
+
+/// The models of `folds`, trained in parallel (each its own training, deterministic whatever the
+/// threads: the cores stay busy through each model's sequential parts), in fold order, each with its
+/// training time in seconds; `progress` is called after each.
+fn train_folds(
+    folds: &[Fold],
+    trainer: &Trainer<'_>,
+    repeat_seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Vec<(Result<crate::pipeline::TrainedModel>, f64)> {
+    folds
+        .par_iter()
+        .map(|fold| {
+            let start = Instant::now();
+            let model = trainer(&fold.train, &fold.validation, repeat_seed);
+            progress();
+            (model, start.elapsed().as_secs_f64())
+        })
+        .collect()
+}
+
+/// What became of one test image: its predicted class, confidence and classification time in
+/// nanoseconds; `Ok(None)` for a perturbed image the model could not classify.
+type TestOutcome = Result<Option<(usize, f64, u64)>>;
+
+/// Classifies the images `test` (indices into `samples`), each passed through `perturb` first if given,
+/// in parallel; the outcomes in the order of `test`.
+fn classify_test_set(
+    model: &crate::pipeline::TrainedModel,
+    test: &[usize],
+    samples: &[LabeledImage<'_>],
+    perturb: Option<&TestTransform<'_>>,
+    repeat_seed: u64,
+) -> Vec<TestOutcome> {
+    test.par_iter()
+        .map_init(
+            || model.session(),
+            |session, &i| {
+                let perturbed = perturb
+                    .map(|p| p(i, samples[i].frame, repeat_seed))
+                    .transpose()?;
+                let frame = perturbed.as_ref().map_or(samples[i].frame, Frame::view);
+                let start = Instant::now();
+                match session.classify(&frame) {
+                    Ok(prediction) => Ok(Some((
+                        prediction.class,
+                        prediction.confidence,
+                        start.elapsed().as_nanos() as u64,
+                    ))),
+                    Err(_) if perturbed.is_some() => Ok(None),
+                    Err(err) => Err(err),
+                }
+            },
+        )
+        .collect()
+}
+
+impl FirstModel {
+    /// `model`, trained on `fold` in the repeat of seed `seed`.
+    fn of(
+        model: &crate::pipeline::TrainedModel,
+        fold: &Fold,
+        samples: &[LabeledImage<'_>],
+        seed: u64,
+    ) -> Self {
+        Self {
+            model: model.clone(),
+            seed,
+            held_out: fold
+                .by_group
+                .then(|| fold.test.first().and_then(|&i| samples[i].group))
+                .flatten()
+                .map(str::to_owned),
+            n_train: fold.train.len(),
+            n_validation: fold.validation.len(),
+            n_test: fold.test.len(),
+        }
+    }
+}
+
+/// What one perturbation's tests have found so far.
+struct Tally {
+    confusion: Confusion,
+    times_ns: Vec<u64>,
+    results: Vec<RepeatResult>,
+    unclassified: u64,
+    reliability: Reliability,
+}
+
+impl Tally {
+    fn new(labels: Vec<String>, repeats: usize) -> Self {
+        Self {
+            confusion: Confusion::new(labels),
+            times_ns: Vec::new(),
+            results: Vec::with_capacity(repeats),
+            unclassified: 0,
+            reliability: Reliability::default(),
+        }
+    }
+
+    /// Adds the `outcomes` of one fold's test images (`fold.test`, in order): the confusion, the
+    /// times, the reliability, and `correct`, the hits and tests by condition (or held-out value).
+    fn add_fold(
+        &mut self,
+        correct: &mut BTreeMap<String, (u64, u64)>,
+        fold: &Fold,
+        samples: &[LabeledImage<'_>],
+        model: &crate::pipeline::TrainedModel,
+        outcomes: Vec<TestOutcome>,
+    ) -> Result<()> {
+        let confusion = &mut self.confusion;
+        for (&i, outcome) in fold.test.iter().zip(outcomes) {
+            let Some((predicted, confidence, ns)) = outcome? else {
+                // A wrong answer, with no predicted class for the confusion matrix.
+                self.unclassified += 1;
+                correct.entry(fold.key_of(&samples[i])).or_default().1 += 1;
+                continue;
+            };
+            self.times_ns.push(ns);
+            let predicted_label = &model.class_names()[predicted];
+            let truth = confusion
+                .labels
+                .binary_search_by(|l| l.as_str().cmp(samples[i].label));
+            let guess = confusion.labels.binary_search(predicted_label);
+            if let (Ok(t), Ok(g)) = (truth, guess) {
+                confusion.counts[t][g] += 1;
+            }
+            let key = fold.key_of(&samples[i]);
+            let entry = correct.entry(key).or_default();
+            entry.1 += 1;
+            let right = predicted_label == samples[i].label;
+            if right {
+                entry.0 += 1;
+            }
+            self.reliability.add(confidence, right);
+        }
+        Ok(())
+    }
+
+    /// Ends a repeat: `result` with the accuracies of `correct` (hits and tests by condition) is its
+    /// result. An error if nothing was tested.
+    fn add_repeat(
+        &mut self,
+        result: &RepeatResult,
+        correct: BTreeMap<String, (u64, u64)>,
+    ) -> Result<()> {
+        let (hits, total) = correct
+            .values()
+            .fold((0, 0), |(c, t), &(c1, t1)| (c + c1, t + t1));
+        if total == 0 {
+            return Err(CoreError::NotEnoughData(
+                "no sample is left to test on: the training set took every sample (draw fewer \
+                 per class, or train on one condition and test on the others)"
+                    .into(),
+            ));
+        }
+        let mut result = result.clone();
+        result.overall_accuracy = ratio(hits, total);
+        result.per_condition = correct
+            .into_iter()
+            .map(|(key, (c, t))| (key, ratio(c, t)))
+            .collect();
+        self.results.push(result);
+        Ok(())
+    }
+
+    fn into_report(self, protocol: &Protocol) -> EvalReport {
+        let mut report = report_of(protocol, self.results, self.confusion, self.times_ns);
+        report.unclassified = self.unclassified;
+        report.reliability = self.reliability;
+        report
     }
 }
 
@@ -653,88 +734,102 @@ fn folds(samples: &[LabeledImage<'_>], protocol: &Protocol, seed: u64) -> Result
             condition,
             per_class,
             validation,
-        } => {
-            let pool: Vec<usize> = (0..samples.len())
-                .filter(|&i| {
-                    condition
-                        .as_deref()
-                        .is_none_or(|c| samples[i].condition == Some(c))
-                })
-                .collect();
-            if pool.is_empty() {
-                return Err(CoreError::NotEnoughData(format!(
-                    "no sample has the training condition {:?}",
-                    condition.as_deref().unwrap_or("")
-                )));
-            }
-            let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
-            let split = stratified_split_capped(&labels, *per_class, *validation, seed)?;
-            let in_pool = |indices: &[usize]| indices.iter().map(|&k| pool[k]).collect::<Vec<_>>();
-            let (train, validation) = (in_pool(&split.train), in_pool(&split.validation));
-            let mut used = vec![false; samples.len()];
-            for &i in train.iter().chain(&validation) {
-                used[i] = true;
-            }
-            let test = (0..samples.len()).filter(|&i| !used[i]).collect();
-            Ok(vec![Fold {
-                train,
-                validation,
-                test,
-                by_group: false,
-            }])
-        }
+        } => condition_fold(samples, condition.as_deref(), *per_class, *validation, seed),
         Protocol::LeaveOneOut {
             column,
             per_class,
             validation,
-        } => {
-            let mut values: Vec<&str> = Vec::new();
-            for sample in samples {
-                let value = sample.group.ok_or_else(|| {
-                    CoreError::NotEnoughData(format!(
-                        "a sample has no value in the leave-one-out column `{column}`"
-                    ))
-                })?;
-                values.push(value);
-            }
-            let mut distinct = values.clone();
-            distinct.sort_unstable();
-            distinct.dedup();
-            if distinct.len() < 2 {
-                return Err(CoreError::NotEnoughData(format!(
-                    "leave-one-out needs at least two values in column `{column}`, found {}",
-                    distinct.len()
-                )));
-            }
-            distinct
-                .iter()
-                .enumerate()
-                .map(|(k, held_out)| {
-                    let pool: Vec<usize> = (0..samples.len())
-                        .filter(|&i| values[i] != *held_out)
-                        .collect();
-                    let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
-                    let split = stratified_split_capped(
-                        &labels,
-                        *per_class,
-                        *validation,
-                        seed.wrapping_add(k as u64 * 7919),
-                    )
-                    .map_err(|err| {
-                        CoreError::NotEnoughData(format!("holding out {held_out:?}: {err}"))
-                    })?;
-                    Ok(Fold {
-                        train: split.train.iter().map(|&j| pool[j]).collect(),
-                        validation: split.validation.iter().map(|&j| pool[j]).collect(),
-                        test: (0..samples.len())
-                            .filter(|&i| values[i] == *held_out)
-                            .collect(),
-                        by_group: true,
-                    })
-                })
-                .collect()
-        }
+        } => leave_one_out_folds(samples, column, *per_class, *validation, seed),
     }
+}
+
+/// The one fold of [`Protocol::TrainCondition`]: training and validation drawn from the samples of
+/// `condition` (of all without one), every other sample tested.
+fn condition_fold(
+    samples: &[LabeledImage<'_>],
+    condition: Option<&str>,
+    per_class: Option<usize>,
+    validation: ValidationSize,
+    seed: u64,
+) -> Result<Vec<Fold>> {
+    let pool: Vec<usize> = (0..samples.len())
+        .filter(|&i| condition.is_none_or(|c| samples[i].condition == Some(c)))
+        .collect();
+    if pool.is_empty() {
+        return Err(CoreError::NotEnoughData(format!(
+            "no sample has the training condition {:?}",
+            condition.unwrap_or("")
+        )));
+    }
+    let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
+    let split = stratified_split_capped(&labels, per_class, validation, seed)?;
+    let in_pool = |indices: &[usize]| indices.iter().map(|&k| pool[k]).collect::<Vec<_>>();
+    let (train, validation) = (in_pool(&split.train), in_pool(&split.validation));
+    let mut used = vec![false; samples.len()];
+    for &i in train.iter().chain(&validation) {
+        used[i] = true;
+    }
+    let test = (0..samples.len()).filter(|&i| !used[i]).collect();
+    Ok(vec![Fold {
+        train,
+        validation,
+        test,
+        by_group: false,
+    }])
+}
+
+/// The folds of [`Protocol::LeaveOneOut`]: one per distinct group (`column`), each testing that
+/// group's samples after training on a draw from the others.
+fn leave_one_out_folds(
+    samples: &[LabeledImage<'_>],
+    column: &str,
+    per_class: Option<usize>,
+    validation: ValidationSize,
+    seed: u64,
+) -> Result<Vec<Fold>> {
+    let mut values: Vec<&str> = Vec::new();
+    for sample in samples {
+        let value = sample.group.ok_or_else(|| {
+            CoreError::NotEnoughData(format!(
+                "a sample has no value in the leave-one-out column `{column}`"
+            ))
+        })?;
+        values.push(value);
+    }
+    let mut distinct = values.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    if distinct.len() < 2 {
+        return Err(CoreError::NotEnoughData(format!(
+            "leave-one-out needs at least two values in column `{column}`, found {}",
+            distinct.len()
+        )));
+    }
+    distinct
+        .iter()
+        .enumerate()
+        .map(|(k, held_out)| {
+            let pool: Vec<usize> = (0..samples.len())
+                .filter(|&i| values[i] != *held_out)
+                .collect();
+            let labels: Vec<&str> = pool.iter().map(|&i| samples[i].label).collect();
+            let split = stratified_split_capped(
+                &labels,
+                per_class,
+                validation,
+                seed.wrapping_add(k as u64 * 7919),
+            )
+            .map_err(|err| CoreError::NotEnoughData(format!("holding out {held_out:?}: {err}")))?;
+            Ok(Fold {
+                train: split.train.iter().map(|&j| pool[j]).collect(),
+                validation: split.validation.iter().map(|&j| pool[j]).collect(),
+                test: (0..samples.len())
+                    .filter(|&i| values[i] == *held_out)
+                    .collect(),
+                by_group: true,
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
