@@ -56,7 +56,8 @@
 //! 3. the drifting baseline otherwise (the paper's hopper, walking, the simulator: unchanged).
 
 use super::offline::{
-    BaselineMode, Segmentation, Stance, ValidSegmentParams, check_finite, segment_drifting,
+    BaselineMode, SegmentParams, Segmentation, Stance, ValidSegmentParams, check_finite,
+    segment_drifting,
 };
 use super::robust::median;
 use crate::error::Result;
@@ -156,31 +157,7 @@ fn preload(
     floor: &Segmentation,
     params: &ValidSegmentParams,
 ) -> Option<String> {
-    let max_len = params.params().max_stance_frames;
-    let merged = drifting.stances.iter().find_map(|stance| {
-        if let Some(max) = max_len
-            && stance.len > max
-        {
-            return Some(format!(
-                "a stance of {} frames from frame {} is longer than the longest allowed ({max}): \
-                 contacts measured from the local floor",
-                stance.len, stance.start
-            ));
-        }
-        let inside = floor
-            .stances
-            .iter()
-            .filter(|press| press.start + 1 >= stance.start && press.end() <= stance.end() + 1)
-            .count();
-        (inside >= PRELOAD_PEAKS).then(|| {
-            format!(
-                "the stance at frames {}..{} holds {inside} presses that never unload (the load \
-                 between them stays above the off level): contacts measured from the local floor",
-                stance.start,
-                stance.end(),
-            )
-        })
-    });
+    let merged = merged_presses(drifting, floor, params.params().max_stance_frames);
     let complete = floor.complete().count();
     if merged.is_some() || complete < PRELOAD_PEAKS {
         return merged;
@@ -195,9 +172,6 @@ fn preload(
     // off level), and the drifting baseline puts a contact's edges elsewhere: it has taken the preload
     // for its baseline in some windows, and a noise mixed from the unloaded and preloaded frames.
     let lowest = floor.baseline.iter().copied().fold(f64::INFINITY, f64::min);
-    // The longest chain of contacts with loaded rests between them: a walking foot's heel and toe
-    // make two, with an unloaded swing before the next pair.
-    let (mut loaded_rests, mut chain) = (0, 0);
     // A rest is loaded when it is above the drifting baseline by the floor's off level, or lies in a
     // stance of the drifting baseline (which found it loaded), or, when the drifting baseline mixed two
     // levels (its off level more than twice the floor's), above the lowest rest. Not above the lowest
@@ -214,64 +188,11 @@ fn preload(
         params.params().min_stance_frames,
     );
     mixed |= sunk.is_some();
-    // The middle frame of the rest between two of the floor's contacts.
-    let rest_frame = |pair: &[Stance]| (pair[0].end() + pair[1].start) / 2;
-    let in_stance = |t: usize| drifting.stances.iter().any(|stance| stance.contains(t));
-    // A rest the drifting baseline found loaded (in one of its stances) next to one it found unloaded at
-    // the same level (within the on level): it took the preload for unloaded there, not here. A walking
-    // foot's heel-toe valley is far above the swing level beside it.
-    // A rest counts as loaded for the drifting baseline when one of its frames but the first two and
-    // the last two lies in one of its stances: each segmentation's boundary may be a frame off, so the
-    // two may differ by two (a walking swing often loses a frame to the stance on each side; a floor
-    // contact that ended a frame early and a drifting stance that ended a frame late made a swing
-    // "loaded" on its second frame and walking a preload).
-    let mut rests: Vec<(usize, bool)> = floor
-        .stances
-        .windows(2)
-        .map(|pair| {
-            let loaded = (pair[0].end() + 2..pair[1].start.saturating_sub(2)).any(in_stance);
-            (rest_frame(pair), loaded)
-        })
-        .collect();
-    // The rest after the last contact too: a drifting stance that runs on into it has stretched the
-    // last press over a preload it took for loaded.
-    let n = floor.baseline.len();
-    if let Some(last) = floor.stances.last()
-        && !last.partial
-        && last.end() + 2 < n
-    {
-        let loaded = (last.end() + 2..n - 1).any(in_stance);
-        rests.push(((last.end() + n) / 2, loaded));
-    }
-    let contradiction = rests.windows(2).find_map(|pair| {
-        let ((a, a_loaded), (b, b_loaded)) = (pair[0], pair[1]);
-        let (inside, outside) = match (a_loaded, b_loaded) {
-            (true, false) => (a, b),
-            (false, true) => (b, a),
-            _ => return None,
-        };
-        let (level, beside) = (floor.baseline[inside], floor.baseline[outside]);
-        (level - lowest > floor.off_level && (level - beside).abs() < floor.on_level).then(|| {
-            format!(
-                "the load between presses rests at the same level at frames {inside} and \
-                 {outside}, loaded for the drifting baseline at one and unloaded at the other (a \
-                 preload): contacts measured from the local floor"
-            )
-        })
-    });
+    let contradiction = rests_loaded_at_one_level(drifting, floor, lowest);
     if contradiction.is_some() {
         return contradiction;
     }
-    for pair in floor.stances.windows(2) {
-        let t = rest_frame(pair);
-        let above = |level: f64| floor.baseline[t] - level > floor.off_level;
-        chain = if above(drifting.baseline[t]) || in_stance(t) || mixed && above(lowest) {
-            chain + 1
-        } else {
-            0
-        };
-        loaded_rests = loaded_rests.max(chain);
-    }
+    let loaded_rests = longest_loaded_chain(drifting, floor, lowest, mixed);
     if loaded_rests + 1 < PRELOAD_PEAKS {
         return None;
     }
@@ -298,6 +219,120 @@ fn preload(
             )
         })
     })
+}
+
+/// Why the drifting baseline merged presses, or `None`: its first stance longer than `max_len`, or
+/// holding at least [`PRELOAD_PEAKS`] of the floor's contacts.
+fn merged_presses(
+    drifting: &Segmentation,
+    floor: &Segmentation,
+    max_len: Option<usize>,
+) -> Option<String> {
+    drifting.stances.iter().find_map(|stance| {
+        if let Some(max) = max_len
+            && stance.len > max
+        {
+            return Some(format!(
+                "a stance of {} frames from frame {} is longer than the longest allowed ({max}): \
+                 contacts measured from the local floor",
+                stance.len, stance.start
+            ));
+        }
+        let inside = floor
+            .stances
+            .iter()
+            .filter(|press| press.start + 1 >= stance.start && press.end() <= stance.end() + 1)
+            .count();
+        (inside >= PRELOAD_PEAKS).then(|| {
+            format!(
+                "the stance at frames {}..{} holds {inside} presses that never unload (the load \
+                 between them stays above the off level): contacts measured from the local floor",
+                stance.start,
+                stance.end(),
+            )
+        })
+    })
+}
+
+/// The middle frame of the rest between two of the floor's contacts.
+fn rest_frame(pair: &[Stance]) -> usize {
+    (pair[0].end() + pair[1].start) / 2
+}
+
+/// Why the drifting baseline took a preload for unloaded, or `None`: a rest of the floor it found
+/// loaded (in one of its stances) next to one it found unloaded at the same level (within the on
+/// level), both above the `lowest` rest by the off level. It took the preload for unloaded there, not
+/// here; a walking foot's heel-toe valley is far above the swing level beside it.
+fn rests_loaded_at_one_level(
+    drifting: &Segmentation,
+    floor: &Segmentation,
+    lowest: f64,
+) -> Option<String> {
+    let in_stance = |t: usize| drifting.stances.iter().any(|stance| stance.contains(t));
+    // A rest counts as loaded for the drifting baseline when one of its frames but the first two and
+    // the last two lies in one of its stances: each segmentation's boundary may be a frame off, so the
+    // two may differ by two (a walking swing often loses a frame to the stance on each side; a floor
+    // contact that ended a frame early and a drifting stance that ended a frame late made a swing
+    // "loaded" on its second frame and walking a preload).
+    let mut rests: Vec<(usize, bool)> = floor
+        .stances
+        .windows(2)
+        .map(|pair| {
+            let loaded = (pair[0].end() + 2..pair[1].start.saturating_sub(2)).any(in_stance);
+            (rest_frame(pair), loaded)
+        })
+        .collect();
+    // The rest after the last contact too: a drifting stance that runs on into it has stretched the
+    // last press over a preload it took for loaded.
+    let n = floor.baseline.len();
+    if let Some(last) = floor.stances.last()
+        && !last.partial
+        && last.end() + 2 < n
+    {
+        let loaded = (last.end() + 2..n - 1).any(in_stance);
+        rests.push(((last.end() + n) / 2, loaded));
+    }
+    rests.windows(2).find_map(|pair| {
+        let ((a, a_loaded), (b, b_loaded)) = (pair[0], pair[1]);
+        let (inside, outside) = match (a_loaded, b_loaded) {
+            (true, false) => (a, b),
+            (false, true) => (b, a),
+            _ => return None,
+        };
+        let (level, beside) = (floor.baseline[inside], floor.baseline[outside]);
+        (level - lowest > floor.off_level && (level - beside).abs() < floor.on_level).then(|| {
+            format!(
+                "the load between presses rests at the same level at frames {inside} and \
+                 {outside}, loaded for the drifting baseline at one and unloaded at the other (a \
+                 preload): contacts measured from the local floor"
+            )
+        })
+    })
+}
+
+/// The longest chain of the floor's contacts with loaded rests between them, as its number of rests
+/// (see [`preload`]; `mixed`: the drifting baseline mixed two levels, and a rest above the `lowest`
+/// one by the off level counts): a walking foot's heel and toe make two, with an unloaded swing
+/// before the next pair.
+fn longest_loaded_chain(
+    drifting: &Segmentation,
+    floor: &Segmentation,
+    lowest: f64,
+    mixed: bool,
+) -> usize {
+    let in_stance = |t: usize| drifting.stances.iter().any(|stance| stance.contains(t));
+    let (mut loaded_rests, mut chain) = (0, 0);
+    for pair in floor.stances.windows(2) {
+        let t = rest_frame(pair);
+        let above = |level: f64| floor.baseline[t] - level > floor.off_level;
+        chain = if above(drifting.baseline[t]) || in_stance(t) || mixed && above(lowest) {
+            chain + 1
+        } else {
+            0
+        };
+        loaded_rests = loaded_rests.max(chain);
+    }
+    loaded_rests
 }
 
 /// The first rest of the floor (the frames before its first contact, between two, or after its last;
@@ -589,13 +624,6 @@ fn segment_floor_from(
     let n = total_load.len();
     let lowest = total_load.iter().copied().fold(f64::INFINITY, f64::min);
     let range = total_load.iter().copied().fold(lowest, f64::max) - lowest;
-    let mut noise = drifting.noise;
-    let levels = |noise: f64| {
-        (
-            (p.on_noise * noise).max(p.on_fraction * range),
-            (p.off_noise * noise).max(p.off_fraction * range),
-        )
-    };
     let empty = Segmentation {
         stances: Vec::new(),
         mode: BaselineMode::Floor,
@@ -605,11 +633,48 @@ fn segment_floor_from(
     if n == 0 || range <= 0.0 {
         return empty;
     }
-    // The prominent peaks from the load range alone (the drifting segmentation's noise may be inflated
-    // by a preload it took for its baseline), the rests between them, the noise measured on the rests;
-    // then the peaks that do not rise the on level above the rests on both sides are dropped and the
-    // rests found again.
-    let mut peaks: Vec<usize> = zigzag_peaks(total_load, p.on_fraction * range)
+    let (peaks, rests, noise) = prominent_peaks(total_load, p, range, drifting.noise);
+    let (on, off) = floor_levels(p, noise, range);
+    let peaks = peaks_above_their_rests(total_load, &peaks, &rests, on);
+    if peaks.is_empty() {
+        return empty;
+    }
+    let (regions, mut rests) = rests_between(total_load, &peaks, (on, off), p.min_stance_frames);
+    drop_edge_rests_of_contacts(&mut rests, on);
+    let (floor, spans) = floor_and_spans(total_load, &peaks, &regions, &rests, on, lowest, p);
+    Segmentation {
+        stances: stances_of_spans(total_load, spans, p.min_stance_frames),
+        baseline: floor,
+        noise,
+        load_range: range,
+        on_level: on,
+        off_level: off,
+        mode: BaselineMode::Floor,
+        mode_reason: None,
+    }
+}
+
+/// The on and off levels of the floor mode for `noise` and the load `range`.
+fn floor_levels(p: &SegmentParams, noise: f64, range: f64) -> (f64, f64) {
+    (
+        (p.on_noise * noise).max(p.on_fraction * range),
+        (p.off_noise * noise).max(p.off_fraction * range),
+    )
+}
+
+/// The prominent peaks, the rests between them and the noise measured on those rests (`noise` if
+/// they are too short to measure it on).
+///
+/// The peaks come from the load range alone (the drifting segmentation's noise may be inflated by a
+/// preload it took for its baseline); the rests are found twice, since the first are cut at an off
+/// level from the range alone, which may be below the noise.
+fn prominent_peaks(
+    total_load: &[f64],
+    p: &SegmentParams,
+    range: f64,
+    mut noise: f64,
+) -> (Vec<usize>, Vec<Option<Rest>>, f64) {
+    let peaks: Vec<usize> = zigzag_peaks(total_load, p.on_fraction * range)
         .iter()
         .map(|peak| peak.peak)
         .collect();
@@ -619,16 +684,30 @@ fn segment_floor_from(
         (p.on_fraction * range, p.off_fraction * range),
         p.min_stance_frames,
     );
-    // Twice: the first rests are cut at an off level from the range alone, which may be below the
-    // noise.
     for _ in 0..2 {
         if let Some(sigma) = rest_noise(total_load, &rests) {
             noise = sigma;
         }
-        rests = rests_between(total_load, &peaks, levels(noise), p.min_stance_frames).1;
+        rests = rests_between(
+            total_load,
+            &peaks,
+            floor_levels(p, noise, range),
+            p.min_stance_frames,
+        )
+        .1;
     }
-    let (on, off) = levels(noise);
-    peaks = peaks
+    (peaks, rests, noise)
+}
+
+/// The `peaks` that rise more than `on` above the rests on both sides of them (`rests[k]` before peak
+/// `k`, `rests[k + 1]` after it; a side without a rest does not count).
+fn peaks_above_their_rests(
+    total_load: &[f64],
+    peaks: &[usize],
+    rests: &[Option<Rest>],
+    on: f64,
+) -> Vec<usize> {
+    peaks
         .iter()
         .enumerate()
         .filter(|&(k, &peak)| {
@@ -642,15 +721,13 @@ fn segment_floor_from(
                 .all(|&floor| total_load[peak] - floor > on)
         })
         .map(|(_, &peak)| peak)
-        .collect();
-    if peaks.is_empty() {
-        return empty;
-    }
-    let (regions, mut rests) = rests_between(total_load, &peaks, (on, off), p.min_stance_frames);
-    let (on, off) = levels(noise);
-    // A recording that starts (ends) rising into (falling from) a contact has no rest before (after)
-    // it: its first (last) "rest" is then higher than the next (previous) one by more than the on
-    // level, and that one's floor is used instead.
+        .collect()
+}
+
+/// A recording that starts (ends) rising into (falling from) a contact has no rest before (after) it:
+/// its first (last) "rest" is then higher than the next (previous) one by more than the `on` level,
+/// and is dropped so that that one's floor is used instead.
+fn drop_edge_rests_of_contacts(rests: &mut [Option<Rest>], on: f64) {
     let last = rests.len() - 1;
     if rests.len() >= 3 {
         for (edge, inner, at_edge) in [(0, 1, true), (last, last - 1, false)] {
@@ -666,8 +743,22 @@ fn segment_floor_from(
             }
         }
     }
-    let mut floor = vec![0.0; n];
-    // Each press: from the frame after the rest before it to the frame before the rest after it.
+}
+
+/// The floor under every frame and the presses as spans of frames `(start, end)`: each press from
+/// the frame after the rest before it to the frame before the rest after it, presses split by a rest
+/// of at most `max_gap_frames` merged. Under a press the floor is the rest before it up to its peak
+/// and the rest after it from there (either one where the other is missing, `lowest` without both).
+fn floor_and_spans(
+    total_load: &[f64],
+    peaks: &[usize],
+    regions: &[std::ops::Range<usize>],
+    rests: &[Option<Rest>],
+    on: f64,
+    lowest: f64,
+    p: &SegmentParams,
+) -> (Vec<f64>, Vec<(usize, usize)>) {
+    let mut floor = vec![0.0; total_load.len()];
     let mut spans: Vec<(usize, usize)> = Vec::new();
     // A recording that starts falling from a contact: no peak of its own, the frames before the first
     // rest rise above it by the on level.
@@ -714,9 +805,20 @@ fn segment_floor_from(
             *slot = rest.at(t);
         }
     }
-    let stances = spans
+    (floor, spans)
+}
+
+/// The stances of the `spans` at least `min_stance_frames` long, each with its peak (the first
+/// highest frame), partial if it touches either end of the recording.
+fn stances_of_spans(
+    total_load: &[f64],
+    spans: Vec<(usize, usize)>,
+    min_stance_frames: usize,
+) -> Vec<Stance> {
+    let n = total_load.len();
+    spans
         .into_iter()
-        .filter(|&(start, end)| end - start >= p.min_stance_frames)
+        .filter(|&(start, end)| end - start >= min_stance_frames)
         .map(|(start, end)| {
             let peak_frame = (start..end).fold(start, |best, t| {
                 if total_load[t] > total_load[best] {
@@ -733,17 +835,7 @@ fn segment_floor_from(
                 partial: start == 0 || end == n,
             }
         })
-        .collect();
-    Segmentation {
-        stances,
-        baseline: floor,
-        noise,
-        load_range: range,
-        on_level: on,
-        off_level: off,
-        mode: BaselineMode::Floor,
-        mode_reason: None,
-    }
+        .collect()
 }
 
 /// The whole recording as one stance, partial at both ends (see the module docs). No stance for fewer
