@@ -37,134 +37,209 @@ impl Smo {
         );
         self.c = c;
         let n = y.len();
+        let problem = Problem {
+            k,
+            y,
+            n,
+            c,
+            // The diagonal read contiguously (K_tt strides by n + 1 in `k`).
+            diag: (0..n).map(|t| k[t * n + t]).collect(),
+        };
         let Self { alpha, grad, .. } = self;
-        let q = |i: usize, j: usize| y[i] * y[j] * k[i * n + j];
         let max_iter = (SMO_ITERATIONS_PER_VECTOR * n).max(SMO_MIN_ITERATIONS);
-        let tau = 1e-12;
-        // The diagonal read contiguously (K_tt strides by n + 1 in `k`).
-        let diag: Vec<f64> = (0..n).map(|t| k[t * n + t]).collect();
         let mut iterations = 0;
         for _ in 0..max_iter {
             iterations += 1;
-            // select i: max over I_up of -y G
-            let mut gmax = f64::NEG_INFINITY;
-            let mut i_sel = usize::MAX;
-            for t in 0..n {
-                let up = if y[t] > 0.0 {
-                    alpha[t] < c
-                } else {
-                    alpha[t] > 0.0
-                };
-                if up && -y[t] * grad[t] >= gmax {
-                    gmax = -y[t] * grad[t];
-                    i_sel = t;
-                }
-            }
-            if i_sel == usize::MAX {
+            let Some((i, gmax)) = problem.select_i(alpha, grad) else {
                 break;
-            }
-            let i = i_sel;
-            let row_i = &k[i * n..(i + 1) * n];
-            let mut gmax2 = f64::NEG_INFINITY;
-            let mut j_sel = usize::MAX;
-            let mut obj_min = f64::INFINITY;
-            for t in 0..n {
-                let low = if y[t] > 0.0 {
-                    alpha[t] > 0.0
-                } else {
-                    alpha[t] < c
-                };
-                if !low {
-                    continue;
-                }
-                let yg = y[t] * grad[t];
-                gmax2 = gmax2.max(yg);
-                let b = gmax + yg;
-                if b > 0.0 {
-                    // (= K_ii + K_tt - 2 y_i y_t Q_it exactly: y is ±1)
-                    let mut a = diag[i] + diag[t] - 2.0 * row_i[t];
-                    if a <= 0.0 {
-                        a = tau;
-                    }
-                    let obj = -(b * b) / a;
-                    if obj <= obj_min {
-                        obj_min = obj;
-                        j_sel = t;
-                    }
-                }
-            }
-            if gmax + gmax2 < tol || j_sel == usize::MAX {
+            };
+            let Some(j) = problem.select_j(i, gmax, alpha, grad, tol) else {
                 break;
-            }
-            let j = j_sel;
+            };
             let (old_i, old_j) = (alpha[i], alpha[j]);
-            let qij = q(i, j);
             if y[i] != y[j] {
-                let mut quad = q(i, i) + q(j, j) + 2.0 * qij;
-                if quad <= 0.0 {
-                    quad = tau;
-                }
-                let delta = (-grad[i] - grad[j]) / quad;
-                let diff = alpha[i] - alpha[j];
-                alpha[i] += delta;
-                alpha[j] += delta;
-                if diff > 0.0 {
-                    if alpha[j] < 0.0 {
-                        alpha[j] = 0.0;
-                        alpha[i] = diff;
-                    }
-                } else if alpha[i] < 0.0 {
-                    alpha[i] = 0.0;
-                    alpha[j] = -diff;
-                }
-                if diff > 0.0 {
-                    if alpha[i] > c {
-                        alpha[i] = c;
-                        alpha[j] = c - diff;
-                    }
-                } else if alpha[j] > c {
-                    alpha[j] = c;
-                    alpha[i] = c + diff;
-                }
+                problem.step_opposite_labels(alpha, grad, i, j);
             } else {
-                let mut quad = q(i, i) + q(j, j) - 2.0 * qij;
-                if quad <= 0.0 {
-                    quad = tau;
-                }
-                let delta = (grad[i] - grad[j]) / quad;
-                let sum = alpha[i] + alpha[j];
-                alpha[i] -= delta;
-                alpha[j] += delta;
-                if sum > c {
-                    if alpha[i] > c {
-                        alpha[i] = c;
-                        alpha[j] = sum - c;
-                    }
-                } else if alpha[j] < 0.0 {
-                    alpha[j] = 0.0;
-                    alpha[i] = sum;
-                }
-                if sum > c {
-                    if alpha[j] > c {
-                        alpha[j] = c;
-                        alpha[i] = sum - c;
-                    }
-                } else if alpha[i] < 0.0 {
-                    alpha[i] = 0.0;
-                    alpha[j] = sum;
-                }
+                problem.step_same_labels(alpha, grad, i, j);
             }
-            let (di, dj) = (alpha[i] - old_i, alpha[j] - old_j);
-            // Q(t, i) read along row i (k is symmetric): contiguous, where column i strides by n.
-            let row_j = &k[j * n..(j + 1) * n];
-            for t in 0..n {
-                grad[t] += y[t] * y[i] * row_i[t] * di + y[t] * y[j] * row_j[t] * dj;
+            problem.update_gradient(grad, i, j, alpha[i] - old_i, alpha[j] - old_j);
+        }
+        (problem.rho(alpha, grad), iterations)
+    }
+}
+
+/// A quadratic below this is taken as this (libsvm's `TAU`): a non-positive-definite pair still moves.
+const TAU: f64 = 1e-12;
+
+/// One binary problem as [`Smo::solve`] sees it: the kernel matrix `k` (`n x n`, row-major), the labels
+/// `y` (±1), the bound `c`, and the kernel's diagonal.
+struct Problem<'a> {
+    k: &'a [f64],
+    y: &'a [f64],
+    n: usize,
+    c: f64,
+    diag: Vec<f64>,
+}
+
+impl Problem<'_> {
+    /// `Q_ij = y_i y_j K_ij`.
+    fn q(&self, i: usize, j: usize) -> f64 {
+        self.y[i] * self.y[j] * self.k[i * self.n + j]
+    }
+
+    /// Row `i` of the kernel matrix.
+    fn row(&self, i: usize) -> &[f64] {
+        &self.k[i * self.n..(i + 1) * self.n]
+    }
+
+    /// The first of the working set: the largest `-y G` over the vectors that can move up (the last of
+    /// equals), and that value; `None` if none can.
+    fn select_i(&self, alpha: &[f64], grad: &[f64]) -> Option<(usize, f64)> {
+        let (y, c) = (self.y, self.c);
+        let mut gmax = f64::NEG_INFINITY;
+        let mut i_sel = usize::MAX;
+        for t in 0..self.n {
+            let up = if y[t] > 0.0 {
+                alpha[t] < c
+            } else {
+                alpha[t] > 0.0
+            };
+            if up && -y[t] * grad[t] >= gmax {
+                gmax = -y[t] * grad[t];
+                i_sel = t;
             }
         }
-        // rho (libsvm's calculate_rho)
+        (i_sel != usize::MAX).then_some((i_sel, gmax))
+    }
+
+    /// The second of the working set, by libsvm's second-order rule (the largest decrease of the
+    /// objective with `i`); `None` once the KKT gap is below `tol` or no vector can move down.
+    fn select_j(
+        &self,
+        i: usize,
+        gmax: f64,
+        alpha: &[f64],
+        grad: &[f64],
+        tol: f64,
+    ) -> Option<usize> {
+        let (y, c) = (self.y, self.c);
+        let row_i = self.row(i);
+        let mut gmax2 = f64::NEG_INFINITY;
+        let mut j_sel = usize::MAX;
+        let mut obj_min = f64::INFINITY;
+        for t in 0..self.n {
+            let low = if y[t] > 0.0 {
+                alpha[t] > 0.0
+            } else {
+                alpha[t] < c
+            };
+            if !low {
+                continue;
+            }
+            let yg = y[t] * grad[t];
+            gmax2 = gmax2.max(yg);
+            let b = gmax + yg;
+            if b > 0.0 {
+                // (= K_ii + K_tt - 2 y_i y_t Q_it exactly: y is ±1)
+                let mut a = self.diag[i] + self.diag[t] - 2.0 * row_i[t];
+                if a <= 0.0 {
+                    a = TAU;
+                }
+                let obj = -(b * b) / a;
+                if obj <= obj_min {
+                    obj_min = obj;
+                    j_sel = t;
+                }
+            }
+        }
+        if gmax + gmax2 < tol || j_sel == usize::MAX {
+            None
+        } else {
+            Some(j_sel)
+        }
+    }
+
+    /// The analytic step of the pair `i`, `j` with `y_i != y_j` (their difference is kept), clipped to
+    /// the box `[0, c]`.
+    fn step_opposite_labels(&self, alpha: &mut [f64], grad: &[f64], i: usize, j: usize) {
+        let c = self.c;
+        let mut quad = self.q(i, i) + self.q(j, j) + 2.0 * self.q(i, j);
+        if quad <= 0.0 {
+            quad = TAU;
+        }
+        let delta = (-grad[i] - grad[j]) / quad;
+        let diff = alpha[i] - alpha[j];
+        alpha[i] += delta;
+        alpha[j] += delta;
+        if diff > 0.0 {
+            if alpha[j] < 0.0 {
+                alpha[j] = 0.0;
+                alpha[i] = diff;
+            }
+        } else if alpha[i] < 0.0 {
+            alpha[i] = 0.0;
+            alpha[j] = -diff;
+        }
+        if diff > 0.0 {
+            if alpha[i] > c {
+                alpha[i] = c;
+                alpha[j] = c - diff;
+            }
+        } else if alpha[j] > c {
+            alpha[j] = c;
+            alpha[i] = c + diff;
+        }
+    }
+
+    /// The analytic step of the pair `i`, `j` with `y_i == y_j` (their sum is kept), clipped to the box
+    /// `[0, c]`.
+    fn step_same_labels(&self, alpha: &mut [f64], grad: &[f64], i: usize, j: usize) {
+        let c = self.c;
+        let mut quad = self.q(i, i) + self.q(j, j) - 2.0 * self.q(i, j);
+        if quad <= 0.0 {
+            quad = TAU;
+        }
+        let delta = (grad[i] - grad[j]) / quad;
+        let sum = alpha[i] + alpha[j];
+        alpha[i] -= delta;
+        alpha[j] += delta;
+        if sum > c {
+            if alpha[i] > c {
+                alpha[i] = c;
+                alpha[j] = sum - c;
+            }
+        } else if alpha[j] < 0.0 {
+            alpha[j] = 0.0;
+            alpha[i] = sum;
+        }
+        if sum > c {
+            if alpha[j] > c {
+                alpha[j] = c;
+                alpha[i] = sum - c;
+            }
+        } else if alpha[i] < 0.0 {
+            alpha[i] = 0.0;
+            alpha[j] = sum;
+        }
+    }
+
+    /// The gradient after `alpha_i` and `alpha_j` moved by `di` and `dj`.
+    fn update_gradient(&self, grad: &mut [f64], i: usize, j: usize, di: f64, dj: f64) {
+        let y = self.y;
+        // Q(t, i) read along row i (k is symmetric): contiguous, where column i strides by n.
+        let (row_i, row_j) = (self.row(i), self.row(j));
+        for t in 0..self.n {
+            grad[t] += y[t] * y[i] * row_i[t] * di + y[t] * y[j] * row_j[t] * dj;
+        }
+    }
+
+    /// The offset `rho` (libsvm's `calculate_rho`): the mean `y G` of the free vectors, or the middle of
+    /// the bounds the others set when none is free.
+    fn rho(&self, alpha: &[f64], grad: &[f64]) -> f64 {
+        let (y, c) = (self.y, self.c);
         let (mut ub, mut lb, mut sum_free, mut n_free) =
             (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
-        for t in 0..n {
+        for t in 0..self.n {
             let yg = y[t] * grad[t];
             if alpha[t] >= c {
                 if y[t] < 0.0 {
@@ -183,12 +258,11 @@ impl Smo {
                 sum_free += yg;
             }
         }
-        let rho = if n_free > 0 {
+        if n_free > 0 {
             sum_free / n_free as f64
         } else {
             (ub + lb) / 2.0
-        };
-        (rho, iterations)
+        }
     }
 }
 
