@@ -385,132 +385,160 @@ impl<'m> OnlineClassifier<'m> {
         self.current = None;
         for event in events.iter() {
             match event {
-                SegEvent::Touchdown(touchdown) => {
-                    self.stats.stances += 1;
-                    self.fusion_sum.fill(0.0);
-                    self.fusion_frames = 0;
-                    self.events.push(OnlineEvent::Touchdown(touchdown));
-                }
-                SegEvent::HoldCurrent { .. } => {
-                    if let Some(frame) = frame {
-                        self.held.copy_from_slice(frame.values());
-                        self.held_has_mask = frame.present().is_some();
-                        if let Some(mask) = frame.present() {
-                            self.held_present.copy_from_slice(mask);
-                        }
-                        self.held_valid = true;
-                    }
-                }
+                SegEvent::Touchdown(touchdown) => self.touchdown(touchdown),
+                SegEvent::HoldCurrent { .. } => self.hold(frame),
                 SegEvent::ClassifySample {
                     stance_id,
                     touchdown_frame,
                     frame: sample_frame,
                     held,
-                } => {
-                    let outcome = if held {
-                        self.classify_held(stance_id, sample_frame)
-                    } else {
-                        let Some(frame) = frame else {
-                            continue;
-                        };
-                        let outcome = self.classify_current(frame);
-                        if outcome.is_ok() {
-                            self.posteriors.extend_from_slice(&self.current_posteriors);
-                        }
-                        outcome
-                    };
-                    let (class, confidence) = match outcome {
-                        Ok(result) => result,
-                        Err(slot) => {
-                            self.events.push(OnlineEvent::Failed(Failure {
-                                stance_id,
-                                kind: DecisionKind::Single,
-                                sample_frame,
-                                frame: t,
-                                slot,
-                            }));
-                            continue;
-                        }
-                    };
-                    let slot = (self.posteriors.len() / self.n_classes.max(1)).saturating_sub(1);
-                    let decision = Decision {
-                        stance_id,
-                        kind: DecisionKind::Single,
-                        touchdown_frame,
-                        sample_frame,
-                        frame: t,
-                        frames_used: 1,
-                        class,
-                        confidence,
-                        slot,
-                    };
-                    self.stats.decisions += 1;
-                    self.decided_stance = Some(stance_id);
-                    self.events.push(OnlineEvent::Decision(decision));
-                }
-                SegEvent::FuseCurrent { stance_id } => {
-                    if let Some(frame) = frame {
-                        match self.classify_current(frame) {
-                            Ok(_) => {
-                                for (sum, p) in
-                                    self.fusion_sum.iter_mut().zip(&self.current_posteriors)
-                                {
-                                    *sum += p;
-                                }
-                                self.fusion_frames += 1;
-                                self.fusion_last = t;
-                            }
-                            Err(slot) => self.events.push(OnlineEvent::Failed(Failure {
-                                stance_id,
-                                kind: DecisionKind::Fused,
-                                sample_frame: t,
-                                frame: t,
-                                slot,
-                            })),
-                        }
-                    }
-                }
+                } => self.decide_sample(stance_id, touchdown_frame, sample_frame, held, frame, t),
+                SegEvent::FuseCurrent { stance_id } => self.fuse(stance_id, frame, t),
                 SegEvent::FusionReady {
                     stance_id,
                     touchdown_frame,
-                } => {
-                    if self.fusion_frames == 0 {
-                        continue;
-                    }
-                    let slot = self.posteriors.len() / self.n_classes.max(1);
-                    let count = self.fusion_frames as f64;
-                    let start = self.posteriors.len();
-                    self.posteriors
-                        .extend(self.fusion_sum.iter().map(|sum| sum / count));
-                    let fused = &self.posteriors[start..];
-                    let (class, confidence) = fused.iter().copied().enumerate().fold(
-                        (0, f64::NEG_INFINITY),
-                        |best, (class, p)| {
-                            if p > best.1 { (class, p) } else { best }
-                        },
-                    );
-                    self.events.push(OnlineEvent::Decision(Decision {
-                        stance_id,
-                        kind: DecisionKind::Fused,
-                        touchdown_frame,
-                        sample_frame: self.fusion_last,
-                        frame: t,
-                        frames_used: self.fusion_frames,
-                        class,
-                        confidence,
-                        slot,
-                    }));
-                    self.stats.fused_decisions += 1;
-                    self.fusion_sum.fill(0.0);
-                    self.fusion_frames = 0;
-                }
-                SegEvent::Liftoff(mut liftoff) => {
-                    self.held_valid = false;
-                    liftoff.sampled &= self.decided_stance == Some(liftoff.stance_id);
-                    self.events.push(OnlineEvent::Liftoff(liftoff));
-                }
+                } => self.decide_fused(stance_id, touchdown_frame, t),
+                SegEvent::Liftoff(liftoff) => self.liftoff(liftoff),
             }
         }
+    }
+
+    /// A stance began: its fusion starts empty.
+    fn touchdown(&mut self, touchdown: Touchdown) {
+        self.stats.stances += 1;
+        self.fusion_sum.fill(0.0);
+        self.fusion_frames = 0;
+        self.events.push(OnlineEvent::Touchdown(touchdown));
+    }
+
+    /// Keeps a copy of the current frame (none at the end of the stream), to be classified later.
+    fn hold(&mut self, frame: Option<&FrameView<'_>>) {
+        if let Some(frame) = frame {
+            self.held.copy_from_slice(frame.values());
+            self.held_has_mask = frame.present().is_some();
+            if let Some(mask) = frame.present() {
+                self.held_present.copy_from_slice(mask);
+            }
+            self.held_valid = true;
+        }
+    }
+
+    /// The single decision of a stance on its sample frame: the held copy, or the current frame (none
+    /// at the end of the stream: no decision); a failure if it cannot be classified.
+    fn decide_sample(
+        &mut self,
+        stance_id: u64,
+        touchdown_frame: usize,
+        sample_frame: usize,
+        held: bool,
+        frame: Option<&FrameView<'_>>,
+        t: usize,
+    ) {
+        let outcome = if held {
+            self.classify_held(stance_id, sample_frame)
+        } else {
+            let Some(frame) = frame else {
+                return;
+            };
+            let outcome = self.classify_current(frame);
+            if outcome.is_ok() {
+                self.posteriors.extend_from_slice(&self.current_posteriors);
+            }
+            outcome
+        };
+        let (class, confidence) = match outcome {
+            Ok(result) => result,
+            Err(slot) => {
+                self.events.push(OnlineEvent::Failed(Failure {
+                    stance_id,
+                    kind: DecisionKind::Single,
+                    sample_frame,
+                    frame: t,
+                    slot,
+                }));
+                return;
+            }
+        };
+        let slot = (self.posteriors.len() / self.n_classes.max(1)).saturating_sub(1);
+        let decision = Decision {
+            stance_id,
+            kind: DecisionKind::Single,
+            touchdown_frame,
+            sample_frame,
+            frame: t,
+            frames_used: 1,
+            class,
+            confidence,
+            slot,
+        };
+        self.stats.decisions += 1;
+        self.decided_stance = Some(stance_id);
+        self.events.push(OnlineEvent::Decision(decision));
+    }
+
+    /// Adds the current frame's posteriors (none at the end of the stream) to the stance's fusion; a
+    /// failure if it cannot be classified.
+    fn fuse(&mut self, stance_id: u64, frame: Option<&FrameView<'_>>, t: usize) {
+        if let Some(frame) = frame {
+            match self.classify_current(frame) {
+                Ok(_) => {
+                    for (sum, p) in self.fusion_sum.iter_mut().zip(&self.current_posteriors) {
+                        *sum += p;
+                    }
+                    self.fusion_frames += 1;
+                    self.fusion_last = t;
+                }
+                Err(slot) => self.events.push(OnlineEvent::Failed(Failure {
+                    stance_id,
+                    kind: DecisionKind::Fused,
+                    sample_frame: t,
+                    frame: t,
+                    slot,
+                })),
+            }
+        }
+    }
+
+    /// The fused decision of a stance: the mean of the posteriors fused (none if no frame was).
+    fn decide_fused(&mut self, stance_id: u64, touchdown_frame: usize, t: usize) {
+        if self.fusion_frames == 0 {
+            return;
+        }
+        let slot = self.posteriors.len() / self.n_classes.max(1);
+        let count = self.fusion_frames as f64;
+        let start = self.posteriors.len();
+        self.posteriors
+            .extend(self.fusion_sum.iter().map(|sum| sum / count));
+        let fused = &self.posteriors[start..];
+        let (class, confidence) =
+            fused
+                .iter()
+                .copied()
+                .enumerate()
+                .fold((0, f64::NEG_INFINITY), |best, (class, p)| {
+                    if p > best.1 { (class, p) } else { best }
+                });
+        self.events.push(OnlineEvent::Decision(Decision {
+            stance_id,
+            kind: DecisionKind::Fused,
+            touchdown_frame,
+            sample_frame: self.fusion_last,
+            frame: t,
+            frames_used: self.fusion_frames,
+            class,
+            confidence,
+            slot,
+        }));
+        self.stats.fused_decisions += 1;
+        self.fusion_sum.fill(0.0);
+        self.fusion_frames = 0;
+    }
+
+    /// A stance ended: the held copy is released, and the lift-off says whether it was decided.
+    fn liftoff(&mut self, mut liftoff: Liftoff) {
+        self.held_valid = false;
+        liftoff.sampled &= self.decided_stance == Some(liftoff.stance_id);
+        self.events.push(OnlineEvent::Liftoff(liftoff));
     }
 }
 
