@@ -80,61 +80,27 @@ fn fit_path_on_gram(
     cs: &[f64],
     tol: f64,
 ) -> Vec<Fitted> {
-    let n = data.classes.len();
     let mut increasing: Vec<usize> = (0..cs.len()).collect();
     increasing.sort_by(|&a, &b| cs[a].total_cmp(&cs[b]));
-    // per C: per pair, (members, y, alpha, rho)
+    // per C: per pair, (alpha, rho)
     let mut solutions: Vec<Vec<(Vec<f64>, f64)>> = vec![Vec::new(); cs.len()];
     let mut pairs = Vec::new();
     for ci in 0..n_classes {
         for cj in ci + 1..n_classes {
-            let members: Vec<usize> = (0..n)
-                .filter(|&t| data.classes[t] == ci || data.classes[t] == cj)
-                .collect();
-            let m = members.len();
-            let y: Vec<f64> = members
-                .iter()
-                .map(|&t| if data.classes[t] == ci { 1.0 } else { -1.0 })
-                .collect();
-            let mut k = vec![0.0; m * m];
-            for (a, &ta) in members.iter().enumerate() {
-                for (b, &tb) in members.iter().enumerate() {
-                    k[a * m + b] = gram[ta * n + tb];
-                }
-            }
-            let mut smo = Smo::new(m);
+            let pair = PairProblem::of(&data, gram, ci, cj);
+            let mut smo = Smo::new(pair.members.len());
             for &index in &increasing {
-                let (rho, _) = smo.solve(&k, &y, cs[index], tol);
+                let (rho, _) = smo.solve(&pair.k, &pair.y, cs[index], tol);
                 solutions[index].push((smo.alpha.clone(), rho));
             }
-            pairs.push((members, y));
+            pairs.push(pair);
         }
     }
     let rows: Vec<&[f64]> = data.vectors.chunks_exact(dims).collect();
     cs.iter()
         .zip(solutions)
         .map(|(&c, per_pair)| {
-            let mut used = vec![usize::MAX; n];
-            let mut stored = Vec::new();
-            let mut machines = Vec::new();
-            for ((members, y), (alpha, rho)) in pairs.iter().zip(per_pair) {
-                let mut machine = PairMachine {
-                    support: Vec::new(),
-                    coefs: Vec::new(),
-                    rho,
-                };
-                for (a, &t) in members.iter().enumerate() {
-                    if alpha[a] > 0.0 {
-                        if used[t] == usize::MAX {
-                            used[t] = stored.len();
-                            stored.push(t);
-                        }
-                        machine.support.push(used[t]);
-                        machine.coefs.push(alpha[a] * y[a]);
-                    }
-                }
-                machines.push(machine);
-            }
+            let (machines, stored) = machines_of(&pairs, per_pair, data.classes.len());
             let vectors = stored
                 .iter()
                 .flat_map(|&t| rows[t].iter().copied())
@@ -154,6 +120,67 @@ fn fit_path_on_gram(
             }
         })
         .collect()
+}
+
+/// The binary problem of classes `ci` (+1) and `cj` (-1): their vectors' indices in `data`, labels and
+/// kernel matrix (from `gram`, the kernel matrix of all of `data`).
+struct PairProblem {
+    members: Vec<usize>,
+    y: Vec<f64>,
+    k: Vec<f64>,
+}
+
+impl PairProblem {
+    fn of(data: &LabeledVectors<'_>, gram: &[f64], ci: usize, cj: usize) -> Self {
+        let n = data.classes.len();
+        let members: Vec<usize> = (0..n)
+            .filter(|&t| data.classes[t] == ci || data.classes[t] == cj)
+            .collect();
+        let m = members.len();
+        let y: Vec<f64> = members
+            .iter()
+            .map(|&t| if data.classes[t] == ci { 1.0 } else { -1.0 })
+            .collect();
+        let mut k = vec![0.0; m * m];
+        for (a, &ta) in members.iter().enumerate() {
+            for (b, &tb) in members.iter().enumerate() {
+                k[a * m + b] = gram[ta * n + tb];
+            }
+        }
+        Self { members, y, k }
+    }
+}
+
+/// The machines of the `pairs` with their solutions `(alpha, rho)` for one `C`, and the training
+/// vectors they keep (indices into the `n` training vectors, in order of first use): each machine's
+/// support vectors index into those.
+fn machines_of(
+    pairs: &[PairProblem],
+    solutions: Vec<(Vec<f64>, f64)>,
+    n: usize,
+) -> (Vec<PairMachine>, Vec<usize>) {
+    let mut used = vec![usize::MAX; n];
+    let mut stored = Vec::new();
+    let mut machines = Vec::new();
+    for (pair, (alpha, rho)) in pairs.iter().zip(solutions) {
+        let mut machine = PairMachine {
+            support: Vec::new(),
+            coefs: Vec::new(),
+            rho,
+        };
+        for (a, &t) in pair.members.iter().enumerate() {
+            if alpha[a] > 0.0 {
+                if used[t] == usize::MAX {
+                    used[t] = stored.len();
+                    stored.push(t);
+                }
+                machine.support.push(used[t]);
+                machine.coefs.push(alpha[a] * pair.y[a]);
+            }
+        }
+        machines.push(machine);
+    }
+    (machines, stored)
 }
 
 impl SvmModel {
@@ -199,72 +226,24 @@ impl SvmModel {
         check_vectors(&train, "svm training vectors", dims, n_classes)?;
         check_vectors(&validation, "svm validation vectors", dims, n_classes)?;
         require_per_class(&train, n_classes, 1)?;
-        let gamma_scale = gamma_scale(train.vectors, dims);
-        let mut grid: Vec<(Kernel, Vec<f64>)> = Vec::new();
-        for kind in &config.kernels {
-            match kind {
-                // C relative to the data's scale: the linear kernel of vectors scaled to unit
-                // gamma_scale · a·b with C is the raw kernel with C · gamma_scale.
-                KernelKind::Linear => grid.push((
-                    Kernel::Linear,
-                    config.c_grid.iter().map(|c| c * gamma_scale).collect(),
-                )),
-                KernelKind::Rbf => grid.extend(config.gamma_factors.iter().map(|f| {
-                    (
-                        Kernel::Rbf {
-                            gamma: f * gamma_scale,
-                        },
-                        config.c_grid.clone(),
-                    )
-                })),
-            }
-        }
-        let mut candidates = Vec::new();
-        let (mut kernel, mut c) = (grid[0].0, grid[0].1[0]);
-        // The chosen candidate's validation scores: the temperature's fallback (see below).
-        let mut validation_scores = None;
-        if !validation.classes.is_empty() {
-            let mut best_accuracy = f64::NEG_INFINITY;
-            let n_train = train.classes.len();
-            for (candidate_kernel, cs) in &grid {
-                // Each kernel's matrices once, for its whole C path.
-                let gram = gram_of(train.vectors, dims, *candidate_kernel);
-                let cross =
-                    cross_kernel_of(validation.vectors, train.vectors, dims, *candidate_kernel);
-                let path = fit_path_on_gram(
-                    train,
-                    &gram,
-                    n_classes,
-                    dims,
-                    *candidate_kernel,
-                    cs,
-                    config.tol,
-                );
-                for fitted in path {
-                    let accuracy = fitted.validation_accuracy(&validation, &cross, n_train);
-                    candidates.push(SvmCandidate {
-                        kernel: *candidate_kernel,
-                        c: fitted.model.c,
-                        validation_accuracy: accuracy,
-                    });
-                    if accuracy > best_accuracy {
-                        best_accuracy = accuracy;
-                        // (only the best's scores are kept: the temperature's fallback)
-                        validation_scores = calibrate
-                            .then(|| fitted.model.scores_of(validation.vectors))
-                            .transpose()?;
-                        (kernel, c) = (*candidate_kernel, fitted.model.c);
-                    }
-                }
-            }
-        }
+        let grid = search_grid(config, gamma_scale(train.vectors, dims));
+        let choice = Choice::search(
+            &train,
+            &validation,
+            &grid,
+            n_classes,
+            dims,
+            config,
+            calibrate,
+        )?;
         let (vectors, classes) = merged(&train, &validation);
         let all = LabeledVectors {
             vectors: &vectors,
             classes: &classes,
         };
+        let (kernel, c) = (choice.kernel, choice.c);
         let mut temperature = 1.0;
-        if let Some(validation_scores) = validation_scores {
+        if let Some(validation_scores) = choice.validation_scores {
             // The chosen kernel and C, cross-validated over every vector (see `cross_validated_scores`);
             // the validation set's scores where a class is too small to fold.
             let cross_validated = cross_validated_scores(
@@ -286,8 +265,100 @@ impl SvmModel {
         }
         let mut model = Self::fit_fixed(all, n_classes, dims, kernel, c, config.tol)?;
         model.temperature = temperature;
-        model.candidates = candidates;
+        model.candidates = choice.candidates;
         Ok(model)
+    }
+}
+
+/// The kernels searched, each with its path of `C`, in the order of `config`: the linear kernel's
+/// `C` and the RBF's gamma relative to the data's `gamma_scale`.
+fn search_grid(config: &SvmConfig, gamma_scale: f64) -> Vec<(Kernel, Vec<f64>)> {
+    let mut grid: Vec<(Kernel, Vec<f64>)> = Vec::new();
+    for kind in &config.kernels {
+        match kind {
+            // C relative to the data's scale: the linear kernel of vectors scaled to unit
+            // gamma_scale · a·b with C is the raw kernel with C · gamma_scale.
+            KernelKind::Linear => grid.push((
+                Kernel::Linear,
+                config.c_grid.iter().map(|c| c * gamma_scale).collect(),
+            )),
+            KernelKind::Rbf => grid.extend(config.gamma_factors.iter().map(|f| {
+                (
+                    Kernel::Rbf {
+                        gamma: f * gamma_scale,
+                    },
+                    config.c_grid.clone(),
+                )
+            })),
+        }
+    }
+    grid
+}
+
+/// The outcome of the search over kernels and `C`: the chosen pair (the first of the grid without
+/// validation vectors), every candidate with its validation accuracy, and the chosen model's
+/// validation scores when calibrating (the temperature's fallback).
+struct Choice {
+    kernel: Kernel,
+    c: f64,
+    candidates: Vec<SvmCandidate>,
+    validation_scores: Option<Vec<f64>>,
+}
+
+impl Choice {
+    /// Fits every kernel's `C` path of `grid` on `train` and keeps the first most accurate on
+    /// `validation`.
+    fn search(
+        train: &LabeledVectors<'_>,
+        validation: &LabeledVectors<'_>,
+        grid: &[(Kernel, Vec<f64>)],
+        n_classes: usize,
+        dims: usize,
+        config: &SvmConfig,
+        calibrate: bool,
+    ) -> Result<Self> {
+        let mut choice = Self {
+            kernel: grid[0].0,
+            c: grid[0].1[0],
+            candidates: Vec::new(),
+            validation_scores: None,
+        };
+        if validation.classes.is_empty() {
+            return Ok(choice);
+        }
+        let mut best_accuracy = f64::NEG_INFINITY;
+        let n_train = train.classes.len();
+        for (candidate_kernel, cs) in grid {
+            // Each kernel's matrices once, for its whole C path.
+            let gram = gram_of(train.vectors, dims, *candidate_kernel);
+            let cross = cross_kernel_of(validation.vectors, train.vectors, dims, *candidate_kernel);
+            let path = fit_path_on_gram(
+                *train,
+                &gram,
+                n_classes,
+                dims,
+                *candidate_kernel,
+                cs,
+                config.tol,
+            );
+            for fitted in path {
+                let accuracy = fitted.validation_accuracy(validation, &cross, n_train);
+                choice.candidates.push(SvmCandidate {
+                    kernel: *candidate_kernel,
+                    c: fitted.model.c,
+                    validation_accuracy: accuracy,
+                });
+                if accuracy > best_accuracy {
+                    best_accuracy = accuracy;
+                    // (only the best's scores are kept: the temperature's fallback)
+                    choice.validation_scores = calibrate
+                        .then(|| fitted.model.scores_of(validation.vectors))
+                        .transpose()?;
+                    (choice.kernel, choice.c) = (*candidate_kernel, fitted.model.c);
+                }
+            }
+        }
+        Ok(choice)
     }
 }
 

@@ -202,6 +202,28 @@ impl From<SvmModel> for SvmFields {
     }
 }
 
+/// What is wrong with `machines[index]` of a model of `n_support` vectors, or `None`.
+fn machine_problem(index: usize, machine: &PairMachine, n_support: usize) -> Option<String> {
+    if machine.support.len() != machine.coefs.len() {
+        return Some(format!(
+            "`machines[{index}]` has {} `support` indices but {} `coefs`",
+            machine.support.len(),
+            machine.coefs.len()
+        ));
+    }
+    if let Some(&s) = machine.support.iter().find(|&&s| s >= n_support) {
+        return Some(format!(
+            "`machines[{index}].support` refers to vector {s}, but `vectors` holds {n_support}"
+        ));
+    }
+    if !machine.rho.is_finite() || machine.coefs.iter().any(|a| !a.is_finite()) {
+        return Some(format!(
+            "`machines[{index}]` has non-finite `coefs` or `rho`"
+        ));
+    }
+    None
+}
+
 impl TryFrom<SvmFields> for SvmModel {
     type Error = CoreError;
 
@@ -242,24 +264,13 @@ impl TryFrom<SvmFields> for SvmModel {
                 pairs.map_or_else(|| "more than fit in memory".into(), |p| p.to_string())
             ));
         }
-        for (index, machine) in fields.machines.iter().enumerate() {
-            if machine.support.len() != machine.coefs.len() {
-                return bad(format!(
-                    "`machines[{index}]` has {} `support` indices but {} `coefs`",
-                    machine.support.len(),
-                    machine.coefs.len()
-                ));
-            }
-            if let Some(&s) = machine.support.iter().find(|&&s| s >= n_support) {
-                return bad(format!(
-                    "`machines[{index}].support` refers to vector {s}, but `vectors` holds {n_support}"
-                ));
-            }
-            if !machine.rho.is_finite() || machine.coefs.iter().any(|a| !a.is_finite()) {
-                return bad(format!(
-                    "`machines[{index}]` has non-finite `coefs` or `rho`"
-                ));
-            }
+        if let Some(reason) = fields
+            .machines
+            .iter()
+            .enumerate()
+            .find_map(|(index, machine)| machine_problem(index, machine, n_support))
+        {
+            return bad(reason);
         }
         if let Kernel::Rbf { gamma } = fields.kernel
             && !(gamma.is_finite() && gamma >= 0.0)
