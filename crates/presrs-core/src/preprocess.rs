@@ -266,24 +266,12 @@ fn fill_holes(
     unreachable: Unreachable,
     scratch: &mut FillScratch,
 ) {
-    let len = grid.len();
     let FillScratch {
         known,
         holes,
         seeded,
     } = scratch;
-    known.clear();
-    holes.clear();
-    let mut any_known = false;
-    for i in 0..len {
-        let is_hole = hole(i);
-        let here = !is_hole && exists(i);
-        any_known |= here;
-        known.push(here);
-        if is_hole {
-            holes.push(i);
-        }
-    }
+    let any_known = find_holes(grid, exists, hole, known, holes);
     if holes.is_empty() {
         return;
     }
@@ -295,40 +283,93 @@ fn fill_holes(
         }
         return;
     }
-    let (rows, cols) = (grid.rows, grid.cols);
-    // Sum and count of the neighbours of `i` for which `use_it` holds.
-    let neighbour_mean = |values: &[f64], i: usize, use_it: &dyn Fn(usize) -> bool| {
-        let (r, c) = (i / cols, i % cols);
-        let (mut sum, mut count) = (0.0, 0usize);
-        let mut add = |j: usize| {
-            if use_it(j) {
-                sum += values[j];
-                count += 1;
+    let remaining = seed_holes(values, grid, holes, known, seeded);
+    // Holes left unseeded are cut off: none of them touches a known or seeded sensel, so relaxing the
+    // seeded ones never reads them, and they keep their values.
+    if remaining > 0 {
+        if unreachable == Unreachable::Zero {
+            for &i in holes.iter().filter(|&&i| !known[i]) {
+                values[i] = 0.0;
             }
-        };
-        if r > 0 {
-            add(i - cols);
         }
-        if r + 1 < rows {
-            add(i + cols);
+        holes.retain(|&i| known[i]);
+    }
+    relax_holes(values, grid, holes, exists);
+}
+
+/// Fills `known` (per sensel: existing and not a hole) and `holes` (the holes' indices, in order);
+/// whether any sensel is known.
+fn find_holes(
+    grid: Grid,
+    exists: &dyn Fn(usize) -> bool,
+    hole: &dyn Fn(usize) -> bool,
+    known: &mut Vec<bool>,
+    holes: &mut Vec<usize>,
+) -> bool {
+    known.clear();
+    holes.clear();
+    let mut any_known = false;
+    for i in 0..grid.len() {
+        let is_hole = hole(i);
+        let here = !is_hole && exists(i);
+        any_known |= here;
+        known.push(here);
+        if is_hole {
+            holes.push(i);
         }
-        if c > 0 {
-            add(i - 1);
+    }
+    any_known
+}
+
+/// Sum and count of the neighbours of sensel `i` (up, down, left, right) for which `use_it` holds.
+fn neighbour_sum(
+    values: &[f64],
+    grid: Grid,
+    i: usize,
+    use_it: &dyn Fn(usize) -> bool,
+) -> (f64, usize) {
+    let (rows, cols) = (grid.rows, grid.cols);
+    let (r, c) = (i / cols, i % cols);
+    let (mut sum, mut count) = (0.0, 0usize);
+    let mut add = |j: usize| {
+        if use_it(j) {
+            sum += values[j];
+            count += 1;
         }
-        if c + 1 < cols {
-            add(i + 1);
-        }
-        (sum, count)
     };
-    // Seed: onion peeling from the known sensels.
+    if r > 0 {
+        add(i - cols);
+    }
+    if r + 1 < rows {
+        add(i + cols);
+    }
+    if c > 0 {
+        add(i - 1);
+    }
+    if c + 1 < cols {
+        add(i + 1);
+    }
+    (sum, count)
+}
+
+/// Seeds the holes by onion peeling from the known sensels: each round, every hole with a known
+/// neighbour becomes the mean of its known neighbours and is known from then on. Returns how many holes
+/// were left unseeded (cut off from every known sensel).
+fn seed_holes(
+    values: &mut [f64],
+    grid: Grid,
+    holes: &[usize],
+    known: &mut [bool],
+    seeded: &mut Vec<usize>,
+) -> usize {
     let mut remaining = holes.len();
     while remaining > 0 {
         seeded.clear();
-        for &i in holes.iter() {
+        for &i in holes {
             if known[i] {
                 continue;
             }
-            let (sum, count) = neighbour_mean(values, i, &|j| known[j]);
+            let (sum, count) = neighbour_sum(values, grid, i, &|j| known[j]);
             if count > 0 {
                 values[i] = sum / count as f64;
                 seeded.push(i);
@@ -343,25 +384,20 @@ fn fill_holes(
         }
         remaining -= seeded.len();
     }
-    // Holes left unseeded are cut off: none of them touches a known or seeded sensel, so relaxing the
-    // seeded ones never reads them, and they keep their values.
-    if remaining > 0 {
-        if unreachable == Unreachable::Zero {
-            for &i in holes.iter().filter(|&&i| !known[i]) {
-                values[i] = 0.0;
-            }
-        }
-        holes.retain(|&i| known[i]);
-    }
-    // Relax: each hole becomes the mean of all its existing neighbours (Gauss-Seidel), until it settles.
+    remaining
+}
+
+/// Relaxes the `holes`: each becomes the mean of all its existing neighbours (Gauss-Seidel), until they
+/// settle (at most [`MAX_SWEEPS`] sweeps).
+fn relax_holes(values: &mut [f64], grid: Grid, holes: &[usize], exists: &dyn Fn(usize) -> bool) {
     let scale = values
         .iter()
         .fold(0.0f64, |m, v| m.max(v.abs()))
         .max(f64::MIN_POSITIVE);
     for _ in 0..MAX_SWEEPS {
         let mut largest_change = 0.0f64;
-        for &i in holes.iter() {
-            let (sum, count) = neighbour_mean(values, i, exists);
+        for &i in holes {
+            let (sum, count) = neighbour_sum(values, grid, i, exists);
             if count == 0 {
                 continue;
             }
