@@ -104,42 +104,81 @@ impl TryFrom<PcaFields> for Pca {
     }
 }
 
+/// Checks the input of [`Pca::fit`]; the number of samples.
+fn check_fit_input(samples: &[f64], n_features: usize, max_components: usize) -> Result<usize> {
+    if n_features == 0 {
+        return Err(CoreError::Param {
+            name: "pca features",
+            reason: "feature vectors are empty".into(),
+        });
+    }
+    if max_components == 0 {
+        return Err(CoreError::Param {
+            name: "dims",
+            reason: "at least one principal component must be kept".into(),
+        });
+    }
+    if samples.len() % n_features != 0 {
+        return Err(CoreError::Shape {
+            what: "pca training matrix",
+            expected: format!("a multiple of {n_features} values"),
+            got: samples.len().to_string(),
+        });
+    }
+    let n_samples = samples.len() / n_features;
+    if n_samples < 2 {
+        return Err(CoreError::NotEnoughData(format!(
+            "PCA needs at least 2 training vectors, got {n_samples}"
+        )));
+    }
+    if samples.iter().any(|value| !value.is_finite()) {
+        return Err(CoreError::Param {
+            name: "pca training matrix",
+            reason: "contains NaN or infinite values".into(),
+        });
+    }
+    Ok(n_samples)
+}
+
+/// The thin SVD of `centred` (`n_samples x n_features`): its singular values and right singular
+/// vectors (one per column).
+fn thin_svd(centred: &Mat<f64>) -> Result<(Diag<f64>, Mat<f64>)> {
+    let (n_samples, n_features) = (centred.nrows(), centred.ncols());
+    let rank = n_samples.min(n_features);
+    let mut singular = Diag::<f64>::zeros(rank);
+    let mut left = Mat::<f64>::zeros(n_samples, rank);
+    let mut right = Mat::<f64>::zeros(n_features, rank);
+    // Sequential: a parallel SVD may round differently with the thread count; this one is small.
+    let par = Par::Seq;
+    let mut workspace = MemBuffer::new(svd_scratch::<f64>(
+        n_samples,
+        n_features,
+        ComputeSvdVectors::Thin,
+        ComputeSvdVectors::Thin,
+        par,
+        Default::default(),
+    ));
+    svd(
+        centred.as_ref(),
+        singular.as_mut(),
+        Some(left.as_mut()),
+        Some(right.as_mut()),
+        par,
+        MemStack::new(&mut workspace),
+        Default::default(),
+    )
+    .map_err(|err| CoreError::Param {
+        name: "pca",
+        reason: format!("the SVD did not converge: {err:?}"),
+    })?;
+    Ok((singular, right))
+}
+
 impl Pca {
     /// Fits on `samples` (`n_samples x n_features`, row-major), keeping
     /// `min(max_components, n_samples - 1, n_features)` components.
     pub fn fit(samples: &[f64], n_features: usize, max_components: usize) -> Result<Self> {
-        if n_features == 0 {
-            return Err(CoreError::Param {
-                name: "pca features",
-                reason: "feature vectors are empty".into(),
-            });
-        }
-        if max_components == 0 {
-            return Err(CoreError::Param {
-                name: "dims",
-                reason: "at least one principal component must be kept".into(),
-            });
-        }
-        if samples.len() % n_features != 0 {
-            return Err(CoreError::Shape {
-                what: "pca training matrix",
-                expected: format!("a multiple of {n_features} values"),
-                got: samples.len().to_string(),
-            });
-        }
-        let n_samples = samples.len() / n_features;
-        if n_samples < 2 {
-            return Err(CoreError::NotEnoughData(format!(
-                "PCA needs at least 2 training vectors, got {n_samples}"
-            )));
-        }
-        if samples.iter().any(|value| !value.is_finite()) {
-            return Err(CoreError::Param {
-                name: "pca training matrix",
-                reason: "contains NaN or infinite values".into(),
-            });
-        }
-
+        let n_samples = check_fit_input(samples, n_features, max_components)?;
         let mut mean = vec![0.0; n_features];
         for row in samples.chunks_exact(n_features) {
             for (acc, value) in mean.iter_mut().zip(row) {
@@ -157,35 +196,7 @@ impl Pca {
             .flat_map(|row| row.iter().zip(&mean).map(|(x, m)| (x - m) * (x - m)))
             .sum::<f64>()
             / (n_samples - 1) as f64;
-
-        let rank = n_samples.min(n_features);
-        let mut singular = Diag::<f64>::zeros(rank);
-        let mut left = Mat::<f64>::zeros(n_samples, rank);
-        let mut right = Mat::<f64>::zeros(n_features, rank);
-        // Sequential: a parallel SVD may round differently with the thread count; this one is small.
-        let par = Par::Seq;
-        let mut workspace = MemBuffer::new(svd_scratch::<f64>(
-            n_samples,
-            n_features,
-            ComputeSvdVectors::Thin,
-            ComputeSvdVectors::Thin,
-            par,
-            Default::default(),
-        ));
-        svd(
-            centred.as_ref(),
-            singular.as_mut(),
-            Some(left.as_mut()),
-            Some(right.as_mut()),
-            par,
-            MemStack::new(&mut workspace),
-            Default::default(),
-        )
-        .map_err(|err| CoreError::Param {
-            name: "pca",
-            reason: format!("the SVD did not converge: {err:?}"),
-        })?;
-
+        let (singular, right) = thin_svd(&centred)?;
         let n_components = max_components.min(n_samples - 1).min(n_features);
         let singular = singular.column_vector();
         let mut basis = Vec::with_capacity(n_components * n_features);
