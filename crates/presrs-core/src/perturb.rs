@@ -131,14 +131,7 @@ impl Perturbation {
         let grid = frame.grid();
         // A view may hold anything at its absent sensels: every perturbation reads them as 0 (the centre
         // of pressure of `rotate`, the maximum of `stuck`, the sensels `shift` moves).
-        let zeroed = frame.present().map(|mask| {
-            let values = frame.values().iter().zip(mask);
-            let values = values
-                .map(|(&v, &here)| if here { v } else { 0.0 })
-                .collect();
-            Frame::with_mask(grid, values, Some(mask.to_vec()))
-                .unwrap_or_else(|_| Frame::zeros(grid))
-        });
+        let zeroed = absent_as_zero(frame);
         let frame = zeroed.as_ref().map_or(frame, Frame::view);
         let present = |i: usize| frame.present().is_none_or(|p| p[i]);
         let mut values = frame.values().to_vec();
@@ -148,19 +141,12 @@ impl Perturbation {
         );
         match *self {
             Self::Dead(fraction) | Self::Stuck(fraction) => {
-                let mut cells: Vec<usize> = (0..values.len()).filter(|&i| present(i)).collect();
-                let count = ((fraction.clamp(0.0, 1.0) * cells.len() as f64).round() as usize)
-                    .min(cells.len());
-                // A partial Fisher-Yates shuffle picks `count` distinct sensels.
-                for k in 0..count {
-                    let j = sensor_rng.random_range(k..cells.len());
-                    cells.swap(k, j);
-                }
+                let cells = random_sensels(fraction, values.len(), &present, &mut sensor_rng);
                 let value = match self {
                     Self::Dead(_) => 0.0,
                     _ => values.iter().copied().fold(0.0, f64::max),
                 };
-                for &i in &cells[..count] {
+                for &i in &cells {
                     values[i] = value;
                 }
             }
@@ -182,19 +168,7 @@ impl Perturbation {
                     }
                 }
             }
-            Self::Shift(dr, dc) => {
-                values.iter_mut().for_each(|v| *v = 0.0);
-                for r in 0..grid.rows {
-                    for c in 0..grid.cols {
-                        let (sr, sc) = (r as i64 - dr, c as i64 - dc);
-                        if (0..grid.rows as i64).contains(&sr)
-                            && (0..grid.cols as i64).contains(&sc)
-                        {
-                            values[r * grid.cols + c] = frame.get(sr as usize, sc as usize);
-                        }
-                    }
-                }
-            }
+            Self::Shift(dr, dc) => shift(frame, dr, dc, &mut values),
             Self::Rotate(degrees) => rotate(frame, degrees, &mut values),
             Self::Load(factor) => values.iter_mut().for_each(|v| *v *= factor),
         }
@@ -210,6 +184,50 @@ impl Perturbation {
         // The grid and mask are the input's: this cannot fail.
         Frame::with_mask(grid, values, mask.map(<[bool]>::to_vec))
             .unwrap_or_else(|_| Frame::zeros(grid))
+    }
+}
+
+/// `frame` with its absent sensels read as 0 (`None` without a mask: it is used as it is).
+fn absent_as_zero(frame: FrameView<'_>) -> Option<Frame> {
+    let grid = frame.grid();
+    frame.present().map(|mask| {
+        let values = frame.values().iter().zip(mask);
+        let values = values
+            .map(|(&v, &here)| if here { v } else { 0.0 })
+            .collect();
+        Frame::with_mask(grid, values, Some(mask.to_vec())).unwrap_or_else(|_| Frame::zeros(grid))
+    })
+}
+
+/// `fraction` of the `len` sensels for which `present` holds, drawn without repeats from `rng`.
+fn random_sensels(
+    fraction: f64,
+    len: usize,
+    present: &dyn Fn(usize) -> bool,
+    rng: &mut ChaCha8Rng,
+) -> Vec<usize> {
+    let mut cells: Vec<usize> = (0..len).filter(|&i| present(i)).collect();
+    let count = ((fraction.clamp(0.0, 1.0) * cells.len() as f64).round() as usize).min(cells.len());
+    // A partial Fisher-Yates shuffle picks `count` distinct sensels.
+    for k in 0..count {
+        let j = rng.random_range(k..cells.len());
+        cells.swap(k, j);
+    }
+    cells.truncate(count);
+    cells
+}
+
+/// Writes `frame` moved by `dr` rows and `dc` columns into `values` (0 where nothing moved in).
+fn shift(frame: FrameView<'_>, dr: i64, dc: i64, values: &mut [f64]) {
+    let grid = frame.grid();
+    values.iter_mut().for_each(|v| *v = 0.0);
+    for r in 0..grid.rows {
+        for c in 0..grid.cols {
+            let (sr, sc) = (r as i64 - dr, c as i64 - dc);
+            if (0..grid.rows as i64).contains(&sr) && (0..grid.cols as i64).contains(&sc) {
+                values[r * grid.cols + c] = frame.get(sr as usize, sc as usize);
+            }
+        }
     }
 }
 
