@@ -402,6 +402,39 @@ mod tests {
     }
 
     #[test]
+    fn random_sensels_are_distinct_present_and_the_fraction() {
+        let present = |i: usize| i % 3 != 0;
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let cells = random_sensels(0.25, 120, &present, &mut rng);
+        assert_eq!(cells.len(), 20, "a quarter of the 80 present sensels");
+        let mut distinct = cells.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), cells.len());
+        assert!(cells.iter().all(|&i| present(i)));
+        assert_eq!(random_sensels(2.0, 120, &present, &mut rng).len(), 80);
+        assert!(random_sensels(0.0, 120, &present, &mut rng).is_empty());
+    }
+
+    #[test]
+    fn shift_moves_the_image_and_fills_with_zero() {
+        let grid = Grid::new(3, 4);
+        let frame = ramp(grid);
+        let mut values = vec![9.0; grid.len()];
+        shift(frame.view(), 1, -1, &mut values);
+        for r in 0..3 {
+            for c in 0..4 {
+                let expected = if r >= 1 && c + 1 < 4 {
+                    frame.view().get(r - 1, c + 1)
+                } else {
+                    0.0
+                };
+                assert_eq!(values[r * 4 + c], expected, "({r}, {c})");
+            }
+        }
+    }
+
+    #[test]
     fn parses_every_kind_and_rejects_nonsense() {
         let p = |t: &str| t.parse::<Perturbation>();
         assert_eq!(p("dead=0.05").unwrap(), Perturbation::Dead(0.05));

@@ -428,6 +428,15 @@ mod tests {
     use super::*;
 
     #[test]
+    fn neighbour_sum_adds_the_four_neighbours_inside_the_grid() {
+        let grid = Grid::new(3, 3);
+        let values: Vec<f64> = (0..9).map(|i| i as f64).collect();
+        assert_eq!(neighbour_sum(&values, grid, 4, &|_| true), (16.0, 4));
+        assert_eq!(neighbour_sum(&values, grid, 0, &|_| true), (4.0, 2));
+        assert_eq!(neighbour_sum(&values, grid, 8, &|j| j != 7), (5.0, 1));
+    }
+
+    #[test]
     fn names() {
         assert_eq!(Preprocess::default().name(), "none");
         assert!(Preprocess::default().is_none());

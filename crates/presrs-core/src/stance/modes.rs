@@ -892,6 +892,44 @@ mod tests {
     use super::*;
 
     #[test]
+    fn stances_of_spans_keep_long_spans_with_their_first_peak() {
+        let load = [0.0, 3.0, 5.0, 5.0, 1.0, 0.0, 2.0, 0.0, 4.0, 6.0];
+        let stances = stances_of_spans(&load, vec![(0, 4), (5, 7), (7, 10)], 3);
+        // (5, 7) is too short; the first span touches the start, the last the end.
+        let summary: Vec<_> = stances
+            .iter()
+            .map(|s| (s.start, s.len, s.peak_frame, s.peak_load, s.partial))
+            .collect();
+        assert_eq!(summary, vec![(0, 4, 2, 5.0, true), (7, 3, 9, 6.0, true)]);
+        let inside = stances_of_spans(&load, vec![(1, 4)], 3);
+        assert!(!inside[0].partial);
+    }
+
+    #[test]
+    fn an_edge_rest_above_its_neighbour_by_the_on_level_is_dropped() {
+        let rest = |first: usize, level| {
+            Some(Rest {
+                first,
+                last: first + 2,
+                level,
+                slope: 0.0,
+                centre: first as f64,
+            })
+        };
+        let mut rests = vec![rest(0, 50.0), rest(10, 0.0), rest(20, 5.0)];
+        drop_edge_rests_of_contacts(&mut rests, 10.0);
+        assert_eq!(rests[0], None, "rising into a contact at the start");
+        assert!(
+            rests[1].is_some() && rests[2].is_some(),
+            "within the on level"
+        );
+        // Two rests (one contact): nothing to compare an edge with.
+        let mut two = vec![rest(0, 50.0), rest(10, 0.0)];
+        drop_edge_rests_of_contacts(&mut two, 10.0);
+        assert!(two[0].is_some());
+    }
+
+    #[test]
     fn zigzag_finds_prominent_peaks_only() {
         let values = [0.0, 5.0, 10.0, 4.0, 6.0, 3.0, 12.0, 11.0, 2.0, 2.5, 9.0];
         let peaks = zigzag_peaks(&values, 5.0);

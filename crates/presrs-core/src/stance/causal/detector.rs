@@ -46,7 +46,7 @@ pub struct Levels {
     pub off_level: f64,
 }
 
-/// The causal stance detector (see the module docs). One [`push`](Self::push) per frame, O(1) amortised,
+/// The causal stance detector (see the [`causal`](crate::stance::causal) module docs). One [`push`](Self::push) per frame, O(1) amortised,
 /// no allocation after construction (the warm-up calibration, if any, allocates once).
 #[derive(Clone, Debug)]
 pub struct CausalSegmenter {
