@@ -113,6 +113,41 @@ pub fn read_manifest(path: &Path) -> Result<Manifest, IoError> {
 pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manifest, IoError> {
     let file = source.display().to_string();
     let sha256 = hex(&Sha256::digest(bytes));
+    let text = manifest_text(bytes, &file)?;
+    check_quotes(text).map_err(|(line, message)| IoError::parse(&file, line, message))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        // Rows of the wrong length are errors below, with a message naming the line.
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let csv_error = |err: csv::Error| csv_error_at_line(&file, text, err);
+    let header = ManifestHeader::parse(reader.headers().map_err(csv_error)?, &file)?;
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(csv_error)?;
+        let line = record.position().map_or(0, |pos| line_at(text, pos.byte()));
+        if record.iter().all(str::is_empty) {
+            continue;
+        }
+        rows.push(header.row(&record, &file, line, base)?);
+    }
+    if rows.is_empty() {
+        return Err(IoError::format(
+            &file,
+            "the manifest lists no samples (only a header)",
+        ));
+    }
+    Ok(Manifest {
+        source: source.to_path_buf(),
+        columns: header.columns,
+        rows,
+        sha256,
+    })
+}
+
+/// The manifest's text: UTF-8 (UTF-16 and other bytes are errors naming the line), without a BOM.
+fn manifest_text<'a>(bytes: &'a [u8], file: &str) -> Result<&'a str, IoError> {
     let text = std::str::from_utf8(bytes).map_err(|err| {
         let line = 1 + bytes[..err.valid_up_to()]
             .iter()
@@ -121,146 +156,131 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
         let utf16 = bytes.starts_with(b"\xFF\xFE") || bytes.starts_with(b"\xFE\xFF");
         if utf16 {
             IoError::parse(
-                &file,
+                file,
                 1,
                 "UTF-16 text; a manifest is a UTF-8 CSV file (save it as \"CSV UTF-8\")",
             )
         } else {
-            IoError::parse(&file, line, "not UTF-8 text; a manifest is a CSV file")
+            IoError::parse(file, line, "not UTF-8 text; a manifest is a CSV file")
         }
     })?;
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    check_quotes(text).map_err(|(line, message)| IoError::parse(&file, line, message))?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        // Rows of the wrong length are errors below, with a message naming the line.
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    // The csv crate's own line count skips blank lines; count newlines up to the byte offset instead.
-    // A record's position can point at the line end before it (CRLF), so skip line ends first.
-    let line_at = |byte: u64| {
-        let bytes = text.as_bytes();
-        let mut at = (byte as usize).min(bytes.len());
-        while at < bytes.len() && matches!(bytes[at], b'\r' | b'\n') {
-            at += 1;
-        }
-        1 + bytes[..at].iter().filter(|&&b| b == b'\n').count()
-    };
-    let csv_error = |err: csv::Error| {
-        let line = err.position().map_or(1, |pos| line_at(pos.byte()));
-        let message = match err.kind() {
-            csv::ErrorKind::UnequalLengths {
-                expected_len, len, ..
-            } => format!("{len} fields, expected {expected_len} (as many as the header)"),
-            _ => err.to_string(),
-        };
-        IoError::parse(&file, line, message)
-    };
-    // The known names in any case (`Path` is `path`); other names as written.
-    let columns: Vec<String> = reader
-        .headers()
-        .map_err(csv_error)?
-        .iter()
-        .map(|name| {
-            let lower = name.to_ascii_lowercase();
-            if KNOWN_COLUMNS.contains(&lower.as_str()) {
-                lower
-            } else {
-                name.to_owned()
-            }
-        })
-        .collect();
-    if columns.iter().all(String::is_empty) {
-        return Err(IoError::parse(
-            &file,
-            1,
-            "empty manifest: expected a header row starting with `path`",
-        ));
+    Ok(text.strip_prefix('\u{feff}').unwrap_or(text))
+}
+
+/// The 1-based line of byte offset `byte` in `text`. The csv crate's own line count skips blank lines,
+/// so newlines are counted up to the offset instead; a record's position can point at the line end
+/// before it (CRLF), so line ends are skipped first.
+fn line_at(text: &str, byte: u64) -> usize {
+    let bytes = text.as_bytes();
+    let mut at = (byte as usize).min(bytes.len());
+    while at < bytes.len() && matches!(bytes[at], b'\r' | b'\n') {
+        at += 1;
     }
-    let index_of = |name: &str| columns.iter().position(|column| column == name);
-    let path_index = index_of("path").ok_or_else(|| {
-        IoError::parse(
-            &file,
-            1,
-            format!(
-                "the header has no `path` column (found: {})",
-                columns.join(",")
-            ),
-        )
-    })?;
-    for (i, name) in columns.iter().enumerate() {
-        if columns[..i].contains(name) {
+    1 + bytes[..at].iter().filter(|&&b| b == b'\n').count()
+}
+
+/// A csv reader's error as a parse error naming the manifest line.
+fn csv_error_at_line(file: &str, text: &str, err: csv::Error) -> IoError {
+    let line = err.position().map_or(1, |pos| line_at(text, pos.byte()));
+    let message = match err.kind() {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => format!("{len} fields, expected {expected_len} (as many as the header)"),
+        _ => err.to_string(),
+    };
+    IoError::parse(file, line, message)
+}
+
+/// The header row: the column names (known names lower-cased) and where the known columns are.
+#[derive(Debug)]
+struct ManifestHeader {
+    columns: Vec<String>,
+    path: usize,
+    label: Option<usize>,
+    condition: Option<usize>,
+    group: Option<usize>,
+    frame: Option<usize>,
+    load: Option<usize>,
+}
+
+impl ManifestHeader {
+    /// Checks the header: not empty, a `path` column, no name twice. Errors name line 1.
+    fn parse(record: &csv::StringRecord, file: &str) -> Result<Self, IoError> {
+        // The known names in any case (`Path` is `path`); other names as written.
+        let columns: Vec<String> = record
+            .iter()
+            .map(|name| {
+                let lower = name.to_ascii_lowercase();
+                if KNOWN_COLUMNS.contains(&lower.as_str()) {
+                    lower
+                } else {
+                    name.to_owned()
+                }
+            })
+            .collect();
+        if columns.iter().all(String::is_empty) {
             return Err(IoError::parse(
-                &file,
+                file,
                 1,
-                format!("column `{name}` appears twice in the header"),
+                "empty manifest: expected a header row starting with `path`",
             ));
         }
-    }
-    let [label_i, condition_i, group_i, frame_i, load_i] =
-        ["label", "condition", "group", "frame", "load"].map(index_of);
-    let mut rows = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(csv_error)?;
-        let line = record.position().map_or(0, |pos| line_at(pos.byte()));
-        if record.iter().all(str::is_empty) {
-            continue;
-        }
-        if record.len() != columns.len() {
-            return Err(IoError::parse(
-                &file,
-                line,
+        let index_of = |name: &str| columns.iter().position(|column| column == name);
+        let path = index_of("path").ok_or_else(|| {
+            IoError::parse(
+                file,
+                1,
                 format!(
-                    "{} fields, expected {} (as many as the header: {}){}",
-                    record.len(),
-                    columns.len(),
-                    columns.join(","),
-                    if record.len() < columns.len() {
-                        "; write an empty field as nothing between commas (`a.png,wood,,`)"
-                    } else {
-                        ""
-                    }
+                    "the header has no `path` column (found: {})",
+                    columns.join(",")
                 ),
-            ));
+            )
+        })?;
+        for (i, name) in columns.iter().enumerate() {
+            if columns[..i].contains(name) {
+                return Err(IoError::parse(
+                    file,
+                    1,
+                    format!("column `{name}` appears twice in the header"),
+                ));
+            }
         }
+        let [label, condition, group, frame, load] =
+            ["label", "condition", "group", "frame", "load"].map(index_of);
+        Ok(Self {
+            columns,
+            path,
+            label,
+            condition,
+            group,
+            frame,
+            load,
+        })
+    }
+
+    /// One sample row (not blank) at 1-based `line`; paths resolved against `base`.
+    fn row(
+        &self,
+        record: &csv::StringRecord,
+        file: &str,
+        line: usize,
+        base: &Path,
+    ) -> Result<ManifestRow, IoError> {
+        self.check_field_count(record, file, line)?;
         let cell = |index: Option<usize>| -> Option<String> {
             index
                 .and_then(|i| record.get(i))
                 .filter(|value| !value.is_empty())
                 .map(str::to_owned)
         };
-        let path_text = cell(Some(path_index))
-            .ok_or_else(|| IoError::parse(&file, line, "field `path` is empty"))?;
-        let frame_text = cell(frame_i);
-        let frame = match &frame_text {
-            Some(text) => Some(text.parse::<usize>().map_err(|_| {
-                IoError::parse(
-                    &file,
-                    line,
-                    format!("field `frame` is {text:?}, expected a 0-based frame index (a whole number) or empty"),
-                )
-            })?),
-            None => None,
-        };
-        let load_text = cell(load_i);
-        let load = match &load_text {
-            Some(text) => {
-                let value = text
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite() && *v > 0.0);
-                Some(value.ok_or_else(|| {
-                    IoError::parse(
-                        &file,
-                        line,
-                        format!("field `load` is {text:?}, expected a positive number or empty"),
-                    )
-                })?)
-            }
-            None => None,
-        };
-        let extra = columns
+        let path_text = cell(Some(self.path))
+            .ok_or_else(|| IoError::parse(file, line, "field `path` is empty"))?;
+        let frame_text = cell(self.frame);
+        let frame = parse_frame_field(frame_text.as_deref(), file, line)?;
+        let load_text = cell(self.load);
+        let load = parse_load_field(load_text.as_deref(), file, line)?;
+        let extra = self
+            .columns
             .iter()
             .enumerate()
             .filter(|(_, name)| !KNOWN_COLUMNS.contains(&name.as_str()))
@@ -274,32 +294,86 @@ pub fn parse_manifest(bytes: &[u8], source: &Path, base: &Path) -> Result<Manife
                 base.join(given)
             }
         };
-        rows.push(ManifestRow {
+        Ok(ManifestRow {
             line,
             path_text,
             path,
-            label: cell(label_i),
-            condition: cell(condition_i),
-            group: cell(group_i),
+            label: cell(self.label),
+            condition: cell(self.condition),
+            group: cell(self.group),
             frame,
             frame_text,
             load,
             load_text,
             extra,
-        });
+        })
     }
-    if rows.is_empty() {
-        return Err(IoError::format(
-            &file,
-            "the manifest lists no samples (only a header)",
-        ));
+
+    /// An error naming the line unless the row has as many fields as the header.
+    fn check_field_count(
+        &self,
+        record: &csv::StringRecord,
+        file: &str,
+        line: usize,
+    ) -> Result<(), IoError> {
+        let columns = &self.columns;
+        if record.len() == columns.len() {
+            return Ok(());
+        }
+        Err(IoError::parse(
+            file,
+            line,
+            format!(
+                "{} fields, expected {} (as many as the header: {}){}",
+                record.len(),
+                columns.len(),
+                columns.join(","),
+                if record.len() < columns.len() {
+                    "; write an empty field as nothing between commas (`a.png,wood,,`)"
+                } else {
+                    ""
+                }
+            ),
+        ))
     }
-    Ok(Manifest {
-        source: source.to_path_buf(),
-        columns,
-        rows,
-        sha256,
-    })
+}
+
+/// The `frame` field: a 0-based frame index, or nothing when empty.
+fn parse_frame_field(
+    text: Option<&str>,
+    file: &str,
+    line: usize,
+) -> Result<Option<usize>, IoError> {
+    let Some(text) = text else {
+        return Ok(None);
+    };
+    let frame = text.parse::<usize>().map_err(|_| {
+        IoError::parse(
+            file,
+            line,
+            format!("field `frame` is {text:?}, expected a 0-based frame index (a whole number) or empty"),
+        )
+    })?;
+    Ok(Some(frame))
+}
+
+/// The `load` field: a positive finite number, or nothing when empty.
+fn parse_load_field(text: Option<&str>, file: &str, line: usize) -> Result<Option<f64>, IoError> {
+    let Some(text) = text else {
+        return Ok(None);
+    };
+    let value = text
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v > 0.0);
+    let load = value.ok_or_else(|| {
+        IoError::parse(
+            file,
+            line,
+            format!("field `load` is {text:?}, expected a positive number or empty"),
+        )
+    })?;
+    Ok(Some(load))
 }
 
 /// Checks that every `"` opens or closes a quoted field (CSV as RFC 4180 writes it: a quoted field
@@ -402,6 +476,61 @@ mod tests {
 
     fn parse(text: &str) -> Result<Manifest, IoError> {
         parse_manifest(text.as_bytes(), Path::new("m.csv"), Path::new("/data"))
+    }
+
+    #[test]
+    fn the_header_finds_the_known_columns_in_any_case() {
+        let record = csv::StringRecord::from(vec!["Label", "PATH", "subject", "Frame"]);
+        let header = ManifestHeader::parse(&record, "m.csv").unwrap();
+        assert_eq!(header.columns, ["label", "path", "subject", "frame"]);
+        assert_eq!(header.path, 1);
+        assert_eq!((header.label, header.frame), (Some(0), Some(3)));
+        assert_eq!(
+            (header.condition, header.group, header.load),
+            (None, None, None)
+        );
+        let twice = csv::StringRecord::from(vec!["path", "Path"]);
+        let err = ManifestHeader::parse(&twice, "m.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("line 1") && err.contains("`path` appears twice"),
+            "{err}"
+        );
+        let empty = csv::StringRecord::from(vec![""]);
+        let err = ManifestHeader::parse(&empty, "m.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("empty manifest"), "{err}");
+    }
+
+    #[test]
+    fn lines_are_counted_from_byte_offsets_past_line_ends() {
+        let text = "path\r\n\r\na.png\nb.png\n";
+        assert_eq!(line_at(text, 0), 1);
+        // The offset of the CRLF ending line 1 counts as the line after the blank line 2.
+        assert_eq!(line_at(text, 4), 3);
+        assert_eq!(line_at(text, 8), 3);
+        assert_eq!(line_at(text, 14), 4);
+        assert_eq!(line_at(text, 1000), 5);
+    }
+
+    #[test]
+    fn frame_and_load_fields_parse_or_name_the_line() {
+        assert_eq!(parse_frame_field(None, "m.csv", 2).unwrap(), None);
+        assert_eq!(parse_frame_field(Some("7"), "m.csv", 2).unwrap(), Some(7));
+        let err = parse_frame_field(Some("-1"), "m.csv", 9)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("line 9") && err.contains("`frame`"), "{err}");
+        assert_eq!(
+            parse_load_field(Some("2.5"), "m.csv", 2).unwrap(),
+            Some(2.5)
+        );
+        assert_eq!(parse_load_field(None, "m.csv", 2).unwrap(), None);
+        for bad in ["0", "-3", "inf", "NaN", "x"] {
+            assert!(parse_load_field(Some(bad), "m.csv", 2).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -58,6 +58,43 @@ pub fn parse_npy_with(
     axes: Option<ArrayAxes>,
 ) -> Result<(Recording, Vec<String>), IoError> {
     let file = source_name;
+    let npy = open_npy(bytes, file)?;
+    let shape: Vec<u64> = npy.shape().to_vec();
+    let warnings: Vec<String> = match axes {
+        Some(_) => Vec::new(),
+        None => time_last_warning(file, &shape).into_iter().collect(),
+    };
+    let axes = axes.unwrap_or_default();
+    let (frames, rows, cols) = array_dims(&shape, axes, file)?;
+    let order = npy.order();
+    let strides: Vec<u64> = npy.strides().to_vec();
+    let stored = read_values(bytes, npy, &shape, (frames, rows, cols), file)?;
+    // Gather into frames x rows x cols, row-major, whatever the storage order and the axes' order.
+    let in_order = shape.len() == 2 || axes == ArrayAxes::default();
+    let data: Vec<f64> = if order == npyz::Order::C && in_order {
+        stored
+    } else {
+        let strides = element_strides(order, &strides, &shape, axes);
+        gather_row_major(&stored, strides, (frames, rows, cols))
+    };
+    check_finite(&data, shape.len(), (rows, cols), file)?;
+    let recording = Recording::new(
+        Grid::new(rows, cols),
+        None,
+        data,
+        None,
+        SensorMeta::default(),
+    )
+    .map_err(|source| IoError::Model {
+        file: file.to_owned(),
+        source,
+    })?;
+    Ok((recording, warnings))
+}
+
+/// The file's header, checked before npyz reads it: the magic bytes, a header that is all there, and a
+/// claimed size that fits.
+fn open_npy<'a>(bytes: &'a [u8], file: &str) -> Result<NpyFile<&'a [u8]>, IoError> {
     if !bytes.starts_with(NPY_MAGIC) {
         return Err(IoError::format(
             file,
@@ -75,15 +112,16 @@ pub fn parse_npy_with(
     })?;
     check_header_sizes(&header)
         .map_err(|why| IoError::format(file, format!("invalid .npy header: {why}")))?;
-    let npy = NpyFile::new(bytes)
-        .map_err(|err| IoError::format(file, format!("invalid .npy header: {err}")))?;
-    let shape: Vec<u64> = npy.shape().to_vec();
-    let warnings: Vec<String> = match axes {
-        Some(_) => Vec::new(),
-        None => time_last_warning(file, &shape).into_iter().collect(),
-    };
-    let axes = axes.unwrap_or_default();
-    let (frames, rows, cols) = match *shape.as_slice() {
+    NpyFile::new(bytes).map_err(|err| IoError::format(file, format!("invalid .npy header: {err}")))
+}
+
+/// `(frames, rows, cols)` of a 2-D or 3-D shape, its axes in the order `axes` says; none of them 0.
+fn array_dims(
+    shape: &[u64],
+    axes: ArrayAxes,
+    file: &str,
+) -> Result<(usize, usize, usize), IoError> {
+    let (frames, rows, cols) = match *shape {
         [rows, cols] => (1, rows, cols),
         [..] if shape.len() == 3 => (
             shape[axes.position(Axis::Frames)],
@@ -119,6 +157,17 @@ pub fn parse_npy_with(
             ),
         ));
     }
+    Ok((frames, rows, cols))
+}
+
+/// Every stored value as `f64`, in storage order, once the dtype is known and the data all there.
+fn read_values(
+    bytes: &[u8],
+    npy: NpyFile<&[u8]>,
+    shape: &[u64],
+    (frames, rows, cols): (usize, usize, usize),
+    file: &str,
+) -> Result<Vec<f64>, IoError> {
     let dtype = npy.dtype();
     let kind = scalar_kind(&dtype).ok_or_else(|| {
         IoError::unsupported(
@@ -131,8 +180,6 @@ pub fn parse_npy_with(
     })?;
     let total = shape_len(frames, rows, cols)
         .ok_or_else(|| IoError::format(file, format!("shape {shape:?} is too large")))?;
-    let order = npy.order();
-    let strides: Vec<u64> = npy.strides().to_vec();
     // Check the data is all there before allocating for it (a header can claim any shape).
     let item_size = kind.size();
     let needed = total.checked_mul(item_size);
@@ -164,66 +211,77 @@ pub fn parse_npy_with(
             ),
         ));
     }
-    // Gather into frames x rows x cols, row-major, whatever the storage order and the axes' order.
-    let in_order = shape.len() == 2 || axes == ArrayAxes::default();
-    let data: Vec<f64> = if order == npyz::Order::C && in_order {
-        stored
+    Ok(stored)
+}
+
+/// The strides, in elements, of the frame, row and column axes in the stored values (0 for the frame
+/// of a 2-D array).
+fn element_strides(
+    order: npyz::Order,
+    strides: &[u64],
+    shape: &[u64],
+    axes: ArrayAxes,
+) -> (usize, usize, usize) {
+    let strides: Vec<usize> = if order == npyz::Order::C {
+        let dims: Vec<usize> = shape.iter().map(|&n| n as usize).collect();
+        (0..dims.len())
+            .map(|i| dims[i + 1..].iter().product())
+            .collect()
     } else {
-        let strides: Vec<usize> = if order == npyz::Order::C {
-            let dims: Vec<usize> = shape.iter().map(|&n| n as usize).collect();
-            (0..dims.len())
-                .map(|i| dims[i + 1..].iter().product())
-                .collect()
-        } else {
-            strides.iter().map(|&s| s as usize).collect()
-        };
-        let (sf, sr, sc) = match *strides.as_slice() {
-            [sr, sc] => (0, sr, sc),
-            [..] if strides.len() == 3 => (
-                strides[axes.position(Axis::Frames)],
-                strides[axes.position(Axis::Rows)],
-                strides[axes.position(Axis::Cols)],
-            ),
-            _ => (0, 0, 0),
-        };
-        let mut out = Vec::with_capacity(total);
-        for f in 0..frames {
-            for r in 0..rows {
-                for c in 0..cols {
-                    out.push(stored[f * sf + r * sr + c * sc]);
-                }
+        strides.iter().map(|&s| s as usize).collect()
+    };
+    match *strides.as_slice() {
+        [sr, sc] => (0, sr, sc),
+        [..] if strides.len() == 3 => (
+            strides[axes.position(Axis::Frames)],
+            strides[axes.position(Axis::Rows)],
+            strides[axes.position(Axis::Cols)],
+        ),
+        _ => (0, 0, 0),
+    }
+}
+
+/// The stored values gathered into frames x rows x cols, row-major, through the axes' strides.
+fn gather_row_major(
+    stored: &[f64],
+    (sf, sr, sc): (usize, usize, usize),
+    (frames, rows, cols): (usize, usize, usize),
+) -> Vec<f64> {
+    let mut out = Vec::with_capacity(frames * rows * cols);
+    for f in 0..frames {
+        for r in 0..rows {
+            for c in 0..cols {
+                out.push(stored[f * sf + r * sr + c * sc]);
             }
         }
-        out
-    };
-    if let Some(at) = data.iter().position(|v| !v.is_finite()) {
-        let per_frame = rows * cols;
-        let (f, cell) = (at / per_frame, at % per_frame);
-        let position = if shape.len() == 3 {
-            format!("[{f}, {}, {}]", cell / cols, cell % cols)
-        } else {
-            format!("[{}, {}]", cell / cols, cell % cols)
-        };
-        return Err(IoError::format(
-            file,
-            format!(
-                "element {position} is {}; expected finite numbers",
-                data[at]
-            ),
-        ));
     }
-    let recording = Recording::new(
-        Grid::new(rows, cols),
-        None,
-        data,
-        None,
-        SensorMeta::default(),
-    )
-    .map_err(|source| IoError::Model {
-        file: file.to_owned(),
-        source,
-    })?;
-    Ok((recording, warnings))
+    out
+}
+
+/// An error naming the first element that is NaN or infinite (its index in the array's own rank).
+fn check_finite(
+    data: &[f64],
+    rank: usize,
+    (rows, cols): (usize, usize),
+    file: &str,
+) -> Result<(), IoError> {
+    let Some(at) = data.iter().position(|v| !v.is_finite()) else {
+        return Ok(());
+    };
+    let per_frame = rows * cols;
+    let (f, cell) = (at / per_frame, at % per_frame);
+    let position = if rank == 3 {
+        format!("[{f}, {}, {}]", cell / cols, cell % cols)
+    } else {
+        format!("[{}, {}]", cell / cols, cell % cols)
+    };
+    Err(IoError::format(
+        file,
+        format!(
+            "element {position} is {}; expected finite numbers",
+            data[at]
+        ),
+    ))
 }
 
 /// The header dictionary text of a `.npy` file (versions 1 to 3), when it is all there.
@@ -716,6 +774,79 @@ mod tests {
         // An ordinary movie (frames first) is not warned about.
         let movie = npy_f64(&[40, 6, 3], &data);
         assert!(parse_npy_with(&movie, "m.npy", None).unwrap().1.is_empty());
+    }
+
+    #[test]
+    fn array_dims_follow_the_axes_and_refuse_empty_or_other_ranks() {
+        let time_last = ArrayAxes([Axis::Rows, Axis::Cols, Axis::Frames]);
+        assert_eq!(array_dims(&[4, 5], time_last, "a.npy").unwrap(), (1, 4, 5));
+        assert_eq!(
+            array_dims(&[2, 3, 7], ArrayAxes::default(), "a.npy").unwrap(),
+            (2, 3, 7)
+        );
+        assert_eq!(
+            array_dims(&[2, 3, 7], time_last, "a.npy").unwrap(),
+            (7, 2, 3)
+        );
+        let err = array_dims(&[2, 0, 7], time_last, "a.npy")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("a.npy") && err.contains("empty"), "{err}");
+        let err = array_dims(&[2, 3, 4, 5], time_last, "a.npy")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("4-D"), "{err}");
+    }
+
+    #[test]
+    fn gathering_through_strides_matches_indexing_every_axes_order() {
+        use Axis::{Cols, Frames, Rows};
+        let shape = [2u64, 3, 4];
+        let stored: Vec<f64> = (0..24).map(f64::from).collect();
+        let orders = [
+            [Frames, Rows, Cols],
+            [Frames, Cols, Rows],
+            [Rows, Frames, Cols],
+            [Rows, Cols, Frames],
+            [Cols, Frames, Rows],
+            [Cols, Rows, Frames],
+        ];
+        for order in orders {
+            let axes = ArrayAxes(order);
+            let dims = array_dims(&shape, axes, "a.npy").unwrap();
+            let strides = element_strides(npyz::Order::C, &[], &shape, axes);
+            let gathered = gather_row_major(&stored, strides, dims);
+            // The oracle: place (frame, row, col) on the stored axes and index C-order.
+            let mut expected = Vec::new();
+            for f in 0..dims.0 {
+                for r in 0..dims.1 {
+                    for c in 0..dims.2 {
+                        let mut at = [0usize; 3];
+                        at[axes.position(Frames)] = f;
+                        at[axes.position(Rows)] = r;
+                        at[axes.position(Cols)] = c;
+                        expected.push(stored[(at[0] * 3 + at[1]) * 4 + at[2]]);
+                    }
+                }
+            }
+            assert_eq!(gathered, expected, "{order:?}");
+        }
+    }
+
+    #[test]
+    fn the_first_non_finite_element_is_named_in_the_arrays_rank() {
+        let mut data = vec![0.0; 12];
+        assert!(check_finite(&data, 3, (2, 3), "a.npy").is_ok());
+        data[10] = f64::NAN;
+        data[11] = f64::INFINITY;
+        let err = check_finite(&data, 3, (2, 3), "a.npy")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("element [1, 1, 1] is NaN"), "{err}");
+        let err = check_finite(&data[6..], 2, (2, 3), "a.npy")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("element [1, 1] is NaN"), "{err}");
     }
 
     #[test]

@@ -63,6 +63,26 @@ pub struct StreamFrame {
     pub has_absent: bool,
 }
 
+/// The frame [`TekscanStream::next_frame`] is reading.
+struct FrameInProgress {
+    /// Rows read so far.
+    row: usize,
+    /// Whether some sensel read so far is absent.
+    has_absent: bool,
+    /// The frame, once its `Frame` line or first row is read: (number, line).
+    current: Option<(i64, usize)>,
+}
+
+/// What [`TekscanStream::next_frame`] does after one line.
+enum LineOutcome {
+    /// Read the next line.
+    NextLine,
+    /// The line is a data row (or cannot be read as any other line).
+    DataRow,
+    /// Return this: a complete frame, or `None` at the end of the stream.
+    Finished(Option<StreamFrame>),
+}
+
 /// What [`TekscanStream::next_line`] read.
 enum Line {
     /// The end of the input.
@@ -284,137 +304,212 @@ impl<R: BufRead> TekscanStream<R> {
         if self.ended {
             return Ok(None);
         }
-        let Grid { rows, cols } = header.grid;
-        let limit = cols.saturating_mul(64).max(1024);
-        let name = self.source_name.clone();
+        let limit = header.grid.cols.saturating_mul(64).max(1024);
         values.clear();
         present.clear();
-        let mut has_absent = false;
-        let mut row = 0;
-        // The frame being read, once its `Frame` line or first row is read: (number, line).
-        let mut current = self.pending_frame.take();
+        let mut frame = FrameInProgress {
+            row: 0,
+            has_absent: false,
+            current: self.pending_frame.take(),
+        };
         loop {
             let unreadable = match self.next_line(limit)? {
-                Line::End => {
-                    self.ended = true;
-                    let Some((number, _)) = current else {
-                        return Ok(None);
-                    };
-                    return Err(IoError::parse(
-                        &name,
-                        self.line_no,
-                        format!("the stream ended inside frame {number} ({row} of {rows} rows)"),
-                    ));
-                }
+                Line::End => return self.end_of_input(&frame, header.grid.rows),
                 Line::Text => None,
                 Line::Bad(message) => Some(message),
             };
             if unreadable.is_none() {
+                match self.structure_line(header.grid, &mut frame)? {
+                    LineOutcome::NextLine => continue,
+                    LineOutcome::Finished(done) => return Ok(done),
+                    LineOutcome::DataRow => {}
+                }
+            }
+            match self.data_row(unreadable, header.grid, &mut frame, values, present)? {
+                LineOutcome::Finished(done) => return Ok(done),
+                LineOutcome::NextLine | LineOutcome::DataRow => {}
+            }
+        }
+    }
+
+    /// The input ended: the end of the stream between frames, an error inside one.
+    fn end_of_input(
+        &mut self,
+        frame: &FrameInProgress,
+        rows: usize,
+    ) -> Result<Option<StreamFrame>, IoError> {
+        self.ended = true;
+        let Some((number, _)) = frame.current else {
+            return Ok(None);
+        };
+        Err(IoError::parse(
+            &self.source_name,
+            self.line_no,
+            format!(
+                "the stream ended inside frame {number} ({} of {rows} rows)",
+                frame.row
+            ),
+        ))
+    }
+
+    /// A readable line in `self.line` that may not be a data row: a blank line, the end of a
+    /// recording (`@@` or another header), or a `Frame` line. Anything else is a data row.
+    fn structure_line(
+        &mut self,
+        grid: Grid,
+        frame: &mut FrameInProgress,
+    ) -> Result<LineOutcome, IoError> {
+        let rows = grid.rows;
+        let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
+        if is_blank(line) {
+            return Ok(LineOutcome::NextLine);
+        }
+        let header_next = line.to_ascii_uppercase().starts_with("DATA_TYPE");
+        if frame.current.is_none() && (line == "@@" || header_next) {
+            // The end of a recording; another may follow.
+            if self.next_recording(grid, header_next)? {
+                return Ok(LineOutcome::NextLine);
+            }
+            self.ended = true;
+            return Ok(LineOutcome::Finished(None));
+        }
+        if line == "@@" {
+            self.ended = true;
+            let Some((number, _)) = frame.current else {
+                return Ok(LineOutcome::Finished(None));
+            };
+            return Err(IoError::parse(
+                &self.source_name,
+                self.line_no,
+                format!("`@@` inside frame {number} ({} of {rows} rows)", frame.row),
+            ));
+        }
+        // Only the number is kept: the rest of the line borrows `self.line`.
+        match frame_line(line).map(|parsed| parsed.map(|(number, _)| number)) {
+            Some(parsed) => self.frame_start(parsed, rows, frame),
+            None => Ok(LineOutcome::DataRow),
+        }
+    }
+
+    /// A `Frame` line: it starts the next frame, after reporting the frame before it if that is short
+    /// (the line is then kept for the next call), or is itself broken (its rows are then skipped).
+    fn frame_start(
+        &mut self,
+        parsed: Result<i64, String>,
+        rows: usize,
+        frame: &mut FrameInProgress,
+    ) -> Result<LineOutcome, IoError> {
+        let line_no = self.line_no;
+        self.framed = Some(true);
+        self.resync = false;
+        self.skip_rows = 0;
+        let row = frame.row;
+        let unfinished = frame
+            .current
+            .map(|(prev, _)| format!("frame {prev} has {row} rows, expected {rows} (ROWS)"));
+        match (parsed, unfinished) {
+            (Ok(number), None) => {
+                frame.current = Some((number, line_no));
+                Ok(LineOutcome::NextLine)
+            }
+            // The previous frame is short (or empty); this line starts the next one.
+            (Ok(number), Some(unfinished)) => {
+                self.pending_frame = Some((number, line_no));
+                Err(IoError::parse(&self.source_name, line_no, unfinished))
+            }
+            (Err(message), unfinished) => {
+                self.resync = true;
+                let message = match unfinished {
+                    Some(unfinished) => format!("{message}; and {unfinished}"),
+                    None => format!("{message}; its rows are skipped"),
+                };
+                Err(IoError::parse(&self.source_name, line_no, message))
+            }
+        }
+    }
+
+    /// A data row (or a line that cannot be one, `unreadable` saying why): appended to the frame, the
+    /// frame returned when it is complete; skipped while resynchronising after a fault.
+    fn data_row(
+        &mut self,
+        unreadable: Option<String>,
+        grid: Grid,
+        frame: &mut FrameInProgress,
+        values: &mut Vec<f64>,
+        present: &mut Vec<bool>,
+    ) -> Result<LineOutcome, IoError> {
+        let Grid { rows, cols } = grid;
+        if self.resync {
+            return Ok(LineOutcome::NextLine);
+        }
+        if self.skip_rows > 0 {
+            self.skip_rows -= 1;
+            return Ok(LineOutcome::NextLine);
+        }
+        let line_no = self.line_no;
+        let (number, first) = self.frame_of_row(frame, rows)?;
+        let row = frame.row;
+        let result = match unreadable {
+            Some(message) => Err(format!("frame {number} row {}: {message}", row + 1)),
+            None => {
                 let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
-                if is_blank(line) {
-                    continue;
-                }
-                let header_next = line.to_ascii_uppercase().starts_with("DATA_TYPE");
-                if current.is_none() && (line == "@@" || header_next) {
-                    // The end of a recording; another may follow.
-                    if self.next_recording(header.grid, header_next)? {
-                        continue;
-                    }
-                    self.ended = true;
-                    return Ok(None);
-                }
-                if line == "@@" {
-                    self.ended = true;
-                    let Some((number, _)) = current else {
-                        return Ok(None);
-                    };
-                    return Err(IoError::parse(
-                        &name,
-                        self.line_no,
-                        format!("`@@` inside frame {number} ({row} of {rows} rows)"),
-                    ));
-                }
-                if let Some(parsed) = frame_line(line) {
-                    let line_no = self.line_no;
-                    self.framed = Some(true);
-                    self.resync = false;
-                    self.skip_rows = 0;
-                    let unfinished = current.map(|(prev, _)| {
-                        format!("frame {prev} has {row} rows, expected {rows} (ROWS)")
-                    });
-                    match (parsed, unfinished) {
-                        (Ok((number, _)), None) => {
-                            current = Some((number, line_no));
-                            continue;
-                        }
-                        // The previous frame is short (or empty); this line starts the next one.
-                        (Ok((number, _)), Some(unfinished)) => {
-                            self.pending_frame = Some((number, line_no));
-                            return Err(IoError::parse(&name, line_no, unfinished));
-                        }
-                        (Err(message), unfinished) => {
-                            self.resync = true;
-                            let message = match unfinished {
-                                Some(unfinished) => format!("{message}; and {unfinished}"),
-                                None => format!("{message}; its rows are skipped"),
-                            };
-                            return Err(IoError::parse(&name, line_no, message));
-                        }
-                    }
-                }
-            }
-            // A data row, or a line that cannot be one.
-            if self.resync {
-                continue;
-            }
-            if self.skip_rows > 0 {
-                self.skip_rows -= 1;
-                continue;
-            }
-            let line_no = self.line_no;
-            let (number, first) = match current {
-                Some(frame) => frame,
-                None if self.framed == Some(true) => {
-                    self.resync = true;
-                    return Err(IoError::parse(
-                        &name,
-                        line_no,
-                        format!(
-                            "a row of data after a complete frame ({rows} rows, ROWS); expected a \
-                             `Frame` line or `@@`. Skipping to the next `Frame` line"
-                        ),
-                    ));
-                }
-                None => {
-                    self.framed = Some(false);
-                    self.counted += 1;
-                    let frame = (self.counted, line_no);
-                    current = Some(frame);
-                    frame
-                }
-            };
-            let result = match unreadable {
-                Some(message) => Err(format!("frame {number} row {}: {message}", row + 1)),
-                None => {
-                    let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
-                    parse_row(line, number, row, cols, values, present, &mut has_absent)
-                }
-            };
-            if let Err(message) = result {
-                if self.framed == Some(true) {
-                    self.resync = true;
-                } else {
-                    self.skip_rows = rows - row - 1;
-                }
-                return Err(IoError::parse(&name, line_no, message));
-            }
-            row += 1;
-            if row == rows {
-                return Ok(Some(StreamFrame {
+                parse_row(
+                    line,
                     number,
-                    line: first,
-                    has_absent,
-                }));
+                    row,
+                    cols,
+                    values,
+                    present,
+                    &mut frame.has_absent,
+                )
+            }
+        };
+        if let Err(message) = result {
+            if self.framed == Some(true) {
+                self.resync = true;
+            } else {
+                self.skip_rows = rows - row - 1;
+            }
+            return Err(IoError::parse(&self.source_name, line_no, message));
+        }
+        frame.row += 1;
+        if frame.row < rows {
+            return Ok(LineOutcome::NextLine);
+        }
+        Ok(LineOutcome::Finished(Some(StreamFrame {
+            number,
+            line: first,
+            has_absent: frame.has_absent,
+        })))
+    }
+
+    /// The frame a data row belongs to: the current one; a new, counted one in a stream without
+    /// `Frame` lines; an error (and a resynchronisation) after a complete frame in one with them.
+    fn frame_of_row(
+        &mut self,
+        frame: &mut FrameInProgress,
+        rows: usize,
+    ) -> Result<(i64, usize), IoError> {
+        let line_no = self.line_no;
+        match frame.current {
+            Some(current) => Ok(current),
+            None if self.framed == Some(true) => {
+                self.resync = true;
+                Err(IoError::parse(
+                    &self.source_name,
+                    line_no,
+                    format!(
+                        "a row of data after a complete frame ({rows} rows, ROWS); expected a \
+                         `Frame` line or `@@`. Skipping to the next `Frame` line"
+                    ),
+                ))
+            }
+            None => {
+                self.framed = Some(false);
+                self.counted += 1;
+                let current = (self.counted, line_no);
+                frame.current = Some(current);
+                Ok(current)
             }
         }
     }

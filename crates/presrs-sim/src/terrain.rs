@@ -385,228 +385,363 @@ impl Terrain {
             stiffness_pa_per_m: vec![f64::INFINITY; n],
             yield_pa: vec![f64::INFINITY; n],
         };
-        let yaw: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-        let (sin, cos) = yaw.sin_cos();
-        let rotate = |x: f64, y: f64| (cos * x - sin * y, sin * x + cos * y);
-        let seed: u64 = rng.random();
-        let size_sd = 0.08 * variability;
-        let relief_sd = 0.2 * variability;
+        let frame = PatchFrame::draw(rng, variability);
         match self {
-            Self::Wood(p) => {
-                let spacing = p.ring_spacing_m * jitter(rng, size_sd);
-                let relief = p.grain_relief_m * jitter(rng, relief_sd);
-                let wave_phase = rng.random_range(0.0..std::f64::consts::TAU);
-                let wave = p.grain_waviness_m * jitter(rng, relief_sd);
-                // Across-grain coordinate of the foot centre inside its plank.
-                let plank_offset = rng.random_range(0.0..p.plank_width_m);
-                let step_sd = p.plank_step_sd_m * variability.max(1e-9);
-                let step = Normal::new(0.0, step_sd).map_or(0.0, |d| d.sample(rng));
-                let ring_offset = rng.random_range(0.0..spacing);
-                for (i, &(x, y)) in points.iter().enumerate() {
-                    // u along the grain, v across it.
-                    let (u, v) = rotate(x, y);
-                    let v_w = v
-                        + wave
-                            * (std::f64::consts::TAU * u / p.grain_waviness_wavelength_m
-                                + wave_phase)
-                                .sin()
-                        + ring_offset;
-                    let ring = (v_w / spacing).floor();
-                    // Ring-to-ring variation of spacing and relief.
-                    let ring_relief = relief * (0.6 + 0.8 * hash_unit(seed, ring as i64, 0, 1));
-                    let frac = v_w / spacing - ring;
-                    let lw = p.latewood_fraction;
-                    let grain = if frac < lw {
-                        ring_relief * (std::f64::consts::PI * frac / lw).sin().powi(2)
-                    } else {
-                        0.0
-                    };
-                    let rough = p.roughness_m * value_noise(seed ^ 0x55, x / 0.5e-3, y / 0.5e-3);
-                    // Plank index across the grain and the seams between planks.
-                    let across = v + plank_offset;
-                    let plank = (across / p.plank_width_m).floor();
-                    let in_plank = across - plank * p.plank_width_m;
-                    let mut h = grain + rough + if plank as i64 % 2 == 0 { 0.0 } else { step };
-                    if in_plank < p.seam_gap_m {
-                        h -= 2e-3;
-                    }
-                    out.height_m[i] = h;
-                    out.stiffness_pa_per_m[i] = p.surface_stiffness_pa_per_m;
-                }
-            }
-            Self::Carpet(p) => {
-                let scale = jitter(rng, size_sd * 0.5);
-                let (stitch, gauge) = (p.stitch_m * scale, p.gauge_m * scale);
-                let (off_u, off_v) = (rng.random_range(0.0..stitch), rng.random_range(0.0..gauge));
-                let h_sd = p.loop_height_sd_m * jitter(rng, relief_sd);
-                let pos_sd = p.loop_position_sd_m * variability;
-                for (i, &(x, y)) in points.iter().enumerate() {
-                    let (u, v) = rotate(x, y);
-                    let (u, v) = (u + off_u, v + off_v);
-                    let (ci, cj) = ((u / stitch).round() as i64, (v / gauge).round() as i64);
-                    let mut best = -p.pile_depth_m;
-                    for di in -1..=1 {
-                        for dj in -1..=1 {
-                            let (a, b) = (ci + di, cj + dj);
-                            let gauss = |k: u64| {
-                                // Sum of uniforms: approximately normal, unit variance.
-                                (hash_unit(seed, a, b, k)
-                                    + hash_unit(seed, a, b, k + 1)
-                                    + hash_unit(seed, a, b, k + 2)
-                                    - 1.5)
-                                    * 2.0
-                            };
-                            let cu = a as f64 * stitch + pos_sd * gauss(10);
-                            let cv = b as f64 * gauge + pos_sd * gauss(20);
-                            let q = ((u - cu) / (0.5 * p.loop_length_m)).powi(2)
-                                + ((v - cv) / (0.5 * p.loop_width_m)).powi(2);
-                            if q < 1.0 {
-                                let top = h_sd * gauss(30);
-                                best = best.max(top - p.loop_crown_m * q);
-                            }
-                        }
-                    }
-                    out.height_m[i] = best;
-                    out.stiffness_pa_per_m[i] = p.loop_stiffness_pa_per_m;
-                }
-            }
-            Self::Clay(p) => {
-                let und = p.undulation_m * jitter(rng, relief_sd);
-                let waves: Vec<(f64, f64, f64, f64)> = (0..4)
-                    .map(|_| {
-                        let dir: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-                        let wl = p.undulation_wavelength_m * rng.random_range(1.0..2.5);
-                        let k = std::f64::consts::TAU / wl;
-                        (
-                            k * dir.cos(),
-                            k * dir.sin(),
-                            rng.random_range(0.0..6.3),
-                            und * 0.5,
-                        )
-                    })
-                    .collect();
-                // Clumps over a square twice the foot's size.
-                let half = 0.05;
-                let density = p.clumps_per_m2 * jitter(rng, relief_sd);
-                let expected = density * (2.0 * half) * (2.0 * half);
-                let count = rand_distr::Poisson::new(expected.max(1e-9))
-                    .map_or(0.0, |d| d.sample(rng)) as usize;
-                let clumps: Vec<(f64, f64, f64, f64, f64)> = (0..count)
-                    .map(|_| {
-                        let cx = rng.random_range(-half..half);
-                        let cy = rng.random_range(-half..half);
-                        let r = uniform(rng, p.clump_radius_m);
-                        let h = uniform(rng, p.clump_height_m);
-                        let elong = rng.random_range(0.6..1.0);
-                        (cx, cy, r, h, elong)
-                    })
-                    .collect();
-                for (i, &(x, y)) in points.iter().enumerate() {
-                    let (u, v) = rotate(x, y);
-                    let mut h: f64 = waves
-                        .iter()
-                        .map(|&(kx, ky, ph, a)| a * (kx * u + ky * v + ph).sin())
-                        .sum();
-                    h += p.grit_m * value_noise(seed, u / p.grit_length_m, v / p.grit_length_m);
-                    let mut clump_h = 0.0_f64;
-                    for &(cx, cy, r, ch, el) in &clumps {
-                        let q = ((x - cx) / r).powi(2) + ((y - cy) / (r * el)).powi(2);
-                        if q < 1.0 {
-                            clump_h = clump_h.max(ch * (1.0 - q).sqrt());
-                        }
-                    }
-                    out.height_m[i] = h + clump_h;
-                    if clump_h > 0.0 {
-                        out.stiffness_pa_per_m[i] = p.clump_stiffness_pa_per_m;
-                    } else {
-                        out.stiffness_pa_per_m[i] = p.soil_stiffness_pa_per_m;
-                        out.yield_pa[i] = p.soil_yield_pa;
-                    }
-                }
-            }
-            Self::Grass(p) => {
-                let half = 0.045;
-                let area = (2.0 * half) * (2.0 * half);
-                let mean_w = 0.5 * (p.blade_width_m[0] + p.blade_width_m[1]);
-                let mean_l = 0.5 * (p.blade_length_m[0] + p.blade_length_m[1]);
-                let layers = p.blade_layers * jitter(rng, relief_sd * 0.5);
-                let expected = layers * area / (mean_w * mean_l) * 2.0;
-                let count = rand_distr::Poisson::new(expected.max(1e-9))
-                    .map_or(0.0, |d| d.sample(rng)) as usize;
-                let lay: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-                let dir_sd = Normal::new(0.0, p.blade_direction_sd_rad.max(1e-9)).ok();
-                // Blade: centre, unit direction, half length, half width, thickness, lift.
-                let blades: Vec<[f64; 8]> = (0..count)
-                    .map(|_| {
-                        let cx = rng.random_range(-half..half);
-                        let cy = rng.random_range(-half..half);
-                        let a = lay + dir_sd.as_ref().map_or(0.0, |d| d.sample(rng));
-                        let l = uniform(rng, p.blade_length_m);
-                        let w = uniform(rng, p.blade_width_m);
-                        let t = p.blade_thickness_m * rng.random_range(0.7..1.3);
-                        let curl = rng.random_range(0.0..0.4e-3);
-                        [cx, cy, a.cos(), a.sin(), 0.5 * l, 0.5 * w, t, curl]
-                    })
-                    .collect();
-                let stems_expected = p.stems_per_m2 * area;
-                let stem_count = rand_distr::Poisson::new(stems_expected.max(1e-9))
-                    .map_or(0.0, |d| d.sample(rng)) as usize;
-                let stems: Vec<[f64; 5]> = (0..stem_count)
-                    .map(|_| {
-                        let cx = rng.random_range(-half..half);
-                        let cy = rng.random_range(-half..half);
-                        let a = lay + dir_sd.as_ref().map_or(0.0, |d| 0.5 * d.sample(rng));
-                        let l = uniform(rng, p.blade_length_m);
-                        [cx, cy, a.cos(), a.sin(), 0.5 * l]
-                    })
-                    .collect();
-                for (i, &(x, y)) in points.iter().enumerate() {
-                    let mut stack = 0.0;
-                    for b in &blades {
-                        let (dx, dy) = (x - b[0], y - b[1]);
-                        let along = dx * b[2] + dy * b[3];
-                        let across = -dx * b[3] + dy * b[2];
-                        if along.abs() < b[4] && across.abs() < b[5] {
-                            // Blades are folded along the midrib: thickest in the middle.
-                            let profile = 1.0 - 0.5 * (across / b[5]).powi(2);
-                            // A blade arches over what lies below it (curl along its length).
-                            let arch = b[7] * (1.0 - (along / b[4]).powi(2));
-                            stack += b[6] * profile + arch * 0.3;
-                        }
-                    }
-                    let mut stem = 0.0_f64;
-                    let r = 0.5 * p.stem_diameter_m;
-                    for s in &stems {
-                        let (dx, dy) = (x - s[0], y - s[1]);
-                        let along = dx * s[2] + dy * s[3];
-                        let across = -dx * s[3] + dy * s[2];
-                        if along.abs() < s[4] && across.abs() < r {
-                            stem = stem.max(r + (r * r - across * across).sqrt());
-                        }
-                    }
-                    let top = stack.max(stem);
-                    if top > 0.0 {
-                        out.height_m[i] = top;
-                        out.stiffness_pa_per_m[i] = p.blade_stiffness_pa_per_m;
-                    } else {
-                        out.height_m[i] = -p.soil_gap_m;
-                        out.stiffness_pa_per_m[i] = p.soil_stiffness_pa_per_m;
-                    }
-                }
-            }
-            Self::Image { map, params } => {
-                let px = params.pixel_size_m * jitter(rng, size_sd * 0.5);
-                let relief = params.relief_m * jitter(rng, relief_sd);
-                let ox = rng.random_range(0.0..map.width as f64);
-                let oy = rng.random_range(0.0..map.height as f64);
-                for (i, &(x, y)) in points.iter().enumerate() {
-                    let (u, v) = rotate(x, y);
-                    let value = map.sample(ox + u / px, oy - v / px);
-                    out.height_m[i] = relief * value;
-                    out.stiffness_pa_per_m[i] = params.surface_stiffness_pa_per_m;
-                }
-            }
+            Self::Wood(p) => wood_patch(p, points, rng, &frame, &mut out),
+            Self::Carpet(p) => carpet_patch(p, points, rng, &frame, &mut out),
+            Self::Clay(p) => clay_patch(p, points, rng, &frame, &mut out),
+            Self::Grass(p) => grass_patch(p, points, rng, &frame, &mut out),
+            Self::Image { map, params } => image_patch(map, params, points, rng, &frame, &mut out),
         }
         out
+    }
+}
+
+/// What every terrain's patch draws first: the terrain's yaw under the foot, the noise seed, and the
+/// spreads of the hop-to-hop variation of its dimensions.
+struct PatchFrame {
+    sin_yaw: f64,
+    cos_yaw: f64,
+    seed: u64,
+    variability: f64,
+    size_sd: f64,
+    relief_sd: f64,
+}
+
+impl PatchFrame {
+    /// Draws the yaw, then the seed (this order is part of the seeded outputs).
+    fn draw<R: Rng + ?Sized>(rng: &mut R, variability: f64) -> Self {
+        let yaw: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+        let (sin_yaw, cos_yaw) = yaw.sin_cos();
+        let seed: u64 = rng.random();
+        Self {
+            sin_yaw,
+            cos_yaw,
+            seed,
+            variability,
+            size_sd: 0.08 * variability,
+            relief_sd: 0.2 * variability,
+        }
+    }
+
+    /// A foot-frame point in the terrain's frame.
+    fn rotate(&self, x: f64, y: f64) -> (f64, f64) {
+        (
+            self.cos_yaw * x - self.sin_yaw * y,
+            self.sin_yaw * x + self.cos_yaw * y,
+        )
+    }
+}
+
+/// Wood: growth rings along the grain (latewood ridges), fine roughness, planks with steps and seams.
+fn wood_patch<R: Rng + ?Sized>(
+    p: &WoodParams,
+    points: &[(f64, f64)],
+    rng: &mut R,
+    frame: &PatchFrame,
+    out: &mut SurfacePatch,
+) {
+    let seed = frame.seed;
+    let spacing = p.ring_spacing_m * jitter(rng, frame.size_sd);
+    let relief = p.grain_relief_m * jitter(rng, frame.relief_sd);
+    let wave_phase = rng.random_range(0.0..std::f64::consts::TAU);
+    let wave = p.grain_waviness_m * jitter(rng, frame.relief_sd);
+    // Across-grain coordinate of the foot centre inside its plank.
+    let plank_offset = rng.random_range(0.0..p.plank_width_m);
+    let step_sd = p.plank_step_sd_m * frame.variability.max(1e-9);
+    let step = Normal::new(0.0, step_sd).map_or(0.0, |d| d.sample(rng));
+    let ring_offset = rng.random_range(0.0..spacing);
+    for (i, &(x, y)) in points.iter().enumerate() {
+        // u along the grain, v across it.
+        let (u, v) = frame.rotate(x, y);
+        let v_w = v
+            + wave * (std::f64::consts::TAU * u / p.grain_waviness_wavelength_m + wave_phase).sin()
+            + ring_offset;
+        let ring = (v_w / spacing).floor();
+        // Ring-to-ring variation of spacing and relief.
+        let ring_relief = relief * (0.6 + 0.8 * hash_unit(seed, ring as i64, 0, 1));
+        let frac = v_w / spacing - ring;
+        let lw = p.latewood_fraction;
+        let grain = if frac < lw {
+            ring_relief * (std::f64::consts::PI * frac / lw).sin().powi(2)
+        } else {
+            0.0
+        };
+        let rough = p.roughness_m * value_noise(seed ^ 0x55, x / 0.5e-3, y / 0.5e-3);
+        // Plank index across the grain and the seams between planks.
+        let across = v + plank_offset;
+        let plank = (across / p.plank_width_m).floor();
+        let in_plank = across - plank * p.plank_width_m;
+        let mut h = grain + rough + if plank as i64 % 2 == 0 { 0.0 } else { step };
+        if in_plank < p.seam_gap_m {
+            h -= 2e-3;
+        }
+        out.height_m[i] = h;
+        out.stiffness_pa_per_m[i] = p.surface_stiffness_pa_per_m;
+    }
+}
+
+/// The loops of one carpet patch: the lattice (stitch along, gauge across), its offset, and the spreads.
+struct CarpetLoops {
+    stitch: f64,
+    gauge: f64,
+    height_sd: f64,
+    position_sd: f64,
+}
+
+/// Carpet: a lattice of elliptic loops, each jittered in place and height; between them, the pile.
+fn carpet_patch<R: Rng + ?Sized>(
+    p: &CarpetParams,
+    points: &[(f64, f64)],
+    rng: &mut R,
+    frame: &PatchFrame,
+    out: &mut SurfacePatch,
+) {
+    let scale = jitter(rng, frame.size_sd * 0.5);
+    let (stitch, gauge) = (p.stitch_m * scale, p.gauge_m * scale);
+    let (off_u, off_v) = (rng.random_range(0.0..stitch), rng.random_range(0.0..gauge));
+    let loops = CarpetLoops {
+        stitch,
+        gauge,
+        height_sd: p.loop_height_sd_m * jitter(rng, frame.relief_sd),
+        position_sd: p.loop_position_sd_m * frame.variability,
+    };
+    for (i, &(x, y)) in points.iter().enumerate() {
+        let (u, v) = frame.rotate(x, y);
+        out.height_m[i] = carpet_height_at(p, &loops, frame.seed, u + off_u, v + off_v);
+        out.stiffness_pa_per_m[i] = p.loop_stiffness_pa_per_m;
+    }
+}
+
+/// The carpet's top at `(u, v)` (terrain frame, lattice offset added): the highest of the nine nearest
+/// loops, or the pile's depth where no loop covers the point.
+fn carpet_height_at(p: &CarpetParams, loops: &CarpetLoops, seed: u64, u: f64, v: f64) -> f64 {
+    let (stitch, gauge, pos_sd) = (loops.stitch, loops.gauge, loops.position_sd);
+    let (ci, cj) = ((u / stitch).round() as i64, (v / gauge).round() as i64);
+    let mut best = -p.pile_depth_m;
+    for di in -1..=1 {
+        for dj in -1..=1 {
+            let (a, b) = (ci + di, cj + dj);
+            let gauss = |k: u64| {
+                // Sum of uniforms: approximately normal, unit variance.
+                (hash_unit(seed, a, b, k)
+                    + hash_unit(seed, a, b, k + 1)
+                    + hash_unit(seed, a, b, k + 2)
+                    - 1.5)
+                    * 2.0
+            };
+            let cu = a as f64 * stitch + pos_sd * gauss(10);
+            let cv = b as f64 * gauge + pos_sd * gauss(20);
+            let q = ((u - cu) / (0.5 * p.loop_length_m)).powi(2)
+                + ((v - cv) / (0.5 * p.loop_width_m)).powi(2);
+            if q < 1.0 {
+                let top = loops.height_sd * gauss(30);
+                best = best.max(top - p.loop_crown_m * q);
+            }
+        }
+    }
+    best
+}
+
+/// Clay: undulating soil with grit that yields, and stiff clumps lying on it.
+fn clay_patch<R: Rng + ?Sized>(
+    p: &ClayParams,
+    points: &[(f64, f64)],
+    rng: &mut R,
+    frame: &PatchFrame,
+    out: &mut SurfacePatch,
+) {
+    let waves = draw_clay_waves(p, rng, frame);
+    let clumps = draw_clay_clumps(p, rng, frame);
+    for (i, &(x, y)) in points.iter().enumerate() {
+        let (u, v) = frame.rotate(x, y);
+        let mut h: f64 = waves
+            .iter()
+            .map(|&(kx, ky, ph, a)| a * (kx * u + ky * v + ph).sin())
+            .sum();
+        h += p.grit_m * value_noise(frame.seed, u / p.grit_length_m, v / p.grit_length_m);
+        let mut clump_h = 0.0_f64;
+        for &(cx, cy, r, ch, el) in &clumps {
+            let q = ((x - cx) / r).powi(2) + ((y - cy) / (r * el)).powi(2);
+            if q < 1.0 {
+                clump_h = clump_h.max(ch * (1.0 - q).sqrt());
+            }
+        }
+        out.height_m[i] = h + clump_h;
+        if clump_h > 0.0 {
+            out.stiffness_pa_per_m[i] = p.clump_stiffness_pa_per_m;
+        } else {
+            out.stiffness_pa_per_m[i] = p.soil_stiffness_pa_per_m;
+            out.yield_pa[i] = p.soil_yield_pa;
+        }
+    }
+}
+
+/// Four plane waves of the clay's undulation: wave vector `(kx, ky)`, phase, amplitude.
+fn draw_clay_waves<R: Rng + ?Sized>(
+    p: &ClayParams,
+    rng: &mut R,
+    frame: &PatchFrame,
+) -> Vec<(f64, f64, f64, f64)> {
+    let und = p.undulation_m * jitter(rng, frame.relief_sd);
+    (0..4)
+        .map(|_| {
+            let dir: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+            let wl = p.undulation_wavelength_m * rng.random_range(1.0..2.5);
+            let k = std::f64::consts::TAU / wl;
+            (
+                k * dir.cos(),
+                k * dir.sin(),
+                rng.random_range(0.0..6.3),
+                und * 0.5,
+            )
+        })
+        .collect()
+}
+
+/// The clay's clumps (foot frame): centre, radius, height, elongation; a Poisson number of them.
+fn draw_clay_clumps<R: Rng + ?Sized>(
+    p: &ClayParams,
+    rng: &mut R,
+    frame: &PatchFrame,
+) -> Vec<(f64, f64, f64, f64, f64)> {
+    // Clumps over a square twice the foot's size.
+    let half = 0.05;
+    let density = p.clumps_per_m2 * jitter(rng, frame.relief_sd);
+    let expected = density * (2.0 * half) * (2.0 * half);
+    let count =
+        rand_distr::Poisson::new(expected.max(1e-9)).map_or(0.0, |d| d.sample(rng)) as usize;
+    (0..count)
+        .map(|_| {
+            let cx = rng.random_range(-half..half);
+            let cy = rng.random_range(-half..half);
+            let r = uniform(rng, p.clump_radius_m);
+            let h = uniform(rng, p.clump_height_m);
+            let elong = rng.random_range(0.6..1.0);
+            (cx, cy, r, h, elong)
+        })
+        .collect()
+}
+
+/// Half the side of the square (foot frame) grass blades and stems are scattered over.
+const GRASS_HALF_SIDE_M: f64 = 0.045;
+
+/// Grass: layers of blades lying roughly one way, stems under them, soil below a gap.
+fn grass_patch<R: Rng + ?Sized>(
+    p: &GrassParams,
+    points: &[(f64, f64)],
+    rng: &mut R,
+    frame: &PatchFrame,
+    out: &mut SurfacePatch,
+) {
+    let (blades, stems) = draw_grass(p, rng, frame);
+    for (i, &(x, y)) in points.iter().enumerate() {
+        let top = grass_blade_stack_at(&blades, x, y).max(grass_stem_top_at(p, &stems, x, y));
+        if top > 0.0 {
+            out.height_m[i] = top;
+            out.stiffness_pa_per_m[i] = p.blade_stiffness_pa_per_m;
+        } else {
+            out.height_m[i] = -p.soil_gap_m;
+            out.stiffness_pa_per_m[i] = p.soil_stiffness_pa_per_m;
+        }
+    }
+}
+
+/// The grass's blades (centre, unit direction, half length, half width, thickness, lift) and stems
+/// (centre, unit direction, half length), both in the foot frame, drawn in that order.
+#[allow(clippy::type_complexity)]
+fn draw_grass<R: Rng + ?Sized>(
+    p: &GrassParams,
+    rng: &mut R,
+    frame: &PatchFrame,
+) -> (Vec<[f64; 8]>, Vec<[f64; 5]>) {
+    let half = GRASS_HALF_SIDE_M;
+    let area = (2.0 * half) * (2.0 * half);
+    let mean_w = 0.5 * (p.blade_width_m[0] + p.blade_width_m[1]);
+    let mean_l = 0.5 * (p.blade_length_m[0] + p.blade_length_m[1]);
+    let layers = p.blade_layers * jitter(rng, frame.relief_sd * 0.5);
+    let expected = layers * area / (mean_w * mean_l) * 2.0;
+    let count =
+        rand_distr::Poisson::new(expected.max(1e-9)).map_or(0.0, |d| d.sample(rng)) as usize;
+    let lay: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+    let dir_sd = Normal::new(0.0, p.blade_direction_sd_rad.max(1e-9)).ok();
+    let blades: Vec<[f64; 8]> = (0..count)
+        .map(|_| {
+            let cx = rng.random_range(-half..half);
+            let cy = rng.random_range(-half..half);
+            let a = lay + dir_sd.as_ref().map_or(0.0, |d| d.sample(rng));
+            let l = uniform(rng, p.blade_length_m);
+            let w = uniform(rng, p.blade_width_m);
+            let t = p.blade_thickness_m * rng.random_range(0.7..1.3);
+            let curl = rng.random_range(0.0..0.4e-3);
+            [cx, cy, a.cos(), a.sin(), 0.5 * l, 0.5 * w, t, curl]
+        })
+        .collect();
+    let stems_expected = p.stems_per_m2 * area;
+    let stem_count =
+        rand_distr::Poisson::new(stems_expected.max(1e-9)).map_or(0.0, |d| d.sample(rng)) as usize;
+    let stems: Vec<[f64; 5]> = (0..stem_count)
+        .map(|_| {
+            let cx = rng.random_range(-half..half);
+            let cy = rng.random_range(-half..half);
+            let a = lay + dir_sd.as_ref().map_or(0.0, |d| 0.5 * d.sample(rng));
+            let l = uniform(rng, p.blade_length_m);
+            [cx, cy, a.cos(), a.sin(), 0.5 * l]
+        })
+        .collect();
+    (blades, stems)
+}
+
+/// The height of the blades stacked over `(x, y)` (0 where none lies).
+fn grass_blade_stack_at(blades: &[[f64; 8]], x: f64, y: f64) -> f64 {
+    let mut stack = 0.0;
+    for b in blades {
+        let (dx, dy) = (x - b[0], y - b[1]);
+        let along = dx * b[2] + dy * b[3];
+        let across = -dx * b[3] + dy * b[2];
+        if along.abs() < b[4] && across.abs() < b[5] {
+            // Blades are folded along the midrib: thickest in the middle.
+            let profile = 1.0 - 0.5 * (across / b[5]).powi(2);
+            // A blade arches over what lies below it (curl along its length).
+            let arch = b[7] * (1.0 - (along / b[4]).powi(2));
+            stack += b[6] * profile + arch * 0.3;
+        }
+    }
+    stack
+}
+
+/// The top of the highest stem (a lying cylinder) over `(x, y)` (0 where none lies).
+fn grass_stem_top_at(p: &GrassParams, stems: &[[f64; 5]], x: f64, y: f64) -> f64 {
+    let mut stem = 0.0_f64;
+    let r = 0.5 * p.stem_diameter_m;
+    for s in stems {
+        let (dx, dy) = (x - s[0], y - s[1]);
+        let along = dx * s[2] + dy * s[3];
+        let across = -dx * s[3] + dy * s[2];
+        if along.abs() < s[4] && across.abs() < r {
+            stem = stem.max(r + (r * r - across * across).sqrt());
+        }
+    }
+    stem
+}
+
+/// An image terrain: the height map at a random offset and scale, one stiffness everywhere.
+fn image_patch<R: Rng + ?Sized>(
+    map: &HeightMap,
+    params: &ImageTerrainParams,
+    points: &[(f64, f64)],
+    rng: &mut R,
+    frame: &PatchFrame,
+    out: &mut SurfacePatch,
+) {
+    let px = params.pixel_size_m * jitter(rng, frame.size_sd * 0.5);
+    let relief = params.relief_m * jitter(rng, frame.relief_sd);
+    let ox = rng.random_range(0.0..map.width as f64);
+    let oy = rng.random_range(0.0..map.height as f64);
+    for (i, &(x, y)) in points.iter().enumerate() {
+        let (u, v) = frame.rotate(x, y);
+        let value = map.sample(ox + u / px, oy - v / px);
+        out.height_m[i] = relief * value;
+        out.stiffness_pa_per_m[i] = params.surface_stiffness_pa_per_m;
     }
 }

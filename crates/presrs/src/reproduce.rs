@@ -11,8 +11,10 @@
 //! a complete data set). [`ReproduceOptions::resimulate`] always simulates. Both sources give the same trials (the movies
 //! hold integer counts, the truth round-trips through JSON exactly), hence the same results.
 
+mod markdown;
+mod results;
+
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -25,16 +27,18 @@ use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording};
 use presrs_io::atomic::write_atomic;
 use presrs_sim::{Dataset as SimDataset, DatasetSpec, SimConfig, TrialOutput, VelocityTable};
-use serde::Serialize;
 
 use crate::dataset::Sample;
 use crate::error::{Context, Error, Result};
-use crate::evaluate::{CalibrationJson, calibration_line, run_counted};
+use crate::evaluate::{CalibrationJson, run_counted};
 use crate::method::CANDIDATE_FEATURES;
 use crate::progress::Progress;
 use crate::report::{PAPER_TABLE2, SimulationReportData, write_simulation_report};
 use crate::simulation::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
 use crate::train::split_images;
+
+use markdown::write_markdown;
+pub use results::{ComparisonSummary, DatasetOrigin, Draw, LoadCheck, Results, SegmentationCheck};
 
 /// The paper's classification time on a 2.67 GHz Core 2 Duo, ns.
 pub const PAPER_CLASSIFY_NS: u64 = 245_000;
@@ -98,127 +102,6 @@ pub struct Reproduction {
     pub report_path: Option<PathBuf>,
 }
 
-/// Where a data set came from.
-#[derive(Debug, Clone, Serialize)]
-pub struct DatasetOrigin {
-    pub path: PathBuf,
-    /// `reusing DIR (seed S, presrs V)` or `simulating DIR (seed S, M kg): REASON`.
-    #[serde(skip)]
-    pub note: String,
-    /// Read back from `path` (its stamp matched) rather than simulated.
-    pub reused: bool,
-    /// Why it was simulated (no data set there, a mismatch, a changed file, `--resimulate`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub simulated_because: Option<String>,
-}
-
-/// Load independence: a model trained at the nominal load tested on images recorded at a higher load,
-/// as they are and scaled by nominal / actual load (the paper's "scaling factor").
-#[derive(Debug, Serialize)]
-pub struct LoadCheck {
-    pub nominal_load_kg: f64,
-    pub test_load_kg: f64,
-    pub test_images: usize,
-    /// Accuracy on the heavier robot's images as recorded.
-    pub accuracy_unscaled: MeanStd,
-    /// Accuracy after multiplying every test image by nominal / test load.
-    pub accuracy_scaled: MeanStd,
-    /// Accuracy of a model trained with `--normalise-load` (each image divided by its total load) on the
-    /// heavier robot's images as recorded: no knowledge of the load.
-    pub accuracy_normalised: MeanStd,
-}
-
-/// One feature x classifier combination of the comparison (trained on G2, 20 per terrain, 7 validating).
-#[derive(Debug, Serialize)]
-pub struct ComparisonSummary {
-    pub features: String,
-    pub classifier: String,
-    /// Over every tested image (mean and spread over repeats); `None` when it could not be trained.
-    pub overall: Option<MeanStd>,
-    pub per_gait: BTreeMap<String, MeanStd>,
-    /// Training time of one model, ms.
-    pub train_ms: MeanStd,
-    pub median_classify_ns: u64,
-    pub error: Option<String>,
-}
-
-impl ComparisonSummary {
-    pub fn of(row: &ComparisonRow) -> Self {
-        let (overall, per_gait, median_classify_ns, error) = match &row.report {
-            Ok(report) => (
-                Some(report.overall),
-                report.per_condition.clone(),
-                report.median_classify_ns,
-                None,
-            ),
-            Err(err) => (None, BTreeMap::new(), 0, Some(err.clone())),
-        };
-        Self {
-            features: row.features.clone(),
-            classifier: row.classifier.clone(),
-            overall,
-            per_gait,
-            train_ms: MeanStd {
-                mean: 1e3 * row.train_seconds.mean,
-                std: 1e3 * row.train_seconds.std,
-            },
-            median_classify_ns,
-            error,
-        }
-    }
-}
-
-#[derive(Debug, Serialize)]
-pub struct SegmentationCheck {
-    /// Hops the simulator recorded (with a stance frame) and stances the segmentation found.
-    pub true_hops: usize,
-    pub found_stances: usize,
-    /// True hops whose stance was found with its first and last frame within one frame.
-    pub matched_within_one_frame: usize,
-    /// Found mid-stance frames equal to the simulator's.
-    pub same_mid_frame: usize,
-}
-
-/// The training draw: images per terrain, and how many of them validate.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct Draw {
-    pub per_class: usize,
-    pub validation: usize,
-}
-
-#[derive(Debug, Serialize)]
-pub struct Results {
-    pub seed: u64,
-    pub repeats: usize,
-    /// Training images per terrain and how many of them validate (the paper's 20 and 7).
-    pub draw: Draw,
-    pub presrs_version: &'static str,
-    /// Forward velocity per gait and terrain, m/s.
-    pub table1: BTreeMap<String, BTreeMap<String, f64>>,
-    pub table1_paper: BTreeMap<String, BTreeMap<String, f64>>,
-    /// Accuracy per tested gait and overall, trained on G2 (means over repeats).
-    pub table2: BTreeMap<String, f64>,
-    pub table2_std: BTreeMap<String, f64>,
-    pub table2_paper: BTreeMap<String, f64>,
-    pub median_classify_ns: u64,
-    pub paper_classify_ns: u64,
-    /// Table II's confidences against whether they were right, as `eval --json` gives them.
-    pub table2_calibration: CalibrationJson,
-    /// Train gait -> tested gait -> accuracy (means over repeats).
-    pub train_test_matrix: BTreeMap<String, BTreeMap<String, f64>>,
-    pub images_per_gait: BTreeMap<String, usize>,
-    pub segmentation: SegmentationCheck,
-    /// Where the data sets came from: `main` and (when measured) `load`.
-    pub datasets: BTreeMap<String, DatasetOrigin>,
-    /// `None` when the heavier hopper could not be simulated (the reason is printed).
-    pub load_independence: Option<LoadCheck>,
-    /// Every feature family x classifier with Table II's protocol and draws (empty with --no-comparison).
-    pub comparison: Vec<ComparisonSummary>,
-    /// Full reports of every training gait.
-    pub evaluations: BTreeMap<String, EvalReport>,
-    pub timings_s: BTreeMap<String, f64>,
-}
-
 /// The options that must agree with each other, checked before anything is simulated: some of the
 /// --per-class images train, and every gait records at least --per-class images per terrain.
 pub fn check_options(
@@ -256,21 +139,202 @@ pub fn reproduce(options: &ReproduceOptions, progress: &dyn Progress) -> Result<
     let started = Instant::now();
     let mut timings = BTreeMap::new();
     let sim_config = SimConfig::default();
-    check_options(args, &sim_config).map_err(Error::invalid)?;
-    let draw = Draw {
-        per_class: args.per_class,
-        validation: args.validation,
-    };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
+    let draw = check_and_prepare(args, &sim_config)?;
 
-    // 1. The data set: read back from DIR/dataset when it is the one this run would simulate.
+    // 1-3. The data set, Table I and the samples.
     let mut spec = DatasetSpec::paper(args.seed);
     spec.hops_per_gait = args.hops_per_gait;
-    let mut datasets = BTreeMap::new();
-    let (dataset, origin) = obtain_dataset(
+    let stances = main_stances(&sim_config, &spec, args, progress, started, &mut timings)?;
+    let images_per_gait = images_per_gait(&stances.samples);
+    let gaits: Vec<String> = images_per_gait.keys().cloned().collect();
+
+    // 4-6. Table II, the gait matrix, load independence and the other methods.
+    let simulator = (&sim_config, &spec);
+    let measured = measure(
+        &stances.samples,
+        &gaits,
+        simulator,
+        draw,
+        args,
+        progress,
+        &mut timings,
+    )?;
+    let (table2, load, rows) = (measured.table2, measured.load, measured.rows);
+    let mut datasets = BTreeMap::from([("main".to_owned(), stances.origin)]);
+    if let Some(origin) = load.origin {
+        datasets.insert("load".to_owned(), origin);
+    }
+    timings.insert("total".to_owned(), started.elapsed().as_secs_f64());
+
+    // 7. Results files.
+    let (table1, table1_paper) = table1_maps(&stances.table);
+    let results = Results {
+        seed: args.seed,
+        repeats: args.repeats,
+        draw,
+        presrs_version: env!("CARGO_PKG_VERSION"),
+        table1,
+        table1_paper,
+        table2: table2.mean,
+        table2_std: table2.std,
+        table2_paper: PAPER_TABLE2
+            .iter()
+            .map(|(k, v)| ((*k).to_owned(), *v))
+            .collect(),
+        median_classify_ns: table2.median_classify_ns,
+        paper_classify_ns: PAPER_CLASSIFY_NS,
+        table2_calibration: table2.calibration,
+        train_test_matrix: measured.matrix,
+        images_per_gait,
+        segmentation: stances.segmentation,
+        datasets,
+        load_independence: load.check,
+        comparison: rows.iter().map(ComparisonSummary::of).collect(),
+        evaluations: measured.evaluations,
+        timings_s: timings,
+    };
+    let table1_text = stances.table.format_with_paper();
+    let (json_path, markdown_path, report_path) = write_results(
+        &results,
+        &table1_text,
+        stances.report_data.as_ref(),
         &sim_config,
-        &spec,
+        args,
+        progress,
+    )?;
+    Ok(Reproduction {
+        results,
+        table1_text,
+        comparison: rows,
+        load_dataset_note: load.note,
+        load_error: load.error,
+        json_path,
+        markdown_path,
+        report_path,
+    })
+}
+
+/// What the experiment measured on the samples.
+struct Measured {
+    /// The evaluation of every training gait.
+    evaluations: BTreeMap<String, EvalReport>,
+    table2: Table2,
+    /// Train gait -> tested gait -> accuracy.
+    matrix: BTreeMap<String, BTreeMap<String, f64>>,
+    load: LoadTest,
+    /// The other methods (empty without the comparison).
+    rows: Vec<ComparisonRow>,
+}
+
+/// Table II and the train-gait x test-gait matrix, load independence (on the heavier hopper of
+/// `simulator`) and the other methods (every feature family x classifier with Table II's protocol and
+/// draws); each step's time goes into `timings`.
+fn measure(
+    samples: &[Sample],
+    gaits: &[String],
+    (sim_config, spec): (&SimConfig, &DatasetSpec),
+    draw: Draw,
+    args: &ReproduceOptions,
+    progress: &dyn Progress,
+    timings: &mut BTreeMap<String, f64>,
+) -> Result<Measured> {
+    let eval_samples: Vec<LabeledImage<'_>> = samples.iter().map(eval_sample).collect();
+    let config = TrainConfig::default().check()?;
+    let evaluations = timed(timings, "evaluate", || {
+        evaluate_each_gait(&eval_samples, gaits, &config, args, progress)
+    })?;
+    let table2 = Table2::of(&evaluations)?;
+    let matrix = train_test_matrix(&evaluations, gaits);
+    let load = timed(timings, "load_independence", || {
+        load_test(sim_config, spec, samples, &config, args, progress)
+    })?;
+    let mut rows = Vec::new();
+    if args.comparison {
+        rows = timed(timings, "comparison", || {
+            compare_methods(&eval_samples, draw, args, progress)
+        })?;
+    }
+    Ok(Measured {
+        evaluations,
+        table2,
+        matrix,
+        load,
+        rows,
+    })
+}
+
+/// Checks the options and makes the output folder; returns the training draw.
+fn check_and_prepare(args: &ReproduceOptions, sim_config: &SimConfig) -> Result<Draw> {
+    check_options(args, sim_config).map_err(Error::invalid)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
+    Ok(Draw {
+        per_class: args.per_class,
+        validation: args.validation,
+    })
+}
+
+/// Table II: what the models trained on G2 found, per tested gait and overall.
+struct Table2 {
+    mean: BTreeMap<String, f64>,
+    std: BTreeMap<String, f64>,
+    median_classify_ns: u64,
+    calibration: CalibrationJson,
+}
+
+impl Table2 {
+    fn of(evaluations: &BTreeMap<String, EvalReport>) -> Result<Self> {
+        let main = evaluations
+            .get("G2")
+            .ok_or_else(|| Error::data("the simulated data set has no gait G2 to train on"))?;
+        let mut table2: BTreeMap<String, MeanStd> = main.per_condition.clone();
+        table2.insert("overall".to_owned(), main.overall);
+        Ok(Self {
+            mean: table2.iter().map(|(k, v)| (k.clone(), v.mean)).collect(),
+            std: table2.iter().map(|(k, v)| (k.clone(), v.std)).collect(),
+            median_classify_ns: main.median_classify_ns,
+            calibration: CalibrationJson::new(&main.reliability),
+        })
+    }
+}
+
+/// Runs `step`, recording how long it took under `name` when it succeeds.
+fn timed<T>(
+    timings: &mut BTreeMap<String, f64>,
+    name: &str,
+    step: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    let start = Instant::now();
+    let value = step()?;
+    timings.insert(name.to_owned(), start.elapsed().as_secs_f64());
+    Ok(value)
+}
+
+/// What the experiment keeps of the main data set once its movies are dropped.
+struct MainStances {
+    origin: DatasetOrigin,
+    /// Table I.
+    table: VelocityTable,
+    /// The mid-stance frame of every complete stance the segmentation finds.
+    samples: Vec<Sample>,
+    segmentation: SegmentationCheck,
+    /// What the report needs from the data set (with `--report`).
+    report_data: Option<SimulationReportData>,
+}
+
+/// The main data set (read back from DIR/dataset when it is the one this run would simulate), its
+/// Table I and its stance samples; `started` is when the run began (the data set's time counts from it).
+fn main_stances(
+    sim_config: &SimConfig,
+    spec: &DatasetSpec,
+    args: &ReproduceOptions,
+    progress: &dyn Progress,
+    started: Instant,
+    timings: &mut BTreeMap<String, f64>,
+) -> Result<MainStances> {
+    let (dataset, origin) = obtain_dataset(
+        sim_config,
+        spec,
         &args.out.join("dataset"),
         args.resimulate,
         progress,
@@ -285,114 +349,34 @@ pub fn reproduce(options: &ReproduceOptions, progress: &dyn Progress) -> Result<
         .to_owned(),
         started.elapsed().as_secs_f64(),
     );
-    datasets.insert("main".to_owned(), origin);
-
-    // 2. Table I.
     let table = dataset.velocity_table();
-    let (table1, table1_paper) = table1_maps(&table);
-
-    // 3. Samples: the mid-stance frame of every complete stance the segmentation finds.
-    let segment_start = Instant::now();
-    let (samples, segmentation) = stance_samples(&dataset.trials)?;
-    timings.insert("segment".to_owned(), segment_start.elapsed().as_secs_f64());
-    // What the report needs from the data set, then the movies go (hundreds of MB; the heavier hopper's
-    // data set below would otherwise be held next to them).
+    let (samples, segmentation) = timed(timings, "segment", || stance_samples(&dataset.trials))?;
+    // What the report needs from the data set; then the movies go (hundreds of MB; the heavier
+    // hopper's data set would otherwise be held next to them).
     let report_data = if args.report {
         Some(SimulationReportData::from_dataset(&dataset)?)
     } else {
         None
     };
     drop(dataset);
+    Ok(MainStances {
+        origin,
+        table,
+        samples,
+        segmentation,
+        report_data,
+    })
+}
+
+/// Sample images per gait (the sample's condition).
+fn images_per_gait(samples: &[Sample]) -> BTreeMap<String, usize> {
     let mut images_per_gait = BTreeMap::new();
-    for sample in &samples {
+    for sample in samples {
         *images_per_gait
             .entry(sample.condition.clone().unwrap_or_default())
             .or_insert(0) += 1;
     }
-
-    // 4. Table II and the train-gait x test-gait matrix.
-    let eval_samples: Vec<LabeledImage<'_>> = samples.iter().map(eval_sample).collect();
-    let config = TrainConfig::default().check()?;
-    let gaits: Vec<String> = images_per_gait.keys().cloned().collect();
-    let eval_start = Instant::now();
-    let evaluations = evaluate_each_gait(&eval_samples, &gaits, &config, args, progress)?;
-    timings.insert("evaluate".to_owned(), eval_start.elapsed().as_secs_f64());
-    let main = evaluations
-        .get("G2")
-        .ok_or_else(|| Error::data("the simulated data set has no gait G2 to train on"))?;
-    let mut table2: BTreeMap<String, MeanStd> = main.per_condition.clone();
-    table2.insert("overall".to_owned(), main.overall);
-    let matrix = train_test_matrix(&evaluations, &gaits);
-
-    // 5. Load independence.
-    let load_start = Instant::now();
-    let load = load_test(&sim_config, &spec, &samples, &config, args, progress)?;
-    if let Some(origin) = load.origin {
-        datasets.insert("load".to_owned(), origin);
-    }
-    let (load_dataset_note, load_check, load_error) = (load.note, load.check, load.error);
-    timings.insert(
-        "load_independence".to_owned(),
-        load_start.elapsed().as_secs_f64(),
-    );
-
-    // 6. Other methods: every feature family x classifier with Table II's protocol and draws.
-    let mut rows = Vec::new();
-    if args.comparison {
-        let compare_start = Instant::now();
-        rows = compare_methods(&eval_samples, draw, args, progress)?;
-        timings.insert(
-            "comparison".to_owned(),
-            compare_start.elapsed().as_secs_f64(),
-        );
-    }
-    timings.insert("total".to_owned(), started.elapsed().as_secs_f64());
-
-    // 7. Results files.
-    let results = Results {
-        seed: args.seed,
-        repeats: args.repeats,
-        draw,
-        presrs_version: env!("CARGO_PKG_VERSION"),
-        table1,
-        table1_paper,
-        table2: table2.iter().map(|(k, v)| (k.clone(), v.mean)).collect(),
-        table2_std: table2.iter().map(|(k, v)| (k.clone(), v.std)).collect(),
-        table2_paper: PAPER_TABLE2
-            .iter()
-            .map(|(k, v)| ((*k).to_owned(), *v))
-            .collect(),
-        median_classify_ns: main.median_classify_ns,
-        paper_classify_ns: PAPER_CLASSIFY_NS,
-        table2_calibration: CalibrationJson::new(&main.reliability),
-        train_test_matrix: matrix,
-        images_per_gait,
-        segmentation,
-        datasets,
-        load_independence: load_check,
-        comparison: rows.iter().map(ComparisonSummary::of).collect(),
-        evaluations,
-        timings_s: timings,
-    };
-    let table1_text = table.format_with_paper();
-    let (json_path, markdown_path, report_path) = write_results(
-        &results,
-        &table1_text,
-        report_data.as_ref(),
-        &sim_config,
-        args,
-        progress,
-    )?;
-    Ok(Reproduction {
-        results,
-        table1_text,
-        comparison: rows,
-        load_dataset_note,
-        load_error,
-        json_path,
-        markdown_path,
-        report_path,
-    })
+    images_per_gait
 }
 
 /// Writes `results.json`, the report (from `report_data`) and `results.md`; returns their paths.
@@ -828,151 +812,4 @@ pub fn stance_samples(trials: &[TrialOutput]) -> Result<(Vec<Sample>, Segmentati
         }
     }
     Ok((samples, check))
-}
-
-fn write_markdown(results: &Results, table1: &str, w: &mut dyn Write) -> std::io::Result<()> {
-    writeln!(
-        w,
-        "# presrs reproduce (seed {}, {} repeats)\n",
-        results.seed, results.repeats
-    )?;
-    writeln!(w, "## Table I: forward velocity\n\n```\n{table1}```\n")?;
-    writeln!(
-        w,
-        "## Table II: classification accuracy, trained on G2 ({} images per terrain, {} of them \
-         validating)\n",
-        results.draw.per_class, results.draw.validation
-    )?;
-    writeln!(
-        w,
-        "| tested | simulated (mean ± std) | paper |\n| --- | --- | --- |"
-    )?;
-    for (name, paper) in PAPER_TABLE2 {
-        if let (Some(mean), Some(std)) = (results.table2.get(name), results.table2_std.get(name)) {
-            writeln!(
-                w,
-                "| {name} | {:.1} % ± {:.1} | {:.1} % |",
-                100.0 * mean,
-                100.0 * std,
-                100.0 * paper
-            )?;
-        }
-    }
-    writeln!(
-        w,
-        "\nMedian classification time: {:.2} µs per image (paper: 245 µs on a 2.67 GHz Core 2 Duo).\n",
-        results.median_classify_ns as f64 / 1e3
-    )?;
-    if let Some(line) = results
-        .evaluations
-        .get("G2")
-        .and_then(|g2| calibration_line(&g2.reliability))
-    {
-        writeln!(w, "Reported {line}.\n")?;
-    }
-    writeln!(w, "## Train gait × test gait accuracy\n")?;
-    let gaits: Vec<&String> = results.images_per_gait.keys().collect();
-    write!(w, "| train |")?;
-    for gait in &gaits {
-        write!(w, " {gait} |")?;
-    }
-    writeln!(w, " overall |")?;
-    writeln!(w, "|{}", " --- |".repeat(gaits.len() + 2))?;
-    for (train, row) in &results.train_test_matrix {
-        write!(w, "| {train} |")?;
-        for gait in gaits.iter().map(|g| g.as_str()).chain(["overall"]) {
-            write!(
-                w,
-                " {:.1} % |",
-                100.0 * row.get(gait).copied().unwrap_or(f64::NAN)
-            )?;
-        }
-        writeln!(w)?;
-    }
-    if let Some(l) = &results.load_independence {
-        writeln!(
-            w,
-            "\n## Load independence\n\nTrained on G2 at {:.2} kg; tested on every gait at {:.2} kg ({} images): \
-         {:.1} % ± {:.1} as recorded, {:.1} % ± {:.1} scaled by the load ratio (the load known), {:.1} % ± \
-         {:.1} with `--normalise-load` (trained and tested on images divided by their total load; the load \
-         unknown).",
-            l.nominal_load_kg,
-            l.test_load_kg,
-            l.test_images,
-            100.0 * l.accuracy_unscaled.mean,
-            100.0 * l.accuracy_unscaled.std,
-            100.0 * l.accuracy_scaled.mean,
-            100.0 * l.accuracy_scaled.std,
-            100.0 * l.accuracy_normalised.mean,
-            100.0 * l.accuracy_normalised.std
-        )?;
-    }
-    if !results.comparison.is_empty() {
-        write_comparison_markdown(&results.comparison, results.draw, w)?;
-    }
-    let s = &results.segmentation;
-    writeln!(
-        w,
-        "\nSegmentation against the simulator's truth: {} of {} stances within one frame ({} found), {} \
-         with the same mid-stance frame.",
-        s.matched_within_one_frame, s.true_hops, s.found_stances, s.same_mid_frame
-    )
-}
-
-/// The comparison as a Markdown table: accuracy per tested gait and overall, training and classification
-/// time.
-fn write_comparison_markdown(
-    rows: &[ComparisonSummary],
-    draw: Draw,
-    w: &mut dyn Write,
-) -> std::io::Result<()> {
-    let mut gaits: Vec<&String> = rows.iter().flat_map(|r| r.per_gait.keys()).collect();
-    gaits.sort();
-    gaits.dedup();
-    writeln!(
-        w,
-        "\n## Other methods\n\nEvery feature family × classifier, trained on G2 ({} images per terrain, {} of \
-         them validating), tested on every other image, with the same draws as Table II (mean ± std over \
-         the repeats). The paper's method is fft1d + pwe.\n",
-        draw.per_class, draw.validation
-    )?;
-    write!(w, "| features | classifier |")?;
-    for gait in &gaits {
-        write!(w, " {gait} |")?;
-    }
-    writeln!(w, " overall | train ms | classify µs |")?;
-    writeln!(w, "|{}", " --- |".repeat(gaits.len() + 5))?;
-    let cell = |m: &MeanStd| format!("{:.1} ± {:.1}", 100.0 * m.mean, 100.0 * m.std);
-    for row in rows {
-        write!(w, "| {} | {} |", row.features, row.classifier)?;
-        match (&row.overall, &row.error) {
-            (Some(overall), _) => {
-                for gait in &gaits {
-                    write!(
-                        w,
-                        " {} |",
-                        row.per_gait.get(*gait).map_or_else(|| "-".to_owned(), cell)
-                    )?;
-                }
-                writeln!(
-                    w,
-                    " {} | {:.1} | {:.1} |",
-                    cell(overall),
-                    row.train_ms.mean,
-                    row.median_classify_ns as f64 / 1e3
-                )?;
-            }
-            (None, error) => {
-                for _ in &gaits {
-                    write!(w, " - |")?;
-                }
-                writeln!(
-                    w,
-                    " failed: {} | | |",
-                    error.as_deref().unwrap_or("unknown error")
-                )?;
-            }
-        }
-    }
-    Ok(())
 }

@@ -30,25 +30,43 @@ pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 }
 
 fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()> {
-    let or_unknown = |value: Option<String>| value.unwrap_or_else(|| "unknown".to_owned());
     writeln!(out, "file           {}", report.file)?;
-    if !report.topics.is_empty() {
-        for t in &report.topics {
-            let mark = if report.topic.as_deref() == Some(t.topic.as_str()) {
-                " (described below)"
-            } else if t.frames {
-                " (frames: --topic to describe it)"
-            } else {
-                ""
-            };
-            writeln!(
-                out,
-                "topic          {}  {}  {} messages{mark}",
-                t.topic, t.schema, t.messages
-            )?;
-        }
+    print_topics(report, out)?;
+    print_sensor(report, out)?;
+    print_dead_sensels(report, out)?;
+    let load_unit = print_frames_and_load(report, out)?;
+    for warning in &report.warnings {
+        writeln!(out, "warning        {warning}")?;
     }
-    writeln!(out, "sensor         {}", or_unknown(report.sensor.clone()))?;
+    print_stances(report, &load_unit, out)
+}
+
+/// The topics of an MCAP bag, the described one marked.
+fn print_topics(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()> {
+    for t in &report.topics {
+        let mark = if report.topic.as_deref() == Some(t.topic.as_str()) {
+            " (described below)"
+        } else if t.frames {
+            " (frames: --topic to describe it)"
+        } else {
+            ""
+        };
+        writeln!(
+            out,
+            "topic          {}  {}  {} messages{mark}",
+            t.topic, t.schema, t.messages
+        )?;
+    }
+    Ok(())
+}
+
+/// The sensor, its size and its pitch.
+fn print_sensor(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()> {
+    let sensor = report
+        .sensor
+        .clone()
+        .unwrap_or_else(|| "unknown".to_owned());
+    writeln!(out, "sensor         {sensor}")?;
     writeln!(
         out,
         "size           {} rows x {} cols ({} absent sensels)",
@@ -59,41 +77,51 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
         _ => "unknown".to_owned(),
     };
     writeln!(out, "pitch          {pitch}")?;
-    if !report.dead_sensels.is_empty() {
-        let at: Vec<String> = report
-            .dead_sensels
-            .iter()
-            .take(20)
-            .map(|d| format!("({}, {})", d.row, d.col))
-            .collect();
-        let more = report.dead_sensels.len().saturating_sub(at.len());
-        writeln!(
-            out,
-            "dead sensels   {} at row, col (0-based) {}{}",
-            report.dead_sensels.len(),
-            at.join(" "),
-            if more > 0 {
-                format!(" and {more} more")
-            } else {
-                String::new()
-            }
-        )?;
-        let what = if report.dead_sensels_filled {
-            "filled from their neighbours in every frame when train, eval, classify, features or \
-             report read this file (--keep-dead-sensels: as read)"
-                .to_owned()
-        } else if report.frames < presrs_core::dead_sensels::DeadSenselConfig::default().min_frames
-        {
-            format!(
-                "not filled: {} frame(s) cannot tell a dead sensel from a gap in the terrain \
-                 (movies of 3 frames or more are corrected)",
-                report.frames
-            )
-        } else {
-            "kept as read (--keep-dead-sensels)".to_owned()
-        };
-        writeln!(out, "               {what}")?;
+    Ok(())
+}
+
+/// The dead sensels (the first 20) and what is done with them; nothing when there are none.
+fn print_dead_sensels(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()> {
+    if report.dead_sensels.is_empty() {
+        return Ok(());
     }
+    let at: Vec<String> = report
+        .dead_sensels
+        .iter()
+        .take(20)
+        .map(|d| format!("({}, {})", d.row, d.col))
+        .collect();
+    let more = report.dead_sensels.len().saturating_sub(at.len());
+    writeln!(
+        out,
+        "dead sensels   {} at row, col (0-based) {}{}",
+        report.dead_sensels.len(),
+        at.join(" "),
+        if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        }
+    )?;
+    let what = if report.dead_sensels_filled {
+        "filled from their neighbours in every frame when train, eval, classify, features or \
+         report read this file (--keep-dead-sensels: as read)"
+            .to_owned()
+    } else if report.frames < presrs_core::dead_sensels::DeadSenselConfig::default().min_frames {
+        format!(
+            "not filled: {} frame(s) cannot tell a dead sensel from a gap in the terrain \
+             (movies of 3 frames or more are corrected)",
+            report.frames
+        )
+    } else {
+        "kept as read (--keep-dead-sensels)".to_owned()
+    };
+    writeln!(out, "               {what}")?;
+    Ok(())
+}
+
+/// The frames, their period, the units and the load range; returns the unit of every load.
+fn print_frames_and_load(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<String> {
     let period = report.frame_period_s.map_or_else(
         || "(frame period unknown)".to_owned(),
         |p| format!("at {p} s ({:.2} Hz)", 1.0 / p),
@@ -128,9 +156,15 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
             "total force    {min:.1} .. {max:.1} N (pressure x sensel area, as plot --movie draws it)"
         )?;
     }
-    for warning in &report.warnings {
-        writeln!(out, "warning        {warning}")?;
-    }
+    Ok(load_unit)
+}
+
+/// The stances found, how they were measured, and one table row per stance.
+fn print_stances(
+    report: &InspectReport,
+    load_unit: &str,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
     let complete = report.stances.iter().filter(|s| !s.partial).count();
     writeln!(
         out,
@@ -149,23 +183,24 @@ fn print_table(report: &InspectReport, out: &mut dyn Write) -> anyhow::Result<()
     for note in &report.stance_notes {
         writeln!(out, "note           {note}")?;
     }
-    if !report.stances.is_empty() {
-        writeln!(out, "  (peak_load in {load_unit})")?;
-        writeln!(out, "  #  start  len  peak_load  sample_frame  partial")?;
-        for (i, stance) in report.stances.iter().enumerate() {
-            writeln!(
-                out,
-                "{:>3}  {:>5}  {:>3}  {:>9.1}  {:>12}  {}",
-                i,
-                stance.start,
-                stance.len,
-                stance.peak_load,
-                stance
-                    .sample_frame
-                    .map_or_else(|| "-".to_owned(), |f| f.to_string()),
-                partial_text(stance, report.frames)
-            )?;
-        }
+    if report.stances.is_empty() {
+        return Ok(());
+    }
+    writeln!(out, "  (peak_load in {load_unit})")?;
+    writeln!(out, "  #  start  len  peak_load  sample_frame  partial")?;
+    for (i, stance) in report.stances.iter().enumerate() {
+        writeln!(
+            out,
+            "{:>3}  {:>5}  {:>3}  {:>9.1}  {:>12}  {}",
+            i,
+            stance.start,
+            stance.len,
+            stance.peak_load,
+            stance
+                .sample_frame
+                .map_or_else(|| "-".to_owned(), |f| f.to_string()),
+            partial_text(stance, report.frames)
+        )?;
     }
     Ok(())
 }

@@ -1,0 +1,143 @@
+//! Where a manifest report's extra inputs come from: the sensor and a few movies of the data set, and the
+//! velocity table and configuration of a `presrs simulate` folder.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use presrs_core::{Recording, SensorMeta};
+use presrs_io::read_recording_with;
+use presrs_sim::{SimConfig, VelocityTable};
+
+use crate::dataset::{Dataset, SampleOptions};
+use crate::error::Result;
+
+/// The sensor metadata of the manifest's first file and up to four movies (one per label) for load
+/// curves.
+pub(super) fn manifest_recordings(
+    loaded: &Dataset,
+    sample_options: &SampleOptions,
+    preferred_condition: Option<&str>,
+) -> (Option<SensorMeta>, Vec<(String, Recording)>) {
+    let read = sample_options.read.clone();
+    let mut sources: Vec<(&Path, Option<&str>, Option<&str>)> = Vec::new();
+    let mut seen = BTreeSet::new();
+    for s in &loaded.samples {
+        if seen.insert(s.source.as_path()) {
+            sources.push((
+                s.source.as_path(),
+                s.label.as_deref(),
+                s.condition.as_deref(),
+            ));
+        }
+    }
+    let meta = sources
+        .first()
+        .and_then(|(path, ..)| read_recording_with(path, &read).ok())
+        .map(|p| p.recording.meta);
+    let mut labels_done = BTreeSet::new();
+    let mut movies = Vec::new();
+    let preferred: Vec<_> = sources
+        .iter()
+        .filter(|s| preferred_condition.is_none_or(|c| s.2 == Some(c)))
+        .chain(sources.iter())
+        .collect();
+    for &&(path, label, condition) in &preferred {
+        if movies.len() >= 4 {
+            break;
+        }
+        if labels_done.contains(&label) {
+            continue;
+        }
+        let Ok(parsed) = read_recording_with(path, &read) else {
+            continue;
+        };
+        if parsed.recording.frame_count() < 10 {
+            continue;
+        }
+        labels_done.insert(label);
+        let name = format!(
+            "{}{}{}",
+            path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            ),
+            label.map_or(String::new(), |l| format!(" · {l}")),
+            condition.map_or(String::new(), |c| format!(" · {c}")),
+        );
+        let recording = first_seconds(&parsed.recording, 3.0).unwrap_or(parsed.recording);
+        movies.push((name, recording));
+    }
+    (meta, movies)
+}
+
+/// The first `seconds` of a recording (all of it when shorter or without a frame period).
+pub(super) fn first_seconds(recording: &Recording, seconds: f64) -> Result<Recording> {
+    let keep = recording
+        .frame_period_s()
+        .map_or(recording.frame_count(), |p| (seconds / p).ceil() as usize)
+        .clamp(1, recording.frame_count().max(1));
+    if keep >= recording.frame_count() {
+        return Ok(recording.clone());
+    }
+    let len = recording.grid().len() * keep;
+    Ok(Recording::new(
+        recording.grid(),
+        recording.frame_period_s(),
+        recording.data()[..len].to_vec(),
+        recording.present().map(<[bool]>::to_vec),
+        recording.meta.clone(),
+    )?)
+}
+
+/// Whether `manifest` sits in a `presrs simulate` output folder.
+pub(super) fn is_simulate_output(manifest: &Path) -> bool {
+    manifest
+        .parent()
+        .is_some_and(|dir| dir.join("table1.csv").is_file() && dir.join("config.json").is_file())
+}
+
+/// Velocity table and config of a `presrs simulate` folder (its `table1.csv` and `config.json`).
+pub(super) fn simulate_outputs(dir: &Path) -> Option<(VelocityTable, SimConfig)> {
+    let table_text = std::fs::read_to_string(dir.join("table1.csv")).ok()?;
+    let config =
+        SimConfig::from_json(&std::fs::read_to_string(dir.join("config.json")).ok()?).ok()?;
+    let mut rows: Vec<(String, String, f64, usize)> = Vec::new();
+    for line in table_text.lines().skip(1) {
+        let fields: Vec<&str> = line.split(',').collect();
+        if let [gait, terrain, velocity, _, hops, ..] = fields[..] {
+            rows.push((
+                gait.to_owned(),
+                terrain.to_owned(),
+                velocity.parse().ok()?,
+                hops.parse().ok()?,
+            ));
+        }
+    }
+    let mut gaits: Vec<String> = Vec::new();
+    let mut terrains: Vec<String> = Vec::new();
+    for (g, t, ..) in &rows {
+        if !gaits.contains(g) {
+            gaits.push(g.clone());
+        }
+        if !terrains.contains(t) {
+            terrains.push(t.clone());
+        }
+    }
+    let mut velocity = vec![vec![f64::NAN; terrains.len()]; gaits.len()];
+    let mut hops = vec![vec![0; terrains.len()]; gaits.len()];
+    for (g, t, v, n) in &rows {
+        let gi = gaits.iter().position(|x| x == g)?;
+        let ti = terrains.iter().position(|x| x == t)?;
+        velocity[gi][ti] = *v;
+        hops[gi][ti] = *n;
+    }
+    Some((
+        VelocityTable {
+            gaits,
+            terrains,
+            velocity_m_per_s: velocity,
+            hops,
+        },
+        config,
+    ))
+}
