@@ -20,6 +20,7 @@ pub mod sample;
 pub mod selection;
 pub mod split;
 pub mod stance;
+pub mod synthetic;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use presrs_core::Frame;
 use presrs_core::pipeline::TrainedModel;
-use presrs_core::testing::bench_fixture;
+use presrs_core::synthetic::{SYNTHETIC_CLASSES, bench_workload};
 use presrs_io::model_file::{ModelFile, Provenance, load_model, save_model};
 use presrs_io::npy::write_npy_f64;
 use serde::Serialize;
@@ -275,15 +275,15 @@ fn manifest_fixture(
     })
 }
 
-/// [`bench_fixture`]'s synthetic pattern, 64 test images cycling through the four classes.
+/// [`bench_workload`]'s synthetic pattern, 64 test images cycling through the four classes.
 fn synthetic_fixture(seed: u64) -> Result<Fixture> {
-    let (model, frames) = bench_fixture(seed, 64)?;
+    let (model, frames) = bench_workload(seed, 64)?;
     let n = frames.len();
     Ok(Fixture {
         model,
         frames,
         truth: (0..n)
-            .map(|i| presrs_core::testing::SYNTHETIC_CLASSES[i % 4].to_owned())
+            .map(|i| SYNTHETIC_CLASSES[i % 4].to_owned())
             .collect(),
         conditions: vec![String::new(); n],
     })

@@ -895,7 +895,7 @@ mod tests {
         use presrs_core::classifier::ClassifierKind;
         use presrs_core::features::FeatureKind;
         use presrs_core::perturb::Perturbation;
-        use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
+        use presrs_core::synthetic::{SYNTHETIC_CLASSES, synthetic_frame};
         use rand::SeedableRng;
 
         use crate::method::{ClassifierChoice, FeatureChoice};

@@ -10,6 +10,10 @@
 //! where a class is too small to fold), so the confidence is not the near-0/1 of a 50-dimensional
 //! Gaussian. The final model is fitted on training + validation vectors.
 
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt;
+use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::{Mat, MatMut, MatRef, Par};
 use serde::{Deserialize, Serialize};
 
 use super::calibration::{cross_validated_scores, fit_temperature};
@@ -99,31 +103,38 @@ pub fn ledoit_wolf(x: &[f64], d: usize) -> Result<(f64, Vec<f64>)> {
     Ok((shrinkage, emp))
 }
 
-/// Lower Cholesky factor of `a` (`d x d`) in place; false if not positive definite.
-fn cholesky_in_place(a: &mut [f64], d: usize) -> bool {
-    for j in 0..d {
-        let mut diag = a[j * d + j];
-        for k in 0..j {
-            diag -= a[j * d + k] * a[j * d + k];
-        }
-        if !(diag > 0.0 && diag.is_finite()) {
-            return false;
-        }
-        let diag = diag.sqrt();
-        a[j * d + j] = diag;
-        for i in j + 1..d {
-            let mut value = a[i * d + j];
-            for k in 0..j {
-                value -= a[i * d + k] * a[j * d + k];
-            }
-            a[i * d + j] = value / diag;
-        }
-        for k in j + 1..d {
-            a[j * d + k] = 0.0;
-        }
-    }
-    true
+/// The lower Cholesky factor `L` (`L Lᵀ = a`) of the symmetric `a` (`d x d`, row-major; its lower
+/// triangle is read), row-major with the upper triangle zero, by faer's LLᵀ, sequential so that the
+/// result does not depend on the thread count; `None` unless `a` is positive definite with a finite
+/// factor.
+fn cholesky_lower(a: &[f64], d: usize) -> Option<Vec<f64>> {
+    let mut factor = Mat::from_fn(d, d, |i, j| a[i * d + j]);
+    let par = Par::Seq;
+    let mut scratch = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(
+        d,
+        par,
+        Default::default(),
+    ));
+    llt::factor::cholesky_in_place(
+        factor.as_mut(),
+        Default::default(),
+        par,
+        MemStack::new(&mut scratch),
+        Default::default(),
+    )
+    .ok()?;
+    let lower: Vec<f64> = (0..d)
+        .flat_map(|i| (0..d).map(move |j| (i, j)))
+        .map(|(i, j)| if j <= i { factor[(i, j)] } else { 0.0 })
+        .collect();
+    // faer stops at a pivot that is not positive; a NaN or infinite entry is refused here.
+    let positive = (0..d).all(|i| lower[i * d + i] > 0.0);
+    (positive && lower.iter().all(|v| v.is_finite())).then_some(lower)
 }
+
+#[cfg(test)]
+#[path = "gaussian_linalg_tests.rs"]
+mod linalg_tests;
 
 /// Shrinks the covariance of centred `x` and factors it; returns (L, log det Σ, shrinkage weight).
 fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>, f64, f64)> {
@@ -141,24 +152,25 @@ fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>,
     }
     // A degenerate covariance (e.g. no spread, or no shrinkage with too few samples) gets a small ridge.
     let mut ridge = 1e-10 * mu.max(1e-300);
-    let original = cov.clone();
-    loop {
-        if cholesky_in_place(&mut cov, d) {
-            break;
+    let mut ridged = cov.clone();
+    let factor = loop {
+        if let Some(factor) = cholesky_lower(&ridged, d) {
+            break factor;
         }
         if ridge > 1e300 {
             return Err(CoreError::NotEnoughData(
                 "the class covariance cannot be made positive definite".into(),
             ));
         }
-        cov.copy_from_slice(&original);
+        ridged.copy_from_slice(&cov);
         for i in 0..d {
-            cov[i * d + i] += ridge;
+            ridged[i * d + i] += ridge;
         }
         ridge *= 100.0;
-    }
-    let log_det = 2.0 * (0..d).map(|i| cov[i * d + i].ln()).sum::<f64>();
-    Ok((cov, log_det, weight))
+    };
+    // det Σ = det L² = (Π L_ii)².
+    let log_det = 2.0 * (0..d).map(|i| factor[i * d + i].ln()).sum::<f64>();
+    Ok((factor, log_det, weight))
 }
 
 /// A trained Gaussian classifier (MLE or LDA). Deserialising checks that the parts fit together: `dims`
@@ -465,17 +477,15 @@ impl GaussianModel {
         scratch.diff.resize(d, 0.0);
         for (class, score) in out.iter_mut().enumerate() {
             let group = if self.shared { 0 } else { class };
-            let factor = &self.factors[group * d * d..(group + 1) * d * d];
+            let factor = MatRef::from_row_major_slice(&self.factors[group * d * d..][..d * d], d, d);
             let mean = &self.means[class * d..(class + 1) * d];
-            // z = L⁻¹ (x - μ) by forward substitution; the quadratic form is |z|².
-            let mut quad = 0.0;
-            for i in 0..d {
-                let row = &factor[i * d..i * d + i];
-                let dot: f64 = row.iter().zip(&scratch.diff[..i]).map(|(l, z)| l * z).sum();
-                let z = (x[i] - mean[i] - dot) / factor[i * d + i];
-                scratch.diff[i] = z;
-                quad += z * z;
+            for ((z, v), m) in scratch.diff.iter_mut().zip(x).zip(mean) {
+                *z = v - m;
             }
+            // z = L⁻¹ (x - μ) by faer's forward substitution; the quadratic form is |z|².
+            let z = MatMut::from_column_major_slice_mut(&mut scratch.diff, d, 1);
+            solve_lower_triangular_in_place(factor, z, Par::Seq);
+            let quad: f64 = scratch.diff.iter().map(|z| z * z).sum();
             *score = -0.5 * (quad + self.log_dets[group]);
         }
         Ok(())
