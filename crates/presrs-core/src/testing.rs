@@ -10,7 +10,10 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::error::Result;
 use crate::frame::{Frame, Grid};
-use crate::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
+use crate::pipeline::config::TrainConfig;
+use crate::pipeline::extract::LabeledImage;
+use crate::pipeline::model::TrainedModel;
+use crate::pipeline::train::train;
 
 /// A synthetic 100 Hz movie for benchmarks and tests of the online path: `stances` times, 20 empty flight
 /// frames then a 14-frame stance whose load follows a half sine over the print of [`synthetic_frame`]
