@@ -20,7 +20,7 @@ use presrs_core::{Frame, Recording, SensorMeta};
 use presrs_io::model_file::load_model;
 use presrs_io::read_recording_with;
 use presrs_sim::trace::{HopTrace, trace_hops};
-use presrs_sim::{Dataset as SimDataset, SimConfig, VelocityTable};
+use presrs_sim::{SimConfig, SimulatedDataset, VelocityTable};
 
 pub use presrs_report::{
     Evaluation, FaultResult, Figure, Format, MovieOptions, PressureFigure, PressureGrid,
@@ -192,7 +192,7 @@ pub struct SimulationReportData {
 }
 
 impl SimulationReportData {
-    pub fn from_dataset(dataset: &SimDataset) -> Result<Self> {
+    pub fn from_dataset(dataset: &SimulatedDataset) -> Result<Self> {
         let segment = ValidSegmentParams::default();
         let mut samples = Vec::new();
         for trial in &dataset.trials {

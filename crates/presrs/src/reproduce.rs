@@ -24,7 +24,7 @@ use presrs_core::split::{ValidationSize, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording};
 use presrs_io::atomic::write_atomic;
-use presrs_sim::{Dataset as SimDataset, DatasetSpec, SimConfig, TrialOutput, VelocityTable};
+use presrs_sim::{DatasetSpec, SimConfig, SimulatedDataset, TrialOutput, VelocityTable};
 use serde::Serialize;
 
 use crate::dataset::Sample;
@@ -645,7 +645,7 @@ fn obtain_dataset(
     dir: &Path,
     resimulate: bool,
     progress: &dyn Progress,
-) -> std::result::Result<(SimDataset, DatasetOrigin), (Option<String>, Error)> {
+) -> std::result::Result<(SimulatedDataset, DatasetOrigin), (Option<String>, Error)> {
     let wanted = DatasetKey::new(config, spec);
     let reason = if resimulate {
         "--resimulate".to_owned()
