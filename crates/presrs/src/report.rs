@@ -1252,7 +1252,7 @@ mod tests {
         };
         let args = parse(
             FeatureChoice::Kinds(vec![FeatureKind::Fft1d]),
-            ClassifierKind::Pwe,
+            ClassifierKind::PWE,
         );
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         let frames: Vec<(Frame, &str, &str)> = (0..96)
@@ -1320,7 +1320,7 @@ mod tests {
         // With the features automatic and the classifier fixed (mle), the line labelled the paper's
         // method is the paper's method: the numbers of the explicit fft1d + pwe run above (it was the
         // configured fft1d + mle).
-        let mle_args = parse(FeatureChoice::Auto, ClassifierKind::Mle);
+        let mle_args = parse(FeatureChoice::Auto, ClassifierKind::MLE);
         let mle_config = mle_args.method.train_config(Grid::new(44, 44)).unwrap();
         let (auto_faults, _) =
             fault_sweep(&mle_args, &samples, &protocol, &mle_config, &Quiet).unwrap();

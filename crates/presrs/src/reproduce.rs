@@ -609,7 +609,7 @@ fn compare_methods(
 ) -> Result<Vec<ComparisonRow>> {
     let mut configs = Vec::new();
     for kinds in CANDIDATE_FEATURES {
-        for kind in ClassifierKind::ALL {
+        for kind in ClassifierKind::all() {
             configs.push(
                 TrainConfig {
                     features: FeatureConfig::combined(kinds),

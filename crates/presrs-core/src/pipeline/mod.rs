@@ -20,12 +20,10 @@ pub(crate) mod session;
 pub(crate) mod train;
 
 pub use config::{CheckedTrainConfig, TrainConfig};
-pub(crate) use extract::FeatureTable;
 pub use extract::{LabeledImage, extract_features, extract_features_many, extract_features_with};
 pub use model::{MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN, TrainedModel, TrainingSummary};
 pub use session::{BATCH_BLOCK, Classification, Prediction, Session};
 pub use train::train;
-pub(crate) use train::{class_indices, class_names_of, project_rows};
 
 /// The record of the automatic choice, at its old path; it lives beside the procedure, in
 /// [`crate::selection`].

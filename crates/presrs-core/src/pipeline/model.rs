@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::classifier::{ClassifierModel, SigmaPoint};
+use crate::classifier::{ClassifierModel, PweFamily, SigmaPoint};
 use crate::crop::Crop;
 use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
@@ -232,18 +232,16 @@ impl TrainedModel {
 
     /// The Parzen kernel width, when the classifier is a Parzen window.
     pub fn sigma(&self) -> Option<f64> {
-        match &self.fields.classifier {
-            ClassifierModel::Pwe(model) => Some(model.sigma()),
-            _ => None,
-        }
+        let parzen = self.fields.classifier.get::<PweFamily>()?;
+        Some(parzen.sigma())
     }
 
     /// Validation accuracy against σ, when σ was searched (empty otherwise).
     pub fn validation_curve(&self) -> &[SigmaPoint] {
-        match &self.fields.classifier {
-            ClassifierModel::Pwe(model) => model.validation_curve(),
-            _ => &[],
-        }
+        self.fields
+            .classifier
+            .get::<PweFamily>()
+            .map_or(&[], |parzen| parzen.validation_curve())
     }
 
     pub fn summary(&self) -> &TrainingSummary {
