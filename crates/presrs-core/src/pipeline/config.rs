@@ -38,7 +38,7 @@ impl Default for TrainConfig {
 }
 
 impl TrainConfig {
-    /// Checks the parameters once; the result is what [`train`] takes.
+    /// Checks the parameters once; the result is what [`train`](crate::pipeline::train) takes.
     pub fn check(self) -> Result<CheckedTrainConfig> {
         if self.dims == 0 {
             return Err(CoreError::Param {
