@@ -112,11 +112,11 @@ impl ClassifierFamily for NearestMean {
                 .map(|(m, v)| (m - v) * (m - v))
                 .sum::<f64>();
         }
-        let best = posteriors.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let scale = model.scale * -best.max(f64::MIN_POSITIVE);
+        // The nearest mean gets exp(0) = 1, the others less.
+        let nearest = posteriors.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         posteriors
             .iter_mut()
-            .for_each(|p| *p = ((*p - best) / scale).exp());
+            .for_each(|p| *p = ((*p - nearest) / model.scale).exp());
         let total: f64 = posteriors.iter().sum();
         posteriors.iter_mut().for_each(|p| *p /= total);
         Ok((0..posteriors.len())
@@ -236,7 +236,9 @@ fn a_registered_toy_classifier_trains_classifies_round_trips_and_is_chosen() {
     let frames: Vec<_> = test_set.iter().map(|(frame, _)| frame.view()).collect();
     let (a, b) = (model.classify_batch(&frames), back.classify_batch(&frames));
     for (a, b) in a.into_iter().zip(b) {
-        assert_eq!(a.unwrap(), b.unwrap());
+        let (a, b) = (a.unwrap(), b.unwrap());
+        assert!((a.posteriors.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        assert_eq!(a, b);
     }
 
     // Picked up by the automatic choice's list of candidates, and scored there beside LDA.
