@@ -14,6 +14,8 @@ speed, with the same model files as the command line::
 """
 
 from ._native import (
+    CLASSIFIERS,
+    FEATURE_FAMILIES,
     Evaluation,
     Model,
     OnlineClassifier,
@@ -49,6 +51,8 @@ def stance_images(recording, *, include_partial=False, sample=None, **params):
 
 
 __all__ = [
+    "CLASSIFIERS",
+    "FEATURE_FAMILIES",
     "DataError",
     "Evaluation",
     "FileError",

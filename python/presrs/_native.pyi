@@ -9,6 +9,10 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+CLASSIFIERS: tuple[str, ...]
+"""The classifier names ``classifier=`` takes besides ``"auto"`` (``"pwe"``, ``"lda"``, ...)."""
+FEATURE_FAMILIES: tuple[str, ...]
+"""The feature families ``features=`` takes besides ``"auto"``, alone or joined with ``+``."""
 
 _Path = Union[str, PathLike[str]]
 _Images = npt.ArrayLike

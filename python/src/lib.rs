@@ -18,6 +18,18 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _native(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // The names `classifier=` and `features=` take (besides "auto"), from the core's registries.
+    let classifiers = presrs::core::classifier::ClassifierKind::names();
+    module.add(
+        "CLASSIFIERS",
+        pyo3::types::PyTuple::new(module.py(), classifiers)?,
+    )?;
+    let families =
+        presrs::core::features::FeatureKind::ALL.map(presrs::core::features::FeatureKind::as_str);
+    module.add(
+        "FEATURE_FAMILIES",
+        pyo3::types::PyTuple::new(module.py(), families)?,
+    )?;
     module.add_class::<model::Model>()?;
     module.add_class::<recording::Recording>()?;
     module.add_class::<recording::Stance>()?;

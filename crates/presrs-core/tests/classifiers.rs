@@ -190,7 +190,7 @@ fn check_backend(config: &ClassifierConfig) {
 
 #[test]
 fn every_backend_passes_the_shared_test() {
-    for kind in ClassifierKind::ALL {
+    for kind in ClassifierKind::all() {
         check_backend(&kind.default_config());
     }
 }

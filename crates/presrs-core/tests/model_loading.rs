@@ -64,7 +64,7 @@ fn classifier(v: &mut Value) -> &mut Value {
 #[test]
 fn knn_models_are_checked_on_load() {
     rejects(
-        ClassifierKind::Knn,
+        ClassifierKind::KNN,
         &[
             (&|v| classifier(v)["k"] = json!(0), "`k`"),
             (&|v| classifier(v)["k"] = json!(1000), "`k`"),
@@ -101,7 +101,7 @@ fn knn_models_are_checked_on_load() {
 
 #[test]
 fn gaussian_models_are_checked_on_load() {
-    for kind in [ClassifierKind::Mle, ClassifierKind::Lda] {
+    for kind in [ClassifierKind::MLE, ClassifierKind::LDA] {
         rejects(
             kind,
             &[
@@ -124,7 +124,7 @@ fn gaussian_models_are_checked_on_load() {
                 (&|v| classifier(v)["factors"][0] = json!(0.0), "`factors`"),
                 (&|v| classifier(v)["dims"] = json!(0), "`dims`"),
                 (
-                    &|v| classifier(v)["shared"] = json!(kind == ClassifierKind::Mle),
+                    &|v| classifier(v)["shared"] = json!(kind == ClassifierKind::MLE),
                     "`factors`",
                 ),
                 (&|v| classifier(v)["n_classes"] = json!(u64::MAX), "`means`"),
@@ -136,7 +136,7 @@ fn gaussian_models_are_checked_on_load() {
 #[test]
 fn svm_models_are_checked_on_load() {
     rejects(
-        ClassifierKind::Svm,
+        ClassifierKind::SVM,
         &[
             (&|v| classifier(v)["machines"] = json!([]), "`machines`"),
             (
@@ -169,7 +169,7 @@ fn svm_models_are_checked_on_load() {
 #[test]
 fn parzen_models_need_a_usable_sigma() {
     rejects(
-        ClassifierKind::Pwe,
+        ClassifierKind::PWE,
         &[
             // σ² underflows to 0: 1/(2σ²) would be infinite and every posterior NaN
             (&|v| classifier(v)["sigma"] = json!(1e-160), "`sigma`"),
@@ -184,7 +184,7 @@ fn parzen_models_need_a_usable_sigma() {
 #[test]
 fn sizes_are_capped_before_anything_is_planned() {
     rejects(
-        ClassifierKind::Pwe,
+        ClassifierKind::PWE,
         &[
             // would plan a 2^32-point FFT (tens of GB) before noticing the PCA does not fit
             (

@@ -85,7 +85,7 @@ fn steady_state_classification_does_not_allocate() {
         intensity: presrs_core::preprocess::Intensity::Log1p,
     };
     let mut cases = Vec::new();
-    for classifier in ClassifierKind::ALL {
+    for classifier in ClassifierKind::all() {
         cases.push((FeatureKind::Fft1d, classifier, Preprocess::NONE));
     }
     for features in [
@@ -93,9 +93,9 @@ fn steady_state_classification_does_not_allocate() {
         FeatureKind::Fft2dPolar,
         FeatureKind::Glcm,
     ] {
-        cases.push((features, ClassifierKind::Pwe, Preprocess::NONE));
+        cases.push((features, ClassifierKind::PWE, Preprocess::NONE));
     }
-    cases.push((FeatureKind::Fft1d, ClassifierKind::Pwe, fill));
+    cases.push((FeatureKind::Fft1d, ClassifierKind::PWE, fill));
 
     for (features, classifier, preprocess) in cases {
         let name = format!("{features:?} + {classifier:?} ({preprocess:?})");

@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used)] // helpers of integration tests are test code too
 
-use presrs_core::classifier::{ClassifierConfig, ParzenConfig, SigmaChoice};
+use presrs_core::classifier::{ClassifierConfig, ParzenConfig, PweFamily, SigmaChoice};
 use presrs_core::features::{FeatureConfig, Fft1dConfig, Fft1dExtractor};
 use presrs_core::pipeline::{
     BATCH_BLOCK, LabeledImage, TrainConfig, TrainedModel, extract_features, train,
@@ -34,9 +34,7 @@ fn bench_fixture_has_the_paper_shapes_and_learns() {
     assert_eq!(model.class_names(), SYNTHETIC_CLASSES);
     assert_eq!(model.summary().train_per_class, vec![13; 4]);
     assert_eq!(model.summary().validation_per_class, vec![7; 4]);
-    let presrs_core::classifier::ClassifierModel::Pwe(parzen) = model.classifier() else {
-        panic!("the default classifier is the Parzen window")
-    };
+    let parzen = model.classifier().get::<PweFamily>().unwrap();
     assert_eq!(parzen.n_stored(), 80);
     assert!(model.sigma().unwrap() > 0.0);
     assert_eq!(model.validation_curve().len(), 41);
@@ -265,7 +263,7 @@ fn training_input_errors() {
         .is_err()
     );
     let bad_sigma = TrainConfig {
-        classifier: ClassifierConfig::Pwe(ParzenConfig {
+        classifier: ClassifierConfig::of::<PweFamily>(ParzenConfig {
             sigma: SigmaChoice::Fixed { sigma: -1.0 },
         }),
         ..TrainConfig::default()
@@ -291,7 +289,7 @@ fn dims_are_capped_by_the_training_set_and_other_settings_work() {
             fft_len: Some(2000),
         }),
         dims: 51,
-        classifier: ClassifierConfig::Pwe(ParzenConfig {
+        classifier: ClassifierConfig::of::<PweFamily>(ParzenConfig {
             sigma: SigmaChoice::Fixed { sigma: 100.0 },
         }),
         ..TrainConfig::default()

@@ -104,7 +104,7 @@ fn normalised_features_do_not_depend_on_the_load() {
 fn a_model_trained_with_normalisation_classifies_scaled_images_alike() {
     let train_set = labeled_set(8, 40);
     let validation_set = labeled_set(4, 41);
-    for classifier in [ClassifierKind::Pwe, ClassifierKind::Lda] {
+    for classifier in [ClassifierKind::PWE, ClassifierKind::LDA] {
         let config = TrainConfig {
             dims: 20,
             classifier: classifier.default_config(),

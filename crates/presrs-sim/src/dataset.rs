@@ -554,11 +554,11 @@ type CurrentHop = (usize, crate::terrain::SurfacePatch, Vec<f64>, (f64, f64));
 
 /// A simulated data set held in memory.
 #[derive(Clone, Debug)]
-pub struct Dataset {
+pub struct SimulatedDataset {
     pub trials: Vec<TrialOutput>,
 }
 
-impl Dataset {
+impl SimulatedDataset {
     /// Table I of the simulation: mean forward velocity per gait and terrain.
     pub fn velocity_table(&self) -> VelocityTable {
         VelocityTable::from_trials(self.trials.iter().map(|t| {
@@ -575,10 +575,10 @@ impl Dataset {
 }
 
 /// Simulates a data set in memory (all trials in parallel).
-pub fn simulate_dataset(config: &SimConfig, spec: &DatasetSpec) -> Result<Dataset> {
+pub fn simulate_dataset(config: &SimConfig, spec: &DatasetSpec) -> Result<SimulatedDataset> {
     let sim = Simulator::new(config.clone(), spec.seed, spec.image_terrains.clone())?;
     let trials = sim.for_each_trial(spec, Ok::<_, SimError>)?;
-    Ok(Dataset { trials })
+    Ok(SimulatedDataset { trials })
 }
 
 /// Mean forward velocity per gait (rows) and terrain (columns), m/s.

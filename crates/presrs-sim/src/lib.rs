@@ -13,7 +13,7 @@ pub mod track;
 
 pub use config::{RealismParams, SimConfig};
 pub use dataset::{
-    Dataset, DatasetSpec, HopRecord, PAPER_TABLE1, Simulator, TrialOutput, TrialPlan,
+    DatasetSpec, HopRecord, PAPER_TABLE1, SimulatedDataset, Simulator, TrialOutput, TrialPlan,
     VelocityTable, simulate_dataset,
 };
 pub use error::{Result, SimError};

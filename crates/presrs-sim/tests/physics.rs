@@ -160,7 +160,7 @@ fn skin_force_balance_and_centre_of_pressure() {
     }
 }
 
-fn small_dataset(seed: u64, hops: usize) -> presrs_sim::Dataset {
+fn small_dataset(seed: u64, hops: usize) -> presrs_sim::SimulatedDataset {
     let mut spec = DatasetSpec::paper(seed);
     spec.hops_per_gait = Some(hops);
     simulate_dataset(&SimConfig::default(), &spec).unwrap()
@@ -251,7 +251,7 @@ fn heavier_robot_presses_harder() {
     let light = simulate_dataset(&SimConfig::default(), &spec).unwrap();
     spec.load_kg = Some(3.5);
     let heavy = simulate_dataset(&SimConfig::default(), &spec).unwrap();
-    let peak = |d: &presrs_sim::Dataset| {
+    let peak = |d: &presrs_sim::SimulatedDataset| {
         d.trials[0]
             .hops
             .iter()

@@ -123,7 +123,7 @@ impl Method {
     pub fn paper() -> Self {
         Self {
             features: FeatureChoice::Kinds(vec![FeatureKind::Fft1d]),
-            classifier: ClassifierChoice::Kind(ClassifierKind::Pwe),
+            classifier: ClassifierChoice::Kind(ClassifierKind::PWE),
             ..Self::default()
         }
     }
@@ -147,7 +147,7 @@ impl Method {
         };
         let classifier = match self.classifier {
             ClassifierChoice::Kind(kind) => kind.default_config(),
-            ClassifierChoice::Auto => ClassifierKind::Pwe.default_config(),
+            ClassifierChoice::Auto => ClassifierKind::PWE.default_config(),
         };
         self.config(grid, features, classifier)
     }
@@ -158,7 +158,7 @@ impl Method {
         self.config(
             grid,
             FeatureKind::Fft1d.default_config(),
-            ClassifierKind::Pwe.default_config(),
+            ClassifierKind::PWE.default_config(),
         )
     }
 
@@ -170,7 +170,7 @@ impl Method {
     pub fn candidates(&self, grid: Grid, all: bool) -> Result<Vec<CheckedTrainConfig>> {
         let classifiers: Vec<ClassifierKind> = match self.classifier {
             ClassifierChoice::Kind(kind) if !all => vec![kind],
-            _ => ClassifierKind::ALL.to_vec(),
+            _ => ClassifierKind::auto_candidates(),
         };
         let families: Vec<FeatureConfig> = match &self.features {
             FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
@@ -266,10 +266,12 @@ impl Method {
         let remedy = "give --validation a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) \
                       with at least 3 images per class";
         match self.classifier {
-            ClassifierChoice::Kind(ClassifierKind::Pwe) => Err(Error::invalid(format!(
-                "--validation {given} leaves no validation images, and the Parzen window (pwe) \
+            ClassifierChoice::Kind(kind) if kind == ClassifierKind::PWE => {
+                Err(Error::invalid(format!(
+                    "--validation {given} leaves no validation images, and the Parzen window (pwe) \
                  chooses its sigma on them: {remedy}, or another --classifier"
-            ))),
+                )))
+            }
             ClassifierChoice::Auto => Err(Error::invalid(format!(
                 "--validation {given} leaves no validation images, and the automatic choice tries \
                  the Parzen window (pwe), which chooses its sigma on them: {remedy}, or a \
@@ -388,7 +390,7 @@ impl FromStr for ClassifierChoice {
         ClassifierKind::parse(text).map(Self::Kind).map_err(|_| {
             format!(
                 "unknown classifier {text:?}; known: auto, {}",
-                ClassifierKind::ALL.map(ClassifierKind::as_str).join(", ")
+                ClassifierKind::names().join(", ")
             )
         })
     }
@@ -429,7 +431,7 @@ mod tests {
         let auto = Method::default();
         assert!(auto.is_auto());
         let candidates = auto.candidates(grid, false).unwrap();
-        let n_classifiers = ClassifierKind::ALL.len();
+        let n_classifiers = ClassifierKind::auto_candidates().len();
         // every family, and the paper's features with the two intensity transforms
         assert_eq!(
             candidates.len(),
@@ -475,7 +477,7 @@ mod tests {
         assert_eq!(intensities(&given), [Intensity::Sqrt]);
         assert_eq!(
             Method::default().candidates(grid, true).unwrap().len(),
-            CANDIDATE_FEATURES.len() * ClassifierKind::ALL.len()
+            CANDIDATE_FEATURES.len() * ClassifierKind::auto_candidates().len()
         );
         let paper = Method::paper();
         assert!(!paper.is_auto());
@@ -531,7 +533,7 @@ mod tests {
         assert!(Method::paper().check_validation_set(none, 0).is_err());
         assert!(Method::default().check_validation_set(none, 0).is_err());
         let lda = Method {
-            classifier: ClassifierChoice::Kind(ClassifierKind::Lda),
+            classifier: ClassifierChoice::Kind(ClassifierKind::LDA),
             ..Method::paper()
         };
         assert!(lda.check_validation_set(none, 0).is_ok());

@@ -21,7 +21,7 @@ use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording, SensorMeta};
 use presrs_io::model_file::load_model;
 use presrs_sim::trace::{HopTrace, trace_hops};
-use presrs_sim::{Dataset as SimDataset, SimConfig, VelocityTable};
+use presrs_sim::{SimConfig, SimulatedDataset, VelocityTable};
 
 pub use presrs_report::{
     Evaluation, FaultResult, Figure, Format, MovieOptions, PressureFigure, PressureGrid,
@@ -175,7 +175,7 @@ pub struct SimulationReportData {
 }
 
 impl SimulationReportData {
-    pub fn from_dataset(dataset: &SimDataset) -> Result<Self> {
+    pub fn from_dataset(dataset: &SimulatedDataset) -> Result<Self> {
         let segment = ValidSegmentParams::default();
         let mut samples = Vec::new();
         for trial in &dataset.trials {
@@ -915,7 +915,7 @@ mod tests {
         };
         let args = parse(
             FeatureChoice::Kinds(vec![FeatureKind::Fft1d]),
-            ClassifierKind::Pwe,
+            ClassifierKind::PWE,
         );
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         let frames: Vec<(Frame, &str, &str)> = (0..96)
@@ -983,7 +983,7 @@ mod tests {
         // With the features automatic and the classifier fixed (mle), the line labelled the paper's
         // method is the paper's method: the numbers of the explicit fft1d + pwe run above (it was the
         // configured fft1d + mle).
-        let mle_args = parse(FeatureChoice::Auto, ClassifierKind::Mle);
+        let mle_args = parse(FeatureChoice::Auto, ClassifierKind::MLE);
         let mle_config = mle_args.method.train_config(Grid::new(44, 44)).unwrap();
         let (auto_faults, _) =
             fault_sweep(&mle_args, &samples, &protocol, &mle_config, &Quiet).unwrap();

@@ -26,7 +26,7 @@ use presrs_core::split::{ValidationSize, stratified_split};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, Recording};
 use presrs_io::atomic::write_atomic;
-use presrs_sim::{Dataset as SimDataset, DatasetSpec, SimConfig, TrialOutput, VelocityTable};
+use presrs_sim::{DatasetSpec, SimConfig, SimulatedDataset, TrialOutput, VelocityTable};
 
 use crate::dataset::Sample;
 use crate::error::{Context, Error, Result};
@@ -593,7 +593,7 @@ fn compare_methods(
 ) -> Result<Vec<ComparisonRow>> {
     let mut configs = Vec::new();
     for kinds in CANDIDATE_FEATURES {
-        for kind in ClassifierKind::ALL {
+        for kind in ClassifierKind::all() {
             configs.push(
                 TrainConfig {
                     features: FeatureConfig::combined(kinds),
@@ -629,7 +629,7 @@ fn obtain_dataset(
     dir: &Path,
     resimulate: bool,
     progress: &dyn Progress,
-) -> std::result::Result<(SimDataset, DatasetOrigin), (Option<String>, Error)> {
+) -> std::result::Result<(SimulatedDataset, DatasetOrigin), (Option<String>, Error)> {
     let wanted = DatasetKey::new(config, spec);
     let reason = if resimulate {
         "--resimulate".to_owned()

@@ -22,7 +22,8 @@ use std::path::{Path, PathBuf};
 use presrs_sim::dataset::{BUILTIN_TERRAINS, first_repeated};
 use presrs_sim::terrain::HeightMap;
 use presrs_sim::{
-    Dataset, DatasetSpec, HopRecord, SimConfig, Simulator, TrialOutput, TrialPlan, VelocityTable,
+    DatasetSpec, HopRecord, SimConfig, SimulatedDataset, Simulator, TrialOutput, TrialPlan,
+    VelocityTable,
 };
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
@@ -217,7 +218,7 @@ pub fn write_dataset_with(
     out_dir: &Path,
     keep: bool,
     progress: &dyn Progress,
-) -> Result<(DatasetSummary, Option<Dataset>)> {
+) -> Result<(DatasetSummary, Option<SimulatedDataset>)> {
     let key = DatasetKey::new(config, spec);
     let sim = Simulator::new(config.clone(), spec.seed, spec.image_terrains.clone())?;
     let stamp_path = out_dir.join(STAMP_FILE);
@@ -259,7 +260,7 @@ pub fn write_dataset_with(
     })?;
     remove_stale(out_dir, old_files, &stamp);
     let summary = DatasetSummary::of(out_dir, &truths, frames, velocity);
-    Ok((summary, keep.then_some(Dataset { trials: kept })))
+    Ok((summary, keep.then_some(SimulatedDataset { trials: kept })))
 }
 
 /// Removes the folder's stamp first: until the new one is written, the folder claims no complete data
@@ -455,7 +456,7 @@ impl DatasetSummary {
 /// Reads back the data set `write_dataset` wrote in `dir`, if its stamp says it was made from `wanted`
 /// and every file is as the stamp lists it (size and fingerprint). The error says why not, in words
 /// that follow "not reusing DIR: ".
-pub fn read_dataset(dir: &Path, wanted: &DatasetKey) -> Result<(Dataset, DatasetStamp)> {
+pub fn read_dataset(dir: &Path, wanted: &DatasetKey) -> Result<(SimulatedDataset, DatasetStamp)> {
     let stamp_path = dir.join(STAMP_FILE);
     let text = match std::fs::read_to_string(&stamp_path) {
         Ok(text) => text,
@@ -531,13 +532,17 @@ pub fn read_dataset(dir: &Path, wanted: &DatasetKey) -> Result<(Dataset, Dataset
         "the movies hold {frames} frames, the stamp says {}",
         stamp.frames
     );
-    Ok((Dataset { trials }, stamp))
+    Ok((SimulatedDataset { trials }, stamp))
 }
 
 /// Checks that this build's simulator still makes `dataset` (read back from a folder): simulates its first
 /// trial again (about 1/50 of the time of the whole data set) and compares the movie and the truth. A
 /// simulator changed without a version change (a development build) is caught here; the error says so.
-pub fn check_simulator(config: &SimConfig, spec: &DatasetSpec, dataset: &Dataset) -> Result<()> {
+pub fn check_simulator(
+    config: &SimConfig,
+    spec: &DatasetSpec,
+    dataset: &SimulatedDataset,
+) -> Result<()> {
     let Some(stored) = dataset.trials.first() else {
         return Ok(());
     };

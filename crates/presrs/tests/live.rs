@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use presrs::core::Grid;
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer, base64, sse_event};
-use presrs::stream::SessionTap;
+use presrs::stream::ConnectionTap;
 use serde_json::Value;
 
 fn hub() -> LiveHub {

@@ -16,8 +16,8 @@ use presrs::core::pipeline::{LabeledImage, TrainedModel, train};
 use presrs::core::{Frame, Grid};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
 use presrs::stream::{
-    InputFormat, ServerNotice, ServerOptions, SessionOptions, SessionTap, ShutdownHandle,
-    StreamServer, run_session, run_session_tapped,
+    ConnectionOptions, ConnectionTap, InputFormat, ServerNotice, ServerOptions, ShutdownHandle,
+    StreamServer, run_connection, run_connection_tapped,
 };
 use serde_json::Value;
 
@@ -214,14 +214,14 @@ fn a_session_runs_over_any_reader_and_writer() {
     let (bytes, frames) = stream_bytes("furrows", 2);
     // The last frame cut short: a fatal error after everything before it was classified.
     let input = &bytes[..bytes.len() - 10];
-    let options = SessionOptions {
+    let options = ConnectionOptions {
         format: InputFormat::Binary,
         name: "memory".into(),
-        ..SessionOptions::default()
+        ..ConnectionOptions::default()
     };
     let notices = Mutex::new(Vec::new());
     let mut output = Vec::new();
-    let summary = run_session(
+    let summary = run_connection(
         &model(),
         &profile(),
         input,
@@ -254,14 +254,15 @@ fn a_frame_cut_by_a_stop_is_the_end_not_an_error() {
     let input = &bytes[..bytes.len() - 10];
     let stop = ShutdownHandle::default();
     stop.stop();
-    let options = SessionOptions {
+    let options = ConnectionOptions {
         format: InputFormat::Binary,
         name: "memory".into(),
         stop: Some(stop),
-        ..SessionOptions::default()
+        ..ConnectionOptions::default()
     };
     let mut output = Vec::new();
-    let summary = run_session(&model(), &profile(), input, &mut output, &options, &|_| {}).unwrap();
+    let summary =
+        run_connection(&model(), &profile(), input, &mut output, &options, &|_| {}).unwrap();
     let events = events(&output);
     assert_eq!(summary.stats.frames, frames as u64 - 1);
     assert!(!summary.had_errors(), "{events:?}");
@@ -276,7 +277,7 @@ struct Seen {
     lines: Vec<String>,
 }
 
-impl SessionTap for Seen {
+impl ConnectionTap for Seen {
     fn frame(
         &mut self,
         index: u64,
@@ -295,15 +296,15 @@ impl SessionTap for Seen {
 #[test]
 fn a_tap_sees_every_frame_and_exactly_the_lines_written() {
     let (bytes, frames) = stream_bytes("ridges", 2);
-    let options = SessionOptions {
+    let options = ConnectionOptions {
         format: InputFormat::Binary,
         name: "memory".into(),
-        ..SessionOptions::default()
+        ..ConnectionOptions::default()
     };
     let mut output = Vec::new();
     let mut seen = Seen::default();
     let (model, profile) = (model(), profile());
-    let summary = run_session_tapped(
+    let summary = run_connection_tapped(
         &model,
         &profile,
         &bytes[..],
@@ -385,13 +386,13 @@ fn a_floor_profile_classifies_every_press_on_a_preload() {
     profile.gait_table.insert("ridges".into(), "G3".into());
 
     let (bytes, _) = encode_loads("ridges", &preload_loads(9, 7));
-    let options = SessionOptions {
+    let options = ConnectionOptions {
         format: InputFormat::Binary,
         name: "preload".into(),
-        ..SessionOptions::default()
+        ..ConnectionOptions::default()
     };
     let mut output = Vec::new();
-    let summary = run_session(
+    let summary = run_connection(
         &model(),
         &profile,
         &bytes[..],
@@ -423,7 +424,7 @@ fn a_floor_profile_classifies_every_press_on_a_preload() {
         ..profile
     };
     let mut output = Vec::new();
-    run_session(
+    run_connection(
         &model(),
         &baseline_profile,
         &bytes[..],

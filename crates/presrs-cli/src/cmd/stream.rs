@@ -27,9 +27,9 @@ use signal_hook::iterator::Signals;
 
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
 use presrs::stream::{
-    BagRecorder, ConnectionSummary, InputFormat, ProfileOverrides, ServerNotice, ServerOptions,
-    SessionNotice, SessionOptions, SessionTap, ShutdownHandle, StreamServer, Taps, resolve_profile,
-    run_session_tapped,
+    BagRecorder, ConnectionNotice, ConnectionOptions, ConnectionSummary, ConnectionTap,
+    InputFormat, ProfileOverrides, ServerNotice, ServerOptions, ShutdownHandle, StreamServer, Taps,
+    resolve_profile, run_connection_tapped,
 };
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use presrs_io::model_file::load_model;
@@ -208,7 +208,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     match args.listen {
         None => {
             let mut tap = live.as_ref().map(|(hub, _)| hub.tap());
-            let tap: &mut dyn SessionTap = match tap.as_mut() {
+            let tap: &mut dyn ConnectionTap = match tap.as_mut() {
                 Some(tap) => tap,
                 None => &mut presrs::stream::NoTap,
             };
@@ -219,7 +219,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             if let Some((hub, _)) = &live {
                 let hub = hub.clone();
                 server = server.with_taps(Arc::new(move |peer: &str| {
-                    Box::new(hub.exclusive_tap(peer)) as Box<dyn SessionTap + Send>
+                    Box::new(hub.exclusive_tap(peer)) as Box<dyn ConnectionTap + Send>
                 }));
             }
             let local = server.local_addr();
@@ -358,18 +358,18 @@ fn run_stdin(
     model: &presrs::core::TrainedModel,
     profile: &presrs::core::online::OnlineProfile,
     signals: Signals,
-    tap: &mut dyn SessionTap,
+    tap: &mut dyn ConnectionTap,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
     let stop = ShutdownHandle::default();
-    let options = SessionOptions {
+    let options = ConnectionOptions {
         format: args.format.into(),
         name: "stdin".to_owned(),
         max_frame_bytes: args.max_frame_bytes,
         stop: Some(stop.clone()),
         topic: args.topic.clone(),
     };
-    let log = |notice: &SessionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
+    let log = |notice: &ConnectionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
     let (input, end_input) = StoppableInput::start();
     let caught = Arc::new(Mutex::new(None));
     let signal_thread = on_signal(signals, caught.clone(), move || {
@@ -379,12 +379,12 @@ fn run_stdin(
     });
     let input = std::io::BufReader::with_capacity(64 * 1024, input);
     let summary = match &args.record {
-        None => run_session_tapped(model, profile, input, out, &options, &log, tap)?,
+        None => run_connection_tapped(model, profile, input, out, &options, &log, tap)?,
         Some(path) => {
             let mut bag = BagRecorder::create(path)?;
             let summary = {
                 let mut taps = Taps(vec![tap, &mut bag]);
-                run_session_tapped(model, profile, input, out, &options, &log, &mut taps)?
+                run_connection_tapped(model, profile, input, out, &options, &log, &mut taps)?
             };
             let recorded = bag.finish()?;
             stderr_line!(
@@ -426,7 +426,7 @@ fn print_server_notice(notice: &ServerNotice<'_>) {
             stderr_line!("presrs stream: {peer}: refused, {max_clients} clients already connected")
         }
         ServerNotice::Connected { peer } => stderr_line!("presrs stream: {peer}: connected"),
-        ServerNotice::Session { peer, notice } => {
+        ServerNotice::Connection { peer, notice } => {
             stderr_line!("presrs stream: {peer}: {}", notice_text(notice));
         }
         ServerNotice::Ended { peer, summary } => {
@@ -440,16 +440,16 @@ fn print_server_notice(notice: &ServerNotice<'_>) {
 }
 
 /// A session's notice as the stderr line says it.
-pub(super) fn notice_text(notice: &SessionNotice) -> String {
+pub(super) fn notice_text(notice: &ConnectionNotice) -> String {
     match notice {
-        SessionNotice::Error(message) => message.clone(),
-        SessionNotice::ErrorsMuted => "further errors are counted, not logged".to_owned(),
-        SessionNotice::WarmupDone { frames } => format!(
+        ConnectionNotice::Error(message) => message.clone(),
+        ConnectionNotice::ErrorsMuted => "further errors are counted, not logged".to_owned(),
+        ConnectionNotice::WarmupDone { frames } => format!(
             "warm-up calibration done on the first {frames} frames: stances before frame {frames} were \
              not classified (give --calibrate MANIFEST or --profile, or a model with an online profile, to \
              classify from the first frame)"
         ),
-        SessionNotice::WarmupUnfinished { frames } => format!(
+        ConnectionNotice::WarmupUnfinished { frames } => format!(
             "the stream ended during the warm-up calibration ({frames} frames): no stance was classified \
              (give --calibrate MANIFEST or --profile, or a model with an online profile, to classify from \
              the first frame)"

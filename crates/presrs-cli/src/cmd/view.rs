@@ -11,7 +11,7 @@ use signal_hook::consts::{SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
 
 use presrs::live::{LiveInfo, ReplayOptions, replay_period_s, replay_recording};
-use presrs::stream::{ProfileOverrides, SessionNotice, ShutdownHandle, resolve_profile};
+use presrs::stream::{ConnectionNotice, ProfileOverrides, ShutdownHandle, resolve_profile};
 use presrs_io::model_file::load_model;
 
 use super::stream::{HttpArgs, notice_text, on_signal, signal_name, summary_text};
@@ -113,7 +113,7 @@ pub fn run(args: &ViewArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.delay > 0.0 {
         std::thread::sleep(std::time::Duration::from_secs_f64(args.delay.min(3600.0)));
     }
-    let log = |notice: &SessionNotice| stderr_line!("presrs view: {}", notice_text(notice));
+    let log = |notice: &ConnectionNotice| stderr_line!("presrs view: {}", notice_text(notice));
     let classify = model
         .as_ref()
         .zip(profile.as_ref())

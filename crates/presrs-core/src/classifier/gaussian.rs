@@ -21,6 +21,7 @@ use super::common::LabeledVectors;
 use super::common::{
     accuracy_of_scores, check_vectors, merged, require_per_class, softmax_in_place,
 };
+use super::family::{ClassifierFamily, FitData};
 use crate::error::{CoreError, Result, check_len};
 
 /// How the covariances are shrunk.
@@ -507,4 +508,116 @@ impl GaussianModel {
 #[derive(Clone, Debug, Default)]
 pub struct GaussianScratch {
     diff: Vec<f64>,
+}
+
+/// Gaussian maximum likelihood (one shrunk covariance per class) as a registered family (`mle`).
+#[derive(Debug)]
+pub struct MleFamily;
+
+impl ClassifierFamily for MleFamily {
+    const NAME: &'static str = "mle";
+    type Config = GaussianConfig;
+    type Model = GaussianModel;
+    type Scratch = GaussianScratch;
+
+    fn check(config: &GaussianConfig) -> Result<()> {
+        config.check()
+    }
+
+    fn fit(config: &GaussianConfig, data: FitData<'_>) -> Result<GaussianModel> {
+        GaussianModel::fit(
+            data.train,
+            data.validation,
+            data.n_classes,
+            data.dims,
+            false,
+            config,
+        )
+    }
+
+    fn dims(model: &GaussianModel) -> usize {
+        model.dims()
+    }
+
+    fn n_classes(model: &GaussianModel) -> usize {
+        model.n_classes()
+    }
+
+    fn describe(model: &GaussianModel) -> String {
+        gaussian_describe(model)
+    }
+
+    fn scratch(model: &GaussianModel) -> GaussianScratch {
+        model.scratch()
+    }
+
+    fn classify_into(
+        model: &GaussianModel,
+        x: &[f64],
+        scratch: &mut GaussianScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        model.classify_into(x, scratch, posteriors)
+    }
+}
+
+/// Linear discriminant analysis (one shared shrunk covariance) as a registered family (`lda`).
+#[derive(Debug)]
+pub struct LdaFamily;
+
+impl ClassifierFamily for LdaFamily {
+    const NAME: &'static str = "lda";
+    type Config = GaussianConfig;
+    type Model = GaussianModel;
+    type Scratch = GaussianScratch;
+
+    fn check(config: &GaussianConfig) -> Result<()> {
+        config.check()
+    }
+
+    fn fit(config: &GaussianConfig, data: FitData<'_>) -> Result<GaussianModel> {
+        GaussianModel::fit(
+            data.train,
+            data.validation,
+            data.n_classes,
+            data.dims,
+            true,
+            config,
+        )
+    }
+
+    fn dims(model: &GaussianModel) -> usize {
+        model.dims()
+    }
+
+    fn n_classes(model: &GaussianModel) -> usize {
+        model.n_classes()
+    }
+
+    fn describe(model: &GaussianModel) -> String {
+        gaussian_describe(model)
+    }
+
+    fn scratch(model: &GaussianModel) -> GaussianScratch {
+        model.scratch()
+    }
+
+    fn classify_into(
+        model: &GaussianModel,
+        x: &[f64],
+        scratch: &mut GaussianScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        model.classify_into(x, scratch, posteriors)
+    }
+}
+
+/// The shrinkage and temperature training chose, in words.
+fn gaussian_describe(model: &GaussianModel) -> String {
+    let s = model.shrinkage();
+    let mean = s.iter().sum::<f64>() / s.len().max(1) as f64;
+    format!(
+        "Ledoit-Wolf shrinkage {mean:.3}, temperature {:.3e}",
+        model.temperature()
+    )
 }

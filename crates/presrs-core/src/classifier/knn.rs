@@ -20,6 +20,7 @@ use super::common::LabeledVectors;
 use super::common::{
     check_vectors, merged, require_per_class, softmax_in_place, validation_accuracy,
 };
+use super::family::{ClassifierFamily, FitData};
 use crate::error::{CoreError, Result, check_len};
 
 /// Parameters of the k-NN classifier.
@@ -371,6 +372,56 @@ const MAX_CALIBRATION_QUERIES: usize = 1000;
 pub struct KnnScratch {
     nearest: Vec<(f64, usize)>,
     closest: Vec<f64>,
+}
+
+/// k-nearest neighbours as a registered family (`knn`).
+#[derive(Debug)]
+pub struct KnnFamily;
+
+impl ClassifierFamily for KnnFamily {
+    const NAME: &'static str = "knn";
+    type Config = KnnConfig;
+    type Model = KnnModel;
+    type Scratch = KnnScratch;
+
+    fn check(config: &KnnConfig) -> Result<()> {
+        config.check()
+    }
+
+    fn fit(config: &KnnConfig, data: FitData<'_>) -> Result<KnnModel> {
+        KnnModel::fit(
+            data.train,
+            data.validation,
+            data.n_classes,
+            data.dims,
+            config,
+        )
+    }
+
+    fn dims(model: &KnnModel) -> usize {
+        model.dims()
+    }
+
+    fn n_classes(model: &KnnModel) -> usize {
+        model.n_classes()
+    }
+
+    fn describe(model: &KnnModel) -> String {
+        format!("k {}, temperature {:.3e}", model.k(), model.temperature())
+    }
+
+    fn scratch(model: &KnnModel) -> KnnScratch {
+        model.scratch()
+    }
+
+    fn classify_into(
+        model: &KnnModel,
+        x: &[f64],
+        scratch: &mut KnnScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        model.classify_into(x, scratch, posteriors)
+    }
 }
 
 #[cfg(test)]

@@ -27,6 +27,7 @@ use super::calibration::{fit_temperature, is_usable_temperature, log_sum_exp, un
 use super::common::{argmax, check_vectors, require_per_class};
 // Defined with the other shared helpers (calibration needs it too); kept nameable from here.
 pub use super::common::LabeledVectors;
+use super::family::{ClassifierFamily, FitData};
 use crate::error::{CoreError, Result, check_len};
 use crate::kernels::{Aligned, columns_times_vector, exp_neg_in_place, ln_in_place};
 
@@ -813,6 +814,61 @@ fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
         }
     }
     partial.iter().sum::<f64>() + tail
+}
+
+/// The Parzen window as a registered classifier family (`pwe`).
+#[derive(Debug)]
+pub struct PweFamily;
+
+impl ClassifierFamily for PweFamily {
+    const NAME: &'static str = "pwe";
+    type Config = ParzenConfig;
+    type Model = ParzenModel;
+    type Scratch = ParzenScratch;
+
+    fn check(config: &ParzenConfig) -> Result<()> {
+        config.check()
+    }
+
+    /// σ searched on validation needs it; a fixed σ does not.
+    fn needs_validation(config: &ParzenConfig) -> bool {
+        matches!(config.sigma, SigmaChoice::Search(_))
+    }
+
+    fn fit(config: &ParzenConfig, data: FitData<'_>) -> Result<ParzenModel> {
+        ParzenModel::fit(
+            data.train,
+            data.validation,
+            data.n_classes,
+            data.dims,
+            config,
+        )
+    }
+
+    fn dims(model: &ParzenModel) -> usize {
+        model.dims()
+    }
+
+    fn n_classes(model: &ParzenModel) -> usize {
+        model.n_classes()
+    }
+
+    fn describe(model: &ParzenModel) -> String {
+        format!("sigma {:.4e}", model.sigma())
+    }
+
+    fn scratch(model: &ParzenModel) -> ParzenScratch {
+        model.scratch()
+    }
+
+    fn classify_into(
+        model: &ParzenModel,
+        x: &[f64],
+        scratch: &mut ParzenScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        model.classify_into(x, scratch, posteriors)
+    }
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 
 use super::{MAX_INNER_FOLDS, ValidateBy};
 use crate::error::{CoreError, Result};
-use crate::pipeline::LabeledImage;
+use crate::pipeline::extract::LabeledImage;
 use crate::split::{ValidationSize, stratified_split};
 
 /// Which field of an image its folds are made by.

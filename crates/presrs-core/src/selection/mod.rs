@@ -23,6 +23,7 @@
 //! others ([`CandidateScore::dropped_early`]; never chosen).
 
 mod folds;
+pub(crate) mod record;
 mod scoring;
 #[cfg(test)]
 mod tests;
@@ -32,11 +33,12 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
-use crate::pipeline::{CheckedTrainConfig, LabeledImage, TrainedModel, train};
+use crate::pipeline::config::CheckedTrainConfig;
+use crate::pipeline::extract::LabeledImage;
+use crate::pipeline::model::TrainedModel;
+use crate::pipeline::train::train;
 
-// The record of a selection is plain data kept in the trained model (`pipeline`); the procedure lives
-// here. Re-exported so `select`'s result type is nameable beside it.
-pub use crate::pipeline::{CandidateScore, Selection};
+pub use record::{CandidateScore, Selection};
 
 /// At most this many folds when validating by group or condition: more values are merged, whole, into
 /// this many folds (as scikit-learn's `GroupKFold`, 5 folds by default). Each fold costs a training of

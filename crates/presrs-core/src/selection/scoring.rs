@@ -16,10 +16,10 @@ use crate::classifier::LabeledVectors;
 use crate::error::{CoreError, Result};
 use crate::metrics::MeanStd;
 use crate::pca::Pca;
-use crate::pipeline::{
-    CandidateScore, CheckedTrainConfig, FeatureTable, LabeledImage, TrainConfig, class_indices,
-    class_names_of, project_rows,
-};
+use crate::pipeline::config::{CheckedTrainConfig, TrainConfig};
+use crate::pipeline::extract::{FeatureTable, LabeledImage};
+use crate::pipeline::train::{class_indices, class_names_of, project_rows};
+use crate::selection::record::CandidateScore;
 
 /// Candidates that share crop, preprocessing and features (indices into the candidate list, in order).
 struct FeatureGroup {

@@ -38,7 +38,7 @@ fn validation_follows_the_groups_then_the_conditions() {
         .collect();
     let images = grouped(&frames);
     let lda = TrainConfig {
-        classifier: crate::classifier::ClassifierKind::Lda.default_config(),
+        classifier: crate::classifier::ClassifierKind::LDA.default_config(),
         dims: 8,
         ..TrainConfig::default()
     }
@@ -148,9 +148,11 @@ fn candidates_needing_validation_images_are_refused_up_front() {
         "{err}"
     );
     let fixed = TrainConfig {
-        classifier: crate::classifier::ClassifierConfig::Pwe(crate::classifier::ParzenConfig {
-            sigma: crate::classifier::SigmaChoice::Fixed { sigma: 1.0 },
-        }),
+        classifier: crate::classifier::ClassifierConfig::of::<crate::classifier::PweFamily>(
+            crate::classifier::ParzenConfig {
+                sigma: crate::classifier::SigmaChoice::Fixed { sigma: 1.0 },
+            },
+        ),
         ..TrainConfig::default()
     };
     let trained = train_auto(
@@ -220,7 +222,7 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
         .unwrap()
     };
     let mut candidates = Vec::new();
-    for classifier in ClassifierKind::ALL {
+    for classifier in ClassifierKind::all() {
         candidates.push(config(
             &[FeatureKind::Fft1d],
             classifier,
@@ -230,25 +232,25 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
     }
     candidates.push(config(
         &[FeatureKind::Fft1d],
-        ClassifierKind::Lda,
+        ClassifierKind::LDA,
         5,
         Intensity::None,
     ));
     candidates.push(config(
         &[FeatureKind::Fft2d],
-        ClassifierKind::Svm,
+        ClassifierKind::SVM,
         12,
         Intensity::None,
     ));
     candidates.push(config(
         &[FeatureKind::Fft1d],
-        ClassifierKind::Pwe,
+        ClassifierKind::PWE,
         12,
         Intensity::Sqrt,
     ));
     candidates.push(config(
         &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
-        ClassifierKind::Knn,
+        ClassifierKind::KNN,
         8,
         Intensity::None,
     ));
@@ -295,14 +297,14 @@ fn a_spent_budget_scores_the_first_feature_group_only() {
     let candidates = [
         with(
             crate::features::FeatureConfig::default(),
-            ClassifierKind::Pwe,
+            ClassifierKind::PWE,
         ),
-        with(fft2d.clone(), ClassifierKind::Lda),
+        with(fft2d.clone(), ClassifierKind::LDA),
         with(
             crate::features::FeatureConfig::default(),
-            ClassifierKind::Lda,
+            ClassifierKind::LDA,
         ),
-        with(fft2d, ClassifierKind::Svm),
+        with(fft2d, ClassifierKind::SVM),
     ];
     let choice = AutoChoice::new(&candidates, ValidateBy::Auto).with_budget(Some(Duration::ZERO));
     let selection = select(&images, &choice, 1).unwrap();
@@ -386,9 +388,9 @@ fn a_race_drops_clear_losers_after_the_first_folds_only() {
     };
     // One component cannot tell four classes apart.
     let candidates = [
-        config(ClassifierKind::Pwe, 12),
-        config(ClassifierKind::Lda, 1),
-        config(ClassifierKind::Knn, 12),
+        config(ClassifierKind::PWE, 12),
+        config(ClassifierKind::LDA, 1),
+        config(ClassifierKind::KNN, 12),
     ];
     let (folds, _) = folds::make_folds(&images, ValidateBy::Group, 1).unwrap();
     assert_eq!(folds.len(), 4);

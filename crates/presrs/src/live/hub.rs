@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use presrs_core::Grid;
 
-use crate::stream::SessionTap;
+use crate::stream::ConnectionTap;
 
 /// Total loads kept for a viewer that connects late or falls behind (the trace it can draw).
 pub const LOAD_HISTORY: usize = 2048;
@@ -233,7 +233,7 @@ impl Drop for ViewerGuard {
     }
 }
 
-/// The [`SessionTap`] of a live view: it never waits for a viewer. Each frame costs its total load and
+/// The [`ConnectionTap`] of a live view: it never waits for a viewer. Each frame costs its total load and
 /// a copy into the hub's one frame slot (the viewers take the latest
 /// frame, skipping those in between); lines go to a bounded history.
 #[derive(Debug)]
@@ -253,7 +253,7 @@ impl Drop for LiveTap {
     }
 }
 
-impl SessionTap for LiveTap {
+impl ConnectionTap for LiveTap {
     fn frame(
         &mut self,
         index: u64,

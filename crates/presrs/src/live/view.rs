@@ -12,8 +12,8 @@ use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, Dtype, encode_frame};
 use super::hub::LiveHub;
 use crate::error::{Error, Result};
 use crate::stream::{
-    ConnectionSummary, InputFormat, SessionNotice, SessionOptions, SessionTap, ShutdownHandle,
-    run_session_tapped,
+    ConnectionNotice, ConnectionOptions, ConnectionSummary, ConnectionTap, InputFormat,
+    ShutdownHandle, run_connection_tapped,
 };
 
 /// How a recording is replayed.
@@ -62,7 +62,7 @@ pub fn replay_recording(
     hub: &LiveHub,
     output: &mut dyn Write,
     options: &ReplayOptions,
-    notify: &dyn Fn(&SessionNotice),
+    notify: &dyn Fn(&ConnectionNotice),
 ) -> Result<Option<ConnectionSummary>> {
     let period = Duration::from_secs_f64(replay_period_s(recording, options)?);
     let mut tap = hub.tap();
@@ -91,19 +91,19 @@ pub fn replay_recording(
         at: 0,
     };
     let grid = recording.grid();
-    let session = SessionOptions {
+    let connection = ConnectionOptions {
         format: InputFormat::Binary,
         name: name.to_owned(),
         max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES.max(grid.len() * 8 + 64),
         stop: options.stop.clone(),
         topic: None,
     };
-    let summary = run_session_tapped(
+    let summary = run_connection_tapped(
         model,
         profile,
         BufReader::new(paced),
         output,
-        &session,
+        &connection,
         notify,
         &mut tap,
     )?;
@@ -147,7 +147,7 @@ impl Schedule {
 }
 
 /// A recording as a paced binary-protocol byte stream (what `presrs replay` sends), so that the
-/// replay runs the very session `presrs stream` runs.
+/// replay runs the very connection `presrs stream` runs.
 struct PacedFrames<'a> {
     recording: &'a Recording,
     dtype: Dtype,

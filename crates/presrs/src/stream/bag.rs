@@ -1,6 +1,6 @@
-//! Recording a stream session as a ROS 2 bag (MCAP): the frames read on [`FRAMES_TOPIC`] and every JSON
-//! line the session emitted on [`DECISIONS_TOPIC`], written as the session runs and renamed into place
-//! when it ends ([`BagRecorder::finish`]); a session that fails or is dropped leaves no file behind.
+//! Recording a stream connection as a ROS 2 bag (MCAP): the frames read on [`FRAMES_TOPIC`] and every JSON
+//! line the connection emitted on [`DECISIONS_TOPIC`], written as the connection runs and renamed into place
+//! when it ends ([`BagRecorder::finish`]); a connection that fails or is dropped leaves no file behind.
 
 use std::fs::File;
 use std::io::BufWriter;
@@ -12,12 +12,12 @@ use presrs_io::IoError;
 use presrs_io::atomic::AtomicFile;
 use presrs_io::mcap::{BagWriter, ImageEncoding};
 
-use super::tap::SessionTap;
+use super::tap::ConnectionTap;
 use crate::error::Result;
 
 /// The topic of the frames (`sensor_msgs/msg/Image`, `mono16` for integer counts, else `32FC1`).
 pub const FRAMES_TOPIC: &str = "/presrs/frames";
-/// The topic of the session's JSON lines (`touchdown`, `classification`, `liftoff`, `error`, `end`),
+/// The topic of the connection's JSON lines (`touchdown`, `classification`, `liftoff`, `error`, `end`),
 /// JSON messages with the schema [`DECISIONS_SCHEMA`].
 pub const DECISIONS_TOPIC: &str = "/presrs/decisions";
 /// The schema name of [`DECISIONS_TOPIC`].
@@ -64,7 +64,7 @@ pub struct RecordedBag {
     pub lines: u64,
 }
 
-/// A [`SessionTap`] writing a bag. Frames are stamped with the sender's timestamp when it gives one,
+/// A [`ConnectionTap`] writing a bag. Frames are stamped with the sender's timestamp when it gives one,
 /// else the wall clock when they are read; each line is logged at the time of the frame before it. A
 /// write that fails stops the recording; [`BagRecorder::finish`] then reports it.
 pub struct BagRecorder {
@@ -123,7 +123,7 @@ impl BagRecorder {
     }
 }
 
-impl SessionTap for BagRecorder {
+impl ConnectionTap for BagRecorder {
     fn frame(
         &mut self,
         _index: u64,

@@ -1,4 +1,4 @@
-//! The JSON lines a session writes (`docs/stream-protocol.md`, "Server -> client").
+//! The JSON lines a connection writes (`docs/stream-protocol.md`, "Server -> client").
 
 use presrs_core::online::{DecisionKind, OnlineEvent, OnlineProfile, Step};
 use presrs_core::pipeline::TrainedModel;
@@ -114,7 +114,7 @@ pub(super) fn error_line(message: &str, fatal: bool) -> String {
     json!({"event": "error", "message": message, "fatal": fatal}).to_string()
 }
 
-/// The `end` line: the session's counters.
+/// The `end` line: the connection's counters.
 pub(super) fn end_line(summary: &ConnectionSummary) -> String {
     let s = summary.stats;
     let mut end = json!({

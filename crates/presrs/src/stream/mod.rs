@@ -3,7 +3,7 @@
 //! Input is TekScan ASCII text or the binary frame protocol of `docs/stream-protocol.md`
 //! ([`presrs_io::frame_protocol`]); output is one JSON object per line (`touchdown`, `classification`,
 //! `liftoff`, `error`, `end`). Two ways to run it:
-//! - [`run_session`]: one session over any reader and writer (stdin and stdout, a pipe, a file);
+//! - [`run_connection`]: one connection over any reader and writer (stdin and stdout, a pipe, a file);
 //! - [`StreamServer`]: binary-protocol clients over TCP on a loopback address, several at once, until
 //!   [`ShutdownHandle::stop`] (or a given number of connections).
 //!
@@ -14,19 +14,19 @@
 //!
 //! Without a calibration (in the [`OnlineProfile`]) the detector calibrates on the stream's first frames
 //! (the warm-up, [`OnlineParams::warmup_frames`](presrs_core::online::OnlineParams)); stances in them
-//! are not classified, and a [`SessionNotice`] says so when the warm-up ends.
+//! are not classified, and a [`ConnectionNotice`] says so when the warm-up ends.
 //!
-//! Each session has its own causal detector and classifier (`presrs_core::online`); the model is shared
+//! Each connection has its own causal detector and classifier (`presrs_core::online`); the model is shared
 //! read-only. Faults never panic and never grow memory without bound: frame sizes are capped before
 //! reading, output to a client goes through a [`BoundedOutput`] (overflow is dropped and counted), the
 //! number of clients is capped, idle connections are closed. Nothing here prints: what a person should
 //! see comes back through the notice callbacks and the summaries.
 
 mod bag;
+mod connection;
 mod events;
 mod output;
 mod server;
-mod session;
 mod shutdown;
 mod summary;
 mod tap;
@@ -42,15 +42,15 @@ pub use bag::{
     BagRecorder, DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, FRAMES_TOPIC,
     RecordedBag,
 };
+pub use connection::{
+    ConnectionNotice, ConnectionOptions, ConnectionSummary, InputFormat, MAX_ERROR_NOTICES,
+    run_connection, run_connection_tapped,
+};
 pub use events::event_values;
 pub use output::BoundedOutput;
 pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer, TapFactory};
-pub use session::{
-    ConnectionSummary, InputFormat, MAX_ERROR_NOTICES, SessionNotice, SessionOptions, run_session,
-    run_session_tapped,
-};
 pub use shutdown::ShutdownHandle;
-pub use tap::{NoTap, SessionTap, Taps};
+pub use tap::{ConnectionTap, NoTap, Taps};
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
 /// and `--gait`).

@@ -1,4 +1,4 @@
-//! The TCP server: binary-protocol clients on a loopback address, one session each, several at once.
+//! The TCP server: binary-protocol clients on a loopback address, one connection each, several at once.
 
 use std::collections::HashMap;
 use std::io::{BufReader, Write};
@@ -11,11 +11,11 @@ use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::TrainedModel;
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 
+use super::connection::{ConnectionNotice, ConnectionSummary, binary_source, drive_connection};
 use super::events::error_line;
 use super::output::BoundedOutput;
-use super::session::{ConnectionSummary, SessionNotice, binary_source, run_connection};
 use super::shutdown::ShutdownHandle;
-use super::tap::{NoTap, SessionTap};
+use super::tap::{ConnectionTap, NoTap};
 use crate::error::{Error, Result};
 
 /// The server's limits.
@@ -60,17 +60,17 @@ pub enum ServerNotice<'a> {
     Connected {
         peer: &'a str,
     },
-    /// Something a client's session noticed.
-    Session {
+    /// Something a client's connection noticed.
+    Connection {
         peer: &'a str,
-        notice: &'a SessionNotice,
+        notice: &'a ConnectionNotice,
     },
-    /// A client's session ended.
+    /// A client's connection ended.
     Ended {
         peer: &'a str,
         summary: &'a ConnectionSummary,
     },
-    /// A client's session could not run (its socket could not be set up, the profile was refused).
+    /// A client's connection could not run (its socket could not be set up, the profile was refused).
     Failed {
         peer: &'a str,
         error: &'a Error,
@@ -80,22 +80,22 @@ pub enum ServerNotice<'a> {
 /// What a [`StreamServer::serve`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ServeSummary {
-    /// Sessions that ended with a summary.
+    /// Connections that ended with a summary.
     pub connections: usize,
-    /// Of those, sessions with a rejected frame or an error.
+    /// Of those, connections with a rejected frame or an error.
     pub with_errors: usize,
-    /// Sessions that could not run.
+    /// Connections that could not run.
     pub failed: usize,
     /// Clients turned away (too many at once).
     pub refused: usize,
 }
 
-/// Makes the [`SessionTap`] of each client's session, given the client's name (its address): what
-/// else sees the sessions of a server (a live view).
-pub type TapFactory = Arc<dyn Fn(&str) -> Box<dyn SessionTap + Send> + Send + Sync>;
+/// Makes the [`ConnectionTap`] of each client's connection, given the client's name (its address): what
+/// else sees the connections of a server (a live view).
+pub type TapFactory = Arc<dyn Fn(&str) -> Box<dyn ConnectionTap + Send> + Send + Sync>;
 
 /// The stream server, bound and ready to [`serve`](Self::serve). The model is shared read-only by the
-/// sessions; each has its own detector and classifier.
+/// connections; each has its own detector and classifier.
 pub struct StreamServer {
     listener: TcpListener,
     local: SocketAddr,
@@ -149,7 +149,7 @@ impl StreamServer {
         })
     }
 
-    /// Gives each client's session the tap `taps` makes for it.
+    /// Gives each client's connection the tap `taps` makes for it.
     #[must_use]
     pub fn with_taps(mut self, taps: TapFactory) -> Self {
         self.taps = Some(taps);
@@ -222,7 +222,7 @@ impl StreamServer {
         let _ = writeln!(stream, "{line}");
     }
 
-    /// One client's thread: its session, then the notice of how it ended.
+    /// One client's thread: its connection, then the notice of how it ended.
     fn run_client(
         &self,
         stream: TcpStream,
@@ -266,20 +266,20 @@ impl StreamServer {
         let (mut output, writer) =
             BoundedOutput::start(stream.try_clone().map_err(setup)?, self.options.queue);
         let reader = BufReader::with_capacity(64 * 1024, stream.try_clone().map_err(setup)?);
-        let session_notice = |notice: &SessionNotice| {
-            notify(&ServerNotice::Session { peer: name, notice });
+        let connection_notice = |notice: &ConnectionNotice| {
+            notify(&ServerNotice::Connection { peer: name, notice });
         };
         let mut emit = |line: String| output.send(line);
-        let mut tap: Box<dyn SessionTap + Send> = match &self.taps {
+        let mut tap: Box<dyn ConnectionTap + Send> = match &self.taps {
             Some(taps) => taps(name),
             None => Box::new(NoTap),
         };
-        let result = run_connection(
+        let result = drive_connection(
             &self.model,
             &self.profile,
             binary_source(reader, name, self.options.max_frame_bytes),
             &mut emit,
-            &session_notice,
+            &connection_notice,
             tap.as_mut(),
         );
         let dropped_in_writer = output.dropped();
@@ -325,7 +325,7 @@ impl ServeState {
         lock(&self.open).1.remove(&id);
     }
 
-    /// Ends the input of every open connection: each session ends as if its client had hung up, and
+    /// Ends the input of every open connection: each connection ends as if its client had hung up, and
     /// still sends its last lines.
     fn close_all(&self) {
         for stream in lock(&self.open).1.values() {

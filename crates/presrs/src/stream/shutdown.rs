@@ -1,11 +1,11 @@
-//! The stop flag a server or a session is stopped by from another thread: a leaf module, so that the
-//! server and the session (which both take one) do not import each other.
+//! The stop flag a server or a connection is stopped by from another thread: a leaf module, so that the
+//! server and the connection (which both take one) do not import each other.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Stops a [`StreamServer`](super::StreamServer), or a session on stdin
-/// ([`SessionOptions::stop`](super::SessionOptions)), from another thread.
+/// Stops a [`StreamServer`](super::StreamServer), or a connection on stdin
+/// ([`ConnectionOptions::stop`](super::ConnectionOptions)), from another thread.
 #[derive(Clone, Debug, Default)]
 pub struct ShutdownHandle(Arc<AtomicBool>);
 
@@ -19,9 +19,9 @@ impl PartialEq for ShutdownHandle {
 impl Eq for ShutdownHandle {}
 
 impl ShutdownHandle {
-    /// Asks to stop. A server accepts no more clients, closes the open connections (their sessions end
+    /// Asks to stop. A server accepts no more clients, closes the open connections (their connections end
     /// as if the client had hung up, with an `end` line) and
-    /// [`StreamServer::serve`](super::StreamServer::serve) returns; a session takes the end of its input
+    /// [`StreamServer::serve`](super::StreamServer::serve) returns; a connection takes the end of its input
     /// that follows for a stop.
     pub fn stop(&self) {
         self.0.store(true, Ordering::SeqCst);

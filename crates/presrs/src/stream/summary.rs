@@ -1,8 +1,8 @@
-//! What one stream session did: the counts its `end` event reports.
+//! What one stream connection did: the counts its `end` event reports.
 
 use presrs_core::online::OnlineStats;
 
-/// What a session did.
+/// What a connection did.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ConnectionSummary {
     /// The classifier's counters; its `rejected_frames` counts only the frames it refused itself.
@@ -24,7 +24,7 @@ pub struct ConnectionSummary {
 }
 
 impl ConnectionSummary {
-    /// Why the session made no decision, when that is not the input's fault: the input ended during
+    /// Why the connection made no decision, when that is not the input's fault: the input ended during
     /// the warm-up calibration. The `end` line carries it to the client as `note`.
     pub fn note(&self) -> Option<String> {
         self.warmup_unfinished.then(|| {
@@ -37,7 +37,7 @@ impl ConnectionSummary {
         })
     }
 
-    /// Whether anything went wrong in the session (a rejected frame or an error).
+    /// Whether anything went wrong in the connection (a rejected frame or an error).
     pub fn had_errors(&self) -> bool {
         self.errors > 0 || self.rejected_frames > 0 || self.fatal
     }

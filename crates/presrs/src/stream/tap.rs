@@ -1,15 +1,15 @@
-//! A tap on a session: what else sees its frames and its decisions besides the output (a bag being
+//! A tap on a connection: what else sees its frames and its decisions besides the output (a bag being
 //! recorded, a live viewer in a browser).
 
 use presrs_core::Grid;
 
-/// Sees every frame a session reads and every JSON line it emits, in order, as they happen.
+/// Sees every frame a connection reads and every JSON line it emits, in order, as they happen.
 ///
 /// Frames come as they were read (before the model's crop), rejected ones included, so a recording of
-/// the session holds what the sensor sent; lines are exactly those written to the session's output
+/// the connection holds what the sensor sent; lines are exactly those written to the connection's output
 /// (`touchdown`, `classification`, `liftoff`, `error`, `end`). A tap must not block for long: the
-/// session waits for it.
-pub trait SessionTap {
+/// connection waits for it.
+pub trait ConnectionTap {
     /// Input frame `index` (counting every frame read), row-major `values`, `present` false where a
     /// sensel is absent (`None`: all present), the sender's timestamp when it gave one.
     fn frame(
@@ -21,7 +21,7 @@ pub trait SessionTap {
         timestamp_us: Option<u64>,
     );
 
-    /// One JSON line the session emitted.
+    /// One JSON line the connection emitted.
     fn line(&mut self, line: &str);
 }
 
@@ -29,13 +29,13 @@ pub trait SessionTap {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoTap;
 
-impl SessionTap for NoTap {
+impl ConnectionTap for NoTap {
     fn frame(&mut self, _: u64, _: Grid, _: &[f64], _: Option<&[bool]>, _: Option<u64>) {}
     fn line(&mut self, _: &str) {}
 }
 
 /// Several taps, each seeing everything in turn (a bag being recorded and a live viewer).
-pub struct Taps<'a>(pub Vec<&'a mut dyn SessionTap>);
+pub struct Taps<'a>(pub Vec<&'a mut dyn ConnectionTap>);
 
 impl std::fmt::Debug for Taps<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -43,7 +43,7 @@ impl std::fmt::Debug for Taps<'_> {
     }
 }
 
-impl SessionTap for Taps<'_> {
+impl ConnectionTap for Taps<'_> {
     fn frame(
         &mut self,
         index: u64,

@@ -27,6 +27,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::classifier::family::{ClassifierFamily, FitData};
 use crate::error::{CoreError, Result, check_len};
 
 mod fit;
@@ -448,4 +449,64 @@ pub struct SvmScratch {
     decisions: Vec<f64>,
     votes: Vec<usize>,
     scores: Vec<f64>,
+}
+
+/// The one-vs-one C-SVC as a registered family (`svm`).
+#[derive(Debug)]
+pub struct SvmFamily;
+
+impl ClassifierFamily for SvmFamily {
+    const NAME: &'static str = "svm";
+    type Config = SvmConfig;
+    type Model = SvmModel;
+    type Scratch = SvmScratch;
+
+    fn check(config: &SvmConfig) -> Result<()> {
+        config.check()
+    }
+
+    fn fit(config: &SvmConfig, data: FitData<'_>) -> Result<SvmModel> {
+        SvmModel::fit_with(
+            data.train,
+            data.validation,
+            data.n_classes,
+            data.dims,
+            config,
+            data.calibrate,
+        )
+    }
+
+    fn dims(model: &SvmModel) -> usize {
+        model.dims()
+    }
+
+    fn n_classes(model: &SvmModel) -> usize {
+        model.n_classes()
+    }
+
+    fn describe(model: &SvmModel) -> String {
+        match model.kernel() {
+            Kernel::Linear => format!("linear, C {}, {} SVs", model.c(), model.n_support()),
+            Kernel::Rbf { gamma } => {
+                format!(
+                    "rbf gamma {gamma:.3e}, C {}, {} SVs",
+                    model.c(),
+                    model.n_support()
+                )
+            }
+        }
+    }
+
+    fn scratch(model: &SvmModel) -> SvmScratch {
+        model.scratch()
+    }
+
+    fn classify_into(
+        model: &SvmModel,
+        x: &[f64],
+        scratch: &mut SvmScratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize> {
+        model.classify_into(x, scratch, posteriors)
+    }
 }

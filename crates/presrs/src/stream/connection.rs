@@ -1,4 +1,4 @@
-//! One session: frames from a source through the causal classifier, JSON lines to a sink.
+//! One connection: frames from a source through the causal classifier, JSON lines to a sink.
 
 use std::io::{BufRead, Read, Write};
 use std::time::Instant;
@@ -13,10 +13,10 @@ use presrs_io::tekscan_stream::TekscanStream;
 use super::events::{end_line, error_line, event_lines};
 use super::shutdown::ShutdownHandle;
 pub use super::summary::ConnectionSummary;
-use super::tap::{NoTap, SessionTap};
+use super::tap::{ConnectionTap, NoTap};
 use crate::error::Result;
 
-/// How the frames of a session are encoded.
+/// How the frames of a connection are encoded.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum InputFormat {
     /// TekScan ASCII movie text, frame by frame.
@@ -25,19 +25,19 @@ pub enum InputFormat {
     /// The binary frame protocol of `docs/stream-protocol.md`.
     Binary,
     /// An MCAP file (a ROS 2 bag), read message by message: the frames of one topic
-    /// ([`SessionOptions::topic`]; see [`presrs_io::mcap`]), stamped with their header stamps.
+    /// ([`ConnectionOptions::topic`]; see [`presrs_io::mcap`]), stamped with their header stamps.
     Mcap,
 }
 
-/// How to read one session.
+/// How to read one connection.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct SessionOptions {
+pub struct ConnectionOptions {
     pub format: InputFormat,
     /// The source's name in messages (`stdin`, a client's address).
     pub name: String,
     /// Largest binary frame payload accepted, bytes (checked before it is read).
     pub max_frame_bytes: usize,
-    /// Set when the session is being stopped (a signal): the input then ends where it was cut, and a
+    /// Set when the connection is being stopped (a signal): the input then ends where it was cut, and a
     /// frame cut short by the stop is dropped, not an error. Whoever stops it must also end the input
     /// (the reader returns end of file).
     pub stop: Option<ShutdownHandle>,
@@ -45,7 +45,7 @@ pub struct SessionOptions {
     pub topic: Option<String>,
 }
 
-impl Default for SessionOptions {
+impl Default for ConnectionOptions {
     fn default() -> Self {
         Self {
             format: InputFormat::Tekscan,
@@ -57,11 +57,11 @@ impl Default for SessionOptions {
     }
 }
 
-/// What a session tells the person watching it, as it happens.
+/// What a connection tells the person watching it, as it happens.
 #[derive(Clone, Debug, PartialEq, Eq)]
 #[non_exhaustive]
-pub enum SessionNotice {
-    /// An `error` event's message (only the first [`MAX_ERROR_NOTICES`] of a session).
+pub enum ConnectionNotice {
+    /// An `error` event's message (only the first [`MAX_ERROR_NOTICES`] of a connection).
     Error(String),
     /// More errors came than are noticed one by one: further ones are only counted.
     ErrorsMuted,
@@ -71,35 +71,35 @@ pub enum SessionNotice {
     WarmupUnfinished { frames: u64 },
 }
 
-/// Errors of a session noticed one by one; a faulty client must not flood the log.
+/// Errors of a connection noticed one by one; a faulty client must not flood the log.
 pub const MAX_ERROR_NOTICES: u64 = 10;
 
-/// Runs one session: frames from `input` as `options` say, through the causal classifier, every JSON
+/// Runs one connection: frames from `input` as `options` say, through the causal classifier, every JSON
 /// line written (and flushed) to `output` at once. A line that cannot be written is dropped and counted;
-/// a closed output (a broken pipe) ends the session as the end of the input would. Returns when the
+/// a closed output (a broken pipe) ends the connection as the end of the input would. Returns when the
 /// input ends or cannot go on.
-pub fn run_session<R: BufRead>(
+pub fn run_connection<R: BufRead>(
     model: &TrainedModel,
     profile: &OnlineProfile,
     input: R,
     output: &mut dyn Write,
-    options: &SessionOptions,
-    notify: &dyn Fn(&SessionNotice),
+    options: &ConnectionOptions,
+    notify: &dyn Fn(&ConnectionNotice),
 ) -> Result<ConnectionSummary> {
-    run_session_tapped(model, profile, input, output, options, notify, &mut NoTap)
+    run_connection_tapped(model, profile, input, output, options, notify, &mut NoTap)
 }
 
-/// [`run_session`] with a [`SessionTap`] that sees every frame read and every line emitted.
-pub fn run_session_tapped<R: BufRead>(
+/// [`run_connection`] with a [`ConnectionTap`] that sees every frame read and every line emitted.
+pub fn run_connection_tapped<R: BufRead>(
     model: &TrainedModel,
     profile: &OnlineProfile,
     input: R,
     output: &mut dyn Write,
-    options: &SessionOptions,
-    notify: &dyn Fn(&SessionNotice),
-    tap: &mut dyn SessionTap,
+    options: &ConnectionOptions,
+    notify: &dyn Fn(&ConnectionNotice),
+    tap: &mut dyn ConnectionTap,
 ) -> Result<ConnectionSummary> {
-    // A closed output (`presrs stream | head`): nobody reads the decisions any more, so the session
+    // A closed output (`presrs stream | head`): nobody reads the decisions any more, so the connection
     // ends as if the input had (a live input may never end by itself).
     let closed = std::cell::Cell::new(false);
     let mut emit = |line: String| -> bool {
@@ -121,21 +121,21 @@ pub fn run_session_tapped<R: BufRead>(
             let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
                 until_stopped(source(values, present))
             };
-            run_connection(model, profile, next, &mut emit, notify, tap)
+            drive_connection(model, profile, next, &mut emit, notify, tap)
         }
         InputFormat::Binary => {
             let mut source = binary_source(input, &options.name, options.max_frame_bytes);
             let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
                 until_stopped(source(values, present))
             };
-            run_connection(model, profile, next, &mut emit, notify, tap)
+            drive_connection(model, profile, next, &mut emit, notify, tap)
         }
         InputFormat::Mcap => {
             let mut source = mcap_source(input, &options.name, options.topic.as_deref());
             let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
                 until_stopped(source(values, present))
             };
-            run_connection(model, profile, next, &mut emit, notify, tap)
+            drive_connection(model, profile, next, &mut emit, notify, tap)
         }
     }
 }
@@ -155,15 +155,15 @@ pub(super) enum Input {
     End,
 }
 
-/// A session in progress: the classifier, the counters, and where lines and notices go.
+/// A connection in progress: the classifier, the counters, and where lines and notices go.
 struct Connection<'a, 'm> {
     model: &'m TrainedModel,
     profile: &'a OnlineProfile,
     classifier: OnlineClassifier<'m>,
     summary: ConnectionSummary,
     emit: &'a mut dyn FnMut(String) -> bool,
-    notify: &'a dyn Fn(&SessionNotice),
-    tap: &'a mut dyn SessionTap,
+    notify: &'a dyn Fn(&ConnectionNotice),
+    tap: &'a mut dyn ConnectionTap,
     /// Errors reported so far (the first few are noticed).
     reported: u64,
 }
@@ -180,16 +180,16 @@ impl Connection<'_, '_> {
     fn error(&mut self, message: &str, fatal: bool) {
         self.summary.errors += 1;
         if self.reported < MAX_ERROR_NOTICES {
-            (self.notify)(&SessionNotice::Error(message.to_owned()));
+            (self.notify)(&ConnectionNotice::Error(message.to_owned()));
         } else if self.reported == MAX_ERROR_NOTICES {
-            (self.notify)(&SessionNotice::ErrorsMuted);
+            (self.notify)(&ConnectionNotice::ErrorsMuted);
         }
         self.reported += 1;
         self.emit(error_line(message, fatal));
     }
 
     /// Classifies one frame (input frame `index`, as it came), emitting its events or its error. False
-    /// when the session cannot go on: the first frame has a size the model cannot use. A stream's frames
+    /// when the connection cannot go on: the first frame has a size the model cannot use. A stream's frames
     /// come from one sensor, so every later one would be rejected too: one fatal error instead of one
     /// per frame. A later frame of another size (a glitch) is rejected alone.
     fn frame(
@@ -220,7 +220,7 @@ impl Connection<'_, '_> {
                 Ok(step) => {
                     let latency_us = arrival.elapsed().as_secs_f64() * 1e6;
                     // A frame taken but not classified is an `error` line (event_lines) and one of
-                    // the session's errors.
+                    // the connection's errors.
                     let failed = step
                         .events
                         .iter()
@@ -254,13 +254,13 @@ impl Connection<'_, '_> {
 
 /// Runs the online classifier over `next` until it ends, handing every JSON line to `emit` (which
 /// returns false when it had to drop the line).
-pub(super) fn run_connection(
+pub(super) fn drive_connection(
     model: &TrainedModel,
     profile: &OnlineProfile,
     mut next: impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input,
     emit: &mut dyn FnMut(String) -> bool,
-    notify: &dyn Fn(&SessionNotice),
-    tap: &mut dyn SessionTap,
+    notify: &dyn Fn(&ConnectionNotice),
+    tap: &mut dyn ConnectionTap,
 ) -> Result<ConnectionSummary> {
     let classifier = OnlineClassifier::new(
         model,
@@ -301,7 +301,7 @@ pub(super) fn run_connection(
                     warming_up = false;
                     conn.summary.warmup_frames = conn.classifier.stats().frames;
                     let frames = conn.summary.warmup_frames;
-                    notify(&SessionNotice::WarmupDone { frames });
+                    notify(&ConnectionNotice::WarmupDone { frames });
                 }
             }
             Input::Skipped(message) => {
@@ -320,7 +320,7 @@ pub(super) fn run_connection(
     finish(conn, warming_up)
 }
 
-/// Ends the session: the stances still open, the warm-up notice if it never ended, the `end` line.
+/// Ends the connection: the stances still open, the warm-up notice if it never ended, the `end` line.
 fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSummary> {
     let lines = event_lines(
         &conn.classifier.finish()?,
@@ -335,7 +335,7 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
     if warming_up && frames > 0 {
         conn.summary.warmup_frames = frames;
         conn.summary.warmup_unfinished = true;
-        (conn.notify)(&SessionNotice::WarmupUnfinished { frames });
+        (conn.notify)(&ConnectionNotice::WarmupUnfinished { frames });
     }
     let end = end_line(&conn.summary);
     conn.emit(end);

@@ -1,0 +1,80 @@
+//! What a classifier family is: the one trait a classifier file implements to be trained, stored and
+//! chosen by the pipeline (in the manner of linfa's `Fit`/`Predict`, with the hyper-parameters checked
+//! once before fitting).
+//!
+//! A family is a unit type (`PweFamily`, `LdaFamily`, ...) naming its hyper-parameters
+//! ([`ClassifierFamily::Config`]), its trained state ([`ClassifierFamily::Model`]) and the buffers
+//! classification reuses ([`ClassifierFamily::Scratch`]). Adding one is one new file with its
+//! `impl ClassifierFamily` and one registration line: a line in the built-in list
+//! (`classifier/registry.rs`) or, for an extension or a test, [`register`](super::register). The model
+//! file format (`{"kind": NAME, ...}`), the automatic search and the Python names follow from it.
+
+use std::fmt::Debug;
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+
+use super::common::LabeledVectors;
+use crate::error::Result;
+
+/// The data a classifier is fitted on: reduced vectors of training and validation images.
+#[derive(Clone, Copy, Debug)]
+pub struct FitData<'a> {
+    pub train: LabeledVectors<'a>,
+    /// For model selection (σ, C, k, the posterior temperature); may be empty unless
+    /// [`ClassifierFamily::needs_validation`] says otherwise.
+    pub validation: LabeledVectors<'a>,
+    pub n_classes: usize,
+    /// Length of every vector.
+    pub dims: usize,
+    /// Whether the posteriors must be calibrated; without it only the decisions count (the automatic
+    /// choice counting right answers), and a family may skip its calibration.
+    pub calibrate: bool,
+}
+
+/// A classifier family: its name, hyper-parameters, training and classification.
+pub trait ClassifierFamily: Send + Sync + 'static {
+    /// The name users and files know it by (`--classifier NAME`, `{"kind": NAME}`): lower-case.
+    const NAME: &'static str;
+    /// Whether the automatic choice tries it.
+    const JOINS_AUTO: bool = true;
+
+    /// Hyper-parameters; `Default` is what users get when they only name the family.
+    type Config: Clone + Debug + Default + PartialEq + Serialize + DeserializeOwned + Send + Sync;
+    /// The trained state, stored in model files; loading it must check it (it may be crafted).
+    type Model: Clone + Debug + PartialEq + Serialize + DeserializeOwned + Send + Sync;
+    /// Buffers [`classify_into`](Self::classify_into) reuses, so that it does not allocate.
+    type Scratch: Debug + Send + 'static;
+
+    /// Checks the hyper-parameters on their own (no data needed); fitting may assume they passed.
+    fn check(config: &Self::Config) -> Result<()>;
+
+    /// Whether fitting needs validation vectors (the others use them when there are some).
+    fn needs_validation(config: &Self::Config) -> bool {
+        let _ = config;
+        false
+    }
+
+    /// Trains on `data` with checked hyper-parameters.
+    fn fit(config: &Self::Config, data: FitData<'_>) -> Result<Self::Model>;
+
+    /// Length of the vectors `model` classifies.
+    fn dims(model: &Self::Model) -> usize;
+
+    fn n_classes(model: &Self::Model) -> usize;
+
+    /// The hyper-parameters training chose, in words (for reports).
+    fn describe(model: &Self::Model) -> String;
+
+    /// Buffers sized for `model`.
+    fn scratch(model: &Self::Model) -> Self::Scratch;
+
+    /// Writes the posterior of every class into `posteriors` (`n_classes` long) and returns the most
+    /// likely class. Must not allocate once `scratch` comes from [`scratch`](Self::scratch).
+    fn classify_into(
+        model: &Self::Model,
+        x: &[f64],
+        scratch: &mut Self::Scratch,
+        posteriors: &mut [f64],
+    ) -> Result<usize>;
+}

@@ -1,0 +1,304 @@
+//! The trained model: its stored fields, the checks loading applies (sizes, parts that fit together), and
+//! what it tells about itself.
+
+use serde::{Deserialize, Serialize};
+
+use crate::classifier::{ClassifierModel, PweFamily, SigmaPoint};
+use crate::crop::Crop;
+use crate::error::{CoreError, Result};
+use crate::features::{FeatureConfig, FeatureExtractor};
+use crate::frame::Grid;
+use crate::pca::Pca;
+use crate::pipeline::config::TrainConfig;
+use crate::preprocess::Preprocess;
+use crate::selection::record::Selection;
+
+/// How much data a model was trained on.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainingSummary {
+    pub config: TrainConfig,
+    /// Training and validation images per class, in class order.
+    pub train_per_class: Vec<usize>,
+    pub validation_per_class: Vec<usize>,
+}
+
+/// Everything needed to classify images: crop, feature parameters, PCA, classifier state and class names.
+/// Serialisable; loading re-checks that the parts fit together (the features against the PCA, the PCA
+/// against the classifier, the classifier's own arrays, indices and values, the class names), and that
+/// the image grid and feature transforms are within [`MAX_MODEL_SENSELS`] and [`MAX_TRANSFORM_LEN`], so
+/// a model that loads classifies frames without panicking.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "ModelFields", into = "ModelFields")]
+pub struct TrainedModel {
+    pub(crate) fields: ModelFields,
+    /// Built once from `fields` (checked), cloned by every session.
+    pub(crate) extractor: FeatureExtractor,
+}
+
+/// The serialised form of [`TrainedModel`].
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ModelFields {
+    /// Bumped when the meaning of a field changes.
+    pub(crate) format_version: u32,
+    pub(crate) crop: Crop,
+    /// Steps after the crop (absent from files written before they existed: none).
+    #[serde(default, skip_serializing_if = "Preprocess::is_none")]
+    pub(crate) preprocess: Preprocess,
+    /// The grid of the images after cropping.
+    pub(crate) image_grid: Grid,
+    pub(crate) features: FeatureConfig,
+    pub(crate) pca: Pca,
+    pub(crate) classifier: ClassifierModel,
+    pub(crate) class_names: Vec<String>,
+    pub(crate) summary: TrainingSummary,
+    /// The automatic choice that picked `features` and `classifier`, when there was one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) selection: Option<Selection>,
+}
+
+pub(crate) const FORMAT_VERSION: u32 = 1;
+
+/// The largest image a model takes once cropped, in sensels (`image_grid` rows x cols): the streaming
+/// readers' limit, far above any pressure sensor (the paper's array has 44 x 44). Training on larger
+/// images and loading a model that claims them are errors, so a crafted file cannot make loading plan
+/// gigantic transforms.
+pub const MAX_MODEL_SENSELS: usize = 1 << 20;
+
+/// The most points the feature transforms of one model may hold together: `fft_len` of the 1-D |FFT|,
+/// `pad_rows x pad_cols` of the 2-D one, summed over the parts of combined features (also the limit on
+/// the polar form's `radial_bins` and `angular_bins`). 4 Mi points are a few hundred MB of plans and
+/// buffers; the paper's setting needs 2048.
+pub const MAX_TRANSFORM_LEN: usize = 1 << 22;
+
+/// Checks `image_grid` and the transform sizes of `features` against [`MAX_MODEL_SENSELS`] and
+/// [`MAX_TRANSFORM_LEN`], before anything is planned or allocated.
+pub(crate) fn check_sizes(features: &FeatureConfig, image_grid: Grid) -> Result<()> {
+    let Grid { rows, cols } = image_grid;
+    if rows == 0
+        || cols == 0
+        || rows
+            .checked_mul(cols)
+            .is_none_or(|len| len > MAX_MODEL_SENSELS)
+    {
+        return Err(CoreError::Param {
+            name: "image_grid",
+            reason: format!(
+                "the images of a model must have 1 to {MAX_MODEL_SENSELS} sensels once cropped, got \
+                 {rows}x{cols}"
+            ),
+        });
+    }
+    let points = transform_points(features, image_grid)?;
+    if points > MAX_TRANSFORM_LEN {
+        return Err(CoreError::Param {
+            name: "features",
+            reason: format!(
+                "the feature transforms need {points} points (fft_len, pad_rows x pad_cols, summed over \
+                 the parts); at most {MAX_TRANSFORM_LEN} are allowed"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The points of the transforms `features` plans for `image_grid` (saturating).
+fn transform_points(features: &FeatureConfig, image_grid: Grid) -> Result<usize> {
+    let too_large = |name: &'static str, what: String| CoreError::Param {
+        name,
+        reason: format!("{what} exceeds the limit of {MAX_TRANSFORM_LEN}"),
+    };
+    match features {
+        FeatureConfig::Fft1d(config) => {
+            let len = config.resolved_len(image_grid)?;
+            if len > MAX_TRANSFORM_LEN {
+                return Err(too_large("fft_len", format!("the transform length {len}")));
+            }
+            Ok(len)
+        }
+        FeatureConfig::Fft2d(config) => {
+            for (name, bins) in [
+                ("radial_bins", config.radial_bins),
+                ("angular_bins", config.angular_bins),
+            ] {
+                if bins > MAX_TRANSFORM_LEN {
+                    return Err(too_large(name, format!("{bins} bins")));
+                }
+            }
+            let rows = config.pad_rows.unwrap_or(image_grid.rows);
+            let cols = config.pad_cols.unwrap_or(image_grid.cols);
+            match rows.checked_mul(cols) {
+                Some(points) if points <= MAX_TRANSFORM_LEN => Ok(points),
+                _ => Err(too_large(
+                    "pad_rows",
+                    format!("the {rows} x {cols} transform (pad_rows x pad_cols)"),
+                )),
+            }
+        }
+        FeatureConfig::Glcm(_) => Ok(0),
+        FeatureConfig::Combined(config) => config.parts.iter().try_fold(0usize, |total, part| {
+            Ok(total.saturating_add(transform_points(part, image_grid)?))
+        }),
+    }
+}
+
+impl From<TrainedModel> for ModelFields {
+    fn from(model: TrainedModel) -> Self {
+        model.fields
+    }
+}
+
+impl TryFrom<ModelFields> for TrainedModel {
+    type Error = CoreError;
+
+    fn try_from(fields: ModelFields) -> Result<Self> {
+        let bad = |reason: String| CoreError::Param {
+            name: "trained model",
+            reason,
+        };
+        if fields.format_version != FORMAT_VERSION {
+            return Err(bad(format!(
+                "format version {} is not supported (this build reads {FORMAT_VERSION})",
+                fields.format_version
+            )));
+        }
+        // Sizes first, then the feature count against the PCA's (both without allocating), and only
+        // then the extractor with its plans and buffers.
+        fields.features.check()?;
+        check_sizes(&fields.features, fields.image_grid)?;
+        let n_features = fields.features.output_len(fields.image_grid)?;
+        if n_features != fields.pca.n_features() {
+            return Err(bad(format!(
+                "{n_features} features per image but the PCA takes {}",
+                fields.pca.n_features()
+            )));
+        }
+        let extractor = fields.features.extractor(fields.image_grid)?;
+        if extractor.output_len() != n_features {
+            return Err(bad(format!(
+                "the extractor gives {} features per image, its configuration {n_features}",
+                extractor.output_len()
+            )));
+        }
+        if fields.pca.n_components() != fields.classifier.dims() {
+            return Err(bad(format!(
+                "the PCA gives {} components but the classifier takes {}",
+                fields.pca.n_components(),
+                fields.classifier.dims()
+            )));
+        }
+        if fields.class_names.len() != fields.classifier.n_classes() {
+            return Err(bad(format!(
+                "{} class names for {} classes",
+                fields.class_names.len(),
+                fields.classifier.n_classes()
+            )));
+        }
+        Ok(Self { fields, extractor })
+    }
+}
+
+impl TrainedModel {
+    /// Class names, in class-index order.
+    pub fn class_names(&self) -> &[String] {
+        &self.fields.class_names
+    }
+
+    pub fn crop(&self) -> Crop {
+        self.fields.crop
+    }
+
+    /// The preprocessing steps after the crop.
+    pub fn preprocess(&self) -> Preprocess {
+        self.fields.preprocess
+    }
+
+    /// The grid of the images after cropping.
+    pub fn image_grid(&self) -> Grid {
+        self.fields.image_grid
+    }
+
+    pub fn features(&self) -> &FeatureConfig {
+        &self.fields.features
+    }
+
+    pub fn pca(&self) -> &Pca {
+        &self.fields.pca
+    }
+
+    pub fn classifier(&self) -> &ClassifierModel {
+        &self.fields.classifier
+    }
+
+    /// The Parzen kernel width, when the classifier is a Parzen window.
+    pub fn sigma(&self) -> Option<f64> {
+        let parzen = self.fields.classifier.get::<PweFamily>()?;
+        Some(parzen.sigma())
+    }
+
+    /// Validation accuracy against σ, when σ was searched (empty otherwise).
+    pub fn validation_curve(&self) -> &[SigmaPoint] {
+        self.fields
+            .classifier
+            .get::<PweFamily>()
+            .map_or(&[], |parzen| parzen.validation_curve())
+    }
+
+    pub fn summary(&self) -> &TrainingSummary {
+        &self.fields.summary
+    }
+
+    /// The automatic choice of features and classifier (with every candidate's validation scores), when
+    /// the model was trained by [`crate::selection::train_auto`].
+    pub fn selection(&self) -> Option<&Selection> {
+        self.fields.selection.as_ref()
+    }
+
+    /// This model with `selection` recorded.
+    pub fn with_selection(mut self, selection: Selection) -> Self {
+        self.fields.selection = Some(selection);
+        self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::bench_fixture;
+
+    use super::*;
+
+    #[test]
+    fn a_model_round_trips_through_serde() {
+        let (model, frames) = bench_fixture(3, 8).unwrap();
+        let json = serde_json::to_string(&model).unwrap();
+        let back: TrainedModel = serde_json::from_str(&json).unwrap();
+        assert_eq!(serde_json::to_string(&back).unwrap(), json);
+        assert_eq!(back.class_names(), model.class_names());
+        for frame in &frames {
+            let (mut a, mut b) = (model.session(), back.session());
+            let (a, b) = (
+                a.classify(&frame.view()).unwrap(),
+                b.classify(&frame.view()).unwrap(),
+            );
+            assert_eq!(a.posteriors, b.posteriors);
+        }
+    }
+
+    #[test]
+    fn loading_refuses_another_version_and_parts_that_do_not_fit() {
+        let (model, _) = bench_fixture(3, 0).unwrap();
+        let value = serde_json::to_value(&model).unwrap();
+        let mut future = value.clone();
+        future["format_version"] = serde_json::json!(FORMAT_VERSION + 1);
+        let err = serde_json::from_value::<TrainedModel>(future).unwrap_err();
+        assert!(err.to_string().contains("format version"), "{err}");
+        let mut renamed = value.clone();
+        renamed["class_names"] = serde_json::json!(["only one"]);
+        let err = serde_json::from_value::<TrainedModel>(renamed).unwrap_err();
+        assert!(err.to_string().contains("class names"), "{err}");
+        let mut huge = value;
+        huge["image_grid"] = serde_json::json!({"rows": MAX_MODEL_SENSELS, "cols": 2});
+        let err = serde_json::from_value::<TrainedModel>(huge).unwrap_err();
+        assert!(err.to_string().contains("sensels"), "{err}");
+    }
+}

@@ -1,0 +1,142 @@
+//! Training: the classes of a training set, its features, the PCA and the classifier, into a model.
+
+use crate::classifier::LabeledVectors;
+use crate::error::{CoreError, Result};
+use crate::features::Precision;
+use crate::pca::Pca;
+use crate::pipeline::config::CheckedTrainConfig;
+use crate::pipeline::extract::{LabeledImage, features_of, preprocessor_for};
+use crate::pipeline::model::{FORMAT_VERSION, ModelFields, TrainedModel, TrainingSummary};
+
+/// Trains the pipeline (see the module documentation). Classes are the distinct training labels, sorted;
+/// every validation label must be one of them.
+pub fn train(
+    train: &[LabeledImage<'_>],
+    validation: &[LabeledImage<'_>],
+    config: &CheckedTrainConfig,
+) -> Result<TrainedModel> {
+    let config = config.config();
+    let first = train
+        .first()
+        .ok_or_else(|| CoreError::NotEnoughData("no training images".into()))?;
+    let class_names = class_names_of(train)?;
+    let train_classes = class_indices(&class_names, train)?;
+    let validation_classes = class_indices(&class_names, validation)?;
+
+    let preprocessor = preprocessor_for(config, first.frame.grid())?;
+    let image_grid = preprocessor.image_grid;
+    let n_features = preprocessor.extractor.output_len();
+    let train_features = features_of(train, &preprocessor, Precision::Exact)?;
+    let validation_features = features_of(validation, &preprocessor, Precision::Exact)?;
+
+    let pca = Pca::fit(&train_features, n_features, config.dims)?;
+    let dims = pca.n_components();
+    let classifier = config.classifier.fit(
+        LabeledVectors {
+            vectors: &project_rows(&pca, &train_features)?,
+            classes: &train_classes,
+        },
+        LabeledVectors {
+            vectors: &project_rows(&pca, &validation_features)?,
+            classes: &validation_classes,
+        },
+        class_names.len(),
+        dims,
+    )?;
+
+    let count = |classes: &[usize]| {
+        let mut counts = vec![0; class_names.len()];
+        for &class in classes {
+            counts[class] += 1;
+        }
+        counts
+    };
+    let summary = TrainingSummary {
+        config: config.clone(),
+        train_per_class: count(&train_classes),
+        validation_per_class: count(&validation_classes),
+    };
+    TrainedModel::try_from(ModelFields {
+        format_version: FORMAT_VERSION,
+        crop: config.crop,
+        preprocess: config.preprocess,
+        image_grid,
+        features: config.features.clone(),
+        pca,
+        classifier,
+        class_names,
+        summary,
+        selection: None,
+    })
+}
+
+/// The classes of a training set: its distinct labels, sorted; at least two.
+pub(crate) fn class_names_of(train: &[LabeledImage<'_>]) -> Result<Vec<String>> {
+    let mut class_names: Vec<String> = train.iter().map(|image| image.label.to_owned()).collect();
+    class_names.sort();
+    class_names.dedup();
+    if class_names.len() < 2 {
+        return Err(CoreError::NotEnoughData(format!(
+            "training needs at least two classes, got {class_names:?}"
+        )));
+    }
+    Ok(class_names)
+}
+
+/// The class index of every image; a label outside `class_names` is an error.
+pub(crate) fn class_indices(
+    class_names: &[String],
+    images: &[LabeledImage<'_>],
+) -> Result<Vec<usize>> {
+    images
+        .iter()
+        .map(|image| {
+            class_names
+                .binary_search_by(|name| name.as_str().cmp(image.label))
+                .map_err(|_| CoreError::Param {
+                    name: "validation label",
+                    reason: format!(
+                        "{:?} is not among the training classes {class_names:?}",
+                        image.label
+                    ),
+                })
+        })
+        .collect()
+}
+
+/// Projects feature rows (`n x pca.n_features()`) with the PCA's fixed-point projection: the one a
+/// session uses, so that training and classification see the same vectors.
+pub(crate) fn project_rows(pca: &Pca, features: &[f64]) -> Result<Vec<f64>> {
+    let n_features = pca.n_features();
+    let dims = pca.n_components();
+    let mut reduced = vec![0.0; features.len() / n_features * dims];
+    let mut scratch = pca.scratch();
+    for (x, out) in features
+        .chunks_exact(n_features)
+        .zip(reduced.chunks_exact_mut(dims))
+    {
+        pca.project_fast_into(x, &mut scratch, out)?;
+    }
+    Ok(reduced)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::{Frame, Grid};
+
+    #[test]
+    fn classes_are_sorted_distinct_labels_and_unknown_ones_are_refused() {
+        let frame = Frame::new(Grid::new(2, 2), vec![1.0; 4]).unwrap();
+        let image = |label| LabeledImage::new(frame.view(), label);
+        let set = [image("b"), image("a"), image("b")];
+        let names = class_names_of(&set).unwrap();
+        assert_eq!(names, ["a", "b"]);
+        assert_eq!(class_indices(&names, &set).unwrap(), [1, 0, 1]);
+        assert!(class_indices(&names, &[image("c")]).is_err());
+        assert!(matches!(
+            class_names_of(&[image("a"), image("a")]),
+            Err(CoreError::NotEnoughData(_))
+        ));
+    }
+}
