@@ -43,7 +43,8 @@ impl Evaluation {
     /// Accuracy per tested condition (or held-out value): `{name: (mean, std)}`.
     #[getter]
     fn per_condition(&self) -> BTreeMap<String, (f64, f64)> {
-        self.outcome.report
+        self.outcome
+            .report
             .per_condition
             .iter()
             .map(|(name, m)| (name.clone(), (m.mean, m.std)))
@@ -53,7 +54,8 @@ impl Evaluation {
     /// The accuracy of every repeat.
     #[getter]
     fn repeats(&self) -> Vec<f64> {
-        self.outcome.report
+        self.outcome
+            .report
             .repeats
             .iter()
             .map(|r| r.overall_accuracy)

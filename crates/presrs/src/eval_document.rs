@@ -165,7 +165,10 @@ impl<'r> CompareJson<'r> {
     pub fn new(rows: &'r [ComparisonRow], method: &Method) -> Result<Self> {
         let (chosen, reason) = summary_of(rows, method)?;
         let row = &rows[chosen];
-        let report = row.report.as_ref().map_err(|err| Error::data(err.clone()))?;
+        let report = row
+            .report
+            .as_ref()
+            .map_err(|err| Error::data(err.clone()))?;
         Ok(Self {
             summary_of: SummaryOf {
                 features: &row.features,
@@ -284,6 +287,21 @@ pub fn chosen_counts(selections: &[Selection]) -> BTreeMap<String, usize> {
         }
     }
     chosen
+}
+
+/// The rows of the accuracy-against-fault table: each perturbation's row of the configured method,
+/// beside the paper's method's row of the same perturbation when it was evaluated too.
+pub fn perturbation_pairs(
+    rows: &[PerturbationRow],
+) -> Vec<(&PerturbationRow, Option<&PerturbationRow>)> {
+    let paper = |perturbation: &str| {
+        rows.iter()
+            .find(|q| q.method == "paper" && q.perturbation == perturbation)
+    };
+    rows.iter()
+        .filter(|r| r.method == "configured")
+        .map(|r| (r, paper(&r.perturbation)))
+        .collect()
 }
 
 /// The perturbation rows as the report's fault results: `configured` is the automatic choice with

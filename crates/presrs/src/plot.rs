@@ -61,7 +61,12 @@ pub enum Plotted {
 
 /// Draws `recording` (read from `file`, whose name titles the figure) into `out`: a still figure
 /// (.png or .svg) or, for [`Drawing::Movie`], an animated GIF.
-pub fn plot(recording: &Recording, file: &Path, options: &PlotOptions, out: &Path) -> Result<Plotted> {
+pub fn plot(
+    recording: &Recording,
+    file: &Path,
+    options: &PlotOptions,
+    out: &Path,
+) -> Result<Plotted> {
     if recording.frame_count() == 0 {
         return Err(Error::data(format!(
             "{}: the recording has no frames",
@@ -111,7 +116,11 @@ pub fn plot(recording: &Recording, file: &Path, options: &PlotOptions, out: &Pat
     } else {
         format!("{name} — {what}")
     };
-    let mut figure = PressureFigure::new(frame, PressureScale::from_meta(Some(&recording.meta)), title);
+    let mut figure = PressureFigure::new(
+        frame,
+        PressureScale::from_meta(Some(&recording.meta)),
+        title,
+    );
     figure.vmax = options.vmax;
     if let Some(crop) = options.outline_crop {
         let (row, col, grid) = crop.window(frame.grid())?;

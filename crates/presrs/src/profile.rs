@@ -27,17 +27,48 @@ pub enum ProfileChoice {
     Never,
 }
 
+/// What a model file's online profile is asked to be.
+#[derive(Clone, Copy, Debug)]
+pub struct ProfileRequest<'a> {
+    pub choice: ProfileChoice,
+    /// The terrain-to-gait table's source (`--gait-table`: `sim` or `TERRAIN=GAIT,...`), with a profile.
+    pub gait_table: Option<&'a str>,
+    /// How a `sim` table is measured.
+    pub sim: GaitTableSim<'a>,
+}
+
 /// The profile [`model_profile`] learned, or what the user should know when it learned none.
 #[derive(Clone, Debug, Default)]
 pub struct ModelProfile {
     pub profile: Option<OnlineProfile>,
     /// Why no profile was written although the default asked for one.
     pub warning: Option<String>,
+    /// The measurement of a simulated terrain-to-gait table.
+    pub measured: Option<MeasuredGaitTable>,
 }
 
-/// The online profile of a model trained on `dataset` (read from `manifest`), learned by offline
-/// segmentation with `params` (those of training) as `choice` says.
+/// The online profile of a model of `class_names` trained on `dataset` (read from `manifest`), learned
+/// by offline segmentation with `params` (those of training) as `request` says, with its
+/// terrain-to-gait table.
 pub fn model_profile(
+    dataset: &Dataset,
+    manifest: &Path,
+    params: &ValidSegmentParams,
+    class_names: &[String],
+    request: &ProfileRequest<'_>,
+    progress: &dyn Progress,
+) -> Result<ModelProfile> {
+    let mut learned = learn_profile(dataset, manifest, params, request.choice)?;
+    if let (Some(profile), Some(source)) = (&mut learned.profile, request.gait_table) {
+        let (table, measured) = gait_table(&source.parse()?, class_names, request.sim, progress)?;
+        profile.gait_table = table;
+        learned.measured = measured;
+    }
+    Ok(learned)
+}
+
+/// The profile alone, as `choice` says.
+fn learn_profile(
     dataset: &Dataset,
     manifest: &Path,
     params: &ValidSegmentParams,
@@ -49,14 +80,14 @@ pub fn model_profile(
         ProfileChoice::WhenMovies => Ok(match learn_online_profile(manifest, params) {
             Ok(profile) => ModelProfile {
                 profile: Some(profile),
-                warning: None,
+                ..ModelProfile::default()
             },
             Err(err) => ModelProfile {
-                profile: None,
                 warning: Some(format!(
                     "{}: no online profile written (a stream will warm up first): {err}",
                     manifest.display()
                 )),
+                ..ModelProfile::default()
             },
         }),
         ProfileChoice::Required => {
@@ -65,7 +96,7 @@ pub fn model_profile(
             })?;
             Ok(ModelProfile {
                 profile: Some(profile),
-                warning: None,
+                ..ModelProfile::default()
             })
         }
     }
@@ -165,9 +196,11 @@ mod tests {
             " sim".parse::<GaitTableSource>().unwrap(),
             GaitTableSource::Simulated
         );
-        let given = "wood = G3,, grass=G1@0.6".parse::<GaitTableSource>().unwrap();
-        let expected = [("grass", "G1@0.6"), ("wood", "G3")]
-            .map(|(t, g)| (t.to_owned(), g.to_owned()));
+        let given = "wood = G3,, grass=G1@0.6"
+            .parse::<GaitTableSource>()
+            .unwrap();
+        let expected =
+            [("grass", "G1@0.6"), ("wood", "G3")].map(|(t, g)| (t.to_owned(), g.to_owned()));
         assert_eq!(given, GaitTableSource::Given(BTreeMap::from(expected)));
         for bad in ["wood", "wood=", "=G1", "wood=G1,clay"] {
             let err = bad.parse::<GaitTableSource>().unwrap_err().to_string();

@@ -10,8 +10,8 @@ use std::sync::mpsc::{Receiver, sync_channel};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use presrs_core::Recording;
 use presrs_core::Grid;
+use presrs_core::Recording;
 use presrs_io::frame_protocol::{Dtype, write_frame};
 
 use crate::error::{Context, Error, Result};
@@ -122,7 +122,12 @@ impl Replay {
 }
 
 /// Sends every frame on schedule; returns the seconds it took.
-fn send_frames(recording: &Recording, stream: &TcpStream, addr: SocketAddr, rate: Rate) -> Result<f64> {
+fn send_frames(
+    recording: &Recording,
+    stream: &TcpStream,
+    addr: SocketAddr,
+    rate: Rate,
+) -> Result<f64> {
     let grid = recording.grid();
     let dtype = Dtype::smallest_exact(recording.data());
     let period_us = match rate {
@@ -142,8 +147,16 @@ fn send_frames(recording: &Recording, stream: &TcpStream, addr: SocketAddr, rate
         }
         let timestamp_us = (index as f64 * period_us).round() as u64;
         let (rows, cols) = (grid.rows, grid.cols);
-        write_frame(&mut writer, &mut scratch, rows, cols, dtype, timestamp_us, frame.values())
-            .with_context(|| format!("cannot send frame {index} to {addr}"))?;
+        write_frame(
+            &mut writer,
+            &mut scratch,
+            rows,
+            cols,
+            dtype,
+            timestamp_us,
+            frame.values(),
+        )
+        .with_context(|| format!("cannot send frame {index} to {addr}"))?;
         if matches!(rate, Rate::Hz(_)) {
             writer.flush()?;
         }

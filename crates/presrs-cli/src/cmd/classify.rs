@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use presrs::classify::{Classified, ClassifyOptions, classify_file};
 use presrs::classify_bag::ClassifyBag;
+use presrs::classify_document::{ClassifyJson, FileError};
 use presrs::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
-use serde::Serialize;
 
 use super::common::{SampleArgs, note_dead_sensels, write_json};
 
@@ -45,21 +45,6 @@ pub struct ClassifyArgs {
     pub mcap: Option<PathBuf>,
     #[command(flatten)]
     pub samples: SampleArgs,
-}
-
-/// A file that could not be classified.
-#[derive(Debug, Serialize)]
-struct FileError {
-    file: String,
-    error: String,
-}
-
-#[derive(Debug, Serialize)]
-struct ClassifyReport {
-    model: String,
-    results: Vec<Classified>,
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    errors: Vec<FileError>,
 }
 
 pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
@@ -148,7 +133,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.json {
         write_json(
             out,
-            &ClassifyReport {
+            &ClassifyJson {
                 model: args.model.display().to_string(),
                 results,
                 errors,

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use presrs::eval_document::{
     CompareJson, EvalJson, PerturbedJson, chosen_counts, comparison_conditions, fault_results,
-    protocol_heading, sigmas,
+    perturbation_pairs, protocol_heading, sigmas,
 };
 use presrs::evaluate::{EvalOptions, EvalSetup, Holdout, PerturbationRow, calibration_line};
 use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
@@ -133,7 +133,13 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     if args.json {
         let perturbations = &perturbed;
-        return write_json(out, &PerturbedJson { eval, perturbations });
+        return write_json(
+            out,
+            &PerturbedJson {
+                eval,
+                perturbations,
+            },
+        );
     }
     print_report(&outcome.report, out)?;
     print_perturbations(&perturbed, out)?;
@@ -294,7 +300,8 @@ fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow:
     if rows.is_empty() {
         return Ok(());
     }
-    let paper = rows.iter().any(|r| r.method == "paper");
+    let pairs = perturbation_pairs(rows);
+    let paper = pairs.iter().any(|(_, paper)| paper.is_some());
     write!(
         out,
         "\naccuracy with perturbed test images\n{:<20} {:>20}",
@@ -311,12 +318,9 @@ fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow:
             100.0 * r.accuracy_std
         )
     };
-    for r in rows.iter().filter(|r| r.method == "configured") {
+    for (r, paper) in pairs {
         write!(out, "{:<20} {:>20}", r.perturbation, cell(r))?;
-        if let Some(p) = rows
-            .iter()
-            .find(|q| q.method == "paper" && q.perturbation == r.perturbation)
-        {
+        if let Some(p) = paper {
             write!(out, " {:>20}", cell(p))?;
         }
         writeln!(out)?;

@@ -56,12 +56,7 @@ pub struct PlotArgs {
 }
 
 pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let read = presrs_io::ReadOptions {
-        lenient: args.lenient,
-        axes: args.axes.axes,
-        topic: args.axes.topic.clone(),
-    };
-    let parsed = read_recording_with(&args.file, &read)?;
+    let parsed = read_recording_with(&args.file, &args.axes.read_options(args.lenient))?;
     for warning in &parsed.warnings {
         stderr_line!("warning: {warning}");
     }
@@ -85,7 +80,9 @@ pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         segment: args.stance_options.segment_params()?,
     };
     match plot(&parsed.recording, &args.file, &options, &args.out)? {
-        Plotted::Movie { frames } => writeln!(out, "wrote {} ({frames} frames)", args.out.display())?,
+        Plotted::Movie { frames } => {
+            writeln!(out, "wrote {} ({frames} frames)", args.out.display())?
+        }
         Plotted::Still { .. } => writeln!(out, "wrote {}", args.out.display())?,
     }
     Ok(())

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use presrs::Progress;
 use presrs::profile::{
-    GaitTableSim, GaitTableSource, ProfileChoice, gait_table, model_profile, profile_summary,
+    GaitTableSim, ProfileChoice, ProfileRequest, model_profile, profile_summary,
 };
 use presrs::train::TrainOptions;
 use presrs_core::selection::Selection;
@@ -114,25 +114,32 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     } else {
         ProfileChoice::WhenMovies
     };
-    let learned = model_profile(&dataset, &args.manifest, &segment, choice)?;
+    let sim = GaitTableSim {
+        config: args.sim_config.as_deref(),
+        seed: args.seed,
+        sweep: args.gait_sweep,
+    };
+    let request = ProfileRequest {
+        choice,
+        gait_table: args.gait_table.as_deref(),
+        sim,
+    };
+    let classes = model.class_names();
+    let learned = model_profile(
+        &dataset,
+        &args.manifest,
+        &segment,
+        classes,
+        &request,
+        &progress,
+    )?;
     if let Some(warning) = &learned.warning {
         stderr_line!("warning: {warning}");
     }
-    file.online = learned.profile;
-    if let (Some(profile), Some(source)) = (&mut file.online, &args.gait_table) {
-        let sim = GaitTableSim {
-            config: args.sim_config.as_deref(),
-            seed: args.seed,
-            sweep: args.gait_sweep,
-        };
-        let source: GaitTableSource = source.parse()?;
-        let (table, measured) =
-            gait_table(&source, model.class_names(), sim, &TerminalProgress::default())?;
-        if let Some(measured) = measured {
-            write!(out, "{}", measured.format())?;
-        }
-        profile.gait_table = table;
+    if let Some(measured) = &learned.measured {
+        write!(out, "{}", measured.format())?;
     }
+    file.online = learned.profile;
     save_model(&args.out, &file)?;
     writeln!(
         out,
