@@ -60,7 +60,12 @@ pub fn model_profile(
 ) -> Result<ModelProfile> {
     let mut learned = learn_profile(dataset, manifest, params, request.choice)?;
     if let (Some(profile), Some(source)) = (&mut learned.profile, request.gait_table) {
-        let (table, measured) = gait_table(&source.parse()?, class_names, request.sim, progress)?;
+        let (table, measured) = gait_table(
+            &source.parse::<GaitTableSource>()?,
+            class_names,
+            request.sim,
+            progress,
+        )?;
         profile.gait_table = table;
         learned.measured = measured;
     }

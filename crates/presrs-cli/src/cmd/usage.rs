@@ -1,5 +1,6 @@
-//! Bad usage: parsers of option values that can be judged alone (clap reports their errors, exit code
-//! 2), and [`UsageError`] for what can only be judged with other options or the configuration.
+//! Bad usage: parsers of option values that can be judged alone ([`presrs::values`]; clap reports their
+//! errors, exit code 2), and [`UsageError`] for what can only be judged with other options or the
+//! configuration.
 
 use clap::CommandFactory;
 use clap::error::ErrorKind;
