@@ -23,6 +23,7 @@ pub mod replay;
 pub mod report;
 pub mod reproduce;
 pub mod simulation;
+pub mod stance_options;
 pub mod stoppable_input;
 pub mod stream;
 pub mod stream_log;

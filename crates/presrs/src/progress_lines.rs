@@ -98,6 +98,17 @@ impl ProgressLines {
     }
 }
 
+/// How often progress lines are written: `PRESRS_PROGRESS_SECONDS` (seconds, e.g. 0.5), else 5 s.
+pub fn progress_interval() -> Duration {
+    std::env::var("PRESRS_PROGRESS_SECONDS")
+        .ok()
+        .and_then(|text| text.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .map_or(Duration::from_secs(5), |s| {
+            Duration::from_secs_f64(s.min(1e6))
+        })
+}
+
 /// One progress line: `TASK: DONE/TOTAL (N s)`, or `TASK: N s` for a task of unknown length.
 pub fn progress_line(task: &str, done: u64, total: Option<u64>, elapsed: Duration) -> String {
     let seconds = elapsed.as_secs_f64();

@@ -21,7 +21,6 @@ pub fn notice_text(notice: &SessionNotice) -> String {
              (give --calibrate MANIFEST or --profile, or a model with an online profile, to classify from \
              the first frame)"
         ),
-        _ => format!("{notice:?}"),
     }
 }
 
@@ -39,10 +38,9 @@ pub fn summary_text(name: &str, s: &ConnectionSummary) -> String {
     )
 }
 
-/// What the server saw, as the log says it (each about a client named by its address); `None` for
-/// what is not logged.
-pub fn server_notice_text(notice: &ServerNotice<'_>) -> Option<String> {
-    Some(match notice {
+/// What the server saw, as the log says it (each about a client named by its address).
+pub fn server_notice_text(notice: &ServerNotice<'_>) -> String {
+    match notice {
         ServerNotice::AcceptFailed(err) => format!("accept failed: {err}"),
         ServerNotice::Refused { peer, max_clients } => {
             format!("{peer}: refused, {max_clients} clients already connected")
@@ -51,8 +49,7 @@ pub fn server_notice_text(notice: &ServerNotice<'_>) -> Option<String> {
         ServerNotice::Session { peer, notice } => format!("{peer}: {}", notice_text(notice)),
         ServerNotice::Ended { peer, summary } => summary_text(peer, summary),
         ServerNotice::Failed { peer, error } => format!("{peer}: {}", chain_text(*error)),
-        _ => return None,
-    })
+    }
 }
 
 /// The first line of a server: where it listens (port 0 asked for any).

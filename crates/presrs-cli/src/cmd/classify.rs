@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs::classify::{Classified, ClassifyOptions, classify_file};
+use presrs::classify::{ClassifyOptions, classify_file};
 use presrs::classify_bag::ClassifyBag;
 use presrs::classify_document::{ClassifyJson, FileError};
 use presrs::dataset::DeadSenselFills;

@@ -7,12 +7,13 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs::dataset::{DeadSenselFills, SampleOptions, read_corrected};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
-use presrs::progress_lines::ProgressLines;
+use presrs::progress_lines::{ProgressLines, progress_interval};
+use presrs::stance_options::StanceOptions;
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::preprocess::Preprocess;
-use presrs_core::stance::{BaselineMode, SampleFrame, SegmentParams, ValidSegmentParams};
+use presrs_core::stance::{BaselineMode, SampleFrame, ValidSegmentParams};
 use presrs_io::{ArrayAxes, ReadOptions};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
@@ -209,21 +210,15 @@ impl AxesArg {
 impl StanceArgs {
     /// The detector's settings these options give (the defaults for those not given).
     pub fn segment_params(&self) -> anyhow::Result<ValidSegmentParams> {
-        let default = SegmentParams::default();
-        let params = SegmentParams {
+        let options = StanceOptions {
             baseline: self.stance_baseline,
-            on_fraction: self.stance_threshold.unwrap_or(default.on_fraction),
-            off_fraction: self.stance_hysteresis.unwrap_or(default.off_fraction),
-            min_stance_frames: self.stance_min_frames.unwrap_or(default.min_stance_frames),
-            max_stance_frames: self.stance_max_frames,
-            max_gap_frames: self
-                .stance_min_gap
-                .map_or(default.max_gap_frames, |gap| gap - 1),
-            ..default
+            threshold: self.stance_threshold,
+            hysteresis: self.stance_hysteresis,
+            min_frames: self.stance_min_frames,
+            max_frames: self.stance_max_frames,
+            min_gap: self.stance_min_gap,
         };
-        params
-            .check()
-            .context("the --stance-* options do not fit together")
+        Ok(options.segment_params()?)
     }
 }
 
@@ -299,18 +294,6 @@ impl Default for TerminalProgress {
             lines: ProgressLines::new(progress_interval(), sink),
         }
     }
-}
-
-/// How often a progress line is written when stderr is not a terminal: `PRESRS_PROGRESS_SECONDS`
-/// (seconds, e.g. 0.5), else 5 s.
-pub fn progress_interval() -> std::time::Duration {
-    std::env::var("PRESRS_PROGRESS_SECONDS")
-        .ok()
-        .and_then(|text| text.trim().parse::<f64>().ok())
-        .filter(|s| s.is_finite() && *s > 0.0)
-        .map_or(std::time::Duration::from_secs(5), |s| {
-            std::time::Duration::from_secs_f64(s.min(1e6))
-        })
 }
 
 impl TerminalProgress {

@@ -343,7 +343,5 @@ fn run_stdin(
 
 /// The stderr line of what the server saw.
 fn print_server_notice(notice: &ServerNotice<'_>) {
-    if let Some(text) = server_notice_text(notice) {
-        stderr_line!("presrs stream: {text}");
-    }
+    stderr_line!("presrs stream: {}", server_notice_text(notice));
 }

@@ -95,10 +95,8 @@ pub fn run(args: &ViewArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     let signals = Signals::new([SIGINT, SIGTERM]).context("cannot handle SIGINT and SIGTERM")?;
     let stop = options.stop.clone().unwrap_or_default();
-    let signal_thread = on_signal(signals, {
-        let stop = stop.clone();
-        move || stop.stop()
-    });
+    let stopper = stop.clone();
+    let signal_thread = on_signal(signals, move || stopper.stop());
     stderr_line!(
         "presrs view: {} frames of {} at {:.1} frames/s{}",
         recording.frame_count(),
