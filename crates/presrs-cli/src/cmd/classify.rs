@@ -78,7 +78,6 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
     }
     for path in &args.files {
-        let name = path.display().to_string();
         let options = ClassifyOptions {
             frame: args.frame,
             samples: args.samples.options()?,
@@ -97,14 +96,12 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 classification.frames
             }
             Err(err) => {
-                let err = anyhow::Error::from(err);
+                let error = crate::error_message(&anyhow::Error::from(err));
                 // what was printed so far comes first
                 out.flush()?;
-                stderr_line!("error: {}", crate::error_message(&err));
-                errors.push(FileError {
-                    file: name,
-                    error: crate::error_message(&err),
-                });
+                stderr_line!("error: {error}");
+                let file = path.display().to_string();
+                errors.push(FileError { file, error });
                 continue;
             }
         };
