@@ -1,11 +1,12 @@
 //! `presrs.evaluate`: the evaluation protocols (train on a draw and test on the rest, or leave one
 //! group out), on a manifest or on numpy arrays.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use numpy::{PyArray1, PyArrayMethods};
-use presrs::core::evaluation::EvalReport;
-use presrs::evaluate::{CalibrationJson, EvalOptions, EvalSetup, Holdout};
+use presrs::eval_document::EvalJson;
+use presrs::evaluate::{CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout};
 use presrs::{Dataset, Progress, Quiet, SampleOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
@@ -19,7 +20,9 @@ use crate::threads::detached;
 #[pyclass(module = "presrs", name = "Evaluation", frozen)]
 #[derive(Debug)]
 pub struct Evaluation {
-    report: EvalReport,
+    outcome: EvalOutcome,
+    /// Tested labels no training set held, by held-out value (part of the `to_dict()` document).
+    never_trained: BTreeMap<String, Vec<String>>,
     warnings: Vec<String>,
 }
 
@@ -28,19 +31,20 @@ impl Evaluation {
     /// Mean accuracy over the repeats (0-1).
     #[getter]
     fn accuracy(&self) -> f64 {
-        self.report.overall.mean
+        self.outcome.report.overall.mean
     }
 
     /// Standard deviation of the accuracy over the repeats.
     #[getter]
     fn accuracy_std(&self) -> f64 {
-        self.report.overall.std
+        self.outcome.report.overall.std
     }
 
     /// Accuracy per tested condition (or held-out value): `{name: (mean, std)}`.
     #[getter]
-    fn per_condition(&self) -> std::collections::BTreeMap<String, (f64, f64)> {
-        self.report
+    fn per_condition(&self) -> BTreeMap<String, (f64, f64)> {
+        self.outcome
+            .report
             .per_condition
             .iter()
             .map(|(name, m)| (name.clone(), (m.mean, m.std)))
@@ -50,7 +54,8 @@ impl Evaluation {
     /// The accuracy of every repeat.
     #[getter]
     fn repeats(&self) -> Vec<f64> {
-        self.report
+        self.outcome
+            .report
             .repeats
             .iter()
             .map(|r| r.overall_accuracy)
@@ -60,14 +65,15 @@ impl Evaluation {
     /// The class names of the confusion matrix's rows (true) and columns (predicted).
     #[getter]
     fn classes(&self) -> Vec<String> {
-        self.report.confusion.labels.clone()
+        self.outcome.report.confusion.labels.clone()
     }
 
     /// Counts over all repeats: row = true class, column = predicted class (`classes` order).
     #[getter]
     fn confusion<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let n = self.report.confusion.labels.len();
+        let n = self.outcome.report.confusion.labels.len();
         let flat: Vec<u64> = self
+            .outcome
             .report
             .confusion
             .counts
@@ -82,7 +88,7 @@ impl Evaluation {
     /// the expected calibration error.
     #[getter]
     fn calibration<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let value = serde_json::to_value(CalibrationJson::new(&self.report.reliability))
+        let value = serde_json::to_value(CalibrationJson::new(&self.outcome.report.reliability))
             .map_err(|err| data_error(err.to_string()))?;
         crate::json::to_py(py, &value)
     }
@@ -90,7 +96,7 @@ impl Evaluation {
     /// Median time to classify one image, in microseconds.
     #[getter]
     fn classify_us(&self) -> f64 {
-        self.report.median_classify_ns as f64 / 1e3
+        self.outcome.report.median_classify_ns as f64 / 1e3
     }
 
     /// What the user should know (labels no training set holds, fewer components than asked).
@@ -99,19 +105,21 @@ impl Evaluation {
         self.warnings.clone()
     }
 
-    /// The whole report as plain dicts and lists (what `presrs eval --json` holds).
+    /// The document `presrs eval --json` prints for the same data, options and seed, as plain dicts
+    /// and lists (built by the same function): the summary fields, `report` (the whole report),
+    /// `selections` and `internal_estimate` with an automatic choice, `labels_never_trained`.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let value =
-            serde_json::to_value(&self.report).map_err(|err| data_error(err.to_string()))?;
+        let document = EvalJson::of(&self.outcome, &self.never_trained);
+        let value = serde_json::to_value(&document).map_err(|err| data_error(err.to_string()))?;
         crate::json::to_py(py, &value)
     }
 
     fn __repr__(&self) -> String {
         format!(
             "<presrs.Evaluation accuracy {:.2} % +- {:.2} over {} repeats>",
-            100.0 * self.report.overall.mean,
-            100.0 * self.report.overall.std,
-            self.report.repeats.len()
+            100.0 * self.outcome.report.overall.mean,
+            100.0 * self.outcome.report.overall.std,
+            self.outcome.report.repeats.len()
         )
     }
 }
@@ -192,12 +200,13 @@ pub fn evaluate(
     let setup = EvalSetup::new(&dataset, &options).py_err()?;
     let mut warnings = setup.warnings.clone();
     let outcome = detached(py, || setup.evaluate(progress))?.py_err()?;
-    warnings.extend(outcome.warnings);
+    warnings.extend(outcome.warnings.iter().cloned());
     for warning in &warnings {
         warn(py, warning)?;
     }
     Ok(Evaluation {
-        report: outcome.report,
+        outcome,
+        never_trained: setup.never_trained,
         warnings,
     })
 }

@@ -21,7 +21,8 @@ def test_evaluate_on_images(sim_images):
     assert result.confusion.sum() == 3 * tested
     assert set(result.per_condition) >= {"G1"}
     assert 0.0 <= result.calibration["mean_confidence"] <= 1.0
-    assert result.to_dict()["overall"]["mean"] == result.accuracy
+    assert result.to_dict()["overall_accuracy"] == result.accuracy
+    assert result.to_dict()["report"]["overall"]["mean"] == result.accuracy
     again = presrs.evaluate(
         images, labels, conditions=gaits, train_condition="G2", per_class=3, repeats=3,
         seed=5, features="fft1d", classifier="pwe",

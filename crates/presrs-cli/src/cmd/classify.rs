@@ -3,11 +3,11 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs::classify::{Classified, ClassifyOptions, classify_file};
+use presrs::classify::{ClassifyOptions, classify_file};
 use presrs::classify_bag::ClassifyBag;
+use presrs::classify_document::{ClassifyJson, FileError};
 use presrs::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
-use serde::Serialize;
 
 use super::common::{SampleArgs, note_dead_sensels, write_json};
 
@@ -47,21 +47,6 @@ pub struct ClassifyArgs {
     pub samples: SampleArgs,
 }
 
-/// A file that could not be classified.
-#[derive(Debug, Serialize)]
-struct FileError {
-    file: String,
-    error: String,
-}
-
-#[derive(Debug, Serialize)]
-struct ClassifyReport {
-    model: String,
-    results: Vec<Classified>,
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    errors: Vec<FileError>,
-}
-
 pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let model_file = load_model(&args.model)?;
     let model = &model_file.model;
@@ -93,7 +78,6 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
     }
     for path in &args.files {
-        let name = path.display().to_string();
         let options = ClassifyOptions {
             frame: args.frame,
             samples: args.samples.options()?,
@@ -112,14 +96,12 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 classification.frames
             }
             Err(err) => {
-                let err = anyhow::Error::from(err);
+                let error = crate::error_message(&anyhow::Error::from(err));
                 // what was printed so far comes first
                 out.flush()?;
-                stderr_line!("error: {}", crate::error_message(&err));
-                errors.push(FileError {
-                    file: name,
-                    error: crate::error_message(&err),
-                });
+                stderr_line!("error: {error}");
+                let file = path.display().to_string();
+                errors.push(FileError { file, error });
                 continue;
             }
         };
@@ -148,7 +130,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.json {
         write_json(
             out,
-            &ClassifyReport {
+            &ClassifyJson {
                 model: args.model.display().to_string(),
                 results,
                 errors,

@@ -7,11 +7,13 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs::dataset::{DeadSenselFills, SampleOptions, read_corrected};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
+use presrs::progress_lines::{ProgressLines, progress_interval};
+use presrs::stance_options::StanceOptions;
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::preprocess::Preprocess;
-use presrs_core::stance::{BaselineMode, SampleFrame, SegmentParams, ValidSegmentParams};
+use presrs_core::stance::{BaselineMode, SampleFrame, ValidSegmentParams};
 use presrs_io::{ArrayAxes, ReadOptions};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
@@ -166,11 +168,11 @@ pub struct StanceArgs {
     pub stance_baseline: BaselineMode,
     /// A stance must somewhere exceed this fraction of the load range above the baseline (or floor)
     /// [default: 0.10].
-    #[arg(long, value_name = "FRACTION", value_parser = parse_fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = presrs::values::fraction)]
     pub stance_threshold: Option<f64>,
     /// Hysteresis: a frame belongs to a stance while its load exceeds this fraction of the load range
     /// above the baseline (or floor), at most --stance-threshold [default: 0.01].
-    #[arg(long, value_name = "FRACTION", value_parser = parse_fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = presrs::values::fraction)]
     pub stance_hysteresis: Option<f64>,
     /// Shortest stance kept, in frames [default: 3].
     #[arg(long, value_name = "FRAMES", value_parser = parse_positive)]
@@ -189,28 +191,34 @@ pub struct StanceArgs {
     pub one_sample_per_file: bool,
     /// Frame period in seconds of files whose format states none (.npy, text, PNG); a manifest's
     /// `frame_period_s` column gives it per file.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_period)]
+    #[arg(long, value_name = "SECONDS", value_parser = presrs::values::period_seconds)]
     pub frame_period: Option<f64>,
+}
+
+impl AxesArg {
+    /// How files are read with these options (and `--lenient` as given).
+    pub fn read_options(&self, lenient: bool) -> ReadOptions {
+        let (axes, topic) = (self.axes, self.topic.clone());
+        ReadOptions {
+            lenient,
+            axes,
+            topic,
+        }
+    }
 }
 
 impl StanceArgs {
     /// The detector's settings these options give (the defaults for those not given).
     pub fn segment_params(&self) -> anyhow::Result<ValidSegmentParams> {
-        let default = SegmentParams::default();
-        let params = SegmentParams {
+        let options = StanceOptions {
             baseline: self.stance_baseline,
-            on_fraction: self.stance_threshold.unwrap_or(default.on_fraction),
-            off_fraction: self.stance_hysteresis.unwrap_or(default.off_fraction),
-            min_stance_frames: self.stance_min_frames.unwrap_or(default.min_stance_frames),
-            max_stance_frames: self.stance_max_frames,
-            max_gap_frames: self
-                .stance_min_gap
-                .map_or(default.max_gap_frames, |gap| gap - 1),
-            ..default
+            threshold: self.stance_threshold,
+            hysteresis: self.stance_hysteresis,
+            min_frames: self.stance_min_frames,
+            max_frames: self.stance_max_frames,
+            min_gap: self.stance_min_gap,
         };
-        params
-            .check()
-            .context("the --stance-* options do not fit together")
+        Ok(options.segment_params()?)
     }
 }
 
@@ -245,11 +253,7 @@ impl SampleArgs {
     }
 
     pub fn read_options(&self) -> ReadOptions {
-        ReadOptions {
-            lenient: self.lenient,
-            axes: self.axes.axes,
-            topic: self.axes.topic.clone(),
-        }
+        self.axes.read_options(self.lenient)
     }
 }
 
@@ -273,47 +277,22 @@ pub fn note_dead_sensels(fills: &DeadSenselFills) {
 }
 
 /// The library's progress on stderr: a bar (or a spinner for a task of unknown length) when stderr is a
-/// terminal; otherwise (logs, CI) a `progress: ...` line every [`progress_interval`] while a task runs;
-/// warnings as `warning: ...` lines.
-#[derive(Debug, Default)]
+/// terminal; otherwise (logs, CI) a `progress: ...` line every [`progress_interval`] while a task runs
+/// ([`ProgressLines`]); warnings as `warning: ...` lines.
+#[derive(Debug)]
 pub struct TerminalProgress {
     bar: std::sync::Mutex<Option<ProgressBar>>,
-    /// The task running, for the progress lines when stderr is not a terminal.
-    log: std::sync::Arc<std::sync::Mutex<Option<LoggedTask>>>,
+    /// The task's progress lines when stderr is not a terminal.
+    lines: ProgressLines,
 }
 
-/// A task whose progress is logged as lines.
-#[derive(Debug)]
-struct LoggedTask {
-    task: String,
-    total: Option<u64>,
-    done: u64,
-    started: std::time::Instant,
-}
-
-/// How often a progress line is written when stderr is not a terminal: `PRESRS_PROGRESS_SECONDS`
-/// (seconds, e.g. 0.5), else 5 s.
-pub fn progress_interval() -> std::time::Duration {
-    std::env::var("PRESRS_PROGRESS_SECONDS")
-        .ok()
-        .and_then(|text| text.trim().parse::<f64>().ok())
-        .filter(|s| s.is_finite() && *s > 0.0)
-        .map_or(std::time::Duration::from_secs(5), |s| {
-            std::time::Duration::from_secs_f64(s.min(1e6))
-        })
-}
-
-/// One progress line: `TASK: DONE/TOTAL (N s)`, or `TASK: N s` for a task of unknown length.
-fn progress_line(
-    task: &str,
-    done: u64,
-    total: Option<u64>,
-    elapsed: std::time::Duration,
-) -> String {
-    let seconds = elapsed.as_secs_f64();
-    match total {
-        Some(total) => format!("{task}: {done}/{total} ({seconds:.0} s)"),
-        None => format!("{task}: {seconds:.0} s"),
+impl Default for TerminalProgress {
+    fn default() -> Self {
+        let sink = std::sync::Arc::new(|line: &str| stderr_line!("progress: {line}"));
+        Self {
+            bar: std::sync::Mutex::default(),
+            lines: ProgressLines::new(progress_interval(), sink),
+        }
     }
 }
 
@@ -324,41 +303,6 @@ impl TerminalProgress {
             .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
-    /// Starts logging `task` as lines (stderr is not a terminal): a thread writes a line every
-    /// [`progress_interval`] until the task is finished or replaced.
-    fn log_task(&self, task: &str, total: Option<u64>) {
-        let started = std::time::Instant::now();
-        let logged = LoggedTask {
-            task: task.to_owned(),
-            total,
-            done: 0,
-            started,
-        };
-        *self
-            .log
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner()) = Some(logged);
-        let log = std::sync::Arc::downgrade(&self.log);
-        let interval = progress_interval();
-        std::thread::spawn(move || {
-            loop {
-                std::thread::sleep(interval);
-                let Some(log) = log.upgrade() else { return };
-                let guard = log.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-                match guard.as_ref() {
-                    // This thread's task, still running.
-                    Some(t) if t.started == started => stderr_line!(
-                        "progress: {}",
-                        progress_line(&t.task, t.done, t.total, t.started.elapsed())
-                    ),
-                    _ => return,
-                }
-            }
-        });
-    }
-}
-
-impl TerminalProgress {
     /// `KIND: message` on stderr, above the bar if one is shown.
     fn line(&self, kind: &str, message: &str) {
         match self.bar().as_ref() {
@@ -371,7 +315,7 @@ impl TerminalProgress {
 impl Progress for TerminalProgress {
     fn start(&self, task: &str, total: Option<u64>) {
         if !std::io::stderr().is_terminal() {
-            self.log_task(task, total);
+            self.lines.start(task, total);
         }
         let bar = match total {
             Some(total) => progress_bar(total, task),
@@ -386,21 +330,11 @@ impl Progress for TerminalProgress {
         if let Some(bar) = self.bar().as_ref() {
             bar.inc(steps);
         }
-        if let Some(task) = self
-            .log
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-            .as_mut()
-        {
-            task.done += steps;
-        }
+        self.lines.advance(steps);
     }
 
     fn finish(&self) {
-        self.log
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-            .take();
+        self.lines.finish();
         if let Some(bar) = self.bar().take() {
             bar.finish_and_clear();
         }
@@ -466,37 +400,4 @@ fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {
 
 fn parse_baseline_mode(text: &str) -> Result<BaselineMode, String> {
     text.parse::<BaselineMode>().map_err(|err| err.to_string())
-}
-
-/// A fraction in (0, 1] (`--stance-threshold`, `--stance-hysteresis`).
-fn parse_fraction(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(value) if value > 0.0 && value <= 1.0 => Ok(value),
-        _ => Err(format!("expected a fraction in (0, 1], got {text:?}")),
-    }
-}
-
-/// A positive, finite number of seconds (`--frame-period`).
-fn parse_period(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(value) if value.is_finite() && value > 0.0 => Ok(value),
-        _ => Err(format!(
-            "expected a positive number of seconds, got {text:?}"
-        )),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn progress_lines_say_how_far_and_how_long() {
-        let ten = std::time::Duration::from_secs(10);
-        assert_eq!(
-            progress_line("training", 3, Some(40), ten),
-            "training: 3/40 (10 s)"
-        );
-        assert_eq!(progress_line("training", 0, None, ten), "training: 10 s");
-    }
 }

@@ -4,7 +4,6 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::convert::{ConvertOptions, DEFAULT_FRAMES_TOPIC, convert};
-use presrs_io::ReadOptions;
 
 use super::common::AxesArg;
 
@@ -37,11 +36,7 @@ pub struct ConvertArgs {
 
 pub fn run(args: &ConvertArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = ConvertOptions {
-        read: ReadOptions {
-            lenient: args.lenient,
-            axes: args.read.axes,
-            topic: args.read.topic.clone(),
-        },
+        read: args.read.read_options(args.lenient),
         topic: args.out_topic.clone(),
         frame_period_s: args.frame_period,
     };

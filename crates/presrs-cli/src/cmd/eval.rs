@@ -1,18 +1,16 @@
 //! `presrs eval`: the evaluation protocols on any manifest.
 
-use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs::evaluate::{
-    CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow,
-    calibration_line,
+use presrs::eval_document::{
+    CompareJson, EvalJson, PerturbedJson, chosen_counts, comparison_conditions, fault_results,
+    perturbation_pairs, protocol_heading, sigmas,
 };
-use presrs::method::{ClassifierChoice, FeatureChoice, Method};
-use presrs_core::evaluation::{ComparisonRow, EvalReport, Protocol};
+use presrs::evaluate::{EvalOptions, EvalSetup, Holdout, PerturbationRow, calibration_line};
+use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
 use presrs_core::split::ValidationSize;
-use serde::Serialize;
 
 use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest, write_json};
 
@@ -82,97 +80,6 @@ pub struct EvalArgs {
     pub samples: SampleArgs,
 }
 
-/// The `--json` document (the contract's fields first).
-#[derive(Debug, Serialize)]
-pub struct EvalJson<'r> {
-    pub overall_accuracy: f64,
-    pub overall_accuracy_std: f64,
-    pub per_condition: BTreeMap<String, f64>,
-    pub per_condition_std: BTreeMap<String, f64>,
-    pub confusion: ConfusionJson,
-    pub median_classify_ns: u64,
-    pub per_class: BTreeMap<String, ClassMetrics>,
-    pub sigmas: Vec<f64>,
-    /// How far the reported confidences can be trusted (the full tally: `report.reliability`).
-    pub calibration: CalibrationJson,
-    pub report: &'r EvalReport,
-    /// The automatic choice of every trained model (with `--features auto` or `--classifier auto`).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub selections: Vec<presrs_core::selection::Selection>,
-    /// With an automatic choice: its own estimate inside the training data (the chosen candidates'
-    /// validation accuracy) and how it validated, to compare with `overall_accuracy`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub internal_estimate: Option<presrs::evaluate::InternalEstimate>,
-    /// Tested labels no training set of the protocol holds, by held-out value (`all` for a training
-    /// condition); those samples are wrong whatever the model.
-    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
-    pub labels_never_trained: BTreeMap<String, Vec<String>>,
-}
-
-#[derive(Debug, Serialize)]
-pub struct ConfusionJson {
-    pub labels: Vec<String>,
-    pub counts: Vec<Vec<u64>>,
-    pub row_normalised: Vec<Vec<f64>>,
-}
-
-#[derive(Debug, Serialize)]
-pub struct ClassMetrics {
-    pub precision: f64,
-    pub recall: f64,
-}
-
-impl<'r> EvalJson<'r> {
-    pub fn new(report: &'r EvalReport) -> Self {
-        let confusion = &report.confusion;
-        let (precision, recall) = (confusion.precision(), confusion.recall());
-        Self {
-            overall_accuracy: report.overall.mean,
-            overall_accuracy_std: report.overall.std,
-            per_condition: report
-                .per_condition
-                .iter()
-                .map(|(k, v)| (k.clone(), v.mean))
-                .collect(),
-            per_condition_std: report
-                .per_condition
-                .iter()
-                .map(|(k, v)| (k.clone(), v.std))
-                .collect(),
-            confusion: ConfusionJson {
-                labels: confusion.labels.clone(),
-                counts: confusion.counts.clone(),
-                row_normalised: confusion.row_normalised(),
-            },
-            median_classify_ns: report.median_classify_ns,
-            calibration: CalibrationJson::new(&report.reliability),
-            per_class: confusion
-                .labels
-                .iter()
-                .enumerate()
-                .map(|(i, label)| {
-                    (
-                        label.clone(),
-                        ClassMetrics {
-                            precision: precision[i],
-                            recall: recall[i],
-                        },
-                    )
-                })
-                .collect(),
-            sigmas: report
-                .repeats
-                .iter()
-                .flat_map(|r| r.sigmas.iter().copied())
-                .collect(),
-            report,
-            selections: Vec::new(),
-            internal_estimate: None,
-            labels_never_trained: BTreeMap::new(),
-        }
-    }
-}
-
 pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = EvalOptions {
@@ -204,7 +111,6 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         return print_comparison(&rows, out);
     }
     let outcome = setup.evaluate(&progress)?;
-    let internal = outcome.internal_estimate();
     for warning in &outcome.warnings {
         stderr_line!("warning: {warning}");
     }
@@ -221,51 +127,39 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
         stderr_line!("report written to {}", path.display());
     }
-    let EvalOutcome {
-        report, selections, ..
-    } = outcome;
-    if args.json {
-        let mut json = EvalJson::new(&report);
-        json.selections = selections;
-        json.internal_estimate = internal;
-        json.labels_never_trained = setup.never_trained.clone();
-        if !perturbed.is_empty() {
-            return write_json(
-                out,
-                &PerturbedJson {
-                    eval: json,
-                    perturbations: perturbed,
-                },
-            );
-        }
-        return write_json(out, &json);
+    let eval = EvalJson::of(&outcome, &setup.never_trained);
+    if args.json && perturbed.is_empty() {
+        return write_json(out, &eval);
     }
-    print_report(&report, out)?;
+    if args.json {
+        let perturbations = &perturbed;
+        return write_json(
+            out,
+            &PerturbedJson {
+                eval,
+                perturbations,
+            },
+        );
+    }
+    print_report(&outcome.report, out)?;
     print_perturbations(&perturbed, out)?;
-    if !selections.is_empty() {
-        let mut chosen: BTreeMap<String, usize> = BTreeMap::new();
-        for selection in &selections {
-            if let Some(score) = selection.chosen() {
-                *chosen.entry(score.name()).or_default() += 1;
-            }
-        }
+    if let Some(first) = outcome.selections.first() {
+        let (method, models) = (&first.method, outcome.selections.len());
         writeln!(
             out,
-            "\nautomatic choice ({}), over {} trained model(s):",
-            selections[0].method,
-            selections.len()
+            "\nautomatic choice ({method}), over {models} trained model(s):"
         )?;
-        for (name, count) in chosen {
+        for (name, count) in chosen_counts(&outcome.selections) {
             writeln!(out, "  {name}: {count}")?;
         }
     }
-    if let Some(internal) = &internal {
+    if let Some(internal) = &eval.internal_estimate {
         writeln!(
             out,
             "internal estimate (validation inside the training data): {:.2} % +- {:.2}; test: {:.2} %",
             100.0 * internal.accuracy.mean,
             100.0 * internal.accuracy.std,
-            100.0 * report.overall.mean
+            100.0 * outcome.report.overall.mean
         )?;
     }
     Ok(())
@@ -273,19 +167,8 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
 
 /// The human-readable tables of an evaluation.
 pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<()> {
-    let percent = |m: &presrs_core::evaluation::MeanStd| {
-        format!("{:6.2} % +- {:.2}", 100.0 * m.mean, 100.0 * m.std)
-    };
-    let heading = match &report.protocol {
-        Protocol::TrainCondition { condition, .. } => format!(
-            "trained on {}, tested on every other sample",
-            condition.as_deref().map_or_else(
-                || "a random draw of all samples".to_owned(),
-                |c| format!("condition {c}")
-            )
-        ),
-        Protocol::LeaveOneOut { column, .. } => format!("leave one `{column}` out"),
-    };
+    let percent = |m: &MeanStd| format!("{:6.2} % +- {:.2}", 100.0 * m.mean, 100.0 * m.std);
+    let heading = protocol_heading(&report.protocol);
     writeln!(out, "{heading}; {} repeat(s)", report.repeats.len())?;
     writeln!(out, "{:<16} {:>20}", "tested", "accuracy")?;
     for (name, accuracy) in &report.per_condition {
@@ -325,13 +208,9 @@ pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<
     if let Some(line) = calibration_line(&report.reliability) {
         writeln!(out, "{line}")?;
     }
-    let sigmas: Vec<f64> = report
-        .repeats
-        .iter()
-        .flat_map(|r| r.sigmas.iter().copied())
-        .collect();
+    let sigmas = sigmas(report);
     if !sigmas.is_empty() {
-        let sigma = presrs_core::evaluation::MeanStd::of(&sigmas);
+        let sigma = MeanStd::of(&sigmas);
         writeln!(
             out,
             "\nParzen sigma chosen on validation: {:.4} +- {:.4}",
@@ -352,124 +231,6 @@ pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<
     Ok(())
 }
 
-/// The `--compare --json` document: the usual `--json` fields of one combination (named in
-/// `summary_of`), and every combination under `comparison`.
-#[derive(Debug, Serialize)]
-pub struct CompareJson<'r> {
-    pub summary_of: SummaryOf<'r>,
-    #[serde(flatten)]
-    pub eval: EvalJson<'r>,
-    pub comparison: Vec<CompareRowJson<'r>>,
-}
-
-/// Which combination the top-level fields of the `--compare --json` document describe, and why.
-#[derive(Debug, Serialize)]
-pub struct SummaryOf<'r> {
-    pub features: &'r str,
-    pub classifier: &'r str,
-    /// `configured` (the --features and --classifier given) or `best` (highest overall accuracy).
-    pub reason: &'static str,
-}
-
-/// One combination of the comparison: its accuracies, timings and full report, or why it failed.
-#[derive(Debug, Serialize)]
-pub struct CompareRowJson<'r> {
-    pub features: &'r str,
-    pub classifier: &'r str,
-    pub config: &'r presrs_core::pipeline::TrainConfig,
-    /// `null` when the combination could not be trained (see `error`).
-    pub overall_accuracy: Option<f64>,
-    pub overall_accuracy_std: Option<f64>,
-    pub per_condition: BTreeMap<String, f64>,
-    pub median_classify_ns: Option<u64>,
-    /// Training time per trained model, seconds (mean and spread over repeats).
-    pub train_seconds: presrs_core::evaluation::MeanStd,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub report: Option<&'r EvalReport>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub error: Option<&'r str>,
-}
-
-impl<'r> CompareJson<'r> {
-    /// The document of `rows`; fails when no combination could be evaluated.
-    pub fn new(rows: &'r [ComparisonRow], method: &Method) -> anyhow::Result<Self> {
-        let configured = match (&method.features, method.classifier) {
-            (FeatureChoice::Kinds(kinds), ClassifierChoice::Kind(kind)) => {
-                let features = presrs_core::features::FeatureConfig::combined(kinds).name();
-                rows.iter().position(|row| {
-                    row.report.is_ok()
-                        && row.features == features
-                        && row.classifier == kind.as_str()
-                })
-            }
-            _ => None,
-        };
-        let best = || {
-            let mut best: Option<(usize, f64)> = None;
-            for (i, row) in rows.iter().enumerate() {
-                if let Ok(report) = &row.report
-                    && best.is_none_or(|(_, accuracy)| report.overall.mean > accuracy)
-                {
-                    best = Some((i, report.overall.mean));
-                }
-            }
-            best.map(|(i, _)| i)
-        };
-        let (chosen, reason) = match configured {
-            Some(i) => (i, "configured"),
-            None => match best() {
-                Some(i) => (i, "best"),
-                None => anyhow::bail!(
-                    "no feature x classifier combination could be evaluated (the first: {} + {}: {})",
-                    rows.first().map_or("-", |r| r.features.as_str()),
-                    rows.first().map_or("-", |r| r.classifier.as_str()),
-                    rows.first()
-                        .and_then(|r| r.report.as_ref().err())
-                        .map_or("no combination", String::as_str)
-                ),
-            },
-        };
-        let row = &rows[chosen];
-        let report = row
-            .report
-            .as_ref()
-            .map_err(|err| anyhow::anyhow!("{err}"))?;
-        Ok(Self {
-            summary_of: SummaryOf {
-                features: &row.features,
-                classifier: &row.classifier,
-                reason,
-            },
-            eval: EvalJson::new(report),
-            comparison: rows
-                .iter()
-                .map(|row| {
-                    let report = row.report.as_ref().ok();
-                    CompareRowJson {
-                        features: &row.features,
-                        classifier: &row.classifier,
-                        config: &row.config,
-                        overall_accuracy: report.map(|r| r.overall.mean),
-                        overall_accuracy_std: report.map(|r| r.overall.std),
-                        per_condition: report
-                            .map(|r| {
-                                r.per_condition
-                                    .iter()
-                                    .map(|(k, v)| (k.clone(), v.mean))
-                                    .collect()
-                            })
-                            .unwrap_or_default(),
-                        median_classify_ns: report.map(|r| r.median_classify_ns),
-                        train_seconds: row.train_seconds,
-                        report,
-                        error: row.report.as_ref().err().map(String::as_str),
-                    }
-                })
-                .collect(),
-        })
-    }
-}
-
 /// `--leave-one-out`: any column but `label` (holding out a class leaves none of its samples to train on).
 pub(crate) fn parse_leave_one_out(text: &str) -> Result<String, String> {
     if text.trim() == "label" {
@@ -485,13 +246,7 @@ pub(crate) fn parse_leave_one_out(text: &str) -> Result<String, String> {
 
 /// The comparison table: one row per feature x classifier combination.
 pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::Result<()> {
-    let mut conditions: Vec<&String> = rows
-        .iter()
-        .filter_map(|row| row.report.as_ref().ok())
-        .flat_map(|report| report.per_condition.keys())
-        .collect();
-    conditions.sort();
-    conditions.dedup();
+    let conditions = comparison_conditions(rows);
     if let Some(report) = rows.iter().find_map(|row| row.report.as_ref().ok()) {
         writeln!(
             out,
@@ -540,39 +295,13 @@ pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::
     Ok(())
 }
 
-/// The `--json` document with `--perturb`: the usual fields plus the perturbation rows.
-#[derive(Debug, Serialize)]
-pub struct PerturbedJson<'r> {
-    #[serde(flatten)]
-    pub eval: EvalJson<'r>,
-    pub perturbations: Vec<PerturbationRow>,
-}
-
-/// The perturbation rows as the report's fault results: `configured` is the automatic choice with
-/// `auto`, else this pipeline.
-fn fault_results(rows: &[PerturbationRow], auto: bool) -> Vec<presrs_report::FaultResult> {
-    rows.iter()
-        .map(|r| presrs_report::FaultResult {
-            perturbation: r.perturbation.parse().ok(),
-            method: match (r.method, auto) {
-                ("paper", _) => presrs::report::PAPER_METHOD.to_owned(),
-                (_, true) => presrs::report::AUTO_METHOD.to_owned(),
-                _ => "this pipeline".to_owned(),
-            },
-            accuracy: presrs_core::evaluation::MeanStd {
-                mean: r.accuracy,
-                std: r.accuracy_std,
-            },
-        })
-        .collect()
-}
-
 /// The accuracy-against-fault table (one column per method).
 fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow::Result<()> {
     if rows.is_empty() {
         return Ok(());
     }
-    let paper = rows.iter().any(|r| r.method == "paper");
+    let pairs = perturbation_pairs(rows);
+    let paper = pairs.iter().any(|(_, paper)| paper.is_some());
     write!(
         out,
         "\naccuracy with perturbed test images\n{:<20} {:>20}",
@@ -589,12 +318,9 @@ fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow:
             100.0 * r.accuracy_std
         )
     };
-    for r in rows.iter().filter(|r| r.method == "configured") {
+    for (r, paper) in pairs {
         write!(out, "{:<20} {:>20}", r.perturbation, cell(r))?;
-        if let Some(p) = rows
-            .iter()
-            .find(|q| q.method == "paper" && q.perturbation == r.perturbation)
-        {
+        if let Some(p) = paper {
             write!(out, " {:>20}", cell(p))?;
         }
         writeln!(out)?;

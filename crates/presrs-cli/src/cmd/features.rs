@@ -3,9 +3,8 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::Context;
-use presrs_core::features::{FeatureConfig, FeatureKind};
-use presrs_core::pipeline::extract_features;
+use presrs::feature_table::{FeatureTable, feature_frames};
+use presrs_core::features::FeatureKind;
 
 use super::common::{CropArg, SampleArgs};
 
@@ -45,49 +44,23 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let mut fills = presrs::dataset::DeadSenselFills::default();
     let recording = &args.samples.read(&args.file, &mut fills)?;
     super::common::note_dead_sensels(&fills);
-    let name = args.file.display();
-    let frames = match args.frame {
-        Some(frame) if frame >= recording.frame_count() => anyhow::bail!(
-            "{name}: --frame {frame} is past the end ({})",
-            presrs::classify::frames_numbered(recording.frame_count())
-        ),
-        Some(frame) => vec![frame],
-        None if recording.frame_count() == 1 => vec![0],
-        None => {
-            let segmentation = presrs_core::stance::segment_recording(
-                recording,
-                &presrs_core::stance::ValidSegmentParams::default(),
-            )
-            .with_context(|| format!("{name}: cannot segment"))?;
-            let frames = segmentation
-                .samples(args.samples.stance_frame, args.samples.include_partial)
-                .with_context(|| format!("{name}"))?;
-            if frames.is_empty() {
-                anyhow::bail!(
-                    "{name}: {} frames but no complete stance phase; choose one with --frame K",
-                    recording.frame_count()
-                );
-            }
-            frames
-        }
-    };
-    let crop = args.crop.crop.resolve(recording.grid());
-    let config = FeatureConfig::combined(&args.features);
-    let image_grid = crop
-        .output_grid(recording.grid())
-        .with_context(|| format!("{name}: cannot crop"))?;
-    let names = config
-        .feature_names(image_grid)
-        .with_context(|| format!("{name}: {image_grid} images"))?;
+    let name = args.file.display().to_string();
+    let samples = &args.samples;
+    let frames = feature_frames(
+        recording,
+        &name,
+        args.frame,
+        samples.stance_frame,
+        samples.include_partial,
+    )?;
+    let table = FeatureTable::new(recording, &name, args.crop.crop, &args.features)?;
     let mut header_written = false;
     for index in frames {
-        let Some(frame) = recording.frame(index) else {
+        let Some(features) = table.row(index)? else {
             continue;
         };
-        let features = extract_features(&frame, &crop, &config)
-            .with_context(|| format!("{name}: frame {index}"))?;
         if !header_written {
-            writeln!(out, "frame,{}", names.join(","))?;
+            writeln!(out, "frame,{}", table.names.join(","))?;
             header_written = true;
         }
         write!(out, "{index}")?;

@@ -3,11 +3,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::Context;
-use presrs_core::stance::{SampleFrame, segment_recording};
+use presrs::plot::{Drawing, PlotOptions, Plotted, Still, plot};
+use presrs_core::stance::SampleFrame;
 use presrs_io::read_recording_with;
-use presrs_report::render::{Format, save_figure};
-use presrs_report::{MovieOptions, PressureFigure, PressureScale, write_movie};
 
 /// Draw a pressure image in physical units (kPa when the file says, raw counts otherwise) with a colour
 /// bar, at the sensor's true aspect ratio; or, with --movie, an animation of the whole recording with its
@@ -58,109 +56,34 @@ pub struct PlotArgs {
 }
 
 pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    let read = presrs_io::ReadOptions {
-        lenient: args.lenient,
-        axes: args.axes.axes,
-        topic: args.axes.topic.clone(),
-    };
-    let parsed = read_recording_with(&args.file, &read)?;
+    let parsed = read_recording_with(&args.file, &args.axes.read_options(args.lenient))?;
     for warning in &parsed.warnings {
         stderr_line!("warning: {warning}");
     }
-    let recording = parsed.recording;
-    anyhow::ensure!(
-        recording.frame_count() > 0,
-        "{}: the recording has no frames",
-        args.file.display()
-    );
-    let name = args.file.file_name().map_or_else(
-        || args.file.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    let format = Format::of(&args.out)?;
-    if args.movie {
-        anyhow::ensure!(
-            format == Format::Gif,
-            "--movie writes an animated GIF: give --out a .gif name"
-        );
-        let options = MovieOptions {
+    let drawing = match (args.movie, args.frame, args.stance) {
+        (true, ..) => Drawing::Movie {
             stride: args.stride,
             max_frames: args.max_frames,
-            segment: args.stance_options.segment_params()?,
             sample: args.stance_frame,
-            title: name,
-        };
-        let frames = write_movie(&recording, &options, &args.out)
-            .with_context(|| format!("cannot write {}", args.out.display()))?;
-        writeln!(out, "wrote {} ({frames} frames)", args.out.display())?;
-        return Ok(());
-    }
-    anyhow::ensure!(
-        format != Format::Gif,
-        "a .gif is an animation: add --movie (or write a .png or .svg)"
-    );
-    let count = recording.frame_count();
-    let (index, what) = match (args.frame, args.stance) {
-        (Some(frame), _) => {
-            anyhow::ensure!(
-                frame < count,
-                "{}: --frame {frame} but the recording has {count} frame(s) (frames are 0-based)",
-                args.file.display()
-            );
-            (frame, format!("frame {frame}"))
-        }
-        (None, Some(n)) => {
-            let segmentation =
-                segment_recording(&recording, &args.stance_options.segment_params()?)?;
-            let stances: Vec<_> = segmentation.complete().collect();
-            let stance = stances.get(n).with_context(|| {
-                format!(
-                    "{}: --stance {n} but {} complete stance phase(s) were found (0-based)",
-                    args.file.display(),
-                    stances.len()
-                )
-            })?;
-            let frames = presrs_core::stance::sample_frames(stance, args.stance_frame)?;
-            let frame = *frames
-                .get(frames.len() / 2)
-                .context("the stance gives no frame")?;
-            (
-                frame,
-                format!("stance {n} ({} frame), frame {frame}", args.stance_frame),
-            )
-        }
-        (None, None) => {
-            let totals = recording.total_per_frame();
-            let frame = totals
-                .iter()
-                .enumerate()
-                .max_by(|a, b| a.1.total_cmp(b.1))
-                .map_or(0, |(i, _)| i);
-            let what = if count > 1 {
-                format!("frame {frame} (largest load)")
-            } else {
-                String::new()
-            };
-            (frame, what)
-        }
+        },
+        (false, Some(frame), _) => Drawing::Still(Still::Frame(frame)),
+        (false, None, Some(stance)) => Drawing::Still(Still::Stance {
+            stance,
+            sample: args.stance_frame,
+        }),
+        (false, None, None) => Drawing::Still(Still::LargestLoad),
     };
-    let frame = recording
-        .frame(index)
-        .with_context(|| format!("no frame {index}"))?;
-    let scale = PressureScale::from_meta(Some(&recording.meta));
-    let title = if what.is_empty() {
-        name
-    } else {
-        format!("{name} — {what}")
+    let options = PlotOptions {
+        drawing,
+        vmax: args.vmax,
+        outline_crop: args.outline_crop,
+        segment: args.stance_options.segment_params()?,
     };
-    let mut figure = PressureFigure::new(frame, scale, title);
-    figure.vmax = args.vmax;
-    if let Some(crop) = args.outline_crop {
-        let (row, col, grid) = crop.window(frame.grid())?;
-        figure.outline = Some(presrs_report::pressure::Outline { row, col, grid });
+    match plot(&parsed.recording, &args.file, &options, &args.out)? {
+        Plotted::Movie { frames } => {
+            writeln!(out, "wrote {} ({frames} frames)", args.out.display())?
+        }
+        Plotted::Still { .. } => writeln!(out, "wrote {}", args.out.display())?,
     }
-    save_figure(&figure, &args.out)
-        .with_context(|| format!("cannot write {}", args.out.display()))?;
-    writeln!(out, "wrote {}", args.out.display())?;
     Ok(())
 }

@@ -66,7 +66,7 @@ pub struct ReproduceArgs {
     /// Extra load of the load-independence test, as a fraction of the nominal body mass: the heavier
     /// hopper weighs nominal x (1 + EXTRA_LOAD), so it must be above -1 (a negative value tests a
     /// lighter hopper).
-    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, value_parser = parse_extra_load)]
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, value_parser = presrs::values::extra_load)]
     pub extra_load: f64,
     /// Skip the comparison of every feature family x classifier (same draws as Table II).
     #[arg(long)]
@@ -74,17 +74,6 @@ pub struct ReproduceArgs {
     /// Simulate the data sets afresh (and rewrite them) even when DIR holds matching ones.
     #[arg(long)]
     pub resimulate: bool,
-}
-
-/// `--extra-load`: a finite fraction above -1 (the heavier hopper's mass stays positive).
-fn parse_extra_load(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && x > -1.0 => Ok(x),
-        _ => Err(format!(
-            "expected a fraction of the nominal body mass above -1 (the test hopper weighs nominal x \
-             (1 + EXTRA_LOAD)), got {text:?}"
-        )),
-    }
 }
 
 impl ReproduceArgs {

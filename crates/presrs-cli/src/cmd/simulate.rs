@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use presrs::gait::{TrackOptions, compare_on_track};
 use presrs::simulation::{dataset_names, load_config, read_terrain_image, write_dataset};
-use presrs_sim::dataset::BUILTIN_TERRAINS;
+use presrs::values::TerrainImage;
 use presrs_sim::{DatasetSpec, SimConfig};
 
 use super::common::TerminalProgress;
@@ -48,12 +48,12 @@ pub struct SimulateArgs {
     /// A terrain given as a greyscale height-map image, NAME=PNG (repeatable), e.g.
     /// --terrain-image photo_grass=grass.png. NAME must differ from the
     /// built-in terrains' names and from the other images'.
-    #[arg(long, value_name = "NAME=PNG", value_parser = parse_terrain_image_arg)]
-    pub terrain_image: Vec<TerrainImageArg>,
+    #[arg(long, value_name = "NAME=PNG", value_parser = presrs::values::terrain_image)]
+    pub terrain_image: Vec<TerrainImage>,
     /// Run a track instead of writing a data set: terrain:metres segments in sequence (built-in
     /// terrains), e.g. wood:3,grass:3,clay:3,carpet:3. Each fixed gait runs it (and the adaptive policy
     /// with --adaptive). Not with --terrains or --terrain-image, which choose a data set's terrains.
-    #[arg(long, value_name = "SPEC", value_parser = parse_track_arg,
+    #[arg(long, value_name = "SPEC", value_parser = presrs::values::track,
           conflicts_with_all = ["terrains", "terrain_image"])]
     pub track: Option<String>,
     /// Model file for the adaptive run: every stance is classified online (the model's online profile)
@@ -86,48 +86,6 @@ pub struct SimulateArgs {
     /// Also write the comparison, every run and every hop as JSON to this file.
     #[arg(long, requires = "track")]
     pub json: Option<PathBuf>,
-}
-
-/// `--terrain-image NAME=PNG`, checked for its form and name (the image is read later).
-#[derive(Clone, Debug, PartialEq)]
-pub struct TerrainImageArg {
-    pub name: String,
-    pub path: PathBuf,
-}
-
-/// Parses `NAME=PNG`; NAME must not be a built-in terrain's (the built-in would be simulated, never the
-/// image).
-fn parse_terrain_image_arg(text: &str) -> Result<TerrainImageArg, String> {
-    let (name, path) = super::usage::name_value(text, "NAME=PNG")?;
-    if BUILTIN_TERRAINS.contains(&name.as_str()) {
-        return Err(format!(
-            "{name} is a built-in terrain ({}); give the image another name, e.g. {name}_image={path}",
-            BUILTIN_TERRAINS.join(", ")
-        ));
-    }
-    Ok(TerrainImageArg {
-        name,
-        path: PathBuf::from(path),
-    })
-}
-
-/// Checks a track (`TERRAIN:METRES,...` of built-in terrains); returns it as given.
-fn parse_track_arg(text: &str) -> Result<String, String> {
-    let segments = presrs_sim::track::parse_track(text).map_err(|e| match e {
-        presrs_sim::SimError::Param { reason, .. } => reason,
-        other => other.to_string(),
-    })?;
-    if let Some(unknown) = segments
-        .iter()
-        .find(|s| !BUILTIN_TERRAINS.contains(&s.terrain.as_str()))
-    {
-        return Err(format!(
-            "unknown terrain {:?}; a track runs on the built-in terrains {}",
-            unknown.terrain,
-            BUILTIN_TERRAINS.join(", ")
-        ));
-    }
-    Ok(text.to_owned())
 }
 
 pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {

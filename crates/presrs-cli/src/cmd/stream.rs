@@ -14,10 +14,9 @@
 //! `end` line), the server stops (each connection gets its `end` line, then a `stopped` line on stdout);
 //! a second signal ends the process at once.
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -26,14 +25,17 @@ use signal_hook::consts::{SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
 
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
+use presrs::stoppable_input::StoppableInput;
 use presrs::stream::{
-    BagRecorder, ConnectionNotice, ConnectionOptions, ConnectionSummary, ConnectionTap,
-    InputFormat, ProfileOverrides, ServerNotice, ServerOptions, ShutdownHandle, StreamServer, Taps,
-    resolve_profile, run_connection_tapped,
+    BagRecorder, InputFormat, ProfileOverrides, ServerNotice, ServerOptions, ConnectionNotice,
+    ConnectionOptions, ConnectionTap, ShutdownHandle, StreamServer, Taps, resolve_profile,
+    run_connection_tapped,
+};
+use presrs::stream_log::{
+    input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
 };
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use presrs_io::model_file::load_model;
-use serde_json::json;
 
 /// Input format on stdin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -223,48 +225,46 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 }));
             }
             let local = server.local_addr();
-            writeln!(
-                out,
-                "{}",
-                json!({"event": "listening", "addr": local.to_string()})
-            )?;
+            writeln!(out, "{}", listening_event(local))?;
             out.flush()?;
             stderr_line!("presrs stream: listening on {local}");
             let stop = server.shutdown_handle();
-            let caught = Arc::new(Mutex::new(None));
-            let signal_thread = on_signal(signals, caught.clone(), move || stop.stop());
+            let signal_thread = on_signal(signals, move || stop.stop());
             let served = server.serve(&print_server_notice)?;
-            signal_thread.close();
-            let caught = *caught.lock().unwrap_or_else(|p| p.into_inner());
-            if let Some(signal) = caught {
-                stderr_line!("presrs stream: stopped by {}", signal_name(signal));
-                let stopped = json!({
-                    "event": "stopped",
-                    "signal": signal_name(signal),
-                    "connections": served.connections,
-                    "with_errors": served.with_errors,
-                    "failed": served.failed,
-                    "refused": served.refused,
-                });
-                writeln!(out, "{stopped}")?;
+            if let Some(signal) = signal_thread.close() {
+                stderr_line!("presrs stream: stopped by {signal}");
+                writeln!(out, "{}", stopped_event(signal, &served))?;
             }
             Ok(())
         }
     }
 }
 
-/// Handles the first SIGINT or SIGTERM on a thread: notes it in `caught` and calls `stop`; a second one
-/// gets the default action (the process ends at once). The returned handle stops the thread.
-pub(super) fn on_signal(
-    mut signals: Signals,
+/// The thread that handles SIGINT and SIGTERM, and the first signal it caught.
+pub(super) struct SignalWatch {
+    handle: signal_hook::iterator::Handle,
     caught: Arc<Mutex<Option<i32>>>,
-    stop: impl FnOnce() + Send + 'static,
-) -> signal_hook::iterator::Handle {
+}
+
+impl SignalWatch {
+    /// Stops the thread; the name of the signal it caught, if any.
+    pub(super) fn close(self) -> Option<&'static str> {
+        self.handle.close();
+        let caught = *self.caught.lock().unwrap_or_else(|p| p.into_inner());
+        caught.map(signal_name)
+    }
+}
+
+/// Handles the first SIGINT or SIGTERM on a thread: notes it and calls `stop`; a second one gets the
+/// default action (the process ends at once).
+pub(super) fn on_signal(mut signals: Signals, stop: impl FnOnce() + Send + 'static) -> SignalWatch {
     let handle = signals.handle();
+    let caught = Arc::new(Mutex::new(None));
+    let first_caught = caught.clone();
     std::thread::spawn(move || {
         let mut stop = Some(stop);
         for signal in signals.forever() {
-            let mut first = caught.lock().unwrap_or_else(|p| p.into_inner());
+            let mut first = first_caught.lock().unwrap_or_else(|p| p.into_inner());
             if first.is_some() {
                 let _ = signal_hook::low_level::emulate_default_handler(signal);
                 continue;
@@ -276,79 +276,14 @@ pub(super) fn on_signal(
             }
         }
     });
-    handle
+    SignalWatch { handle, caught }
 }
 
-pub(super) fn signal_name(signal: i32) -> &'static str {
+fn signal_name(signal: i32) -> &'static str {
     match signal {
         SIGINT => "SIGINT",
         SIGTERM => "SIGTERM",
         _ => "a signal",
-    }
-}
-
-/// What the stdin reader thread hands on.
-enum Chunk {
-    Data(Vec<u8>),
-    /// The end of the input, or a signal: read as the end of the input.
-    End,
-}
-
-/// Standard input read on a thread, so that a signal can end the input without waiting for a read
-/// that may never return: the session sees the end of the input and writes its `end` line.
-struct StoppableInput {
-    chunks: Receiver<Chunk>,
-    current: Vec<u8>,
-    at: usize,
-    ended: bool,
-}
-
-impl StoppableInput {
-    /// Starts the reader thread; the sender ends the input early.
-    fn start() -> (Self, SyncSender<Chunk>) {
-        let (sender, chunks) = sync_channel(16);
-        let feed = sender.clone();
-        std::thread::spawn(move || {
-            let mut stdin = std::io::stdin().lock();
-            loop {
-                let mut buf = vec![0u8; 64 * 1024];
-                match stdin.read(&mut buf) {
-                    Ok(0) | Err(_) => break,
-                    Ok(n) => {
-                        buf.truncate(n);
-                        if feed.send(Chunk::Data(buf)).is_err() {
-                            return;
-                        }
-                    }
-                }
-            }
-            let _ = feed.send(Chunk::End);
-        });
-        let input = Self {
-            chunks,
-            current: Vec::new(),
-            at: 0,
-            ended: false,
-        };
-        (input, sender)
-    }
-}
-
-impl Read for StoppableInput {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        while self.at == self.current.len() {
-            if self.ended {
-                return Ok(0);
-            }
-            match self.chunks.recv() {
-                Ok(Chunk::Data(data)) => (self.current, self.at) = (data, 0),
-                Ok(Chunk::End) | Err(_) => self.ended = true,
-            }
-        }
-        let n = buf.len().min(self.current.len() - self.at);
-        buf[..n].copy_from_slice(&self.current[self.at..self.at + n]);
-        self.at += n;
-        Ok(n)
     }
 }
 
@@ -370,12 +305,11 @@ fn run_stdin(
         topic: args.topic.clone(),
     };
     let log = |notice: &ConnectionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
-    let (input, end_input) = StoppableInput::start();
-    let caught = Arc::new(Mutex::new(None));
-    let signal_thread = on_signal(signals, caught.clone(), move || {
+    let (input, end_input) = StoppableInput::start(|| std::io::stdin().lock());
+    let signal_thread = on_signal(signals, move || {
         // The flag first: the session must know the end it is about to read is a stop.
         stop.stop();
-        let _ = end_input.send(Chunk::End);
+        end_input.stop();
     });
     let input = std::io::BufReader::with_capacity(64 * 1024, input);
     let summary = match &args.record {
@@ -396,94 +330,18 @@ fn run_stdin(
             summary
         }
     };
-    signal_thread.close();
     let name = &options.name;
-    if let Some(signal) = *caught.lock().unwrap_or_else(|p| p.into_inner()) {
-        stderr_line!(
-            "presrs stream: stopped by {}: the input read so far was classified",
-            signal_name(signal)
-        );
+    if let Some(signal) = signal_thread.close() {
+        stderr_line!("presrs stream: stopped by {signal}: the input read so far was classified");
     }
     stderr_line!("presrs stream: {}", summary_text(name, &summary));
-    if summary.fatal {
-        anyhow::bail!("the input stream ended with an error (see above)");
+    match input_failure(name, &summary) {
+        Some(failure) => Err(anyhow::anyhow!(failure)),
+        None => Ok(()),
     }
-    if summary.had_errors() {
-        anyhow::bail!(
-            "{name}: {} rejected frame(s), {} error(s) in the input (see the error events)",
-            summary.rejected_frames,
-            summary.errors
-        );
-    }
-    Ok(())
 }
 
-/// The stderr line of what the server saw (each about a client is named by its address).
+/// The stderr line of what the server saw.
 fn print_server_notice(notice: &ServerNotice<'_>) {
-    match notice {
-        ServerNotice::AcceptFailed(err) => stderr_line!("presrs stream: accept failed: {err}"),
-        ServerNotice::Refused { peer, max_clients } => {
-            stderr_line!("presrs stream: {peer}: refused, {max_clients} clients already connected")
-        }
-        ServerNotice::Connected { peer } => stderr_line!("presrs stream: {peer}: connected"),
-        ServerNotice::Connection { peer, notice } => {
-            stderr_line!("presrs stream: {peer}: {}", notice_text(notice));
-        }
-        ServerNotice::Ended { peer, summary } => {
-            stderr_line!("presrs stream: {}", summary_text(peer, summary));
-        }
-        ServerNotice::Failed { peer, error } => {
-            stderr_line!("presrs stream: {peer}: {}", chain_text(*error));
-        }
-        _ => {}
-    }
-}
-
-/// A session's notice as the stderr line says it.
-pub(super) fn notice_text(notice: &ConnectionNotice) -> String {
-    match notice {
-        ConnectionNotice::Error(message) => message.clone(),
-        ConnectionNotice::ErrorsMuted => "further errors are counted, not logged".to_owned(),
-        ConnectionNotice::WarmupDone { frames } => format!(
-            "warm-up calibration done on the first {frames} frames: stances before frame {frames} were \
-             not classified (give --calibrate MANIFEST or --profile, or a model with an online profile, to \
-             classify from the first frame)"
-        ),
-        ConnectionNotice::WarmupUnfinished { frames } => format!(
-            "the stream ended during the warm-up calibration ({frames} frames): no stance was classified \
-             (give --calibrate MANIFEST or --profile, or a model with an online profile, to classify from \
-             the first frame)"
-        ),
-        _ => format!("{notice:?}"),
-    }
-}
-
-pub(super) fn summary_text(name: &str, s: &ConnectionSummary) -> String {
-    format!(
-        "{name}: {} frames, {} stances, {} decisions ({} fused), {} rejected frames, {} errors, {} dropped events",
-        s.stats.frames,
-        s.stats.stances,
-        s.stats.decisions,
-        s.stats.fused_decisions,
-        s.rejected_frames,
-        s.errors,
-        s.dropped_events
-    )
-}
-
-/// An error and its causes in one line, skipping causes whose text is already there.
-fn chain_text(error: &(dyn std::error::Error + 'static)) -> String {
-    let mut text = String::new();
-    let mut cause = Some(error);
-    while let Some(err) = cause {
-        let part = err.to_string();
-        if !text.contains(&part) {
-            if !text.is_empty() {
-                text.push_str(": ");
-            }
-            text.push_str(&part);
-        }
-        cause = err.source();
-    }
-    text
+    stderr_line!("presrs stream: {}", server_notice_text(notice));
 }

@@ -1,16 +1,16 @@
 //! `presrs train`: train the pipeline on a manifest and write a model file.
 
-use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::Context;
-use presrs::train::{TrainOptions, learn_online_profile, trained_on_movies};
+use presrs::Progress;
+use presrs::profile::{
+    GaitTableSim, ProfileChoice, ProfileRequest, model_profile, profile_summary,
+};
+use presrs::train::TrainOptions;
 use presrs_core::selection::Selection;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
-
-use presrs::Progress;
 
 use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
 
@@ -107,28 +107,39 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         Some(std::env::args().collect::<Vec<_>>().join(" ")),
     );
     let segment = args.samples.options()?.segment_params();
-    let asked = args.online_profile || args.gait_table.is_some();
-    if !asked && !args.no_online_profile && trained_on_movies(&dataset) {
-        match learn_online_profile(&args.manifest, &segment) {
-            Ok(profile) => file.online = Some(profile),
-            Err(err) => stderr_line!(
-                "warning: {}: no online profile written (a stream will warm up first): {err:#}",
-                args.manifest.display()
-            ),
-        }
+    let choice = if args.online_profile || args.gait_table.is_some() {
+        ProfileChoice::Required
+    } else if args.no_online_profile {
+        ProfileChoice::Never
+    } else {
+        ProfileChoice::WhenMovies
+    };
+    let sim = GaitTableSim {
+        config: args.sim_config.as_deref(),
+        seed: args.seed,
+        sweep: args.gait_sweep,
+    };
+    let request = ProfileRequest {
+        choice,
+        gait_table: args.gait_table.as_deref(),
+        sim,
+    };
+    let classes = model.class_names();
+    let learned = model_profile(
+        &dataset,
+        &args.manifest,
+        &segment,
+        classes,
+        &request,
+        &progress,
+    )?;
+    if let Some(warning) = &learned.warning {
+        stderr_line!("warning: {warning}");
     }
-    if asked {
-        let mut profile = learn_online_profile(&args.manifest, &segment).with_context(|| {
-            format!(
-                "{}: cannot learn the online profile",
-                args.manifest.display()
-            )
-        })?;
-        if let Some(source) = &args.gait_table {
-            profile.gait_table = terrain_gait_table(source, model.class_names(), args, out)?;
-        }
-        file.online = Some(profile);
+    if let Some(measured) = &learned.measured {
+        write!(out, "{}", measured.format())?;
     }
+    file.online = learned.profile;
     save_model(&args.out, &file)?;
     writeln!(
         out,
@@ -142,26 +153,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     )?;
     writeln!(out, "{}", presrs::describe::pipeline_summary(model))?;
     if let Some(profile) = &file.online {
-        let table: Vec<String> = profile
-            .gait_table
-            .iter()
-            .map(|(t, g)| format!("{t}={g}"))
-            .collect();
-        writeln!(
-            out,
-            "online profile: sample frame k = {}, {}, gait table {}",
-            profile.params.sample_offset,
-            if profile.calibration.is_some() {
-                "calibrated"
-            } else {
-                "warm-up calibration"
-            },
-            if table.is_empty() {
-                "empty".to_owned()
-            } else {
-                table.join(",")
-            }
-        )?;
+        writeln!(out, "{}", profile_summary(profile))?;
     }
     writeln!(out, "model written to {}", args.out.display())?;
     Ok(())
@@ -213,36 +205,4 @@ fn print_selection(selection: &Selection, out: &mut dyn Write) -> anyhow::Result
         )?;
     }
     Ok(())
-}
-
-/// The terrain-to-gait table of `--gait-table`: measured with the simulator (`sim`) or given.
-fn terrain_gait_table(
-    source: &str,
-    class_names: &[String],
-    args: &TrainArgs,
-    out: &mut dyn Write,
-) -> anyhow::Result<BTreeMap<String, String>> {
-    if source.trim() != "sim" {
-        let mut table = BTreeMap::new();
-        for entry in source.split(',').filter(|e| !e.trim().is_empty()) {
-            let (terrain, gait) = entry
-                .split_once('=')
-                .filter(|(t, g)| !t.trim().is_empty() && !g.trim().is_empty())
-                .with_context(|| {
-                    format!("--gait-table expects sim or TERRAIN=GAIT,..., got {entry:?}")
-                })?;
-            table.insert(terrain.trim().to_owned(), gait.trim().to_owned());
-        }
-        return Ok(table);
-    }
-    let config = presrs::simulation::load_config(args.sim_config.as_deref())?;
-    let measured = presrs::gait::measure_gait_table(
-        &config,
-        args.seed,
-        class_names,
-        args.gait_sweep,
-        &super::common::TerminalProgress::default(),
-    )?;
-    write!(out, "{}", measured.format())?;
-    Ok(measured.table.best)
 }

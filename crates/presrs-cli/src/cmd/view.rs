@@ -4,7 +4,6 @@
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
 
 use anyhow::Context;
 use signal_hook::consts::{SIGINT, SIGTERM};
@@ -14,7 +13,9 @@ use presrs::live::{LiveInfo, ReplayOptions, replay_period_s, replay_recording};
 use presrs::stream::{ConnectionNotice, ProfileOverrides, ShutdownHandle, resolve_profile};
 use presrs_io::model_file::load_model;
 
-use super::stream::{HttpArgs, notice_text, on_signal, signal_name, summary_text};
+use presrs::stream_log::{notice_text, summary_text};
+
+use super::stream::{HttpArgs, on_signal};
 
 /// Where `presrs view` serves without `--http`.
 const DEFAULT_ADDR: SocketAddr = SocketAddr::V4(std::net::SocketAddrV4::new(
@@ -93,12 +94,9 @@ pub fn run(args: &ViewArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         anyhow::bail!("no address to serve the live view on");
     };
     let signals = Signals::new([SIGINT, SIGTERM]).context("cannot handle SIGINT and SIGTERM")?;
-    let caught = Arc::new(Mutex::new(None));
     let stop = options.stop.clone().unwrap_or_default();
-    let signal_thread = on_signal(signals, caught.clone(), {
-        let stop = stop.clone();
-        move || stop.stop()
-    });
+    let stopper = stop.clone();
+    let signal_thread = on_signal(signals, move || stopper.stop());
     stderr_line!(
         "presrs view: {} frames of {} at {:.1} frames/s{}",
         recording.frame_count(),
@@ -130,9 +128,8 @@ pub fn run(args: &ViewArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
     }
-    signal_thread.close();
-    if let Some(signal) = *caught.lock().unwrap_or_else(|p| p.into_inner()) {
-        stderr_line!("presrs view: stopped by {}", signal_name(signal));
+    if let Some(signal) = signal_thread.close() {
+        stderr_line!("presrs view: stopped by {signal}");
     }
     server.stop();
     Ok(())
