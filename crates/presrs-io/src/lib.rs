@@ -4,6 +4,7 @@ pub mod atomic;
 pub mod error;
 pub mod frame_protocol;
 pub mod manifest;
+pub mod message;
 pub mod mcap;
 pub mod model_file;
 pub mod npy;
@@ -18,8 +19,10 @@ use std::path::Path;
 
 use presrs_core::Recording;
 
+
 pub use atomic::{write_atomic, write_atomic_with};
 pub use error::IoError;
+pub use message::{Face, Message, Opt, Warning, Warnings};
 pub use parsed::{ArrayAxes, Axis, Parsed, ReadOptions};
 pub use tekscan::{parse_tekscan, read_tekscan, write_tekscan, write_tekscan_file};
 
@@ -54,7 +57,7 @@ pub fn read_recording_with(path: &Path, options: &ReadOptions) -> Result<Parsed,
     let name = error::display_name(path);
     let plain = |recording| Parsed {
         recording,
-        warnings: Vec::new(),
+        warnings: Warnings::new(),
     };
     match detect_kind(path, &bytes)? {
         FileKind::Npy => {
