@@ -6,12 +6,12 @@ use std::path::PathBuf;
 use numpy::{PyArray1, PyArrayMethods};
 use presrs::core::evaluation::EvalReport;
 use presrs::evaluate::{CalibrationJson, EvalOptions, EvalSetup, Holdout};
-use presrs::{Dataset, Progress, Quiet, SampleOptions};
+use presrs::{Dataset, Face, Progress, Quiet, SampleOptions, Warnings};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
-use crate::errors::{IntoPyResult, data_error};
-use crate::model::{dataset_of, method, validation_size, warn};
+use crate::errors::{IntoPyResult, data_error, warn};
+use crate::model::{dataset_of, method, validation_size};
 use crate::progress::PyProgress;
 use crate::threads::detached;
 
@@ -20,7 +20,7 @@ use crate::threads::detached;
 #[derive(Debug)]
 pub struct Evaluation {
     report: EvalReport,
-    warnings: Vec<String>,
+    warnings: Warnings,
 }
 
 #[pymethods]
@@ -96,7 +96,7 @@ impl Evaluation {
     /// What the user should know (labels no training set holds, fewer components than asked).
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.warnings.clone()
+        self.warnings.render(Face::Python)
     }
 
     /// The whole report as plain dicts and lists (what `presrs eval --json` holds).

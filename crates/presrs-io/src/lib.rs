@@ -4,8 +4,8 @@ pub mod atomic;
 pub mod error;
 pub mod frame_protocol;
 pub mod manifest;
-pub mod message;
 pub mod mcap;
+pub mod message;
 pub mod model_file;
 pub mod npy;
 mod parsed;
@@ -18,7 +18,6 @@ mod textutil;
 use std::path::Path;
 
 use presrs_core::Recording;
-
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use error::IoError;

@@ -336,6 +336,14 @@ impl fmt::Display for Warning {
     }
 }
 
+/// As its command-line text: the JSON documents (`inspect --json`, `classify --json`) are the
+/// command line's.
+impl serde::Serialize for Warning {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(&self.message)
+    }
+}
+
 impl From<Message> for Warning {
     fn from(message: Message) -> Self {
         Self { message }
@@ -377,6 +385,13 @@ impl Warnings {
     /// Sorted by their command-line text (a stable order for warnings gathered in parallel).
     pub fn sort_by_text(&mut self) {
         self.0.sort_by_cached_key(ToString::to_string);
+    }
+}
+
+/// As a list of their command-line texts (see [`Warning`]'s).
+impl serde::Serialize for Warnings {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq(&self.0)
     }
 }
 
@@ -433,7 +448,10 @@ mod tests {
     fn every_option_renders_in_both_faces() {
         for opt in Opt::ALL {
             let flag = opt.cli_flag();
-            assert!(flag.starts_with("--") && names_a_flag(flag), "{opt:?}: {flag}");
+            assert!(
+                flag.starts_with("--") && names_a_flag(flag),
+                "{opt:?}: {flag}"
+            );
             let bare = Message::new().opt(opt);
             let valued = Message::new().opt_is(opt, 7);
             let text = Message::new().opt_text(opt, "group");
@@ -503,5 +521,9 @@ mod tests {
         assert_eq!(warnings.render(Face::Python), ["a: budget=0", "b: plain"]);
         let copied: Warnings = warnings.iter().cloned().collect();
         assert_eq!(copied, warnings);
+        assert_eq!(
+            serde_json::to_string(&warnings).unwrap_or_default(),
+            r#"["a: --budget 0","b: plain"]"#
+        );
     }
 }

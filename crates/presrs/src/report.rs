@@ -34,6 +34,7 @@ use crate::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, run_counted}
 use crate::method::Method;
 use crate::progress::Progress;
 use crate::train::split_images;
+use presrs_io::message::Warnings;
 
 /// The paper's Table II (trained on G2).
 pub const PAPER_TABLE2: [(&str, f64); 4] = [
@@ -685,7 +686,7 @@ pub struct ReportSummary {
     /// given model on every image); `None` with `--repeats 0` and no model.
     pub evaluation: Option<(String, EvalReport)>,
     /// What the user should know about the run (capped draws, labels no training set holds).
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
 }
 
 /// The protocol of the report's evaluation: as asked (`--train-condition`, `--leave-one-out`); else
@@ -732,7 +733,7 @@ pub fn report_dataset(
 ) -> Result<ReportSummary> {
     let name = dataset.path().display();
     let mut evaluation: Option<(String, EvalReport)> = None;
-    let mut warnings = Vec::new();
+    let mut warnings = Warnings::new();
     let mut faults = (Vec::new(), String::new());
     let model: Option<(TrainedModel, String)> = match &options.model {
         Some(path) => {
