@@ -70,7 +70,7 @@ def test_too_many_dims_warns_with_the_argument(sim_images):
         features="fft1d", classifier="lda", dims=500,
     )
     assert any(m.startswith("dims=500: models trained on") for m in messages), messages
-    assert result.warnings == [m for m in messages if m in result.warnings]
+    assert all(m in messages for m in result.warnings), (result.warnings, messages)
     for message in result.warnings:
         _no_flag(message)
 
@@ -112,14 +112,21 @@ def test_a_bag_of_several_topics_names_the_argument():
     assert "choose one with topic=" in message
 
 
-def test_a_manifest_of_one_contact_files_says_what_to_do_in_words(tmp_path):
-    # Each file is loaded from its first frame to its last: one contact, partial at both ends.
+@pytest.mark.parametrize(
+    "load, hint",
+    [
+        # one press from the first frame to the last: one contact, partial at both ends
+        (5 + 4 * np.sin(np.linspace(0, np.pi, 40)), "try one sample per file"),
+        # a press already under way when the recording starts
+        (np.r_[np.linspace(10, 0, 15), np.zeros(25)], "try sampling partial stances too"),
+    ],
+)
+def test_a_manifest_without_samples_says_what_to_do_in_words(tmp_path, load, hint):
     rows = ["path,label"]
     for i in range(4):
-        movie = np.ones((30, 8, 8)) * (1.0 + 0.01 * np.sin(np.arange(30))[:, None, None])
-        np.save(tmp_path / f"press{i}.npy", movie)
+        np.save(tmp_path / f"press{i}.npy", np.ones((len(load), 8, 8)) * load[:, None, None])
         rows.append(f"press{i}.npy,{'ab'[i % 2]}")
     (tmp_path / "manifest.csv").write_text("\n".join(rows) + "\n")
     message = _raised(presrs.evaluate, tmp_path / "manifest.csv", repeats=1)
-    assert "gave no sample" in message
-    assert "an option of the presrs command line" in message
+    assert "4 of 4 files gave no sample" in message
+    assert f"{hint} (an option of the presrs command line)" in message
