@@ -1,9 +1,9 @@
 //! The error type of the `presrs` library: the lower crates' errors, plus what a workflow finds wrong
 //! with the data or the options, each message saying what to try.
 //!
-//! The options a message names are data ([`Message`], [`Opt`]): [`Error::render`] spells them in a
-//! face's words (`--per-class 10` on the command line, `per_class=10` in Python); `Display` uses the
-//! command line's.
+//! The options a message names are data ([`Message`], [`Opt`](presrs_io::message::Opt)):
+//! [`Error::render`] spells them in a face's words (`--per-class 10` on the command line,
+//! `per_class=10` in Python); `Display` uses the command line's.
 
 use presrs_core::CoreError;
 use presrs_io::IoError;
