@@ -1,17 +1,26 @@
 //! Rust errors as Python exceptions. The classes live in `presrs/errors.py` (they need two bases each,
 //! which only Python can declare): `FileError(PresrsError, OSError)` when the operating system refused
 //! a file, `DataError(PresrsError, ValueError)` for everything else. Each carries the Rust message, with
-//! the file, line and field it names.
+//! the file, line and field it names, and the options it names spelled as Python's arguments
+//! (`per_class=`, not the command line's `--per-class`).
 
+use presrs::{Face, Warning};
 use pyo3::prelude::*;
 
 /// The Python exception for a presrs error.
 pub fn to_py(err: presrs::Error) -> PyErr {
-    let message = err.to_string();
+    let message = err.render(Face::Python);
     match err.io_kind() {
         Some(kind) => raise("FileError", message, Some(kind)),
         None => raise("DataError", message, None),
     }
+}
+
+/// A Python `UserWarning` saying `warning` in Python's words.
+pub fn warn(py: Python<'_>, warning: &Warning) -> PyResult<()> {
+    py.import("warnings")?
+        .call_method1("warn", (warning.render(Face::Python),))?;
+    Ok(())
 }
 
 /// A `DataError` with `message`: the input does not fit (a shape, a value, an option).

@@ -7,12 +7,12 @@ use std::path::PathBuf;
 use numpy::{PyArray1, PyArrayMethods};
 use presrs::eval_document::EvalJson;
 use presrs::evaluate::{CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout};
-use presrs::{Dataset, Progress, Quiet, SampleOptions};
+use presrs::{Dataset, Face, Progress, Quiet, SampleOptions, Warnings};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
-use crate::errors::{IntoPyResult, data_error};
-use crate::model::{dataset_of, method, validation_size, warn};
+use crate::errors::{IntoPyResult, data_error, warn};
+use crate::model::{dataset_of, method, validation_size};
 use crate::progress::PyProgress;
 use crate::threads::detached;
 
@@ -23,7 +23,7 @@ pub struct Evaluation {
     outcome: EvalOutcome,
     /// Tested labels no training set held, by held-out value (part of the `to_dict()` document).
     never_trained: BTreeMap<String, Vec<String>>,
-    warnings: Vec<String>,
+    warnings: Warnings,
 }
 
 #[pymethods]
@@ -102,7 +102,7 @@ impl Evaluation {
     /// What the user should know (labels no training set holds, fewer components than asked).
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.warnings.clone()
+        self.warnings.render(Face::Python)
     }
 
     /// The document `presrs eval --json` prints for the same data, options and seed, as plain dicts

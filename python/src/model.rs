@@ -18,7 +18,7 @@ use pyo3::types::{PyBytes, PyTuple};
 use self_cell::self_cell;
 
 use crate::arrays::{Images, labels};
-use crate::errors::{IntoPyResult, data_error};
+use crate::errors::{IntoPyResult, data_error, warn};
 use crate::threads::detached;
 
 type SessionSlot<'a> = Mutex<Session<'a>>;
@@ -369,10 +369,4 @@ pub fn dataset_of(
         samples.push(sample);
     }
     Dataset::from_samples(format!("numpy images ({n})"), samples).py_err()
-}
-
-/// A Python `UserWarning`.
-pub fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
-    py.import("warnings")?.call_method1("warn", (message,))?;
-    Ok(())
 }

@@ -5,19 +5,18 @@ use std::path::PathBuf;
 use std::str::FromStr;
 
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
-use presrs::CropChoice;
 use presrs::core::features::FeatureConfig;
 use presrs::core::pipeline::extract_features_many;
 use presrs::core::preprocess::Preprocess;
 use presrs::core::stance::{SampleFrame, SegmentParams, Stance as CoreStance, ValidSegmentParams};
 use presrs::core::{Recording as CoreRecording, SensorMeta};
 use presrs::io::{ArrayAxes, ReadOptions, read_recording_with};
+use presrs::{CropChoice, Face, Warnings};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::arrays::Images;
-use crate::errors::{IntoPyResult, data_error};
-use crate::model::warn;
+use crate::errors::{IntoPyResult, data_error, warn};
 use crate::threads::detached;
 
 /// A recording: frames of one pressure array, with what the file says about the sensor.
@@ -28,11 +27,11 @@ pub struct Recording {
     /// The file it was read from (`None` for one made from an array).
     path: Option<PathBuf>,
     /// What the reader had to say (a truncated last frame dropped, a header value kept verbatim).
-    warnings: Vec<String>,
+    warnings: Warnings,
 }
 
 impl Recording {
-    pub fn of(recording: CoreRecording, path: Option<PathBuf>, warnings: Vec<String>) -> Self {
+    pub fn of(recording: CoreRecording, path: Option<PathBuf>, warnings: Warnings) -> Self {
         Self {
             recording,
             path,
@@ -64,7 +63,7 @@ impl Recording {
             SensorMeta::default(),
         )
         .py_err()?;
-        Ok(Self::of(recording, None, Vec::new()))
+        Ok(Self::of(recording, None, Warnings::new()))
     }
 
     /// The frames, float64 `(n_frames, rows, cols)`, in the file's unit (a new array each time).
@@ -135,7 +134,7 @@ impl Recording {
     /// What the reader reported without failing (each names the file and line).
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.warnings.clone()
+        self.warnings.render(Face::Python)
     }
 
     /// The total load of every frame (sum over present sensels), float64 `(n_frames,)`.

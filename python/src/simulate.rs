@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use presrs::Warnings;
 use presrs::sim::dataset::{DatasetSpec, simulate_dataset};
 use pyo3::prelude::*;
 
@@ -73,7 +74,7 @@ pub fn simulate(
                 terrain: trial.plan.terrain.clone(),
                 gait: trial.plan.gait.name.clone(),
                 load_kg: trial.plan.load_kg,
-                recording: Py::new(py, Recording::of(trial.recording, None, Vec::new()))?,
+                recording: Py::new(py, Recording::of(trial.recording, None, Warnings::new()))?,
             })
         })
         .collect()

@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 use presrs_core::CoreError;
 
+use crate::message::{Face, Message};
+
 /// Everything that can go wrong reading or writing files in this crate.
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
@@ -28,15 +30,15 @@ pub enum IoError {
         /// 1-based line number.
         line: usize,
         /// What was expected and what was found.
-        message: String,
+        message: Message,
     },
     /// Bad content that has no line number (binary formats, or a problem with the file as a whole).
     #[error("{file}: {message}")]
-    Format { file: String, message: String },
+    Format { file: String, message: Message },
     /// The file is well formed but holds something this crate does not support (a colour PNG, a complex
     /// NumPy dtype, ...). The message suggests what to do instead.
     #[error("{file}: {message}")]
-    Unsupported { file: String, message: String },
+    Unsupported { file: String, message: Message },
     /// The data read could not be assembled into a recording (the data model rejected it).
     #[error("{file}: {source}")]
     Model {
@@ -57,7 +59,7 @@ impl IoError {
     }
 
     /// A parse error at 1-based `line` of `file`.
-    pub fn parse(file: &str, line: usize, message: impl Into<String>) -> Self {
+    pub fn parse(file: &str, line: usize, message: impl Into<Message>) -> Self {
         Self::Parse {
             file: file.to_owned(),
             line,
@@ -66,7 +68,7 @@ impl IoError {
     }
 
     /// A content error without a line number.
-    pub fn format(file: &str, message: impl Into<String>) -> Self {
+    pub fn format(file: &str, message: impl Into<Message>) -> Self {
         Self::Format {
             file: file.to_owned(),
             message: message.into(),
@@ -74,10 +76,26 @@ impl IoError {
     }
 
     /// Well-formed content this crate does not support.
-    pub fn unsupported(file: &str, message: impl Into<String>) -> Self {
+    pub fn unsupported(file: &str, message: impl Into<Message>) -> Self {
         Self::Unsupported {
             file: file.to_owned(),
             message: message.into(),
+        }
+    }
+
+    /// The error in `face`'s words (`Display` is the command line's): the options a message names
+    /// are spelled as `face` spells them.
+    pub fn render(&self, face: Face) -> String {
+        match self {
+            Self::Parse {
+                file,
+                line,
+                message,
+            } => format!("{file} line {line}: {}", message.render(face)),
+            Self::Format { file, message } | Self::Unsupported { file, message } => {
+                format!("{file}: {}", message.render(face))
+            }
+            Self::Io { .. } | Self::Model { .. } => self.to_string(),
         }
     }
 

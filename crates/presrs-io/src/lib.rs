@@ -5,6 +5,7 @@ pub mod error;
 pub mod frame_protocol;
 pub mod manifest;
 pub mod mcap;
+pub mod message;
 pub mod model_file;
 pub mod npy;
 mod parsed;
@@ -20,6 +21,7 @@ use presrs_core::Recording;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use error::IoError;
+pub use message::{Face, Message, Opt, Warning, Warnings};
 pub use parsed::{ArrayAxes, Axis, Parsed, ReadOptions};
 pub use tekscan::{parse_tekscan, read_tekscan, write_tekscan, write_tekscan_file};
 
@@ -54,7 +56,7 @@ pub fn read_recording_with(path: &Path, options: &ReadOptions) -> Result<Parsed,
     let name = error::display_name(path);
     let plain = |recording| Parsed {
         recording,
-        warnings: Vec::new(),
+        warnings: Warnings::new(),
     };
     match detect_kind(path, &bytes)? {
         FileKind::Npy => {

@@ -97,7 +97,11 @@ impl Manifest {
     }
 
     /// An error naming a manifest line, for callers that find a problem with a row later (e.g. its file).
-    pub fn row_error(&self, row: &ManifestRow, message: impl Into<String>) -> IoError {
+    pub fn row_error(
+        &self,
+        row: &ManifestRow,
+        message: impl Into<crate::message::Message>,
+    ) -> IoError {
         IoError::parse(&self.source.display().to_string(), row.line, message)
     }
 }

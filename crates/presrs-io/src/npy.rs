@@ -19,6 +19,7 @@ use npyz::{DType, NpyFile, TypeChar, WriterBuilder};
 use presrs_core::{Grid, Recording, SensorMeta};
 
 use crate::error::{IoError, display_name};
+use crate::message::{Message, Opt, Warnings};
 use crate::parsed::{ArrayAxes, Axis};
 
 /// The first bytes of every `.npy` file.
@@ -37,16 +38,16 @@ pub fn parse_npy(bytes: &[u8], source_name: &str) -> Result<Recording, IoError> 
 }
 
 /// The warning for a 3-D shape that looks like rows x cols x frames read as frames x rows x cols.
-fn time_last_warning(file: &str, shape: &[u64]) -> Option<String> {
+fn time_last_warning(file: &str, shape: &[u64]) -> Option<Message> {
     let &[a, b, c] = shape else {
         return None;
     };
     (c >= 3 * a && c >= 4 * b).then(|| {
-        format!(
+        Message::from(format!(
             "{file}: read as {a} frames of {b} x {c} (axes frames,rows,cols); if its last axis is time \
-             (rows x cols x frames, as some exporters write: {c} frames of {a} x {b}), give \
-             --axes rows,cols,frames"
-        )
+             (rows x cols x frames, as some exporters write: {c} frames of {a} x {b}), give "
+        ))
+        .opt_text(Opt::Axes, "rows,cols,frames")
     })
 }
 
@@ -56,12 +57,12 @@ pub fn parse_npy_with(
     bytes: &[u8],
     source_name: &str,
     axes: Option<ArrayAxes>,
-) -> Result<(Recording, Vec<String>), IoError> {
+) -> Result<(Recording, Warnings), IoError> {
     let file = source_name;
     let npy = open_npy(bytes, file)?;
     let shape: Vec<u64> = npy.shape().to_vec();
-    let warnings: Vec<String> = match axes {
-        Some(_) => Vec::new(),
+    let warnings: Warnings = match axes {
+        Some(_) => Warnings::new(),
         None => time_last_warning(file, &shape).into_iter().collect(),
     };
     let axes = axes.unwrap_or_default();
@@ -760,10 +761,19 @@ mod tests {
         assert_eq!((rec.frame_count(), rec.grid()), (6, Grid::new(3, 40)));
         assert_eq!(warnings.len(), 1, "{warnings:?}");
         assert!(
-            warnings[0].contains("--axes rows,cols,frames"),
+            warnings[0].to_string().contains("--axes rows,cols,frames"),
             "{warnings:?}"
         );
-        assert!(warnings[0].contains("40 frames of 6 x 3"), "{warnings:?}");
+        assert!(
+            warnings[0].to_string().contains("40 frames of 6 x 3"),
+            "{warnings:?}"
+        );
+        assert!(
+            warnings[0]
+                .render(crate::Face::Python)
+                .ends_with("give axes=\"rows,cols,frames\""),
+            "{warnings:?}"
+        );
         // Told: 40 frames of 6 x 3, frame f row r col c where it should be; no warning.
         let axes: ArrayAxes = "rows,cols,frames".parse().unwrap();
         let (rec, warnings) = parse_npy_with(&bytes, "walk.npy", Some(axes)).unwrap();

@@ -3,6 +3,8 @@
 
 use presrs_core::Recording;
 
+use crate::message::Warnings;
+
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ReadOptions {
     /// Accept a TekScan file whose last frame is truncated (or that ends before `END_FRAME`): the
@@ -106,5 +108,5 @@ pub struct Parsed {
     /// Problems that did not stop reading, each naming the file and line (a dropped truncated frame, a
     /// header value that was not understood and was kept verbatim, a frame count that disagrees with
     /// `START_FRAME`/`END_FRAME`, a jump in the frame numbers, ...). Empty for a clean file.
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
 }

@@ -104,7 +104,7 @@ fn detected_by_content_and_both_byte_orders_agree() {
 fn gaps_are_reported_with_the_message_index() {
     let parsed = read("gap.mcap", None).unwrap();
     assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
-    let warning = &parsed.warnings[0];
+    let warning = &parsed.warnings[0].to_string();
     assert!(warning.contains("gap.mcap"), "{warning}");
     assert!(warning.contains("topic /foot"), "{warning}");
     assert!(

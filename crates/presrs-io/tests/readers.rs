@@ -424,7 +424,7 @@ proptest! {
             .unwrap_or_else(|err| panic!("{err}\n{text}"));
         // Non-consecutive frame numbers give a START/END warning and a warning of each jump (or a
         // summary of them); nothing else may be reported.
-        for warning in &parsed.warnings {
+        for warning in parsed.warnings.render(presrs_io::Face::Cli) {
             prop_assert!(
                 warning.contains("START_FRAME") || warning.contains("time is not contiguous"),
                 "{}",

@@ -20,6 +20,7 @@ use serde::Serialize;
 use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Context, Error, Result};
 use crate::progress::Progress;
+use presrs_io::message::{Message, Opt};
 
 /// What to time.
 #[derive(Clone, Debug)]
@@ -318,7 +319,13 @@ pub fn bench(options: &BenchOptions, progress: &dyn Progress) -> Result<BenchRep
     let args = options;
     if args.iterations == 0 || args.batch == 0 || args.batch_runs == 0 {
         return Err(Error::invalid(
-            "--iterations, --batch and --batch-runs must be positive",
+            Message::new()
+                .opt(Opt::Iterations)
+                .text(", ")
+                .opt(Opt::Batch)
+                .text(" and ")
+                .opt(Opt::BatchRuns)
+                .text(" must be positive"),
         ));
     }
     let (fixture, model_file, source) = match (&args.images, &args.model) {

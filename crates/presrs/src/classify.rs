@@ -11,6 +11,7 @@ use serde::Serialize;
 
 use crate::dataset::{DeadSenselFills, SampleOptions, read_corrected};
 use crate::error::{Context, Error, Result};
+use presrs_io::message::{Message, Opt, Warning, Warnings};
 
 /// One classified frame.
 #[derive(Clone, Debug, Serialize)]
@@ -23,14 +24,14 @@ pub struct Classified {
     pub posteriors: BTreeMap<String, f64>,
     /// Why this label may mean little: the frame lies outside every stance phase, or carries no load.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub warning: Option<String>,
+    pub warning: Option<Warning>,
 }
 
 /// What was classified in one file, and what the user should know about the file.
 #[derive(Clone, Debug, Default)]
 pub struct FileClassification {
     /// The reader's warnings, and a movie without a complete stance phase.
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
     pub frames: Vec<Classified>,
 }
 
@@ -61,7 +62,7 @@ pub fn classify_file(
     let name = path.display().to_string();
     let mut classification = classify_recording(model, session, &parsed.recording, &name, options)?;
     let mut warnings = parsed.warnings;
-    warnings.append(&mut classification.warnings);
+    warnings.extend(std::mem::take(&mut classification.warnings));
     classification.warnings = warnings;
     Ok(classification)
 }
@@ -74,16 +75,25 @@ pub fn classify_recording(
     name: &str,
     options: &ClassifyOptions,
 ) -> Result<FileClassification> {
-    let mut warnings = Vec::new();
+    let mut warnings = Warnings::new();
     let frames = match options.frame {
         Some(frame) if frame >= recording.frame_count() => {
-            return Err(Error::invalid(format!(
-                "{name}: --frame {frame} is past the end ({})",
-                frames_numbered(recording.frame_count())
-            )));
+            return Err(Error::invalid(
+                Message::from(format!("{name}: "))
+                    .opt_is(Opt::Frame, frame)
+                    .text(format!(
+                        " is past the end ({})",
+                        frames_numbered(recording.frame_count())
+                    )),
+            ));
         }
-        Some(frame) => vec![(frame, unloaded_frame_warning(recording, frame))],
-        None if recording.frame_count() == 1 => vec![(0, unloaded_frame_warning(recording, 0))],
+        Some(frame) => vec![(
+            frame,
+            unloaded_frame_warning(recording, frame).map(Warning::from),
+        )],
+        None if recording.frame_count() == 1 => {
+            vec![(0, unloaded_frame_warning(recording, 0).map(Warning::from))]
+        }
         None => {
             let segmentation = segment_recording(recording, &options.samples.segment_params())
                 .with_context(|| format!("{name}: cannot segment"))?;
@@ -91,11 +101,15 @@ pub fn classify_recording(
                 .samples(options.samples.sample, options.samples.include_partial())
                 .context(name)?;
             if frames.is_empty() {
-                warnings.push(format!(
-                    "{name}: {} frames but no complete stance phase; nothing classified (choose a \
-                     frame with --frame K)",
-                    recording.frame_count()
-                ));
+                warnings.push(
+                    Message::from(format!(
+                        "{name}: {} frames but no complete stance phase; nothing classified (choose \
+                         a frame with ",
+                        recording.frame_count()
+                    ))
+                    .opt_is(Opt::Frame, "K")
+                    .text(")"),
+                );
             }
             frames.into_iter().map(|frame| (frame, None)).collect()
         }

@@ -13,6 +13,7 @@ use crate::classify::{Classified, ClassifyOptions};
 use crate::dataset::read_corrected;
 use crate::error::{Error, Result};
 use crate::stream::DecisionBag;
+use presrs_io::message::{Message, Opt};
 
 /// A bag of classified recordings being written; it appears under its name at [`Self::finish`].
 pub struct ClassifyBag {
@@ -57,7 +58,13 @@ impl ClassifyBag {
         if let Some(period) = samples.frame_period_s {
             recording
                 .set_frame_period_if_unknown(period)
-                .map_err(|err| Error::invalid(format!("--frame-period: {err}")))?;
+                .map_err(|err| {
+                    Error::invalid(
+                        Message::new()
+                            .opt(Opt::FramePeriod)
+                            .text(format!(": {err}")),
+                    )
+                })?;
         }
         let file = path.display().to_string();
         let segmentation = segment_recording(&recording, &samples.segment_params())

@@ -7,6 +7,7 @@ use presrs_io::mcap::{ImageEncoding, write_recording_mcap};
 use presrs_io::{ReadOptions, read_recording_with, write_atomic_with};
 
 use crate::error::{Error, Result};
+use presrs_io::message::{Message, Opt, Warnings};
 
 /// The topic `convert` writes frames on unless told otherwise.
 pub const DEFAULT_FRAMES_TOPIC: &str = "/presrs/frames";
@@ -42,7 +43,7 @@ pub struct Converted {
     pub frame_period_s: Option<f64>,
     pub encoding: ImageEncoding,
     /// The reader's warnings about the input.
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
 }
 
 /// Converts `input` (any format [`read_recording_with`] reads) into the MCAP file `output`, written
@@ -63,7 +64,13 @@ pub fn convert(input: &Path, output: &Path, options: &ConvertOptions) -> Result<
     if let Some(period) = options.frame_period_s {
         recording
             .set_frame_period_if_unknown(period)
-            .map_err(|err| Error::invalid(format!("--frame-period: {err}")))?;
+            .map_err(|err| {
+                Error::invalid(
+                    Message::new()
+                        .opt(Opt::FramePeriod)
+                        .text(format!(": {err}")),
+                )
+            })?;
     }
     let name = presrs_io::error::display_name(output);
     let encoding = write_atomic_with(output, |w| {

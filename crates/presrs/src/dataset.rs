@@ -25,6 +25,7 @@ use presrs_io::{IoError, Parsed, ReadOptions, read_recording_with};
 
 use crate::error::{Error, Result};
 use crate::progress::Progress;
+use presrs_io::message::{Message, Opt, Warning, Warnings};
 
 /// How samples are picked from movies.
 #[derive(Clone, Debug)]
@@ -150,7 +151,7 @@ pub use presrs_core::Sample;
 #[derive(Clone, Debug, Default)]
 pub struct LoadedSamples {
     pub samples: Vec<Sample>,
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
     /// The dead sensels filled (with [`SampleOptions::dead_sensels`]), by recording.
     pub dead_sensels: DeadSenselFills,
 }
@@ -164,7 +165,7 @@ pub struct Dataset {
     pub samples: Vec<Sample>,
     /// What did not stop loading (a movie without a stance, a reader's warning), each naming the file
     /// and line.
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
     /// The dead sensels filled, by recording.
     pub dead_sensels: DeadSenselFills,
 }
@@ -189,15 +190,15 @@ impl Dataset {
         let loaded = loaded?;
         if loaded.samples.is_empty() {
             // The summary of the files that gave none says why (it is the last warning).
-            let why = loaded
-                .warnings
-                .last()
-                .filter(|w| w.contains("gave no sample"))
-                .map_or_else(String::new, |w| format!(": {w}"));
-            return Err(Error::data(format!(
-                "{}: the manifest gives no samples{why}",
+            let message = Message::from(format!(
+                "{}: the manifest gives no samples",
                 manifest.source.display()
-            )));
+            ));
+            let message = match loaded.warnings.last().filter(|w| is_no_sample_summary(w)) {
+                Some(why) => message.text(": ").then(why.message().clone()),
+                None => message,
+            };
+            return Err(Error::data(message));
         }
         Ok(Self {
             manifest,
@@ -248,7 +249,7 @@ impl Dataset {
         Ok(Self {
             manifest,
             samples,
-            warnings: Vec::new(),
+            warnings: Warnings::new(),
             dead_sensels: DeadSenselFills::default(),
         })
     }
@@ -259,7 +260,7 @@ impl Dataset {
     /// `too few samples per class: "grass" has 1, "gravel" 0 (at least 3 needed); 599 of 600 files
     /// gave no sample: ... ; they are one contact each: try --one-sample-per-file`. `None` when every
     /// class has enough.
-    pub fn too_few_samples(&self, condition: Option<&str>, need: usize) -> Option<String> {
+    pub fn too_few_samples(&self, condition: Option<&str>, need: usize) -> Option<Message> {
         let mut classes: Vec<&str> = self
             .manifest
             .rows
@@ -294,14 +295,19 @@ impl Dataset {
             .warnings
             .iter()
             .rev()
-            .find(|w| w.contains("gave no sample"))
-            .map_or_else(String::new, |w| format!("; {w}"));
-        Some(format!(
-            "too few samples per class: {} (at least {need} needed, {} sample{} in all){why}",
-            counts.join(", "),
-            labels.len(),
-            if labels.len() == 1 { "" } else { "s" }
-        ))
+            .find(|w| is_no_sample_summary(w))
+            .map_or_else(Message::new, |w| {
+                Message::from("; ").then(w.message().clone())
+            });
+        Some(
+            Message::from(format!(
+                "too few samples per class: {} (at least {need} needed, {} sample{} in all)",
+                counts.join(", "),
+                labels.len(),
+                if labels.len() == 1 { "" } else { "s" }
+            ))
+            .then(why),
+        )
     }
 
     /// The manifest file.
@@ -436,7 +442,7 @@ pub fn load_samples(
     for parsed in by_path.values() {
         loaded.warnings.extend(parsed.warnings.iter().cloned());
     }
-    loaded.warnings.sort();
+    loaded.warnings.sort_by_text();
     let mut empty = EmptyFiles::default();
     for row in &manifest.rows {
         let Some(parsed) = by_path.get(&row_key(row)) else {
@@ -530,7 +536,7 @@ impl EmptyFiles {
 
     /// `412 of 600 files gave no sample: a.npy, b.npy, ... ; they are one contact each: try
     /// --one-sample-per-file`, or `None` when every file gave one. `rows` is the manifest's row count.
-    fn summary(&self, rows: usize, options: &SampleOptions) -> Option<String> {
+    fn summary(&self, rows: usize, options: &SampleOptions) -> Option<Message> {
         const NAMED: usize = 5;
         let count = self.files.len();
         if count == 0 {
@@ -547,25 +553,38 @@ impl EmptyFiles {
         }
         let most = |why: NoSample| self.files.iter().filter(|(_, w)| *w == why).count() * 2 > count;
         let hint = if most(NoSample::OneContact) {
-            "they are one contact each (loaded from the first frame to the last): try \
-             --one-sample-per-file"
-                .to_owned()
+            Message::from(
+                "they are one contact each (loaded from the first frame to the last): try ",
+            )
+            .opt(Opt::OneSamplePerFile)
         } else if most(NoSample::OnlyPartial) && !options.include_partial() {
-            "their stances are cut by the start or end of the recording: try --include-partial"
-                .to_owned()
+            Message::from("their stances are cut by the start or end of the recording: try ")
+                .opt(Opt::IncludePartial)
         } else {
-            format!(
+            Message::from(format!(
                 "no stance was found in them (baseline mode {}): see `presrs inspect FILE`, or give \
                  a `frame` column to use one frame anyway",
                 options.segment.params().baseline
-            )
+            ))
         };
-        Some(format!(
-            "{count} of {rows} file{} gave no sample: {} ; {hint}",
-            if rows == 1 { "" } else { "s" },
-            names.join(", ")
-        ))
+        Some(
+            Message::from(format!(
+                "{count} of {rows} file{} {NO_SAMPLE}: {} ; ",
+                if rows == 1 { "" } else { "s" },
+                names.join(", ")
+            ))
+            .then(hint),
+        )
     }
+}
+
+/// What the warning that sums up the files without a sample says after their count.
+const NO_SAMPLE: &str = "gave no sample";
+
+/// Whether `warning` is the summary of the files that gave no sample (an error about too few samples
+/// repeats it as the reason).
+fn is_no_sample_summary(warning: &Warning) -> bool {
+    warning.to_string().contains(NO_SAMPLE)
 }
 
 /// A manifest row's fields as written, by column name (empty ones left out).

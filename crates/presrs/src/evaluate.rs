@@ -18,6 +18,7 @@ use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
 use crate::method::Method;
 use crate::progress::Progress;
+use presrs_io::message::{Message, Opt, Warnings};
 
 /// Which images train and which test.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -77,7 +78,7 @@ pub struct EvalSetup<'d> {
     /// Test labels no training set can hold, by held-out value (`labels_never_trained`).
     pub never_trained: BTreeMap<String, Vec<String>>,
     /// What the user should know before the run (labels that cannot be recognised).
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
 }
 
 /// The outcome of [`EvalSetup::evaluate`].
@@ -87,7 +88,7 @@ pub struct EvalOutcome {
     /// The automatic choice of every trained model (empty for a fixed method).
     pub selections: Vec<presrs_core::selection::Selection>,
     /// What the user should know (fewer principal components than asked).
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
     /// The first model trained (first repeat, first fold), as a report shows it.
     pub first_model: Option<presrs_core::evaluation::FirstModel>,
 }
@@ -148,10 +149,14 @@ impl<'d> EvalSetup<'d> {
         if let Some(column) = column
             && !dataset.manifest.has_column(column)
         {
-            return Err(Error::data(format!(
-                "{name}: --leave-one-out {column}: the manifest has no such column (columns: {})",
-                dataset.manifest.columns.join(", ")
-            )));
+            return Err(Error::data(
+                Message::from(format!("{name}: "))
+                    .opt_text(Opt::LeaveOneOut, column)
+                    .text(format!(
+                        ": the manifest has no such column (columns: {})",
+                        dataset.manifest.columns.join(", ")
+                    )),
+            ));
         }
         // Too few samples of a class for the draws: the real cause of any later complaint about the
         // validation set, so said first (with why files gave none).
@@ -167,7 +172,9 @@ impl<'d> EvalSetup<'d> {
         };
         let need = presrs_core::split::min_samples_per_class(options.per_class, options.validation);
         if needs_validation && let Some(cause) = dataset.too_few_samples(training_condition, need) {
-            return Err(Error::data(format!("{name}: cannot evaluate: {cause}")));
+            return Err(Error::data(
+                Message::from(format!("{name}: cannot evaluate: ")).then(cause),
+            ));
         }
         let mut samples = Vec::with_capacity(dataset.samples.len());
         for sample in &dataset.samples {
@@ -179,10 +186,14 @@ impl<'d> EvalSetup<'d> {
             })?;
             let group = match column {
                 Some(column) => Some(sample.column(column).ok_or_else(|| {
-                    Error::data(format!(
-                        "{}: field `{column}` is empty; --leave-one-out needs a value in every row",
-                        sample.origin(dataset.path())
-                    ))
+                    Error::data(
+                        Message::from(format!(
+                            "{}: field `{column}` is empty; ",
+                            sample.origin(dataset.path())
+                        ))
+                        .opt(Opt::LeaveOneOut)
+                        .text(" needs a value in every row"),
+                    )
                 })?),
                 // The automatic choice validates by the manifest's groups.
                 None => sample.group.as_deref(),
@@ -207,7 +218,7 @@ impl<'d> EvalSetup<'d> {
             },
         };
         let never_trained = presrs_core::evaluation::labels_never_trained(&samples, &protocol);
-        let mut warnings: Vec<String> = never_trained
+        let mut warnings: Warnings = never_trained
             .iter()
             .map(|(held_out, labels)| {
                 let tested = match column {
@@ -226,8 +237,7 @@ impl<'d> EvalSetup<'d> {
             && !capped.is_empty()
         {
             let held = column.is_some();
-            warnings.push(format!(
-                "{name}: {}",
+            warnings.push(Message::from(format!("{name}: ")).then(
                 crate::train::per_class_warning(
                     per_class,
                     capped.iter().flat_map(|(held_out, classes)| {
@@ -235,7 +245,7 @@ impl<'d> EvalSetup<'d> {
                             (held.then_some(held_out.as_str()), class.as_str(), n)
                         })
                     }),
-                )
+                ),
             ));
         }
         Ok(Self {
@@ -299,18 +309,18 @@ impl<'d> EvalSetup<'d> {
                 self.dataset.path().display()
             ))
         })?;
-        let mut warnings = Vec::new();
+        let mut warnings = Warnings::new();
         // (one fold per repeat: with leave-one-out, n_train sums the folds)
         if let Some(n_train) = report.repeats.iter().map(|r| r.n_train).min()
             && let Some(dims) = method.dims
             && self.folds() == 1
             && dims >= n_train
         {
-            warnings.push(format!(
-                "--dims {dims}: models trained on {n_train} images keep at most {} principal \
-                 components (one fewer than the training images)",
+            warnings.push(Message::new().opt_is(Opt::Dims, dims).text(format!(
+                ": models trained on {n_train} images keep at most {} principal components (one \
+                 fewer than the training images)",
                 n_train.saturating_sub(1)
-            ));
+            )));
         }
         warnings.extend(crate::method::budget_warning(&selections));
         Ok(EvalOutcome {

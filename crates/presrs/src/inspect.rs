@@ -11,6 +11,7 @@ use serde::Serialize;
 
 use crate::dataset::SampleOptions;
 use crate::error::{Error, Result};
+use presrs_io::message::{Message, Opt, Warnings};
 
 #[derive(Debug, Serialize)]
 pub struct StanceReport {
@@ -78,7 +79,7 @@ pub struct InspectReport {
     pub stances: Vec<StanceReport>,
     /// Why a recording that carries load gave no stance, or suspiciously few, with the option to try.
     pub stance_notes: Vec<String>,
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
 }
 
 /// Reads `path` as `options` say and describes it (the stance sample frame is `options.sample`; dead
@@ -116,7 +117,13 @@ pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
         parsed
             .recording
             .set_frame_period_if_unknown(period)
-            .map_err(|err| Error::invalid(format!("--frame-period: {err}")))?;
+            .map_err(|err| {
+                Error::invalid(
+                    Message::new()
+                        .opt(Opt::FramePeriod)
+                        .text(format!(": {err}")),
+                )
+            })?;
     }
     let recording = &parsed.recording;
     let totals = recording.total_per_frame();

@@ -35,6 +35,8 @@ pub use describe::describe_model;
 pub use error::{Context, Error, Result};
 pub use method::{ClassifierChoice, CropChoice, FeatureChoice, Method};
 pub use progress::{Progress, Quiet, Recorder};
+// Messages that name options as data, and the one warning type.
+pub use presrs_io::message::{self, Face, Message, Opt, Warning, Warnings};
 
 /// The algorithms on plain data (frames, stance detection, features, projection, classifiers).
 pub use presrs_core as core;

@@ -13,6 +13,7 @@ pub use presrs_core::selection::ChoiceRule;
 pub use presrs_core::selection::ValidateBy;
 use presrs_core::split::ValidationSize;
 use presrs_core::{CoreError, Crop, Grid};
+use presrs_io::message::{Message, Opt};
 
 use crate::error::{Error, Result};
 
@@ -263,20 +264,32 @@ impl Method {
             ValidationSize::Count(count) => count.to_string(),
             ValidationSize::Fraction(fraction) => fraction.to_string(),
         };
-        let remedy = "give --validation a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) \
-                      with at least 3 images per class";
+        let remedy = Message::from("give ").opt(Opt::Validation).text(
+            " a count of at least 1 (e.g. 7) or a fraction (e.g. 0.35) with at least 3 images \
+                 per class",
+        );
+        let leaves_none = Message::new()
+            .opt_is(Opt::Validation, given)
+            .text(" leaves no validation images, and ");
         match self.classifier {
-            ClassifierChoice::Kind(kind) if kind == ClassifierKind::PWE => {
-                Err(Error::invalid(format!(
-                    "--validation {given} leaves no validation images, and the Parzen window (pwe) \
-                 chooses its sigma on them: {remedy}, or another --classifier"
-                )))
-            }
-            ClassifierChoice::Auto => Err(Error::invalid(format!(
-                "--validation {given} leaves no validation images, and the automatic choice tries \
-                 the Parzen window (pwe), which chooses its sigma on them: {remedy}, or a \
-                 --classifier other than pwe or auto"
-            ))),
+            ClassifierChoice::Kind(kind) if kind == ClassifierKind::PWE => Err(Error::invalid(
+                leaves_none
+                    .text("the Parzen window (pwe) chooses its sigma on them: ")
+                    .then(remedy)
+                    .text(", or another ")
+                    .opt(Opt::Classifier),
+            )),
+            ClassifierChoice::Auto => Err(Error::invalid(
+                leaves_none
+                    .text(
+                        "the automatic choice tries the Parzen window (pwe), which chooses its \
+                         sigma on them: ",
+                    )
+                    .then(remedy)
+                    .text(", or a ")
+                    .opt(Opt::Classifier)
+                    .text(" other than pwe or auto"),
+            )),
             ClassifierChoice::Kind(_) => Ok(()),
         }
     }
@@ -296,7 +309,7 @@ pub fn budget_from_seconds(seconds: f64) -> std::result::Result<Option<Duration>
 
 /// The warning for selections whose time budget cut candidates (`None` when none was cut): how many
 /// models, which candidates, and what to do.
-pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Option<String> {
+pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Option<Message> {
     let cut: Vec<_> = selections
         .iter()
         .filter(|selection| selection.scores.iter().any(|score| score.skipped))
@@ -329,15 +342,20 @@ pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Optio
     } else {
         format!("in {} of {} models, ", cut.len(), selections.len())
     };
-    Some(format!(
-        "{models}the automatic choice was cut short ({}): {} of {} candidates not tried ({}); \
-         give --budget a larger value in seconds, or --budget 0 for no limit (the choice then \
-         does not depend on the machine's speed)",
+    let message = Message::from(format!(
+        "{models}the automatic choice was cut short ({}): {} of {} candidates not tried ({}); give ",
         budget.trim_start_matches("not tried: "),
         skipped.len(),
         first.scores.len(),
         families.join(", ")
-    ))
+    ));
+    Some(
+        message
+            .opt(Opt::Budget)
+            .text(" a larger value in seconds, or ")
+            .opt_is(Opt::Budget, 0)
+            .text(" for no limit (the choice then does not depend on the machine's speed)"),
+    )
 }
 
 /// Whether `features` holds a texture family (the costly ones, scored last).

@@ -3,6 +3,8 @@
 
 use std::sync::Mutex;
 
+use presrs_io::message::{Warning, Warnings};
+
 /// Receives the progress of a long workflow. Every method has a do-nothing default, so an
 /// implementation overrides what it shows. Called from worker threads too, hence `Sync`.
 pub trait Progress: Sync {
@@ -14,7 +16,7 @@ pub trait Progress: Sync {
     fn finish(&self) {}
     /// Something the user should know that did not stop the work (a file without stance, a capped
     /// option). Workflows that return a result also keep their warnings in it.
-    fn warn(&self, _message: &str) {}
+    fn warn(&self, _warning: &Warning) {}
     /// Something worth saying as it happens that is not a problem (a draw made smaller to fit the
     /// data, how long a stage took).
     fn note(&self, _message: &str) {}
@@ -40,7 +42,7 @@ pub struct RecorderLog {
     pub tasks: Vec<(String, Option<u64>)>,
     /// Steps reported over all tasks.
     pub steps: u64,
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
     pub notes: Vec<String>,
 }
 
@@ -67,8 +69,8 @@ impl Progress for Recorder {
         self.lock().steps += steps;
     }
 
-    fn warn(&self, message: &str) {
-        self.lock().warnings.push(message.to_owned());
+    fn warn(&self, warning: &Warning) {
+        self.lock().warnings.push(warning.clone());
     }
 
     fn note(&self, message: &str) {

@@ -35,6 +35,7 @@ use crate::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, run_counted}
 use crate::method::Method;
 use crate::progress::Progress;
 use crate::train::split_images;
+use presrs_io::message::Warnings;
 
 pub use draws::shrink_draw;
 use draws::{evaluation_draw, smallest_class};
@@ -458,7 +459,7 @@ pub struct ReportSummary {
     /// given model on every image); `None` with `--repeats 0` and no model.
     pub evaluation: Option<(String, EvalReport)>,
     /// What the user should know about the run (capped draws, labels no training set holds).
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
 }
 
 /// The protocol of the report's evaluation: as asked (`--train-condition`, `--leave-one-out`); else
@@ -505,7 +506,7 @@ pub fn report_dataset(
 ) -> Result<ReportSummary> {
     let name = dataset.path().display();
     let mut evaluation: Option<(String, EvalReport)> = None;
-    let mut warnings = Vec::new();
+    let mut warnings = Warnings::new();
     let mut faults = (Vec::new(), String::new());
     let model: Option<(TrainedModel, String)> = match &options.model {
         Some(path) => {

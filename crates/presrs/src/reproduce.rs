@@ -36,6 +36,7 @@ use crate::progress::Progress;
 use crate::report::{PAPER_TABLE2, SimulationReportData, write_simulation_report};
 use crate::simulation::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
 use crate::train::split_images;
+use presrs_io::message::{Message, Opt};
 
 use markdown::write_markdown;
 pub use results::{ComparisonSummary, DatasetOrigin, Draw, LoadCheck, Results, SegmentationCheck};
@@ -103,31 +104,38 @@ pub struct Reproduction {
 }
 
 /// The options that must agree with each other, checked before anything is simulated: some of the
-/// --per-class images train, and every gait records at least --per-class images per terrain.
+/// per-class images train, and every gait records at least as many images per terrain.
 pub fn check_options(
     args: &ReproduceOptions,
     config: &SimConfig,
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), Message> {
     if args.validation >= args.per_class {
-        return Err(format!(
-            "--validation {} must be smaller than --per-class {}: some images must train; give \
-             --validation {} or less, or a larger --per-class",
-            args.validation,
-            args.per_class,
-            args.per_class.saturating_sub(1)
-        ));
+        return Err(Message::new()
+            .opt_is(Opt::Validation, args.validation)
+            .text(" must be smaller than ")
+            .opt_is(Opt::PerClass, args.per_class)
+            .text(": some images must train; give ")
+            .opt_is(Opt::Validation, args.per_class.saturating_sub(1))
+            .text(" or less, or a larger ")
+            .opt(Opt::PerClass));
     }
     let hops = args
         .hops_per_gait
         .unwrap_or(config.experiment.hops_per_gait);
     if hops < args.per_class {
-        return Err(format!(
-            "--hops-per-gait {hops} records {hops} images per terrain and gait, fewer than the \
-             --per-class {} training images drawn per terrain from the training gait; give \
-             --hops-per-gait {} or more, or a --per-class of at most {hops} with a smaller --validation \
-             (now {})",
-            args.per_class, args.per_class, args.validation
-        ));
+        return Err(Message::new()
+            .opt_is(Opt::HopsPerGait, hops)
+            .text(format!(
+                " records {hops} images per terrain and gait, fewer than the "
+            ))
+            .opt_is(Opt::PerClass, args.per_class)
+            .text(" training images drawn per terrain from the training gait; give ")
+            .opt_is(Opt::HopsPerGait, args.per_class)
+            .text(" or more, or a ")
+            .opt(Opt::PerClass)
+            .text(format!(" of at most {hops} with a smaller "))
+            .opt(Opt::Validation)
+            .text(format!(" (now {})", args.validation)));
     }
     Ok(())
 }

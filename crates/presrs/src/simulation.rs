@@ -30,6 +30,7 @@ use sha2::{Digest, Sha256};
 
 use crate::error::{Context, Error, Result};
 use crate::progress::Progress;
+use presrs_io::message::{Message, Opt};
 
 /// `return Err(Error::Data(..))` unless `cond`.
 macro_rules! ensure {
@@ -728,15 +729,20 @@ pub fn read_terrain_image(name: &str, path: &Path) -> Result<(String, HeightMap)
 /// Checks that every gait of `gaits` is one of `config`'s or a variant `BASE@BETA` of one; the error
 /// names `option`.
 pub fn check_gaits<'a>(
-    option: &str,
+    option: Opt,
     gaits: impl IntoIterator<Item = &'a String>,
     config: &SimConfig,
-) -> Result<(), String> {
+) -> Result<(), Message> {
     let sim = Simulator::new(config.clone(), 0, Vec::new()).map_err(|e| e.to_string())?;
     for gait in gaits {
-        sim.gait(gait.trim()).map_err(|e| match e {
-            presrs_sim::SimError::Param { reason, .. } => format!("{option} {gait}: {reason}"),
-            other => format!("{option} {gait}: {other}"),
+        sim.gait(gait.trim()).map_err(|e| {
+            let reason = match e {
+                presrs_sim::SimError::Param { reason, .. } => reason,
+                other => other.to_string(),
+            };
+            Message::new()
+                .opt_text(option, gait)
+                .text(format!(": {reason}"))
         })?;
     }
     Ok(())
@@ -751,11 +757,11 @@ pub fn dataset_names(
     images: &[&str],
     gaits: &[String],
     config: &SimConfig,
-) -> std::result::Result<(Vec<String>, Vec<String>), String> {
+) -> std::result::Result<(Vec<String>, Vec<String>), Message> {
     if let Some(twice) = first_repeated(images) {
-        return Err(format!(
-            "--terrain-image gives the name {twice} to two images; give each its own"
-        ));
+        return Err(Message::new().opt(Opt::TerrainImage).text(format!(
+            " gives the name {twice} to two images; give each its own"
+        )));
     }
     let terrains: Vec<String> = if terrains.is_empty() {
         let mut terrains = DatasetSpec::paper(0).terrains;
@@ -765,24 +771,29 @@ pub fn dataset_names(
         terrains.iter().map(|t| t.trim().to_owned()).collect()
     };
     if let Some(twice) = first_repeated(&terrains) {
-        return Err(format!(
-            "--terrains lists {twice} twice; list each terrain once (a repeated terrain's images would \
-             be in the manifest twice, and could be both trained on and tested)"
-        ));
+        return Err(Message::new().opt(Opt::Terrains).text(format!(
+            " lists {twice} twice; list each terrain once (a repeated terrain's images would be in \
+             the manifest twice, and could be both trained on and tested)"
+        )));
     }
     for terrain in &terrains {
         if !BUILTIN_TERRAINS.contains(&terrain.as_str()) && !images.contains(&terrain.as_str()) {
-            return Err(format!(
-                "--terrains: unknown terrain {terrain:?}; the built-in terrains are {}, others must be \
-                 given as height maps with --terrain-image {terrain}=PNG",
-                BUILTIN_TERRAINS.join(", ")
-            ));
+            return Err(Message::new()
+                .opt(Opt::Terrains)
+                .text(format!(
+                    ": unknown terrain {terrain:?}; the built-in terrains are {}, others must be \
+                     given as height maps with ",
+                    BUILTIN_TERRAINS.join(", ")
+                ))
+                .opt_is(Opt::TerrainImage, format!("{terrain}=PNG")));
         }
     }
     if let Some(unused) = images.iter().find(|&&n| !terrains.iter().any(|t| t == n)) {
-        return Err(format!(
-            "--terrain-image {unused} is not among --terrains; add it there or leave the image out"
-        ));
+        return Err(Message::new()
+            .opt_is(Opt::TerrainImage, unused)
+            .text(" is not among ")
+            .opt(Opt::Terrains)
+            .text("; add it there or leave the image out"));
     }
     let gaits: Vec<String> = if gaits.is_empty() {
         DatasetSpec::paper(0).gaits
@@ -790,9 +801,11 @@ pub fn dataset_names(
         gaits.iter().map(|g| g.trim().to_owned()).collect()
     };
     if let Some(twice) = first_repeated(&gaits) {
-        return Err(format!("--gaits lists {twice} twice; list each gait once"));
+        return Err(Message::new()
+            .opt(Opt::Gaits)
+            .text(format!(" lists {twice} twice; list each gait once")));
     }
-    check_gaits("--gaits", &gaits, config)?;
+    check_gaits(Opt::Gaits, &gaits, config)?;
     Ok((terrains, gaits))
 }
 

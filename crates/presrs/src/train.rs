@@ -9,6 +9,7 @@ use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::{LabeledImage, train as train_pipeline};
 use presrs_core::split::{Split, ValidationSize, min_samples_per_class, stratified_split_capped};
 use presrs_core::stance::{ValidSegmentParams, segment};
+use presrs_io::message::{Message, Opt, Warnings};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
 use crate::dataset::{Dataset, Sample, sample_labels};
@@ -49,7 +50,7 @@ pub struct Training {
     pub train_counts: BTreeMap<String, usize>,
     pub validation_counts: BTreeMap<String, usize>,
     /// What the user should know (fewer principal components than asked).
-    pub warnings: Vec<String>,
+    pub warnings: Warnings,
 }
 
 impl Training {
@@ -117,7 +118,9 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     if !matches!(validation_check, Ok(Ok(()))) {
         let need = min_samples_per_class(options.per_class, options.validation);
         if let Some(cause) = dataset.too_few_samples(options.condition.as_deref(), need) {
-            return Err(Error::data(format!("{name}: cannot train: {cause}")));
+            return Err(Error::data(
+                Message::from(format!("{name}: cannot train: ")).then(cause),
+            ));
         }
     }
     let split = split.with_context(|| format!("{name}: cannot draw the training set"))?;
@@ -146,7 +149,7 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         )
     }
     .with_context(|| format!("{name}: training failed"))?;
-    let mut warnings = Vec::new();
+    let mut warnings = Warnings::new();
     if let Some(per_class) = options.per_class
         && !split.capped.is_empty()
     {
@@ -165,13 +168,12 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     if let Some(dims) = method.dims
         && kept < dims
     {
-        warnings.push(format!(
-            "--dims {dims}: kept {kept} principal components, the most that {} training images of {} \
-             features allow (at most one fewer than the training images, and no more than the \
-             features)",
+        warnings.push(Message::new().opt_is(Opt::Dims, dims).text(format!(
+            ": kept {kept} principal components, the most that {} training images of {} features \
+             allow (at most one fewer than the training images, and no more than the features)",
             split.train.len(),
             model.pca().n_features()
-        ));
+        )));
     }
     let count = |indices: &[usize]| {
         let mut counts = BTreeMap::new();
@@ -188,12 +190,12 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     })
 }
 
-/// The one warning line for a `--per-class` that some classes cannot give: `short` lists (held-out
+/// The one warning line for a per-class count that some classes cannot give: `short` lists (held-out
 /// value, class, images it has) and the line names the fewest.
 pub fn per_class_warning<'a>(
     per_class: usize,
     short: impl Iterator<Item = (Option<&'a str>, &'a str, usize)>,
-) -> String {
+) -> Message {
     let short: Vec<_> = short.collect();
     let classes: std::collections::BTreeSet<&str> = short.iter().map(|s| s.1).collect();
     let fewest = short.iter().min_by_key(|s| s.2);
@@ -204,11 +206,13 @@ pub fn per_class_warning<'a>(
         Some((None, class, n)) => format!("; fewest: {n} of class {class}"),
         None => String::new(),
     };
-    format!(
-        "--per-class {per_class}: capped to the images there are for {} class(es) ({}){fewest}",
-        classes.len(),
-        classes.into_iter().collect::<Vec<_>>().join(", ")
-    )
+    Message::new()
+        .opt_is(Opt::PerClass, per_class)
+        .text(format!(
+            ": capped to the images there are for {} class(es) ({}){fewest}",
+            classes.len(),
+            classes.into_iter().collect::<Vec<_>>().join(", ")
+        ))
 }
 
 /// The training and validation images of a draw: `image(i)` is the image at index `i` of what was

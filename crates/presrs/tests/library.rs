@@ -183,7 +183,7 @@ fn too_few_samples_of_a_class_is_named_before_the_validation_set() {
     assert_eq!(dataset.samples.len(), 6);
     assert!(dataset.too_few_samples(None, 2).is_none());
     assert_eq!(
-        dataset.too_few_samples(None, 3).unwrap(),
+        dataset.too_few_samples(None, 3).unwrap().to_string(),
         "too few samples per class: \"fast\" has 2, \"normal\" 2, \"slow\" 2 (at least 3 needed, 6 \
          samples in all)"
     );

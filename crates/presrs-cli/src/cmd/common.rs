@@ -340,8 +340,8 @@ impl Progress for TerminalProgress {
         }
     }
 
-    fn warn(&self, message: &str) {
-        self.line("warning", message);
+    fn warn(&self, warning: &presrs::Warning) {
+        self.line("warning", &warning.render(presrs::Face::Cli));
     }
 
     fn note(&self, message: &str) {

@@ -97,7 +97,10 @@ pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let options = args.options();
     if let Err(message) = check_options(&options, &SimConfig::default()) {
-        return Err(super::usage::UsageError::error("reproduce", message));
+        return Err(super::usage::UsageError::error(
+            "reproduce",
+            message.render(presrs::Face::Cli),
+        ));
     }
     let reproduction = reproduce(&options, &TerminalProgress::default())?;
     print_tables(&reproduction, out)?;

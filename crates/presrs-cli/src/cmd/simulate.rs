@@ -102,7 +102,9 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     let image_names: Vec<&str> = args.terrain_image.iter().map(|i| i.name.as_str()).collect();
     let (terrains, gaits) = dataset_names(&args.terrains, &image_names, &args.gaits, &config)
-        .map_err(|message| super::usage::UsageError::error("simulate", message))?;
+        .map_err(|message| {
+            super::usage::UsageError::error("simulate", message.render(presrs::Face::Cli))
+        })?;
     let images = args
         .terrain_image
         .iter()
@@ -141,10 +143,15 @@ pub fn run_track_comparison(
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
     // Gait names are judged with the configuration, before anything runs.
-    if let Err(message) = presrs::simulation::check_gaits("--start-gait", &args.start_gait, config)
-        .and_then(|()| presrs::simulation::check_gaits("--fixed-gait", &args.fixed_gait, config))
+    if let Err(message) =
+        presrs::simulation::check_gaits(presrs::Opt::StartGait, &args.start_gait, config).and_then(
+            |()| presrs::simulation::check_gaits(presrs::Opt::FixedGait, &args.fixed_gait, config),
+        )
     {
-        return Err(super::usage::UsageError::error("simulate", message));
+        return Err(super::usage::UsageError::error(
+            "simulate",
+            message.render(presrs::Face::Cli),
+        ));
     }
     let options = TrackOptions {
         seed: args.seed,

@@ -9,6 +9,7 @@ use presrs_core::{Grid, PressureUnit, Recording, SensorMeta};
 
 use super::cdr::{self, ArrayElement};
 use crate::error::IoError;
+use crate::message::{Message, Opt, Warnings};
 use crate::parsed::Parsed;
 
 /// Largest MCAP record accepted (a longer claimed length is a damaged file, not a reason to allocate).
@@ -130,7 +131,7 @@ impl<R: Read> BagFrames<R> {
         self.chosen.as_ref().map(|(topic, _)| topic.as_str())
     }
 
-    fn error(&mut self, message: impl Into<String>) -> IoError {
+    fn error(&mut self, message: impl Into<Message>) -> IoError {
         self.failed = true;
         IoError::format(&self.name, message)
     }
@@ -200,10 +201,14 @@ impl<R: Read> BagFrames<R> {
                         continue;
                     }
                     let chosen = chosen.clone();
-                    return Err(self.error(format!(
-                        "it holds frames on several topics ({chosen}, {topic}, ...); choose one with \
-                         --topic (`presrs inspect` lists them)"
-                    )));
+                    return Err(self.error(
+                        Message::from(format!(
+                            "it holds frames on several topics ({chosen}, {topic}, ...); choose one \
+                             with "
+                        ))
+                        .opt(Opt::Topic)
+                        .text(" (`presrs inspect` lists them)"),
+                    ));
                 }
             };
             if self.chosen.is_none() {
@@ -466,13 +471,13 @@ pub fn parse_mcap<R: Read>(reader: R, name: &str, topic: Option<&str>) -> Result
 
 /// The frame period of frames at `times` (ns): the median of the positive differences; and a warning
 /// for each gap (up to 10, then a count) and for times that do not increase.
-pub fn frame_timing(name: &str, topic: &str, times: &[u64]) -> (Option<f64>, Vec<String>) {
+pub fn frame_timing(name: &str, topic: &str, times: &[u64]) -> (Option<f64>, Warnings) {
     let mut steps: Vec<u64> = times
         .windows(2)
         .filter_map(|w| w[1].checked_sub(w[0]))
         .filter(|&d| d > 0)
         .collect();
-    let mut warnings = Vec::new();
+    let mut warnings = Warnings::new();
     let backwards = times.windows(2).filter(|w| w[1] <= w[0]).count();
     if backwards > 0 {
         warnings.push(format!(

@@ -6,6 +6,7 @@ use super::header::Header;
 use super::lines::{clip, frame_line};
 use crate::ReadOptions;
 use crate::error::IoError;
+use crate::message::Warnings;
 use crate::textutil::{Cell, is_blank, parse_cell, split_cells};
 
 /// The frames read.
@@ -48,7 +49,7 @@ struct Reader<'a> {
     header: &'a Header,
     file: &'a str,
     options: &'a ReadOptions,
-    warnings: &'a mut Vec<String>,
+    warnings: &'a mut Warnings,
     data: Vec<f64>,
     mask: Vec<bool>,
     any_absent: bool,
@@ -64,7 +65,7 @@ pub(super) fn parse_frames(
     input_len: usize,
     file: &str,
     options: &ReadOptions,
-    warnings: &mut Vec<String>,
+    warnings: &mut Warnings,
 ) -> Result<Body, IoError> {
     let mut reader = Reader::new(header, input_len, file, options, warnings);
     let last_nonblank = lines
@@ -96,7 +97,7 @@ impl<'a> Reader<'a> {
         input_len: usize,
         file: &'a str,
         options: &'a ReadOptions,
-        warnings: &'a mut Vec<String>,
+        warnings: &'a mut Warnings,
     ) -> Self {
         // Reserve for the announced frames, but never more than the input could hold (>= 2 bytes per
         // value). In i128: `END_FRAME - START_FRAME + 1` overflows i64 for extreme (crafted) values.
@@ -502,7 +503,7 @@ pub(super) const MAX_GAP_WARNINGS: usize = 5;
 
 /// Warns of jumps in the frame numbers (`Frame 49` then `Frame 150`): frames are missing there, so time
 /// is not contiguous across the jump.
-fn report_gaps(gaps: &[(usize, i64, i64, i128)], file: &str, warnings: &mut Vec<String>) {
+fn report_gaps(gaps: &[(usize, i64, i64, i128)], file: &str, warnings: &mut Warnings) {
     for &(line_no, prev, number, missing) in gaps.iter().take(MAX_GAP_WARNINGS) {
         warnings.push(format!(
             "{file} line {line_no}: frame {number} follows frame {prev}: {missing} frame number{} \
@@ -527,7 +528,7 @@ pub(super) fn check_frame_count(
     body: &Body,
     file: &str,
     options: &ReadOptions,
-    warnings: &mut Vec<String>,
+    warnings: &mut Warnings,
 ) -> Result<(), IoError> {
     let Some((end_line, end)) = header.end_frame else {
         return Ok(());

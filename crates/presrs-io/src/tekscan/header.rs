@@ -7,6 +7,7 @@ use presrs_core::{Grid, PressureUnit, SensorMeta};
 
 use super::lines::{frame_line, is_ascii_data};
 use crate::error::IoError;
+use crate::message::Warnings;
 use crate::textutil::is_blank;
 
 /// Header keys this module interprets (everything else goes to [`SensorMeta::extra`] untouched).
@@ -52,7 +53,7 @@ enum State {
 /// What the header has said so far.
 struct Reader<'a> {
     file: &'a str,
-    warnings: &'a mut Vec<String>,
+    warnings: &'a mut Warnings,
     meta: SensorMeta,
     rows: Option<usize>,
     cols: Option<usize>,
@@ -73,7 +74,7 @@ struct Reader<'a> {
 pub(super) fn parse_header(
     lines: &[(usize, &str)],
     file: &str,
-    warnings: &mut Vec<String>,
+    warnings: &mut Warnings,
 ) -> Result<Header, IoError> {
     let mut reader = Reader::new(lines, file, warnings);
     let mut state = State::Keys;
@@ -104,7 +105,7 @@ fn no_ascii_data(lines: &[(usize, &str)], file: &str) -> IoError {
 }
 
 impl<'a> Reader<'a> {
-    fn new(lines: &[(usize, &str)], file: &'a str, warnings: &'a mut Vec<String>) -> Self {
+    fn new(lines: &[(usize, &str)], file: &'a str, warnings: &'a mut Warnings) -> Self {
         let has_ascii_data = lines
             .iter()
             .any(|(_, line)| is_ascii_data(line.split_whitespace().next().unwrap_or("")));

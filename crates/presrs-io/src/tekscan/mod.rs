@@ -53,6 +53,7 @@ use presrs_core::Recording;
 use self::frames::{check_frame_count, parse_frames};
 use self::header::parse_header;
 use crate::error::{IoError, display_name};
+use crate::message::Warnings;
 use crate::textutil::{decode_text, is_blank, numbered_lines};
 use crate::{Parsed, ReadOptions};
 
@@ -97,7 +98,7 @@ pub fn parse_tekscan(
              `ASCII_DATA`) followed by frames",
         ));
     }
-    let mut warnings = Vec::new();
+    let mut warnings = Warnings::new();
     let header = parse_header(&lines, source_name, &mut warnings)?;
     let data_lines = &lines[header.data_start..];
     let body = parse_frames(

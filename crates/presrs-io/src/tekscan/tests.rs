@@ -165,11 +165,16 @@ fn unknown_typed_values_kept_with_warnings() {
     );
     assert_eq!(parsed.warnings.len(), 4, "{:?}", parsed.warnings);
     assert!(
-        parsed.warnings[0].starts_with("t.asf line 3: ROW_SPACING"),
+        parsed.warnings[0]
+            .to_string()
+            .starts_with("t.asf line 3: ROW_SPACING"),
         "{:?}",
         parsed.warnings
     );
-    assert!(parsed.warnings[3].contains("line 7") && parsed.warnings[3].contains("line 6"));
+    assert!(
+        parsed.warnings[3].to_string().contains("line 7")
+            && parsed.warnings[3].to_string().contains("line 6")
+    );
 }
 
 #[test]
@@ -281,7 +286,10 @@ fn truncated_last_frame_strict_and_lenient() {
     assert_eq!(parsed.recording.frame_count(), 1);
     assert_eq!(parsed.recording.data(), &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
     assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
-    assert!(parsed.warnings[0].contains("frame 2") && parsed.warnings[0].contains("dropped"));
+    assert!(
+        parsed.warnings[0].to_string().contains("frame 2")
+            && parsed.warnings[0].to_string().contains("dropped")
+    );
 
     // Cut in the middle of a row (no final newline).
     let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\nFrame 2\n7,8,9\n10,1");
@@ -323,7 +331,11 @@ fn frame_count_against_start_end_frame() {
     let text = format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\n@@\n");
     let parsed = strict(&text).unwrap();
     assert_eq!(parsed.warnings.len(), 1);
-    assert!(parsed.warnings[0].contains("keeping the frames found"));
+    assert!(
+        parsed.warnings[0]
+            .to_string()
+            .contains("keeping the frames found")
+    );
     // More frames than announced: a warning.
     let text =
         format!("{HEAD_2X3}Frame 1\n1,2,3\n4,5,6\nFrame 2\n1,2,3\n4,5,6\nFrame 3\n1,2,3\n4,5,6\n");
@@ -500,7 +512,9 @@ fn extreme_start_and_end_frame_do_not_overflow() {
     );
     let parsed = strict(&text).unwrap();
     assert!(
-        parsed.warnings[0].contains("18446744073709551614 frame numbers missing"),
+        parsed.warnings[0]
+            .to_string()
+            .contains("18446744073709551614 frame numbers missing"),
         "{:?}",
         parsed.warnings
     );
@@ -532,12 +546,16 @@ fn repeated_or_decreasing_frame_numbers_are_errors_gaps_are_warnings() {
     let parsed = lenient(&frames(&[1, 2, 2, 3])).unwrap();
     assert_eq!(parsed.recording.frame_count(), 4);
     assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
-    assert!(parsed.warnings[0].starts_with("t.asf line 8: frame 2 repeats frame 2"));
+    assert!(
+        parsed.warnings[0]
+            .to_string()
+            .starts_with("t.asf line 8: frame 2 repeats frame 2")
+    );
     // A jump (49 -> 150): read, with a warning naming the line and the numbers missing.
     let parsed = strict(&frames(&[48, 49, 150, 151])).unwrap();
     assert_eq!(parsed.recording.frame_count(), 4);
     assert_eq!(
-        parsed.warnings,
+        parsed.warnings.render(crate::Face::Cli),
         vec![
             "t.asf line 8: frame 150 follows frame 49: 100 frame numbers missing, so time is \
              not contiguous here"
@@ -546,7 +564,9 @@ fn repeated_or_decreasing_frame_numbers_are_errors_gaps_are_warnings() {
     );
     let parsed = strict(&frames(&[1, 3])).unwrap();
     assert!(
-        parsed.warnings[0].contains("1 frame number missing"),
+        parsed.warnings[0]
+            .to_string()
+            .contains("1 frame number missing"),
         "{:?}",
         parsed.warnings
     );
@@ -560,7 +580,7 @@ fn repeated_or_decreasing_frame_numbers_are_errors_gaps_are_warnings() {
         parsed.warnings
     );
     assert!(
-        parsed.warnings[MAX_GAP_WARNINGS].starts_with(
+        parsed.warnings[MAX_GAP_WARNINGS].to_string().starts_with(
             "t.asf: 14 more jumps in the frame numbers (from line 16), 28 frame numbers missing"
         ),
         "{:?}",
@@ -570,11 +590,15 @@ fn repeated_or_decreasing_frame_numbers_are_errors_gaps_are_warnings() {
     let text = frames(&[1, 2]).replace("ASCII_DATA", "START_FRAME 1\nEND_FRAME 5000\nASCII_DATA");
     let parsed = strict(&text).unwrap();
     assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
-    assert!(parsed.warnings[0].contains("announce 5000 frames, the file holds 2"));
+    assert!(
+        parsed.warnings[0]
+            .to_string()
+            .contains("announce 5000 frames, the file holds 2")
+    );
     let text = frames(&[1, 2]).replace("ASCII_DATA", "END_FRAME 5000\nASCII_DATA");
     let parsed = strict(&text).unwrap();
     assert_eq!(
-        parsed.warnings,
+        parsed.warnings.render(crate::Face::Cli),
         vec![
             "t.asf line 3: the first frame (1, no START_FRAME) and END_FRAME 5000 announce 5000 \
              frames, the file holds 2; keeping the frames found"

@@ -1,0 +1,132 @@
+"""Errors and warnings speak Python: the options they name are this package's arguments
+(`per_class=`), never the command line's flags (`--per-class`). Each case below reaches a message that
+named a flag before the library carried options as data."""
+
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import presrs
+
+MCAP_FIXTURES = (
+    Path(__file__).resolve().parents[2] / "crates" / "presrs-io" / "tests" / "fixtures" / "mcap"
+)
+
+# `--` then a letter: a command-line flag (an em-dash written `--` or a negative number is not one).
+FLAG = re.compile(r"--[A-Za-z]")
+
+
+def _no_flag(text):
+    assert not FLAG.search(text), f"a Python message names a command-line flag: {text}"
+
+
+def _raised(call, *args, **kwargs):
+    """The message of the `presrs.DataError` that `call` raises, checked for flags."""
+    with pytest.raises(presrs.DataError) as caught:
+        call(*args, **kwargs)
+    message = str(caught.value)
+    _no_flag(message)
+    return message
+
+
+def _warned(call, *args, **kwargs):
+    """What `call` returns and the messages of the warnings it gives, each checked for flags."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = call(*args, **kwargs)
+    messages = [str(w.message) for w in caught]
+    for message in messages:
+        _no_flag(message)
+    return result, messages
+
+
+def test_validation_too_small_names_the_argument(sim_images):
+    images, labels, _ = sim_images
+    message = _raised(
+        presrs.Model.train, images, labels, features="fft1d", classifier="pwe", validation=0
+    )
+    assert "validation=0 leaves no validation images" in message
+    assert "or another classifier=" in message
+
+
+def test_leave_one_out_on_a_missing_column_names_the_argument(sim_images):
+    images, labels, _ = sim_images
+    message = _raised(presrs.evaluate, images, labels, leave_one_out="site", repeats=1)
+    assert "leave_one_out=\"site\": the manifest has no such column" in message
+
+
+def test_too_many_dims_warns_with_the_argument(sim_images):
+    images, labels, _ = sim_images
+    model, messages = _warned(
+        presrs.Model.train, images[:12], labels[:12], features="fft1d", classifier="lda",
+        dims=500, validation=0,
+    )
+    assert any(m.startswith("dims=500: kept") for m in messages), messages
+    result, messages = _warned(
+        presrs.evaluate, images, labels, repeats=1, per_class=3, validation=0,
+        features="fft1d", classifier="lda", dims=500,
+    )
+    assert any(m.startswith("dims=500: models trained on") for m in messages), messages
+    assert all(m in messages for m in result.warnings), (result.warnings, messages)
+    for message in result.warnings:
+        _no_flag(message)
+
+
+def test_a_capped_per_class_warns_with_the_argument(sim_images):
+    images, labels, _ = sim_images
+    _, messages = _warned(
+        presrs.Model.train, images, labels, features="fft1d", classifier="lda", per_class=1000,
+    )
+    assert any(m.startswith("per_class=1000: capped") for m in messages), messages
+    images, labels, gaits = sim_images
+    result, messages = _warned(
+        presrs.evaluate, images, labels, conditions=gaits, train_condition="G1", repeats=1,
+        per_class=1000, features="fft1d", classifier="lda",
+    )
+    capped = [m for m in result.warnings if "per_class=1000: capped" in m]
+    assert capped and capped[0] in messages, (result.warnings, messages)
+
+
+def test_a_spent_budget_warns_with_the_argument(sim_images):
+    images, labels, gaits = sim_images
+    _, messages = _warned(
+        presrs.Model.train, images, labels, conditions=gaits, classifier="lda", budget=1e-9,
+        seed=1,
+    )
+    cut = [m for m in messages if "cut short" in m]
+    assert cut and "give budget= a larger value" in cut[0] and "budget=0 for no limit" in cut[0]
+
+
+def test_a_time_last_npy_warns_with_the_argument(tmp_path):
+    np.save(tmp_path / "time-last.npy", np.random.default_rng(3).random((6, 5, 40)))
+    rec, messages = _warned(presrs.read, tmp_path / "time-last.npy")
+    assert any('give axes="rows,cols,frames"' in m for m in messages), messages
+    assert rec.warnings == messages
+
+
+def test_a_bag_of_several_topics_names_the_argument():
+    message = _raised(presrs.read, MCAP_FIXTURES / "two_topics.mcap")
+    assert "choose one with topic=" in message
+
+
+@pytest.mark.parametrize(
+    "load, hint",
+    [
+        # one press from the first frame to the last: one contact, partial at both ends
+        (5 + 4 * np.sin(np.linspace(0, np.pi, 40)), "try one sample per file"),
+        # a press already under way when the recording starts
+        (np.r_[np.linspace(10, 0, 15), np.zeros(25)], "try sampling partial stances too"),
+    ],
+)
+def test_a_manifest_without_samples_says_what_to_do_in_words(tmp_path, load, hint):
+    rows = ["path,label"]
+    for i in range(4):
+        np.save(tmp_path / f"press{i}.npy", np.ones((len(load), 8, 8)) * load[:, None, None])
+        rows.append(f"press{i}.npy,{'ab'[i % 2]}")
+    (tmp_path / "manifest.csv").write_text("\n".join(rows) + "\n")
+    message = _raised(presrs.evaluate, tmp_path / "manifest.csv", repeats=1)
+    assert "4 of 4 files gave no sample" in message
+    assert f"{hint} (an option of the presrs command line)" in message
