@@ -4,7 +4,7 @@
 
 use serde_json::json;
 
-use crate::stream::{ConnectionSummary, ServeSummary, ServerNotice, ConnectionNotice};
+use crate::stream::{ConnectionNotice, ConnectionSummary, ServeSummary, ServerNotice};
 
 /// A connection's notice as the log says it.
 pub fn notice_text(notice: &ConnectionNotice) -> String {

@@ -27,8 +27,8 @@ use signal_hook::iterator::Signals;
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
 use presrs::stoppable_input::StoppableInput;
 use presrs::stream::{
-    BagRecorder, InputFormat, ProfileOverrides, ServerNotice, ServerOptions, ConnectionNotice,
-    ConnectionOptions, ConnectionTap, ShutdownHandle, StreamServer, Taps, resolve_profile,
+    BagRecorder, ConnectionNotice, ConnectionOptions, ConnectionTap, InputFormat, ProfileOverrides,
+    ServerNotice, ServerOptions, ShutdownHandle, StreamServer, Taps, resolve_profile,
     run_connection_tapped,
 };
 use presrs::stream_log::{

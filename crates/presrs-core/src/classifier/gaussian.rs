@@ -478,7 +478,8 @@ impl GaussianModel {
         scratch.diff.resize(d, 0.0);
         for (class, score) in out.iter_mut().enumerate() {
             let group = if self.shared { 0 } else { class };
-            let factor = MatRef::from_row_major_slice(&self.factors[group * d * d..][..d * d], d, d);
+            let factor =
+                MatRef::from_row_major_slice(&self.factors[group * d * d..][..d * d], d, d);
             let mean = &self.means[class * d..(class + 1) * d];
             for ((z, v), m) in scratch.diff.iter_mut().zip(x).zip(mean) {
                 *z = v - m;

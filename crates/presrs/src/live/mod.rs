@@ -22,9 +22,9 @@ mod server;
 mod view;
 mod write_timeout;
 
+pub use events::{base64, frame_json, sse_event};
 pub use hub::{
     Cursor, LINE_HISTORY, LOAD_HISTORY, LatestFrame, LiveHub, LiveInfo, LiveTap, Update,
 };
-pub use events::{base64, frame_json, sse_event};
 pub use server::{LiveOptions, LiveServer, state_json};
 pub use view::{ReplayOptions, replay_period_s, replay_recording};

@@ -42,7 +42,10 @@ mod tests {
         // 2100 is no leap year.
         assert_eq!(at(47_540 * DAY), "2100-02-28 00:00 UTC");
         assert_eq!(at(47_541 * DAY), "2100-03-01 00:00 UTC");
-        assert_eq!(at(20_417 * DAY + 13 * 3600 + 7 * 60 + 30), "2025-11-25 13:07 UTC");
+        assert_eq!(
+            at(20_417 * DAY + 13 * 3600 + 7 * 60 + 30),
+            "2025-11-25 13:07 UTC"
+        );
         assert_eq!(at(-60), "1969-12-31 23:59 UTC");
     }
 }
