@@ -17,18 +17,14 @@
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
-
-use anyhow::Context;
-use signal_hook::consts::{SIGINT, SIGTERM};
-use signal_hook::iterator::Signals;
 
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
 use presrs::stoppable_input::StoppableInput;
 use presrs::stream::{
     BagRecorder, ConnectionNotice, ConnectionOptions, ConnectionTap, InputFormat, ProfileOverrides,
-    ServerNotice, ServerOptions, ShutdownHandle, StreamServer, Taps, resolve_profile,
+    ServerNotice, ServerOptions, ShutdownHandle, StopSignals, StreamServer, Taps, resolve_profile,
     run_connection_tapped,
 };
 use presrs::stream_log::{
@@ -195,7 +191,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         file.online.as_ref(),
         &args.overrides(),
     )?;
-    let signals = Signals::new([SIGINT, SIGTERM]).context("cannot handle SIGINT and SIGTERM")?;
+    let signals = StopSignals::register()?;
     let info = LiveInfo {
         source: if args.listen.is_some() {
             "no client yet"
@@ -229,7 +225,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             out.flush()?;
             stderr_line!("presrs stream: listening on {local}");
             let stop = server.shutdown_handle();
-            let signal_thread = on_signal(signals, move || stop.stop());
+            let signal_thread = signals.on_first(move || stop.stop());
             let served = server.serve(&print_server_notice)?;
             if let Some(signal) = signal_thread.close() {
                 stderr_line!("presrs stream: stopped by {signal}");
@@ -240,59 +236,12 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
 }
 
-/// The thread that handles SIGINT and SIGTERM, and the first signal it caught.
-pub(super) struct SignalWatch {
-    handle: signal_hook::iterator::Handle,
-    caught: Arc<Mutex<Option<i32>>>,
-}
-
-impl SignalWatch {
-    /// Stops the thread; the name of the signal it caught, if any.
-    pub(super) fn close(self) -> Option<&'static str> {
-        self.handle.close();
-        let caught = *self.caught.lock().unwrap_or_else(|p| p.into_inner());
-        caught.map(signal_name)
-    }
-}
-
-/// Handles the first SIGINT or SIGTERM on a thread: notes it and calls `stop`; a second one gets the
-/// default action (the process ends at once).
-pub(super) fn on_signal(mut signals: Signals, stop: impl FnOnce() + Send + 'static) -> SignalWatch {
-    let handle = signals.handle();
-    let caught = Arc::new(Mutex::new(None));
-    let first_caught = caught.clone();
-    std::thread::spawn(move || {
-        let mut stop = Some(stop);
-        for signal in signals.forever() {
-            let mut first = first_caught.lock().unwrap_or_else(|p| p.into_inner());
-            if first.is_some() {
-                let _ = signal_hook::low_level::emulate_default_handler(signal);
-                continue;
-            }
-            *first = Some(signal);
-            drop(first);
-            if let Some(stop) = stop.take() {
-                stop();
-            }
-        }
-    });
-    SignalWatch { handle, caught }
-}
-
-fn signal_name(signal: i32) -> &'static str {
-    match signal {
-        SIGINT => "SIGINT",
-        SIGTERM => "SIGTERM",
-        _ => "a signal",
-    }
-}
-
-/// One session on stdin; an error (after the summary) when any frame was rejected or any error came.
+/// One connection on stdin; an error (after the summary) when any frame was rejected or any error came.
 fn run_stdin(
     args: &StreamArgs,
     model: &presrs::core::TrainedModel,
     profile: &presrs::core::online::OnlineProfile,
-    signals: Signals,
+    signals: StopSignals,
     tap: &mut dyn ConnectionTap,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
@@ -306,7 +255,7 @@ fn run_stdin(
     };
     let log = |notice: &ConnectionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
     let (input, end_input) = StoppableInput::start(|| std::io::stdin().lock());
-    let signal_thread = on_signal(signals, move || {
+    let signal_thread = signals.on_first(move || {
         // The flag first: the session must know the end it is about to read is a stop.
         stop.stop();
         end_input.stop();

@@ -5,17 +5,13 @@ use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
-use anyhow::Context;
-use signal_hook::consts::{SIGINT, SIGTERM};
-use signal_hook::iterator::Signals;
-
 use presrs::live::{LiveInfo, ReplayOptions, replay_period_s, replay_recording};
 use presrs::stream::{ConnectionNotice, ProfileOverrides, ShutdownHandle, resolve_profile};
 use presrs_io::model_file::load_model;
 
 use presrs::stream_log::{notice_text, summary_text};
 
-use super::stream::{HttpArgs, on_signal};
+use super::stream::HttpArgs;
 
 /// Where `presrs view` serves without `--http`.
 const DEFAULT_ADDR: SocketAddr = SocketAddr::V4(std::net::SocketAddrV4::new(
@@ -93,10 +89,10 @@ pub fn run(args: &ViewArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let Some((hub, server)) = args.http.start(Some(addr), info, "view")? else {
         anyhow::bail!("no address to serve the live view on");
     };
-    let signals = Signals::new([SIGINT, SIGTERM]).context("cannot handle SIGINT and SIGTERM")?;
+    let signals = presrs::stream::StopSignals::register()?;
     let stop = options.stop.clone().unwrap_or_default();
     let stopper = stop.clone();
-    let signal_thread = on_signal(signals, move || stopper.stop());
+    let signal_thread = signals.on_first(move || stopper.stop());
     stderr_line!(
         "presrs view: {} frames of {} at {:.1} frames/s{}",
         recording.frame_count(),

@@ -28,6 +28,7 @@ mod events;
 mod output;
 mod server;
 mod shutdown;
+mod signals;
 mod summary;
 mod tap;
 
@@ -50,6 +51,7 @@ pub use events::event_values;
 pub use output::BoundedOutput;
 pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer, TapFactory};
 pub use shutdown::ShutdownHandle;
+pub use signals::{SignalWatch, StopSignals};
 pub use tap::{ConnectionTap, NoTap, Taps};
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
