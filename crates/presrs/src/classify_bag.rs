@@ -10,10 +10,9 @@ use presrs_io::mcap::ImageEncoding;
 use serde_json::json;
 
 use crate::classify::{Classified, ClassifyOptions};
-use crate::dataset::read_corrected;
+use crate::dataset::{apply_frame_period_option, read_corrected};
 use crate::error::{Error, Result};
 use crate::stream::DecisionBag;
-use presrs_io::message::{Message, Opt};
 
 /// A bag of classified recordings being written; it appears under its name at [`Self::finish`].
 pub struct ClassifyBag {
@@ -55,17 +54,7 @@ impl ClassifyBag {
         let samples = &options.samples;
         let (parsed, _) = read_corrected(path, &samples.read, samples.dead_sensels.as_ref())?;
         let mut recording = parsed.recording;
-        if let Some(period) = samples.frame_period_s {
-            recording
-                .set_frame_period_if_unknown(period)
-                .map_err(|err| {
-                    Error::invalid(
-                        Message::new()
-                            .opt(Opt::FramePeriod)
-                            .text(format!(": {err}")),
-                    )
-                })?;
-        }
+        apply_frame_period_option(&mut recording, samples.frame_period_s)?;
         let file = path.display().to_string();
         let segmentation = segment_recording(&recording, &samples.segment_params())
             .map_err(|err| Error::data(format!("{file}: cannot segment: {err}")))?;

@@ -6,8 +6,9 @@ use presrs_core::Grid;
 use presrs_io::mcap::{ImageEncoding, write_recording_mcap};
 use presrs_io::{ReadOptions, read_recording_with, write_atomic_with};
 
+use crate::dataset::apply_frame_period_option;
 use crate::error::{Error, Result};
-use presrs_io::message::{Message, Opt, Warnings};
+use presrs_io::message::Warnings;
 
 /// The topic `convert` writes frames on unless told otherwise.
 pub const DEFAULT_FRAMES_TOPIC: &str = "/presrs/frames";
@@ -61,17 +62,7 @@ pub fn convert(input: &Path, output: &Path, options: &ConvertOptions) -> Result<
     }
     let parsed = read_recording_with(input, &options.read)?;
     let mut recording = parsed.recording;
-    if let Some(period) = options.frame_period_s {
-        recording
-            .set_frame_period_if_unknown(period)
-            .map_err(|err| {
-                Error::invalid(
-                    Message::new()
-                        .opt(Opt::FramePeriod)
-                        .text(format!(": {err}")),
-                )
-            })?;
-    }
+    apply_frame_period_option(&mut recording, options.frame_period_s)?;
     let name = presrs_io::error::display_name(output);
     let encoding = write_atomic_with(output, |w| {
         write_recording_mcap(w, &name, &recording, &options.topic)

@@ -479,6 +479,26 @@ fn row_key(row: &ManifestRow) -> RecordingKey<'_> {
     (&row.path, row.column("topic"))
 }
 
+/// Sets a recording's frame period from the frame-period option when its file states none; a value that
+/// is not a period names the option.
+pub(crate) fn apply_frame_period_option(
+    recording: &mut Recording,
+    period: Option<f64>,
+) -> Result<()> {
+    if let Some(period) = period {
+        recording
+            .set_frame_period_if_unknown(period)
+            .map_err(|err| {
+                Error::invalid(
+                    Message::new()
+                        .opt(Opt::FramePeriod)
+                        .text(format!(": {err}")),
+                )
+            })?;
+    }
+    Ok(())
+}
+
 /// Sets the frame period of the recordings whose rows give a `frame_period_s` (when the file states
 /// none); a value that is not a positive number is an error naming the line.
 fn apply_frame_period_column<'m>(

@@ -9,9 +9,9 @@ use presrs_io::mcap::list_topics;
 use presrs_io::{IoError, read_recording_with};
 use serde::Serialize;
 
-use crate::dataset::SampleOptions;
+use crate::dataset::{SampleOptions, apply_frame_period_option};
 use crate::error::{Error, Result};
-use presrs_io::message::{Message, Opt, Warnings};
+use presrs_io::message::Warnings;
 
 #[derive(Debug, Serialize)]
 pub struct StanceReport {
@@ -113,18 +113,7 @@ pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
             .collect();
     }
     let mut parsed = read_recording_with(path, &read)?;
-    if let Some(period) = options.frame_period_s {
-        parsed
-            .recording
-            .set_frame_period_if_unknown(period)
-            .map_err(|err| {
-                Error::invalid(
-                    Message::new()
-                        .opt(Opt::FramePeriod)
-                        .text(format!(": {err}")),
-                )
-            })?;
-    }
+    apply_frame_period_option(&mut parsed.recording, options.frame_period_s)?;
     let recording = &parsed.recording;
     let totals = recording.total_per_frame();
     let segmentation = segment_recording(recording, &options.segment_params())

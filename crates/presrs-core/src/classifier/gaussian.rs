@@ -511,12 +511,20 @@ pub struct GaussianScratch {
     diff: Vec<f64>,
 }
 
-/// Gaussian maximum likelihood (one shrunk covariance per class) as a registered family (`mle`).
+/// The Gaussian classifiers as registered families: `SHARED_COVARIANCE` false is maximum likelihood with
+/// one shrunk covariance per class ([`MleFamily`], `mle`), true is linear discriminant analysis with one
+/// shared shrunk covariance ([`LdaFamily`], `lda`).
 #[derive(Debug)]
-pub struct MleFamily;
+pub struct GaussianFamily<const SHARED_COVARIANCE: bool>;
 
-impl ClassifierFamily for MleFamily {
-    const NAME: &'static str = "mle";
+/// Gaussian maximum likelihood (one shrunk covariance per class), `mle`.
+pub type MleFamily = GaussianFamily<false>;
+
+/// Linear discriminant analysis (one shared shrunk covariance), `lda`.
+pub type LdaFamily = GaussianFamily<true>;
+
+impl<const SHARED_COVARIANCE: bool> ClassifierFamily for GaussianFamily<SHARED_COVARIANCE> {
+    const NAME: &'static str = if SHARED_COVARIANCE { "lda" } else { "mle" };
     type Config = GaussianConfig;
     type Model = GaussianModel;
     type Scratch = GaussianScratch;
@@ -531,58 +539,7 @@ impl ClassifierFamily for MleFamily {
             data.validation,
             data.n_classes,
             data.dims,
-            false,
-            config,
-        )
-    }
-
-    fn dims(model: &GaussianModel) -> usize {
-        model.dims()
-    }
-
-    fn n_classes(model: &GaussianModel) -> usize {
-        model.n_classes()
-    }
-
-    fn describe(model: &GaussianModel) -> String {
-        gaussian_describe(model)
-    }
-
-    fn scratch(model: &GaussianModel) -> GaussianScratch {
-        model.scratch()
-    }
-
-    fn classify_into(
-        model: &GaussianModel,
-        x: &[f64],
-        scratch: &mut GaussianScratch,
-        posteriors: &mut [f64],
-    ) -> Result<usize> {
-        model.classify_into(x, scratch, posteriors)
-    }
-}
-
-/// Linear discriminant analysis (one shared shrunk covariance) as a registered family (`lda`).
-#[derive(Debug)]
-pub struct LdaFamily;
-
-impl ClassifierFamily for LdaFamily {
-    const NAME: &'static str = "lda";
-    type Config = GaussianConfig;
-    type Model = GaussianModel;
-    type Scratch = GaussianScratch;
-
-    fn check(config: &GaussianConfig) -> Result<()> {
-        config.check()
-    }
-
-    fn fit(config: &GaussianConfig, data: FitData<'_>) -> Result<GaussianModel> {
-        GaussianModel::fit(
-            data.train,
-            data.validation,
-            data.n_classes,
-            data.dims,
-            true,
+            SHARED_COVARIANCE,
             config,
         )
     }
