@@ -16,6 +16,8 @@ def _stubbed():
     for node in tree.body:
         if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
             names.add(node.name)
+        if isinstance(node, ast.AnnAssign) and not node.target.id.startswith("_"):
+            names.add(node.target.id)  # module constants, e.g. CLASSIFIERS: tuple[str, ...]
         if isinstance(node, ast.ClassDef):
             members[node.name] = {
                 n.name if isinstance(n, ast.FunctionDef) else n.target.id
@@ -46,3 +48,9 @@ def test_everything_public_has_a_docstring():
                     if not member.startswith("_") and not (getattr(value, "__doc__", "") or "").strip():
                         missing.append(f"{name}.{member}")
     assert not missing, missing
+
+
+def test_the_registered_names_are_exported():
+    # The classifier and feature-family names come from the library's registration.
+    assert presrs.CLASSIFIERS[:5] == ("pwe", "mle", "lda", "svm", "knn")
+    assert {"fft1d", "fft2d", "fft2d_polar", "glcm"} <= set(presrs.FEATURE_FAMILIES)
