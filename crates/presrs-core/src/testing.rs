@@ -5,11 +5,20 @@
 //! Behind the `testing` cargo feature (always on in this crate's own unit tests), never on in a
 //! production build: tests and benchmarks enable it through their dev-dependencies.
 
-use rand::Rng;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 use crate::frame::Frame;
 pub use crate::synthetic::bench_workload as bench_fixture;
 pub use crate::synthetic::{SYNTHETIC_CLASSES, synthetic_frame};
+
+/// `per_class` synthetic images of each of the four classes, with their labels, drawn from `seed`.
+pub fn labeled_set(per_class: usize, seed: u64) -> Vec<(Frame, &'static str)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..4 * per_class)
+        .map(|i| (synthetic_frame(i % 4, &mut rng), SYNTHETIC_CLASSES[i % 4]))
+        .collect()
+}
 
 /// A synthetic 100 Hz movie for benchmarks and tests of the online path: `stances` times, 20 empty flight
 /// frames then a 14-frame stance whose load follows a half sine over the print of [`synthetic_frame`]

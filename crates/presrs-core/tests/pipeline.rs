@@ -7,17 +7,8 @@ use presrs_core::features::{FeatureConfig, Fft1dConfig, Fft1dExtractor};
 use presrs_core::pipeline::{
     BATCH_BLOCK, LabeledImage, TrainConfig, TrainedModel, extract_features, train,
 };
-use presrs_core::testing::{SYNTHETIC_CLASSES, bench_fixture, synthetic_frame};
+use presrs_core::testing::{SYNTHETIC_CLASSES, bench_fixture, labeled_set};
 use presrs_core::{CoreError, Crop, Frame, FrameView, Grid};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-
-fn labeled_set(per_class: usize, seed: u64) -> Vec<(Frame, &'static str)> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..4 * per_class)
-        .map(|i| (synthetic_frame(i % 4, &mut rng), SYNTHETIC_CLASSES[i % 4]))
-        .collect()
-}
 
 fn images<'a>(set: &'a [(Frame, &'static str)]) -> Vec<LabeledImage<'a>> {
     set.iter()

@@ -11,7 +11,7 @@ use presrs_core::pipeline::{
 use presrs_core::preprocess::{
     FillScratch, Intensity, Preprocess, fill_from_neighbours, normalise_load,
 };
-use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
+use presrs_core::testing::{labeled_set, synthetic_frame};
 use presrs_core::{Crop, Frame, Grid};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -25,13 +25,6 @@ const BOTH: Preprocess = Preprocess {
     fill_absent: true,
     ..Preprocess::NONE
 };
-
-fn labeled_set(per_class: usize, seed: u64) -> Vec<(Frame, &'static str)> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..4 * per_class)
-        .map(|i| (synthetic_frame(i % 4, &mut rng), SYNTHETIC_CLASSES[i % 4]))
-        .collect()
-}
 
 fn images<'a>(set: &'a [(Frame, &'static str)]) -> Vec<LabeledImage<'a>> {
     set.iter()

@@ -10,7 +10,7 @@ use presrs_core::classifier::{
 use presrs_core::error::{CoreError, Result};
 use presrs_core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
 use presrs_core::selection::{AutoChoice, ValidateBy, select};
-use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
+use presrs_core::testing::{SYNTHETIC_CLASSES, labeled_set, synthetic_frame};
 use presrs_core::{Crop, Frame};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -165,13 +165,6 @@ impl ClassifierFamily for FakePwe {
     ) -> Result<usize> {
         NearestMean::classify_into(model, x, scratch, posteriors)
     }
-}
-
-fn labeled_set(per_class: usize, seed: u64) -> Vec<(Frame, &'static str)> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..4 * per_class)
-        .map(|i| (synthetic_frame(i % 4, &mut rng), SYNTHETIC_CLASSES[i % 4]))
-        .collect()
 }
 
 fn images<'a>(set: &'a [(Frame, &'static str)]) -> Vec<LabeledImage<'a>> {
