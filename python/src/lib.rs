@@ -24,8 +24,7 @@ fn _native(module: &Bound<'_, PyModule>) -> PyResult<()> {
         "CLASSIFIERS",
         pyo3::types::PyTuple::new(module.py(), classifiers)?,
     )?;
-    let families =
-        presrs::core::features::FeatureKind::ALL.map(presrs::core::features::FeatureKind::as_str);
+    let families = presrs::core::features::FeatureKind::names();
     module.add(
         "FEATURE_FAMILIES",
         pyo3::types::PyTuple::new(module.py(), families)?,

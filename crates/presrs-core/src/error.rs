@@ -21,7 +21,7 @@ pub enum CoreError {
 pub type Result<T, E = CoreError> = std::result::Result<T, E>;
 
 /// `Ok` when a buffer or vector has the `expected` length, else a [`CoreError::Shape`] naming `what`.
-pub(crate) fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
+pub fn check_len(what: &'static str, expected: usize, got: usize) -> Result<()> {
     if expected == got {
         Ok(())
     } else {
@@ -31,25 +31,4 @@ pub(crate) fn check_len(what: &'static str, expected: usize, got: usize) -> Resu
             got: got.to_string(),
         })
     }
-}
-
-/// The member of `all` whose name (`as_str`) is `text`, trimmed and case-insensitive; else a
-/// [`CoreError::Param`] for `param` that says it is an unknown `what` and lists the known names.
-pub(crate) fn parse_name<T: Copy, const N: usize>(
-    text: &str,
-    all: [T; N],
-    as_str: fn(T) -> &'static str,
-    param: &'static str,
-    what: &str,
-) -> Result<T> {
-    let wanted = text.trim().to_ascii_lowercase();
-    all.into_iter()
-        .find(|&item| as_str(item) == wanted)
-        .ok_or_else(|| CoreError::Param {
-            name: param,
-            reason: format!(
-                "unknown {what} {text:?}; known: {}",
-                all.map(as_str).join(", ")
-            ),
-        })
 }

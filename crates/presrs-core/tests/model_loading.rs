@@ -240,7 +240,7 @@ fn training_cannot_make_a_model_too_large_to_load() {
         .map(|(i, frame)| LabeledImage::new(frame.view(), SYNTHETIC_CLASSES[i % 4]))
         .collect();
     let config = TrainConfig {
-        features: FeatureConfig::Fft1d(Fft1dConfig {
+        features: FeatureConfig::of::<presrs_core::features::Fft1dFamily>(Fft1dConfig {
             fft_len: Some(MAX_TRANSFORM_LEN + 2),
         }),
         ..TrainConfig::default()

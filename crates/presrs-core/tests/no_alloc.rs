@@ -86,16 +86,16 @@ fn steady_state_classification_does_not_allocate() {
     };
     let mut cases = Vec::new();
     for classifier in ClassifierKind::all() {
-        cases.push((FeatureKind::Fft1d, classifier, Preprocess::NONE));
+        cases.push((FeatureKind::FFT1D, classifier, Preprocess::NONE));
     }
     for features in [
-        FeatureKind::Fft2d,
-        FeatureKind::Fft2dPolar,
-        FeatureKind::Glcm,
+        FeatureKind::FFT2D,
+        FeatureKind::FFT2D_POLAR,
+        FeatureKind::GLCM,
     ] {
         cases.push((features, ClassifierKind::PWE, Preprocess::NONE));
     }
-    cases.push((FeatureKind::Fft1d, ClassifierKind::PWE, fill));
+    cases.push((FeatureKind::FFT1D, ClassifierKind::PWE, fill));
 
     for (features, classifier, preprocess) in cases {
         let name = format!("{features:?} + {classifier:?} ({preprocess:?})");

@@ -261,7 +261,7 @@ fn training_input_errors() {
     };
     assert!(bad_sigma.check().is_err());
     let short_fft = TrainConfig {
-        features: FeatureConfig::Fft1d(Fft1dConfig {
+        features: FeatureConfig::of::<presrs_core::features::Fft1dFamily>(Fft1dConfig {
             fft_len: Some(1000),
         }),
         ..TrainConfig::default()
@@ -276,7 +276,7 @@ fn dims_are_capped_by_the_training_set_and_other_settings_work() {
     let validation_set = labeled_set(2, 31);
     let config = TrainConfig {
         crop: Crop::NONE,
-        features: FeatureConfig::Fft1d(Fft1dConfig {
+        features: FeatureConfig::of::<presrs_core::features::Fft1dFamily>(Fft1dConfig {
             fft_len: Some(2000),
         }),
         dims: 51,

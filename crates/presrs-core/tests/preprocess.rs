@@ -50,10 +50,10 @@ fn assert_close(a: &[f64], b: &[f64], rel: f64) {
 fn normalised_features_do_not_depend_on_the_load() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     for kind in [
-        FeatureKind::Fft1d,
-        FeatureKind::Fft2d,
-        FeatureKind::Fft2dPolar,
-        FeatureKind::Glcm,
+        FeatureKind::FFT1D,
+        FeatureKind::FFT2D,
+        FeatureKind::FFT2D_POLAR,
+        FeatureKind::GLCM,
     ] {
         let features = kind.default_config();
         for class in 0..4 {
@@ -66,7 +66,7 @@ fn normalised_features_do_not_depend_on_the_load() {
                     .unwrap();
                 assert_close(&base, &got, 1e-9);
                 // without normalisation the 1-D |FFT| scales with the load
-                if kind == FeatureKind::Fft1d {
+                if kind == FeatureKind::FFT1D {
                     let raw = extract_features_with(
                         &heavy.view(),
                         &Crop::PAPER,

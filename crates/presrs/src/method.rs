@@ -34,11 +34,11 @@ pub const REFINED_DIMS: [usize; 2] = [25, 102];
 /// (glcm, alone or combined: a GLCM image costs 2-3x an FFT one) after the cheap ones and the intensity
 /// transforms, so that a time budget cuts them first.
 pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
-    &[FeatureKind::Fft1d],
-    &[FeatureKind::Fft2d],
-    &[FeatureKind::Fft2dPolar],
-    &[FeatureKind::Glcm],
-    &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
+    &[FeatureKind::FFT1D],
+    &[FeatureKind::FFT2D],
+    &[FeatureKind::FFT2D_POLAR],
+    &[FeatureKind::GLCM],
+    &[FeatureKind::FFT2D_POLAR, FeatureKind::GLCM],
 ];
 
 /// A crop, or `auto`: decided from the image size.
@@ -123,7 +123,7 @@ impl Method {
     /// 44 x 44 array.
     pub fn paper() -> Self {
         Self {
-            features: FeatureChoice::Kinds(vec![FeatureKind::Fft1d]),
+            features: FeatureChoice::Kinds(vec![FeatureKind::FFT1D]),
             classifier: ClassifierChoice::Kind(ClassifierKind::PWE),
             ..Self::default()
         }
@@ -144,7 +144,7 @@ impl Method {
     pub fn train_config(&self, grid: Grid) -> Result<CheckedTrainConfig> {
         let features = match &self.features {
             FeatureChoice::Kinds(kinds) => FeatureConfig::combined(kinds),
-            FeatureChoice::Auto => FeatureKind::Fft1d.default_config(),
+            FeatureChoice::Auto => FeatureKind::FFT1D.default_config(),
         };
         let classifier = match self.classifier {
             ClassifierChoice::Kind(kind) => kind.default_config(),
@@ -158,7 +158,7 @@ impl Method {
     pub fn paper_config(&self, grid: Grid) -> Result<CheckedTrainConfig> {
         self.config(
             grid,
-            FeatureKind::Fft1d.default_config(),
+            FeatureKind::FFT1D.default_config(),
             ClassifierKind::PWE.default_config(),
         )
     }
@@ -197,11 +197,9 @@ impl Method {
                     },
                     ..self.clone()
                 };
-                for feature in families.iter().filter(|f| is_texture(f) == texture) {
+                for feature in families.iter().filter(|f| f.is_costly() == texture) {
                     // Transforms multiply the default search by a third, not threefold.
-                    let tried = intensity == given
-                        || self.full_search
-                        || matches!(feature, FeatureConfig::Fft1d(_));
+                    let tried = intensity == given || self.full_search || feature.is_fft1d();
                     if !tried {
                         continue;
                     }
@@ -358,15 +356,6 @@ pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Optio
     )
 }
 
-/// Whether `features` holds a texture family (the costly ones, scored last).
-fn is_texture(features: &FeatureConfig) -> bool {
-    match features {
-        FeatureConfig::Glcm(_) => true,
-        FeatureConfig::Combined(config) => config.parts.iter().any(is_texture),
-        _ => false,
-    }
-}
-
 /// Feature families joined with `+` or `,` (`fft1d`, `fft2d_polar+glcm`); the error lists the names.
 pub fn parse_feature_kinds(text: &str) -> std::result::Result<Vec<FeatureKind>, String> {
     text.split(['+', ','])
@@ -376,7 +365,7 @@ pub fn parse_feature_kinds(text: &str) -> std::result::Result<Vec<FeatureKind>, 
                     "unknown feature family {:?} in {text:?}; known: {}, or several joined with + \
                      (fft1d+glcm)",
                     part.trim(),
-                    FeatureKind::ALL.map(FeatureKind::as_str).join(", ")
+                    FeatureKind::names().join(", ")
                 )
             })
         })
@@ -457,7 +446,7 @@ mod tests {
         );
         // the paper's method first; the texture families last, where a budget cuts
         assert_eq!(candidates[0], auto.paper_config(grid).unwrap());
-        let texture = |c: &CheckedTrainConfig| is_texture(&c.config().features);
+        let texture = |c: &CheckedTrainConfig| c.config().features.is_costly();
         let first_texture = candidates.iter().position(texture).unwrap();
         assert_eq!(first_texture, candidates.len() - 2 * n_classifiers);
         assert!(candidates[first_texture..].iter().all(texture));
@@ -515,8 +504,8 @@ mod tests {
         assert_eq!(
             "fft1d+glcm".parse::<FeatureChoice>(),
             Ok(FeatureChoice::Kinds(vec![
-                FeatureKind::Fft1d,
-                FeatureKind::Glcm
+                FeatureKind::FFT1D,
+                FeatureKind::GLCM
             ]))
         );
         let err = "fft3d".parse::<FeatureChoice>().unwrap_err();

@@ -915,7 +915,7 @@ mod tests {
             ..ReportOptions::default()
         };
         let args = parse(
-            FeatureChoice::Kinds(vec![FeatureKind::Fft1d]),
+            FeatureChoice::Kinds(vec![FeatureKind::FFT1D]),
             ClassifierKind::PWE,
         );
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);

@@ -78,7 +78,7 @@ fn parse_features(text: &str) -> Result<Vec<FeatureKind>, String> {
         return Err(format!(
             "auto chooses the features while training a model; here name the families to print ({}, \
              or several joined with +)",
-            FeatureKind::ALL.map(FeatureKind::as_str).join(", ")
+            FeatureKind::names().join(", ")
         ));
     }
     presrs::method::parse_feature_kinds(text)

@@ -13,6 +13,7 @@ use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result, check_len};
+use crate::features::family::{FeatureFamily, MAX_TRANSFORM_LEN};
 use crate::frame::Grid;
 #[cfg(target_arch = "x86_64")]
 use crate::kernels::SplitAvx512;
@@ -262,6 +263,90 @@ impl Fft1dExtractor {
         let mut out = vec![0.0; self.output_len()];
         self.extract_into(image, &mut out)?;
         Ok(out)
+    }
+}
+
+/// The paper's 1-D |FFT| as a [`FeatureFamily`]: it has a fast path (single precision, read straight
+/// from the frame's crop) that classification uses.
+#[derive(Debug)]
+pub struct Fft1dFamily;
+
+impl FeatureFamily for Fft1dFamily {
+    const NAME: &'static str = "fft1d";
+    const PRESETS: &'static [&'static str] = &["fft1d"];
+    type Config = Fft1dConfig;
+    type Extractor = Fft1dExtractor;
+
+    fn preset(_index: usize) -> Fft1dConfig {
+        Fft1dConfig::PAPER
+    }
+
+    fn check(config: &Fft1dConfig) -> Result<()> {
+        if config.fft_len == Some(0) {
+            return Err(CoreError::Param {
+                name: "fft_len",
+                reason: "the transform length must be positive".into(),
+            });
+        }
+        Ok(())
+    }
+
+    fn output_len(config: &Fft1dConfig, grid: Grid) -> Result<usize> {
+        config.output_len(grid)
+    }
+
+    fn feature_names(config: &Fft1dConfig, grid: Grid) -> Result<Vec<String>> {
+        config.feature_names(grid)
+    }
+
+    fn transform_points(config: &Fft1dConfig, grid: Grid) -> Result<usize> {
+        let len = config.resolved_len(grid)?;
+        if len > MAX_TRANSFORM_LEN {
+            return Err(CoreError::Param {
+                name: "fft_len",
+                reason: format!(
+                    "the transform length {len} exceeds the limit of {MAX_TRANSFORM_LEN}"
+                ),
+            });
+        }
+        Ok(len)
+    }
+
+    fn extractor(config: &Fft1dConfig, grid: Grid) -> Result<Fft1dExtractor> {
+        Fft1dExtractor::new(grid, config)
+    }
+
+    fn grid(extractor: &Fft1dExtractor) -> Grid {
+        extractor.grid()
+    }
+
+    fn len(extractor: &Fft1dExtractor) -> usize {
+        extractor.output_len()
+    }
+
+    fn extract_into(extractor: &mut Fft1dExtractor, image: &[f64], out: &mut [f64]) -> Result<()> {
+        extractor.extract_into(image, out)
+    }
+
+    fn has_fast_path(_config: &Fft1dConfig) -> bool {
+        true
+    }
+
+    fn extract_fast_into(
+        extractor: &mut Fft1dExtractor,
+        image: &[f64],
+        out: &mut [f64],
+    ) -> Result<()> {
+        extractor.extract_fast_into(image, out)
+    }
+
+    fn extract_fast_window<'e>(
+        extractor: &'e mut Fft1dExtractor,
+        values: &[f64],
+        first: usize,
+        stride: usize,
+    ) -> Option<Result<&'e [f32]>> {
+        Some(extractor.extract_fast_window(values, first, stride))
     }
 }
 

@@ -24,6 +24,7 @@ use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result, check_len};
+use crate::features::family::{FeatureFamily, MAX_TRANSFORM_LEN};
 use crate::frame::Grid;
 
 /// What is kept of the 2-D magnitude spectrum.
@@ -155,6 +156,82 @@ impl Fft2dConfig {
             Fft2dForm::Half => half_len(rows, cols),
             Fft2dForm::Polar => self.radial_bins + self.angular_bins,
         })
+    }
+}
+
+/// The 2-D |FFT| as a [`FeatureFamily`], with two presets: `fft2d` (the half spectrum) and `fft2d_polar`
+/// (ring and wedge sums).
+#[derive(Debug)]
+pub struct Fft2dFamily;
+
+impl FeatureFamily for Fft2dFamily {
+    const NAME: &'static str = "fft2d";
+    const PRESETS: &'static [&'static str] = &["fft2d", "fft2d_polar"];
+    type Config = Fft2dConfig;
+    type Extractor = Fft2dExtractor;
+
+    fn preset(index: usize) -> Fft2dConfig {
+        if index == 1 {
+            Fft2dConfig::POLAR
+        } else {
+            Fft2dConfig::HALF
+        }
+    }
+
+    fn preset_of(config: &Fft2dConfig) -> usize {
+        usize::from(config.form == Fft2dForm::Polar)
+    }
+
+    fn check(config: &Fft2dConfig) -> Result<()> {
+        config.check()
+    }
+
+    fn output_len(config: &Fft2dConfig, grid: Grid) -> Result<usize> {
+        config.output_len(grid)
+    }
+
+    fn feature_names(config: &Fft2dConfig, grid: Grid) -> Result<Vec<String>> {
+        config.feature_names(grid)
+    }
+
+    fn transform_points(config: &Fft2dConfig, grid: Grid) -> Result<usize> {
+        let too_large = |name: &'static str, what: String| CoreError::Param {
+            name,
+            reason: format!("{what} exceeds the limit of {MAX_TRANSFORM_LEN}"),
+        };
+        for (name, bins) in [
+            ("radial_bins", config.radial_bins),
+            ("angular_bins", config.angular_bins),
+        ] {
+            if bins > MAX_TRANSFORM_LEN {
+                return Err(too_large(name, format!("{bins} bins")));
+            }
+        }
+        let rows = config.pad_rows.unwrap_or(grid.rows);
+        let cols = config.pad_cols.unwrap_or(grid.cols);
+        match rows.checked_mul(cols) {
+            Some(points) if points <= MAX_TRANSFORM_LEN => Ok(points),
+            _ => Err(too_large(
+                "pad_rows",
+                format!("the {rows} x {cols} transform (pad_rows x pad_cols)"),
+            )),
+        }
+    }
+
+    fn extractor(config: &Fft2dConfig, grid: Grid) -> Result<Fft2dExtractor> {
+        Fft2dExtractor::new(grid, config)
+    }
+
+    fn grid(extractor: &Fft2dExtractor) -> Grid {
+        extractor.grid()
+    }
+
+    fn len(extractor: &Fft2dExtractor) -> usize {
+        extractor.output_len()
+    }
+
+    fn extract_into(extractor: &mut Fft2dExtractor, image: &[f64], out: &mut [f64]) -> Result<()> {
+        extractor.extract_into(image, out)
     }
 }
 

@@ -17,6 +17,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result, check_len};
+use crate::features::family::FeatureFamily;
 use crate::frame::Grid;
 
 /// Number of attributes per co-occurrence matrix.
@@ -309,6 +310,51 @@ impl GlcmExtractor {
             }
         }
         Ok(())
+    }
+}
+
+/// Grey-level co-occurrence attributes as a [`FeatureFamily`]: a texture family, costly, so the
+/// automatic choice scores it last.
+#[derive(Debug)]
+pub struct GlcmFamily;
+
+impl FeatureFamily for GlcmFamily {
+    const NAME: &'static str = "glcm";
+    const PRESETS: &'static [&'static str] = &["glcm"];
+    const COSTLY: bool = true;
+    type Config = GlcmConfig;
+    type Extractor = GlcmExtractor;
+
+    fn preset(_index: usize) -> GlcmConfig {
+        GlcmConfig::default()
+    }
+
+    fn check(config: &GlcmConfig) -> Result<()> {
+        config.check()
+    }
+
+    fn output_len(config: &GlcmConfig, grid: Grid) -> Result<usize> {
+        config.output_len(grid)
+    }
+
+    fn feature_names(config: &GlcmConfig, grid: Grid) -> Result<Vec<String>> {
+        config.feature_names(grid)
+    }
+
+    fn extractor(config: &GlcmConfig, grid: Grid) -> Result<GlcmExtractor> {
+        GlcmExtractor::new(grid, config)
+    }
+
+    fn grid(extractor: &GlcmExtractor) -> Grid {
+        extractor.grid()
+    }
+
+    fn len(extractor: &GlcmExtractor) -> usize {
+        extractor.output_len()
+    }
+
+    fn extract_into(extractor: &mut GlcmExtractor, image: &[f64], out: &mut [f64]) -> Result<()> {
+        extractor.extract_into(image, out)
     }
 }
 

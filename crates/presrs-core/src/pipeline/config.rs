@@ -99,7 +99,9 @@ mod tests {
             "{err}"
         );
         let empty_transform = TrainConfig {
-            features: FeatureConfig::Fft1d(Fft1dConfig { fft_len: Some(0) }),
+            features: FeatureConfig::of::<crate::features::Fft1dFamily>(Fft1dConfig {
+                fft_len: Some(0),
+            }),
             ..TrainConfig::default()
         };
         let err = CheckedTrainConfig::try_from(empty_transform).unwrap_err();

@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use crate::crop::Crop;
 use crate::error::{CoreError, Result, check_len};
-use crate::features::{FeatureConfig, FeatureExtractor, Precision};
+use crate::features::{FeatureConfig, FeatureExtractor, FitImages, Precision};
 use crate::frame::{FrameView, Grid};
 use crate::pipeline::config::TrainConfig;
 use crate::pipeline::model::check_sizes;
@@ -35,6 +35,33 @@ impl<'a> LabeledImage<'a> {
             group: None,
         }
     }
+}
+
+/// `config` with its features fitted on the prepared `images` ([`FeatureConfig::fit`]); a clone when no
+/// family learns. The labels are not used.
+pub(crate) fn fitted_config(
+    config: &TrainConfig,
+    images: &[LabeledImage<'_>],
+) -> Result<TrainConfig> {
+    let mut fitted = config.clone();
+    if !config.features.learns() {
+        return Ok(fitted);
+    }
+    let first = images
+        .first()
+        .ok_or_else(|| CoreError::NotEnoughData("no images to fit the features on".into()))?;
+    let image_grid = config.crop.output_grid(first.frame.grid())?;
+    check_sizes(&config.features, image_grid)?;
+    let mut preparation = Preparation::new(config.crop, config.preprocess, image_grid);
+    let mut values = Vec::with_capacity(images.len() * image_grid.len());
+    for image in images {
+        values.extend_from_slice(preparation.prepare(&image.frame)?);
+    }
+    fitted.features = config.features.fit(FitImages {
+        grid: image_grid,
+        values: &values,
+    })?;
+    Ok(fitted)
 }
 
 /// The crop, preprocessing and feature extractor of `config` for images of `frame_grid`, with the size
@@ -67,6 +94,8 @@ impl FeatureTable {
         let first = images
             .first()
             .ok_or_else(|| CoreError::NotEnoughData("no images".into()))?;
+        // Families that learn are fitted on the whole table (unsupervised: no label is read).
+        let config = &fitted_config(config, images)?;
         let preprocessor = preprocessor_for(config, first.frame.grid())?;
         let exact = features_of(images, &preprocessor, Precision::Exact)?;
         let fast = if config.features.has_fast_path() {
@@ -136,26 +165,20 @@ pub(crate) fn features_of(
     Ok(features)
 }
 
-/// Crop + preprocessing + features for one image grid, with its buffers.
+/// Crop + preprocessing for one image grid, with its buffers: a frame made ready for the features.
 #[derive(Clone, Debug)]
-pub(crate) struct Preprocessor {
+pub(crate) struct Preparation {
     pub(crate) crop: Crop,
     pub(crate) preprocess: Preprocess,
     pub(crate) image_grid: Grid,
-    pub(crate) cropped: Vec<f64>,
+    cropped: Vec<f64>,
     /// The crop of the frame's mask (used when filling absent sensels).
-    pub(crate) cropped_present: Vec<bool>,
-    pub(crate) fill: FillScratch,
-    pub(crate) extractor: FeatureExtractor,
+    cropped_present: Vec<bool>,
+    fill: FillScratch,
 }
 
-impl Preprocessor {
-    pub(crate) fn new(
-        crop: Crop,
-        preprocess: Preprocess,
-        image_grid: Grid,
-        extractor: FeatureExtractor,
-    ) -> Self {
+impl Preparation {
+    pub(crate) fn new(crop: Crop, preprocess: Preprocess, image_grid: Grid) -> Self {
         let len = image_grid.len();
         let fill = preprocess.fill_absent;
         Self {
@@ -169,27 +192,13 @@ impl Preprocessor {
             } else {
                 FillScratch::default()
             },
-            extractor,
         }
     }
 
-    /// Crops `frame` (absent sensels read as 0, or filled from their neighbours), normalises its load when
-    /// asked, and writes its features into `out`. Does not allocate.
-    pub(crate) fn features_into(
-        &mut self,
-        frame: &FrameView<'_>,
-        out: &mut [f64],
-        precision: Precision,
-    ) -> Result<()> {
-        if precision == Precision::Fast
-            && let Some(features) = self.fast_f32_features(frame)?
-        {
-            check_len("feature buffer", features.len(), out.len())?;
-            for (dst, &value) in out.iter_mut().zip(features) {
-                *dst = f64::from(value);
-            }
-            return Ok(());
-        }
+    /// Crops `frame` (absent sensels read as 0, or filled from their neighbours), applies the intensity
+    /// transform and normalises its load when asked; the image is valid until the next call. Does not
+    /// allocate.
+    pub(crate) fn prepare(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
         crop_masked_into(&self.crop, self.image_grid, frame, &mut self.cropped)?;
         if self.preprocess.fill_absent
             && let Some(mask) = frame.present()
@@ -212,29 +221,78 @@ impl Preprocessor {
         if self.preprocess.normalise_load {
             normalise_load(&mut self.cropped);
         }
-        match precision {
-            Precision::Exact => self.extractor.extract_into(&self.cropped, out),
-            Precision::Fast => self.extractor.extract_fast_into(&self.cropped, out),
-        }
+        Ok(&self.cropped)
     }
 }
 
+/// Crop + preprocessing + features for one image grid, with its buffers.
+#[derive(Clone, Debug)]
+pub(crate) struct Preprocessor {
+    pub(crate) preparation: Preparation,
+    pub(crate) extractor: FeatureExtractor,
+}
+
 impl Preprocessor {
-    /// The common case of classification: the 1-D |FFT| reads the crop straight from the frame (no
-    /// absent sensels, no load normalisation, no intensity transform) and gives its features in f32, as the fixed-point PCA reads
-    /// them. `None` when the case does not apply.
-    pub(crate) fn fast_f32_features(&mut self, frame: &FrameView<'_>) -> Result<Option<&[f32]>> {
-        if let FeatureExtractor::Fft1d(extractor) = &mut self.extractor
-            && frame.present().is_none()
-            && !self.preprocess.normalise_load
-            && self.preprocess.intensity.is_none()
-        {
-            let start = crop_start(&self.crop, self.image_grid, frame)?;
-            return extractor
-                .extract_fast_window(frame.values(), start, frame.grid().cols)
-                .map(Some);
+    pub(crate) fn new(
+        crop: Crop,
+        preprocess: Preprocess,
+        image_grid: Grid,
+        extractor: FeatureExtractor,
+    ) -> Self {
+        Self {
+            preparation: Preparation::new(crop, preprocess, image_grid),
+            extractor,
         }
-        Ok(None)
+    }
+
+    /// The grid of the images the features are taken of (after the crop).
+    pub(crate) fn image_grid(&self) -> Grid {
+        self.preparation.image_grid
+    }
+
+    /// Prepares `frame` ([`Preparation::prepare`]) and writes its features into `out`. Does not
+    /// allocate.
+    pub(crate) fn features_into(
+        &mut self,
+        frame: &FrameView<'_>,
+        out: &mut [f64],
+        precision: Precision,
+    ) -> Result<()> {
+        if precision == Precision::Fast
+            && let Some(features) = self.fast_f32_features(frame)?
+        {
+            check_len("feature buffer", features.len(), out.len())?;
+            for (dst, &value) in out.iter_mut().zip(features) {
+                *dst = f64::from(value);
+            }
+            return Ok(());
+        }
+        let image = self.preparation.prepare(frame)?;
+        match precision {
+            Precision::Exact => self.extractor.extract_into(image, out),
+            Precision::Fast => self.extractor.extract_fast_into(image, out),
+        }
+    }
+
+    /// The common case of classification: a family with a windowed fast path (the 1-D |FFT|) reads the
+    /// crop straight from the frame (no absent sensels, no load normalisation, no intensity transform)
+    /// and gives its features in f32, as the fixed-point PCA reads them. `None` when the case does not
+    /// apply.
+    pub(crate) fn fast_f32_features(&mut self, frame: &FrameView<'_>) -> Result<Option<&[f32]>> {
+        let Preparation {
+            crop,
+            preprocess,
+            image_grid,
+            ..
+        } = &self.preparation;
+        if frame.present().is_some() || preprocess.normalise_load || !preprocess.intensity.is_none()
+        {
+            return Ok(None);
+        }
+        let start = crop_start(crop, *image_grid, frame)?;
+        self.extractor
+            .extract_fast_window(frame.values(), start, frame.grid().cols)
+            .transpose()
     }
 }
 

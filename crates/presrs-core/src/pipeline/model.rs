@@ -65,11 +65,7 @@ pub(crate) const FORMAT_VERSION: u32 = 1;
 /// gigantic transforms.
 pub const MAX_MODEL_SENSELS: usize = 1 << 20;
 
-/// The most points the feature transforms of one model may hold together: `fft_len` of the 1-D |FFT|,
-/// `pad_rows x pad_cols` of the 2-D one, summed over the parts of combined features (also the limit on
-/// the polar form's `radial_bins` and `angular_bins`). 4 Mi points are a few hundred MB of plans and
-/// buffers; the paper's setting needs 2048.
-pub const MAX_TRANSFORM_LEN: usize = 1 << 22;
+pub use crate::features::MAX_TRANSFORM_LEN;
 
 /// Checks `image_grid` and the transform sizes of `features` against [`MAX_MODEL_SENSELS`] and
 /// [`MAX_TRANSFORM_LEN`], before anything is planned or allocated.
@@ -89,7 +85,7 @@ pub(crate) fn check_sizes(features: &FeatureConfig, image_grid: Grid) -> Result<
             ),
         });
     }
-    let points = transform_points(features, image_grid)?;
+    let points = features.transform_points(image_grid)?;
     if points > MAX_TRANSFORM_LEN {
         return Err(CoreError::Param {
             name: "features",
@@ -100,46 +96,6 @@ pub(crate) fn check_sizes(features: &FeatureConfig, image_grid: Grid) -> Result<
         });
     }
     Ok(())
-}
-
-/// The points of the transforms `features` plans for `image_grid` (saturating).
-fn transform_points(features: &FeatureConfig, image_grid: Grid) -> Result<usize> {
-    let too_large = |name: &'static str, what: String| CoreError::Param {
-        name,
-        reason: format!("{what} exceeds the limit of {MAX_TRANSFORM_LEN}"),
-    };
-    match features {
-        FeatureConfig::Fft1d(config) => {
-            let len = config.resolved_len(image_grid)?;
-            if len > MAX_TRANSFORM_LEN {
-                return Err(too_large("fft_len", format!("the transform length {len}")));
-            }
-            Ok(len)
-        }
-        FeatureConfig::Fft2d(config) => {
-            for (name, bins) in [
-                ("radial_bins", config.radial_bins),
-                ("angular_bins", config.angular_bins),
-            ] {
-                if bins > MAX_TRANSFORM_LEN {
-                    return Err(too_large(name, format!("{bins} bins")));
-                }
-            }
-            let rows = config.pad_rows.unwrap_or(image_grid.rows);
-            let cols = config.pad_cols.unwrap_or(image_grid.cols);
-            match rows.checked_mul(cols) {
-                Some(points) if points <= MAX_TRANSFORM_LEN => Ok(points),
-                _ => Err(too_large(
-                    "pad_rows",
-                    format!("the {rows} x {cols} transform (pad_rows x pad_cols)"),
-                )),
-            }
-        }
-        FeatureConfig::Glcm(_) => Ok(0),
-        FeatureConfig::Combined(config) => config.parts.iter().try_fold(0usize, |total, part| {
-            Ok(total.saturating_add(transform_points(part, image_grid)?))
-        }),
-    }
 }
 
 impl From<TrainedModel> for ModelFields {

@@ -5,7 +5,7 @@ use crate::error::{CoreError, Result};
 use crate::features::Precision;
 use crate::pca::Pca;
 use crate::pipeline::config::CheckedTrainConfig;
-use crate::pipeline::extract::{LabeledImage, features_of, preprocessor_for};
+use crate::pipeline::extract::{LabeledImage, features_of, fitted_config, preprocessor_for};
 use crate::pipeline::model::{FORMAT_VERSION, ModelFields, TrainedModel, TrainingSummary};
 
 /// Trains the pipeline (see the module documentation). Classes are the distinct training labels, sorted;
@@ -23,8 +23,9 @@ pub fn train(
     let train_classes = class_indices(&class_names, train)?;
     let validation_classes = class_indices(&class_names, validation)?;
 
-    let preprocessor = preprocessor_for(config, first.frame.grid())?;
-    let image_grid = preprocessor.image_grid;
+    let fitted = fitted_config(config, train)?;
+    let preprocessor = preprocessor_for(&fitted, first.frame.grid())?;
+    let image_grid = preprocessor.image_grid();
     let n_features = preprocessor.extractor.output_len();
     let train_features = features_of(train, &preprocessor, Precision::Exact)?;
     let validation_features = features_of(validation, &preprocessor, Precision::Exact)?;
@@ -61,7 +62,7 @@ pub fn train(
         crop: config.crop,
         preprocess: config.preprocess,
         image_grid,
-        features: config.features.clone(),
+        features: fitted.features,
         pca,
         classifier,
         class_names,

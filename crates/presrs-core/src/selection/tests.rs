@@ -224,32 +224,32 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
     let mut candidates = Vec::new();
     for classifier in ClassifierKind::all() {
         candidates.push(config(
-            &[FeatureKind::Fft1d],
+            &[FeatureKind::FFT1D],
             classifier,
             12,
             Intensity::None,
         ));
     }
     candidates.push(config(
-        &[FeatureKind::Fft1d],
+        &[FeatureKind::FFT1D],
         ClassifierKind::LDA,
         5,
         Intensity::None,
     ));
     candidates.push(config(
-        &[FeatureKind::Fft2d],
+        &[FeatureKind::FFT2D],
         ClassifierKind::SVM,
         12,
         Intensity::None,
     ));
     candidates.push(config(
-        &[FeatureKind::Fft1d],
+        &[FeatureKind::FFT1D],
         ClassifierKind::PWE,
         12,
         Intensity::Sqrt,
     ));
     candidates.push(config(
-        &[FeatureKind::Fft2dPolar, FeatureKind::Glcm],
+        &[FeatureKind::FFT2D_POLAR, FeatureKind::GLCM],
         ClassifierKind::KNN,
         8,
         Intensity::None,
@@ -293,7 +293,7 @@ fn a_spent_budget_scores_the_first_feature_group_only() {
         .check()
         .unwrap()
     };
-    let fft2d = crate::features::FeatureKind::Fft2d.default_config();
+    let fft2d = crate::features::FeatureKind::FFT2D.default_config();
     let candidates = [
         with(
             crate::features::FeatureConfig::default(),

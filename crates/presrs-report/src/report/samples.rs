@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
 use presrs_core::Crop;
-use presrs_core::features::FeatureConfig;
+use presrs_core::features::{FeatureConfig, Fft1dFamily};
 use presrs_core::pca::Pca;
 use presrs_core::pipeline::{TrainedModel, extract_features};
 use presrs_core::{FrameView, Grid, Recording};
@@ -310,8 +310,9 @@ pub(super) fn spectra_section<'a>(g: &Groups<'a>, features: &Features) -> Option
         return None;
     }
     let image_grid = crop.output_grid(grid).unwrap_or(grid);
-    let (x, x_label) = match &features_config {
-        FeatureConfig::Fft1d(config) => {
+    let fft1d = features_config.params::<Fft1dFamily>();
+    let (x, x_label) = match fft1d {
+        Some(config) => {
             let n = config.resolved_len(image_grid).unwrap_or(2 * n_features) as f64;
             let (_, pitch) = scale.pitches();
             let per = if scale.physical() { "mm" } else { "sensel" };
@@ -320,8 +321,7 @@ pub(super) fn spectra_section<'a>(g: &Groups<'a>, features: &Features) -> Option
                 format!("spatial frequency along the row-major image vector (cycles/{per})"),
             )
         }
-        #[allow(unreachable_patterns)]
-        _ => (
+        None => (
             (0..n_features).map(|k| k as f64).collect(),
             "feature index".to_owned(),
         ),
