@@ -206,6 +206,22 @@ impl<'a> FrameView<'a> {
             present: self.present.map(<[bool]>::to_vec),
         }
     }
+
+    /// The frame with rows and columns swapped (a series whose time runs down the rows, laid as
+    /// channels x time), absent sensels kept absent.
+    pub fn transposed(&self) -> Frame {
+        let Grid { rows, cols } = self.grid;
+        let swap = |index: usize| (index % rows) * cols + index / rows;
+        Frame {
+            grid: Grid::new(cols, rows),
+            values: (0..self.values.len())
+                .map(|i| self.values[swap(i)])
+                .collect(),
+            present: self
+                .present
+                .map(|mask| (0..mask.len()).map(|i| mask[swap(i)]).collect()),
+        }
+    }
 }
 
 fn check_len(what: &'static str, grid: Grid, got: usize) -> Result<()> {
@@ -223,6 +239,24 @@ fn check_len(what: &'static str, grid: Grid, got: usize) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn transposing_swaps_rows_and_columns_with_the_mask() {
+        let frame = Frame::with_mask(
+            Grid::new(2, 3),
+            vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+            Some(vec![true, true, false, true, true, true]),
+        )
+        .unwrap();
+        let swapped = frame.view().transposed();
+        assert_eq!(swapped.grid(), Grid::new(3, 2));
+        assert_eq!(swapped.values(), [1.0, 4.0, 2.0, 5.0, 3.0, 6.0]);
+        assert_eq!(
+            swapped.present().unwrap(),
+            [true, true, true, true, false, true]
+        );
+        assert_eq!(swapped.view().transposed(), frame);
+    }
 
     #[test]
     fn rejects_wrong_length() {

@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use presrs_core::Recording;
-use presrs_core::pipeline::{Session, TrainedModel};
+use presrs_core::pipeline::{Prediction, Session, TrainedModel};
+use presrs_core::sample::SampleKind;
+use presrs_core::stance::summary::{SummaryConfig, pad_to, summarise};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use serde::Serialize;
 
@@ -75,6 +77,9 @@ pub fn classify_recording(
     name: &str,
     options: &ClassifyOptions,
 ) -> Result<FileClassification> {
+    if let SampleKind::Stance { summary, length } = model.sample() {
+        return classify_stances(model, session, recording, name, options, &summary, length);
+    }
     let mut warnings = Warnings::new();
     let frames = match options.frame {
         Some(frame) if frame >= recording.frame_count() => {
@@ -119,27 +124,107 @@ pub fn classify_recording(
         let Some(frame) = recording.frame(index) else {
             continue;
         };
+        let transposed;
+        let frame = match model.sample() {
+            SampleKind::Series { time_in_rows: true } => {
+                transposed = frame.transposed();
+                transposed.view()
+            }
+            _ => frame,
+        };
         let prediction = session
             .classify(&frame)
             .with_context(|| format!("{name}: frame {index}"))?;
-        classified.push(Classified {
-            file: name.to_owned(),
-            frame: index,
-            label: prediction.label.to_owned(),
-            confidence: prediction.confidence,
-            posteriors: model
-                .class_names()
-                .iter()
-                .cloned()
-                .zip(prediction.posteriors.iter().copied())
-                .collect(),
-            warning,
-        });
+        classified.push(classified_of(model, name, index, &prediction, warning));
     }
     Ok(FileClassification {
         warnings,
         frames: classified,
     })
+}
+
+/// Classifies every stance of `recording` whole, as a whole-stance model does: each summarised and laid
+/// into the model's length. A result's frame is the stance's touchdown.
+fn classify_stances(
+    model: &TrainedModel,
+    session: &mut Session<'_>,
+    recording: &Recording,
+    name: &str,
+    options: &ClassifyOptions,
+    summary: &SummaryConfig,
+    length: Option<usize>,
+) -> Result<FileClassification> {
+    let mut warnings = Warnings::new();
+    if options.frame.is_some() || recording.frame_count() == 1 {
+        return Err(Error::invalid(format!(
+            "{name}: the model classifies whole stances (it was trained on stance samples), so it \
+             takes movies, not one frame"
+        )));
+    }
+    let length = length.unwrap_or(model.image_grid().cols);
+    let segmentation = segment_recording(recording, &options.samples.segment_params())
+        .with_context(|| format!("{name}: cannot segment"))?;
+    let include_partial = options.samples.include_partial();
+    let mut classified = Vec::new();
+    for stance in segmentation
+        .stances
+        .iter()
+        .filter(|s| include_partial || !s.partial)
+    {
+        let frames: Vec<_> = (stance.start..stance.end())
+            .filter_map(|index| recording.frame(index))
+            .collect();
+        let at = || format!("{name}: the stance at frame {}", stance.start);
+        let stance_summary = summarise(&frames, summary).with_context(at)?;
+        let (padded, cut) = pad_to(&stance_summary.view(), length).with_context(at)?;
+        let warning = cut.then(|| {
+            Warning::from(format!(
+                "the stance has {} frames, more than the model's {length}: its first {length} were \
+                 used",
+                stance.len
+            ))
+        });
+        let prediction = session.classify(&padded.view()).with_context(at)?;
+        classified.push(classified_of(
+            model,
+            name,
+            stance.start,
+            &prediction,
+            warning,
+        ));
+    }
+    if classified.is_empty() {
+        warnings.push(format!(
+            "{name}: {} frames but no complete stance phase; nothing classified",
+            recording.frame_count()
+        ));
+    }
+    Ok(FileClassification {
+        warnings,
+        frames: classified,
+    })
+}
+
+fn classified_of(
+    model: &TrainedModel,
+    name: &str,
+    frame: usize,
+    prediction: &Prediction<'_>,
+    warning: Option<Warning>,
+) -> Classified {
+    Classified {
+        file: name.to_owned(),
+        frame,
+        label: prediction.label.to_owned(),
+        confidence: prediction.confidence,
+        posteriors: model
+            .class_names()
+            .iter()
+            .cloned()
+            .zip(prediction.posteriors.iter().copied())
+            .collect(),
+        warning,
+    }
 }
 
 /// Why frame `index` (chosen by number) is no foot contact, if it is none: in a movie, a frame

@@ -13,8 +13,11 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sensels};
+pub use presrs_core::sample::SampleKind;
+use presrs_core::stance::summary::{pad_to, summarise};
 use presrs_core::stance::{
-    BaselineMode, SampleFrame, SegmentParams, Segmentation, ValidSegmentParams, segment_recording,
+    BaselineMode, SampleFrame, SegmentParams, Segmentation, Stance, ValidSegmentParams,
+    segment_recording,
 };
 use presrs_core::{Grid, Recording};
 use rayon::prelude::*;
@@ -30,7 +33,9 @@ use presrs_io::message::{Message, Opt, Warning, Warnings};
 /// How samples are picked from movies.
 #[derive(Clone, Debug)]
 pub struct SampleOptions {
-    /// Which frame(s) of each stance.
+    /// A frame of each stance, or each stance whole.
+    pub kind: SampleKind,
+    /// Which frame(s) of each stance, for frame samples.
     pub sample: SampleFrame,
     pub segment: ValidSegmentParams,
     /// Also sample stances cut by the start or end of a recording.
@@ -50,6 +55,7 @@ pub struct SampleOptions {
 impl Default for SampleOptions {
     fn default() -> Self {
         Self {
+            kind: SampleKind::Frame,
             sample: SampleFrame::default(),
             segment: ValidSegmentParams::default(),
             include_partial: false,
@@ -168,6 +174,8 @@ pub struct Dataset {
     pub warnings: Warnings,
     /// The dead sensels filled, by recording.
     pub dead_sensels: DeadSenselFills,
+    /// What a sample is (one frame, a whole stance, a series): models trained on the set say so.
+    pub sample: SampleKind,
 }
 
 impl Dataset {
@@ -205,6 +213,7 @@ impl Dataset {
             samples: loaded.samples,
             warnings: loaded.warnings,
             dead_sensels: loaded.dead_sensels,
+            sample: options.kind,
         })
     }
 
@@ -251,6 +260,7 @@ impl Dataset {
             samples,
             warnings: Warnings::new(),
             dead_sensels: DeadSenselFills::default(),
+            sample: SampleKind::Frame,
         })
     }
 
@@ -448,23 +458,46 @@ pub fn load_samples(
         let Some(parsed) = by_path.get(&row_key(row)) else {
             continue;
         };
+        let sample = |frame, frame_index| Sample {
+            frame,
+            label: row.label.clone(),
+            condition: row.condition.clone(),
+            group: row.group.clone(),
+            load: row.load,
+            source: row.path.clone(),
+            frame_index,
+            line: Some(row.line),
+            columns: row_columns(row),
+        };
+        if let SampleKind::Stance { summary, .. } = options.kind {
+            for stance in row_stances(manifest, row, &parsed.recording, options, &mut empty)? {
+                let frames: Vec<_> = (stance.start..stance.end())
+                    .filter_map(|index| parsed.recording.frame(index))
+                    .collect();
+                let summary = summarise(&frames, &summary).map_err(|err| {
+                    manifest.row_error(row, format!("`{}`: {err}", row.path_text))
+                })?;
+                loaded.samples.push(sample(summary, stance.start));
+            }
+            continue;
+        }
+        if let SampleKind::Series { time_in_rows } = options.kind {
+            loaded.samples.push(sample(
+                row_series(manifest, row, &parsed.recording, time_in_rows)?,
+                0,
+            ));
+            continue;
+        }
         let frames = row_frames(manifest, row, &parsed.recording, options, &mut empty)?;
         for frame_index in frames {
             let Some(view) = parsed.recording.frame(frame_index) else {
                 continue;
             };
-            loaded.samples.push(Sample {
-                frame: view.to_frame(),
-                label: row.label.clone(),
-                condition: row.condition.clone(),
-                group: row.group.clone(),
-                load: row.load,
-                source: row.path.clone(),
-                frame_index,
-                line: Some(row.line),
-                columns: row_columns(row),
-            });
+            loaded.samples.push(sample(view.to_frame(), frame_index));
         }
+    }
+    if let SampleKind::Stance { length, .. } = options.kind {
+        pad_stances(&mut loaded, length)?;
     }
     loaded
         .warnings
@@ -674,9 +707,7 @@ fn row_frames(
     if count == 1 {
         return Ok(vec![0]);
     }
-    let segmentation = segment_recording(recording, &options.segment_params()).map_err(|err| {
-        manifest.row_error(row, format!("cannot segment `{}`: {err}", row.path_text))
-    })?;
+    let segmentation = row_segmentation(manifest, row, recording, options)?;
     let frames = segmentation
         .samples(options.sample, options.include_partial())
         .map_err(|err| manifest.row_error(row, format!("`{}`: {err}", row.path_text)))?;
@@ -684,6 +715,116 @@ fn row_frames(
         empty.add(&row.path_text, &segmentation);
     }
     Ok(frames)
+}
+
+fn row_segmentation(
+    manifest: &Manifest,
+    row: &ManifestRow,
+    recording: &Recording,
+    options: &SampleOptions,
+) -> std::result::Result<Segmentation, IoError> {
+    segment_recording(recording, &options.segment_params()).map_err(|err| {
+        manifest.row_error(row, format!("cannot segment `{}`: {err}", row.path_text))
+    })
+}
+
+/// The stances one manifest row contributes as whole-stance samples: every complete stance (and the
+/// partial ones when asked). A row that names a frame, or a one-frame file, has no stance to give.
+fn row_stances(
+    manifest: &Manifest,
+    row: &ManifestRow,
+    recording: &Recording,
+    options: &SampleOptions,
+    empty: &mut EmptyFiles,
+) -> std::result::Result<Vec<Stance>, IoError> {
+    if row.frame.is_some() {
+        return Err(manifest.row_error(
+            row,
+            "field `frame` names one frame, but whole-stance samples take every frame of a stance: \
+             leave the `frame` column empty, or use frame samples"
+                .to_owned(),
+        ));
+    }
+    if recording.frame_count() == 1 {
+        return Err(manifest.row_error(
+            row,
+            format!(
+                "`{}` is one frame, not a movie: whole-stance samples need movies (a 2-D array \
+                 of taxels over time is a series sample)",
+                row.path_text
+            ),
+        ));
+    }
+    let segmentation = row_segmentation(manifest, row, recording, options)?;
+    let include_partial = options.include_partial();
+    let stances: Vec<Stance> = segmentation
+        .stances
+        .iter()
+        .filter(|stance| include_partial || !stance.partial)
+        .copied()
+        .collect();
+    if stances.is_empty() {
+        empty.add(&row.path_text, &segmentation);
+    }
+    Ok(stances)
+}
+
+/// A one-frame file as a series sample: channels in rows, time in columns (transposed when time is in
+/// the file's rows).
+fn row_series(
+    manifest: &Manifest,
+    row: &ManifestRow,
+    recording: &Recording,
+    time_in_rows: bool,
+) -> std::result::Result<presrs_core::Frame, IoError> {
+    let frame = match recording.frame(0) {
+        Some(frame) if recording.frame_count() == 1 && row.frame.is_none() => frame,
+        _ => {
+            return Err(manifest.row_error(
+                row,
+                format!(
+                    "`{}` is a movie (or the row names a frame): a series sample is one 2-D array \
+                     of channels x time; for a movie of pressure images use whole-stance samples",
+                    row.path_text
+                ),
+            ));
+        }
+    };
+    Ok(if time_in_rows {
+        frame.transposed()
+    } else {
+        frame.to_frame()
+    })
+}
+
+/// Lays every whole-stance sample into one length: `length`, or the longest stance's; warns once
+/// about the stances cut to it.
+fn pad_stances(
+    loaded: &mut LoadedSamples,
+    length: Option<usize>,
+) -> std::result::Result<(), IoError> {
+    let longest = loaded
+        .samples
+        .iter()
+        .map(|s| s.frame.grid().cols)
+        .max()
+        .unwrap_or(0);
+    let length = length.unwrap_or(longest);
+    let mut cut = 0;
+    for sample in &mut loaded.samples {
+        let (padded, was_cut) = pad_to(&sample.frame.view(), length)
+            .map_err(|err| IoError::format("stance samples", err.to_string()))?;
+        sample.frame = padded;
+        cut += usize::from(was_cut);
+    }
+    if cut > 0 {
+        loaded.warnings.push(Warning::from(Message::from(format!(
+            "{cut} of {} stances are longer than {length} frames: their first {length} frames are \
+             used (the longest has {longest})",
+            loaded.samples.len()
+        ))));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -30,7 +30,7 @@ pub mod stream_log;
 pub mod train;
 pub mod values;
 
-pub use dataset::{Dataset, Sample, SampleOptions};
+pub use dataset::{Dataset, Sample, SampleKind, SampleOptions};
 pub use describe::describe_model;
 pub use error::{Context, Error, Result};
 pub use method::{ClassifierChoice, CropChoice, FeatureChoice, Method};

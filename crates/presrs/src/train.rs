@@ -148,6 +148,7 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
             &method.train_config(grid)?,
         )
     }
+    .and_then(|model| model.with_sample(dataset.sample))
     .with_context(|| format!("{name}: training failed"))?;
     let mut warnings = Warnings::new();
     if let Some(per_class) = options.per_class

@@ -156,3 +156,61 @@ fn the_walking_f_scan_file_online_has_the_same_five_stances() {
         );
     }
 }
+
+#[test]
+fn jiku_walk_movies_give_one_whole_stance_sample_each() {
+    use presrs::core::sample::SampleKind;
+    use presrs::core::stance::summary::SummaryConfig;
+    let summary = SummaryConfig::default();
+    let options = SampleOptions {
+        one_sample_per_file: true,
+        kind: SampleKind::Stance {
+            summary,
+            length: None,
+        },
+        ..SampleOptions::default()
+    };
+    let dataset = Dataset::load(&shared("real/jiku-walk/manifest.csv"), &options, &Quiet).unwrap();
+    assert_eq!(dataset.samples.len(), 120);
+    assert_eq!(dataset.sample, options.kind);
+    let length = dataset.samples[0].frame.grid().cols;
+    // Every stance laid into the longest one's frames, channels in rows.
+    assert!(
+        dataset
+            .samples
+            .iter()
+            .all(|s| s.frame.grid() == presrs::core::Grid::new(summary.channels(), length))
+    );
+    // The load channel is the movie's total load, frame by frame, then zeros.
+    let first = &dataset.samples[0];
+    let movie = presrs::dataset::read_corrected(
+        &shared("real/jiku-walk").join(&first.source),
+        &Default::default(),
+        Some(&Default::default()),
+    )
+    .unwrap()
+    .0
+    .recording;
+    let totals = movie.total_per_frame();
+    let load = &first.frame.values()[..length];
+    assert_eq!(&load[..totals.len()], &totals[..]);
+    assert!(load[totals.len()..].iter().all(|&v| v == 0.0));
+    assert!(dataset.warnings.render(presrs::Face::Cli).is_empty());
+
+    // A fixed shorter length cuts the longer stances, and says so.
+    let cut = Dataset::load(
+        &shared("real/jiku-walk/manifest.csv"),
+        &SampleOptions {
+            kind: SampleKind::Stance {
+                summary,
+                length: Some(20),
+            },
+            ..options
+        },
+        &Quiet,
+    )
+    .unwrap();
+    assert_eq!(cut.samples[0].frame.grid().cols, 20);
+    let warnings = cut.warnings.render(presrs::Face::Cli).join("\n");
+    assert!(warnings.contains("longer than 20 frames"), "{warnings}");
+}

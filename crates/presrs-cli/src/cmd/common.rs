@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use presrs::dataset::{DeadSenselFills, SampleOptions, read_corrected};
+use presrs::dataset::{DeadSenselFills, SampleKind, SampleOptions, read_corrected};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
 use presrs::progress_lines::{ProgressLines, progress_interval};
 use presrs::stance_options::StanceOptions;
@@ -119,6 +119,17 @@ fn parse_budget(text: &str) -> Result<Budget, String> {
 /// How samples are taken from movies.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SampleArgs {
+    /// What a sample is: frame (a frame of each stance, --stance-frame), stance (each stance's movie as
+    /// load, contact area, centre of pressure and regional loads over time), or series (a 2-D array as
+    /// channels x time)
+    #[arg(long, default_value = "frame")]
+    pub sample: String,
+    /// With --sample stance: frames each stance is laid into (default: the longest stance)
+    #[arg(long)]
+    pub stance_length: Option<usize>,
+    /// With --sample series: the array's axis that is time, cols (rows are channels) or rows
+    #[arg(long)]
+    pub series_axis: Option<String>,
     /// Which frame of each stance phase is a sample: mid (the paper's mid-stance frame), peak, a frame
     /// offset K after touchdown (0-based), or all.
     #[arg(long, default_value = "mid", value_parser = parse_sample_frame)]
@@ -224,7 +235,13 @@ impl StanceArgs {
 
 impl SampleArgs {
     pub fn options(&self) -> anyhow::Result<SampleOptions> {
+        let kind = SampleKind::parse(
+            &self.sample,
+            self.stance_length,
+            self.series_axis.as_deref(),
+        );
         Ok(SampleOptions {
+            kind: kind.map_err(anyhow::Error::msg)?,
             sample: self.stance_frame,
             include_partial: self.include_partial,
             read: self.read_options(),

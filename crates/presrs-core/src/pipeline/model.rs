@@ -11,6 +11,7 @@ use crate::frame::Grid;
 use crate::pca::Pca;
 use crate::pipeline::config::TrainConfig;
 use crate::preprocess::Preprocess;
+use crate::sample::SampleKind;
 use crate::selection::record::Selection;
 
 /// How much data a model was trained on.
@@ -55,6 +56,9 @@ pub(crate) struct ModelFields {
     /// The automatic choice that picked `features` and `classifier`, when there was one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) selection: Option<Selection>,
+    /// What a sample is, when not one frame (absent from files of one-frame models).
+    #[serde(default, skip_serializing_if = "SampleKind::is_frame")]
+    pub(crate) sample: SampleKind,
 }
 
 pub(crate) const FORMAT_VERSION: u32 = 1;
@@ -150,8 +154,26 @@ impl TryFrom<ModelFields> for TrainedModel {
                 fields.classifier.n_classes()
             )));
         }
+        check_sample(&fields.sample, fields.image_grid)?;
         Ok(Self { fields, extractor })
     }
+}
+
+/// A whole-stance model's images are its summary's channels over its length.
+fn check_sample(sample: &SampleKind, image_grid: Grid) -> Result<()> {
+    if let SampleKind::Stance { summary, length } = sample {
+        let expected = Grid::new(summary.channels(), length.unwrap_or(image_grid.cols));
+        if expected != image_grid || length.is_none() {
+            return Err(CoreError::Param {
+                name: "sample",
+                reason: format!(
+                    "a whole-stance model takes {expected} summaries with a stated length, but its \
+                     images are {image_grid}"
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 impl TrainedModel {
@@ -162,6 +184,26 @@ impl TrainedModel {
 
     pub fn crop(&self) -> Crop {
         self.fields.crop
+    }
+
+    /// What a sample is: one frame (the paper's), a whole stance, or a series.
+    pub fn sample(&self) -> SampleKind {
+        self.fields.sample
+    }
+
+    /// This model, stating that its samples are of `sample` (a stance's length fixed to the model's).
+    /// Training knows images only; the workflow that made them says what they are.
+    pub fn with_sample(mut self, sample: SampleKind) -> Result<Self> {
+        let sample = match sample {
+            SampleKind::Stance { summary, .. } => SampleKind::Stance {
+                summary,
+                length: Some(self.fields.image_grid.cols),
+            },
+            other => other,
+        };
+        check_sample(&sample, self.fields.image_grid)?;
+        self.fields.sample = sample;
+        Ok(self)
     }
 
     /// The preprocessing steps after the crop.

@@ -7,6 +7,7 @@ use crate::pca::Pca;
 use crate::pipeline::config::CheckedTrainConfig;
 use crate::pipeline::extract::{LabeledImage, features_of, fitted_config, preprocessor_for};
 use crate::pipeline::model::{FORMAT_VERSION, ModelFields, TrainedModel, TrainingSummary};
+use crate::sample::SampleKind;
 
 /// Trains the pipeline (see the module documentation). Classes are the distinct training labels, sorted;
 /// every validation label must be one of them.
@@ -68,6 +69,7 @@ pub fn train(
         class_names,
         summary,
         selection: None,
+        sample: SampleKind::Frame,
     })
 }
 

@@ -4,6 +4,7 @@
 //! - [`offline`]: a whole recording at once (the paper's method, from a drifting baseline).
 //! - [`modes`]: what the stances rise above (drifting baseline, local floor, one contact) and the
 //!   automatic choice ([`segment`], [`segment_recording`]).
+//! - [`summary`]: a whole stance as channels over time (load, area, centre of pressure, regions).
 //! - [`causal`]: one total load at a time, without looking ahead ([`CausalSegmenter`]), with the offline
 //!   method's rules and levels learned from offline segmentations ([`Calibration`]).
 //!
@@ -15,6 +16,7 @@ pub mod causal;
 pub mod modes;
 pub mod offline;
 mod robust;
+pub mod summary;
 
 pub use causal::{
     Calibration, CausalSegmenter, Levels, Liftoff, OnlineParams, SegEvent, SegEvents, Touchdown,
