@@ -250,7 +250,8 @@ mod tests {
         .unwrap();
         let swapped = frame.view().transposed();
         assert_eq!(swapped.grid(), Grid::new(3, 2));
-        assert_eq!(swapped.values(), [1.0, 4.0, 2.0, 5.0, 3.0, 6.0]);
+        // An absent sensel reads 0.
+        assert_eq!(swapped.values(), [1.0, 4.0, 2.0, 5.0, 0.0, 6.0]);
         assert_eq!(
             swapped.present().unwrap(),
             [true, true, true, true, false, true]
