@@ -727,7 +727,10 @@ pub fn fault_sweep(
         samples,
         protocol,
         (options.fault_repeats, options.seed),
-        ("fault sweep", (methods * options.fault_repeats) as u64),
+        (
+            "fault sweep",
+            (methods * models_per_repeat(samples, protocol) * options.fault_repeats) as u64,
+        ),
         progress,
         |evaluation| {
             let paper = evaluation.run_each(Models::Config(paper), &each)?.reports;
@@ -754,6 +757,19 @@ pub fn fault_sweep(
     let seconds = started.elapsed().as_secs_f64();
     progress.note(&format!("fault sweep: {seconds:.1} s"));
     Ok((results, fault_sweep_note(options, protocol, seconds)))
+}
+
+/// The models one repeat of `protocol` trains per method (the evaluation advances the progress once
+/// for each): one per held-out group, or the one trained on a condition.
+fn models_per_repeat(samples: &[LabeledImage<'_>], protocol: &Protocol) -> usize {
+    match protocol {
+        Protocol::LeaveOneOut { .. } => samples
+            .iter()
+            .filter_map(|s| s.group)
+            .collect::<BTreeSet<_>>()
+            .len(),
+        Protocol::TrainCondition { .. } => 1,
+    }
 }
 
 /// One result per report of `method`: the first without a perturbation, then one per level of `sweep`.
@@ -939,6 +955,24 @@ mod tests {
         };
         let (faults, note) = fault_sweep(&args, &samples, &protocol, &config, &Quiet).unwrap();
         assert!(note.contains("2 repeat(s)"), "{note}");
+        // Leaving one of 3 groups out: the progress announces the steps it takes (was 2 of 6).
+        let grouped: Vec<LabeledImage<'_>> = samples
+            .iter()
+            .map(|s| LabeledImage {
+                group: s.condition,
+                ..*s
+            })
+            .collect();
+        let by_group = Protocol::LeaveOneOut {
+            column: "group".into(),
+            per_class: Some(8),
+            validation: ValidationSize::Fraction(0.3),
+        };
+        let recorder = crate::progress::Recorder::default();
+        fault_sweep(&args, &grouped, &by_group, &config, &recorder).unwrap();
+        let log = recorder.log();
+        assert_eq!(log.tasks, [("fault sweep".to_owned(), Some(log.steps))]);
+        assert_eq!(log.steps, 3 * 2, "3 groups x 2 repeats");
         assert!(
             note.starts_with("trained on G2 (8 images per class)"),
             "{note}"

@@ -61,6 +61,10 @@ pub struct BenchArgs {
 }
 
 pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    args.export
+        .as_deref()
+        .map(presrs_io::output_path::check_output_dir)
+        .transpose()?;
     let options = BenchOptions {
         model: args.model.clone(),
         images: args.images.clone(),

@@ -184,6 +184,10 @@ impl StreamArgs {
 }
 
 pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    args.record
+        .as_deref()
+        .map(presrs_io::output_path::check_output_file)
+        .transpose()?;
     let file = load_model(&args.model)?;
     let profile = resolve_profile(
         args.profile.as_deref(),
