@@ -341,3 +341,74 @@ fn classify_prints_no_table_header_before_an_error() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stdout(&out).starts_with("file"), "{}", stdout(&out));
 }
+
+/// Trials cut to one foot contact each (as `jiku-walk`): the report with `--one-sample-per-file` says
+/// what it sampled, marks those samples on the load curves, names the classifier's own
+/// hyper-parameters, and says why the fault sweep's clean accuracy differs from the evaluation's.
+#[test]
+fn a_report_with_one_sample_per_file_says_what_it_did() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut manifest = String::from("path,label,condition,group\n");
+    for class in 0..3 {
+        for trial in 0..9 {
+            let name = format!("t{class}_{trial}.npy");
+            let frames = 30 + 3 * trial;
+            let (rows, cols) = (10, 8);
+            let data: Vec<f64> = (0..frames * rows * cols)
+                .map(|k| {
+                    let (t, cell) = (k / (rows * cols), k % (rows * cols));
+                    let load =
+                        40.0 + 100.0 * (std::f64::consts::PI * t as f64 / frames as f64).sin();
+                    let stripe = ((cell / cols) as f64 * (0.3 + 0.4 * class as f64)).sin();
+                    load * (1.5 + stripe + 0.1 * ((cell * 7 + trial) % 3) as f64)
+                })
+                .collect();
+            let file = std::fs::File::create(dir.path().join(&name)).unwrap();
+            presrs_io::npy::write_npy_f64(file, &[frames, rows, cols], &data).unwrap();
+            manifest.push_str(&format!("{name},c{class},walk,s{}\n", trial % 3));
+        }
+    }
+    std::fs::write(dir.path().join("manifest.csv"), manifest).unwrap();
+    let out_dir = dir.path().join("report");
+    let out = presrs(&[
+        "report",
+        "--manifest",
+        text(&dir.path().join("manifest.csv")),
+        "--out",
+        text(&out_dir),
+        "--one-sample-per-file",
+        "--frame-period",
+        "0.01",
+        "--features",
+        "fft1d",
+        "--classifier",
+        "mle",
+        "--dims",
+        "3",
+        "--per-class",
+        "6",
+        "--validation",
+        "2",
+        "--repeats",
+        "2",
+        "--fault-repeats",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let html = std::fs::read_to_string(out_dir.join("index.html")).unwrap();
+    assert!(
+        html.contains("mid frame(s) of the whole recording (one contact per file) of 27 movie(s)"),
+        "{html}"
+    );
+    assert!(!html.contains("complete stance"), "{html}");
+    assert!(!html.contains("σ = —"), "{html}");
+    assert!(html.contains("classifier mle ("), "{html}");
+    assert!(
+        html.contains("(mid, red dots)"),
+        "the samples are marked: {html}"
+    );
+    assert!(
+        html.contains("averages these 1 repeat(s), where the evaluation above averages 2"),
+        "{html}"
+    );
+}

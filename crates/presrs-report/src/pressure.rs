@@ -540,7 +540,7 @@ pub fn write_movie(recording: &Recording, options: &MovieOptions, path: &Path) -
         recording,
         &scale,
         &options.segment,
-        options.sample,
+        (options.sample, false),
     )?;
     // The grey line is named by what the detector measured from (a movie frame has no legend).
     curve.name = curve.name_with_baseline();
@@ -622,7 +622,7 @@ mod tests {
                 &recording,
                 &scale,
                 &segment.check().unwrap(),
-                SampleFrame::default(),
+                (SampleFrame::default(), false),
             )
             .unwrap()
         };
@@ -647,7 +647,7 @@ mod tests {
             &recording,
             &scale,
             &ValidSegmentParams::default(),
-            SampleFrame::default(),
+            (SampleFrame::default(), false),
         )
         .unwrap();
         let render = |index| {
