@@ -99,12 +99,19 @@ pub struct StreamArgs {
     /// Exit after this many connections have ended (demos and tests) [default: serve forever].
     #[arg(long)]
     pub exit_after: Option<usize>,
+    /// With --format tekscan: the frame period in seconds when the header states no SECONDS_PER_FRAME
+    /// (the frames' times, in the JSON lines and a --record bag; else untimed, and a bag takes the
+    /// wall clock).
+    #[arg(long, value_name = "SECONDS", value_parser = presrs::values::period_seconds)]
+    pub frame_period: Option<f64>,
     /// With --format mcap: the topic to read [default: the only topic holding frames].
     #[arg(long, value_name = "NAME")]
     pub topic: Option<String>,
     /// Record the session (stdin) to this MCAP file: the frames on /presrs/frames
-    /// (sensor_msgs/msg/Image) and every JSON line on /presrs/decisions (JSON, with a JSON schema); the
-    /// file appears when the stream ends.
+    /// (sensor_msgs/msg/Image), stamped with the input's own frame times (TekScan SECONDS_PER_FRAME or
+    /// --frame-period, MCAP stamps, binary timestamps; the wall clock only when it has none: the bag's
+    /// `presrs.recording` metadata says which), and every JSON line on /presrs/decisions (JSON, with a
+    /// JSON schema); the file appears when the stream ends.
     #[arg(long, value_name = "OUT.mcap", conflicts_with = "listen")]
     pub record: Option<PathBuf>,
     #[command(flatten)]
@@ -256,6 +263,7 @@ fn run_stdin(
         max_frame_bytes: args.max_frame_bytes,
         stop: Some(stop.clone()),
         topic: args.topic.clone(),
+        frame_period_s: args.frame_period,
     };
     let log = |notice: &ConnectionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
     let (input, end_input) = StoppableInput::start(|| std::io::stdin().lock());
@@ -274,8 +282,9 @@ fn run_stdin(
                 run_connection_tapped(model, profile, input, out, &options, &log, &mut taps)?
             };
             let recorded = bag.finish()?;
+            let times = recorded.frame_times.map_or("none", |t| t.as_str());
             stderr_line!(
-                "presrs stream: recorded {} frames and {} lines to {}",
+                "presrs stream: recorded {} frames and {} lines to {} (frame times: {times})",
                 recorded.frames,
                 recorded.lines,
                 recorded.path.display()

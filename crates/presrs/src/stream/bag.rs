@@ -62,15 +62,49 @@ pub struct RecordedBag {
     pub path: PathBuf,
     pub frames: u64,
     pub lines: u64,
+    /// Where the frames' stamps came from (`None`: no frame).
+    pub frame_times: Option<FrameTimes>,
 }
 
-/// A [`ConnectionTap`] writing a bag. Frames are stamped with the sender's timestamp when it gives one,
-/// else the wall clock when they are read; each line is logged at the time of the frame before it. A
-/// write that fails stops the recording; [`BagRecorder::finish`] then reports it.
+/// The name of the metadata record that says where a recorded bag's times come from
+/// ([`FRAME_TIMES_KEY`]).
+pub const RECORDING_METADATA: &str = "presrs.recording";
+/// The key of [`RECORDING_METADATA`] whose value is [`FrameTimes::as_str`].
+pub const FRAME_TIMES_KEY: &str = "frame_times";
+
+/// Where the stamps of a recorded bag's frames come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameTimes {
+    /// The input's own frame times: a TekScan file's frame period, the given frame period, an MCAP
+    /// input's stamps, a sender's timestamps.
+    Input,
+    /// The wall clock when each frame was read: the input states no frame times.
+    WallClock,
+    /// Some frames had their own times and others did not.
+    Mixed,
+}
+
+impl FrameTimes {
+    /// The metadata's words: `input`, `wall_clock`, `mixed`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Input => "input",
+            Self::WallClock => "wall_clock",
+            Self::Mixed => "mixed",
+        }
+    }
+}
+
+/// A [`ConnectionTap`] writing a bag. Frames are stamped with the input's own times when it gives them
+/// (the TekScan frame period, MCAP stamps, the sender's timestamps), else the wall clock when they are
+/// read; the bag's [`RECORDING_METADATA`] record says which. Each line is logged at the time of the
+/// frame before it. A write that fails stops the recording; [`BagRecorder::finish`] then reports it.
 pub struct BagRecorder {
     bag: DecisionBag,
     time_ns: u64,
     frames: u64,
+    /// Frames stamped with the input's own time.
+    timed: u64,
     lines: u64,
     failed: Option<IoError>,
 }
@@ -98,21 +132,39 @@ impl BagRecorder {
             bag: DecisionBag::create(path)?,
             time_ns: 0,
             frames: 0,
+            timed: 0,
             lines: 0,
             failed: None,
         })
     }
 
+    /// Where the frames' stamps came from so far (`None` before the first frame).
+    pub fn frame_times(&self) -> Option<FrameTimes> {
+        match (self.frames, self.timed) {
+            (0, _) => None,
+            (_, 0) => Some(FrameTimes::WallClock),
+            (all, timed) if timed == all => Some(FrameTimes::Input),
+            _ => Some(FrameTimes::Mixed),
+        }
+    }
+
     /// Ends the bag (its summary and footer) and renames it into place; the first write error, if any,
     /// instead (and no file).
-    pub fn finish(self) -> Result<RecordedBag> {
+    pub fn finish(mut self) -> Result<RecordedBag> {
         if let Some(err) = self.failed {
             return Err(err.into());
+        }
+        let frame_times = self.frame_times();
+        if let Some(times) = frame_times {
+            let entries = [(FRAME_TIMES_KEY.to_owned(), times.as_str().to_owned())];
+            self.bag
+                .write_metadata(RECORDING_METADATA, entries.into())?;
         }
         Ok(RecordedBag {
             path: self.bag.finish()?,
             frames: self.frames,
             lines: self.lines,
+            frame_times,
         })
     }
 
@@ -136,6 +188,7 @@ impl ConnectionTap for BagRecorder {
             return;
         }
         self.time_ns = timestamp_us.map_or_else(now_ns, |us| us.saturating_mul(1000));
+        self.timed += u64::from(timestamp_us.is_some());
         let encoding = ImageEncoding::for_values(values.iter());
         let written = self.bag.write_image(self.time_ns, grid, values, encoding);
         self.frames += 1;
@@ -198,6 +251,14 @@ impl DecisionBag {
         line: &str,
     ) -> std::result::Result<(), IoError> {
         self.bag.write_json(self.decisions_channel, time_ns, line)
+    }
+
+    pub(crate) fn write_metadata(
+        &mut self,
+        name: &str,
+        entries: std::collections::BTreeMap<String, String>,
+    ) -> std::result::Result<(), IoError> {
+        self.bag.write_metadata(name, entries)
     }
 
     /// Ends the bag (its summary and footer) and renames it into place; returns its path.

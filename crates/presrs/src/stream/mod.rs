@@ -40,8 +40,8 @@ use crate::error::{Error, Result};
 
 pub(crate) use bag::DecisionBag;
 pub use bag::{
-    BagRecorder, DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, FRAMES_TOPIC,
-    RecordedBag,
+    BagRecorder, DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, FRAME_TIMES_KEY,
+    FRAMES_TOPIC, FrameTimes, RECORDING_METADATA, RecordedBag,
 };
 pub use connection::{
     ConnectionNotice, ConnectionOptions, ConnectionSummary, InputFormat, MAX_ERROR_NOTICES,
