@@ -313,7 +313,6 @@ fn median(values: &[f64]) -> f64 {
     }
 }
 
-/// Times one classification and batch throughput as `options` say (and exports the inputs and
 
 impl BenchReport {
     /// The report as `presrs bench` prints it (a folder the inputs were exported to last).
@@ -357,6 +356,7 @@ impl BenchReport {
     }
 }
 
+/// Times one classification and batch throughput as `options` say (and exports the inputs and
 /// answers with `options.export`).
 pub fn bench(options: &BenchOptions, progress: &dyn Progress) -> Result<BenchReport> {
     let args = options;

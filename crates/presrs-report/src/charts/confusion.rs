@@ -54,9 +54,7 @@ impl ConfusionLayout {
     /// The layout of a matrix of `labels` whose largest count is `max_count`.
     pub(crate) fn new(labels: &[String], max_count: u64) -> Self {
         let k = labels.len().max(1);
-        let cell = (MATRIX_SIDE * 2.0 / (k as f64 + 2.0))
-            .min(MAX_CELL)
-            .max(4.0);
+        let cell = (MATRIX_SIDE * 2.0 / (k as f64 + 2.0)).clamp(4.0, MAX_CELL);
         let label_font = (TICK + 2.0).min(0.8 * cell).max(5.0);
         let label_width = labels
             .iter()
