@@ -14,7 +14,7 @@ mod cmd;
 use std::io::Write;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Terrain identification from high-resolution pressure images (PreSRS).
 #[derive(Debug, Parser)]
@@ -85,7 +85,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|err| err.exit());
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let result = match &cli.command {
@@ -125,6 +125,21 @@ fn main() -> ExitCode {
     }
 }
 
+/// The command line as parsed: every option that takes a value takes a negative number too, so that
+/// `--frame-period -0.01` reaches the option's own check ("expected a positive number") instead of
+/// clap's hint about an unknown `-0` argument.
+pub(crate) fn command() -> clap::Command {
+    fn numbers_reach_parsers(command: clap::Command) -> clap::Command {
+        command
+            .mut_args(|arg| {
+                let takes_values = arg.get_action().takes_values();
+                arg.allow_negative_numbers(takes_values)
+            })
+            .mut_subcommands(numbers_reach_parsers)
+    }
+    numbers_reach_parsers(Cli::command())
+}
+
 /// The error and its causes in one sentence, skipping causes whose text the message already contains
 /// (our error types print their source inline).
 fn error_message(err: &anyhow::Error) -> String {
@@ -159,13 +174,12 @@ fn is_broken_pipe(err: &anyhow::Error) -> bool {
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
-    use clap::CommandFactory;
 
     use super::*;
 
     /// The help of the program and of every subcommand, rendered for an 80-column terminal.
     fn helps() -> Vec<(String, String)> {
-        let mut root = Cli::command().term_width(80);
+        let mut root = command().term_width(80);
         root.build();
         let mut helps = vec![("presrs".to_owned(), root.render_long_help().to_string())];
         for sub in root.get_subcommands_mut() {

@@ -288,11 +288,14 @@ fn inspect_lists_the_topics_of_a_bag() {
         (Some(2), Some(3))
     );
     assert_eq!(doc["topics"].as_array().unwrap().len(), 3);
-    // Another command asks for a topic.
-    let out = run(&["plot", s(&bag), "--out", "/nonexistent/x.png"]);
+    // Another command asks for a topic (and writes nothing).
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("x.png");
+    let out = run(&["plot", s(&bag), "--out", s(&png)]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("several topics (/left, /right"), "{err}");
+    assert!(!png.exists());
 }
 
 #[test]
@@ -400,4 +403,71 @@ fn classify_writes_its_frames_and_decisions_to_a_bag() {
     let first = presrs_io::read_recording(&files[0]).unwrap();
     assert_eq!(back.frame_count(), frames);
     assert_eq!(&back.data()[..first.data().len()], first.data());
+}
+
+/// What a recorded bag's metadata says of its frame times (`presrs.recording`, `frame_times`): the
+/// record is written outside the compressed chunks, so its strings can be found in the file's bytes.
+fn frame_times(bag: &Path) -> &'static str {
+    let bytes = std::fs::read(bag).unwrap();
+    let has = |text: &str| bytes.windows(text.len()).any(|w| w == text.as_bytes());
+    assert!(
+        has("presrs.recording") && has("frame_times"),
+        "{}",
+        bag.display()
+    );
+    ["input", "wall_clock", "mixed"]
+        .into_iter()
+        .find(|t| has(t))
+        .unwrap()
+}
+
+/// `stream --record` of a TekScan file stamps its frames with the file's own period (not the wall
+/// clock, which read back as thousands of Hz with gaps); a file that states none takes --frame-period,
+/// else the wall clock; the bag's metadata says which.
+#[test]
+fn recorded_bags_keep_the_input_s_frame_times() {
+    let d = data();
+    let model = d.dir.join("times.model.json");
+    train(&d.asf_manifest, &model);
+    let asf = recordings("asf")[0].clone();
+    let text = std::fs::read_to_string(&asf).unwrap();
+    assert!(
+        text.contains("SECONDS_PER_FRAME 0.01"),
+        "the simulator states its period"
+    );
+    let untimed: String = text
+        .lines()
+        .filter(|l| !l.starts_with("SECONDS_PER_FRAME"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    for (case, input, extra, times) in [
+        ("stated", text.clone(), &[][..], "input"),
+        ("none", untimed.clone(), &[][..], "wall_clock"),
+        ("given", untimed, &["--frame-period", "0.01"][..], "input"),
+    ] {
+        let record = d.dir.join(format!("times-{case}.mcap"));
+        let mut args = vec!["--record", s(&record)];
+        args.extend_from_slice(extra);
+        let (out, lines) = stream(&model, &args, input.into_bytes());
+        let log = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{case}: {log}");
+        assert!(
+            log.contains(&format!("(frame times: {times})")),
+            "{case}: {log}"
+        );
+        assert_eq!(frame_times(&record), times, "{case}");
+        if times == "input" {
+            let back: Value =
+                serde_json::from_str(&run_ok(&["inspect", s(&record), "--json"])).unwrap();
+            let period = back["frame_period_s"].as_f64().unwrap();
+            assert!((period - 0.01).abs() < 1e-9, "{case}: {back}");
+            assert_eq!(back["warnings"], serde_json::json!([]), "{case}: {back}");
+            let classified = lines.iter().filter(|l| l["event"] == "classification");
+            assert!(classified.clone().count() > 0);
+            assert!(
+                classified.into_iter().all(|l| l["timestamp_us"].is_u64()),
+                "{case}"
+            );
+        }
+    }
 }

@@ -898,3 +898,28 @@ fn a_model_trained_on_movies_streams_from_its_first_stance() {
     assert_eq!(singles, offline_stances(&path), "{events:?}");
     assert_eq!(events.last().unwrap()["warmup_frames"], 0, "{events:?}");
 }
+
+/// `--record` with `--listen`: one bag per connection (OUT-1.mcap, OUT-2.mcap in the order the clients
+/// connected), each holding what its client sent at the sender's times, its metadata naming the client.
+#[test]
+fn a_server_records_one_bag_per_connection() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("session.mcap");
+    let server = Server::start(&["--exit-after", "2", "--record", out.to_str().unwrap()]);
+    let (wood, grass) = (recording("wood"), recording("grass"));
+    replay(&server.addr, &wood);
+    replay(&server.addr, &grass);
+    let err = server.finish();
+    for (n, path) in [(1, &wood), (2, &grass)] {
+        let bag = dir.path().join(format!("session-{n}.mcap"));
+        assert!(err.contains(&bag.display().to_string()), "{err}");
+        let sent = presrs_io::read_recording(path).unwrap();
+        let back = presrs_io::read_recording(&bag).unwrap();
+        assert_eq!(back.frame_count(), sent.frame_count(), "{}", bag.display());
+        assert_eq!(back.data(), sent.data(), "{}", bag.display());
+        let bytes = std::fs::read(&bag).unwrap();
+        let has = |text: &str| bytes.windows(text.len()).any(|w| w == text.as_bytes());
+        assert!(has("presrs.recording") && has("127.0.0.1:"), "{}", bag.display());
+    }
+    assert!(!out.exists(), "no bag under the name given: {err}");
+}

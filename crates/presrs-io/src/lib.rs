@@ -8,6 +8,7 @@ pub mod mcap;
 pub mod message;
 pub mod model_file;
 pub mod npy;
+pub mod output_path;
 mod parsed;
 pub mod png;
 pub mod tekscan;

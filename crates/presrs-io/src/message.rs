@@ -66,6 +66,8 @@ pub enum Opt {
     Batch,
     /// Batches of the benchmark.
     BatchRuns,
+    /// Replace what an earlier run wrote in an output folder.
+    Force,
 }
 
 /// What Python calls an option.
@@ -79,7 +81,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 21] = [
+    pub const ALL: [Opt; 22] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -101,6 +103,7 @@ impl Opt {
         Opt::Iterations,
         Opt::Batch,
         Opt::BatchRuns,
+        Opt::Force,
     ];
 
     /// The command line's flag, e.g. `--per-class`.
@@ -127,6 +130,7 @@ impl Opt {
             Self::Iterations => "--iterations",
             Self::Batch => "--batch",
             Self::BatchRuns => "--batch-runs",
+            Self::Force => "--force",
         }
     }
 
@@ -160,6 +164,7 @@ impl Opt {
             Self::Iterations => Words("the iterations"),
             Self::Batch => Words("the batch size"),
             Self::BatchRuns => Words("the batch runs"),
+            Self::Force => Words("permission to replace it (an option of the presrs command line)"),
         }
     }
 

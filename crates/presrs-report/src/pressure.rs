@@ -361,6 +361,28 @@ impl PressureGrid<'_> {
     const PANEL_H: u32 = 260;
     const COLORBAR_W: u32 = 120;
     const TITLE_H: u32 = 40;
+    /// Most rows of panels: more labels wrap into further blocks of columns.
+    const MAX_ROWS: usize = 8;
+    /// Most columns of panels that wrapping makes (a manifest with more conditions keeps them all).
+    const MAX_COLS: usize = 6;
+    /// The tallest colour bar: it reads the same at any height.
+    const MAX_COLORBAR_H: u32 = 2 * Self::PANEL_H;
+
+    /// Blocks of labels side by side, and the rows of panels in each: one label per row and one
+    /// condition per column in every block.
+    fn blocks(&self) -> (usize, usize) {
+        let labels = self.row_names.len().max(1);
+        let conditions = self.col_names.len().max(1);
+        let fit = (Self::MAX_COLS / conditions).max(1);
+        let blocks = labels.div_ceil(Self::MAX_ROWS).clamp(1, fit);
+        (blocks, labels.div_ceil(blocks))
+    }
+
+    /// Columns and rows of panels.
+    fn panels(&self) -> (usize, usize) {
+        let (blocks, rows) = self.blocks();
+        (blocks * self.col_names.len().max(1), rows)
+    }
 
     fn panel_w(&self) -> u32 {
         let grid = self
@@ -379,8 +401,8 @@ impl PressureGrid<'_> {
 
 impl Figure for PressureGrid<'_> {
     fn size(&self) -> (u32, u32) {
-        let cols = self.col_names.len().max(1) as u32;
-        let rows = self.row_names.len().max(1) as u32;
+        let (cols, rows) = self.panels();
+        let (cols, rows) = (cols as u32, rows as u32);
         (
             (self.panel_w() * cols + Self::COLORBAR_W)
                 .max(420)
@@ -399,10 +421,14 @@ impl Figure for PressureGrid<'_> {
         let frames: Vec<&FrameView<'_>> = self.cells.iter().flatten().flatten().collect();
         let vmax = shown_max(frames.iter().copied(), &self.scale);
         let masked = frames.iter().any(|f| has_mask(f));
-        let areas = panels.split_evenly((self.row_names.len().max(1), self.col_names.len().max(1)));
+        let (cols, rows) = self.panels();
+        let areas = panels.split_evenly((rows, cols));
+        let conditions = self.col_names.len().max(1);
         for (r, row) in self.cells.iter().enumerate() {
             for (c, cell) in row.iter().enumerate() {
-                let Some(area) = areas.get(r * self.col_names.len().max(1) + c) else {
+                // Label r in block r / rows, on row r % rows of it.
+                let col = (r / rows) * conditions + c;
+                let Some(area) = areas.get((r % rows) * cols + col) else {
                     continue;
                 };
                 let name = match (self.row_names.get(r), self.col_names.get(c)) {
@@ -421,6 +447,8 @@ impl Figure for PressureGrid<'_> {
                 }
             }
         }
+        let (_, bar_h) = bar.dim_in_pixel();
+        let (bar, _) = bar.split_vertically(bar_h.min(Self::MAX_COLORBAR_H));
         draw_colorbar(
             &bar,
             vmax,
@@ -512,7 +540,7 @@ pub fn write_movie(recording: &Recording, options: &MovieOptions, path: &Path) -
         recording,
         &scale,
         &options.segment,
-        options.sample,
+        (options.sample, false),
     )?;
     // The grey line is named by what the detector measured from (a movie frame has no legend).
     curve.name = curve.name_with_baseline();
@@ -594,7 +622,7 @@ mod tests {
                 &recording,
                 &scale,
                 &segment.check().unwrap(),
-                SampleFrame::default(),
+                (SampleFrame::default(), false),
             )
             .unwrap()
         };
@@ -619,7 +647,7 @@ mod tests {
             &recording,
             &scale,
             &ValidSegmentParams::default(),
-            SampleFrame::default(),
+            (SampleFrame::default(), false),
         )
         .unwrap();
         let render = |index| {
@@ -675,5 +703,38 @@ mod tests {
         let needed = title_width(title, 20.0);
         assert!(needed > 600, "{needed}");
         assert!(figure.size().0 >= needed, "{} < {needed}", figure.size().0);
+    }
+
+    /// 22 labels of one condition wrap into blocks of columns: no longer one column 22 panels tall
+    /// (694 x 5,760 px); and every label is drawn in its own panel.
+    #[test]
+    fn a_grid_of_many_labels_stays_bounded() {
+        let grid = Grid::new(28, 50);
+        let frames: Vec<_> = (0..40)
+            .map(|i| presrs_core::Frame::new(grid, vec![f64::from(i); grid.len()]).unwrap())
+            .collect();
+        for (labels, conditions) in [(22, 1), (40, 1), (22, 3), (4, 3)] {
+            let figure = PressureGrid {
+                title: "Pressure images".to_owned(),
+                row_names: (0..labels).map(|i| format!("class{i}")).collect(),
+                col_names: (0..conditions).map(|c| format!("G{c}")).collect(),
+                cells: (0..labels)
+                    .map(|i| (0..conditions).map(|_| Some(frames[i].view())).collect())
+                    .collect(),
+                scale: PressureScale::default(),
+                outline: None,
+            };
+            let (w, h) = figure.size();
+            assert!(h <= 4000 && w <= 3200, "{labels} x {conditions}: {w} x {h}");
+            let (cols, rows) = figure.panels();
+            assert!(
+                cols * rows >= labels * conditions,
+                "{labels} x {conditions}"
+            );
+            assert_eq!(cols % conditions, 0, "each block holds every condition");
+            if labels <= PressureGrid::MAX_ROWS {
+                assert_eq!((cols, rows), (conditions, labels), "small grids as before");
+            }
+        }
     }
 }

@@ -313,6 +313,49 @@ fn median(values: &[f64]) -> f64 {
     }
 }
 
+
+impl BenchReport {
+    /// The report as `presrs bench` prints it (a folder the inputs were exported to last).
+    pub fn text(&self, export: Option<&Path>) -> String {
+        use std::fmt::Write as _;
+        let mut text = String::new();
+        let _ = writeln!(text, "model                      {}", self.model);
+        let _ = writeln!(
+            text,
+            "single image (median)      {:.2} us   (quartiles {:.2}-{:.2} us, p99 {:.2} us, min {:.2} us, {} runs)",
+            self.single_image_median_ns as f64 / 1e3,
+            self.single_image_p25_ns as f64 / 1e3,
+            self.single_image_p75_ns as f64 / 1e3,
+            self.single_image_p99_ns as f64 / 1e3,
+            self.single_image_min_ns as f64 / 1e3,
+            self.iterations
+        );
+        let _ = writeln!(
+            text,
+            "  of which (medians)       crop + features {:.2} us, PCA {:.2} us, classifier {:.2} us (each timed alone)",
+            self.stages_median_ns.features as f64 / 1e3,
+            self.stages_median_ns.pca as f64 / 1e3,
+            self.stages_median_ns.classifier as f64 / 1e3,
+        );
+        let _ = writeln!(
+            text,
+            "batch throughput           {:.0} images/s on {} threads ({} images, median of {} runs)",
+            self.batch_images_per_s,
+            self.batch_threads,
+            self.batch,
+            self.batch_runs_images_per_s.len()
+        );
+        let _ = writeln!(
+            text,
+            "paper                      245 us per image (2.67 GHz Core 2 Duo)"
+        );
+        if let Some(dir) = export {
+            let _ = writeln!(text, "exported to                {}", dir.display());
+        }
+        text
+    }
+}
+
 /// Times one classification and batch throughput as `options` say (and exports the inputs and
 /// answers with `options.export`).
 pub fn bench(options: &BenchOptions, progress: &dyn Progress) -> Result<BenchReport> {

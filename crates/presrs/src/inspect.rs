@@ -176,6 +176,49 @@ pub fn inspect(path: &Path, options: &SampleOptions) -> Result<InspectReport> {
     })
 }
 
+impl InspectReport {
+    /// What train, eval, classify, features and report do with the dead sensels, in the command
+    /// line's words.
+    pub fn dead_sensels_treatment(&self) -> String {
+        if self.dead_sensels_filled {
+            "filled from their neighbours in every frame when train, eval, classify, features or \
+         report read this file (--keep-dead-sensels: as read)"
+                .to_owned()
+        } else if self.frames < presrs_core::dead_sensels::DeadSenselConfig::default().min_frames {
+            format!(
+                "not filled: {} frame(s) cannot tell a dead sensel from a gap in the terrain \
+             (movies of 3 frames or more are corrected)",
+                self.frames
+            )
+        } else {
+            "kept as read (--keep-dead-sensels)".to_owned()
+        }
+    }
+}
+
+impl StanceReport {
+    /// `no`, `yes`, or `both ends` for a stance that is the whole recording of `frames` frames.
+    pub fn partial_text(&self, frames: usize) -> &'static str {
+        match (self.partial, self.start == 0 && self.len == frames) {
+            (false, _) => "no",
+            (true, false) => "yes",
+            (true, true) => "both ends",
+        }
+    }
+}
+
+/// A total load for the table: whole numbers as they are (raw counts), others to a precision that
+/// fits their size (a float image's sum has a dozen meaningless decimals).
+pub fn load_text(load: f64) -> String {
+    if load.fract() == 0.0 || !load.is_finite() {
+        format!("{load}")
+    } else if load.abs() >= 100.0 {
+        format!("{load:.1}")
+    } else {
+        format!("{load:.4}")
+    }
+}
+
 /// A stance covering more than this fraction of a recording of several times its length is suspicious
 /// in the drifting mode: a foot that never unloads.
 const LONG_STANCE_FRACTION: f64 = 0.5;

@@ -16,7 +16,9 @@ use crate::error::{Context, Error, Result};
 pub enum Still {
     /// This frame (0-based).
     Frame(usize),
-    /// A frame of the N-th complete stance phase (0-based), chosen by `sample`.
+    /// A frame of the N-th stance phase (0-based), chosen by `sample`. Stances are numbered as
+    /// `presrs inspect` numbers them: every stance found, partial ones (cut by the recording's start
+    /// or end) included.
     Stance { stance: usize, sample: SampleFrame },
     /// The frame with the largest total load.
     LargestLoad,
@@ -146,19 +148,23 @@ fn still_frame(
         Still::Frame(frame) => Ok((frame, format!("frame {frame}"))),
         Still::Stance { stance: n, sample } => {
             let segmentation = segment_recording(recording, segment)?;
-            let stances: Vec<_> = segmentation.complete().collect();
-            let stance = stances.get(n).ok_or_else(|| {
+            let stance = segmentation.stances.get(n).ok_or_else(|| {
                 Error::data(format!(
-                    "{}: --stance {n} but {} complete stance phase(s) were found (0-based)",
+                    "{}: --stance {n} but {} stance phase(s) were found (0-based, as `presrs \
+                     inspect` lists them)",
                     file.display(),
-                    stances.len()
+                    segmentation.stances.len()
                 ))
             })?;
             let frames = sample_frames(stance, sample)?;
             let frame = *frames
                 .get(frames.len() / 2)
                 .ok_or_else(|| Error::data("the stance gives no frame"))?;
-            Ok((frame, format!("stance {n} ({sample} frame), frame {frame}")))
+            let partial = if stance.partial { ", partial" } else { "" };
+            Ok((
+                frame,
+                format!("stance {n} ({sample} frame{partial}), frame {frame}"),
+            ))
         }
         Still::LargestLoad => {
             let frame = recording

@@ -363,10 +363,13 @@ fn describe_samples(samples: &[Sample], options: &SampleOptions) -> String {
             movies.insert(s.source.as_path());
         }
     }
-    let partial = if options.include_partial {
-        "stance"
+    let of_each = if options.one_sample_per_file {
+        // The whole recording is the one contact, complete or not.
+        "the whole recording (one contact per file)"
+    } else if options.include_partial {
+        "each stance"
     } else {
-        "complete stance"
+        "each complete stance"
     };
     let mut parts = Vec::new();
     if single > 0 {
@@ -377,7 +380,7 @@ fn describe_samples(samples: &[Sample], options: &SampleOptions) -> String {
     }
     if stance > 0 {
         parts.push(format!(
-            "{stance} {} frame(s) of each {partial} of {} movie(s)",
+            "{stance} {} frame(s) of {of_each} of {} movie(s)",
             options.sample,
             movies.len()
         ));
@@ -441,6 +444,9 @@ fn write_manifest_report(
         })
         .collect();
     inputs.sample_frame = sample_options.sample;
+    // The curves segmented and sampled as the data set was (one contact per file, partial stances).
+    inputs.segment = sample_options.segment_params();
+    inputs.include_partial = sample_options.include_partial();
     inputs.simulation = simulated.as_ref().map(|(table, _)| SimulationInputs {
         velocity: table,
         traces: &traces,
@@ -727,7 +733,10 @@ pub fn fault_sweep(
         samples,
         protocol,
         (options.fault_repeats, options.seed),
-        ("fault sweep", (methods * options.fault_repeats) as u64),
+        (
+            "fault sweep",
+            (methods * models_per_repeat(samples, protocol) * options.fault_repeats) as u64,
+        ),
         progress,
         |evaluation| {
             let paper = evaluation.run_each(Models::Config(paper), &each)?.reports;
@@ -754,6 +763,19 @@ pub fn fault_sweep(
     let seconds = started.elapsed().as_secs_f64();
     progress.note(&format!("fault sweep: {seconds:.1} s"));
     Ok((results, fault_sweep_note(options, protocol, seconds)))
+}
+
+/// The models one repeat of `protocol` trains per method (the evaluation advances the progress once
+/// for each): one per held-out group, or the one trained on a condition.
+fn models_per_repeat(samples: &[LabeledImage<'_>], protocol: &Protocol) -> usize {
+    match protocol {
+        Protocol::LeaveOneOut { .. } => samples
+            .iter()
+            .filter_map(|s| s.group)
+            .collect::<BTreeSet<_>>()
+            .len(),
+        Protocol::TrainCondition { .. } => 1,
+    }
 }
 
 /// One result per report of `method`: the first without a perturbation, then one per level of `sweep`.
@@ -783,12 +805,22 @@ fn fault_sweep_note(options: &ReportOptions, protocol: &Protocol, seconds: f64) 
             )
         }
     };
-    format!(
+    let mut note = format!(
         "{} ({per_class}), {} repeat(s), seed {}; the sweep took {seconds:.1} s.",
         protocol_words(protocol),
         options.fault_repeats,
         options.seed
-    )
+    );
+    if options.repeats > 0 && options.repeats != options.fault_repeats {
+        let _ = write!(
+            note,
+            " Its clean accuracy (as recorded) averages these {} repeat(s), where the evaluation \
+             above averages {} with the same protocol and seeds from {}: the two figures differ by \
+             the draws they cover, not by what was measured.",
+            options.fault_repeats, options.repeats, options.seed
+        );
+    }
+    note
 }
 
 #[cfg(test)]
@@ -939,6 +971,30 @@ mod tests {
         };
         let (faults, note) = fault_sweep(&args, &samples, &protocol, &config, &Quiet).unwrap();
         assert!(note.contains("2 repeat(s)"), "{note}");
+        // The evaluation's 5 repeats against the sweep's 2: the page says why their figures differ.
+        assert_eq!(args.repeats, 5);
+        assert!(
+            note.contains("averages these 2 repeat(s), where the evaluation above averages 5"),
+            "{note}"
+        );
+        // Leaving one of 3 groups out: the progress announces the steps it takes (was 2 of 6).
+        let grouped: Vec<LabeledImage<'_>> = samples
+            .iter()
+            .map(|s| LabeledImage {
+                group: s.condition,
+                ..*s
+            })
+            .collect();
+        let by_group = Protocol::LeaveOneOut {
+            column: "group".into(),
+            per_class: Some(8),
+            validation: ValidationSize::Fraction(0.3),
+        };
+        let recorder = crate::progress::Recorder::default();
+        fault_sweep(&args, &grouped, &by_group, &config, &recorder).unwrap();
+        let log = recorder.log();
+        assert_eq!(log.tasks, [("fault sweep".to_owned(), Some(log.steps))]);
+        assert_eq!(log.steps, 3 * 2, "3 groups x 2 repeats");
         assert!(
             note.starts_with("trained on G2 (8 images per class)"),
             "{note}"

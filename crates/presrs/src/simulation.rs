@@ -705,6 +705,27 @@ pub fn load_config(path: Option<&Path>) -> Result<SimConfig> {
     }
 }
 
+/// Checks, before anything is simulated, that a data set can be written in `out_dir`: a folder (or
+/// none yet) that accepts files, and one that holds no data set already (a `manifest.csv`) unless
+/// `replace`: a data set someone trains on is not replaced silently.
+pub fn check_dataset_out(out_dir: &Path, replace: bool) -> Result<()> {
+    presrs_io::output_path::check_output_dir(out_dir)?;
+    let manifest = out_dir.join("manifest.csv");
+    if manifest.exists() && !replace {
+        return Err(Error::invalid(
+            Message::new()
+                .text(format!(
+                    "{} already holds a data set ({}): give another folder, or ",
+                    out_dir.display(),
+                    manifest.display()
+                ))
+                .opt(Opt::Force)
+                .text(" to replace it"),
+        ));
+    }
+    Ok(())
+}
+
 /// Reads `NAME=PNG` as a height map scaled to `[0, 1]` (darkest pixel 0, brightest 1).
 pub fn read_terrain_image(name: &str, path: &Path) -> Result<(String, HeightMap)> {
     let rec = presrs_io::png::read_png(path)

@@ -36,6 +36,16 @@ pub fn positive_seconds(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A wait in seconds: finite, 0 or more and at most a billion.
+pub fn non_negative_seconds(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && (0.0..=1e9).contains(&x) => Ok(x),
+        _ => Err(format!(
+            "expected a number of seconds from 0 to 1e9, got {text:?}"
+        )),
+    }
+}
+
 /// `IP:PORT`, e.g. 127.0.0.1:7700.
 pub fn socket_addr(text: &str) -> Result<SocketAddr, String> {
     text.trim()
@@ -148,6 +158,10 @@ mod tests {
             assert!(positive_count(bad).is_err(), "{bad}");
         }
         assert_eq!(positive_number("0.5").unwrap(), 0.5);
+        assert_eq!(non_negative_seconds("0").unwrap(), 0.0);
+        for bad in ["-1", "nan", "inf", "2e9", "x"] {
+            assert!(non_negative_seconds(bad).is_err(), "{bad}");
+        }
         for bad in ["0", "-5", "nan", "inf", "x"] {
             assert!(positive_number(bad).is_err(), "{bad}");
         }

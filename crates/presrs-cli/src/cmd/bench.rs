@@ -61,6 +61,10 @@ pub struct BenchArgs {
 }
 
 pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    args.export
+        .as_deref()
+        .map(presrs_io::output_path::check_output_dir)
+        .transpose()?;
     let options = BenchOptions {
         model: args.model.clone(),
         images: args.images.clone(),
@@ -77,38 +81,6 @@ pub fn run(args: &BenchArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.json {
         return write_json(out, &report);
     }
-    writeln!(out, "model                      {}", report.model)?;
-    writeln!(
-        out,
-        "single image (median)      {:.2} us   (quartiles {:.2}-{:.2} us, p99 {:.2} us, min {:.2} us, {} runs)",
-        report.single_image_median_ns as f64 / 1e3,
-        report.single_image_p25_ns as f64 / 1e3,
-        report.single_image_p75_ns as f64 / 1e3,
-        report.single_image_p99_ns as f64 / 1e3,
-        report.single_image_min_ns as f64 / 1e3,
-        report.iterations
-    )?;
-    writeln!(
-        out,
-        "  of which (medians)       crop + features {:.2} us, PCA {:.2} us, classifier {:.2} us (each timed alone)",
-        report.stages_median_ns.features as f64 / 1e3,
-        report.stages_median_ns.pca as f64 / 1e3,
-        report.stages_median_ns.classifier as f64 / 1e3,
-    )?;
-    writeln!(
-        out,
-        "batch throughput           {:.0} images/s on {} threads ({} images, median of {} runs)",
-        report.batch_images_per_s,
-        report.batch_threads,
-        report.batch,
-        report.batch_runs_images_per_s.len()
-    )?;
-    writeln!(
-        out,
-        "paper                      245 us per image (2.67 GHz Core 2 Duo)"
-    )?;
-    if let Some(dir) = &args.export {
-        writeln!(out, "exported to                {}", dir.display())?;
-    }
+    write!(out, "{}", report.text(args.export.as_deref()))?;
     Ok(())
 }

@@ -48,6 +48,10 @@ pub struct ClassifyArgs {
 }
 
 pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    args.mcap
+        .as_deref()
+        .map(presrs_io::output_path::check_output_file)
+        .transpose()?;
     let model_file = load_model(&args.model)?;
     let model = &model_file.model;
     let mut session = model.session();
@@ -70,13 +74,8 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         .max()
         .unwrap_or(0)
         .max(5);
-    if !args.json {
-        writeln!(
-            out,
-            "{:<file_width$} {:>6}  {:<label_width$} {:>10}",
-            "file", "frame", "label", "confidence"
-        )?;
-    }
+    // The header comes with the first row: a run whose files all fail prints only the errors.
+    let mut header = !args.json;
     for path in &args.files {
         let options = ClassifyOptions {
             frame: args.frame,
@@ -113,6 +112,13 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             if args.json {
                 results.push(sample);
             } else {
+                if std::mem::take(&mut header) {
+                    writeln!(
+                        out,
+                        "{:<file_width$} {:>6}  {:<label_width$} {:>10}",
+                        "file", "frame", "label", "confidence"
+                    )?;
+                }
                 writeln!(
                     out,
                     "{:<file_width$} {:>6}  {:<label_width$} {:>10.4}",

@@ -48,7 +48,7 @@ pub struct PipelineArgs {
     pub choose: presrs::method::ChoiceRule,
     /// Principal components kept, at least 1 (at most the number of training images minus one, and the
     /// number of features: a larger value is lowered to that, with a warning when given) [default: 51].
-    #[arg(long, value_name = "DIMS", value_parser = parse_positive)]
+    #[arg(long, value_name = "DIMS", value_parser = presrs::values::positive_count)]
     pub dims: Option<usize>,
     /// Divide each cropped image by its total load (sum of its values): features that do not depend on
     /// the robot's load, without knowing it. Stored in the model; off in the paper's method.
@@ -186,15 +186,15 @@ pub struct StanceArgs {
     #[arg(long, value_name = "FRACTION", value_parser = presrs::values::fraction)]
     pub stance_hysteresis: Option<f64>,
     /// Shortest stance kept, in frames [default: 3].
-    #[arg(long, value_name = "FRAMES", value_parser = parse_positive)]
+    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
     pub stance_min_frames: Option<usize>,
     /// Longest stance kept, in frames (default: no limit); with --stance-baseline auto a longer one
     /// is taken for a standing preload and measured from the local floor.
-    #[arg(long, value_name = "FRAMES", value_parser = parse_positive)]
+    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
     pub stance_max_frames: Option<usize>,
     /// Fewest unloaded frames between two stances: a shorter dropout inside a stance is bridged
     /// [default: 3].
-    #[arg(long, value_name = "FRAMES", value_parser = parse_positive)]
+    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
     pub stance_min_gap: Option<usize>,
     /// Every movie is one contact (trials cut to one foot contact, loaded from the first frame to the
     /// last): one sample from each, the whole recording being its stance.
@@ -398,17 +398,6 @@ pub fn write_json(
     serde_json::to_writer_pretty(&mut *out, value).context("cannot write JSON")?;
     writeln!(out)?;
     Ok(())
-}
-
-/// A whole number of at least 1 (`--dims`, `--per-class`, `--repeats`).
-pub fn parse_positive(text: &str) -> Result<usize, String> {
-    match text.trim().parse::<usize>() {
-        Ok(0) => Err("must be at least 1".to_owned()),
-        Ok(n) => Ok(n),
-        Err(_) => Err(format!(
-            "expected a whole number of at least 1, got {text:?}"
-        )),
-    }
 }
 
 fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {

@@ -35,6 +35,7 @@ pub struct ConvertArgs {
 }
 
 pub fn run(args: &ConvertArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    presrs_io::output_path::check_output_file(&args.output)?;
     let options = ConvertOptions {
         read: args.read.read_options(args.lenient),
         topic: args.out_topic.clone(),

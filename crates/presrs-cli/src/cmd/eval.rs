@@ -38,13 +38,13 @@ pub struct EvalArgs {
     pub leave_one_out: Option<String>,
     /// Random samples drawn per class for training + validation, at least 1 (default: all available);
     /// a class (or held-out fold) with fewer gives all it has, with one warning.
-    #[arg(long, value_parser = super::common::parse_positive)]
+    #[arg(long, value_parser = super::usage::positive_count)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).
     #[arg(long, default_value = "0.35", value_parser = |t: &str| t.parse::<ValidationSize>().map_err(|e| e.to_string()))]
     pub validation: ValidationSize,
     /// Repeats with seeds seed, seed+1, ...; results are mean +- std (at least 1).
-    #[arg(long, default_value_t = 10, value_parser = super::common::parse_positive)]
+    #[arg(long, default_value_t = 10, value_parser = super::usage::positive_count)]
     pub repeats: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -81,6 +81,9 @@ pub struct EvalArgs {
 }
 
 pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    for dir in [&args.report, &args.export_draws].into_iter().flatten() {
+        presrs_io::output_path::check_output_dir(dir)?;
+    }
     let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = EvalOptions {
         holdout: match &args.leave_one_out {

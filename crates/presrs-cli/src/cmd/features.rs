@@ -21,7 +21,7 @@ Examples:
   presrs features walk.asf --features fft2d_polar+glcm > f.csv"
 )]
 pub struct FeaturesArgs {
-    /// A recording file (TekScan ASCII, .npy, greyscale .png, text matrix).
+    /// A recording file (TekScan ASCII, .npy, greyscale .png, text matrix or MCAP).
     pub file: PathBuf,
     /// The 0-based frame; by default every stance phase's sample frame (`--stance-frame`), or the only
     /// frame of a one-frame file.

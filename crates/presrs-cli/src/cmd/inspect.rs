@@ -103,20 +103,7 @@ fn print_dead_sensels(report: &InspectReport, out: &mut dyn Write) -> anyhow::Re
             String::new()
         }
     )?;
-    let what = if report.dead_sensels_filled {
-        "filled from their neighbours in every frame when train, eval, classify, features or \
-         report read this file (--keep-dead-sensels: as read)"
-            .to_owned()
-    } else if report.frames < presrs_core::dead_sensels::DeadSenselConfig::default().min_frames {
-        format!(
-            "not filled: {} frame(s) cannot tell a dead sensel from a gap in the terrain \
-             (movies of 3 frames or more are corrected)",
-            report.frames
-        )
-    } else {
-        "kept as read (--keep-dead-sensels)".to_owned()
-    };
-    writeln!(out, "               {what}")?;
+    writeln!(out, "               {}", report.dead_sensels_treatment())?;
     Ok(())
 }
 
@@ -146,8 +133,8 @@ fn print_frames_and_load(report: &InspectReport, out: &mut dyn Write) -> anyhow:
     writeln!(
         out,
         "total load     {} .. {} {load_unit} (baseline noise {:.3})",
-        load_text(report.load_min),
-        load_text(report.load_max),
+        presrs::inspect::load_text(report.load_min),
+        presrs::inspect::load_text(report.load_max),
         report.baseline_noise
     )?;
     if let (Some(min), Some(max)) = (report.force_min_n, report.force_max_n) {
@@ -199,29 +186,8 @@ fn print_stances(
             stance
                 .sample_frame
                 .map_or_else(|| "-".to_owned(), |f| f.to_string()),
-            partial_text(stance, report.frames)
+            stance.partial_text(report.frames)
         )?;
     }
     Ok(())
-}
-
-/// `no`, `yes`, or `both ends` for a stance that is the whole recording.
-fn partial_text(stance: &presrs::inspect::StanceReport, frames: usize) -> &'static str {
-    match (stance.partial, stance.start == 0 && stance.len == frames) {
-        (false, _) => "no",
-        (true, false) => "yes",
-        (true, true) => "both ends",
-    }
-}
-
-/// A total load for the table: whole numbers as they are (raw counts), others to a precision that
-/// fits their size (a float image's sum has a dozen meaningless decimals).
-fn load_text(load: f64) -> String {
-    if load.fract() == 0.0 || !load.is_finite() {
-        format!("{load}")
-    } else if load.abs() >= 100.0 {
-        format!("{load:.1}")
-    } else {
-        format!("{load:.4}")
-    }
 }

@@ -16,12 +16,14 @@ use presrs_io::read_recording_with;
   presrs plot walk.asf --frame 120 --out frame.svg
   presrs plot walk.asf --movie --out walk.gif")]
 pub struct PlotArgs {
-    /// The recording (TekScan, .npy, PNG or text matrix).
+    /// The recording (TekScan ASCII, .npy, PNG, text matrix or MCAP).
     pub file: PathBuf,
     /// Frame to draw (0-based). Default: the frame with the largest total load.
     #[arg(long, conflicts_with_all = ["stance", "movie"])]
     pub frame: Option<usize>,
-    /// Draw a frame of the N-th complete stance phase (0-based), chosen by --stance-frame.
+    /// Draw a frame of stance phase N, chosen by --stance-frame; stances are numbered as `presrs
+    /// inspect` lists them (0-based, every stance found, those cut by the recording's start or end
+    /// included).
     #[arg(long, conflicts_with = "movie")]
     pub stance: Option<usize>,
     /// Which frame of the stance: mid, peak or an offset K after touchdown.
@@ -56,6 +58,7 @@ pub struct PlotArgs {
 }
 
 pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    presrs_io::output_path::check_output_file(&args.out)?;
     let parsed = read_recording_with(&args.file, &args.axes.read_options(args.lenient))?;
     for warning in &parsed.warnings {
         stderr_line!("warning: {warning}");
@@ -83,7 +86,7 @@ pub fn run(args: &PlotArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         Plotted::Movie { frames } => {
             writeln!(out, "wrote {} ({frames} frames)", args.out.display())?
         }
-        Plotted::Still { .. } => writeln!(out, "wrote {}", args.out.display())?,
+        Plotted::Still { frame } => writeln!(out, "wrote {} (frame {frame})", args.out.display())?,
     }
     Ok(())
 }

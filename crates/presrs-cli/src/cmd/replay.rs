@@ -14,7 +14,8 @@ use presrs::replay::{Rate, Replay};
 /// Send a recording as a live frame stream to `presrs stream --listen`.
 #[derive(Debug, clap::Args)]
 pub struct ReplayArgs {
-    /// Recording to send (TekScan, NPY, PNG or text matrix).
+    /// Recording to send (TekScan ASCII, .npy, PNG, text matrix or MCAP: the only topic of a bag that
+    /// holds frames).
     pub file: PathBuf,
     /// The server's address, e.g. 127.0.0.1:7700.
     #[arg(long, value_name = "IP:PORT", value_parser = super::usage::socket_addr)]

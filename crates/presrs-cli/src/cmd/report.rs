@@ -41,7 +41,7 @@ pub struct ReportArgs {
     /// Images drawn per class for training + validation, at least 1 (fewer if a class has fewer; when
     /// every condition trains and a class has no more than this, the evaluations draw two thirds of it
     /// and test on the rest).
-    #[arg(long, default_value_t = 20, value_parser = super::common::parse_positive)]
+    #[arg(long, default_value_t = 20, value_parser = super::usage::positive_count)]
     pub per_class: usize,
     /// Of those, how many per class validate sigma: a count (7) or a fraction (0.35). When a class has
     /// fewer images than --per-class, a count becomes the same fraction of what is drawn (7 of 20: 0.35).
@@ -65,6 +65,7 @@ pub struct ReportArgs {
 
 pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
+    presrs_io::output_path::check_output_dir(&args.out)?;
     let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = ReportOptions {
         model: args.model.clone(),

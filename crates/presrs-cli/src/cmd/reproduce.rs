@@ -95,6 +95,7 @@ impl ReproduceArgs {
 
 pub fn run(args: &ReproduceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
+    presrs_io::output_path::check_output_dir(&args.out)?;
     let options = args.options();
     if let Err(message) = check_options(&options, &SimConfig::default()) {
         return Err(super::usage::UsageError::error(

@@ -22,6 +22,10 @@ pub struct SimulateArgs {
     /// fingerprint of every file: `presrs reproduce --out R` reuses R/dataset when it matches).
     #[arg(long, required_unless_present_any = ["print_config", "track"])]
     pub out: Option<PathBuf>,
+    /// Replace the data set already in --out (its manifest.csv and recordings); without it an --out
+    /// that holds a manifest.csv is refused.
+    #[arg(long)]
+    pub force: bool,
     /// Seed of every random choice; the same seed gives the same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -100,6 +104,7 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let Some(out_dir) = args.out.as_deref() else {
         anyhow::bail!("--out DIR is required");
     };
+    presrs::simulation::check_dataset_out(out_dir, args.force)?;
     let image_names: Vec<&str> = args.terrain_image.iter().map(|i| i.name.as_str()).collect();
     let (terrains, gaits) = dataset_names(&args.terrains, &image_names, &args.gaits, &config)
         .map_err(|message| {
@@ -142,6 +147,10 @@ pub fn run_track_comparison(
     spec: &str,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
+    args.json
+        .as_deref()
+        .map(presrs_io::output_path::check_output_file)
+        .transpose()?;
     // Gait names are judged with the configuration, before anything runs.
     if let Err(message) =
         presrs::simulation::check_gaits(presrs::Opt::StartGait, &args.start_gait, config).and_then(

@@ -23,9 +23,9 @@ use std::time::Duration;
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
 use presrs::stoppable_input::StoppableInput;
 use presrs::stream::{
-    BagRecorder, ConnectionNotice, ConnectionOptions, ConnectionTap, InputFormat, ProfileOverrides,
-    ServerNotice, ServerOptions, ShutdownHandle, StopSignals, StreamServer, Taps, resolve_profile,
-    run_connection_tapped,
+    BagRecorder, BagReport, ConnectionBags, ConnectionNotice, ConnectionOptions, ConnectionTap,
+    InputFormat, OwnedTaps, ProfileOverrides, ServerNotice, ServerOptions, ShutdownHandle,
+    StopSignals, StreamServer, Taps, resolve_profile, run_connection_tapped,
 };
 use presrs::stream_log::{
     input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
@@ -99,13 +99,21 @@ pub struct StreamArgs {
     /// Exit after this many connections have ended (demos and tests) [default: serve forever].
     #[arg(long)]
     pub exit_after: Option<usize>,
+    /// With --format tekscan: the frame period in seconds when the header states no SECONDS_PER_FRAME
+    /// (the frames' times, in the JSON lines and a --record bag; else untimed, and a bag takes the
+    /// wall clock).
+    #[arg(long, value_name = "SECONDS", value_parser = presrs::values::period_seconds)]
+    pub frame_period: Option<f64>,
     /// With --format mcap: the topic to read [default: the only topic holding frames].
     #[arg(long, value_name = "NAME")]
     pub topic: Option<String>,
-    /// Record the session (stdin) to this MCAP file: the frames on /presrs/frames
-    /// (sensor_msgs/msg/Image) and every JSON line on /presrs/decisions (JSON, with a JSON schema); the
-    /// file appears when the stream ends.
-    #[arg(long, value_name = "OUT.mcap", conflicts_with = "listen")]
+    /// Record the session (stdin; with --listen one bag per connection, OUT-1.mcap, OUT-2.mcap, ... in
+    /// the order the clients connected) to this MCAP file: the frames on /presrs/frames
+    /// (sensor_msgs/msg/Image), stamped with the input's own frame times (TekScan SECONDS_PER_FRAME or
+    /// --frame-period, MCAP stamps, binary timestamps; the wall clock only when it has none: the bag's
+    /// `presrs.recording` metadata says which), and every JSON line on /presrs/decisions (JSON, with a
+    /// JSON schema); the file appears when the stream ends.
+    #[arg(long, value_name = "OUT.mcap")]
     pub record: Option<PathBuf>,
     #[command(flatten)]
     pub http: HttpArgs,
@@ -184,6 +192,10 @@ impl StreamArgs {
 }
 
 pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    args.record
+        .as_deref()
+        .map(presrs_io::output_path::check_output_file)
+        .transpose()?;
     let file = load_model(&args.model)?;
     let profile = resolve_profile(
         args.profile.as_deref(),
@@ -214,10 +226,16 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
         Some(addr) => {
             let mut server = StreamServer::bind(addr, file.model, profile, args.server_options())?;
-            if let Some((hub, _)) = &live {
-                let hub = hub.clone();
+            let hub = live.as_ref().map(|(hub, _)| hub.clone());
+            let bags = (args.record.as_deref()).map(|path| ConnectionBags::new(path, bag_report()));
+            if hub.is_some() || bags.is_some() {
                 server = server.with_taps(Arc::new(move |peer: &str| {
-                    Box::new(hub.exclusive_tap(peer)) as Box<dyn ConnectionTap + Send>
+                    let mut taps: Vec<Box<dyn ConnectionTap + Send>> = Vec::new();
+                    if let Some(hub) = &hub {
+                        taps.push(Box::new(hub.exclusive_tap(peer)));
+                    }
+                    taps.extend(bags.as_ref().map(|bags| bags.tap(peer)));
+                    Box::new(OwnedTaps(taps))
                 }));
             }
             let local = server.local_addr();
@@ -252,6 +270,7 @@ fn run_stdin(
         max_frame_bytes: args.max_frame_bytes,
         stop: Some(stop.clone()),
         topic: args.topic.clone(),
+        frame_period_s: args.frame_period,
     };
     let log = |notice: &ConnectionNotice| stderr_line!("presrs stream: {}", notice_text(notice));
     let (input, end_input) = StoppableInput::start(|| std::io::stdin().lock());
@@ -270,12 +289,7 @@ fn run_stdin(
                 run_connection_tapped(model, profile, input, out, &options, &log, &mut taps)?
             };
             let recorded = bag.finish()?;
-            stderr_line!(
-                "presrs stream: recorded {} frames and {} lines to {}",
-                recorded.frames,
-                recorded.lines,
-                recorded.path.display()
-            );
+            stderr_line!("presrs stream: {}", recorded.text());
             summary
         }
     };
@@ -288,6 +302,14 @@ fn run_stdin(
         Some(failure) => Err(anyhow::anyhow!(failure)),
         None => Ok(()),
     }
+}
+
+/// Each connection's bag, said on stderr when its connection ends.
+fn bag_report() -> BagReport {
+    Arc::new(|peer: &str, recorded| match recorded {
+        Ok(bag) => stderr_line!("presrs stream: {peer}: {}", bag.text()),
+        Err(err) => stderr_line!("presrs stream: {peer}: no bag: {err}"),
+    })
 }
 
 /// The stderr line of what the server saw.

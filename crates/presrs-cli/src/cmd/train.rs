@@ -38,7 +38,7 @@ pub struct TrainArgs {
     pub train_condition: Option<String>,
     /// Random samples drawn per class, at least 1 (default: every sample); a class with fewer gives
     /// all it has, with one warning.
-    #[arg(long, value_parser = super::common::parse_positive)]
+    #[arg(long, value_parser = super::usage::positive_count)]
     pub per_class: Option<usize>,
     /// Of those, how many per class validate the hyper-parameters: a count (7) or a fraction (0.35).
     #[arg(long, default_value = "0.35", value_parser = |t: &str| t.parse::<ValidationSize>().map_err(|e| e.to_string()))]
@@ -79,6 +79,7 @@ pub struct TrainArgs {
 }
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    presrs_io::output_path::check_output_file(&args.out)?;
     let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = TrainOptions {
         condition: args.train_condition.clone(),

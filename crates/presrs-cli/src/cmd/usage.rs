@@ -2,7 +2,6 @@
 //! errors, exit code 2), and [`UsageError`] for what can only be judged with other options or the
 //! configuration.
 
-use clap::CommandFactory;
 use clap::error::ErrorKind;
 
 /// Options that cannot be used together (judged with each other or the configuration). `main` reports
@@ -33,7 +32,7 @@ impl UsageError {
 
     /// The error as clap would have made it.
     pub fn to_clap(&self) -> clap::Error {
-        let mut cli = crate::Cli::command();
+        let mut cli = crate::command();
         cli.build();
         match cli.find_subcommand_mut(self.subcommand) {
             Some(sub) => sub.error(ErrorKind::ArgumentConflict, &self.message),

@@ -29,7 +29,8 @@ const DEFAULT_ADDR: SocketAddr = SocketAddr::V4(std::net::SocketAddrV4::new(
   presrs view sim/recordings/grass_G2_000.asf
   presrs view my-walk.asf --model g2.model.json --speed 0.5 --hold")]
 pub struct ViewArgs {
-    /// Recording to replay (TekScan, NPY, PNG or text matrix).
+    /// Recording to replay (TekScan ASCII, .npy, PNG, text matrix or MCAP: the only topic of a bag that
+    /// holds frames).
     pub file: PathBuf,
     /// Classify the frames online with this model (its online profile, else warm-up calibration).
     #[arg(long)]
@@ -49,7 +50,7 @@ pub struct ViewArgs {
     #[arg(long, value_parser = super::usage::positive_number)]
     pub frame_period: Option<f64>,
     /// Wait before the first frame, seconds (time to open the page).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = presrs::values::non_negative_seconds)]
     pub delay: f64,
     /// Keep serving after the last frame until SIGINT or SIGTERM.
     #[arg(long)]

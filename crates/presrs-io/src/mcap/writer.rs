@@ -183,6 +183,22 @@ impl<W: Write> BagWriter<W> {
         self.write_message(channel, time_ns, text.as_bytes())
     }
 
+    /// Writes a metadata record `name` of `entries` (what the file as a whole is, e.g. where its
+    /// times come from).
+    pub fn write_metadata(
+        &mut self,
+        name: &str,
+        entries: BTreeMap<String, String>,
+    ) -> Result<(), IoError> {
+        let metadata = mcap::records::Metadata {
+            name: name.to_owned(),
+            metadata: entries,
+        };
+        self.writer
+            .write_metadata(&metadata)
+            .map_err(|err| mcap_error(&self.name, err))
+    }
+
     /// Writes the summary and the footer; returns the underlying writer.
     pub fn finish(mut self) -> Result<W, IoError> {
         self.writer

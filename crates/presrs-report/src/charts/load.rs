@@ -5,13 +5,19 @@ use plotters::prelude::*;
 use presrs_core::Recording;
 use presrs_core::stance::{BaselineMode, SampleFrame, ValidSegmentParams, segment_recording};
 
-use super::common::{TITLE, draw_legend, finite_range, numeric_axes, padded};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::common::{TICK, TITLE, draw_legend, finite_range, numeric_axes, padded};
 use crate::error::Result;
-use crate::render::{Figure, category_color, title_font};
+use crate::render::{Figure, category_color, font, title_font};
 use crate::scale::PressureScale;
 
 /// Soft colour for shaded stance phases.
 const STANCE_SHADE: RGBColor = RGBColor(255, 224, 178);
+/// The shade of stances cut by the recording's ends.
+const PARTIAL_SHADE: RGBColor = RGBColor(220, 220, 220);
+/// The colour of the segmentation's baseline.
+const BASELINE: RGBColor = RGBColor(120, 120, 120);
 
 /// A recording's total load per frame with its detected stances and sampled frames.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,19 +40,22 @@ pub struct LoadCurveData {
 }
 
 impl LoadCurveData {
-    /// Segments `recording` and marks the frames `sample` picks from complete stances.
+    /// Segments `recording` and marks the frames `sample` picks from complete stances (and from those
+    /// cut by the recording's ends with `include_partial`, as a data set read with it samples them).
     pub fn from_recording(
         name: String,
         recording: &Recording,
         scale: &PressureScale,
         segment: &ValidSegmentParams,
-        sample: SampleFrame,
+        (sample, include_partial): (SampleFrame, bool),
     ) -> Result<Self> {
         let (load_label, factor) = scale.load_axis();
         let totals = recording.total_per_frame();
         let segmentation = segment_recording(recording, segment)?;
         // A stance too short for a fixed offset gives no sample; that is not an error for a picture.
-        let sampled = segmentation.samples(sample, false).unwrap_or_default();
+        let sampled = segmentation
+            .samples(sample, include_partial)
+            .unwrap_or_default();
         let (mut stances, mut partial) = (Vec::new(), Vec::new());
         for s in &segmentation.stances {
             if s.partial {
@@ -210,9 +219,54 @@ pub struct LoadCurvesFigure {
     pub curves: Vec<LoadCurveData>,
 }
 
+/// The width of the legend beside the curves, pixels.
+const LEGEND_W: u32 = 260;
+
+impl LoadCurvesFigure {
+    /// The legend's lines: `(text, how it is drawn)`, only for what some curve shows.
+    fn legend(&self) -> Vec<(String, LegendMark)> {
+        let any = |f: &dyn Fn(&LoadCurveData) -> bool| self.curves.iter().any(f);
+        let mut lines = Vec::new();
+        if any(&|c| !c.stances.is_empty()) {
+            lines.push((
+                "detected stance".to_owned(),
+                LegendMark::Shade(STANCE_SHADE),
+            ));
+        }
+        if any(&|c| !c.partial.is_empty()) {
+            let text = "stance cut by the recording's end".to_owned();
+            lines.push((text, LegendMark::Shade(PARTIAL_SHADE)));
+        }
+        let mut baselines: Vec<&str> = self.curves.iter().map(|c| c.baseline_label).collect();
+        baselines.dedup();
+        for label in baselines {
+            lines.push((label.to_owned(), LegendMark::Line(BASELINE, 1)));
+        }
+        lines.push((
+            "total load".to_owned(),
+            LegendMark::Line(category_color(0), 2),
+        ));
+        if any(&|c| !c.sampled.is_empty()) {
+            lines.push((
+                "sampled frame".to_owned(),
+                LegendMark::Dot(category_color(3)),
+            ));
+        }
+        lines
+    }
+}
+
+/// How a legend line is marked.
+#[derive(Clone, Copy, Debug)]
+enum LegendMark {
+    Shade(RGBColor),
+    Line(RGBColor, u32),
+    Dot(RGBColor),
+}
+
 impl Figure for LoadCurvesFigure {
     fn size(&self) -> (u32, u32) {
-        (1000, 40 + 230 * self.curves.len().max(1) as u32)
+        (1000 + LEGEND_W, 40 + 230 * self.curves.len().max(1) as u32)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
@@ -220,10 +274,95 @@ impl Figure for LoadCurvesFigure {
         DB::ErrorType: 'static,
     {
         let body = root.titled(&self.title, title_font(TITLE + 2.0))?;
-        let areas = body.split_evenly((self.curves.len().max(1), 1));
-        for (i, (area, curve)) in areas.iter().zip(&self.curves).enumerate() {
-            draw_load_curve(area, curve, None, i == 0)?;
+        let (w, _) = body.dim_in_pixel();
+        // The legend beside the curves, where it covers none of them.
+        let (curves, legend) = body.split_horizontally(w.saturating_sub(LEGEND_W));
+        let areas = curves.split_evenly((self.curves.len().max(1), 1));
+        for (area, curve) in areas.iter().zip(&self.curves) {
+            draw_load_curve(area, curve, None, false)?;
+        }
+        for (row, (text, mark)) in self.legend().into_iter().enumerate() {
+            let y = 40 + 22 * row as i32;
+            match mark {
+                LegendMark::Shade(color) => {
+                    legend.draw(&Rectangle::new([(4, y - 6), (20, y + 6)], color.filled()))?
+                }
+                LegendMark::Line(color, width) => legend.draw(&PathElement::new(
+                    vec![(4, y), (20, y)],
+                    color.stroke_width(width),
+                ))?,
+                LegendMark::Dot(color) => legend.draw(&Circle::new((12, y), 4, color.filled()))?,
+            }
+            legend.draw(&Text::new(
+                text,
+                (28, y),
+                font(TICK).pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use presrs_core::stance::{BaselineMode, SegmentParams};
+    use presrs_core::{Grid, SensorMeta};
+
+    use super::*;
+
+    /// A recording that is one contact from its first frame to its last (a trial cut to one step).
+    fn one_contact() -> Recording {
+        let grid = Grid::new(6, 4);
+        let data = (0..40)
+            .flat_map(|f| {
+                let load = 50.0 + 100.0 * (std::f64::consts::PI * f64::from(f) / 39.0).sin();
+                (0..grid.len()).map(move |i| load * (1.0 + (i % 3) as f64 / 3.0))
+            })
+            .collect();
+        Recording::new(grid, Some(0.01), data, None, SensorMeta::default()).unwrap()
+    }
+
+    /// With one sample per file the whole recording is the stance (cut at both ends): its sample is
+    /// drawn, and the legend promises a red dot only when one is drawn.
+    #[test]
+    fn the_legend_promises_only_what_is_drawn() {
+        let recording = one_contact();
+        let segment = SegmentParams {
+            baseline: BaselineMode::Contact,
+            ..SegmentParams::default()
+        }
+        .check()
+        .unwrap();
+        let curve = |include_partial| {
+            LoadCurveData::from_recording(
+                "trial".into(),
+                &recording,
+                &PressureScale::default(),
+                &segment,
+                (SampleFrame::default(), include_partial),
+            )
+            .unwrap()
+        };
+        let legend = |curve: LoadCurveData| {
+            let figure = LoadCurvesFigure {
+                title: "t".into(),
+                curves: vec![curve],
+            };
+            figure
+                .legend()
+                .into_iter()
+                .map(|(text, _)| text)
+                .collect::<Vec<_>>()
+        };
+        let sampled = curve(true);
+        assert_eq!(sampled.sampled.len(), 1, "{sampled:?}");
+        assert!(legend(sampled).contains(&"sampled frame".to_owned()));
+        let unsampled = curve(false);
+        assert!(unsampled.sampled.is_empty());
+        let lines = legend(unsampled);
+        assert!(!lines.contains(&"sampled frame".to_owned()), "{lines:?}");
+        assert!(lines.contains(&"stance cut by the recording's end".to_owned()));
     }
 }

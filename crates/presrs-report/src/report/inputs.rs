@@ -68,6 +68,9 @@ pub struct ReportInputs<'a> {
     /// How the stances of those recordings are found and sampled.
     pub segment: ValidSegmentParams,
     pub sample_frame: SampleFrame,
+    /// Whether stances cut by a recording's ends are sampled too (`--include-partial`, and every
+    /// recording with one sample per file).
+    pub include_partial: bool,
     pub simulation: Option<SimulationInputs<'a>>,
     /// Accuracy under sensor faults (a sweep of levels per kind, a line per method); empty for none.
     pub faults: Vec<FaultResult>,
@@ -89,6 +92,7 @@ impl<'a> ReportInputs<'a> {
             recordings: Vec::new(),
             segment: ValidSegmentParams::default(),
             sample_frame: SampleFrame::default(),
+            include_partial: false,
             simulation: None,
             faults: Vec::new(),
             fault_note: None,

@@ -180,12 +180,14 @@ pub(super) fn data_section<'a>(inputs: &ReportInputs<'_>, g: &Groups<'a>) -> Sec
     if let Some(model) = inputs.model {
         let _ = write!(
             summary,
-            "<p>Model: classes {}; crop {} → {} image; {} principal components; Parzen σ = {}.{}</p>",
+            "<p>Model: classes {}; crop {} → {} image; {} principal components; classifier {} \
+             ({}).{}</p>",
             esc(&model.class_names().join(", ")),
             model.crop(),
             model.image_grid(),
             model.pca().n_components(),
-            model.sigma().map_or("—".to_owned(), |s| format!("{s:.4e}")),
+            esc(model.classifier().kind().as_str()),
+            esc(&model.classifier().describe()),
             inputs
                 .model_note
                 .as_ref()
@@ -401,7 +403,7 @@ pub(super) fn load_section<'a>(inputs: &ReportInputs<'_>) -> Option<Section<'a>>
                 r.recording,
                 &scale_of(r.recording),
                 &inputs.segment,
-                inputs.sample_frame,
+                (inputs.sample_frame, inputs.include_partial),
             )
             .ok()
         })
@@ -409,6 +411,7 @@ pub(super) fn load_section<'a>(inputs: &ReportInputs<'_>) -> Option<Section<'a>>
     if curves.is_empty() {
         return None;
     }
+    let caption = load_caption(&curves, inputs);
     Some(Section {
         id: "load",
         heading: "Load curves, detected stances and sampled frames".into(),
@@ -419,15 +422,24 @@ pub(super) fn load_section<'a>(inputs: &ReportInputs<'_>) -> Option<Section<'a>>
                 title: "Total load per frame of sample recordings".into(),
                 curves,
             }),
-            format!(
-                "Total load of every frame (sum over sensels), the stance phases the \
-                 segmentation found (shaded), its baseline (grey) and the frames taken as \
-                 samples ({}, red dots).",
-                esc(&inputs.sample_frame.to_string())
-            ),
+            caption,
         )),
         after: String::new(),
     })
+}
+
+/// What the load curves show: the red dots only when some curve has a sampled frame.
+fn load_caption(curves: &[LoadCurveData], inputs: &ReportInputs<'_>) -> String {
+    let shown = "Total load of every frame (sum over sensels), the stance phases the segmentation \
+                 found (shaded), its baseline (grey)";
+    if curves.iter().any(|c| !c.sampled.is_empty()) {
+        format!(
+            "{shown} and the frames taken as samples ({}, red dots).",
+            esc(&inputs.sample_frame.to_string())
+        )
+    } else {
+        format!("{shown}; none of these recordings gives a sample.")
+    }
 }
 
 /// The samples in the first two principal components (the model's, else fitted to them); `None` with
@@ -501,9 +513,15 @@ pub(super) fn pca_section<'a>(
                 points,
             }),
             format!(
-                "Every image's feature vector projected on {pca_note}; colour: label, marker: \
-                 condition. Separate clusters per label that mix the conditions are what a \
-                 condition-independent classifier needs."
+                "Every image's feature vector projected on {pca_note}; {}. Separate clusters per \
+                 label that mix the conditions are what a condition-independent classifier needs.",
+                if row_names.len() > crate::render::PALETTE.len() {
+                    "colour and marker: label (more labels than colours)"
+                } else if g.has_conditions {
+                    "colour: label, marker: condition"
+                } else {
+                    "colour: label"
+                }
             ),
         )),
         after: String::new(),

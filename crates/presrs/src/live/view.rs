@@ -97,6 +97,7 @@ pub fn replay_recording(
         max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES.max(grid.len() * 8 + 64),
         stop: options.stop.clone(),
         topic: None,
+        frame_period_s: None,
     };
     let summary = run_connection_tapped(
         model,

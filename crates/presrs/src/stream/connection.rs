@@ -30,7 +30,7 @@ pub enum InputFormat {
 }
 
 /// How to read one connection.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ConnectionOptions {
     pub format: InputFormat,
     /// The source's name in messages (`stdin`, a client's address).
@@ -43,6 +43,9 @@ pub struct ConnectionOptions {
     pub stop: Option<ShutdownHandle>,
     /// The topic of an MCAP input (`None`: the only topic holding frames).
     pub topic: Option<String>,
+    /// The frame period, seconds, of a TekScan input whose header states none: its frames are then
+    /// timed from it (`None`: untimed, as are frames of a header without `SECONDS_PER_FRAME`).
+    pub frame_period_s: Option<f64>,
 }
 
 impl Default for ConnectionOptions {
@@ -53,6 +56,7 @@ impl Default for ConnectionOptions {
             max_frame_bytes: DEFAULT_MAX_PAYLOAD_BYTES,
             stop: None,
             topic: None,
+            frame_period_s: None,
         }
     }
 }
@@ -117,7 +121,7 @@ pub fn run_connection_tapped<R: BufRead>(
     };
     match options.format {
         InputFormat::Tekscan => {
-            let mut source = tekscan_source(input, &options.name);
+            let mut source = tekscan_source(input, &options.name, options.frame_period_s);
             let next = |values: &mut Vec<f64>, present: &mut Vec<bool>| {
                 until_stopped(source(values, present))
             };
@@ -398,13 +402,17 @@ fn mcap_source<R: Read>(
     }
 }
 
-/// A TekScan ASCII source over a buffered reader.
+/// A TekScan ASCII source over a buffered reader. Frames are timed by the file's own clock: their
+/// `Frame` numbers times its `SECONDS_PER_FRAME` (else `frame_period_s`), from 0 at the first frame;
+/// untimed when neither is known.
 fn tekscan_source<R: BufRead>(
     reader: R,
     name: &str,
+    frame_period_s: Option<f64>,
 ) -> impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input {
     let mut stream = TekscanStream::new(reader, name);
     let mut failures = 0usize;
+    let mut first_number = None;
     move |values, present| match stream.next_frame(values, present) {
         Ok(Some(frame)) => {
             failures = 0;
@@ -412,7 +420,11 @@ fn tekscan_source<R: BufRead>(
                 Some(header) => Input::Frame {
                     grid: header.grid,
                     has_mask: frame.has_absent,
-                    timestamp_us: None,
+                    timestamp_us: header.period_s.or(frame_period_s).map(|period| {
+                        let first = *first_number.get_or_insert(frame.number);
+                        let frames = frame.number.saturating_sub(first).max(0) as f64;
+                        (frames * period * 1e6).round() as u64
+                    }),
                     arrival: Instant::now(),
                 },
                 None => Input::Fatal("no header".to_owned()),

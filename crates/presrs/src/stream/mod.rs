@@ -40,8 +40,8 @@ use crate::error::{Error, Result};
 
 pub(crate) use bag::DecisionBag;
 pub use bag::{
-    BagRecorder, DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, FRAMES_TOPIC,
-    RecordedBag,
+    BagRecorder, BagReport, ConnectionBags, DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME,
+    DECISIONS_TOPIC, FRAME_TIMES_KEY, FRAMES_TOPIC, FrameTimes, RECORDING_METADATA, RecordedBag,
 };
 pub use connection::{
     ConnectionNotice, ConnectionOptions, ConnectionSummary, InputFormat, MAX_ERROR_NOTICES,
@@ -52,7 +52,7 @@ pub use output::BoundedOutput;
 pub use server::{ServeSummary, ServerNotice, ServerOptions, StreamServer, TapFactory};
 pub use shutdown::ShutdownHandle;
 pub use signals::{SignalWatch, StopSignals};
-pub use tap::{ConnectionTap, NoTap, Taps};
+pub use tap::{ConnectionTap, NoTap, OwnedTaps, Taps};
 
 /// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
 /// and `--gait`).

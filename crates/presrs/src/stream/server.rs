@@ -282,6 +282,7 @@ impl StreamServer {
             &connection_notice,
             tap.as_mut(),
         );
+        tap.end();
         let dropped_in_writer = output.dropped();
         output.close();
         let _ = writer.join();

@@ -23,6 +23,9 @@ pub trait ConnectionTap {
 
     /// One JSON line the connection emitted.
     fn line(&mut self, line: &str);
+
+    /// The connection ended (after its `end` line): a tap that owns a file closes it.
+    fn end(&mut self) {}
 }
 
 /// The tap that sees nothing.
@@ -60,6 +63,49 @@ impl ConnectionTap for Taps<'_> {
     fn line(&mut self, line: &str) {
         for tap in &mut self.0 {
             tap.line(line);
+        }
+    }
+
+    fn end(&mut self) {
+        for tap in &mut self.0 {
+            tap.end();
+        }
+    }
+}
+
+/// Several taps a connection owns (what a server's [`TapFactory`](super::TapFactory) makes for each
+/// client: a live viewer's and a bag's), each seeing everything in turn.
+pub struct OwnedTaps(pub Vec<Box<dyn ConnectionTap + Send>>);
+
+impl std::fmt::Debug for OwnedTaps {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "OwnedTaps({})", self.0.len())
+    }
+}
+
+impl ConnectionTap for OwnedTaps {
+    fn frame(
+        &mut self,
+        index: u64,
+        grid: Grid,
+        values: &[f64],
+        present: Option<&[bool]>,
+        timestamp_us: Option<u64>,
+    ) {
+        for tap in &mut self.0 {
+            tap.frame(index, grid, values, present, timestamp_us);
+        }
+    }
+
+    fn line(&mut self, line: &str) {
+        for tap in &mut self.0 {
+            tap.line(line);
+        }
+    }
+
+    fn end(&mut self) {
+        for tap in &mut self.0 {
+            tap.end();
         }
     }
 }
