@@ -7,6 +7,7 @@
 pub mod fft1d;
 pub mod fft2d;
 pub mod glcm;
+pub mod rocket;
 
 use serde::{Deserialize, Serialize};
 
