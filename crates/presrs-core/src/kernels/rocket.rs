@@ -12,8 +12,9 @@
 
 use pulp::{Arch, Simd, WithSimd};
 
-/// Output registers summed at once per pass over the offsets of [`sum_at_offsets`].
-const SUM_BLOCK: usize = 4;
+/// Output registers summed at once per pass over the offsets of [`sum_at_offsets`] (then 4, 2, 1 for
+/// what is left): independent chains of additions, and one walk over the offsets per block.
+const SUM_BLOCK: usize = 8;
 
 /// Thresholds compared at once per pass over the values of [`count_greater`].
 const COUNT_BLOCK: usize = 8;
@@ -51,28 +52,48 @@ impl WithSimd for SumAtOffsets<'_> {
             return;
         };
         let lanes = S::F64_LANES;
-        let block = SUM_BLOCK * lanes;
-        let whole = out.len() - out.len() % block;
         let mut start = 0;
-        while start < whole {
-            let (head, _) = S::as_simd_f64s(&data[first + start..first + start + block]);
-            let mut acc: [S::f64s; SUM_BLOCK] = core::array::from_fn(|r| head[r]);
-            for &offset in rest {
-                let (terms, _) = S::as_simd_f64s(&data[offset + start..offset + start + block]);
-                for (a, &term) in acc.iter_mut().zip(terms) {
-                    *a = simd.add_f64s(*a, term);
+        for registers in [SUM_BLOCK, 4, 2, 1] {
+            while start + registers * lanes <= out.len() {
+                match registers {
+                    SUM_BLOCK => sum_block::<S, SUM_BLOCK>(simd, data, first, rest, start, out),
+                    4 => sum_block::<S, 4>(simd, data, first, rest, start, out),
+                    2 => sum_block::<S, 2>(simd, data, first, rest, start, out),
+                    _ => sum_block::<S, 1>(simd, data, first, rest, start, out),
                 }
+                start += registers * lanes;
             }
-            let (dst, _) = S::as_mut_simd_f64s(&mut out[start..start + block]);
-            dst.copy_from_slice(&acc);
-            start += block;
         }
+        let whole = start;
         for (t, dst) in out.iter_mut().enumerate().skip(whole) {
             *dst = rest
                 .iter()
                 .fold(data[first + t], |sum, &offset| sum + data[offset + t]);
         }
     }
+}
+
+/// Outputs `start .. start + R * lanes` of [`sum_at_offsets`], in `R` registers.
+#[inline(always)]
+fn sum_block<S: Simd, const R: usize>(
+    simd: S,
+    data: &[f64],
+    first: usize,
+    rest: &[usize],
+    start: usize,
+    out: &mut [f64],
+) {
+    let block = R * S::F64_LANES;
+    let (head, _) = S::as_simd_f64s(&data[first + start..first + start + block]);
+    let mut acc: [S::f64s; R] = core::array::from_fn(|r| head[r]);
+    for &offset in rest {
+        let (terms, _) = S::as_simd_f64s(&data[offset + start..offset + start + block]);
+        for (a, &term) in acc.iter_mut().zip(terms) {
+            *a = simd.add_f64s(*a, term);
+        }
+    }
+    let (dst, _) = S::as_mut_simd_f64s(&mut out[start..start + block]);
+    dst.copy_from_slice(&acc);
 }
 
 /// `counts[f] = ` the number of `values[t] > thresholds[f]` (a NaN value counts for none), for

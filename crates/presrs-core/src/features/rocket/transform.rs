@@ -16,6 +16,16 @@ use super::model::{Combination, RocketModel};
 use crate::error::{CoreError, Result, check_len};
 use crate::kernels::{count_greater, sum_at_offsets};
 
+/// Convolution outputs are computed and counted in whole multiples of this (the most f64 lanes of a
+/// register, AVX-512's 8), so the kernels never fall back to their scalar tails; the outputs past the
+/// counted ones are set to -inf, which is above no bias. The rows keep this much slack at their end for
+/// the reads of those extra outputs.
+const ROUND: usize = 8;
+
+fn rounded(len: usize) -> usize {
+    len.div_ceil(ROUND) * ROUND
+}
+
 /// The buffers of one transform: the sample padded with zeros (as is and tripled), each channel's
 /// nine-tap sums at one dilation, one convolution output and its counts. Made for a model by
 /// [`RocketModel::scratch`]; any scratch works with any model (it grows when it must, the only
@@ -45,12 +55,12 @@ impl RocketScratch {
         self.channels = channels;
         self.length = length;
         self.pad = (KERNEL_LENGTH / 2) * max_dilation;
-        let rows = 2 * channels * self.width() + channels * length;
+        let rows = 2 * channels * self.width() + channels * length + ROUND;
         if self.rows.len() < rows {
             self.rows.resize(rows, 0.0);
         }
-        if self.conv.len() < length {
-            self.conv.resize(length, 0.0);
+        if self.conv.len() < rounded(length) {
+            self.conv.resize(rounded(length), 0.0);
         }
         if self.counts.len() < max_features {
             self.counts.resize(max_features, 0);
@@ -109,8 +119,8 @@ impl RocketScratch {
         }
     }
 
-    /// The convolution output of `combination` at `outputs`, into `conv[..outputs.len()]` (the tap
-    /// sums of its dilation must be loaded for its channels).
+    /// The convolution output of `combination` at `outputs`, into `conv[..outputs.len()]`, then -inf
+    /// up to a multiple of [`ROUND`] (the tap sums of its dilation must be loaded for its channels).
     pub(super) fn convolve(&mut self, combination: &Combination<'_>, outputs: Range<usize>) {
         let Combination {
             dilation,
@@ -129,7 +139,9 @@ impl RocketScratch {
                     .map(|&tap| tripled + tap * dilation),
             );
         }
-        sum_at_offsets(&self.rows, &self.offsets, &mut self.conv[..outputs.len()]);
+        let computed = rounded(outputs.len());
+        sum_at_offsets(&self.rows, &self.offsets, &mut self.conv[..computed]);
+        self.conv[outputs.len()..computed].fill(f64::NEG_INFINITY);
     }
 
     /// The last output of [`convolve`](Self::convolve).
