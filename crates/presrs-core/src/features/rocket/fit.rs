@@ -72,7 +72,7 @@ impl RocketModel {
             let drawn = 2f64.powf(rng.random_range(0.0..max_exponent)) as usize;
             let chosen = drawn.clamp(1, most);
             channels_per_combination.push(chosen);
-            channel_indices.extend(choose_indices(&mut rng, channels, chosen).into_iter());
+            channel_indices.extend(choose_indices(&mut rng, channels, chosen));
         }
         rng.set_stream(EXAMPLE_STREAM);
         let examples = (0..combinations)
