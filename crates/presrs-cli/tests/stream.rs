@@ -919,7 +919,11 @@ fn a_server_records_one_bag_per_connection() {
         assert_eq!(back.data(), sent.data(), "{}", bag.display());
         let bytes = std::fs::read(&bag).unwrap();
         let has = |text: &str| bytes.windows(text.len()).any(|w| w == text.as_bytes());
-        assert!(has("presrs.recording") && has("127.0.0.1:"), "{}", bag.display());
+        assert!(
+            has("presrs.recording") && has("127.0.0.1:"),
+            "{}",
+            bag.display()
+        );
     }
     assert!(!out.exists(), "no bag under the name given: {err}");
 }

@@ -313,7 +313,6 @@ fn median(values: &[f64]) -> f64 {
     }
 }
 
-
 impl BenchReport {
     /// The report as `presrs bench` prints it (a folder the inputs were exported to last).
     pub fn text(&self, export: Option<&Path>) -> String {

@@ -13,6 +13,7 @@ pub mod fft1d;
 pub mod fft2d;
 pub mod glcm;
 mod registry;
+pub mod rocket;
 
 pub use dynamic::{FeatureConfig, FeatureExtractor, Precision};
 pub use family::{FeatureFamily, FitImages, MAX_TRANSFORM_LEN};
@@ -21,6 +22,7 @@ pub use registry::{FeatureKind, register};
 pub use fft1d::{Fft1dConfig, Fft1dExtractor, Fft1dFamily};
 pub use fft2d::{Fft2dConfig, Fft2dExtractor, Fft2dFamily, Fft2dForm};
 pub use glcm::{GLCM_ATTRIBUTE_NAMES, GlcmConfig, GlcmExtractor, GlcmFamily};
+pub use rocket::family::{FittedRocket, RocketExtractor, RocketFamily, RocketParams};
 
 #[cfg(test)]
 mod tests {

@@ -12,13 +12,15 @@ use crate::features::family::FeatureFamily;
 use crate::features::fft1d::Fft1dFamily;
 use crate::features::fft2d::Fft2dFamily;
 use crate::features::glcm::GlcmFamily;
+use crate::features::rocket::family::RocketFamily;
 
 /// The built-in families, in the order users see them. One line per family (every preset of it is a
 /// name).
-const BUILT_IN: [&dyn DynFamily; 3] = [
+const BUILT_IN: [&dyn DynFamily; 4] = [
     Erased::<Fft1dFamily>::FAMILY,
     Erased::<Fft2dFamily>::FAMILY,
     Erased::<GlcmFamily>::FAMILY,
+    Erased::<RocketFamily>::FAMILY,
 ];
 
 /// Families registered at run time, after the built-in ones.
@@ -41,6 +43,9 @@ impl FeatureKind {
     pub const FFT2D_POLAR: Self = Self::preset::<Fft2dFamily>(1);
     /// Haralick attributes of grey-level co-occurrence matrices.
     pub const GLCM: Self = Self::preset::<GlcmFamily>(0);
+    /// MiniRocket's random convolutions of a series (an image's rows as channels over time), learned
+    /// from the training samples.
+    pub const ROCKET: Self = Self::preset::<RocketFamily>(0);
 
     /// Preset `index` of family `F` (registered or not: see [`register`]); a bad index fails to compile
     /// where it is a constant.

@@ -1,0 +1,344 @@
+//! MiniRocket as a feature family (`--features rocket`). A sample's image is read as a series: its rows
+//! are the channels and its columns time (a whole stance's summary, a taxel x time array).
+//!
+//! Before the convolutions each channel is divided by its spread (standard deviation) over the training
+//! samples: a channel combination sums channels of different units (a load in the sensor's units, a
+//! centre of pressure in fractions of the grid), which would otherwise leave the combination to the
+//! channel of largest units. The scales and the fitted MiniRocket model are learned at training
+//! ([`FeatureFamily::fit`]) and stored in the model file with the settings.
+
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result, check_len};
+use crate::features::family::{FeatureFamily, FitImages};
+use crate::features::rocket::config::{RocketConfig, check_shape};
+use crate::features::rocket::model::RocketModel;
+use crate::features::rocket::transform::RocketScratch;
+use crate::frame::Grid;
+
+/// The rocket family.
+#[derive(Debug)]
+pub struct RocketFamily;
+
+/// The family's parameters: MiniRocket's settings and, once trained, what was learned.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RocketParams {
+    /// Features wanted (rounded down to a multiple of 84: 9,996 for the paper's 10,000).
+    #[serde(default = "default_features")]
+    pub num_features: usize,
+    /// The most dilations per kernel (the paper's 32).
+    #[serde(default = "default_dilations")]
+    pub max_dilations_per_kernel: usize,
+    /// The seed of every random choice.
+    #[serde(default)]
+    pub seed: u64,
+    /// Learned at training.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fitted: Option<FittedRocket>,
+}
+
+fn default_features() -> usize {
+    RocketConfig::default().num_features
+}
+
+fn default_dilations() -> usize {
+    RocketConfig::default().max_dilations_per_kernel
+}
+
+impl Default for RocketParams {
+    fn default() -> Self {
+        let config = RocketConfig::default();
+        Self {
+            num_features: config.num_features,
+            max_dilations_per_kernel: config.max_dilations_per_kernel,
+            seed: config.seed,
+            fitted: None,
+        }
+    }
+}
+
+impl RocketParams {
+    /// MiniRocket's settings.
+    pub fn config(&self) -> RocketConfig {
+        RocketConfig {
+            num_features: self.num_features,
+            max_dilations_per_kernel: self.max_dilations_per_kernel,
+            seed: self.seed,
+        }
+    }
+}
+
+/// What training learned: each channel's scale and the MiniRocket model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedRocket {
+    /// Each channel is divided by its scale before the convolutions.
+    pub channel_scales: Vec<f64>,
+    pub model: RocketModel,
+}
+
+/// Rocket features of series of one shape; owns its buffers.
+#[derive(Clone, Debug)]
+pub struct RocketExtractor {
+    grid: Grid,
+    fitted: Arc<FittedRocket>,
+    scaled: Vec<f64>,
+    scratch: RocketScratch,
+}
+
+/// The fitted part, checked against the series' shape `grid` (channels x time).
+fn fitted_for(params: &RocketParams, grid: Grid) -> Result<&FittedRocket> {
+    let fitted = params.fitted.as_ref().ok_or_else(|| CoreError::Param {
+        name: "rocket",
+        reason: "the features are not fitted: they are learned from the training samples, so only \
+                 a trained model can compute them"
+            .into(),
+    })?;
+    let model = &fitted.model;
+    if Grid::new(model.channels(), model.length()) != grid {
+        return Err(CoreError::Shape {
+            what: "rocket series",
+            expected: format!("{} channels x {} frames", model.channels(), model.length()),
+            got: format!("{} x {}", grid.rows, grid.cols),
+        });
+    }
+    Ok(fitted)
+}
+
+impl FeatureFamily for RocketFamily {
+    const NAME: &'static str = "rocket";
+    const PRESETS: &'static [&'static str] = &["rocket"];
+    const COSTLY: bool = true;
+    const LEARNS: bool = true;
+    type Config = RocketParams;
+    type Extractor = RocketExtractor;
+
+    fn preset(_index: usize) -> RocketParams {
+        RocketParams::default()
+    }
+
+    fn check(params: &RocketParams) -> Result<()> {
+        params.config().check()?;
+        if let Some(fitted) = &params.fitted {
+            fitted.model.check()?;
+            if fitted.model.config() != &params.config() {
+                return Err(CoreError::Param {
+                    name: "rocket",
+                    reason: "the fitted model's settings differ from the family's".into(),
+                });
+            }
+            check_len(
+                "rocket channel scales",
+                fitted.model.channels(),
+                fitted.channel_scales.len(),
+            )?;
+            if fitted
+                .channel_scales
+                .iter()
+                .any(|s| !(s.is_finite() && *s > 0.0))
+            {
+                return Err(CoreError::Param {
+                    name: "channel_scales",
+                    reason: "every channel scale must be positive and finite".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn fit(params: &RocketParams, images: FitImages<'_>) -> Result<RocketParams> {
+        let Grid {
+            rows: channels,
+            cols: length,
+        } = images.grid;
+        check_shape("rocket training series", channels, length)?;
+        if images.is_empty() {
+            return Err(CoreError::NotEnoughData(
+                "rocket: no training series to fit on".into(),
+            ));
+        }
+        let channel_scales = channel_spreads(images);
+        let mut scaled = images.values.to_vec();
+        for series in scaled.chunks_exact_mut(channels * length) {
+            for (row, scale) in series.chunks_exact_mut(length).zip(&channel_scales) {
+                row.iter_mut().for_each(|v| *v /= scale);
+            }
+        }
+        let model = RocketModel::fit(&params.config(), &scaled, channels, length)?;
+        Ok(RocketParams {
+            fitted: Some(FittedRocket {
+                channel_scales,
+                model,
+            }),
+            ..params.clone()
+        })
+    }
+
+    fn output_len(params: &RocketParams, grid: Grid) -> Result<usize> {
+        check_shape("rocket series", grid.rows, grid.cols)?;
+        match &params.fitted {
+            Some(_) => Ok(fitted_for(params, grid)?.model.output_len()),
+            None => Ok(params.config().output_len()),
+        }
+    }
+
+    fn feature_names(params: &RocketParams, grid: Grid) -> Result<Vec<String>> {
+        match &params.fitted {
+            Some(_) => Ok(fitted_for(params, grid)?.model.feature_names()),
+            None => {
+                let len = Self::output_len(params, grid)?;
+                Ok((0..len).map(|i| format!("rocket_{i}")).collect())
+            }
+        }
+    }
+
+    fn extractor(params: &RocketParams, grid: Grid) -> Result<RocketExtractor> {
+        let fitted = fitted_for(params, grid)?;
+        Ok(RocketExtractor {
+            grid,
+            scaled: vec![0.0; grid.len()],
+            scratch: fitted.model.scratch(),
+            fitted: Arc::new(fitted.clone()),
+        })
+    }
+
+    fn grid(extractor: &RocketExtractor) -> Grid {
+        extractor.grid
+    }
+
+    fn len(extractor: &RocketExtractor) -> usize {
+        extractor.fitted.model.output_len()
+    }
+
+    fn extract_into(extractor: &mut RocketExtractor, image: &[f64], out: &mut [f64]) -> Result<()> {
+        check_len("rocket series", extractor.grid.len(), image.len())?;
+        let length = extractor.grid.cols;
+        let fitted = &extractor.fitted;
+        for ((dst, src), scale) in extractor
+            .scaled
+            .chunks_exact_mut(length)
+            .zip(image.chunks_exact(length))
+            .zip(&fitted.channel_scales)
+        {
+            for (d, s) in dst.iter_mut().zip(src) {
+                *d = s / scale;
+            }
+        }
+        fitted
+            .model
+            .transform_into(&extractor.scaled, out, &mut extractor.scratch)
+    }
+}
+
+/// Each channel's standard deviation over every value of every training series (1 for a constant
+/// channel, which then stays as it is).
+fn channel_spreads(images: FitImages<'_>) -> Vec<f64> {
+    let Grid {
+        rows: channels,
+        cols: length,
+    } = images.grid;
+    (0..channels)
+        .map(|channel| {
+            let values = (0..images.len())
+                .flat_map(|i| &images.image(i)[channel * length..(channel + 1) * length]);
+            let (mut count, mut mean, mut m2) = (0.0, 0.0, 0.0);
+            for &value in values {
+                // Welford's running mean and squared deviations.
+                count += 1.0;
+                let delta = value - mean;
+                mean += delta / count;
+                m2 += delta * (value - mean);
+            }
+            let spread = (m2 / count).sqrt();
+            if spread.is_finite() && spread > 0.0 {
+                spread
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::features::FeatureConfig;
+    use crate::features::rocket::oracle;
+
+    /// Continuous values (no ties with the biases), channels of very different units.
+    fn series(n: usize, channels: usize, length: usize, phase: f64) -> Vec<f64> {
+        (0..n * channels * length)
+            .map(|i| {
+                let unit = if (i / length) % channels == 0 { 100.0 } else { 0.01 };
+                unit * ((i as f64 * 0.7 + phase).sin() + 0.3 * (i as f64 * 0.13).cos())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn fitted_features_are_the_oracle_s_on_the_scaled_series() {
+        let (channels, length) = (3, 20);
+        let grid = Grid::new(channels, length);
+        let values = series(6, channels, length, 0.0);
+        let params = RocketParams {
+            num_features: 840,
+            ..RocketParams::default()
+        };
+        let config = FeatureConfig::of::<RocketFamily>(params.clone());
+        let images = FitImages {
+            grid,
+            values: &values,
+        };
+        let fitted = config.fit(images).unwrap();
+        let fitted_params = fitted.params::<RocketFamily>().unwrap();
+        let rocket = fitted_params.fitted.as_ref().unwrap();
+        assert_eq!(rocket.channel_scales.len(), channels);
+        let mut extractor = fitted.extractor(grid).unwrap();
+        let fresh = series(1, channels, length, 1.0);
+        let sample = &fresh[..];
+        let features = extractor.extract(sample).unwrap();
+        let scaled: Vec<f64> = sample
+            .chunks_exact(length)
+            .zip(&rocket.channel_scales)
+            .flat_map(|(row, s)| row.iter().map(move |v| v / s))
+            .collect();
+        assert_eq!(features, oracle::transform(&rocket.model, &scaled));
+        assert_eq!(features.len(), 840);
+        // Stored and read back whole.
+        let json = serde_json::to_string(&fitted).unwrap();
+        assert!(json.starts_with(r#"{"kind":"rocket","num_features":840,"#));
+        assert_eq!(
+            serde_json::from_str::<FeatureConfig>(&json).unwrap(),
+            fitted
+        );
+        // Another shape, or no fit, is a clear error.
+        assert!(fitted.extractor(Grid::new(channels, length + 1)).is_err());
+        let err = config.extractor(grid).unwrap_err().to_string();
+        assert!(err.contains("not fitted"), "{err}");
+    }
+
+    #[test]
+    fn scales_are_the_channel_spreads() {
+        let grid = Grid::new(2, 10);
+        let mut values = vec![0.0; 2 * 20];
+        for (i, v) in values.iter_mut().enumerate() {
+            *v = if (i / 10) % 2 == 0 {
+                (i % 10) as f64
+            } else {
+                5.0
+            };
+        }
+        let scales = channel_spreads(FitImages {
+            grid,
+            values: &values,
+        });
+        let spread = ((0..10).map(|x| (x as f64 - 4.5).powi(2)).sum::<f64>() / 10.0).sqrt();
+        assert!((scales[0] - spread).abs() < 1e-12);
+        assert_eq!(scales[1], 1.0, "a constant channel keeps its scale");
+    }
+}
