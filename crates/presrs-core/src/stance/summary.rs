@@ -210,7 +210,7 @@ mod tests {
     fn channels_follow_their_definitions() {
         let grid = Grid::new(8, 4);
         let config = SummaryConfig::default();
-        let mut frames = vec![
+        let mut frames = [
             point(grid, 1, 0, 10.0),
             point(grid, 6, 3, 30.0),
             Frame::zeros(grid),
