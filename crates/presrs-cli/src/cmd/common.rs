@@ -20,7 +20,8 @@ use presrs_io::{ArrayAxes, ReadOptions};
 #[derive(Debug, Clone, clap::Args)]
 pub struct PipelineArgs {
     /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
-    /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes); join
+    /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes), rocket
+    /// (MiniRocket over a series: rows are channels; with --sample stance or series); join
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
     /// by group or condition (--validate-by), among every family: the FFT ones first, then fft1d after
     /// sqrt and log1p, then glcm and fft2d_polar+glcm, as far as --budget allows).

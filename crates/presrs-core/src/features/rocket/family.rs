@@ -274,7 +274,11 @@ mod tests {
     fn series(n: usize, channels: usize, length: usize, phase: f64) -> Vec<f64> {
         (0..n * channels * length)
             .map(|i| {
-                let unit = if (i / length) % channels == 0 { 100.0 } else { 0.01 };
+                let unit = if (i / length) % channels == 0 {
+                    100.0
+                } else {
+                    0.01
+                };
                 unit * ((i as f64 * 0.7 + phase).sin() + 0.3 * (i as f64 * 0.13).cos())
             })
             .collect()
