@@ -257,6 +257,11 @@ fn kinds_parse_and_combine() {
     for kind in FeatureKind::all() {
         let config = kind.default_config();
         assert_eq!(config.kind(), Some(kind));
+        if config.learns() {
+            // Learned from training images: no extractor before a fit.
+            assert!(config.extractor(grid).is_err(), "{kind}");
+            continue;
+        }
         let mut extractor = config.extractor(grid).unwrap();
         let features = extractor.extract(&test_image(38, 41)).unwrap();
         assert!(features.iter().all(|v| v.is_finite()));
