@@ -372,3 +372,21 @@ fn bad_training_data_is_an_error() {
     assert_eq!(model.scales()[1], 1.0);
     assert!((0..3).all(|c| model.coefficients(c).unwrap()[1].abs() < 1e-12));
 }
+
+#[test]
+fn the_model_does_not_depend_on_the_thread_count() {
+    // Large enough (a Gram matrix of 360) for faer to split the product, and its tridiagonalisation if
+    // it were asked to, over threads.
+    let (x, y) = draw(120, 3, 1000, 8);
+    let fit_with = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| fit(&RidgeConfig::default(), &x, &y, 3, true).unwrap())
+    };
+    let one = fit_with(1);
+    for threads in [2, 3] {
+        assert_eq!(fit_with(threads), one, "{threads} threads");
+    }
+}

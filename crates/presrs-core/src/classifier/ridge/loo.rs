@@ -63,7 +63,8 @@ pub struct Spectrum<'a> {
 
 impl<'a> Spectrum<'a> {
     /// Decomposes `z` (`n x p`, columns centred, finite, `n >= 2`) for targets `targets` (`n x k`);
-    /// `par` parallelises the product and the decomposition.
+    /// `par` parallelises the matrix products (faer splits their outputs, so the result does not depend
+    /// on the thread count); the eigendecomposition itself is sequential (see `symmetric_eigen`).
     pub fn new(z: MatRef<'a, f64>, targets: MatRef<'_, f64>, par: Par) -> Result<Self> {
         let (n, p) = (z.nrows(), z.ncols());
         let decomposition = Decomposition::for_shape(n, p);
@@ -234,17 +235,20 @@ fn symmetric_eigen(a: MatRef<'_, f64>, par: Par) -> Result<(Vec<f64>, Mat<f64>)>
     );
     let mut values = Diag::<f64>::zeros(r);
     let mut vectors = Mat::<f64>::zeros(r, r);
+    // faer's parallel tridiagonalisation sums per-thread parts, so its rounding (and at worst the
+    // chosen α) would depend on the thread count; sequential, it costs little next to the product.
+    let evd_par = Par::Seq;
     let mut workspace = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
         r,
         ComputeEigenvectors::Yes,
-        par,
+        evd_par,
         Default::default(),
     ));
     self_adjoint_evd(
         product.as_ref(),
         values.as_mut(),
         Some(vectors.as_mut()),
-        par,
+        evd_par,
         MemStack::new(&mut workspace),
         Default::default(),
     )
