@@ -274,6 +274,7 @@ fn built_in_models_are_stored_as_the_tagged_enum_stored_them() {
         ClassifierKind::LDA,
         ClassifierKind::SVM,
         ClassifierKind::KNN,
+        ClassifierKind::RIDGE,
     ] {
         let config = TrainConfig {
             dims: 6,
@@ -309,9 +310,14 @@ fn built_in_models_are_stored_as_the_tagged_enum_stored_them() {
                     .get::<presrs_core::classifier::SvmFamily>()
                     .unwrap(),
             ),
-            _ => serde_json::to_string(
+            "knn" => serde_json::to_string(
                 classifier
                     .get::<presrs_core::classifier::KnnFamily>()
+                    .unwrap(),
+            ),
+            _ => serde_json::to_string(
+                classifier
+                    .get::<presrs_core::classifier::RidgeFamily>()
                     .unwrap(),
             ),
         }
@@ -331,8 +337,8 @@ fn built_in_models_are_stored_as_the_tagged_enum_stored_them() {
         let config_back: ClassifierConfig = serde_json::from_str(&config_json).unwrap();
         assert_eq!(config_back, config.classifier);
     }
-    let err = serde_json::from_str::<ClassifierConfig>(r#"{"kind":"ridge"}"#).unwrap_err();
-    assert!(err.to_string().contains("unknown variant `ridge`"), "{err}");
+    let err = serde_json::from_str::<ClassifierConfig>(r#"{"kind":"lasso"}"#).unwrap_err();
+    assert!(err.to_string().contains("unknown variant `lasso`"), "{err}");
     let err = serde_json::from_str::<ClassifierConfig>(r#"{"kind":"pwe","sigmaa":1}"#).unwrap_err();
     assert!(err.to_string().contains("sigmaa"), "{err}");
 }

@@ -1,5 +1,6 @@
 //! Classifiers on reduced feature vectors: the paper's Parzen-window estimator, Gaussian maximum likelihood
-//! (MLE) and linear discriminant analysis (LDA), support vector machines and k-nearest neighbours.
+//! (MLE) and linear discriminant analysis (LDA), support vector machines, k-nearest neighbours and ridge
+//! regression (one-vs-rest).
 //!
 //! Each family implements [`ClassifierFamily`] in its own file and is registered once (the built-in list
 //! in `registry.rs`, or [`register`] at run time); [`ClassifierKind`] names one. [`ClassifierConfig`]
@@ -16,6 +17,7 @@ pub mod gaussian;
 pub mod knn;
 pub mod parzen;
 mod registry;
+pub mod ridge;
 pub mod svm;
 
 pub use dynamic::{ClassifierConfig, ClassifierModel, ClassifierScratch};
@@ -30,4 +32,5 @@ pub use parzen::{
     LabeledVectors, ParzenConfig, ParzenModel, ParzenScratch, PweFamily, SigmaChoice, SigmaPoint,
     SigmaSearch,
 };
+pub use ridge::{RidgeConfig, RidgeFamily, RidgeModel, RidgeScratch};
 pub use svm::{Kernel, KernelKind, SvmCandidate, SvmConfig, SvmFamily, SvmModel, SvmScratch};

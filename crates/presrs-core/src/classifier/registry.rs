@@ -10,16 +10,18 @@ use super::family::ClassifierFamily;
 use super::gaussian::{LdaFamily, MleFamily};
 use super::knn::KnnFamily;
 use super::parzen::PweFamily;
+use super::ridge::RidgeFamily;
 use super::svm::SvmFamily;
 use crate::error::{CoreError, Result};
 
 /// The built-in families, in the order the automatic choice tries them. One line per family.
-const BUILT_IN: [ClassifierKind; 5] = [
+const BUILT_IN: [ClassifierKind; 6] = [
     ClassifierKind::PWE,
     ClassifierKind::MLE,
     ClassifierKind::LDA,
     ClassifierKind::SVM,
     ClassifierKind::KNN,
+    ClassifierKind::RIDGE,
 ];
 
 /// Families registered at run time, after the built-in ones.
@@ -41,6 +43,8 @@ impl ClassifierKind {
     pub const SVM: Self = Self::of::<SvmFamily>();
     /// k-nearest neighbours, k chosen on validation.
     pub const KNN: Self = Self::of::<KnnFamily>();
+    /// One-vs-rest ridge regression on standardised features, alpha chosen by exact leave-one-out.
+    pub const RIDGE: Self = Self::of::<RidgeFamily>();
 
     /// The handle of family `F` (registered or not: see [`register`]).
     pub const fn of<F: ClassifierFamily>() -> Self {

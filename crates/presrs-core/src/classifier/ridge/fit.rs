@@ -1,0 +1,208 @@
+//! Fitting the ridge classifier: the standardisation, the ±1 targets, the leave-one-out choice of `α` and
+//! the temperature (see the documentation of the `ridge` module).
+
+use faer::{Mat, MatRef, Par};
+
+use super::loo::Spectrum;
+use super::{RidgeConfig, RidgeModel};
+use crate::classifier::calibration::fit_temperature;
+use crate::classifier::common::{LabeledVectors, accuracy_of_scores, check_vectors};
+use crate::classifier::family::FitData;
+use crate::error::{CoreError, Result};
+
+impl RidgeModel {
+    /// Trains on the training and validation vectors together (see the module documentation).
+    pub(super) fn fit(config: &RidgeConfig, data: FitData<'_>) -> Result<Self> {
+        config.check()?;
+        let (dims, n_classes) = (data.dims, data.n_classes);
+        check_vectors(&data.train, "ridge training vectors", dims, n_classes)?;
+        check_vectors(
+            &data.validation,
+            "ridge validation vectors",
+            dims,
+            n_classes,
+        )?;
+        let sets = [data.train, data.validation];
+        let classes: Vec<usize> = sets
+            .iter()
+            .flat_map(|s| s.classes.iter().copied())
+            .collect();
+        require_every_class(&classes, n_classes)?;
+        let (means, scales) = standardisation(&sets, dims);
+        let standardised = standardise(&sets, &means, &scales);
+        let z = MatRef::from_row_major_slice(&standardised, classes.len(), dims);
+        let targets = targets(&classes, n_classes);
+        // The Gram product and its eigendecomposition are most of the time; faer spreads them over the
+        // cores.
+        let spectrum = Spectrum::new(z, targets.as_ref(), Par::rayon(0))?;
+        let choice = choose_alpha(&spectrum, &config.alphas)?;
+        // The leave-one-out decisions: each target less its leave-one-out residual.
+        let held_out = Mat::from_fn(targets.nrows(), targets.ncols(), |i, t| {
+            targets[(i, t)] - choice.residuals[(i, t)]
+        });
+        let scores = class_scores(held_out.as_ref(), n_classes);
+        let temperature = if data.calibrate {
+            fit_temperature(&scores, &classes, n_classes)?
+        } else {
+            1.0
+        };
+        let columns = spectrum.coefficients(choice.alpha);
+        let mut coefficients = Vec::with_capacity(n_classes * dims);
+        let mut intercepts = Vec::with_capacity(n_classes);
+        for class in 0..n_classes {
+            // Two classes share one column: the first class's decision is its negation.
+            let (column, sign) = if columns.ncols() == 1 {
+                (0, if class == 0 { -1.0 } else { 1.0 })
+            } else {
+                (class, 1.0)
+            };
+            coefficients.extend((0..dims).map(|j| sign * columns[(j, column)]));
+            intercepts.push(sign * spectrum.target_means()[column]);
+        }
+        Ok(Self {
+            dims,
+            n_classes,
+            alpha: choice.alpha,
+            means,
+            scales,
+            coefficients,
+            intercepts,
+            temperature,
+            loo_errors: choice.curve,
+            loo_accuracy: accuracy_of_scores(&scores, &classes, n_classes),
+        })
+    }
+}
+
+/// Errors unless there are two classes or more and every one has a vector.
+fn require_every_class(classes: &[usize], n_classes: usize) -> Result<()> {
+    if n_classes < 2 {
+        return Err(CoreError::NotEnoughData(format!(
+            "the ridge classifier needs at least 2 classes, got {n_classes}"
+        )));
+    }
+    let mut counts = vec![0usize; n_classes];
+    classes.iter().for_each(|&c| counts[c] += 1);
+    if let Some(empty) = counts.iter().position(|&count| count == 0) {
+        return Err(CoreError::NotEnoughData(format!(
+            "class {empty} has no training vector; the ridge classifier needs one of every class"
+        )));
+    }
+    Ok(())
+}
+
+/// The mean and scale of every feature over the vectors of `sets`: the population standard deviation,
+/// or 1 where the variance is within rounding of zero (scikit-learn's `StandardScaler`:
+/// `var <= n ε var + (n ε mean)²`).
+fn standardisation(sets: &[LabeledVectors<'_>], dims: usize) -> (Vec<f64>, Vec<f64>) {
+    let rows = || sets.iter().flat_map(|s| s.vectors.chunks_exact(dims));
+    let n = sets.iter().map(|s| s.classes.len()).sum::<usize>() as f64;
+    let mut means = vec![0.0; dims];
+    for row in rows() {
+        means.iter_mut().zip(row).for_each(|(m, v)| *m += v);
+    }
+    means.iter_mut().for_each(|m| *m /= n);
+    let mut variances = vec![0.0; dims];
+    for row in rows() {
+        for ((var, v), m) in variances.iter_mut().zip(row).zip(&means) {
+            *var += (v - m) * (v - m);
+        }
+    }
+    let scales = variances
+        .iter()
+        .zip(&means)
+        .map(|(sum, mean)| {
+            let var = sum / n;
+            let bound = n * f64::EPSILON * var + (n * mean * f64::EPSILON).powi(2);
+            if var <= bound { 1.0 } else { var.sqrt() }
+        })
+        .collect();
+    (means, scales)
+}
+
+/// The vectors of `sets`, standardised, row-major.
+fn standardise(sets: &[LabeledVectors<'_>], means: &[f64], scales: &[f64]) -> Vec<f64> {
+    let dims = means.len();
+    let mut out = Vec::with_capacity(sets.iter().map(|s| s.vectors.len()).sum());
+    for row in sets.iter().flat_map(|s| s.vectors.chunks_exact(dims)) {
+        out.extend(
+            row.iter()
+                .zip(means)
+                .zip(scales)
+                .map(|((v, m), s)| (v - m) / s),
+        );
+    }
+    out
+}
+
+/// The `±1` targets (`n x k`): one column per class, or for two classes one column, `+1` for the
+/// second (scikit-learn's `LabelBinarizer(pos_label=1, neg_label=-1)`).
+fn targets(classes: &[usize], n_classes: usize) -> Mat<f64> {
+    let columns = if n_classes == 2 { 1 } else { n_classes };
+    Mat::from_fn(classes.len(), columns, |i, t| {
+        let positive = if n_classes == 2 { 1 } else { t };
+        if classes[i] == positive { 1.0 } else { -1.0 }
+    })
+}
+
+/// Per-class scores (`n x n_classes`, row-major) of decisions `n x k`: the columns, or `(-s, s)` for
+/// one column of two classes.
+fn class_scores(decisions: MatRef<'_, f64>, n_classes: usize) -> Vec<f64> {
+    let mut scores = Vec::with_capacity(decisions.nrows() * n_classes);
+    for i in 0..decisions.nrows() {
+        if decisions.ncols() == 1 {
+            scores.extend([-decisions[(i, 0)], decisions[(i, 0)]]);
+        } else {
+            scores.extend((0..decisions.ncols()).map(|t| decisions[(i, t)]));
+        }
+    }
+    scores
+}
+
+/// The chosen regularisation, the residuals it left and the whole curve.
+struct AlphaChoice {
+    alpha: f64,
+    residuals: Mat<f64>,
+    /// `(α, mean squared leave-one-out residual)` for every `α` whose residuals are finite.
+    curve: Vec<(f64, f64)>,
+}
+
+/// The `α` of `alphas` with the smallest mean squared leave-one-out residual over every vector and target
+/// (scikit-learn's criterion without a scorer), the first of equals; an `α` whose residuals are not
+/// finite (a vector the others cannot predict at all, at a vanishing `α`) is never chosen.
+fn choose_alpha(spectrum: &Spectrum<'_>, alphas: &[f64]) -> Result<AlphaChoice> {
+    let mut best: Option<(f64, f64, Mat<f64>)> = None;
+    let mut curve = Vec::with_capacity(alphas.len());
+    for &alpha in alphas {
+        let residuals = spectrum.leave_one_out(alpha);
+        let count = (residuals.nrows() * residuals.ncols()).max(1) as f64;
+        let error = residuals
+            .col_iter()
+            .flat_map(|c| c.iter().map(|r| r * r))
+            .sum::<f64>()
+            / count;
+        if !error.is_finite() {
+            continue;
+        }
+        curve.push((alpha, error));
+        if best
+            .as_ref()
+            .is_none_or(|(_, smallest, _)| error < *smallest)
+        {
+            best = Some((alpha, error, residuals));
+        }
+    }
+    let Some((alpha, _, residuals)) = best else {
+        return Err(CoreError::Param {
+            name: "ridge alphas",
+            reason: format!(
+                "the leave-one-out residuals are not finite for any alpha of {alphas:?}; try larger alphas"
+            ),
+        });
+    };
+    Ok(AlphaChoice {
+        alpha,
+        residuals,
+        curve,
+    })
+}

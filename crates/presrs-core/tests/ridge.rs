@@ -1,0 +1,392 @@
+//! The ridge classifier against scikit-learn's `RidgeClassifierCV` (fixtures/ridge/, made by
+//! `make_fixture.py` there): the same chosen alpha and leave-one-out curve, coefficients within 1e-8, the
+//! same decisions and predictions. Also its registration, its model file checks, its calibration and its
+//! errors.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use presrs_core::classifier::{
+    ClassifierFamily, ClassifierKind, ClassifierModel, FitData, LabeledVectors, RidgeConfig,
+    RidgeFamily, RidgeModel,
+};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::Value;
+
+fn fixture() -> Value {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/ridge/ridge_sklearn.json"
+    );
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn floats(value: &Value) -> Vec<f64> {
+    value
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
+fn indices(value: &Value) -> Vec<usize> {
+    value
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect()
+}
+
+fn fit(
+    config: &RidgeConfig,
+    vectors: &[f64],
+    classes: &[usize],
+    n_classes: usize,
+    calibrate: bool,
+) -> presrs_core::error::Result<RidgeModel> {
+    let dims = vectors.len() / classes.len().max(1);
+    RidgeFamily::fit(
+        config,
+        FitData {
+            train: LabeledVectors { vectors, classes },
+            validation: LabeledVectors {
+                vectors: &[],
+                classes: &[],
+            },
+            n_classes,
+            dims: dims.max(1),
+            calibrate,
+        },
+    )
+}
+
+/// Largest `|a - b|` over two equally long lists.
+fn max_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn the_default_alphas_are_numpys_logspace() {
+    let expected = floats(&fixture()["alphas"]);
+    let alphas = RidgeConfig::default().alphas;
+    assert_eq!(alphas.len(), 10);
+    for (a, e) in alphas.iter().zip(&expected) {
+        assert!((a - e).abs() <= 1e-15 * e, "{a} vs {e}");
+    }
+}
+
+#[test]
+fn matches_scikit_learns_ridge_classifier_cv() {
+    let fixture = fixture();
+    let config = RidgeConfig {
+        alphas: floats(&fixture["alphas"]),
+    };
+    let mut largest = Vec::new();
+    for case in fixture["cases"].as_array().unwrap() {
+        let name = case["name"].as_str().unwrap();
+        let (dims, n_classes) = (
+            case["dims"].as_u64().unwrap() as usize,
+            case["n_classes"].as_u64().unwrap() as usize,
+        );
+        let classes = indices(&case["y_train"]);
+        let model = fit(
+            &config,
+            &floats(&case["x_train"]),
+            &classes,
+            n_classes,
+            true,
+        )
+        .unwrap();
+
+        assert_eq!(model.alpha(), case["alpha"].as_f64().unwrap(), "{name}");
+        assert!(max_difference(model.means(), &floats(&case["scaler_mean"])) < 1e-10);
+        let scales = floats(&case["scaler_scale"]);
+        for (s, e) in model.scales().iter().zip(&scales) {
+            assert!((s - e).abs() <= 1e-12 * e, "{name}: scale {s} vs {e}");
+        }
+        let curve: Vec<f64> = model.loo_errors().iter().map(|&(_, e)| e).collect();
+        let expected_curve = floats(&case["loo_errors"]);
+        assert!(
+            max_difference(&curve, &expected_curve) < 1e-10,
+            "{name}: {curve:?} vs {expected_curve:?}"
+        );
+
+        // Coefficients on the standardised features: one row per class, or for two classes scikit-learn's
+        // single row (the second class's) and its negation.
+        let coef: Vec<Vec<f64>> = case["coef"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(floats)
+            .collect();
+        let intercept = floats(&case["intercept"]);
+        let mut difference = 0.0f64;
+        for class in 0..n_classes {
+            let (row, sign) = if n_classes == 2 {
+                (0, if class == 0 { -1.0 } else { 1.0 })
+            } else {
+                (class, 1.0)
+            };
+            let expected: Vec<f64> = coef[row].iter().map(|c| sign * c).collect();
+            difference = difference.max(max_difference(
+                model.coefficients(class).unwrap(),
+                &expected,
+            ));
+            difference = difference.max((model.intercepts()[class] - sign * intercept[row]).abs());
+        }
+        assert!(
+            difference < 1e-8,
+            "{name}: coefficients differ by {difference:e}"
+        );
+        largest.push((name, difference));
+
+        // Decisions and predictions on the test vectors.
+        let x_test = floats(&case["x_test"]);
+        let decisions = floats(&case["decision_function"]);
+        let predictions = indices(&case["predict"]);
+        let mut scratch = model.scratch();
+        let mut scores = vec![0.0; n_classes];
+        let mut posteriors = vec![0.0; n_classes];
+        let columns = if n_classes == 2 { 1 } else { n_classes };
+        for (i, x) in x_test.chunks_exact(dims).enumerate() {
+            model.decisions_into(x, &mut scratch, &mut scores).unwrap();
+            let expected = &decisions[i * columns..(i + 1) * columns];
+            let ours = if n_classes == 2 {
+                &scores[1..]
+            } else {
+                &scores[..]
+            };
+            assert!(max_difference(ours, expected) < 1e-8, "{name} vector {i}");
+            let class = model
+                .classify_into(x, &mut scratch, &mut posteriors)
+                .unwrap();
+            assert_eq!(class, predictions[i], "{name} vector {i}");
+            assert!((posteriors.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        }
+    }
+    // `cargo test -p presrs-core --test ridge -- --nocapture` shows the margins.
+    println!("largest coefficient / intercept difference from scikit-learn: {largest:?}");
+}
+
+/// `per_class` draws of each of `n_classes` overlapping Gaussian classes in `dims` dimensions, with
+/// uneven feature offsets and scales.
+fn draw(per_class: usize, n_classes: usize, dims: usize, seed: u64) -> (Vec<f64>, Vec<usize>) {
+    let mut centres = ChaCha8Rng::seed_from_u64(99);
+    let centres: Vec<f64> = (0..n_classes * dims)
+        .map(|_| centres.random_range(-0.6..0.6))
+        .collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    for i in 0..per_class * n_classes {
+        let class = i % n_classes;
+        for j in 0..dims {
+            let noise: f64 = (0..4).map(|_| rng.random_range(-1.0..1.0)).sum::<f64>() * 0.6;
+            x.push((centres[class * dims + j] + noise) * (1.0 + j as f64) + 10.0 * j as f64);
+        }
+        y.push(class);
+    }
+    (x, y)
+}
+
+#[test]
+fn calibrated_confidences_follow_the_accuracy_and_calibrate_false_keeps_t_one() {
+    let (n_classes, dims) = (3, 12);
+    let (x, y) = draw(40, n_classes, dims, 1);
+    let config = RidgeConfig::default();
+    let plain = fit(&config, &x, &y, n_classes, false).unwrap();
+    assert_eq!(plain.temperature(), 1.0);
+    let model = fit(&config, &x, &y, n_classes, true).unwrap();
+    assert_eq!(
+        (model.alpha(), model.coefficients(0)),
+        (plain.alpha(), plain.coefficients(0))
+    );
+    assert!(model.temperature() != 1.0);
+
+    let (test_x, test_y) = draw(300, n_classes, dims, 2);
+    let mut scratch = model.scratch();
+    let mut posteriors = vec![0.0; n_classes];
+    let (mut confidence, mut right) = (0.0, 0.0);
+    for (x, &truth) in test_x.chunks_exact(dims).zip(&test_y) {
+        let class = model
+            .classify_into(x, &mut scratch, &mut posteriors)
+            .unwrap();
+        confidence += posteriors[class];
+        right += f64::from(u8::from(class == truth));
+    }
+    let n = test_y.len() as f64;
+    let (confidence, accuracy) = (confidence / n, right / n);
+    assert!(
+        accuracy > 0.6 && accuracy < 0.98,
+        "the classes should overlap: accuracy {accuracy}"
+    );
+    assert!(
+        (confidence - accuracy).abs() < 0.05,
+        "mean confidence {confidence} against accuracy {accuracy} (T {})",
+        model.temperature()
+    );
+    assert!((model.loo_accuracy() - accuracy).abs() < 0.1);
+}
+
+#[test]
+fn two_classes_decide_by_the_sign_of_one_decision() {
+    let (x, y) = draw(15, 2, 5, 3);
+    let model = fit(&RidgeConfig::default(), &x, &y, 2, true).unwrap();
+    assert_eq!(
+        model.coefficients(0).unwrap(),
+        model
+            .coefficients(1)
+            .unwrap()
+            .iter()
+            .map(|c| -c)
+            .collect::<Vec<_>>()
+    );
+    let (test_x, _) = draw(20, 2, 5, 4);
+    let mut scratch = model.scratch();
+    let (mut scores, mut posteriors) = (vec![0.0; 2], vec![0.0; 2]);
+    for x in test_x.chunks_exact(5) {
+        model.decisions_into(x, &mut scratch, &mut scores).unwrap();
+        assert_eq!(scores[0], -scores[1]);
+        let class = model
+            .classify_into(x, &mut scratch, &mut posteriors)
+            .unwrap();
+        assert_eq!(class, usize::from(scores[1] > 0.0));
+        let expected = 1.0 / (1.0 + (-2.0 * scores[1] / model.temperature()).exp());
+        assert!((posteriors[1] - expected).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn registered_stored_loaded_and_not_yet_in_the_automatic_choice() {
+    let kind = ClassifierKind::parse("Ridge").unwrap();
+    assert_eq!(kind, ClassifierKind::RIDGE);
+    assert!(ClassifierKind::all().contains(&kind));
+    assert!(!kind.joins_auto());
+    assert!(!ClassifierKind::auto_candidates().contains(&kind));
+
+    let (x, y) = draw(10, 3, 4, 5);
+    let model = fit(&RidgeConfig::default(), &x, &y, 3, true).unwrap();
+    let none = LabeledVectors {
+        vectors: &[],
+        classes: &[],
+    };
+    let data = LabeledVectors {
+        vectors: &x,
+        classes: &y,
+    };
+    let stored = kind.default_config().fit(data, none, 3, 4).unwrap();
+    assert_eq!(stored.get::<RidgeFamily>().unwrap(), &model);
+    let json = serde_json::to_string(&stored).unwrap();
+    assert!(
+        json.starts_with(r#"{"kind":"ridge","dims":4,"n_classes":3,"alpha":"#),
+        "{json}"
+    );
+    let back: ClassifierModel = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, stored);
+    assert_eq!(back.get::<RidgeFamily>().unwrap(), &model);
+
+    let config = r#"{"kind":"ridge","alphas":[0.5,2.0,0.1]}"#;
+    let config: presrs_core::classifier::ClassifierConfig = serde_json::from_str(config).unwrap();
+    assert_eq!(
+        config.params::<RidgeFamily>().unwrap().alphas,
+        [0.5, 2.0, 0.1]
+    );
+    for bad in [
+        r#"{"kind":"ridge","alphas":[]}"#,
+        r#"{"kind":"ridge","alphas":[1.0,0.0]}"#,
+        r#"{"kind":"ridge","alphas":[-1.0]}"#,
+        r#"{"kind":"ridge","alphas":[1e400]}"#,
+    ] {
+        let parsed = serde_json::from_str::<presrs_core::classifier::ClassifierConfig>(bad);
+        assert!(parsed.is_err() || parsed.unwrap().check().is_err(), "{bad}");
+    }
+}
+
+#[test]
+fn crafted_model_files_are_errors_naming_the_field() {
+    let (x, y) = draw(10, 3, 4, 6);
+    let model = fit(&RidgeConfig::default(), &x, &y, 3, true).unwrap();
+    let good = serde_json::to_value(&model).unwrap();
+    let cases: [(&str, Value, &str); 9] = [
+        ("dims", serde_json::json!(0), "`dims`"),
+        ("n_classes", serde_json::json!(1), "`n_classes`"),
+        ("n_classes", serde_json::json!(4), "`coefficients`"),
+        ("means", serde_json::json!([0.0, 1.0]), "`means`"),
+        (
+            "scales",
+            serde_json::json!([1.0, 1.0, 0.0, 1.0]),
+            "`scales`",
+        ),
+        ("coefficients", serde_json::json!([1.0]), "`coefficients`"),
+        ("intercepts", serde_json::json!([0.0, null, 1.0]), "null"),
+        ("alpha", serde_json::json!(-2.0), "`alpha`"),
+        ("temperature", serde_json::json!(0.0), "`temperature`"),
+    ];
+    for (field, value, message) in cases {
+        let mut crafted = good.clone();
+        crafted[field] = value;
+        let err = serde_json::from_value::<RidgeModel>(crafted).unwrap_err();
+        assert!(err.to_string().contains(message), "{field}: {err}");
+    }
+    let mut huge = good.clone();
+    huge["dims"] = serde_json::json!(usize::MAX);
+    assert!(serde_json::from_value::<RidgeModel>(huge).is_err());
+    // A model file without a temperature reads with T = 1.
+    let mut old = good;
+    old.as_object_mut().unwrap().remove("temperature");
+    assert_eq!(
+        serde_json::from_value::<RidgeModel>(old)
+            .unwrap()
+            .temperature(),
+        1.0
+    );
+}
+
+#[test]
+fn bad_training_data_is_an_error() {
+    let config = RidgeConfig::default();
+    let (x, y) = draw(5, 3, 4, 7);
+    // A class without a vector.
+    let only_two: Vec<usize> = y.iter().map(|&c| c.min(1)).collect();
+    let err = fit(&config, &x, &only_two, 3, true).unwrap_err();
+    assert!(err.to_string().contains("class 2"), "{err}");
+    // One class.
+    assert!(fit(&config, &x, &vec![0; y.len()], 1, true).is_err());
+    // Not finite.
+    let mut nan = x.clone();
+    nan[7] = f64::NAN;
+    assert!(fit(&config, &nan, &y, 3, true).is_err());
+    // Bad hyper-parameters.
+    assert!(fit(&RidgeConfig { alphas: vec![] }, &x, &y, 3, true).is_err());
+    // Constant features are kept with scale 1 and get no weight.
+    let constant: Vec<f64> = x
+        .chunks_exact(4)
+        .flat_map(|row| [row[0], 3.5, row[2], row[3]])
+        .collect();
+    let model = fit(&config, &constant, &y, 3, true).unwrap();
+    assert_eq!(model.scales()[1], 1.0);
+    assert!((0..3).all(|c| model.coefficients(c).unwrap()[1].abs() < 1e-12));
+}
+
+#[test]
+fn the_model_does_not_depend_on_the_thread_count() {
+    // Large enough (a Gram matrix of 360) for faer to split the product, and its tridiagonalisation if
+    // it were asked to, over threads.
+    let (x, y) = draw(120, 3, 1000, 8);
+    let fit_with = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| fit(&RidgeConfig::default(), &x, &y, 3, true).unwrap())
+    };
+    let one = fit_with(1);
+    for threads in [2, 3] {
+        assert_eq!(fit_with(threads), one, "{threads} threads");
+    }
+}
