@@ -29,8 +29,9 @@ pub struct PipelineArgs {
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<FeatureChoice>())]
     pub features: FeatureChoice,
     /// Classifier: pwe (Parzen window, the paper's), mle (Gaussian, shrunk full covariance per class),
-    /// lda (shared covariance), svm (one-vs-one, linear or RBF, C and gamma chosen on validation), knn;
-    /// or auto (the default: chosen by validation inside the training data among all five).
+    /// lda (shared covariance), svm (one-vs-one, linear or RBF, C and gamma chosen on validation), knn,
+    /// ridge (one-vs-rest, for rocket); or auto (the default: chosen by validation inside the training
+    /// data among the first five).
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
     /// With auto: try the intensity transforms (sqrt, log1p) with every feature family, not only with
