@@ -66,6 +66,10 @@ pub enum Opt {
     Batch,
     /// Batches of the benchmark.
     BatchRuns,
+    /// How the automatic choice validates its candidates inside the training data.
+    ValidateBy,
+    /// The one condition an evaluation trains on.
+    TrainCondition,
 }
 
 /// What Python calls an option.
@@ -79,7 +83,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 21] = [
+    pub const ALL: [Opt; 23] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -101,6 +105,8 @@ impl Opt {
         Opt::Iterations,
         Opt::Batch,
         Opt::BatchRuns,
+        Opt::ValidateBy,
+        Opt::TrainCondition,
     ];
 
     /// The command line's flag, e.g. `--per-class`.
@@ -127,6 +133,8 @@ impl Opt {
             Self::Iterations => "--iterations",
             Self::Batch => "--batch",
             Self::BatchRuns => "--batch-runs",
+            Self::ValidateBy => "--validate-by",
+            Self::TrainCondition => "--train-condition",
         }
     }
 
@@ -160,6 +168,8 @@ impl Opt {
             Self::Iterations => Words("the iterations"),
             Self::Batch => Words("the batch size"),
             Self::BatchRuns => Words("the batch runs"),
+            Self::ValidateBy => Argument("validate_by"),
+            Self::TrainCondition => Argument("train_condition"),
         }
     }
 

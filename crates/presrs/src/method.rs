@@ -8,9 +8,9 @@ use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::{Intensity, Preprocess};
-use presrs_core::selection::AutoChoice;
 pub use presrs_core::selection::ChoiceRule;
 pub use presrs_core::selection::ValidateBy;
+use presrs_core::selection::{AutoChoice, CandidateScore, Selection, ValidationFallback};
 use presrs_core::split::ValidationSize;
 use presrs_core::{CoreError, Crop, Grid};
 use presrs_io::message::{Message, Opt};
@@ -308,31 +308,35 @@ pub fn budget_from_seconds(seconds: f64) -> std::result::Result<Option<Duration>
 }
 
 /// The warning for selections whose time budget cut candidates (`None` when none was cut): how many
-/// models, which candidates, and what to do.
-pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Option<Message> {
+/// models, which candidates (each feature family with its classifiers), and what to do.
+pub fn budget_warning(selections: &[Selection]) -> Option<Message> {
     let cut: Vec<_> = selections
         .iter()
         .filter(|selection| selection.scores.iter().any(|score| score.skipped))
         .collect();
     let first = cut.first()?;
-    let skipped: Vec<&presrs_core::selection::CandidateScore> =
-        first.scores.iter().filter(|score| score.skipped).collect();
-    let mut families: Vec<String> = skipped
-        .iter()
-        .map(|score| {
-            let intensity = score.config.preprocess.intensity;
-            let mut name = score.features.clone();
-            if !intensity.is_none() {
-                name.push_str(&format!(" ({intensity})"));
-            }
-            // (the refinement of the best candidates' dims)
-            if score.config.dims != first.scores[0].config.dims {
-                name.push_str(&format!(", {} dims", score.config.dims));
-            }
-            name
-        })
+    let skipped: Vec<&CandidateScore> = first.scores.iter().filter(|score| score.skipped).collect();
+    // Each feature family (with its transform, and its dims when refined) with its classifiers.
+    let mut families: Vec<(String, Vec<&str>)> = Vec::new();
+    for score in &skipped {
+        let intensity = score.config.preprocess.intensity;
+        let mut name = score.features.clone();
+        if !intensity.is_none() {
+            name.push_str(&format!(" ({intensity})"));
+        }
+        // (the refinement of the best candidates' dims)
+        if score.config.dims != first.scores[0].config.dims {
+            name.push_str(&format!(", {} dims", score.config.dims));
+        }
+        match families.iter_mut().find(|(family, _)| *family == name) {
+            Some((_, classifiers)) => classifiers.push(&score.classifier),
+            None => families.push((name, vec![&score.classifier])),
+        }
+    }
+    let families: Vec<String> = families
+        .into_iter()
+        .map(|(family, classifiers)| format!("{family} with {}", classifiers.join(", ")))
         .collect();
-    families.dedup();
     let budget = skipped[0]
         .error
         .as_deref()
@@ -347,7 +351,7 @@ pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Optio
         budget.trim_start_matches("not tried: "),
         skipped.len(),
         first.scores.len(),
-        families.join(", ")
+        families.join("; ")
     ));
     Some(
         message
@@ -356,6 +360,52 @@ pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Optio
             .opt_is(Opt::Budget, 0)
             .text(" for no limit (the choice then does not depend on the machine's speed)"),
     )
+}
+
+/// The warning for selections whose validation scheme was passed over because a held-out fold held a
+/// class its training part lacked (`None` when none was): one line, in how many models, the first
+/// class and fold, and what was used instead.
+pub fn validation_warning(selections: &[Selection]) -> Option<Message> {
+    let fell: Vec<&ValidationFallback> = selections
+        .iter()
+        .filter_map(|selection| selection.fallback.as_ref())
+        .collect();
+    let first = fell.first()?;
+    let (class, fold) = first.unseen.first()?;
+    let models = if selections.len() == 1 {
+        String::new()
+    } else {
+        format!("in {} of {} models, ", fell.len(), selections.len())
+    };
+    let more = match first.unseen.len() {
+        1 => String::new(),
+        n => format!(" (and {} other class(es) the same way)", n - 1),
+    };
+    let what = first.wanted.as_str();
+    Some(
+        Message::from(format!(
+            "{models}the automatic choice validated its candidates by {} instead of {}: holding \
+             out {what} {fold} leaves no training image of class {class}{more}, so every candidate \
+             would score 0 on it; images of one {what} may now be on both sides of a fold, which \
+             makes the internal estimate optimistic (",
+            first.used.describe(),
+            first.wanted.describe()
+        ))
+        .opt_text(Opt::ValidateBy, first.used.as_str())
+        .text(" chooses this without a warning)"),
+    )
+}
+
+/// The paper's method (1-D |FFT| + Parzen window, no intensity transform, the candidates' own number
+/// of components) among a selection's scores, with its index.
+pub fn paper_score(selection: &Selection) -> Option<(usize, &CandidateScore)> {
+    let dims = selection.scores.first()?.config.dims;
+    selection.scores.iter().enumerate().find(|(_, score)| {
+        score.features == FeatureKind::Fft1d.as_str()
+            && score.config.classifier.kind() == ClassifierKind::PWE
+            && score.config.preprocess.intensity.is_none()
+            && score.config.dims == dims
+    })
 }
 
 /// Whether `features` holds a texture family (the costly ones, scored last).

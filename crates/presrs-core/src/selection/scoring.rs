@@ -57,10 +57,9 @@ pub(super) fn score_candidates(
     images: &[LabeledImage<'_>],
     folds: &[InnerFold],
     candidates: &[CheckedTrainConfig],
-    budget: Option<Duration>,
+    budget: Option<Budget>,
     race: &mut Option<Race>,
 ) -> Result<Vec<CandidateScore>> {
-    let started = Instant::now();
     let mut scores: Vec<Option<CandidateScore>> = vec![None; candidates.len()];
     let mut slowest_per_candidate = Duration::ZERO;
     let mut out_of_budget = false;
@@ -69,11 +68,13 @@ pub(super) fn score_candidates(
             && g > 0
         {
             let expected = slowest_per_candidate * group.members.len() as u32;
-            out_of_budget |= started.elapsed() + expected > budget;
+            out_of_budget |= budget.started.elapsed() + expected > budget.total;
         }
-        if out_of_budget {
+        if let Some(budget) = budget
+            && out_of_budget
+        {
             for &index in &group.members {
-                scores[index] = Some(skipped(&candidates[index], budget.unwrap_or_default()));
+                scores[index] = Some(skipped(&candidates[index], budget.total));
             }
             continue;
         }
@@ -86,6 +87,21 @@ pub(super) fn score_candidates(
         }
     }
     Ok(scores.into_iter().flatten().collect())
+}
+
+/// The automatic choice's time budget: `total` from `started`, across every call of
+/// [`score_candidates`] (the refinement of the dims spends what the candidates left).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Budget {
+    pub started: Instant,
+    pub total: Duration,
+}
+
+impl Budget {
+    /// Whether the budget is spent.
+    pub(super) fn spent(&self) -> bool {
+        self.started.elapsed() >= self.total
+    }
 }
 
 /// A race (Maron and Moore's Hoeffding races, with a normal bound): every candidate is scored on the
@@ -121,12 +137,25 @@ impl Race {
 /// A candidate not scored for lack of time.
 pub(super) fn skipped(candidate: &CheckedTrainConfig, budget: Duration) -> CandidateScore {
     let reason = format!(
-        "not tried: the time budget of {} s was spent",
-        budget.as_secs_f64()
+        "not tried: the time budget of {} was spent",
+        seconds_text(budget)
     );
     let mut score = candidate_score(candidate.config(), BTreeMap::new(), Some(reason));
     score.skipped = true;
     score
+}
+
+/// A duration in seconds as a reader wants it: whole seconds from 10 s, else to a tenth (`60 s`,
+/// `2.5 s`), and below a tenth as given.
+pub(super) fn seconds_text(duration: Duration) -> String {
+    let seconds = duration.as_secs_f64();
+    if seconds >= 10.0 {
+        format!("{seconds:.0} s")
+    } else if seconds >= 0.1 {
+        format!("{seconds:.1} s")
+    } else {
+        format!("{seconds} s")
+    }
 }
 
 fn candidate_score(
