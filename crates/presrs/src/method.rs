@@ -84,7 +84,7 @@ pub struct Method {
     pub features: FeatureChoice,
     pub classifier: ClassifierChoice,
     /// With `auto`: try every intensity transform with every feature family (by default only with the
-    /// paper's 1-D |FFT|).
+    /// FFT families, not the texture ones).
     pub full_search: bool,
     /// With `auto`: how long scoring the candidates of one model may take (`None`: no limit, every
     /// candidate scored) [default: [`DEFAULT_BUDGET`]].
@@ -198,10 +198,9 @@ impl Method {
                     ..self.clone()
                 };
                 for feature in families.iter().filter(|f| is_texture(f) == texture) {
-                    // Transforms multiply the default search by a third, not threefold.
-                    let tried = intensity == given
-                        || self.full_search
-                        || matches!(feature, FeatureConfig::Fft1d(_));
+                    // The transforms are raced with every FFT family (their features are cheap,
+                    // and the race drops the clear losers); with the texture ones, in a full search.
+                    let tried = intensity == given || self.full_search || !texture;
                     if !tried {
                         continue;
                     }
@@ -500,11 +499,9 @@ mod tests {
         assert!(auto.is_auto());
         let candidates = auto.candidates(grid, false).unwrap();
         let n_classifiers = ClassifierKind::auto_candidates().len();
-        // every family, and the paper's features with the two intensity transforms
-        assert_eq!(
-            candidates.len(),
-            (CANDIDATE_FEATURES.len() + 2) * n_classifiers
-        );
+        // every family, and the FFT families with the two intensity transforms too
+        let fft_families = CANDIDATE_FEATURES.len() - 2;
+        assert_eq!(candidates.len(), (3 * fft_families + 2) * n_classifiers);
         // the paper's method first; the texture families last, where a budget cuts
         assert_eq!(candidates[0], auto.paper_config(grid).unwrap());
         let texture = |c: &CheckedTrainConfig| is_texture(&c.config().features);

@@ -23,9 +23,10 @@
 //! Candidates that share their features (crop, preprocessing, feature family) are scored together: the
 //! features of every image once, each fold's PCA once, then every classifier on them (`scoring`). A
 //! time budget ([`AutoChoice::budget`]) stops before a feature group that would end past it; callers list
-//! the cheap and likely candidates first. With [`RACE_MIN_FOLDS`] folds or more, candidates race: each is
-//! scored on the first [`RACE_FOLDS`] folds, and those clearly behind the best there are not scored on the
-//! others ([`CandidateScore::dropped_early`]; never chosen).
+//! the cheap and likely candidates first. With [`RACE_MIN_FOLDS`] folds or more, candidates race: every
+//! feature group is scored on the first [`RACE_FOLDS`] folds, those clearly behind the best of all there
+//! are not scored on the others ([`CandidateScore::dropped_early`]; never chosen), and the rest finish,
+//! the most promising groups first, so that a budget cuts the least promising.
 
 mod folds;
 pub(crate) mod record;
@@ -184,14 +185,22 @@ pub fn select(
     // candidate is dropped too.
     let mut race = scoring::Race::of(&folds);
     let budget = budget.map(|total| scoring::Budget { started, total });
-    let mut scores = scoring::score_candidates(images, &folds, candidates, budget, &mut race)?;
+    let mut tables = scoring::Tables::default();
+    let mut scores =
+        scoring::score_candidates(images, &folds, candidates, budget, &mut race, &mut tables)?;
     let variants = dims_variants(&scores, refine_dims)?;
+    tables.retain(&variants);
     match budget {
         Some(budget) if budget.spent() => {
             scores.extend(variants.iter().map(|v| scoring::skipped(v, budget.total)))
         }
         _ => scores.extend(scoring::score_candidates(
-            images, &folds, &variants, budget, &mut race,
+            images,
+            &folds,
+            &variants,
+            budget,
+            &mut race,
+            &mut tables,
         )?),
     }
     let mut chosen = 0;

@@ -21,7 +21,8 @@ pub struct CandidateScore {
     pub per_fold: BTreeMap<String, f64>,
     /// Why the candidate could not be trained, if it could not.
     pub error: Option<String>,
-    /// Not scored: the automatic choice's time budget was spent before its turn (`error` says so).
+    /// Not scored, or in a race scored on the first folds only: the automatic choice's time budget
+    /// was spent before its turn (`error` says so). Never chosen.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub skipped: bool,
     /// Scored on the first folds only: it was clearly behind the best there, and the race

@@ -256,8 +256,15 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
     ));
     for by in [ValidateBy::Group, ValidateBy::Split] {
         let folds = folds::make_folds(&images, by, 5).unwrap().folds;
-        let cached =
-            scoring::score_candidates(&images, &folds, &candidates, None, &mut None).unwrap();
+        let cached = scoring::score_candidates(
+            &images,
+            &folds,
+            &candidates,
+            None,
+            &mut None,
+            &mut Default::default(),
+        )
+        .unwrap();
         assert_eq!(cached.len(), candidates.len());
         for (candidate, score) in candidates.iter().zip(&cached) {
             let (per_fold, error) = score_by_training_each(&images, &folds, candidate);
@@ -396,13 +403,22 @@ fn a_race_drops_clear_losers_after_the_first_folds_only() {
         .unwrap()
         .folds;
     assert_eq!(folds.len(), 4);
-    let full = scoring::score_candidates(&images, &folds, &candidates, None, &mut None).unwrap();
+    let full = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        None,
+        &mut None,
+        &mut Default::default(),
+    )
+    .unwrap();
     let raced = scoring::score_candidates(
         &images,
         &folds,
         &candidates,
         None,
         &mut scoring::Race::of(&folds),
+        &mut Default::default(),
     )
     .unwrap();
     assert!(full.iter().all(|score| score.is_contender()));
@@ -600,8 +616,15 @@ fn a_cut_candidate_names_the_whole_budget_rounded() {
         started,
         total: Duration::from_secs_f64(60.4),
     };
-    let scores =
-        scoring::score_candidates(&images, &folds, &candidates, Some(budget), &mut None).unwrap();
+    let scores = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        Some(budget),
+        &mut None,
+        &mut Default::default(),
+    )
+    .unwrap();
     assert!(!scores[0].skipped);
     assert!(scores[1].skipped);
     assert_eq!(
@@ -612,4 +635,63 @@ fn a_cut_candidate_names_the_whole_budget_rounded() {
         scoring::seconds_text(Duration::from_secs_f64(2.46)),
         "2.5 s"
     );
+}
+
+/// In a race every feature group is scored on the first folds before any finishes, so a candidate is
+/// dropped when clearly behind the best of all there, even one scored before the best's group (issue
+/// #35: the default search races the transforms with every FFT family; what the first folds say
+/// decides what finishes).
+#[test]
+fn a_race_drops_against_the_best_of_every_group_on_the_first_folds() {
+    use crate::classifier::ClassifierKind;
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let frames: Vec<Frame> = (0..64)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let config = |features: crate::features::FeatureConfig, dims| {
+        TrainConfig {
+            features,
+            classifier: ClassifierKind::LDA.default_config(),
+            dims,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    // The weak candidate's group comes first; the strong one's after it.
+    let candidates = [
+        config(crate::features::FeatureConfig::default(), 1),
+        config(crate::features::FeatureKind::Fft2d.default_config(), 12),
+    ];
+    let folds = folds::make_folds(&images, ValidateBy::Group, 1)
+        .unwrap()
+        .folds;
+    let full = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        None,
+        &mut None,
+        &mut Default::default(),
+    )
+    .unwrap();
+    assert!(
+        full[1].accuracy.mean > full[0].accuracy.mean + 0.3,
+        "{:?}",
+        full
+    );
+    let raced = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        None,
+        &mut scoring::Race::of(&folds),
+        &mut Default::default(),
+    )
+    .unwrap();
+    assert!(raced[0].dropped_early, "{:?}", raced[0]);
+    assert_eq!(raced[0].per_fold.len(), RACE_FOLDS);
+    assert_eq!(raced[1], full[1]);
 }
