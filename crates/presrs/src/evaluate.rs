@@ -213,7 +213,7 @@ fn nothing_to_test(
             "{condition} for training; hold each group out in turn with "
         ))
         .opt_text(Opt::LeaveOneOut, "group")
-        .text(" (or another column), train on one condition and test on the others with ")
+        .text(" (given a group in every row) or another column, train on one condition and test on the others with ")
         .opt(Opt::TrainCondition)
         .text(", or draw fewer images per class with ")
         .opt(Opt::PerClass),
