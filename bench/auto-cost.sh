@@ -6,6 +6,14 @@
 #   bench/auto-cost.sh OLD_PRESRS NEW_PRESRS   # several binaries, one column each
 #   ROUNDS=5 bench/auto-cost.sh ...
 #   WORKLOADS="train600 eval-8groups" bench/auto-cost.sh ...   # some workloads only
+#   bench/auto-cost.sh --search [PRESRS ...]   # the default search next to the full one (below)
+#   SETS="tais22" bench/auto-cost.sh --search ...
+#
+# --search (issue #35): on the shared real sets of single pressure maps (tais22, icub20: an object on
+# the array), `eval` leaving one group out, 20 per class, 1 repeat, seed 1, with the default search
+# (its 60 s budget per model) and with `--full-search --budget 0` (every transform with every family,
+# no limit): per binary and search, the wall time, the accuracy and the methods chosen in the five
+# models, so that what the default leaves on the table, and what it costs to take it, sit side by side.
 #
 # Workloads (real data from ../shared/data/real; the issue's own sets are not shared, so the nearest):
 #   train600: `train` auto on 600 one-contact plantar frames of 63 x 33 (jiku-walk, every stance frame,
@@ -24,6 +32,11 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=$(cd "$here/.." && pwd)
 data=${DATA:-$root/../shared/data/real}
 rounds=${ROUNDS:-3}
+search=0
+if [ "${1:-}" = --search ]; then
+    search=1
+    shift
+fi
 binaries=("$@")
 if [ ${#binaries[@]} -eq 0 ]; then
     (cd "$root" && cargo build --release --locked -p presrs-cli >&2)
@@ -31,6 +44,36 @@ if [ ${#binaries[@]} -eq 0 ]; then
 fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+
+# The default search next to the full one (--search): one line per set, binary and search.
+search_side_by_side() {
+    local sets=(${SETS:-tais22 icub20})
+    echo "| set | binary | search | time (s) | accuracy | chosen (models) |"
+    echo "| --- | --- | --- | --- | --- | --- |"
+    for set in "${sets[@]}"; do
+        for i in "${!binaries[@]}"; do
+            for search in default full; do
+                local extra=()
+                [ "$search" = full ] && extra=(--full-search --budget 0)
+                local start end
+                start=$(date +%s.%N)
+                "${binaries[$i]}" eval --manifest "$data/$set/manifest.csv" --leave-one-out group \
+                    --per-class 20 --repeats 1 --seed 1 "${extra[@]}" > "$tmp/search.out" 2> "$tmp/err"
+                end=$(date +%s.%N)
+                local accuracy chosen
+                accuracy=$(awk '$1 == "overall" { print $2 " %" }' "$tmp/search.out")
+                chosen=$(awk '/^automatic choice/ { on = 1; next } on && /^  / { sub(/^  /, ""); printf "%s%s", sep, $0; sep = "; "; next } { on = 0 }' "$tmp/search.out")
+                printf '| %s | %s | %s | %.1f | %s | %s |\n' "$set" "$i" "$search" \
+                    "$(awk "BEGIN { print $end - $start }")" "$accuracy" "$chosen"
+            done
+        done
+    done
+    for i in "${!binaries[@]}"; do echo "binary $i: ${binaries[$i]}"; done
+}
+if [ "$search" = 1 ]; then
+    search_side_by_side
+    exit 0
+fi
 
 run() {
     local binary=$1 workload=$2

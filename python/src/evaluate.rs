@@ -126,8 +126,9 @@ impl Evaluation {
 
 /// Evaluates a method on `data`: a manifest (a path) or images `(n, rows, cols)` with `labels`.
 ///
-/// By default a model is trained on a random draw and tested on every other image (the paper's
-/// protocol), `repeats` times. `leave_one_out="group"` (or `"condition"`, or a manifest column) holds
+/// With `per_class`, a model is trained on a random draw and tested on every other image (the paper's
+/// protocol), `repeats` times; without it (and without a protocol), on G2 when there is such a
+/// condition, else leaving one group out when every image has a group (as `presrs report`). `leave_one_out="group"` (or `"condition"`, or a manifest column) holds
 /// out each value in turn; `train_condition` trains on one condition only. The method options are
 /// `Model.train`'s. `progress=True` writes a line to `sys.stderr` every few seconds; a callable is
 /// called with `(task, done, total)` instead.
@@ -167,17 +168,14 @@ pub fn evaluate(
     if repeats == 0 {
         return Err(data_error("repeats=0: give at least one repeat"));
     }
-    let holdout = match (leave_one_out, train_condition) {
-        (Some(_), Some(_)) => {
-            return Err(data_error(
-                "leave_one_out and train_condition: choose one protocol",
-            ));
-        }
-        (Some(column), None) => Holdout::LeaveOneOut(column),
-        (None, condition) => Holdout::TrainCondition(condition),
-    };
+    if leave_one_out.is_some() && train_condition.is_some() {
+        return Err(data_error(
+            "leave_one_out and train_condition: choose one protocol",
+        ));
+    }
+    let dataset = load(py, data, labels, groups, conditions, progress)?;
     let options = EvalOptions {
-        holdout,
+        holdout: Holdout::resolve(&dataset, leave_one_out, train_condition, per_class),
         per_class,
         validation: validation_size(validation)?,
         repeats,
@@ -193,7 +191,6 @@ pub fn evaluate(
             choose,
         )?,
     };
-    let dataset = load(py, data, labels, groups, conditions, progress)?;
     for warning in &dataset.warnings {
         warn(py, warning)?;
     }

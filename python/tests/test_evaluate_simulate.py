@@ -41,8 +41,10 @@ def test_leave_one_group_out(sim_images):
 
 def test_evaluation_errors_say_what_to_do(sim_images):
     images, labels, _ = sim_images
-    with pytest.raises(presrs.DataError, match="no sample is left to test"):
+    # No protocol, no groups and no per-class draw: refused before any training, in Python's words.
+    with pytest.raises(presrs.DataError, match="no image would be left to test on") as error:
         presrs.evaluate(images, labels, repeats=1, features="fft1d", classifier="pwe")
+    assert 'leave_one_out="group"' in str(error.value) and "--" not in str(error.value)
     with pytest.raises(presrs.DataError, match="labels"):
         presrs.evaluate(images)
     with pytest.raises(presrs.DataError, match="choose one protocol"):

@@ -100,6 +100,26 @@ def test_a_spent_budget_warns_with_the_argument(sim_images):
     assert cut and "give budget= a larger value" in cut[0] and "budget=0 for no limit" in cut[0]
 
 
+def test_a_validation_that_hides_a_class_warns_with_the_argument(sim_images):
+    # Each terrain one group (its trial), as in one gait of the simulator's data: leaving a group out
+    # leaves its terrain out of training, so the choice validates by splits and says so (issue #35).
+    images, labels, gaits = sim_images
+    g2 = gaits == "G2"
+    _, messages = _warned(
+        presrs.Model.train, images[g2], labels[g2], groups=labels[g2], classifier="lda",
+        features="fft1d", budget=0, seed=1,
+    )
+    # (a fixed method makes no choice)
+    assert not any("instead of" in m for m in messages), messages
+    model, messages = _warned(
+        presrs.Model.train, images[g2], labels[g2], groups=labels[g2], classifier="auto",
+        features="fft1d", budget=0, seed=1,
+    )
+    fell = [m for m in messages if "instead of leaving one group out" in m]
+    assert len(fell) == 1, messages
+    assert 'validate_by="split"' in fell[0] and "leaves no training image of class" in fell[0]
+
+
 def test_a_time_last_npy_warns_with_the_argument(tmp_path):
     np.save(tmp_path / "time-last.npy", np.random.default_rng(3).random((6, 5, 40)))
     rec, messages = _warned(presrs.read, tmp_path / "time-last.npy")

@@ -1,5 +1,6 @@
-//! Drawing and validating on small or grouped data sets: `--per-class` capped with one warning, and the
-//! automatic choice validated by group.
+//! Drawing and validating on small or grouped data sets: `--per-class` capped with one warning, the
+//! automatic choice validated by group (or, when that hides a class from training, by splits, with a
+//! warning), and the protocol `eval` takes when none is given.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -364,4 +365,236 @@ fn eval_exports_its_images_and_draws() {
     }
     let (_, again) = run(&dir.path().join("again"));
     assert_eq!(again["draws"], draws["draws"]);
+}
+
+/// Simulated trials of `presrs --help`'s example: one trial (group) per terrain and gait.
+fn simulated(dir: &std::path::Path) -> String {
+    let sim = dir.join("sim");
+    let out = presrs(&[
+        "simulate",
+        "--out",
+        sim.to_str().unwrap(),
+        "--seed",
+        "7",
+        "--hops-per-gait",
+        "6",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    sim.join("manifest.csv").to_str().unwrap().to_owned()
+}
+
+/// Issue #35: trained on one gait, every terrain is one group, so leaving a group out leaves its
+/// terrain out of training and every candidate scored 0 %, silently. The choice now falls back to
+/// stratified splits and says so in one warning line, in train and eval alike; the table says whether
+/// the choice is the paper's method and why the model keeps fewer components than it names.
+#[test]
+fn a_validation_that_hides_a_class_from_training_is_replaced_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = simulated(dir.path());
+    let model = dir.path().join("m.json");
+    let train = presrs(&[
+        "train",
+        "--manifest",
+        &manifest,
+        "--train-condition",
+        "G2",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(train.status.success(), "{}", stderr(&train));
+    let (err, text) = (stderr(&train), stdout(&train));
+    let warned: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("instead of leaving one group out"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{err}");
+    assert!(
+        warned[0].starts_with(
+            "warning: the automatic choice validated its candidates by three \
+             stratified 70/30 splits"
+        ) && warned[0].contains("leaves no training image of class")
+            && warned[0].contains("--validate-by split"),
+        "{err}"
+    );
+    assert!(
+        text.starts_with("automatic choice (three stratified 70/30 splits"),
+        "{text}"
+    );
+    let (percent, _) = estimate_of(&text);
+    assert!(percent > 50.0, "{text}");
+    // The paper's method is named only when chosen; otherwise its score is given beside the choice.
+    let chosen = text.lines().find(|l| l.starts_with("chosen: ")).unwrap();
+    assert!(!chosen.contains("--features"), "{chosen}");
+    assert_eq!(
+        chosen.contains("(the paper's method)"),
+        chosen.starts_with("chosen: fft1d + pwe, 51 dims"),
+        "{chosen}"
+    );
+    // 16 training images keep at most 15 components, whatever the candidate asked for.
+    let summary = text.lines().find(|l| l.contains("PCA ")).unwrap();
+    assert!(summary.contains("PCA 15 components"), "{text}");
+    assert!(
+        text.contains("the model keeps 15 of the ")
+            && text.contains("at most one fewer than its 16 training images"),
+        "{text}"
+    );
+
+    let eval = presrs(&[
+        "eval",
+        "--manifest",
+        &manifest,
+        "--train-condition",
+        "G2",
+        "--repeats",
+        "1",
+        "--budget",
+        "0",
+        "--classifier",
+        "lda",
+        "--features",
+        "fft1d",
+    ]);
+    assert!(eval.status.success(), "{}", stderr(&eval));
+    // (a fixed method makes no choice, so no warning)
+    assert!(!stderr(&eval).contains("instead of"), "{}", stderr(&eval));
+    let eval = presrs(&[
+        "eval",
+        "--manifest",
+        &manifest,
+        "--train-condition",
+        "G2",
+        "--repeats",
+        "1",
+        "--budget",
+        "0.000001",
+    ]);
+    assert!(eval.status.success(), "{}", stderr(&eval));
+    let err = stderr(&eval);
+    assert_eq!(
+        err.lines()
+            .filter(|l| l.contains("instead of leaving one group out"))
+            .count(),
+        1,
+        "{err}"
+    );
+}
+
+/// (internal estimate in %, the validation's words) from `train`'s output.
+fn estimate_of(text: &str) -> (f64, String) {
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("internal estimate: "))
+        .unwrap_or_else(|| panic!("{text}"));
+    let percent: f64 = line["internal estimate: ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    (
+        percent,
+        line.split(", validated by ").nth(1).unwrap().to_owned(),
+    )
+}
+
+/// Candidates a budget cuts say the budget in force, and the warning names their classifiers
+/// (issue #35).
+#[test]
+fn a_cut_search_names_the_budget_and_every_candidate_it_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = simulated(dir.path());
+    let model = dir.path().join("m.json");
+    let train = presrs(&[
+        "train",
+        "--manifest",
+        &manifest,
+        "--train-condition",
+        "G2",
+        "--budget",
+        "0.000001",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(train.status.success(), "{}", stderr(&train));
+    let (err, text) = (stderr(&train), stdout(&train));
+    assert!(
+        text.contains("glcm + svm, 51 dims")
+            && text.contains("not tried: the time budget of 0.000001 s was spent"),
+        "{text}"
+    );
+    assert!(err.contains("glcm with pwe, mle, lda, svm, knn"), "{err}");
+}
+
+/// `eval` decides its protocol before any training (issue #35: one condition and no protocol trained
+/// for 37 s, then found nothing to test on): leave one group out where there are groups, as `report`
+/// does; without groups, an error that names the options, at once. Its counts say they are per fold.
+#[test]
+fn eval_without_a_protocol_holds_out_groups_or_says_what_to_give() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (16, 16), 3, 8, 4, 0.0, 5);
+    let fixed = [
+        "--features",
+        "fft1d",
+        "--classifier",
+        "lda",
+        "--dims",
+        "4",
+        "--repeats",
+        "1",
+    ];
+    let eval = |manifest: &std::path::Path| {
+        presrs(
+            &[
+                &["eval", "--manifest", manifest.to_str().unwrap()][..],
+                &fixed[..],
+            ]
+            .concat(),
+        )
+    };
+    let grouped = eval(&manifest);
+    assert!(grouped.status.success(), "{}", stderr(&grouped));
+    let text = stdout(&grouped);
+    assert!(text.starts_with("leave one `group` out"), "{text}");
+    assert!(
+        text.contains("per repeat: 4 folds, per fold (on average) ")
+            && text.contains("24 tested in all (summed over the folds: "),
+        "{text}"
+    );
+    let plain = dir.path().join("plain.csv");
+    let rows: Vec<String> = std::fs::read_to_string(&manifest)
+        .unwrap()
+        .lines()
+        .map(|l| l.rsplit_once(',').unwrap().0.to_owned())
+        .collect();
+    std::fs::write(&plain, rows.join("\n")).unwrap();
+    let refused = eval(&plain);
+    assert!(!refused.status.success());
+    let err = stderr(&refused);
+    assert!(
+        err.contains("no image would be left to test on")
+            && err.contains("--leave-one-out group")
+            && err.contains("--train-condition")
+            && err.contains("--per-class"),
+        "{err}"
+    );
+    // A per-class draw without a protocol is the random draw it always was.
+    let drawn = presrs(
+        &[
+            &[
+                "eval",
+                "--manifest",
+                plain.to_str().unwrap(),
+                "--per-class",
+                "5",
+            ][..],
+            &fixed[..],
+        ]
+        .concat(),
+    );
+    assert!(drawn.status.success(), "{}", stderr(&drawn));
+    assert!(
+        stdout(&drawn).contains("per repeat: 9 training + 6 validation images, 9 tested"),
+        "{}",
+        stdout(&drawn)
+    );
 }

@@ -121,7 +121,7 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     );
 
     // auto is the default: the cheap feature families (fft1d, fft2d, fft2d_polar) x every classifier,
-    // fft1d after the square root and log1p intensity transforms x every classifier, then the texture
+    // then each after the square root and log1p intensity transforms x every classifier, then the texture
     // families (glcm, fft2d_polar+glcm) x every classifier; --dims given: no refinement of the dims
     let auto = presrs(&[&["eval", "--json"][..], &common[..]].concat());
     assert!(
@@ -132,11 +132,11 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     let json: serde_json::Value = serde_json::from_slice(&auto.stdout).unwrap();
     let selection = &json["selections"][0];
     let scores = selection["scores"].as_array().unwrap();
-    assert_eq!(scores.len(), 35);
-    assert!(selection["chosen"].as_u64().unwrap() < 35);
+    assert_eq!(scores.len(), 55);
+    assert!(selection["chosen"].as_u64().unwrap() < 55);
     let texture = |s: &serde_json::Value| s["features"].as_str().unwrap().contains("glcm");
-    assert!(scores[25..].iter().all(texture), "texture families last");
-    assert!(!scores[..25].iter().any(texture));
+    assert!(scores[45..].iter().all(texture), "texture families last");
+    assert!(!scores[..45].iter().any(texture));
     assert!(scores.iter().all(|s| s.get("skipped").is_none()));
 
     // a budget spent at once: only the first feature group (the paper's features) is scored, the rest
@@ -150,14 +150,14 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     let stderr = String::from_utf8_lossy(&cut.stderr);
     assert!(
         stderr.contains("the automatic choice was cut short (the time budget of")
-            && stderr.contains("30 of 35 candidates not tried")
+            && stderr.contains("50 of 55 candidates not tried")
             && stderr.contains("--budget 0 for no limit"),
         "{stderr}"
     );
     let json: serde_json::Value = serde_json::from_slice(&cut.stdout).unwrap();
     let scores = json["selections"][0]["scores"].as_array().unwrap();
     let skipped: Vec<bool> = scores.iter().map(|s| s["skipped"] == true).collect();
-    assert_eq!(skipped, [vec![false; 5], vec![true; 30]].concat());
+    assert_eq!(skipped, [vec![false; 5], vec![true; 50]].concat());
     let bad = presrs(&[&["eval", "--budget=-1"][..], &common[..]].concat());
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("0 or more"));

@@ -54,10 +54,46 @@ pub struct RepeatResult {
     pub per_condition: BTreeMap<String, f64>,
     /// The Parzen σ of each model trained in this repeat (one per held-out value for leave-one-out).
     pub sigmas: Vec<f64>,
+    /// Training, validation and test images, summed over the repeat's folds (see `folds`).
     pub n_train: usize,
     pub n_validation: usize,
     pub n_test: usize,
     pub train_seconds: f64,
+    /// Models trained in this repeat: one, or one per held-out value with leave-one-out. An image
+    /// trains in every fold but the one that holds it out, so `n_train` and `n_validation` may exceed
+    /// the images there are; `n_test` counts each tested image once per repeat.
+    #[serde(default = "one_fold")]
+    pub folds: usize,
+}
+
+/// Repeats stored before `folds` was recorded trained one model (the paper's protocol) or did not say.
+fn one_fold() -> usize {
+    1
+}
+
+impl RepeatResult {
+    /// The image counts in words: `13 training + 7 validation images, 60 tested` for one model, and per
+    /// fold (on average) with the total tested for several.
+    pub fn counts_text(&self) -> String {
+        if self.folds <= 1 {
+            return format!(
+                "{} training + {} validation images, {} tested",
+                self.n_train, self.n_validation, self.n_test
+            );
+        }
+        let per_fold = |n: usize| n as f64 / self.folds as f64;
+        format!(
+            "{} folds, per fold (on average) {:.0} training + {:.0} validation images and {:.0} \
+             tested; {} tested in all (summed over the folds: {} training + {} validation)",
+            self.folds,
+            per_fold(self.n_train),
+            per_fold(self.n_validation),
+            per_fold(self.n_test),
+            self.n_test,
+            self.n_train,
+            self.n_validation
+        )
+    }
 }
 
 /// The result of an evaluation ([`Evaluation::run`]): every repeat, and their summary.
@@ -342,6 +378,7 @@ impl Evaluation<'_, '_> {
             n_validation: 0,
             n_test: 0,
             train_seconds: 0.0,
+            folds: folds.len(),
         };
         let trained = train_folds(&folds, trainer, repeat_seed, self.progress);
         for (fold, (model, seconds)) in folds.into_iter().zip(trained) {
@@ -1028,6 +1065,25 @@ mod tests {
         );
         assert_eq!(report.repeats[0].n_test, samples.len());
         assert_eq!(report.repeats[0].sigmas.len(), 3);
+        // Issue #35: the counts are summed over the three folds (each draws 8 per class, 3 of them
+        // validating), and the words say so, per fold.
+        let first = &report.repeats[0];
+        assert_eq!(first.folds, 3);
+        assert_eq!((first.n_train, first.n_validation), (3 * 4 * 5, 3 * 4 * 3));
+        let text = first.counts_text();
+        assert!(
+            text.starts_with("3 folds, per fold (on average) 20 training + 12 validation images"),
+            "{text}"
+        );
+        assert!(
+            text.contains(&format!("{} tested in all", samples.len())),
+            "{text}"
+        );
+        let g2 = evaluation(&samples, &g2_protocol(), 1, 3)
+            .run(Models::Config(&config))
+            .unwrap();
+        assert_eq!(g2.repeats[0].folds, 1);
+        assert!(g2.repeats[0].counts_text().ends_with(" tested"));
     }
 
     #[test]

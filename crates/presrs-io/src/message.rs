@@ -68,6 +68,10 @@ pub enum Opt {
     BatchRuns,
     /// Replace what an earlier run wrote in an output folder.
     Force,
+    /// How the automatic choice validates its candidates inside the training data.
+    ValidateBy,
+    /// The one condition an evaluation trains on.
+    TrainCondition,
 }
 
 /// What Python calls an option.
@@ -81,7 +85,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 22] = [
+    pub const ALL: [Opt; 24] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -104,6 +108,8 @@ impl Opt {
         Opt::Batch,
         Opt::BatchRuns,
         Opt::Force,
+        Opt::ValidateBy,
+        Opt::TrainCondition,
     ];
 
     /// The command line's flag, e.g. `--per-class`.
@@ -131,6 +137,8 @@ impl Opt {
             Self::Batch => "--batch",
             Self::BatchRuns => "--batch-runs",
             Self::Force => "--force",
+            Self::ValidateBy => "--validate-by",
+            Self::TrainCondition => "--train-condition",
         }
     }
 
@@ -165,6 +173,8 @@ impl Opt {
             Self::Batch => Words("the batch size"),
             Self::BatchRuns => Words("the batch runs"),
             Self::Force => Words("permission to replace it (an option of the presrs command line)"),
+            Self::ValidateBy => Argument("validate_by"),
+            Self::TrainCondition => Argument("train_condition"),
         }
     }
 

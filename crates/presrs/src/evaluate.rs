@@ -42,6 +42,52 @@ impl Holdout {
     }
 }
 
+impl Holdout {
+    /// The protocol when none is asked for (`presrs report`'s; `presrs eval` and `presrs.evaluate`
+    /// without a per-class draw): trained on G2 on data with a G2 condition (the simulator's, the
+    /// paper's protocol); else leave one group out when every sample has a group and there are two or
+    /// more (a person, a trial, a session: the same one never in training and test); else a random
+    /// draw from every condition.
+    pub fn default_for(dataset: &Dataset) -> Self {
+        let has = |condition: &str| {
+            dataset
+                .samples
+                .iter()
+                .any(|s| s.condition.as_deref() == Some(condition))
+        };
+        if has("G2") {
+            return Self::TrainCondition(Some("G2".to_owned()));
+        }
+        let groups: std::collections::BTreeSet<&str> = dataset
+            .samples
+            .iter()
+            .filter_map(|s| s.group.as_deref())
+            .collect();
+        if groups.len() >= 2 && dataset.samples.iter().all(|s| s.group.is_some()) {
+            Self::LeaveOneOut("group".to_owned())
+        } else {
+            Self::TrainCondition(None)
+        }
+    }
+
+    /// The protocol of `presrs eval` and `presrs.evaluate`, decided before any training: as asked
+    /// (`leave_one_out` or `train_condition`); else, with a per-class draw, a random draw tested on the
+    /// rest; else (a draw of every image would leave none to test on) [`default_for`](Self::default_for).
+    pub fn resolve(
+        dataset: &Dataset,
+        leave_one_out: Option<String>,
+        train_condition: Option<String>,
+        per_class: Option<usize>,
+    ) -> Self {
+        match (leave_one_out, train_condition) {
+            (Some(column), _) => Self::LeaveOneOut(column),
+            (None, Some(condition)) => Self::TrainCondition(Some(condition)),
+            (None, None) if per_class.is_some() => Self::TrainCondition(None),
+            (None, None) => Self::default_for(dataset),
+        }
+    }
+}
+
 /// How an evaluation is run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EvalOptions {
@@ -120,6 +166,58 @@ impl EvalOutcome {
             models: chosen.len(),
         })
     }
+}
+
+/// An error, before any training, when the protocol's draw would take every sample for training and
+/// leave none to test on; it names the options that leave some.
+fn nothing_to_test(
+    dataset: &Dataset,
+    samples: &[LabeledImage<'_>],
+    protocol: &Protocol,
+    options: &EvalOptions,
+) -> Result<()> {
+    let noop = || {};
+    let evaluation = Evaluation {
+        samples,
+        protocol,
+        repeats: 1,
+        seed: options.seed,
+        progress: &noop,
+    };
+    // (a draw that fails says why when the evaluation runs)
+    let Ok(draws) = evaluation.draws() else {
+        return Ok(());
+    };
+    if draws.iter().any(|draw| !draw.test.is_empty()) {
+        return Ok(());
+    }
+    let drawn = match options.per_class {
+        Some(per_class) => Message::new()
+            .opt_is(Opt::PerClass, per_class)
+            .text(" draws every image of every class"),
+        None => Message::from("without ")
+            .opt(Opt::PerClass)
+            .text(", the draw takes every image"),
+    };
+    let condition = match &options.holdout {
+        Holdout::TrainCondition(Some(condition)) => format!(" of condition {condition}"),
+        _ => String::new(),
+    };
+    Err(Error::data(
+        Message::from(format!(
+            "{}: no image would be left to test on: ",
+            dataset.path().display()
+        ))
+        .then(drawn)
+        .text(format!(
+            "{condition} for training; hold each group out in turn with "
+        ))
+        .opt_text(Opt::LeaveOneOut, "group")
+        .text(" (given a group in every row) or another column, train on one condition and test on the others with ")
+        .opt(Opt::TrainCondition)
+        .text(", or draw fewer images per class with ")
+        .opt(Opt::PerClass),
+    ))
 }
 
 /// Accuracy of one method with the test images perturbed.
@@ -217,6 +315,7 @@ impl<'d> EvalSetup<'d> {
                 validation: options.validation,
             },
         };
+        nothing_to_test(dataset, &samples, &protocol, options)?;
         let never_trained = presrs_core::evaluation::labels_never_trained(&samples, &protocol);
         let mut warnings: Warnings = never_trained
             .iter()
@@ -322,6 +421,7 @@ impl<'d> EvalSetup<'d> {
                 n_train.saturating_sub(1)
             )));
         }
+        warnings.extend(crate::method::validation_warning(&selections));
         warnings.extend(crate::method::budget_warning(&selections));
         Ok(EvalOutcome {
             report,

@@ -8,9 +8,9 @@ use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::{Intensity, Preprocess};
-use presrs_core::selection::AutoChoice;
 pub use presrs_core::selection::ChoiceRule;
 pub use presrs_core::selection::ValidateBy;
+use presrs_core::selection::{AutoChoice, CandidateScore, Selection, ValidationFallback};
 use presrs_core::split::ValidationSize;
 use presrs_core::{CoreError, Crop, Grid};
 use presrs_io::message::{Message, Opt};
@@ -84,7 +84,7 @@ pub struct Method {
     pub features: FeatureChoice,
     pub classifier: ClassifierChoice,
     /// With `auto`: try every intensity transform with every feature family (by default only with the
-    /// paper's 1-D |FFT|).
+    /// FFT families, not the texture ones).
     pub full_search: bool,
     /// With `auto`: how long scoring the candidates of one model may take (`None`: no limit, every
     /// candidate scored) [default: [`DEFAULT_BUDGET`]].
@@ -198,8 +198,9 @@ impl Method {
                     ..self.clone()
                 };
                 for feature in families.iter().filter(|f| f.is_costly() == texture) {
-                    // Transforms multiply the default search by a third, not threefold.
-                    let tried = intensity == given || self.full_search || feature.is_fft1d();
+                    // The transforms are raced with every FFT family (their features are cheap,
+                    // and the race drops the clear losers); with the texture ones, in a full search.
+                    let tried = intensity == given || self.full_search || !texture;
                     if !tried {
                         continue;
                     }
@@ -306,31 +307,35 @@ pub fn budget_from_seconds(seconds: f64) -> std::result::Result<Option<Duration>
 }
 
 /// The warning for selections whose time budget cut candidates (`None` when none was cut): how many
-/// models, which candidates, and what to do.
-pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Option<Message> {
+/// models, which candidates (each feature family with its classifiers), and what to do.
+pub fn budget_warning(selections: &[Selection]) -> Option<Message> {
     let cut: Vec<_> = selections
         .iter()
         .filter(|selection| selection.scores.iter().any(|score| score.skipped))
         .collect();
     let first = cut.first()?;
-    let skipped: Vec<&presrs_core::selection::CandidateScore> =
-        first.scores.iter().filter(|score| score.skipped).collect();
-    let mut families: Vec<String> = skipped
-        .iter()
-        .map(|score| {
-            let intensity = score.config.preprocess.intensity;
-            let mut name = score.features.clone();
-            if !intensity.is_none() {
-                name.push_str(&format!(" ({intensity})"));
-            }
-            // (the refinement of the best candidates' dims)
-            if score.config.dims != first.scores[0].config.dims {
-                name.push_str(&format!(", {} dims", score.config.dims));
-            }
-            name
-        })
+    let skipped: Vec<&CandidateScore> = first.scores.iter().filter(|score| score.skipped).collect();
+    // Each feature family (with its transform, and its dims when refined) with its classifiers.
+    let mut families: Vec<(String, Vec<&str>)> = Vec::new();
+    for score in &skipped {
+        let intensity = score.config.preprocess.intensity;
+        let mut name = score.features.clone();
+        if !intensity.is_none() {
+            name.push_str(&format!(" ({intensity})"));
+        }
+        // (the refinement of the best candidates' dims)
+        if score.config.dims != first.scores[0].config.dims {
+            name.push_str(&format!(", {} dims", score.config.dims));
+        }
+        match families.iter_mut().find(|(family, _)| *family == name) {
+            Some((_, classifiers)) => classifiers.push(&score.classifier),
+            None => families.push((name, vec![&score.classifier])),
+        }
+    }
+    let families: Vec<String> = families
+        .into_iter()
+        .map(|(family, classifiers)| format!("{family} with {}", classifiers.join(", ")))
         .collect();
-    families.dedup();
     let budget = skipped[0]
         .error
         .as_deref()
@@ -345,7 +350,7 @@ pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Optio
         budget.trim_start_matches("not tried: "),
         skipped.len(),
         first.scores.len(),
-        families.join(", ")
+        families.join("; ")
     ));
     Some(
         message
@@ -354,6 +359,52 @@ pub fn budget_warning(selections: &[presrs_core::selection::Selection]) -> Optio
             .opt_is(Opt::Budget, 0)
             .text(" for no limit (the choice then does not depend on the machine's speed)"),
     )
+}
+
+/// The warning for selections whose validation scheme was passed over because a held-out fold held a
+/// class its training part lacked (`None` when none was): one line, in how many models, the first
+/// class and fold, and what was used instead.
+pub fn validation_warning(selections: &[Selection]) -> Option<Message> {
+    let fell: Vec<&ValidationFallback> = selections
+        .iter()
+        .filter_map(|selection| selection.fallback.as_ref())
+        .collect();
+    let first = fell.first()?;
+    let (class, fold) = first.unseen.first()?;
+    let models = if selections.len() == 1 {
+        String::new()
+    } else {
+        format!("in {} of {} models, ", fell.len(), selections.len())
+    };
+    let more = match first.unseen.len() {
+        1 => String::new(),
+        n => format!(" (and {} other class(es) the same way)", n - 1),
+    };
+    let what = first.wanted.as_str();
+    Some(
+        Message::from(format!(
+            "{models}the automatic choice validated its candidates by {} instead of {}: holding \
+             out {what} {fold} leaves no training image of class {class}{more}, so every candidate \
+             would score 0 on it; images of one {what} may now be on both sides of a fold, which \
+             makes the internal estimate optimistic (",
+            first.used.describe(),
+            first.wanted.describe()
+        ))
+        .opt_text(Opt::ValidateBy, first.used.as_str())
+        .text(" chooses this without a warning)"),
+    )
+}
+
+/// The paper's method (1-D |FFT| + Parzen window, no intensity transform, the candidates' own number
+/// of components) among a selection's scores, with its index.
+pub fn paper_score(selection: &Selection) -> Option<(usize, &CandidateScore)> {
+    let dims = selection.scores.first()?.config.dims;
+    selection.scores.iter().enumerate().find(|(_, score)| {
+        score.features == FeatureKind::FFT1D.as_str()
+            && score.config.classifier.kind() == ClassifierKind::PWE
+            && score.config.preprocess.intensity.is_none()
+            && score.config.dims == dims
+    })
 }
 
 /// Feature families joined with `+` or `,` (`fft1d`, `fft2d_polar+glcm`); the error lists the names.
@@ -439,11 +490,9 @@ mod tests {
         assert!(auto.is_auto());
         let candidates = auto.candidates(grid, false).unwrap();
         let n_classifiers = ClassifierKind::auto_candidates().len();
-        // every family, and the paper's features with the two intensity transforms
-        assert_eq!(
-            candidates.len(),
-            (CANDIDATE_FEATURES.len() + 2) * n_classifiers
-        );
+        // every family, and the FFT families with the two intensity transforms too
+        let fft_families = CANDIDATE_FEATURES.len() - 2;
+        assert_eq!(candidates.len(), (3 * fft_families + 2) * n_classifiers);
         // the paper's method first; the texture families last, where a budget cuts
         assert_eq!(candidates[0], auto.paper_config(grid).unwrap());
         let texture = |c: &CheckedTrainConfig| c.config().features.is_costly();

@@ -469,9 +469,7 @@ pub struct ReportSummary {
 }
 
 /// The protocol of the report's evaluation: as asked (`--train-condition`, `--leave-one-out`); else
-/// the paper's (trained on G2) on data with a G2 condition (the simulator's); else leave one group out
-/// when the manifest has two or more groups (a person, a trial, a session: the same one never in
-/// training and test); else a random draw from every condition.
+/// [`Holdout::default_for`] (the one `presrs eval` takes without a protocol or a per-class draw).
 pub fn report_holdout(dataset: &Dataset, options: &ReportOptions) -> Holdout {
     if let Some(column) = &options.leave_one_out {
         return Holdout::LeaveOneOut(column.clone());
@@ -479,25 +477,7 @@ pub fn report_holdout(dataset: &Dataset, options: &ReportOptions) -> Holdout {
     if let Some(condition) = &options.train_condition {
         return Holdout::TrainCondition(Some(condition.clone()));
     }
-    let has = |condition: &str| {
-        dataset
-            .samples
-            .iter()
-            .any(|s| s.condition.as_deref() == Some(condition))
-    };
-    if has("G2") {
-        return Holdout::TrainCondition(Some("G2".to_owned()));
-    }
-    let groups: BTreeSet<&str> = dataset
-        .samples
-        .iter()
-        .filter_map(|s| s.group.as_deref())
-        .collect();
-    if groups.len() >= 2 && dataset.samples.iter().all(|s| s.group.is_some()) {
-        Holdout::LeaveOneOut("group".to_owned())
-    } else {
-        Holdout::TrainCondition(None)
-    }
+    Holdout::default_for(dataset)
 }
 
 /// `presrs report`: the report of a data set in `out_dir` (`index.html` and its figures), with a

@@ -162,9 +162,9 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
                 .map(|(class, &n)| (None, class.as_str(), n)),
         ));
     }
-    warnings.extend(crate::method::budget_warning(
-        model.selection().cloned().as_slice(),
-    ));
+    let selections = model.selection().cloned();
+    warnings.extend(crate::method::validation_warning(selections.as_slice()));
+    warnings.extend(crate::method::budget_warning(selections.as_slice()));
     let kept = model.pca().n_components();
     if let Some(dims) = method.dims
         && kept < dims

@@ -30,6 +30,9 @@ pub struct EvalArgs {
     #[arg(long)]
     pub manifest: PathBuf,
     /// Train on samples of this condition only; test on every other sample (the paper's protocol).
+    /// With neither this nor --leave-one-out: a random draw of --per-class tested on the rest, or
+    /// without --per-class the protocol of `presrs report` (trained on G2 when there is such a
+    /// condition, else leave one group out when every sample has a group).
     #[arg(long, conflicts_with = "leave_one_out")]
     pub train_condition: Option<String>,
     /// Hold out each value of this manifest column in turn (e.g. condition, group, or an extra column;
@@ -86,10 +89,12 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = EvalOptions {
-        holdout: match &args.leave_one_out {
-            Some(column) => Holdout::LeaveOneOut(column.clone()),
-            None => Holdout::TrainCondition(args.train_condition.clone()),
-        },
+        holdout: Holdout::resolve(
+            &dataset,
+            args.leave_one_out.clone(),
+            args.train_condition.clone(),
+            args.per_class,
+        ),
         per_class: args.per_class,
         validation: args.validation,
         repeats: args.repeats,
@@ -223,8 +228,9 @@ pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<
     let first = &report.repeats[0];
     writeln!(
         out,
-        "per repeat: {} training + {} validation images, {} tested; training {:.3} s",
-        first.n_train, first.n_validation, first.n_test, first.train_seconds
+        "per repeat: {}; training {:.3} s",
+        first.counts_text(),
+        first.train_seconds
     )?;
     writeln!(
         out,

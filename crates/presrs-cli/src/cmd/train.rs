@@ -8,7 +8,6 @@ use presrs::profile::{
     GaitTableSim, ProfileChoice, ProfileRequest, model_profile, profile_summary,
 };
 use presrs::train::TrainOptions;
-use presrs_core::selection::Selection;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
@@ -99,7 +98,9 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let model = &training.model;
     if let Some(selection) = model.selection() {
-        print_selection(selection, out)?;
+        for line in presrs::selection_table::selection_lines(selection, model, training.n_train()) {
+            writeln!(out, "{line}")?;
+        }
     }
     let mut file = training.model_file(
         &dataset,
@@ -157,53 +158,5 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         writeln!(out, "{}", profile_summary(profile))?;
     }
     writeln!(out, "model written to {}", args.out.display())?;
-    Ok(())
-}
-
-/// The automatic choice's table: every candidate's validation accuracy, the chosen one marked.
-fn print_selection(selection: &Selection, out: &mut dyn Write) -> anyhow::Result<()> {
-    writeln!(out, "automatic choice ({}):", selection.method)?;
-    let folds = selection
-        .scores
-        .iter()
-        .filter(|score| score.is_contender())
-        .map(|score| score.per_fold.len())
-        .max()
-        .unwrap_or(0);
-    for (i, score) in selection.scores.iter().enumerate() {
-        let mark = if i == selection.chosen { "*" } else { " " };
-        match &score.error {
-            None if score.dropped_early => writeln!(
-                out,
-                "{mark} {:<40} {:6.2} % on the first {} of {folds} folds: clearly behind, dropped",
-                score.name(),
-                100.0 * score.accuracy.mean,
-                score.per_fold.len()
-            )?,
-            None => writeln!(
-                out,
-                "{mark} {:<40} {:6.2} % +- {:.2}",
-                score.name(),
-                100.0 * score.accuracy.mean,
-                100.0 * score.accuracy.std
-            )?,
-            Some(err) if score.skipped => writeln!(out, "{mark} {:<40} {err}", score.name())?,
-            Some(err) => writeln!(out, "{mark} {:<40} failed: {err}", score.name())?,
-        }
-    }
-    if let Some(chosen) = selection.chosen() {
-        writeln!(
-            out,
-            "chosen: {} (the paper's method: --features fft1d --classifier pwe)",
-            chosen.name()
-        )?;
-        writeln!(
-            out,
-            "internal estimate: {:.2} % +- {:.2}, validated by {}",
-            100.0 * chosen.accuracy.mean,
-            100.0 * chosen.accuracy.std,
-            selection.method
-        )?;
-    }
     Ok(())
 }

@@ -1,8 +1,12 @@
 //! The folds an automatic choice validates its candidates on, made from the training data alone.
 
-use super::{MAX_INNER_FOLDS, ValidateBy};
+use std::collections::BTreeSet;
+
+use super::MAX_INNER_FOLDS;
 use crate::error::{CoreError, Result};
 use crate::pipeline::extract::LabeledImage;
+use crate::selection::record::ValidationFallback;
+use crate::selection::validate_by::ValidateBy;
 use crate::split::{ValidationSize, stratified_split};
 
 /// Which field of an image its folds are made by.
@@ -17,57 +21,127 @@ pub(super) struct InnerFold {
     pub test: Vec<usize>,
 }
 
+/// The folds an automatic choice scores its candidates on, and how they were made.
+pub(super) struct Folds {
+    pub folds: Vec<InnerFold>,
+    /// The validation in words.
+    pub method: String,
+    /// The scheme passed over, if one was.
+    pub fallback: Option<ValidationFallback>,
+}
+
 /// The folds of `images` as `by` says (resolved from the images' groups and conditions), with the
-/// validation described in words. Deterministic in `seed`.
-pub(super) fn make_folds(
-    images: &[LabeledImage<'_>],
-    by: ValidateBy,
-    seed: u64,
-) -> Result<(Vec<InnerFold>, String)> {
-    let labels: Vec<&str> = images.iter().map(|i| i.label).collect();
-    let distinct = |key: Key| -> Option<Vec<&str>> {
-        let keys: Option<Vec<&str>> = images.iter().map(key).collect();
-        let mut keys = keys?;
-        keys.sort_unstable();
-        keys.dedup();
-        Some(keys)
-    };
-    let groups = distinct(|i| i.group).unwrap_or_default();
-    let conditions = distinct(|i| i.condition).unwrap_or_default();
-    let by = by.resolve(groups.len(), conditions.len());
-    let mut folds = Vec::new();
-    if by == ValidateBy::Split {
-        for k in 0..3u64 {
-            let outer = stratified_split(
-                &labels,
-                None,
-                ValidationSize::Fraction(0.3),
-                seed.wrapping_add(k),
-            )?;
-            let inner_labels: Vec<&str> = outer.train.iter().map(|&i| labels[i]).collect();
-            let inner = stratified_split(
-                &inner_labels,
-                None,
-                ValidationSize::Fraction(0.35),
-                seed.wrapping_add(1000 + k),
-            )?;
-            folds.push(InnerFold {
-                name: format!("split {k}"),
-                train: inner.train.iter().map(|&j| outer.train[j]).collect(),
-                validation: inner.validation.iter().map(|&j| outer.train[j]).collect(),
-                test: outer.validation.clone(),
+/// validation described in words. A scheme under which a held-out fold holds a class that its training
+/// part lacks is not used: `auto` goes on to the next it would choose (condition, then splits), a
+/// scheme asked for falls back to stratified splits, and [`Folds::fallback`] says so. Deterministic
+/// in `seed`.
+pub(super) fn make_folds(images: &[LabeledImage<'_>], by: ValidateBy, seed: u64) -> Result<Folds> {
+    let groups = distinct(images, |i| i.group);
+    let conditions = distinct(images, |i| i.condition);
+    let wanted = by.resolve(groups.len(), conditions.len());
+    let mut tried = wanted;
+    let mut fallback: Option<ValidationFallback> = None;
+    loop {
+        if tried == ValidateBy::Split {
+            let folds = split_folds(images, seed)?;
+            let method = "three stratified 70/30 splits of the training data".to_owned();
+            return Ok(Folds {
+                folds,
+                method,
+                fallback: fallback.map(|f| ValidationFallback { used: tried, ..f }),
             });
         }
-        return Ok((
-            folds,
-            "three stratified 70/30 splits of the training data".to_owned(),
-        ));
+        let (folds, method) = if tried == ValidateBy::Group {
+            held_out_folds(images, "group", &groups, |i| i.group, seed)?
+        } else {
+            held_out_folds(images, "condition", &conditions, |i| i.condition, seed)?
+        };
+        let unseen = classes_unseen_in_training(images, &folds);
+        if unseen.is_empty() {
+            return Ok(Folds {
+                folds,
+                method,
+                fallback: fallback.map(|f| ValidationFallback { used: tried, ..f }),
+            });
+        }
+        fallback.get_or_insert(ValidationFallback {
+            wanted,
+            used: ValidateBy::Split,
+            unseen,
+        });
+        tried = if tried == ValidateBy::Group && by == ValidateBy::Auto && conditions.len() >= 2 {
+            ValidateBy::Condition
+        } else {
+            ValidateBy::Split
+        };
     }
-    let (what, distinct, key): (&str, &[&str], Key) = if by == ValidateBy::Group {
-        ("group", &groups, |i| i.group)
-    } else {
-        ("condition", &conditions, |i| i.condition)
-    };
+}
+
+/// The distinct values of `key` over `images`, sorted; empty when an image has none.
+fn distinct<'a>(images: &[LabeledImage<'a>], key: Key) -> Vec<&'a str> {
+    let keys: Option<Vec<&str>> = images.iter().map(key).collect();
+    let mut keys = keys.unwrap_or_default();
+    keys.sort_unstable();
+    keys.dedup();
+    keys
+}
+
+/// The classes some fold tests on and does not train on, each with the first such fold's name.
+fn classes_unseen_in_training(
+    images: &[LabeledImage<'_>],
+    folds: &[InnerFold],
+) -> Vec<(String, String)> {
+    let mut unseen: Vec<(String, String)> = Vec::new();
+    for fold in folds {
+        let trained: BTreeSet<&str> = fold.train.iter().map(|&i| images[i].label).collect();
+        let tested: BTreeSet<&str> = fold.test.iter().map(|&i| images[i].label).collect();
+        for class in tested.difference(&trained) {
+            if !unseen.iter().any(|(c, _)| c == class) {
+                unseen.push(((*class).to_owned(), fold.name.clone()));
+            }
+        }
+    }
+    unseen
+}
+
+/// Three seeded stratified splits: 70 % to train (of which 35 % validate), 30 % to test.
+fn split_folds(images: &[LabeledImage<'_>], seed: u64) -> Result<Vec<InnerFold>> {
+    let labels: Vec<&str> = images.iter().map(|i| i.label).collect();
+    let mut folds = Vec::new();
+    for k in 0..3u64 {
+        let outer = stratified_split(
+            &labels,
+            None,
+            ValidationSize::Fraction(0.3),
+            seed.wrapping_add(k),
+        )?;
+        let inner_labels: Vec<&str> = outer.train.iter().map(|&i| labels[i]).collect();
+        let inner = stratified_split(
+            &inner_labels,
+            None,
+            ValidationSize::Fraction(0.35),
+            seed.wrapping_add(1000 + k),
+        )?;
+        folds.push(InnerFold {
+            name: format!("split {k}"),
+            train: inner.train.iter().map(|&j| outer.train[j]).collect(),
+            validation: inner.validation.iter().map(|&j| outer.train[j]).collect(),
+            test: outer.validation.clone(),
+        });
+    }
+    Ok(folds)
+}
+
+/// One fold per value of `key` (`what`: group or condition) with its images held out, or
+/// [`MAX_INNER_FOLDS`] folds of whole values; the rest of the images, stratified, train (65 %) and
+/// validate (35 %).
+fn held_out_folds(
+    images: &[LabeledImage<'_>],
+    what: &str,
+    distinct: &[&str],
+    key: Key,
+    seed: u64,
+) -> Result<(Vec<InnerFold>, String)> {
     if distinct.len() < 2 {
         return Err(CoreError::NotEnoughData(format!(
             "validating by {what} needs at least two {what}s in the training data, with a value for every image; found {}",
@@ -89,6 +163,8 @@ pub(super) fn make_folds(
             distinct.len()
         )
     };
+    let labels: Vec<&str> = images.iter().map(|i| i.label).collect();
+    let mut folds = Vec::new();
     for (k, held_out) in held_out_sets.iter().enumerate() {
         let held = |i: usize| key(&images[i]).is_some_and(|value| held_out.contains(&value));
         let pool: Vec<usize> = (0..images.len()).filter(|&i| !held(i)).collect();

@@ -9,6 +9,11 @@
 //!   conditions;
 //! - otherwise three seeded stratified splits: 70 % to train (of which 35 % validate), 30 % to test.
 //!
+//! A scheme under which a held-out fold holds a class its training part lacks is not used (every
+//! candidate would score 0 on that class, and the choice would be blind): `auto` goes on to the next
+//! (condition, then splits), a scheme asked for falls back to splits, and [`Selection::fallback`] records
+//! it for the callers to say.
+//!
 //! More than [`MAX_INNER_FOLDS`] groups (or conditions) are merged, whole, into that many folds.
 //!
 //! The candidate with the highest mean fold accuracy wins; ties go to the earlier candidate (callers list
@@ -18,15 +23,17 @@
 //! Candidates that share their features (crop, preprocessing, feature family) are scored together: the
 //! features of every image once, each fold's PCA once, then every classifier on them (`scoring`). A
 //! time budget ([`AutoChoice::budget`]) stops before a feature group that would end past it; callers list
-//! the cheap and likely candidates first. With [`RACE_MIN_FOLDS`] folds or more, candidates race: each is
-//! scored on the first [`RACE_FOLDS`] folds, and those clearly behind the best there are not scored on the
-//! others ([`CandidateScore::dropped_early`]; never chosen).
+//! the cheap and likely candidates first. With [`RACE_MIN_FOLDS`] folds or more, candidates race: every
+//! feature group is scored on the first [`RACE_FOLDS`] folds, those clearly behind the best of all there
+//! are not scored on the others ([`CandidateScore::dropped_early`]; never chosen), and the rest finish,
+//! the most promising groups first, so that a budget cuts the least promising.
 
 mod folds;
 pub(crate) mod record;
 mod scoring;
 #[cfg(test)]
 mod tests;
+pub(crate) mod validate_by;
 
 use std::time::Duration;
 
@@ -38,7 +45,8 @@ use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
 use crate::pipeline::train::train;
 
-pub use record::{CandidateScore, Selection};
+pub use record::{CandidateScore, Selection, ValidationFallback};
+pub use validate_by::ValidateBy;
 
 /// At most this many folds when validating by group or condition: more values are merged, whole, into
 /// this many folds (as scikit-learn's `GroupKFold`, 5 folds by default). Each fold costs a training of
@@ -51,68 +59,6 @@ pub const RACE_FOLDS: usize = 2;
 pub const RACE_MIN_FOLDS: usize = 4;
 /// How many standard errors behind the best a candidate must be on the first folds to be dropped.
 pub const RACE_Z: f64 = 2.0;
-
-/// How the automatic choice validates its candidates inside the training data.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ValidateBy {
-    /// Group when the images span 3 or more groups, else condition when they span 2 or more, else
-    /// stratified splits.
-    #[default]
-    Auto,
-    /// Leave one group out (at least two groups needed).
-    Group,
-    /// Leave one condition out (at least two conditions needed).
-    Condition,
-    /// Three stratified 70/30 splits.
-    Split,
-}
-
-impl ValidateBy {
-    pub const NAMES: [&'static str; 4] = ["auto", "group", "condition", "split"];
-
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Auto => "auto",
-            Self::Group => "group",
-            Self::Condition => "condition",
-            Self::Split => "split",
-        }
-    }
-
-    /// What `Auto` means for images with these distinct groups and conditions (counts).
-    pub fn resolve(self, groups: usize, conditions: usize) -> Self {
-        match self {
-            Self::Auto if groups >= 3 => Self::Group,
-            Self::Auto if conditions >= 2 => Self::Condition,
-            Self::Auto => Self::Split,
-            other => other,
-        }
-    }
-}
-
-impl std::fmt::Display for ValidateBy {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl std::str::FromStr for ValidateBy {
-    type Err = String;
-
-    fn from_str(text: &str) -> std::result::Result<Self, String> {
-        match text.trim().to_ascii_lowercase().as_str() {
-            "auto" => Ok(Self::Auto),
-            "group" => Ok(Self::Group),
-            "condition" => Ok(Self::Condition),
-            "split" => Ok(Self::Split),
-            _ => Err(format!(
-                "unknown validation {text:?} (known: {})",
-                Self::NAMES.join(", ")
-            )),
-        }
-    }
-}
 
 /// What an automatic choice chooses among, and how.
 #[derive(Clone, Copy, Debug)]
@@ -228,27 +174,34 @@ pub fn select(
             reason: "the automatic choice needs at least one candidate".into(),
         });
     }
-    let (folds, method) = folds::make_folds(images, by, seed)?;
+    let folds::Folds {
+        folds,
+        method,
+        fallback,
+    } = folds::make_folds(images, by, seed)?;
     // Each candidate's folds in order, classifiers in parallel: the scores, and so the choice, do not
     // depend on the number of threads.
     // One race for the candidates and their refinements: a refinement clearly behind the best
     // candidate is dropped too.
     let mut race = scoring::Race::of(&folds);
-    let mut scores = scoring::score_candidates(images, &folds, candidates, budget, &mut race)?;
+    let budget = budget.map(|total| scoring::Budget { started, total });
+    let mut tables = scoring::Tables::default();
+    let mut scores =
+        scoring::score_candidates(images, &folds, candidates, budget, &mut race, &mut tables)?;
     let variants = dims_variants(&scores, refine_dims)?;
-    if !variants.is_empty() {
-        let left = budget.map(|budget| budget.saturating_sub(started.elapsed()));
-        if left == Some(Duration::ZERO) {
-            scores.extend(
-                variants
-                    .iter()
-                    .map(|v| scoring::skipped(v, budget.unwrap_or_default())),
-            );
-        } else {
-            scores.extend(scoring::score_candidates(
-                images, &folds, &variants, left, &mut race,
-            )?);
+    tables.retain(&variants);
+    match budget {
+        Some(budget) if budget.spent() => {
+            scores.extend(variants.iter().map(|v| scoring::skipped(v, budget.total)))
         }
+        _ => scores.extend(scoring::score_candidates(
+            images,
+            &folds,
+            &variants,
+            budget,
+            &mut race,
+            &mut tables,
+        )?),
     }
     let mut chosen = 0;
     for (i, score) in scores.iter().enumerate() {
@@ -284,6 +237,7 @@ pub fn select(
         method,
         chosen,
         scores,
+        fallback,
     })
 }
 

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::metrics::MeanStd;
 use crate::pipeline::config::TrainConfig;
+use crate::selection::validate_by::ValidateBy;
 
 /// One candidate's validation.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -20,7 +21,8 @@ pub struct CandidateScore {
     pub per_fold: BTreeMap<String, f64>,
     /// Why the candidate could not be trained, if it could not.
     pub error: Option<String>,
-    /// Not scored: the automatic choice's time budget was spent before its turn (`error` says so).
+    /// Not scored, or in a race scored on the first folds only: the automatic choice's time budget
+    /// was spent before its turn (`error` says so). Never chosen.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub skipped: bool,
     /// Scored on the first folds only: it was clearly behind the best there, and the race
@@ -59,6 +61,22 @@ pub struct Selection {
     /// Index of the chosen candidate in `scores`.
     pub chosen: usize,
     pub scores: Vec<CandidateScore>,
+    /// The validation the data (or the caller) asked for, when it could not be used: a held-out fold
+    /// held a class its training part lacks, so every candidate would have scored 0 on that class.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fallback: Option<ValidationFallback>,
+}
+
+/// A validation scheme passed over for another ([`Selection::fallback`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ValidationFallback {
+    /// The scheme asked for (or that `auto` resolved to first): group or condition.
+    pub wanted: ValidateBy,
+    /// The scheme used instead.
+    pub used: ValidateBy,
+    /// The classes a held-out fold of `wanted` held and its training part lacked, each with the first
+    /// such fold's name (`carpet`, `carpet_G2_000`), in the order of the folds.
+    pub unseen: Vec<(String, String)>,
 }
 
 impl Selection {

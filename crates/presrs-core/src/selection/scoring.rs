@@ -1,6 +1,6 @@
 //! Scoring the candidates of an automatic choice on its folds, each feature configuration's features
-//! computed once and each fold's PCA fitted once per number of components, then shared by every
-//! classifier that uses them. Gives, candidate for candidate, the scores that training each candidate
+//! computed once (and kept for the race's second phase and the refinement of the dims) and each fold's
+//! PCA fitted once per number of components, then shared by every classifier that uses them. Gives, candidate for candidate, the scores that training each candidate
 //! on each fold with [`crate::pipeline::train`] and classifying the held-out images with a session
 //! gives (the test `cached_scores_equal_training_each_candidate_on_each_fold` checks it), at a fraction
 //! of the cost.
@@ -33,10 +33,7 @@ fn feature_groups(candidates: &[CheckedTrainConfig]) -> Vec<FeatureGroup> {
     for (index, candidate) in candidates.iter().enumerate() {
         let config = candidate.config();
         let same = |group: &&mut FeatureGroup| {
-            let first = candidates[group.members[0]].config();
-            first.crop == config.crop
-                && first.preprocess == config.preprocess
-                && first.features == config.features
+            same_features(candidates[group.members[0]].config(), config)
         };
         match groups.iter_mut().find(same) {
             Some(group) => group.members.push(index),
@@ -48,44 +45,240 @@ fn feature_groups(candidates: &[CheckedTrainConfig]) -> Vec<FeatureGroup> {
     groups
 }
 
-/// Scores every candidate on `folds`, feature group by feature group in order. With a `budget`, a group
-/// that would end past it (judged from the slowest candidate scored so far) is not scored, nor any
-/// after it: its candidates are marked `skipped`. The first group is always scored. In a `race` (from
-/// [`Race::of`], kept across calls), candidates clearly behind the best so far on the first folds are
-/// not scored on the rest.
+/// The features of each feature group scored so far (or why they could not be computed), kept across
+/// the race's two phases and the refinement of the dims, which would otherwise compute them again.
+#[derive(Default)]
+pub(super) struct Tables {
+    entries: Vec<(TrainConfig, std::result::Result<FeatureTable, String>)>,
+}
+
+impl Tables {
+    /// The features of `images` under `config`'s crop, preprocessing and features, computed once.
+    fn get(
+        &mut self,
+        images: &[LabeledImage<'_>],
+        config: &TrainConfig,
+    ) -> &std::result::Result<FeatureTable, String> {
+        let position = self
+            .entries
+            .iter()
+            .position(|(key, _)| same_features(key, config));
+        let index = position.unwrap_or_else(|| {
+            let table = FeatureTable::of(images, config).map_err(|err| err.to_string());
+            self.entries.push((config.clone(), table));
+            self.entries.len() - 1
+        });
+        &self.entries[index].1
+    }
+
+    /// Keeps only the features some of `candidates` use (the memory of the others is freed).
+    pub(super) fn retain(&mut self, candidates: &[CheckedTrainConfig]) {
+        self.entries.retain(|(key, _)| {
+            candidates
+                .iter()
+                .any(|candidate| same_features(key, candidate.config()))
+        });
+    }
+}
+
+/// Whether two configurations compute the same features.
+fn same_features(a: &TrainConfig, b: &TrainConfig) -> bool {
+    a.crop == b.crop && a.preprocess == b.preprocess && a.features == b.features
+}
+
+/// Each candidate's result on each fold scored so far, in fold order.
+type FoldResults = Vec<std::result::Result<f64, String>>;
+
+/// Scores every candidate on `folds`, feature group by feature group. Without a race, each group on
+/// every fold, in order. In a `race` (from [`Race::of`], kept across calls), in two phases: every group
+/// on the first [`RACE_FOLDS`] folds, in order; then the candidates not clearly behind the best there
+/// on the other folds, the groups ordered by their best first-folds accuracy, so that a budget cuts
+/// the least promising. With a `budget`, a group whose turn would end past it (judged from the slowest
+/// candidate so far) is not scored ([`CandidateScore::skipped`]); the first group of each phase always
+/// is. Features are computed once per group, in `tables`.
 pub(super) fn score_candidates(
     images: &[LabeledImage<'_>],
     folds: &[InnerFold],
     candidates: &[CheckedTrainConfig],
-    budget: Option<Duration>,
+    budget: Option<Budget>,
     race: &mut Option<Race>,
+    tables: &mut Tables,
 ) -> Result<Vec<CandidateScore>> {
-    let started = Instant::now();
-    let mut scores: Vec<Option<CandidateScore>> = vec![None; candidates.len()];
-    let mut slowest_per_candidate = Duration::ZERO;
-    let mut out_of_budget = false;
-    for (g, group) in feature_groups(candidates).iter().enumerate() {
-        if let Some(budget) = budget
-            && g > 0
-        {
-            let expected = slowest_per_candidate * group.members.len() as u32;
-            out_of_budget |= started.elapsed() + expected > budget;
-        }
-        if out_of_budget {
-            for &index in &group.members {
-                scores[index] = Some(skipped(&candidates[index], budget.unwrap_or_default()));
-            }
+    let groups = feature_groups(candidates);
+    let configs: Vec<&TrainConfig> = candidates.iter().map(|c| c.config()).collect();
+    let first_folds = if race.is_some() {
+        RACE_FOLDS
+    } else {
+        folds.len()
+    };
+    let (first, rest) = folds.split_at(first_folds);
+    let mut results: Vec<Option<FoldResults>> = vec![None; candidates.len()];
+    let mut clock = Clock::default();
+    for (g, group) in groups.iter().enumerate() {
+        if g > 0 && clock.would_overrun(budget, group.members.len() * first.len()) {
             continue;
         }
-        let group_started = Instant::now();
-        let scored = score_group(images, folds, candidates, &group.members, race.as_mut())?;
-        slowest_per_candidate =
-            slowest_per_candidate.max(group_started.elapsed() / group.members.len().max(1) as u32);
-        for (index, score) in group.members.iter().zip(scored) {
-            scores[*index] = Some(score);
+        let scored = clock.time(group.members.len() * first.len(), || {
+            score_folds(images, first, &configs, &group.members, tables)
+        })?;
+        for (&m, result) in group.members.iter().zip(scored) {
+            results[m] = Some(result);
         }
     }
-    Ok(scores.into_iter().flatten().collect())
+    let Some(race) = race.as_mut() else {
+        return Ok(finish(candidates, folds, results, budget, &[]));
+    };
+    // Dropped against the best of every group's first folds, not of those scored before it.
+    let mut first_scores: Vec<Option<CandidateScore>> = vec![None; candidates.len()];
+    for (m, result) in results.iter().enumerate() {
+        if let Some(result) = result {
+            let score = fold_scores(configs[m], first.iter().zip(result));
+            if score.error.is_none() {
+                race.best = race.best.max(score.accuracy.mean);
+            }
+            first_scores[m] = Some(score);
+        }
+    }
+    let going_on = |m: &usize| {
+        first_scores[*m]
+            .as_ref()
+            .is_some_and(|score| score.error.is_none() && !race.clearly_behind(score.accuracy.mean))
+    };
+    let best_first = |group: &FeatureGroup| {
+        group
+            .members
+            .iter()
+            .filter(|m| going_on(m))
+            .map(|&m| first_scores[m].as_ref().map_or(0.0, |s| s.accuracy.mean))
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let mut order: Vec<(&FeatureGroup, Vec<usize>)> = groups
+        .iter()
+        .map(|group| {
+            (
+                group,
+                group.members.iter().copied().filter(going_on).collect(),
+            )
+        })
+        .filter(|(_, members): &(_, Vec<usize>)| !members.is_empty())
+        .collect();
+    // (a stable sort: ties keep the candidates' order)
+    order.sort_by(|a, b| best_first(b.0).total_cmp(&best_first(a.0)));
+    let mut cut = Vec::new();
+    for (k, (_, members)) in order.iter().enumerate() {
+        if k > 0 && clock.would_overrun(budget, members.len() * rest.len()) {
+            cut.extend(members.iter().copied());
+            continue;
+        }
+        let scored = clock.time(members.len() * rest.len(), || {
+            score_folds(images, rest, &configs, members, tables)
+        })?;
+        for (&m, more) in members.iter().zip(scored) {
+            if let Some(result) = results[m].as_mut() {
+                result.extend(more);
+            }
+        }
+    }
+    let mut scores = finish(candidates, folds, results, budget, &cut);
+    for (m, score) in scores.iter_mut().enumerate() {
+        score.dropped_early = first_scores[m]
+            .as_ref()
+            .is_some_and(|first| first.error.is_none() && !going_on(&m));
+    }
+    Ok(scores)
+}
+
+/// The time spent scoring so far, and the slowest candidate-fold: what a budget judges by.
+#[derive(Default)]
+struct Clock {
+    slowest: Duration,
+}
+
+impl Clock {
+    /// Runs `score`, `runs` candidate-folds, and keeps the slowest one's time.
+    fn time<T>(&mut self, runs: usize, score: impl FnOnce() -> T) -> T {
+        let started = Instant::now();
+        let out = score();
+        let each = started.elapsed() / runs.max(1) as u32;
+        self.slowest = self.slowest.max(each);
+        out
+    }
+
+    /// Whether `runs` more candidate-folds would end past the budget.
+    fn would_overrun(&self, budget: Option<Budget>, runs: usize) -> bool {
+        budget.is_some_and(|budget| {
+            budget.started.elapsed() + self.slowest * runs as u32 > budget.total
+        })
+    }
+}
+
+/// Every candidate's score from its fold results: those never scored are skipped, those in `cut`
+/// were scored on the first folds only before the budget was spent.
+fn finish(
+    candidates: &[CheckedTrainConfig],
+    folds: &[InnerFold],
+    results: Vec<Option<FoldResults>>,
+    budget: Option<Budget>,
+    cut: &[usize],
+) -> Vec<CandidateScore> {
+    let total = budget.map(|budget| budget.total).unwrap_or_default();
+    results
+        .into_iter()
+        .enumerate()
+        .map(|(m, result)| match result {
+            None => skipped(&candidates[m], total),
+            Some(result) => {
+                let mut score = fold_scores(candidates[m].config(), folds.iter().zip(&result));
+                if cut.contains(&m) && score.error.is_none() {
+                    score.error = Some(format!(
+                        "scored on the first {} folds only: the time budget of {} was spent",
+                        result.len(),
+                        seconds_text(total)
+                    ));
+                    score.skipped = true;
+                }
+                score
+            }
+        })
+        .collect()
+}
+
+/// The results of the candidates `members` (sharing their features) on each of `folds`: per member,
+/// per fold in order (a member whose features cannot be computed fails on each, with the reason).
+fn score_folds(
+    images: &[LabeledImage<'_>],
+    folds: &[InnerFold],
+    configs: &[&TrainConfig],
+    members: &[usize],
+    tables: &mut Tables,
+) -> Result<Vec<FoldResults>> {
+    let member_configs: Vec<&TrainConfig> = members.iter().map(|&m| configs[m]).collect();
+    let table = match tables.get(images, member_configs[0]) {
+        Ok(table) => table,
+        Err(reason) => return Ok(vec![vec![Err(reason.clone()); folds.len()]; members.len()]),
+    };
+    let per_fold = folds
+        .par_iter()
+        .map(|fold| score_fold(images, fold, table, &member_configs))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((0..members.len())
+        .map(|m| per_fold.iter().map(|fold| fold[m].clone()).collect())
+        .collect())
+}
+
+/// The automatic choice's time budget: `total` from `started`, across every call of
+/// [`score_candidates`] (the refinement of the dims spends what the candidates left).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Budget {
+    pub started: Instant,
+    pub total: Duration,
+}
+
+impl Budget {
+    /// Whether the budget is spent.
+    pub(super) fn spent(&self) -> bool {
+        self.started.elapsed() >= self.total
+    }
 }
 
 /// A race (Maron and Moore's Hoeffding races, with a normal bound): every candidate is scored on the
@@ -121,12 +314,25 @@ impl Race {
 /// A candidate not scored for lack of time.
 pub(super) fn skipped(candidate: &CheckedTrainConfig, budget: Duration) -> CandidateScore {
     let reason = format!(
-        "not tried: the time budget of {} s was spent",
-        budget.as_secs_f64()
+        "not tried: the time budget of {} was spent",
+        seconds_text(budget)
     );
     let mut score = candidate_score(candidate.config(), BTreeMap::new(), Some(reason));
     score.skipped = true;
     score
+}
+
+/// A duration in seconds as a reader wants it: whole seconds from 10 s, else to a tenth (`60 s`,
+/// `2.5 s`), and below a tenth as given.
+pub(super) fn seconds_text(duration: Duration) -> String {
+    let seconds = duration.as_secs_f64();
+    if seconds >= 10.0 {
+        format!("{seconds:.0} s")
+    } else if seconds >= 0.1 {
+        format!("{seconds:.1} s")
+    } else {
+        format!("{seconds} s")
+    }
 }
 
 fn candidate_score(
@@ -149,76 +355,6 @@ fn candidate_score(
         skipped: false,
         dropped_early: false,
     }
-}
-
-/// The scores of the candidates `members` (sharing their features) on every fold, or, in a race, on
-/// the first folds and then, for those not clearly behind, on the others.
-fn score_group(
-    images: &[LabeledImage<'_>],
-    folds: &[InnerFold],
-    candidates: &[CheckedTrainConfig],
-    members: &[usize],
-    race: Option<&mut Race>,
-) -> Result<Vec<CandidateScore>> {
-    let configs: Vec<&TrainConfig> = members.iter().map(|&i| candidates[i].config()).collect();
-    let table = match FeatureTable::of(images, configs[0]) {
-        Ok(table) => table,
-        Err(err) => {
-            let reason = err.to_string();
-            return Ok(configs
-                .iter()
-                .map(|config| candidate_score(config, BTreeMap::new(), Some(reason.clone())))
-                .collect());
-        }
-    };
-    let score_on = |folds: &[InnerFold], configs: &[&TrainConfig]| {
-        folds
-            .par_iter()
-            .map(|fold| score_fold(images, fold, &table, configs))
-            .collect::<Result<Vec<_>>>()
-    };
-    // Without a race every fold is scored at once and nobody is dropped.
-    let (first, rest) = folds.split_at(if race.is_some() {
-        RACE_FOLDS
-    } else {
-        folds.len()
-    });
-    let first_results = score_on(first, &configs)?;
-    let mut scores: Vec<CandidateScore> = (0..configs.len())
-        .map(|m| {
-            fold_scores(
-                configs[m],
-                first.iter().zip(&first_results).map(|(f, r)| (f, &r[m])),
-            )
-        })
-        .collect();
-    let Some(race) = race else {
-        return Ok(scores);
-    };
-    for score in scores.iter().filter(|score| score.error.is_none()) {
-        race.best = race.best.max(score.accuracy.mean);
-    }
-    for score in &mut scores {
-        score.dropped_early = score.error.is_none() && race.clearly_behind(score.accuracy.mean);
-    }
-    let going_on: Vec<usize> = (0..configs.len())
-        .filter(|&m| scores[m].is_contender())
-        .collect();
-    let going_on_configs: Vec<&TrainConfig> = going_on.iter().map(|&m| configs[m]).collect();
-    let rest_results = score_on(rest, &going_on_configs)?;
-    for (position, &m) in going_on.iter().enumerate() {
-        let all = first
-            .iter()
-            .zip(&first_results)
-            .map(|(f, r)| (f, &r[m]))
-            .chain(
-                rest.iter()
-                    .zip(&rest_results)
-                    .map(|(f, r)| (f, &r[position])),
-            );
-        scores[m] = fold_scores(configs[m], all);
-    }
-    Ok(scores)
 }
 
 /// A candidate's score from its result on each fold, in order: as training it fold by fold would, the

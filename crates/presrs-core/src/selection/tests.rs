@@ -255,9 +255,16 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
         Intensity::None,
     ));
     for by in [ValidateBy::Group, ValidateBy::Split] {
-        let (folds, _) = folds::make_folds(&images, by, 5).unwrap();
-        let cached =
-            scoring::score_candidates(&images, &folds, &candidates, None, &mut None).unwrap();
+        let folds = folds::make_folds(&images, by, 5).unwrap().folds;
+        let cached = scoring::score_candidates(
+            &images,
+            &folds,
+            &candidates,
+            None,
+            &mut None,
+            &mut Default::default(),
+        )
+        .unwrap();
         assert_eq!(cached.len(), candidates.len());
         for (candidate, score) in candidates.iter().zip(&cached) {
             let (per_fold, error) = score_by_training_each(&images, &folds, candidate);
@@ -392,15 +399,26 @@ fn a_race_drops_clear_losers_after_the_first_folds_only() {
         config(ClassifierKind::LDA, 1),
         config(ClassifierKind::KNN, 12),
     ];
-    let (folds, _) = folds::make_folds(&images, ValidateBy::Group, 1).unwrap();
+    let folds = folds::make_folds(&images, ValidateBy::Group, 1)
+        .unwrap()
+        .folds;
     assert_eq!(folds.len(), 4);
-    let full = scoring::score_candidates(&images, &folds, &candidates, None, &mut None).unwrap();
+    let full = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        None,
+        &mut None,
+        &mut Default::default(),
+    )
+    .unwrap();
     let raced = scoring::score_candidates(
         &images,
         &folds,
         &candidates,
         None,
         &mut scoring::Race::of(&folds),
+        &mut Default::default(),
     )
     .unwrap();
     assert!(full.iter().all(|score| score.is_contender()));
@@ -448,7 +466,8 @@ fn many_groups_are_merged_whole_into_five_folds() {
             group: Some(GROUPS[(i / 4) % 7]),
         })
         .collect();
-    let (folds, method) = folds::make_folds(&images, ValidateBy::Auto, 1).unwrap();
+    let folds::Folds { folds, method, .. } =
+        folds::make_folds(&images, ValidateBy::Auto, 1).unwrap();
     assert_eq!(folds.len(), MAX_INNER_FOLDS);
     assert!(method.starts_with("5 folds of whole groups"), "{method}");
     assert!(method.contains("7 groups"), "{method}");
@@ -481,7 +500,198 @@ fn many_groups_are_merged_whole_into_five_folds() {
         .filter(|i| !matches!(i.group, Some("p5" | "p6")))
         .copied()
         .collect();
-    let (folds, method) = folds::make_folds(&five, ValidateBy::Auto, 1).unwrap();
+    let folds::Folds { folds, method, .. } = folds::make_folds(&five, ValidateBy::Auto, 1).unwrap();
     assert_eq!(folds.len(), 5);
     assert!(method.starts_with("leave one group out"), "{method}");
+}
+
+/// A held-out fold that holds a class its training part lacks scores every candidate 0 on it: such a
+/// scheme is passed over, and the selection says which and why (issue #35: every class in one group,
+/// as in one gait of the simulator's trials).
+#[test]
+fn a_fold_holding_a_class_training_lacks_falls_back_and_says_so() {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+    let frames: Vec<Frame> = (0..48)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    // One group per class (the class's trial), and two conditions that each hold every class.
+    let images: Vec<LabeledImage<'_>> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, frame)| LabeledImage {
+            frame: frame.view(),
+            label: crate::testing::SYNTHETIC_CLASSES[i % 4],
+            condition: Some(["c0", "c1"][(i / 4) % 2]),
+            group: Some(["t0", "t1", "t2", "t3"][i % 4]),
+        })
+        .collect();
+    let lda = TrainConfig {
+        classifier: crate::classifier::ClassifierKind::LDA.default_config(),
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let candidates = std::slice::from_ref(&lda);
+    let folds = |selection: &Selection| -> Vec<String> {
+        selection.scores[0].per_fold.keys().cloned().collect()
+    };
+    // auto: by group would hold every image of a class out; the conditions are used instead.
+    let auto = select(&images, &AutoChoice::new(candidates, ValidateBy::Auto), 1).unwrap();
+    assert_eq!(folds(&auto), ["c0", "c1"]);
+    let fallback = auto.fallback.clone().unwrap();
+    assert_eq!(
+        (fallback.wanted, fallback.used),
+        (ValidateBy::Group, ValidateBy::Condition)
+    );
+    assert_eq!(fallback.unseen.len(), 4, "{:?}", fallback.unseen);
+    assert_eq!(
+        fallback.unseen[0],
+        (
+            crate::testing::SYNTHETIC_CLASSES[0].to_owned(),
+            "t0".to_owned()
+        )
+    );
+    assert!(auto.scores[0].accuracy.mean > 0.5, "{:?}", auto.scores[0]);
+    // Without conditions, and when group is asked for: stratified splits.
+    let one_condition: Vec<LabeledImage<'_>> = images
+        .iter()
+        .map(|i| LabeledImage {
+            condition: Some("G2"),
+            ..*i
+        })
+        .collect();
+    for by in [ValidateBy::Auto, ValidateBy::Group] {
+        let selection = select(&one_condition, &AutoChoice::new(candidates, by), 1).unwrap();
+        assert_eq!(folds(&selection), ["split 0", "split 1", "split 2"]);
+        let fallback = selection.fallback.unwrap();
+        assert_eq!(
+            (fallback.wanted, fallback.used),
+            (ValidateBy::Group, ValidateBy::Split)
+        );
+        assert!(selection.scores[0].accuracy.mean > 0.5);
+    }
+    // Groups that each hold every class are used as they are, with no fallback.
+    let shared = grouped(&frames);
+    let selection = select(&shared, &AutoChoice::new(candidates, ValidateBy::Auto), 1).unwrap();
+    assert_eq!(folds(&selection), ["g0", "g1", "g2", "g3"]);
+    assert_eq!(selection.fallback, None);
+}
+
+/// Candidates cut by the budget name the budget in force, rounded, whichever call of the scoring
+/// (the candidates, or the refinement of the dims after them) cut them (issue #35: the refinement
+/// said "the time budget of 10.643012081 s", what was left of 60 s).
+#[test]
+fn a_cut_candidate_names_the_whole_budget_rounded() {
+    use crate::classifier::ClassifierKind;
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let frames: Vec<Frame> = (0..32)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let with = |features: crate::features::FeatureConfig| {
+        TrainConfig {
+            features,
+            classifier: ClassifierKind::LDA.default_config(),
+            dims: 8,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    let candidates = [
+        with(crate::features::FeatureConfig::default()),
+        with(crate::features::FeatureKind::FFT2D.default_config()),
+    ];
+    let folds = folds::make_folds(&images, ValidateBy::Group, 1)
+        .unwrap()
+        .folds;
+    let Some(started) = std::time::Instant::now().checked_sub(Duration::from_secs(61)) else {
+        return;
+    };
+    // 61 s into a budget of 60.4 s: the first group is scored, the second is cut.
+    let budget = scoring::Budget {
+        started,
+        total: Duration::from_secs_f64(60.4),
+    };
+    let scores = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        Some(budget),
+        &mut None,
+        &mut Default::default(),
+    )
+    .unwrap();
+    assert!(!scores[0].skipped);
+    assert!(scores[1].skipped);
+    assert_eq!(
+        scores[1].error.as_deref(),
+        Some("not tried: the time budget of 60 s was spent")
+    );
+    assert_eq!(
+        scoring::seconds_text(Duration::from_secs_f64(2.46)),
+        "2.5 s"
+    );
+}
+
+/// In a race every feature group is scored on the first folds before any finishes, so a candidate is
+/// dropped when clearly behind the best of all there, even one scored before the best's group (issue
+/// #35: the default search races the transforms with every FFT family; what the first folds say
+/// decides what finishes).
+#[test]
+fn a_race_drops_against_the_best_of_every_group_on_the_first_folds() {
+    use crate::classifier::ClassifierKind;
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let frames: Vec<Frame> = (0..64)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let config = |features: crate::features::FeatureConfig, dims| {
+        TrainConfig {
+            features,
+            classifier: ClassifierKind::LDA.default_config(),
+            dims,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    // The weak candidate's group comes first; the strong one's after it.
+    let candidates = [
+        config(crate::features::FeatureConfig::default(), 1),
+        config(crate::features::FeatureKind::FFT2D.default_config(), 12),
+    ];
+    let folds = folds::make_folds(&images, ValidateBy::Group, 1)
+        .unwrap()
+        .folds;
+    let full = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        None,
+        &mut None,
+        &mut Default::default(),
+    )
+    .unwrap();
+    assert!(
+        full[1].accuracy.mean > full[0].accuracy.mean + 0.3,
+        "{:?}",
+        full
+    );
+    let raced = scoring::score_candidates(
+        &images,
+        &folds,
+        &candidates,
+        None,
+        &mut scoring::Race::of(&folds),
+        &mut Default::default(),
+    )
+    .unwrap();
+    assert!(raced[0].dropped_early, "{:?}", raced[0]);
+    assert_eq!(raced[0].per_fold.len(), RACE_FOLDS);
+    assert_eq!(raced[1], full[1]);
 }

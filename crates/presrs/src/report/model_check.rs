@@ -93,6 +93,7 @@ pub(super) fn model_on_samples(model: &TrainedModel, samples: &[Sample]) -> Resu
             n_validation: 0,
             n_test: total as usize,
             train_seconds: 0.0,
+            folds: 1,
         }],
         overall: MeanStd::of(&[ratio(correct, total)]),
         per_condition: per_condition

@@ -1,0 +1,92 @@
+//! What `presrs train` shows of an automatic choice: every candidate's validation score (the chosen
+//! one marked), the choice next to the paper's method, the internal estimate, and why the model keeps
+//! fewer principal components than the chosen candidate names, when it does.
+
+use presrs_core::TrainedModel;
+use presrs_core::selection::{CandidateScore, Selection};
+
+use crate::method::paper_score;
+
+/// The table's lines, in order. `n_train` is the number of images the model was trained on (without
+/// the validation ones): what bounds its principal components.
+pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usize) -> Vec<String> {
+    let mut lines = vec![format!("automatic choice ({}):", selection.method)];
+    let folds = selection
+        .scores
+        .iter()
+        .filter(|score| score.is_contender())
+        .map(|score| score.per_fold.len())
+        .max()
+        .unwrap_or(0);
+    for (i, score) in selection.scores.iter().enumerate() {
+        let mark = if i == selection.chosen { "*" } else { " " };
+        let name = score.name();
+        lines.push(match &score.error {
+            None if score.dropped_early => format!(
+                "{mark} {name:<40} {:6.2} % on the first {} of {folds} folds: clearly behind, dropped",
+                100.0 * score.accuracy.mean,
+                score.per_fold.len()
+            ),
+            None => format!("{mark} {name:<40} {}", percent(score)),
+            Some(err) if score.skipped => format!("{mark} {name:<40} {err}"),
+            Some(err) => format!("{mark} {name:<40} failed: {err}"),
+        });
+    }
+    let Some(chosen) = selection.chosen() else {
+        return lines;
+    };
+    lines.push(match paper_score(selection) {
+        Some((i, _)) if i == selection.chosen => {
+            format!("chosen: {} (the paper's method)", chosen.name())
+        }
+        Some((_, paper)) if paper.is_contender() => format!(
+            "chosen: {}; the paper's method ({}) scored {}",
+            chosen.name(),
+            paper.name(),
+            percent(paper)
+        ),
+        _ => format!("chosen: {}", chosen.name()),
+    });
+    if let Some(note) = components_note(chosen, model, n_train) {
+        lines.push(note);
+    }
+    lines.push(format!(
+        "internal estimate: {}, validated by {}",
+        percent(chosen),
+        selection.method
+    ));
+    lines
+}
+
+/// `85.00 % +- 2.00`
+fn percent(score: &CandidateScore) -> String {
+    format!(
+        "{:6.2} % +- {:.2}",
+        100.0 * score.accuracy.mean,
+        100.0 * score.accuracy.std
+    )
+}
+
+/// Why the model keeps fewer principal components than the chosen candidate asks for (`None` when it
+/// keeps them all): a PCA keeps at most one fewer than its training images, and no more than the
+/// features.
+pub fn components_note(
+    chosen: &CandidateScore,
+    model: &TrainedModel,
+    n_train: usize,
+) -> Option<String> {
+    let (asked, kept) = (chosen.config.dims, model.pca().n_components());
+    if kept >= asked {
+        return None;
+    }
+    let features = model.pca().n_features();
+    let bound = if features <= n_train.saturating_sub(1) {
+        format!("no more than its {features} features")
+    } else {
+        format!("at most one fewer than its {n_train} training images")
+    };
+    Some(format!(
+        "the model keeps {kept} of the {asked} principal components asked for: {bound} (the \
+         validation folds, trained on fewer images, may have kept fewer still)"
+    ))
+}
