@@ -390,7 +390,7 @@ impl<'d> EvalSetup<'d> {
         let grid = self.samples[0].frame.grid();
         let config = method.train_config(grid)?;
         let candidates = if method.is_auto() {
-            method.candidates(grid, false)?
+            method.candidates_for(grid, false, &self.dataset.sample)?
         } else {
             Vec::new()
         };
@@ -434,10 +434,11 @@ impl<'d> EvalSetup<'d> {
     /// Every feature family x classifier with the same draws (the method's crop, dims and
     /// preprocessing).
     pub fn compare(&self, progress: &dyn Progress) -> Result<Vec<ComparisonRow>> {
-        let configs = self
-            .options
-            .method
-            .candidates(self.samples[0].frame.grid(), true)?;
+        let configs = self.options.method.candidates_for(
+            self.samples[0].frame.grid(),
+            true,
+            &self.dataset.sample,
+        )?;
         self.run("comparing", configs.len(), progress, |evaluation| {
             evaluation.compare(&configs)
         })
@@ -460,7 +461,7 @@ impl<'d> EvalSetup<'d> {
         let grid = self.samples[0].frame.grid();
         let (config, paper) = (method.train_config(grid)?, method.paper_config(grid)?);
         let candidates = if method.is_auto() {
-            method.candidates(grid, false)?
+            method.candidates_for(grid, false, &self.dataset.sample)?
         } else {
             Vec::new()
         };

@@ -8,6 +8,7 @@ use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::{Intensity, Preprocess};
+use presrs_core::sample::SampleKind;
 pub use presrs_core::selection::ChoiceRule;
 pub use presrs_core::selection::ValidateBy;
 use presrs_core::selection::{AutoChoice, CandidateScore, Selection, ValidationFallback};
@@ -169,17 +170,32 @@ impl Method {
     /// (with the paper's features, or with every cheap family in a full search), then the texture
     /// families (with the transforms in a full search): a time budget cuts from the end.
     pub fn candidates(&self, grid: Grid, all: bool) -> Result<Vec<CheckedTrainConfig>> {
+        self.candidates_for(grid, all, &SampleKind::Frame)
+    }
+
+    /// [`candidates`](Self::candidates) for samples of `sample`: whole stances and series add
+    /// MiniRocket (`rocket`, costly: scored with the texture families), with the ridge classifier it is
+    /// paired with beside the others.
+    pub fn candidates_for(
+        &self,
+        grid: Grid,
+        all: bool,
+        sample: &SampleKind,
+    ) -> Result<Vec<CheckedTrainConfig>> {
         let classifiers: Vec<ClassifierKind> = match self.classifier {
             ClassifierChoice::Kind(kind) if !all => vec![kind],
             _ => ClassifierKind::auto_candidates(),
         };
-        let families: Vec<FeatureConfig> = match &self.features {
+        let mut families: Vec<FeatureConfig> = match &self.features {
             FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
             _ => CANDIDATE_FEATURES
                 .iter()
                 .map(|kinds| FeatureConfig::combined(kinds))
                 .collect(),
         };
+        if !sample.is_frame() && (all || self.features == FeatureChoice::Auto) {
+            families.push(FeatureKind::ROCKET.default_config());
+        }
         let given = self.preprocess.intensity;
         let intensities: &[Intensity] =
             if !all && self.features == FeatureChoice::Auto && given.is_none() {
@@ -204,7 +220,10 @@ impl Method {
                     if !tried {
                         continue;
                     }
-                    for &classifier in &classifiers {
+                    let ridge = (feature.kind() == Some(FeatureKind::ROCKET)
+                        && (all || self.classifier == ClassifierChoice::Auto))
+                        .then_some(ClassifierKind::RIDGE);
+                    for &classifier in classifiers.iter().chain(&ridge) {
                         out.push(method.config(
                             grid,
                             feature.clone(),
@@ -482,6 +501,61 @@ mod tests {
     #![allow(clippy::unwrap_used)]
 
     use super::*;
+
+    #[test]
+    fn whole_stances_and_series_add_rocket_with_ridge_to_the_search() {
+        let grid = Grid::new(12, 54);
+        let stance = SampleKind::Stance {
+            summary: Default::default(),
+            length: None,
+        };
+        let auto = Method::default();
+        let frame = auto.candidates(grid, false).unwrap();
+        assert!(
+            frame
+                .iter()
+                .all(|c| c.config().features.kind() != Some(FeatureKind::ROCKET))
+        );
+        let whole = auto.candidates_for(grid, false, &stance).unwrap();
+        let rocket: Vec<ClassifierKind> = whole
+            .iter()
+            .filter(|c| c.config().features.kind() == Some(FeatureKind::ROCKET))
+            .map(|c| c.config().classifier.kind())
+            .collect();
+        let mut expected = ClassifierKind::auto_candidates();
+        expected.push(ClassifierKind::RIDGE);
+        assert_eq!(rocket, expected);
+        assert_eq!(whole.len(), frame.len() + expected.len());
+        // Costly: after every cheap family.
+        let first_rocket = whole
+            .iter()
+            .position(|c| c.config().features.kind() == Some(FeatureKind::ROCKET))
+            .unwrap();
+        assert!(
+            whole[..first_rocket]
+                .iter()
+                .all(|c| !c.config().features.learns())
+        );
+        // A fixed method stays fixed; a series adds rocket too.
+        let fixed = Method {
+            features: FeatureChoice::Kinds(vec![FeatureKind::FFT1D]),
+            ..Method::default()
+        };
+        assert!(
+            fixed
+                .candidates_for(grid, false, &stance)
+                .unwrap()
+                .iter()
+                .all(|c| c.config().features.is_fft1d())
+        );
+        let series = SampleKind::Series {
+            time_in_rows: false,
+        };
+        assert_eq!(
+            auto.candidates_for(grid, false, &series).unwrap().len(),
+            whole.len()
+        );
+    }
 
     #[test]
     fn auto_tries_every_family_with_every_classifier_cheap_first_and_paper_is_fft1d_pwe() {

@@ -700,7 +700,9 @@ pub fn fault_sweep(
         config
     };
     let candidates = if auto {
-        options.method.candidates(grid, false)?
+        options
+            .method
+            .candidates_for(grid, false, &options.samples.kind)?
     } else {
         Vec::new()
     };

@@ -138,7 +138,7 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         presrs_core::selection::train_auto(
             &train_images,
             &validation_images,
-            &method.auto_choice(&method.candidates(grid, false)?),
+            &method.auto_choice(&method.candidates_for(grid, false, &dataset.sample)?),
             options.seed,
         )
     } else {
