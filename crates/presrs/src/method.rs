@@ -174,8 +174,9 @@ impl Method {
     }
 
     /// [`candidates`](Self::candidates) for samples of `sample`: whole stances and series add
-    /// MiniRocket (`rocket`, costly: scored with the texture families), with the ridge classifier it is
-    /// paired with beside the others.
+    /// MiniRocket (`rocket`), with the ridge classifier it is paired with beside the others, first: it
+    /// is the family made for series, and an automatic choice breaks ties by order (validation inside
+    /// one walker's or session's samples often scores every candidate alike).
     pub fn candidates_for(
         &self,
         grid: Grid,
@@ -186,15 +187,21 @@ impl Method {
             ClassifierChoice::Kind(kind) if !all => vec![kind],
             _ => ClassifierKind::auto_candidates(),
         };
-        let mut families: Vec<FeatureConfig> = match &self.features {
+        let families: Vec<FeatureConfig> = match &self.features {
             FeatureChoice::Kinds(kinds) if !all => vec![FeatureConfig::combined(kinds)],
             _ => CANDIDATE_FEATURES
                 .iter()
                 .map(|kinds| FeatureConfig::combined(kinds))
                 .collect(),
         };
+        let mut out = Vec::new();
         if !sample.is_frame() && (all || self.features == FeatureChoice::Auto) {
-            families.push(FeatureKind::ROCKET.default_config());
+            let rocket = FeatureKind::ROCKET.default_config();
+            let ridge =
+                (all || self.classifier == ClassifierChoice::Auto).then_some(ClassifierKind::RIDGE);
+            for &classifier in classifiers.iter().chain(&ridge) {
+                out.push(self.config(grid, rocket.clone(), classifier.default_config())?);
+            }
         }
         let given = self.preprocess.intensity;
         let intensities: &[Intensity] =
@@ -203,7 +210,6 @@ impl Method {
             } else {
                 std::slice::from_ref(&given)
             };
-        let mut out = Vec::new();
         for texture in [false, true] {
             for &intensity in intensities {
                 let method = Self {
@@ -220,10 +226,7 @@ impl Method {
                     if !tried {
                         continue;
                     }
-                    let ridge = (feature.kind() == Some(FeatureKind::ROCKET)
-                        && (all || self.classifier == ClassifierChoice::Auto))
-                        .then_some(ClassifierKind::RIDGE);
-                    for &classifier in classifiers.iter().chain(&ridge) {
+                    for &classifier in &classifiers {
                         out.push(method.config(
                             grid,
                             feature.clone(),
