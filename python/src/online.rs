@@ -72,11 +72,15 @@ impl OnlineClassifier {
         Ok(Self { online, frames: 0 })
     }
 
-    /// Feeds one frame `(rows, cols)`; returns the events it completed, as dicts.
+    /// Feeds one frame `(rows, cols)`; returns the events it completed, as dicts. `timestamp_us`: the
+    /// frame's time in microseconds (from the recording's clock), copied into its events as
+    /// `presrs stream` does with its input's times; `None` when the frame has none.
+    #[pyo3(signature = (frame, *, timestamp_us = None))]
     fn push<'py>(
         &mut self,
         py: Python<'py>,
         frame: &Bound<'py, PyAny>,
+        timestamp_us: Option<u64>,
     ) -> PyResult<Vec<Bound<'py, PyAny>>> {
         let images = Images::new(frame, "frame")?;
         if images.batch {
@@ -97,7 +101,7 @@ impl OnlineClassifier {
                 &running.file.model,
                 &running.profile,
                 latency_us,
-                None,
+                timestamp_us,
             ))
         })?;
         self.frames += 1;
