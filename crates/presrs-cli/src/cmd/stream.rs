@@ -24,8 +24,8 @@ use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
 use presrs::stoppable_input::StoppableInput;
 use presrs::stream::{
     BagRecorder, BagReport, ConnectionBags, ConnectionNotice, ConnectionOptions, ConnectionTap,
-    InputFormat, OwnedTaps, ProfileOverrides, ServerNotice, ServerOptions, ShutdownHandle,
-    StopSignals, StreamServer, Taps, resolve_profile, run_connection_tapped,
+    InputFormat, ProfileOverrides, ServerNotice, ServerOptions, ShutdownHandle, StopSignals,
+    StreamServer, Taps, resolve_profile, run_connection_tapped,
 };
 use presrs::stream_log::{
     input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
@@ -235,7 +235,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                         taps.push(Box::new(hub.exclusive_tap(peer)));
                     }
                     taps.extend(bags.as_ref().map(|bags| bags.tap(peer)));
-                    Box::new(OwnedTaps(taps))
+                    Box::new(Taps(taps))
                 }));
             }
             let local = server.local_addr();
@@ -285,7 +285,7 @@ fn run_stdin(
         Some(path) => {
             let mut bag = BagRecorder::create(path)?;
             let summary = {
-                let mut taps = Taps(vec![tap, &mut bag]);
+                let mut taps: Taps<&mut dyn ConnectionTap> = Taps(vec![tap, &mut bag]);
                 run_connection_tapped(model, profile, input, out, &options, &log, &mut taps)?
             };
             let recorded = bag.finish()?;

@@ -37,16 +37,21 @@ impl ConnectionTap for NoTap {
     fn line(&mut self, _: &str) {}
 }
 
-/// Several taps, each seeing everything in turn (a bag being recorded and a live viewer).
-pub struct Taps<'a>(pub Vec<&'a mut dyn ConnectionTap>);
+/// Several taps, each seeing everything in turn: borrowed (`Taps<&mut dyn ConnectionTap>`: a bag being
+/// recorded and a live viewer) or owned ([`OwnedTaps`]: what a server's
+/// [`TapFactory`](super::TapFactory) makes for each client).
+pub struct Taps<P>(pub Vec<P>);
 
-impl std::fmt::Debug for Taps<'_> {
+/// The taps a connection owns.
+pub type OwnedTaps = Taps<Box<dyn ConnectionTap + Send>>;
+
+impl<P> std::fmt::Debug for Taps<P> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "Taps({})", self.0.len())
     }
 }
 
-impl ConnectionTap for Taps<'_> {
+impl<P: ConnectionTap> ConnectionTap for Taps<P> {
     fn frame(
         &mut self,
         index: u64,
@@ -73,17 +78,8 @@ impl ConnectionTap for Taps<'_> {
     }
 }
 
-/// Several taps a connection owns (what a server's [`TapFactory`](super::TapFactory) makes for each
-/// client: a live viewer's and a bag's), each seeing everything in turn.
-pub struct OwnedTaps(pub Vec<Box<dyn ConnectionTap + Send>>);
-
-impl std::fmt::Debug for OwnedTaps {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "OwnedTaps({})", self.0.len())
-    }
-}
-
-impl ConnectionTap for OwnedTaps {
+/// A borrowed tap is a tap.
+impl<T: ConnectionTap + ?Sized> ConnectionTap for &mut T {
     fn frame(
         &mut self,
         index: u64,
@@ -92,20 +88,36 @@ impl ConnectionTap for OwnedTaps {
         present: Option<&[bool]>,
         timestamp_us: Option<u64>,
     ) {
-        for tap in &mut self.0 {
-            tap.frame(index, grid, values, present, timestamp_us);
-        }
+        (**self).frame(index, grid, values, present, timestamp_us);
     }
 
     fn line(&mut self, line: &str) {
-        for tap in &mut self.0 {
-            tap.line(line);
-        }
+        (**self).line(line);
     }
 
     fn end(&mut self) {
-        for tap in &mut self.0 {
-            tap.end();
-        }
+        (**self).end();
+    }
+}
+
+/// A boxed tap is a tap.
+impl<T: ConnectionTap + ?Sized> ConnectionTap for Box<T> {
+    fn frame(
+        &mut self,
+        index: u64,
+        grid: Grid,
+        values: &[f64],
+        present: Option<&[bool]>,
+        timestamp_us: Option<u64>,
+    ) {
+        (**self).frame(index, grid, values, present, timestamp_us);
+    }
+
+    fn line(&mut self, line: &str) {
+        (**self).line(line);
+    }
+
+    fn end(&mut self) {
+        (**self).end();
     }
 }
