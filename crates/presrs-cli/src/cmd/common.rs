@@ -124,13 +124,13 @@ pub struct SampleArgs {
     /// What a sample is: frame (a frame of each stance, --stance-frame), stance (each stance's movie as
     /// load, contact area, centre of pressure and regional loads over time), or series (a 2-D array as
     /// channels x time)
-    #[arg(long, default_value = "frame")]
+    #[arg(long, default_value = "frame", value_parser = ["frame", "stance", "series"])]
     pub sample: String,
     /// With --sample stance: frames each stance is laid into (default: the longest stance)
     #[arg(long)]
     pub stance_length: Option<usize>,
     /// With --sample series: the array's axis that is time, cols (rows are channels) or rows
-    #[arg(long)]
+    #[arg(long, value_parser = ["cols", "rows"])]
     pub series_axis: Option<String>,
     /// Which frame of each stance phase is a sample: mid (the paper's mid-stance frame), peak, a frame
     /// offset K after touchdown (0-based), or all.
