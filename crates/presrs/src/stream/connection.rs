@@ -144,8 +144,12 @@ pub fn run_connection_tapped<R: BufRead>(
     }
 }
 
-/// One frame source: fills `values`/`present`, returns what came.
-pub(super) enum Input {
+/// What a frame source gives the session for one step ([`run_frames`]): it has filled `values`/`present`
+/// with a frame, skipped a bad one, cannot go on, or ended.
+#[derive(Debug)]
+pub enum Input {
+    /// A frame of `grid` is in `values` (and in `present` when `has_mask`), stamped `timestamp_us` by
+    /// its sender when it was; `arrival` is when it came (the events' latency counts from it).
     Frame {
         grid: Grid,
         has_mask: bool,
@@ -254,6 +258,19 @@ impl Connection<'_, '_> {
         self.error(&message, false);
         true
     }
+}
+
+/// The per-frame session of a face that reads frames its own way (a ROS 2 node): the same session,
+/// classifier, error policy, JSON lines and summary as [`run_connection`], over `next` until it returns
+/// [`Input::End`] or [`Input::Fatal`]; every JSON line goes to `emit` (false: the line was dropped).
+pub fn run_frames(
+    model: &TrainedModel,
+    profile: &OnlineProfile,
+    next: impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input,
+    emit: &mut dyn FnMut(String) -> bool,
+    notify: &dyn Fn(&ConnectionNotice),
+) -> Result<ConnectionSummary> {
+    drive_connection(model, profile, next, emit, notify, &mut NoTap)
 }
 
 /// Runs the online classifier over `next` until it ends, handing every JSON line to `emit` (which

@@ -44,8 +44,8 @@ pub use bag::{
     DECISIONS_TOPIC, FRAME_TIMES_KEY, FRAMES_TOPIC, FrameTimes, RECORDING_METADATA, RecordedBag,
 };
 pub use connection::{
-    ConnectionNotice, ConnectionOptions, ConnectionSummary, InputFormat, MAX_ERROR_NOTICES,
-    run_connection, run_connection_tapped,
+    ConnectionNotice, ConnectionOptions, ConnectionSummary, Input, InputFormat, MAX_ERROR_NOTICES,
+    run_connection, run_connection_tapped, run_frames,
 };
 pub use events::event_values;
 pub use output::BoundedOutput;

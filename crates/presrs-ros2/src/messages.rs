@@ -1,0 +1,256 @@
+//! The messages the node publishes, as serde types in the field order of their `.msg` files (CDR is
+//! positional), and the typed messages made from the stream's JSON events.
+//!
+//! `presrs_msgs/msg/TerrainDecision` and `StanceEvent` are defined in `ros/presrs_msgs/msg/`; the rest
+//! are ROS 2's own (`std_msgs/msg/String`, `diagnostic_msgs/msg/DiagnosticArray`).
+
+use presrs_io::mcap::Stamp;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+/// `builtin_interfaces/msg/Time`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Time {
+    pub sec: i32,
+    pub nanosec: u32,
+}
+
+impl From<Stamp> for Time {
+    fn from(stamp: Stamp) -> Self {
+        Self {
+            sec: stamp.sec,
+            nanosec: stamp.nanosec,
+        }
+    }
+}
+
+/// `std_msgs/msg/Header`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Header {
+    pub stamp: Time,
+    pub frame_id: String,
+}
+
+/// `std_msgs/msg/String`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StringMsg {
+    pub data: String,
+}
+
+/// `diagnostic_msgs/msg/KeyValue`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct KeyValue {
+    pub key: String,
+    pub value: String,
+}
+
+/// `diagnostic_msgs/msg/DiagnosticStatus`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DiagnosticStatus {
+    /// [`DiagnosticStatus::OK`], [`WARN`](DiagnosticStatus::WARN), [`ERROR`](DiagnosticStatus::ERROR).
+    pub level: u8,
+    pub name: String,
+    pub message: String,
+    pub hardware_id: String,
+    pub values: Vec<KeyValue>,
+}
+
+impl DiagnosticStatus {
+    pub const OK: u8 = 0;
+    pub const WARN: u8 = 1;
+    pub const ERROR: u8 = 2;
+}
+
+/// `diagnostic_msgs/msg/DiagnosticArray`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DiagnosticArray {
+    pub header: Header,
+    pub status: Vec<DiagnosticStatus>,
+}
+
+/// `presrs_msgs/msg/TerrainDecision` (`ros/presrs_msgs/msg/TerrainDecision.msg`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TerrainDecision {
+    pub header: Header,
+    pub stance: u64,
+    pub kind: String,
+    pub label: String,
+    pub class_index: u32,
+    pub class_names: Vec<String>,
+    pub confidence: f64,
+    pub posteriors: Vec<f64>,
+    pub touchdown_frame: u64,
+    pub sample_frame: u64,
+    pub frame: u64,
+    pub frames_used: u32,
+    pub touchdown_stamp: Time,
+    pub liftoff_stamp: Time,
+    pub gait: String,
+    pub latency_us: f64,
+}
+
+/// `presrs_msgs/msg/StanceEvent` (`ros/presrs_msgs/msg/StanceEvent.msg`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StanceEvent {
+    pub header: Header,
+    /// [`StanceEvent::TOUCHDOWN`] or [`StanceEvent::LIFTOFF`].
+    pub event: u8,
+    pub stance: u64,
+    pub touchdown_frame: u64,
+    pub end_frame: u64,
+    pub frame: u64,
+    pub partial: bool,
+    pub peak_frame: u64,
+    pub peak_load: f64,
+    pub sampled: bool,
+    pub touchdown_stamp: Time,
+    pub liftoff_stamp: Time,
+}
+
+impl StanceEvent {
+    pub const TOUCHDOWN: u8 = 0;
+    pub const LIFTOFF: u8 = 1;
+}
+
+/// The stamps of the frames the events name (frame indices count the session's accepted frames).
+pub trait FrameStamps {
+    /// The header stamp of accepted frame `index`, if still known.
+    fn stamp_of(&self, index: u64) -> Option<Time>;
+}
+
+fn u64_of(event: &Value, key: &str) -> u64 {
+    event[key].as_u64().unwrap_or(0)
+}
+
+fn stamp_at(stamps: &dyn FrameStamps, event: &Value, key: &str) -> Time {
+    event[key]
+        .as_u64()
+        .and_then(|index| stamps.stamp_of(index))
+        .unwrap_or_default()
+}
+
+/// The typed decision of a `classification` event; `class_names` the model's, in its order.
+pub fn decision_message(
+    event: &Value,
+    class_names: &[String],
+    stamps: &dyn FrameStamps,
+    frame_id: &str,
+) -> TerrainDecision {
+    let posteriors = class_names
+        .iter()
+        .map(|name| event["posteriors"][name].as_f64().unwrap_or(f64::NAN))
+        .collect();
+    TerrainDecision {
+        header: Header {
+            stamp: stamp_at(stamps, event, "sample_frame"),
+            frame_id: frame_id.to_owned(),
+        },
+        stance: u64_of(event, "stance"),
+        kind: event["kind"].as_str().unwrap_or_default().to_owned(),
+        label: event["label"].as_str().unwrap_or_default().to_owned(),
+        class_index: u64_of(event, "class") as u32,
+        class_names: class_names.to_vec(),
+        confidence: event["confidence"].as_f64().unwrap_or(f64::NAN),
+        posteriors,
+        touchdown_frame: u64_of(event, "touchdown_frame"),
+        sample_frame: u64_of(event, "sample_frame"),
+        frame: u64_of(event, "frame"),
+        frames_used: u64_of(event, "frames_used") as u32,
+        touchdown_stamp: stamp_at(stamps, event, "touchdown_frame"),
+        liftoff_stamp: stamp_at(stamps, event, "end_frame"),
+        gait: event["gait"].as_str().unwrap_or_default().to_owned(),
+        latency_us: event["latency_us"].as_f64().unwrap_or(0.0),
+    }
+}
+
+/// The typed stance event of a `touchdown` or `liftoff` event (`None` for other events).
+pub fn stance_message(
+    event: &Value,
+    stamps: &dyn FrameStamps,
+    frame_id: &str,
+) -> Option<StanceEvent> {
+    let kind = match event["event"].as_str()? {
+        "touchdown" => StanceEvent::TOUCHDOWN,
+        "liftoff" => StanceEvent::LIFTOFF,
+        _ => return None,
+    };
+    Some(StanceEvent {
+        header: Header {
+            stamp: stamp_at(stamps, event, "frame"),
+            frame_id: frame_id.to_owned(),
+        },
+        event: kind,
+        stance: u64_of(event, "stance"),
+        touchdown_frame: u64_of(event, "touchdown_frame"),
+        end_frame: u64_of(event, "end_frame"),
+        frame: u64_of(event, "frame"),
+        partial: event["partial"].as_bool().unwrap_or(false),
+        peak_frame: u64_of(event, "peak_frame"),
+        peak_load: event["peak_load"].as_f64().unwrap_or(0.0),
+        sampled: event["sampled"].as_bool().unwrap_or(false),
+        touchdown_stamp: stamp_at(stamps, event, "touchdown_frame"),
+        liftoff_stamp: stamp_at(stamps, event, "end_frame"),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+    use serde_json::json;
+
+    struct Tenths;
+    impl FrameStamps for Tenths {
+        fn stamp_of(&self, index: u64) -> Option<Time> {
+            Some(Time {
+                sec: (index / 10) as i32,
+                nanosec: (index % 10) as u32 * 100_000_000,
+            })
+        }
+    }
+
+    #[test]
+    fn a_classification_event_becomes_a_decision_with_the_frames_stamps() {
+        let names = vec!["grass".to_owned(), "sand".to_owned()];
+        let event = json!({"event": "classification", "kind": "single", "stance": 3, "label": "sand",
+            "class": 1, "confidence": 0.75, "posteriors": {"grass": 0.25, "sand": 0.75},
+            "sample_frame": 26, "frame": 26, "frames_used": 1, "touchdown_frame": 20,
+            "latency_us": 12.5, "timestamp_us": 2_600_000, "gait": "walk"});
+        let d = decision_message(&event, &names, &Tenths, "foot");
+        assert_eq!((d.label.as_str(), d.class_index, d.stance), ("sand", 1, 3));
+        assert_eq!(d.posteriors, [0.25, 0.75]);
+        assert_eq!(
+            d.header.stamp,
+            Time {
+                sec: 2,
+                nanosec: 600_000_000
+            }
+        );
+        assert_eq!(d.touchdown_stamp, Time { sec: 2, nanosec: 0 });
+        assert_eq!(d.liftoff_stamp, Time::default());
+        assert_eq!(
+            (d.gait.as_str(), d.header.frame_id.as_str()),
+            ("walk", "foot")
+        );
+    }
+
+    #[test]
+    fn touchdown_and_liftoff_become_stance_events_and_others_none() {
+        let liftoff = json!({"event": "liftoff", "stance": 1, "touchdown_frame": 10, "end_frame": 19,
+            "len": 10, "peak_frame": 14, "peak_load": 5.5, "partial": false, "sampled": true,
+            "frame": 21});
+        let s = stance_message(&liftoff, &Tenths, "").unwrap();
+        assert_eq!(
+            (s.event, s.end_frame, s.frame, s.peak_frame),
+            (StanceEvent::LIFTOFF, 19, 21, 14)
+        );
+        assert_eq!(
+            s.liftoff_stamp,
+            Time {
+                sec: 1,
+                nanosec: 900_000_000
+            }
+        );
+        assert!(stance_message(&json!({"event": "end"}), &Tenths, "").is_none());
+    }
+}

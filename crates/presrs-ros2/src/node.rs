@@ -1,0 +1,286 @@
+//! The node's loop: frames from the input topic through the stream's own per-frame session
+//! ([`presrs::stream::run_frames`]: the same classifier, error policy and JSON events as
+//! `presrs stream`), every event out as a typed message, a JSON string, and the gait command.
+
+use std::cell::RefCell;
+use std::collections::{HashMap, VecDeque};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use presrs::stream::{ConnectionNotice, ConnectionSummary, Input, run_frames};
+use presrs_core::Grid;
+use presrs_core::online::OnlineProfile;
+use presrs_core::pipeline::TrainedModel;
+use presrs_io::mcap::{FrameType, Stamp, decode_frame};
+use ros2_client::dds::rustdds::GUID;
+use ros2_client::dds::rustdds::mio1::Events;
+use ros2_client::dds::rustdds::no_key::DeserializedCacheChange;
+use serde_json::Value;
+
+use crate::diagnostics::{DiagnosticsReport, NodeCounters};
+use crate::error::Result;
+use crate::graph::{NodeGraph, Outputs};
+use crate::messages::{FrameStamps, StringMsg, Time, decision_message, stance_message};
+use crate::raw::RawCdr;
+
+/// The node waits for frames at most this long before it looks at its stop flag again.
+const IDLE_POLL: Duration = Duration::from_millis(100);
+
+/// Frame stamps kept for the events that name earlier frames (a stance far longer than this many
+/// frames gets zero stamps for its touchdown).
+const STAMPS_KEPT: usize = 1 << 16;
+
+/// What a node did, when it ends.
+#[derive(Clone, Debug)]
+pub struct NodeSummary {
+    /// The session's summary (as `presrs stream` reports it in its `end` event).
+    pub session: ConnectionSummary,
+    /// The node's own counters (the input as it came, dropped frames, publish failures).
+    pub counters: NodeCounters,
+}
+
+/// The stamps of the accepted frames, by their index in the session.
+#[derive(Debug, Default)]
+struct StampBook {
+    first: u64,
+    stamps: VecDeque<Time>,
+}
+
+impl StampBook {
+    fn push(&mut self, stamp: Time) {
+        if self.stamps.len() == STAMPS_KEPT {
+            self.stamps.pop_front();
+            self.first += 1;
+        }
+        self.stamps.push_back(stamp);
+    }
+}
+
+impl FrameStamps for StampBook {
+    fn stamp_of(&self, index: u64) -> Option<Time> {
+        let offset = usize::try_from(index.checked_sub(self.first)?).ok()?;
+        self.stamps.get(offset).copied()
+    }
+}
+
+/// The loop's state, shared by the frame source and the event sink (never at the same time).
+struct LoopState {
+    counters: NodeCounters,
+    at_last_report: NodeCounters,
+    last_report: Instant,
+    stamps: StampBook,
+    /// The last sequence number of each input publisher.
+    sequences: HashMap<GUID, i64>,
+    /// The size of the session's first frame: the session takes only frames of that size, so only
+    /// they get an index (and a stamp) in it.
+    first_grid: Option<Grid>,
+}
+
+impl LoopState {
+    /// One message of the input: its frame into `values`, or why it was rejected.
+    fn take(
+        &mut self,
+        sample: DeserializedCacheChange<RawCdr>,
+        kind: FrameType,
+        topic: &str,
+        values: &mut Vec<f64>,
+    ) -> Input {
+        let arrival = Instant::now();
+        let sequence = i64::from(sample.sequence_number);
+        match self.sequences.insert(sample.writer_guid, sequence) {
+            Some(last) if sequence > last + 1 => {
+                self.counters.dropped += (sequence - last - 1) as u64
+            }
+            Some(_) => {}
+            None => self.counters.publishers += 1,
+        }
+        let index = self.counters.received;
+        self.counters.received += 1;
+        match decode_frame(kind, &sample.sample.0, values) {
+            Ok((grid, stamp)) => {
+                // Header stamps as given (a bag's first frame may be at 0); arrays have none.
+                let stamp = stamp.unwrap_or_else(wall_clock);
+                if *self.first_grid.get_or_insert(grid) == grid {
+                    self.stamps.push(Time::from(stamp));
+                }
+                Input::Frame {
+                    grid,
+                    has_mask: false,
+                    timestamp_us: stamp.nanos().map(|ns| ns / 1000),
+                    arrival,
+                }
+            }
+            Err(why) => {
+                self.counters.undecodable += 1;
+                Input::Skipped(format!("{topic}: message {index} rejected: {why}"))
+            }
+        }
+    }
+}
+
+fn wall_clock() -> Stamp {
+    let nanos = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+    Stamp::from_nanos(nanos)
+}
+
+/// Runs the node until its stop handle is called (a signal), or its input cannot go on (a fatal
+/// error, as in `presrs stream`): every JSON event also goes to `on_line`, the session's notices to
+/// `notify`. Publishes the final diagnostics, then waits `linger` for subscribers to take the last
+/// messages.
+pub fn run_node(
+    graph: NodeGraph,
+    model: &TrainedModel,
+    profile: &OnlineProfile,
+    on_line: &mut dyn FnMut(&str),
+    notify: &dyn Fn(&ConnectionNotice),
+) -> Result<NodeSummary> {
+    let NodeGraph {
+        _context,
+        node,
+        reader,
+        outputs,
+        mut poll,
+        stop,
+        options,
+    } = graph;
+    let name = node.fully_qualified_name();
+    let state = RefCell::new(LoopState {
+        counters: NodeCounters::default(),
+        at_last_report: NodeCounters::default(),
+        last_report: Instant::now(),
+        stamps: StampBook::default(),
+        sequences: HashMap::new(),
+        first_grid: None,
+    });
+    let report = |state: &mut LoopState, ended: bool| {
+        let message = DiagnosticsReport {
+            node: &name,
+            input: &options.input,
+            now: &state.counters,
+            before: &state.at_last_report,
+            period: state.last_report.elapsed(),
+            stamp: Time::from(wall_clock()),
+            ended,
+        }
+        .message();
+        if outputs.diagnostics.publish(message).is_err() {
+            state.counters.publish_failures += 1;
+        }
+        state.at_last_report = state.counters.clone();
+        state.last_report = Instant::now();
+    };
+    let mut events = Events::with_capacity(16);
+    let next = |values: &mut Vec<f64>, _present: &mut Vec<bool>| loop {
+        if stop.is_stopped() {
+            return Input::End;
+        }
+        {
+            let mut s = state.borrow_mut();
+            if s.last_report.elapsed() >= options.diagnostics_period {
+                report(&mut s, false);
+            }
+        }
+        match reader.try_take_one() {
+            Ok(Some(sample)) => {
+                let mut s = state.borrow_mut();
+                return s.take(sample, options.input_type, &options.input, values);
+            }
+            Ok(None) => {
+                let due = options
+                    .diagnostics_period
+                    .saturating_sub(state.borrow().last_report.elapsed());
+                // An interrupted poll (a signal) is looked at like a wake-up.
+                let _ = poll.poll(&mut events, Some(due.min(IDLE_POLL)));
+                reader.drain_read_notifications();
+            }
+            Err(err) => {
+                let mut s = state.borrow_mut();
+                s.counters.undecodable += 1;
+                return Input::Skipped(format!(
+                    "{}: cannot read a message: {err:?}",
+                    options.input
+                ));
+            }
+        }
+    };
+    let frame_id = options.name.clone();
+    let mut emit = |line: String| -> bool {
+        on_line(&line);
+        let event: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
+        let mut s = state.borrow_mut();
+        s.counters.note_event(&event);
+        let published = publish_event(
+            &outputs,
+            &event,
+            line,
+            model.class_names(),
+            &s.stamps,
+            &frame_id,
+        );
+        if !published {
+            s.counters.publish_failures += 1;
+        }
+        published
+    };
+    let session = run_frames(model, profile, next, &mut emit, notify)?;
+    let mut s = state.into_inner();
+    report(&mut s, true);
+    std::thread::sleep(options.linger);
+    Ok(NodeSummary {
+        session,
+        counters: s.counters,
+    })
+}
+
+/// Publishes one event: the JSON string, and its typed message and gait command when it has them.
+/// False when any of them could not be published.
+fn publish_event(
+    outputs: &Outputs,
+    event: &Value,
+    line: String,
+    class_names: &[String],
+    stamps: &StampBook,
+    frame_id: &str,
+) -> bool {
+    let mut ok = outputs.events.publish(StringMsg { data: line }).is_ok();
+    match event["event"].as_str() {
+        Some("classification") => {
+            let decision = decision_message(event, class_names, stamps, frame_id);
+            let gait = decision.gait.clone();
+            ok &= outputs.decisions.publish(decision).is_ok();
+            if !gait.is_empty() {
+                ok &= outputs.gait.publish(StringMsg { data: gait }).is_ok();
+            }
+        }
+        Some("touchdown" | "liftoff") => {
+            if let Some(stance) = stance_message(event, stamps, frame_id) {
+                ok &= outputs.stances.publish(stance).is_ok();
+            }
+        }
+        _ => {}
+    }
+    ok
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_stamp_book_forgets_the_oldest_frames_only() {
+        let mut book = StampBook::default();
+        for i in 0..(STAMPS_KEPT as u64 + 3) {
+            book.push(Time {
+                sec: i as i32,
+                nanosec: 0,
+            });
+        }
+        assert_eq!(book.stamp_of(0), None);
+        assert_eq!(book.stamp_of(2), None);
+        assert_eq!(book.stamp_of(3).map(|t| t.sec), Some(3));
+        let last = STAMPS_KEPT as u64 + 2;
+        assert_eq!(book.stamp_of(last).map(|t| t.sec), Some(last as i32));
+        assert_eq!(book.stamp_of(last + 1), None);
+    }
+}

@@ -1,0 +1,37 @@
+//! What the node says about itself to a person or a script: the `joined` line and the final summary.
+
+use serde_json::{Value, json};
+
+use crate::graph::NodeGraph;
+use crate::node::NodeSummary;
+
+/// The first JSON line of `presrs ros2`: the node is in the graph (a script may publish from now on).
+pub fn joined_event(graph: &NodeGraph) -> Value {
+    let options = &graph.options;
+    json!({
+        "event": "joined",
+        "node": graph.fully_qualified_name(),
+        "domain_id": options.domain_id,
+        "input": options.input,
+        "localhost_only": options.localhost_only,
+    })
+}
+
+/// The final summary line: the session's counts (as `presrs stream` gives them) and the node's own.
+pub fn summary_text(input: &str, summary: &NodeSummary) -> String {
+    let (s, c) = (&summary.session, &summary.counters);
+    format!(
+        "{input}: {} messages received, {} frames classified, {} stances, {} decisions ({} fused), \
+         {} rejected frames, {} errors, {} frames dropped before the node took them, {} publish \
+         failures",
+        c.received,
+        s.stats.frames,
+        s.stats.stances,
+        s.stats.decisions,
+        s.stats.fused_decisions,
+        s.rejected_frames,
+        s.errors,
+        c.dropped,
+        c.publish_failures,
+    )
+}

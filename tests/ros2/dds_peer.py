@@ -1,0 +1,108 @@
+"""The test side of the DDS graph: Cyclone DDS (Python) publishing frames and reading the node's outputs,
+on this machine's loopback only."""
+
+import os
+import time
+
+# Cyclone reads its configuration when the first domain is created: loopback only, discovery by unicast
+# to this machine's participant ports (lo has no multicast).
+LOOPBACK_CONFIG = """<CycloneDDS><Domain id="any">
+  <General><Interfaces><NetworkInterface name="lo"/></Interfaces><AllowMulticast>false</AllowMulticast></General>
+  <Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>60</MaxAutoParticipantIndex>
+    <Peers><Peer address="127.0.0.1"/></Peers></Discovery>
+</Domain></CycloneDDS>"""
+os.environ["CYCLONEDDS_URI"] = LOOPBACK_CONFIG
+
+from cyclonedds.core import Policy, Qos  # noqa: E402
+from cyclonedds.domain import DomainParticipant  # noqa: E402
+from cyclonedds.pub import DataWriter  # noqa: E402
+from cyclonedds.sub import DataReader  # noqa: E402
+from cyclonedds.topic import Topic  # noqa: E402
+from cyclonedds.util import duration  # noqa: E402
+
+import ros2_types as t  # noqa: E402
+
+# ROS 2's own DDS representation: plain CDR (XCDR1), as rmw_cyclonedds_cpp writes it.
+XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
+RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepAll, XCDR1)
+BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(5), XCDR1)
+
+
+class Peer:
+    """One Cyclone participant on `domain`, with a frame writer and readers of the node's outputs."""
+
+    def __init__(self, domain, input_topic="foot/pressure", input_type=t.Image, reliable=True,
+                 namespace=""):
+        self.dp = DomainParticipant(domain)
+        self.input_type = input_type
+        self.writer = DataWriter(self.dp, Topic(self.dp, "rt/" + input_topic, input_type),
+                                 qos=RELIABLE if reliable else BEST_EFFORT)
+        ns = namespace.strip("/")
+        prefix = f"rt/{ns}/" if ns else "rt/"
+
+        def reader(name, kind, absolute=False):
+            topic = ("rt/" + name) if absolute else (prefix + name)
+            return DataReader(self.dp, Topic(self.dp, topic, kind), qos=RELIABLE)
+
+        self.decisions = reader("presrs/decisions", t.TerrainDecision)
+        self.stances = reader("presrs/stance_events", t.StanceEvent)
+        self.events = reader("presrs/events", t.String)
+        self.gait = reader("presrs/gait", t.String)
+        self.diagnostics = reader("diagnostics", t.DiagnosticArray, absolute=True)
+        self.readers = [self.decisions, self.stances, self.events, self.gait, self.diagnostics]
+        self.got = {r: [] for r in self.readers}
+
+    def wait_matched(self, timeout=30.0):
+        """Until the node's reader and every output writer are matched; False on timeout."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if self.writer.get_matched_subscriptions() and all(
+                r.get_matched_publications() for r in self.readers
+            ):
+                return True
+            time.sleep(0.05)
+        return False
+
+    def publish(self, message):
+        self.writer.write(message)
+
+    def poll(self):
+        """Takes what has arrived on every output."""
+        for r in self.readers:
+            self.got[r].extend(r.take(N=10_000))
+
+    def wait_for(self, predicate, timeout=20.0):
+        """Polls until `predicate(self)` holds; False on timeout."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            self.poll()
+            if predicate(self):
+                return True
+            time.sleep(0.05)
+        self.poll()
+        return predicate(self)
+
+    def json_events(self):
+        import json
+
+        return [json.loads(m.data) for m in self.got[self.events]]
+
+    def close(self):
+        # Dropping the participant leaves the graph (its writers' publishers disappear).
+        self.dp = None
+        self.writer = None
+        self.readers = []
+
+
+def image(rows, cols, values, stamp_ns=0, encoding="mono16", big_endian=False, frame_id="foot"):
+    """A sensor_msgs/Image of `values` (row-major ints or floats)."""
+    import numpy as np
+
+    dtype = {"mono16": "u2", "16UC1": "u2", "mono8": "u1", "32FC1": "f4"}.get(encoding, "u2")
+    array = np.asarray(values).reshape(rows, cols).astype((">" if big_endian else "<") + dtype)
+    data = array.tobytes()
+    return t.Image(
+        header=t.Header(stamp=t.Time(sec=stamp_ns // 1_000_000_000, nanosec=stamp_ns % 1_000_000_000),
+                        frame_id=frame_id),
+        height=rows, width=cols, encoding=encoding, is_bigendian=int(big_endian),
+        step=cols * array.itemsize, data=list(data))
