@@ -82,6 +82,8 @@ enum Command {
     Report(cmd::report::ReportArgs),
     /// Convert a recording to a ROS 2 bag (MCAP) of sensor_msgs/msg/Image.
     Convert(cmd::convert::ConvertArgs),
+    /// Run as a ROS 2 node: pressure frames from a topic in, terrain decisions out.
+    Ros2(cmd::ros2::Ros2Args),
 }
 
 fn main() -> ExitCode {
@@ -103,6 +105,7 @@ fn main() -> ExitCode {
         Command::Plot(args) => cmd::plot::run(args, &mut out),
         Command::Report(args) => cmd::report::run(args, &mut out),
         Command::Convert(args) => cmd::convert::run(args, &mut out),
+        Command::Ros2(args) => cmd::ros2::run(args, &mut out),
     }
     .and_then(|()| out.flush().map_err(anyhow::Error::from));
     match result {

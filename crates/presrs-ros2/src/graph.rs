@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use crate::error::{Result, Ros2Error};
 use crate::messages::{DiagnosticArray, StanceEvent, StringMsg, TerrainDecision};
+use crate::names::resolve_topic;
 use crate::options::{NodeOptions, output_qos, ros_type};
 use crate::raw::{RawAdapter, RawCdr};
 
@@ -150,6 +151,8 @@ fn topic(
     (package, type_name): (&str, &str),
     qos: &QosProfile,
 ) -> Result<ros2_client::dds::rustdds::Topic> {
+    // Resolved here: ros2-client puts a relative name in the root namespace as `rt//name`.
+    let name = &resolve_topic(node.namespace(), name);
     let parsed =
         Name::parse(name).map_err(|e| Ros2Error::dds(format!("name the topic {name}"), e))?;
     node.create_topic(&parsed, MessageTypeName::new(package, type_name), qos)

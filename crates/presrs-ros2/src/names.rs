@@ -65,6 +65,15 @@ pub fn check_topic_name(topic: &str) -> Result<()> {
     relative.split('/').try_for_each(token_rule).map_err(bad)
 }
 
+/// The absolute name of `topic` in `namespace` (both checked): relative names are in the namespace.
+pub fn resolve_topic(namespace: &str, topic: &str) -> String {
+    if topic.starts_with('/') {
+        topic.to_owned()
+    } else {
+        format!("{}/{topic}", namespace.trim_end_matches('/'))
+    }
+}
+
 /// One token of a name: non-empty, letters, digits and underscores, not starting with a digit.
 fn token_rule(token: &str) -> Result<(), String> {
     let Some(first) = token.chars().next() else {
@@ -114,6 +123,13 @@ mod tests {
             let err = check_namespace(bad).unwrap_err().to_string();
             assert!(err.contains("namespace"), "{bad}: {err}");
         }
+    }
+
+    #[test]
+    fn relative_topics_are_resolved_in_the_namespace() {
+        assert_eq!(resolve_topic("/", "foot/pressure"), "/foot/pressure");
+        assert_eq!(resolve_topic("/robot", "presrs/gait"), "/robot/presrs/gait");
+        assert_eq!(resolve_topic("/robot", "/diagnostics"), "/diagnostics");
     }
 
     #[test]

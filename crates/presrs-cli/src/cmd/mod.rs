@@ -11,6 +11,7 @@ pub mod plot;
 pub mod replay;
 pub mod report;
 pub mod reproduce;
+pub mod ros2;
 pub mod simulate;
 pub mod stream;
 pub mod train;
