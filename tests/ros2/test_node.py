@@ -93,6 +93,8 @@ def test_faults_are_reported_and_the_node_goes_on(fras, domain, node_factory):
     peer = Peer(domain, reliable=True)
     node = node_factory(fras.model, domain, "--input-depth", "5")
     assert peer.wait_matched(30)
+    # Best effort: a frame sent before the node's side of the match is set up would be lost unseen.
+    time.sleep(0.5)
     frames = fras.payloads
     publish_all(peer, frames[:60], 0.002)
     # A frame of another size, then one of an unsupported encoding: one error event each.
@@ -116,6 +118,7 @@ def test_faults_are_reported_and_the_node_goes_on(fras, domain, node_factory):
     from dds_peer import RELIABLE
     peer.writer = DataWriter(peer.dp, Topic(peer.dp, "rt/foot/pressure", t.Image), qos=RELIABLE)
     assert wait_until(lambda: peer.writer.get_matched_subscriptions(), 30)
+    time.sleep(0.5)
     publish_all(peer, peer_writer_frames, 0.002)
     n = sum(e["event"] == "classification" for e in fras.reference)
     assert peer.wait_for(lambda p: len(p.got[p.decisions]) >= n, 30)
