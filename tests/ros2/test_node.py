@@ -123,10 +123,12 @@ def test_faults_are_reported_and_the_node_goes_on(fras, domain, node_factory):
     n = sum(e["event"] == "classification" for e in fras.reference)
     assert peer.wait_for(lambda p: len(p.got[p.decisions]) >= n, 30)
 
-    # A burst faster than the node: the node is paused while 200 frames come, its history keeps 5.
+    # A burst faster than the node: the node is paused while 4000 frames (10 MB) come, more than its
+    # socket buffer and its history (5 frames) hold.
+    burst = 4000
     node.proc.send_signal(signal.SIGSTOP)
     try:
-        publish_all(peer, (frames * 2)[:200])
+        publish_all(peer, (frames * 20)[:burst])
         time.sleep(0.5)
     finally:
         node.proc.send_signal(signal.SIGCONT)
@@ -144,7 +146,7 @@ def test_faults_are_reported_and_the_node_goes_on(fras, domain, node_factory):
     final = [d for d in peer.got[peer.diagnostics] if diagnostics_values(d)["state"] == "ended"]
     assert final, "no final diagnostics"
     v = diagnostics_values(final[-1])
-    sent = len(frames) + 2 + 200 + 1
+    sent = len(frames) + 2 + burst + 1
     # Every frame sent is accounted for: taken by the node, or counted as dropped.
     assert int(v["frames_received"]) + int(v["frames_dropped"]) == sent, v
     assert int(v["frames_dropped"]) > 0 and int(v["publishers_seen"]) == 2
