@@ -33,10 +33,12 @@ class Peer:
 
     def __init__(self, domain, input_topic="foot/pressure", input_type=t.Image, reliable=True,
                  namespace=""):
+        self.domain = domain
         self.dp = DomainParticipant(domain)
         self.input_type = input_type
-        self.writer = DataWriter(self.dp, Topic(self.dp, "rt/" + input_topic, input_type),
-                                 qos=RELIABLE if reliable else BEST_EFFORT)
+        self.input_topic = input_topic
+        self.writer_qos = RELIABLE if reliable else BEST_EFFORT
+        self.start_publisher()
         ns = namespace.strip("/")
         prefix = f"rt/{ns}/" if ns else "rt/"
 
@@ -51,6 +53,20 @@ class Peer:
         self.diagnostics = reader("diagnostics", t.DiagnosticArray, absolute=True)
         self.readers = [self.decisions, self.stances, self.events, self.gait, self.diagnostics]
         self.got = {r: [] for r in self.readers}
+
+    def start_publisher(self):
+        """The frames' publisher: a participant of its own, as a camera driver's process would be."""
+        self.pub_dp = DomainParticipant(self.domain)
+        topic = Topic(self.pub_dp, "rt/" + self.input_topic, self.input_type)
+        self.writer = DataWriter(self.pub_dp, topic, qos=self.writer_qos)
+
+    def stop_publisher(self):
+        """The publisher's process ends: its participant leaves the graph."""
+        import gc
+
+        self.writer = None
+        self.pub_dp = None
+        gc.collect()
 
     def wait_matched(self, timeout=30.0):
         """Until the node's reader and every output writer are matched; False on timeout."""
@@ -108,3 +124,59 @@ def image(rows, cols, values, stamp_ns=0, encoding="mono16", big_endian=False, f
                         frame_id=frame_id),
         height=rows, width=cols, encoding=encoding, is_bigendian=int(big_endian),
         step=cols * array.itemsize, data=list(data))
+
+
+def _publish_in_child(domain, topic, payloads, period, reliable, ready_timeout, matched, go, published):
+    import ros2_types as types
+
+    dp = DomainParticipant(domain)
+    writer = DataWriter(dp, Topic(dp, "rt/" + topic, types.Image), qos=RELIABLE if reliable else BEST_EFFORT)
+    end = time.monotonic() + ready_timeout
+    while not writer.get_matched_subscriptions():
+        if time.monotonic() > end:
+            raise SystemExit(3)
+        time.sleep(0.05)
+    time.sleep(0.5)
+    matched.set()
+    if not go.wait(ready_timeout):
+        raise SystemExit(4)
+    for data in payloads:
+        writer.write(types.Image.deserialize(data))
+        if period:
+            time.sleep(period)
+    published.set()
+    # Reliable: until the node has taken them all (bounded). Best effort: a while, so that a paused
+    # node finds its publisher still there when it resumes. Then the process leaves the graph.
+    if reliable:
+        writer.wait_for_acks(duration(seconds=5))
+    else:
+        # One more frame once the node has resumed: the frames lost at the burst's end are a gap
+        # before it.
+        time.sleep(1.5)
+        writer.write(types.Image.deserialize(payloads[-1]))
+        time.sleep(2)
+
+
+def publish_from_process(domain, payloads, period=0.0, reliable=True, topic="foot/pressure", timeout=60,
+                         when_matched=None, when_published=None):
+    """Publishes `payloads` (CDR images) from a process of its own, as a camera driver would, and waits
+    for it to end (bounded); `when_matched()` runs once it has found the node, before it publishes.
+    Returns its exit code (0: all published)."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn")
+    matched, go, published = ctx.Event(), ctx.Event(), ctx.Event()
+    proc = ctx.Process(target=_publish_in_child,
+                       args=(domain, topic, list(payloads), period, reliable, 30, matched, go, published))
+    proc.start()
+    if matched.wait(40) and when_matched is not None:
+        when_matched()
+    go.set()
+    if published.wait(timeout) and when_published is not None:
+        when_published()
+    proc.join(timeout)
+    if proc.is_alive():
+        proc.kill()
+        proc.join(5)
+        return None
+    return proc.exitcode

@@ -9,7 +9,7 @@ import pytest
 
 import ros2_types as t
 from conftest import run_cli, wait_until
-from dds_peer import Peer, image
+from dds_peer import Peer, image, publish_from_process
 
 # Decisions equal the stream's: the same label, class and frames; the confidence and posteriors to 1e-9.
 TOL = 1e-9
@@ -85,47 +85,62 @@ def test_a_simulated_run_at_100_hz_on_sensor_data_qos(sim, domain, node_factory)
     assert end["frames"] == len(sim.payloads) and end["rejected_frames"] == 0
 
 
+def pause(node):
+    # The publisher has matched the node; the node's side of the match takes a moment more.
+    time.sleep(1.5)
+    node.proc.send_signal(signal.SIGSTOP)
+
+
 def diagnostics_values(message):
     return {kv.key: kv.value for kv in message.status[0].values}
 
 
 def test_faults_are_reported_and_the_node_goes_on(fras, domain, node_factory):
-    peer = Peer(domain, reliable=True)
+    # The frames come from publisher processes (a driver that stops and restarts); the readers stay.
+    peer = Peer(domain, reliable=True, input_topic="unused/pressure")
     node = node_factory(fras.model, domain, "--input-depth", "5")
-    assert peer.wait_matched(30)
-    # Best effort: a frame sent before the node's side of the match is set up would be lost unseen.
-    time.sleep(0.5)
+    assert peer.wait_for(lambda p: p.got[p.diagnostics], 30), "no diagnostics within 30 s"
     frames = fras.payloads
-    publish_all(peer, frames[:60], 0.002)
+    wrong_size = image(10, 10, [0] * 100, encoding="mono16").serialize()
+    rgb = image(60, 21, [0] * 1260, encoding="rgb8").serialize()
+    assert publish_from_process(domain, frames[:60] + [wrong_size, rgb], 0.002) == 0
     # A frame of another size, then one of an unsupported encoding: one error event each.
-    peer.publish(image(10, 10, [0] * 100, encoding="mono16"))
-    peer.publish(image(60, 21, [0] * 1260, encoding="rgb8"))
     assert peer.wait_for(lambda p: sum(e["event"] == "error" for e in p.json_events()) >= 2, 10)
     errors = [e for e in peer.json_events() if e["event"] == "error"]
     assert len(errors) == 2 and not any(e["fatal"] for e in errors)
     assert "rejected" in errors[0]["message"] and "10x10" in errors[0]["message"]
     assert "rgb8" in errors[1]["message"] and "not supported" in errors[1]["message"]
-    assert peer.wait_for(lambda p: any(d.status[0].level == 2 for d in p.got[p.diagnostics]), 5)
+    assert peer.wait_for(lambda p: any(d.status[0].level == 2 for d in p.got[p.diagnostics]), 5), [
+        (d.status[0].level, d.status[0].message) for d in peer.got[peer.diagnostics]]
     bad = [d.status[0] for d in peer.got[peer.diagnostics] if d.status[0].level == 2]
     assert any("rgb8" in s.message or "10x10" in s.message for s in bad)
 
-    # The publisher stops and another starts: the node goes on with it.
-    peer_writer_frames = frames[60:]
-    peer.writer = None
+    # The publisher has stopped; another starts: the node goes on with it.
     time.sleep(1.0)
-    from cyclonedds.pub import DataWriter
-    from cyclonedds.topic import Topic
-    from dds_peer import RELIABLE
-    peer.writer = DataWriter(peer.dp, Topic(peer.dp, "rt/foot/pressure", t.Image), qos=RELIABLE)
-    assert wait_until(lambda: peer.writer.get_matched_subscriptions(), 30)
-    time.sleep(0.5)
-    publish_all(peer, peer_writer_frames, 0.002)
+    assert publish_from_process(domain, frames[60:], 0.002) == 0
     n = sum(e["event"] == "classification" for e in fras.reference)
     assert peer.wait_for(lambda p: len(p.got[p.decisions]) >= n, 30)
 
-    # A burst faster than the node: the node is paused while 4000 frames (10 MB) come, more than its
-    # socket buffer and its history (5 frames) hold.
-    burst = 4000
+    code, stderr = node.stop(signal.SIGTERM)
+    assert code == 0, stderr
+    assert "stopped by SIGTERM" in stderr
+    assert "publish failures" in stderr
+
+
+def burst_once(fras, domain, node_factory, burst):
+    """One paused-node burst: (the final diagnostics values, stderr), or None when the DDS path from
+    the node to this process's readers did not carry the diagnostics (seen now and then after a
+    SIGSTOP: discovery's view of a paused participant, not the node's counting)."""
+    peer = Peer(domain, reliable=False)
+    node = node_factory(fras.model, domain, "--input-depth", "5")
+    assert peer.wait_matched(30), "the node's topics were not discovered within 30 s"
+    assert peer.wait_for(lambda p: p.got[p.diagnostics], 30), "no diagnostics within 30 s"
+    frames = fras.payloads
+    # A first frame the node takes: the publisher's later gaps are between frames it has seen (a
+    # publisher's frames before the first the node takes are not counted: the node may have joined late).
+    publish_all(peer, frames[:1])
+    assert peer.wait_for(lambda p: any(diagnostics_values(d)["frames_received"] == "1"
+                                       for d in p.got[p.diagnostics]), 10)
     node.proc.send_signal(signal.SIGSTOP)
     try:
         publish_all(peer, (frames * 20)[:burst])
@@ -133,24 +148,36 @@ def test_faults_are_reported_and_the_node_goes_on(fras, domain, node_factory):
     finally:
         node.proc.send_signal(signal.SIGCONT)
     time.sleep(1.0)
-    publish_all(peer, frames[:1])  # a last frame closes the gap of the burst's tail
+    publish_all(peer, frames[:1])
 
-    def dropped(p):
-        return max([int(diagnostics_values(d)["frames_dropped"]) for d in p.got[p.diagnostics]] + [0])
+    def ended(p):
+        return [d for d in p.got[p.diagnostics] if diagnostics_values(d)["state"] == "ended"]
 
-    assert peer.wait_for(lambda p: dropped(p) > 0, 10)
+    time.sleep(1.5)
     code, stderr = node.stop(signal.SIGTERM)
     assert code == 0, stderr
     assert "stopped by SIGTERM" in stderr
-    peer.wait_for(lambda p: any(diagnostics_values(d)["state"] == "ended" for d in p.got[p.diagnostics]), 10)
-    final = [d for d in peer.got[peer.diagnostics] if diagnostics_values(d)["state"] == "ended"]
-    assert final, "no final diagnostics"
-    v = diagnostics_values(final[-1])
-    sent = len(frames) + 2 + burst + 1
-    # Every frame sent is accounted for: taken by the node, or counted as dropped.
-    assert int(v["frames_received"]) + int(v["frames_dropped"]) == sent, v
-    assert int(v["frames_dropped"]) > 0 and int(v["publishers_seen"]) == 2
+    if not peer.wait_for(ended, 10):
+        return None
+    return diagnostics_values(ended(peer)[-1]), stderr, peer
+
+
+def test_a_burst_faster_than_the_node_is_counted_as_dropped(fras, domain, node_factory):
+    # 4000 frames (10 MB) while the node is paused: more than its socket buffer and its history
+    # (5 frames) hold; then one frame after a pause (the frames lost at the burst's end are a gap
+    # before it).
+    burst = 4000
+    for attempt in range(3):
+        result = burst_once(fras, domain + 200 * attempt % 30 + attempt, node_factory, burst)
+        if result is not None:
+            break
+    assert result is not None, "no final diagnostics in 3 attempts"
+    v, stderr, peer = result
+    assert int(v["frames_dropped"]) > 0, v
+    assert any(d.status[0].level == 1 for d in peer.got[peer.diagnostics])  # WARN
     assert f"{v['frames_dropped']} frames dropped before the node took them" in stderr
+    # Every frame sent is accounted for: taken by the node, or counted as dropped.
+    assert int(v["frames_received"]) + int(v["frames_dropped"]) == 1 + burst + 1, v
 
 
 @pytest.mark.parametrize("model_text", [None, "{not json"])
