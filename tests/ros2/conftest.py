@@ -67,7 +67,11 @@ class Case:
 def fras(tmp_path_factory):
     """The real F-Scan insole recording (60 x 21, 205 frames): a model of it and a copy 1.7 times as
     loaded (two classes), its bag, and the stream's events on it."""
-    d = tmp_path_factory.mktemp("fras")
+    return make_fras_case(tmp_path_factory.mktemp("fras"))
+
+
+def make_fras_case(d):
+    """The `fras` case in folder `d` (also used by bench/ros2)."""
     src = (SHARED / "tekscan" / "FrasP01L.asf").read_text()
     head, sep, body = src.partition("ASCII_DATA @@")
     scaled = []
