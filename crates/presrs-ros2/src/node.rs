@@ -117,6 +117,39 @@ impl LoopState {
     }
 }
 
+impl LoopState {
+    fn new() -> Self {
+        Self {
+            counters: NodeCounters::default(),
+            at_last_report: NodeCounters::default(),
+            last_report: Instant::now(),
+            stamps: StampBook::default(),
+            sequences: HashMap::new(),
+            first_grid: None,
+        }
+    }
+
+    /// Publishes `/diagnostics` for node `names.0` reading `names.1`: the counters and what changed
+    /// since the last report.
+    fn report(&mut self, outputs: &Outputs, names: (&str, &str), ended: bool) {
+        let message = DiagnosticsReport {
+            node: names.0,
+            input: names.1,
+            now: &self.counters,
+            before: &self.at_last_report,
+            period: self.last_report.elapsed(),
+            stamp: Time::from(wall_clock()),
+            ended,
+        }
+        .message();
+        if outputs.diagnostics.publish(message).is_err() {
+            self.counters.publish_failures += 1;
+        }
+        self.at_last_report = self.counters.clone();
+        self.last_report = Instant::now();
+    }
+}
+
 fn wall_clock() -> Stamp {
     let nanos = SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -145,30 +178,9 @@ pub fn run_node(
         options,
     } = graph;
     let name = node.fully_qualified_name();
-    let state = RefCell::new(LoopState {
-        counters: NodeCounters::default(),
-        at_last_report: NodeCounters::default(),
-        last_report: Instant::now(),
-        stamps: StampBook::default(),
-        sequences: HashMap::new(),
-        first_grid: None,
-    });
+    let state = RefCell::new(LoopState::new());
     let report = |state: &mut LoopState, ended: bool| {
-        let message = DiagnosticsReport {
-            node: &name,
-            input: &options.input,
-            now: &state.counters,
-            before: &state.at_last_report,
-            period: state.last_report.elapsed(),
-            stamp: Time::from(wall_clock()),
-            ended,
-        }
-        .message();
-        if outputs.diagnostics.publish(message).is_err() {
-            state.counters.publish_failures += 1;
-        }
-        state.at_last_report = state.counters.clone();
-        state.last_report = Instant::now();
+        state.report(&outputs, (&name, &options.input), ended);
     };
     let mut events = Events::with_capacity(16);
     let next = |values: &mut Vec<f64>, _present: &mut Vec<bool>| loop {
@@ -210,17 +222,9 @@ pub fn run_node(
         let event: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
         let mut s = state.borrow_mut();
         s.counters.note_event(&event);
-        let published = publish_event(
-            &outputs,
-            &event,
-            line,
-            model.class_names(),
-            &s.stamps,
-            &frame_id,
-        );
-        if !published {
-            s.counters.publish_failures += 1;
-        }
+        let names = model.class_names();
+        let published = publish_event(&outputs, &event, line, names, &s.stamps, &frame_id);
+        s.counters.publish_failures += u64::from(!published);
         published
     };
     let session = run_frames(model, profile, next, &mut emit, notify)?;
