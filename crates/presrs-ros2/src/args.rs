@@ -29,8 +29,8 @@ pub struct Ros2Args {
     #[arg(long, default_value = "sensor_msgs/msg/Image", value_name = "TYPE",
           value_parser = |t: &str| input_type(t).map_err(|e| e.to_string()))]
     pub input_type: FrameType,
-    /// Input QoS: sensor-data (best effort, keep last --input-depth [5]) or reliable (keep last
-    /// --input-depth [1000]).
+    /// Input QoS: sensor-data (best effort, keep the last 5 frames) or reliable (keep the last 1000);
+    /// --input-depth sets how many.
     #[arg(long, default_value = "sensor-data", value_name = "PROFILE")]
     pub input_qos: String,
     /// Frames the input QoS history keeps [default: the profile's].
