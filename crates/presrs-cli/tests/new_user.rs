@@ -210,7 +210,7 @@ fn value_options(sub: &str) -> Vec<String> {
         .collect()
 }
 
-const SUBCOMMANDS: [&str; 14] = [
+const SUBCOMMANDS: [&str; 15] = [
     "simulate",
     "inspect",
     "features",
@@ -225,6 +225,7 @@ const SUBCOMMANDS: [&str; 14] = [
     "plot",
     "report",
     "convert",
+    "ros2",
 ];
 
 #[test]
