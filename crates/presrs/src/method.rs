@@ -219,13 +219,9 @@ impl Method {
                     },
                     ..self.clone()
                 };
+                // The transforms are raced with every family: the race drops the clear losers, and
+                // the texture families come last, where a budget cuts first on large sets.
                 for feature in families.iter().filter(|f| f.is_costly() == texture) {
-                    // The transforms are raced with every FFT family (their features are cheap,
-                    // and the race drops the clear losers); with the texture ones, in a full search.
-                    let tried = intensity == given || self.full_search || !texture;
-                    if !tried {
-                        continue;
-                    }
                     for &classifier in &classifiers {
                         out.push(method.config(
                             grid,
@@ -249,7 +245,7 @@ impl Method {
             &[]
         };
         AutoChoice::new(candidates, self.validate_by)
-            .with_budget(self.budget)
+            .with_budget(if self.full_search { None } else { self.budget })
             .with_refined_dims(refine)
             .with_rule(self.choose)
     }

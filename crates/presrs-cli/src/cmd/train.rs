@@ -11,7 +11,9 @@ use presrs::train::TrainOptions;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
-use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
+use super::common::{
+    PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings,
+};
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
@@ -79,7 +81,6 @@ pub struct TrainArgs {
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     presrs_io::output_path::check_output_file(&args.out)?;
-    let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = TrainOptions {
         condition: args.train_condition.clone(),
         per_class: args.per_class,
@@ -89,10 +90,26 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
     let progress = TerminalProgress::default();
-    progress.start("training", None);
-    let training = presrs::train::train(&dataset, &options);
-    progress.finish();
-    let training = training?;
+    let (dataset, training) = if args.samples.is_auto() {
+        let raced = presrs::sample_race::train_racing_samples(
+            &args.manifest,
+            &args.samples.options_of("frame")?,
+            args.samples.whole_sample(),
+            &options,
+            &progress,
+        )?;
+        for line in raced.race.lines() {
+            stderr_line!("note: {line}");
+        }
+        print_load_warnings(&raced.dataset);
+        (raced.dataset, raced.training)
+    } else {
+        let dataset = load_manifest(&args.manifest, &args.samples)?;
+        progress.start("training", None);
+        let training = presrs::train::train(&dataset, &options);
+        progress.finish();
+        (dataset, training?)
+    };
     for warning in &training.warnings {
         stderr_line!("warning: {warning}");
     }
