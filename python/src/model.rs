@@ -9,11 +9,11 @@ use numpy::{PyArray1, PyArrayMethods};
 use presrs::classify::whole_stance_sample;
 use presrs::core::pipeline::{Classification, Session};
 use presrs::core::split::ValidationSize;
-use presrs::io::output_path::check_output_file;
-use presrs::io::model_file::{ModelFile, load_model, parse_model, save_model};
-use presrs::train::{TrainOptions, train};
 use presrs::core::stance::summary::{SummaryConfig, summarise};
 use presrs::core::{Frame, FrameView};
+use presrs::io::model_file::{ModelFile, load_model, parse_model, save_model};
+use presrs::io::output_path::check_output_file;
+use presrs::train::{TrainOptions, train};
 use presrs::{ClassifierChoice, CropChoice, Dataset, FeatureChoice, Method, Sample, SampleKind};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -22,8 +22,8 @@ use self_cell::self_cell;
 
 use crate::arrays::{Images, labels};
 use crate::errors::{IntoPyResult, data_error, warn};
-use presrs::Warning;
 use crate::threads::detached;
+use presrs::Warning;
 
 type SessionSlot<'a> = Mutex<Session<'a>>;
 
@@ -128,7 +128,13 @@ impl Model {
                 let frames = images
                     .frames()?
                     .iter()
-                    .map(|f| if time_in_rows { f.transposed() } else { f.to_frame() })
+                    .map(|f| {
+                        if time_in_rows {
+                            f.transposed()
+                        } else {
+                            f.to_frame()
+                        }
+                    })
                     .collect();
                 Ok(Samples::Owned(frames, images.batch))
             }
@@ -146,7 +152,11 @@ impl Model {
                 };
                 let mut frames = Vec::with_capacity(movies.len());
                 for (index, movie) in movies.iter().enumerate() {
-                    let what = if one { "x".to_owned() } else { format!("x[{index}]") };
+                    let what = if one {
+                        "x".to_owned()
+                    } else {
+                        format!("x[{index}]")
+                    };
                     let movie = Images::new(movie, &what)?;
                     if !movie.batch {
                         return Err(data_error(format!(
@@ -155,9 +165,8 @@ impl Model {
                         )));
                     }
                     movie.require_finite(&what, "frame")?;
-                    let (sample, warning) =
-                        whole_stance_sample(&movie.frames()?, &summary, length)
-                            .map_err(|err| data_error(format!("{what}: {err}")))?;
+                    let (sample, warning) = whole_stance_sample(&movie.frames()?, &summary, length)
+                        .map_err(|err| data_error(format!("{what}: {err}")))?;
                     if let Some(warning) = warning {
                         warn(py, &Warning::from(format!("{what}: {}", warning.message())))?;
                     }
@@ -257,7 +266,11 @@ impl Model {
             "python: presrs.Model.train({} {}s, features={features:?}, classifier={classifier:?}, \
              sample={:?}, seed={seed})",
             dataset.samples.len(),
-            if kind.is_frame() { "image" } else { kind.name() },
+            if kind.is_frame() {
+                "image"
+            } else {
+                kind.name()
+            },
             kind.name()
         );
         Ok(Self::new(training.model_file(
@@ -518,7 +531,11 @@ pub fn dataset_of(
         sample.condition = conditions.as_ref().map(|c| c[index].clone());
         samples.push(sample);
     }
-    let what = if kind.is_frame() { "image" } else { kind.name() };
+    let what = if kind.is_frame() {
+        "image"
+    } else {
+        kind.name()
+    };
     Dataset::from_samples_of(format!("numpy {what}s ({n})"), samples, kind).py_err()
 }
 

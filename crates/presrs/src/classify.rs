@@ -4,11 +4,11 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use presrs_core::{Frame, FrameView, Recording};
 use presrs_core::pipeline::{Prediction, Session, TrainedModel};
 use presrs_core::sample::SampleKind;
 use presrs_core::stance::summary::{SummaryConfig, pad_to, summarise};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
+use presrs_core::{Frame, FrameView, Recording};
 use serde::Serialize;
 
 use crate::dataset::{DeadSenselFills, SampleOptions, read_corrected};
