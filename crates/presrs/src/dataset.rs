@@ -266,7 +266,7 @@ impl Dataset {
 
     /// [`Dataset::from_samples`] for samples of `kind`, made in memory as [`Dataset::load`] makes them
     /// from files: a whole stance's sample is its movie's summary
-    /// ([`summarise`](presrs_core::stance::summary::summarise)), laid here into the kind's length (or
+    /// ([`summarise`]), laid here into the kind's length (or
     /// the longest stance's), with the warning of [`pad_stance_samples`]; a series' sample is its
     /// channels x time array.
     pub fn from_samples_of(
