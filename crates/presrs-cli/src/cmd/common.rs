@@ -34,8 +34,7 @@ pub struct PipelineArgs {
     /// data among the first five).
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
-    /// With auto: try the intensity transforms (sqrt, log1p) with every feature family, not only with
-    /// fft1d (about twice the time of the default search).
+    /// With auto: score every candidate whatever the time it takes (the same as --budget 0).
     #[arg(long)]
     pub full_search: bool,
     /// With auto: seconds the automatic choice may spend scoring its candidates, per model trained (in

@@ -19,7 +19,7 @@ use super::common::{
 #[derive(Debug, clap::Args)]
 #[command(
     after_help = "By default the feature family and classifier are chosen automatically by validation \
-inside the training data (--features auto --classifier auto; --full-search for every family).\n\n\
+inside the training data (--features auto --classifier auto; --full-search: no time budget).\n\n\
 Examples (sim/ made by `presrs simulate --out sim`; the second is the paper's method and protocol: \
 1-D |FFT| + Parzen window, 20 images per terrain from gait G2, 7 of them for choosing sigma):
   presrs train --manifest sim/manifest.csv --out g2.model.json
@@ -125,7 +125,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         !args.samples.keep_dead_sensels,
         Some(std::env::args().collect::<Vec<_>>().join(" ")),
     );
-    let segment = args.samples.options()?.segment_params();
+    let segment = args.samples.options_of("frame")?.segment_params();
     let choice = if args.online_profile || args.gait_table.is_some() {
         ProfileChoice::Required
     } else if args.no_online_profile {
