@@ -123,47 +123,96 @@ pub fn summarise(frames: &[FrameView<'_>], config: &SummaryConfig) -> Result<Fra
                 reason: format!("frame {index} of the stance holds {bad}; values must be finite"),
             });
         }
-        peak = frame.values().iter().fold(peak, |m, &v| m.max(v));
+        peak = peak.max(frame_peak(frame));
     }
     let contact_level = config.contact_fraction * peak;
     let length = frames.len();
-    let mut out = vec![0.0; config.channels() * length];
+    let channels = config.channels();
+    let mut out = vec![0.0; channels * length];
+    let mut column = vec![0.0; channels];
     let mut regions = vec![0.0; config.region_rows * config.region_cols];
     for (t, frame) in frames.iter().enumerate() {
-        regions.fill(0.0);
-        let (mut load, mut area, mut row_moment, mut col_moment) = (0.0, 0.0, 0.0, 0.0);
-        for r in 0..grid.rows {
-            let block_row = block_of(r, grid.rows, config.region_rows);
-            for c in 0..grid.cols {
-                let value = if frame.is_present(r, c) {
-                    frame.get(r, c).max(0.0)
-                } else {
-                    0.0
-                };
-                load += value;
-                area += f64::from(u8::from(value > contact_level && value > 0.0));
-                row_moment += value * (r as f64 + 0.5);
-                col_moment += value * (c as f64 + 0.5);
-                regions[block_row * config.region_cols
-                    + block_of(c, grid.cols, config.region_cols)] += value;
-            }
-        }
-        let (cop_row, cop_col) = if load > 0.0 {
-            (
-                row_moment / load / grid.rows as f64,
-                col_moment / load / grid.cols as f64,
-            )
-        } else {
-            (0.0, 0.0)
-        };
-        let column = [load, area, cop_row, cop_col]
-            .into_iter()
-            .chain(regions.iter().copied());
-        for (channel, value) in column.enumerate() {
-            out[channel * length + t] = value;
+        frame_channels(frame, config, &mut regions, &mut column);
+        column[AREA_CHANNEL] = contact_area(frame_loads(frame), contact_level);
+        for (channel, value) in column.iter().enumerate() {
+            out[channel * length + t] = *value;
         }
     }
     Frame::new(Grid::new(config.channels(), length), out)
+}
+
+/// The index of the `area` channel: the one channel that depends on the whole stance (its contact
+/// level is a fraction of the stance's highest sensel), so it is counted last ([`contact_area`]).
+pub const AREA_CHANNEL: usize = 1;
+
+/// The highest value of a frame (absent sensels included, as read), at least 0: the stance's
+/// contact level is `contact_fraction` times the highest of its frames'.
+pub fn frame_peak(frame: &FrameView<'_>) -> f64 {
+    frame.values().iter().fold(0.0_f64, |m, &v| m.max(v))
+}
+
+/// The load each sensel of `frame` counts with, row-major: its value, at least 0; 0 where absent.
+pub fn frame_loads<'f>(frame: &'f FrameView<'_>) -> impl Iterator<Item = f64> + 'f {
+    let grid = frame.grid();
+    (0..grid.rows).flat_map(move |r| {
+        (0..grid.cols).map(move |c| {
+            if frame.is_present(r, c) {
+                frame.get(r, c).max(0.0)
+            } else {
+                0.0
+            }
+        })
+    })
+}
+
+/// The sensels of `loads` (a frame's [`frame_loads`]) in contact: above `contact_level` and above 0.
+pub fn contact_area(loads: impl IntoIterator<Item = f64>, contact_level: f64) -> f64 {
+    loads
+        .into_iter()
+        .filter(|&value| value > contact_level && value > 0.0)
+        .count() as f64
+}
+
+/// One frame's column of the summary, every channel but [`AREA_CHANNEL`] (left 0): they depend on
+/// the frame alone, so an online summary computes them as frames arrive. `regions` (one per region)
+/// and `column` ([`SummaryConfig::channels`] long) are the caller's buffers; the frame's grid must
+/// have passed [`SummaryConfig::check`].
+pub fn frame_channels(
+    frame: &FrameView<'_>,
+    config: &SummaryConfig,
+    regions: &mut [f64],
+    column: &mut [f64],
+) {
+    let grid = frame.grid();
+    regions.fill(0.0);
+    let (mut load, mut row_moment, mut col_moment) = (0.0, 0.0, 0.0);
+    let mut loads = frame_loads(frame);
+    for r in 0..grid.rows {
+        let block_row = block_of(r, grid.rows, config.region_rows);
+        for c in 0..grid.cols {
+            let value = loads.next().unwrap_or(0.0);
+            load += value;
+            row_moment += value * (r as f64 + 0.5);
+            col_moment += value * (c as f64 + 0.5);
+            regions[block_row * config.region_cols + block_of(c, grid.cols, config.region_cols)] +=
+                value;
+        }
+    }
+    let (cop_row, cop_col) = if load > 0.0 {
+        (
+            row_moment / load / grid.rows as f64,
+            col_moment / load / grid.cols as f64,
+        )
+    } else {
+        (0.0, 0.0)
+    };
+    let fixed = [load, 0.0, cop_row, cop_col];
+    for (slot, value) in column
+        .iter_mut()
+        .zip(fixed.into_iter().chain(regions.iter().copied()))
+    {
+        *slot = value;
+    }
 }
 
 /// `summary` (`channels x frames`) laid into `length` frames: zeros after the stance when it is
