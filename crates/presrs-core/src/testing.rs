@@ -97,6 +97,18 @@ pub fn stance_model(
     stances: &[(usize, usize, usize)],
     length: usize,
 ) -> Result<TrainedModel> {
+    stance_model_with(frames, stances, length, 168, 12, ClassifierKind::LDA)
+}
+
+/// [`stance_model`] with `num_features` MiniRocket features, `dims` components and `classifier`.
+pub fn stance_model_with(
+    frames: &[Frame],
+    stances: &[(usize, usize, usize)],
+    length: usize,
+    num_features: usize,
+    dims: usize,
+    classifier: ClassifierKind,
+) -> Result<TrainedModel> {
     let samples = stances
         .iter()
         .map(|&(start, len, class)| {
@@ -111,11 +123,11 @@ pub fn stance_model(
     let config = TrainConfig {
         crop: Crop::NONE,
         features: FeatureConfig::of::<RocketFamily>(RocketParams {
-            num_features: 168,
+            num_features,
             ..RocketParams::default()
         }),
-        dims: 12,
-        classifier: ClassifierKind::LDA.default_config(),
+        dims,
+        classifier: classifier.default_config(),
         preprocess: Preprocess::NONE,
     }
     .check()?;
