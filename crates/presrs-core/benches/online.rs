@@ -11,7 +11,8 @@
 //! frames laid into 128): `stance_stream` pushes a stream of stances frame by frame (each frame's
 //! summary column kept, each stance decided at its lift-off); `stance_push_flight` and
 //! `stance_push_loaded` one frame in flight and one inside a stance (no decision); `stance_decision`
-//! the decision alone (the kept stance laid out as the model's sample, and classified).
+//! the decision alone (the kept stance laid out as the model's sample, and classified), and
+//! `stance_layout` its first part (the layout, with the area counted).
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -216,6 +217,16 @@ fn whole_stance(c: &mut Criterion) {
     for (t, frame) in frames[20..20 + stance_len].iter().enumerate() {
         buffer.keep(t, &frame.view());
     }
+    group.bench_function("stance_layout", |b| {
+        b.iter(|| {
+            black_box(
+                buffer
+                    .sample(0, black_box(stance_len))
+                    .map(|s| s.values()[0])
+                    .ok(),
+            )
+        })
+    });
     let mut session = model.session();
     group.bench_function("stance_decision", |b| {
         b.iter(|| {

@@ -269,6 +269,8 @@ struct WholeStance {
     decide_partial: bool,
     /// The stance under way and not yet decided: its id and touchdown frame.
     open: Option<(u64, usize)>,
+    /// Stances are reported without a decision (the end of a stream that ended in the warm-up).
+    report_only: bool,
 }
 
 impl WholeStance {
@@ -315,6 +317,7 @@ impl WholeStance {
             decide_at: online.decide_at,
             decide_partial: params.params().baseline == BaselineMode::Contact,
             open: None,
+            report_only: false,
         }))
     }
 }
@@ -435,6 +438,13 @@ impl<'m> OnlineClassifier<'m> {
         self.events.clear();
         self.posteriors.clear();
         self.errors.clear();
+        // A stream that ends in the warm-up has its stances found at the end, their frames past: they
+        // are reported, not decided (as the one-frame path does).
+        if self.segmenter.warming_up()
+            && let Some(whole) = &mut self.whole
+        {
+            whole.report_only = true;
+        }
         let seg_events = self.segmenter.finish()?;
         let t = self.segmenter.frames_seen().saturating_sub(1);
         self.handle(seg_events, None, t);
@@ -677,6 +687,7 @@ impl<'m> OnlineClassifier<'m> {
                 SegEvent::Touchdown(touchdown) => {
                     self.touchdown(touchdown);
                     if let Some(whole) = &mut self.whole
+                        && !whole.report_only
                         && (!touchdown.partial || whole.decide_partial)
                     {
                         whole.open = Some((touchdown.stance_id, touchdown.touchdown_frame));

@@ -251,3 +251,29 @@ fn settings_that_do_not_fit_the_model_are_refused() {
     assert!(classifier.push(&tiny.view()).is_err());
     assert!(classifier.push(&frames[0].view()).is_ok());
 }
+
+/// A stream that ends during the warm-up has its stances found at the end: reported, not decided.
+#[test]
+fn stances_found_at_the_end_of_a_warmup_are_reported_not_decided() {
+    let (model, _) = setup(false);
+    let (frames, stances) = stance_stream(&[12, 14], 5);
+    assert!(frames.len() < OnlineParams::default().warmup_frames);
+    let params = ValidSegmentParams::default();
+    let mut classifier =
+        OnlineClassifier::new(&model, &params, &OnlineParams::default(), None).unwrap();
+    for frame in &frames {
+        assert!(classifier.push(&frame.view()).unwrap().events.is_empty());
+    }
+    let step = classifier.finish().unwrap();
+    let liftoffs: Vec<_> = step
+        .events
+        .iter()
+        .filter_map(|e| match e {
+            OnlineEvent::Liftoff(l) => Some(l),
+            OnlineEvent::Touchdown(_) => None,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(liftoffs.len(), stances.len());
+    assert!(liftoffs.iter().all(|l| !l.sampled));
+}

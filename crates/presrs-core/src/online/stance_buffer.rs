@@ -11,7 +11,7 @@
 use crate::error::{CoreError, Result};
 use crate::frame::{FrameView, Grid};
 use crate::stance::summary::{
-    AREA_CHANNEL, SummaryConfig, contact_area, frame_channels, frame_loads, frame_peak,
+    AREA_CHANNEL, SummaryConfig, contact_area, frame_loads, loads_channels,
 };
 
 /// A ring of the last `length` frames' summary columns and loads (see the module docs).
@@ -80,17 +80,20 @@ impl StanceBuffer {
 
     /// Keeps frame `t` (of the grid set), in place of frame `t - length`.
     pub fn keep(&mut self, t: usize, frame: &FrameView<'_>) {
-        let slot = t % self.length;
-        let channels = self.column.len();
-        frame_channels(frame, &self.config, &mut self.regions, &mut self.column);
+        let grid = frame.grid();
+        let (slot, size, channels) = (t % self.length, grid.len(), self.column.len());
+        let Some(loads) = self.loads.get_mut(slot * size..(slot + 1) * size) else {
+            return;
+        };
+        self.peaks[slot] = frame_loads(frame, loads);
+        loads_channels(
+            loads,
+            grid,
+            &self.config,
+            &mut self.regions,
+            &mut self.column,
+        );
         self.columns[slot * channels..(slot + 1) * channels].copy_from_slice(&self.column);
-        let size = frame.grid().len();
-        if let Some(dst) = self.loads.get_mut(slot * size..(slot + 1) * size) {
-            for (dst, load) in dst.iter_mut().zip(frame_loads(frame)) {
-                *dst = load;
-            }
-        }
-        self.peaks[slot] = frame_peak(frame);
         self.held[slot] = Some(t);
     }
 
@@ -122,8 +125,7 @@ impl StanceBuffer {
                 self.sample[channel * self.length + i] = value;
             }
             let loads = &self.loads[slot * size..(slot + 1) * size];
-            self.sample[AREA_CHANNEL * self.length + i] =
-                contact_area(loads.iter().copied(), contact_level);
+            self.sample[AREA_CHANNEL * self.length + i] = contact_area(loads, contact_level);
         }
         FrameView::new(self.sample_grid(), &self.sample, None)
     }
