@@ -306,10 +306,10 @@ impl WholeStance {
             return Err(CoreError::Shape {
                 what: "whole-stance model",
                 expected: format!(
-                    "a crop that turns its {} summaries into",
+                    "a crop that keeps its {} stance summaries whole",
                     buffer.sample_grid()
                 ),
-                got: format!("{} and a {} image", model.crop(), model.image_grid()),
+                got: format!("crop {} giving {} images", model.crop(), model.image_grid()),
             });
         }
         Ok(Some(Self {

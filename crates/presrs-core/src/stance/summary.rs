@@ -201,14 +201,17 @@ pub fn loads_channels(
             let end = ((j + 1) * grid.cols)
                 .div_ceil(config.region_cols)
                 .min(grid.cols);
+            // The region's sum goes on in a register: the same additions in the same order.
             let region = &mut regions[block_row * config.region_cols + j];
+            let mut sum = *region;
             for &value in &row[c..end] {
                 load += value;
                 row_moment += value * row_centre;
                 col_moment += value * (c as f64 + 0.5);
-                *region += value;
+                sum += value;
                 c += 1;
             }
+            *region = sum;
         }
     }
     let (cop_row, cop_col) = if load > 0.0 {
