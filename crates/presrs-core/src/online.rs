@@ -678,7 +678,7 @@ impl<'m> OnlineClassifier<'m> {
     fn handle_whole(&mut self, events: SegEvents, frame: Option<&FrameView<'_>>, t: usize) {
         if let (Some(frame), Some(whole)) = (frame, self.whole.as_mut()) {
             let length = whole.buffer.length();
-            if !whole.open.is_some_and(|(_, start)| t >= start + length) {
+            if whole.open.is_none_or(|(_, start)| t < start + length) {
                 whole.buffer.keep(t, frame);
             }
         }
