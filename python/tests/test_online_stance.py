@@ -25,7 +25,7 @@ def stance_model(cli, tmp_path_factory):
     cli(
         "train", "--manifest", JIKU / "manifest.csv", "--out", path,
         "--sample", "stance", "--one-sample-per-file", "--features", "rocket",
-        "--classifier", "lda", "--dims", "20", "--seed", "1",
+        "--classifier", "lda", "--dims", "20", "--seed", "1", "--online-profile",
     )
     return path
 
