@@ -150,7 +150,13 @@ class Evaluation:
 class OnlineClassifier:
     """Frames in one at a time, `presrs stream`'s events out (as dicts)."""
 
-    def __init__(self, model: Model, *, gait_table: Optional[dict[str, str]] = None) -> None: ...
+    def __init__(
+        self,
+        model: Model,
+        *,
+        gait_table: Optional[dict[str, str]] = None,
+        decide_at: Optional[int] = None,
+    ) -> None: ...
     def push(self, frame: _Images, *, timestamp_us: Optional[int] = None) -> list[dict[str, Any]]: ...
     def finish(self) -> list[dict[str, Any]]: ...
     @property

@@ -74,6 +74,8 @@ pub enum Opt {
     TrainCondition,
     /// What a sample is: one frame, a whole stance, a series.
     Sample,
+    /// When a whole-stance model decides online: K frames after touchdown.
+    DecideAt,
 }
 
 /// What Python calls an option.
@@ -87,7 +89,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 25] = [
+    pub const ALL: [Opt; 26] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -113,6 +115,7 @@ impl Opt {
         Opt::ValidateBy,
         Opt::TrainCondition,
         Opt::Sample,
+        Opt::DecideAt,
     ];
 
     /// The command line's flag, e.g. `--per-class`.
@@ -143,6 +146,7 @@ impl Opt {
             Self::ValidateBy => "--validate-by",
             Self::TrainCondition => "--train-condition",
             Self::Sample => "--sample",
+            Self::DecideAt => "--decide-at",
         }
     }
 
@@ -180,6 +184,7 @@ impl Opt {
             Self::ValidateBy => Argument("validate_by"),
             Self::TrainCondition => Argument("train_condition"),
             Self::Sample => Argument("sample"),
+            Self::DecideAt => Argument("decide_at"),
         }
     }
 
