@@ -86,17 +86,36 @@ class Model:
         validate_by: str = "auto",
         budget: Optional[float] = 60.0,
         choose: str = "best",
-    ) -> Model: ...
+        sample: Literal["frame", "stance", "series"] = "frame",
+        stance_length: Optional[int] = None,
+        series_axis: Optional[Literal["cols", "rows"]] = None,
+    ) -> Model:
+        """Trains on images ``(n, rows, cols)`` (``sample="frame"``), on stances' movies (a sequence of
+        ``(frames, rows, cols)`` arrays of any length, ``sample="stance"``: each summarised over time as
+        ``presrs train --sample stance`` does, laid into ``stance_length`` frames, by default the
+        longest's) or on series ``(n, channels, time)`` (``sample="series"``; ``series_axis="rows"``
+        when time runs down the rows). A value that is not a finite number is an error naming its
+        image, row and column."""
     @staticmethod
     def load(path: _Path) -> Model: ...
-    def save(self, path: _Path) -> None: ...
+    def save(self, path: _Path) -> None:
+        """Writes the model file atomically, after checking that its folder exists and accepts it."""
     def to_json(self) -> str: ...
     @staticmethod
     def from_json(data: Union[str, bytes]) -> Model: ...
-    def predict(self, x: _Images) -> Any:
-        """A `str` for one image (rows, cols); an array of labels for a batch (n, rows, cols)."""
-    def predict_proba(self, x: _Images) -> npt.NDArray[np.float64]:
-        """(n_classes,) for one image; (n, n_classes) for a batch."""
+    def predict(self, x: Any) -> Any:
+        """A `str` for one sample; an array of labels for a batch. A sample is what the model was
+        trained on (`sample`): an image (rows, cols), batch (n, rows, cols); a stance's movie
+        (frames, rows, cols), batch a list of movies; a series (channels, time), batch
+        (n, channels, time)."""
+    def predict_index(self, x: Any) -> Any:
+        """The index in `classes_` of the label: an `int` for one sample, an integer array for a
+        batch (`predict` without making the labels)."""
+    def predict_proba(self, x: Any) -> npt.NDArray[np.float64]:
+        """(n_classes,) for one sample; (n, n_classes) for a batch."""
+    @property
+    def sample(self) -> Literal["frame", "stance", "series"]:
+        """What a sample is for this model."""
     @property
     def classes_(self) -> npt.NDArray[np.str_]: ...
     @property
@@ -131,7 +150,13 @@ class Evaluation:
 class OnlineClassifier:
     """Frames in one at a time, `presrs stream`'s events out (as dicts)."""
 
-    def __init__(self, model: Model, *, gait_table: Optional[dict[str, str]] = None) -> None: ...
+    def __init__(
+        self,
+        model: Model,
+        *,
+        gait_table: Optional[dict[str, str]] = None,
+        decide_at: Optional[int] = None,
+    ) -> None: ...
     def push(self, frame: _Images, *, timestamp_us: Optional[int] = None) -> list[dict[str, Any]]: ...
     def finish(self) -> list[dict[str, Any]]: ...
     @property

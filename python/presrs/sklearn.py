@@ -2,8 +2,16 @@
 pipelines.
 
 ``X`` is images ``(n, rows, cols)``, or a 2-D matrix ``(n, rows * cols)`` of flattened images with
-``image_shape=(rows, cols)`` (scikit-learn's tools pass 2-D data). Without ``image_shape`` each row of
-a 2-D ``X`` is taken as a one-row image. Labels may be any values; ``classes_`` keeps them.
+``image_shape=(rows, cols)`` (scikit-learn's tools pass 2-D data; ``image_shape=(1, -1)`` takes each
+row as a one-row image, whatever its length). A 2-D ``X`` without ``image_shape`` is refused rather than
+guessed. Once fitted, ``predict`` also takes one image ``(rows, cols)`` of the training images' shape
+(and gives one label, in an array of one).
+
+With ``sample="stance"``, ``X`` is a sequence of movies ``(frames, rows, cols)`` (one per stance, of
+any length); with ``sample="series"``, series ``(n, channels, time)``.
+
+Labels may be any values: ``classes_`` keeps them (strings stay strings, ints ints), and the model
+(``model_``, and the file ``model_.save`` writes) names its classes ``str(label)``.
 """
 
 from __future__ import annotations
@@ -14,6 +22,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._native import Model
+from .errors import DataError
 
 __all__ = ["TerrainClassifier"]
 
@@ -24,10 +33,12 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
     Parameters are those of :meth:`presrs.Model.train`: ``features`` and ``classifier`` take the
     command line's names (``"auto"`` chooses by validation), ``dims`` the principal components kept,
     ``validation`` the share (or count) of each class that validates the hyper-parameters, ``seed`` the
-    random draw. ``image_shape`` says how to unflatten a 2-D ``X``; ``validate_by`` how the automatic
-    choice validates (``auto``, ``group``, ``condition``, ``split``; give ``groups`` to ``fit``);
-    ``budget`` the seconds it may spend (``None``: no limit, the choice independent of the machine);
-    ``choose`` how it picks (``best``, or ``one-se``: the earliest candidate within one standard error).
+    random draw. ``image_shape`` says how to unflatten a 2-D ``X`` (one of its sizes may be ``-1``);
+    ``validate_by`` how the automatic choice validates (``auto``, ``group``, ``condition``, ``split``;
+    give ``groups`` to ``fit``); ``budget`` the seconds it may spend (``None``: no limit, the choice
+    independent of the machine); ``choose`` how it picks (``best``, or ``one-se``: the earliest
+    candidate within one standard error). ``sample`` (``frame``, ``stance``, ``series``),
+    ``stance_length`` and ``series_axis``: what a sample is, as in :meth:`presrs.Model.train`.
     """
 
     def __init__(
@@ -43,6 +54,9 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         validate_by="auto",
         budget=60.0,
         choose="best",
+        sample="frame",
+        stance_length=None,
+        series_axis=None,
     ):
         self.features = features
         self.classifier = classifier
@@ -55,38 +69,76 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         self.validate_by = validate_by
         self.budget = budget
         self.choose = choose
+        self.sample = sample
+        self.stance_length = stance_length
+        self.series_axis = series_axis
+
+    def _unflatten(self, X):
+        """A 2-D ``X`` of flattened images as images ``(n, rows, cols)``, by ``image_shape``."""
+        if self.image_shape is None:
+            raise DataError(
+                f"X is 2-D {X.shape}: give image_shape=(rows, cols) to read each row as an image "
+                f"of rows x cols (image_shape=(1, -1) takes each row as a one-row image), or pass "
+                f"images as a 3-D array (n, rows, cols)"
+            )
+        try:
+            rows, cols = (int(v) for v in self.image_shape)
+        except (TypeError, ValueError):
+            raise DataError(
+                f"image_shape={self.image_shape!r}: give two sizes (rows, cols), one of them "
+                f"perhaps -1"
+            ) from None
+        n_values = X.shape[1]
+        if rows == -1 and cols > 0 and n_values % cols == 0:
+            rows = n_values // cols
+        elif cols == -1 and rows > 0 and n_values % rows == 0:
+            cols = n_values // rows
+        if rows <= 0 or cols <= 0 or rows * cols != n_values:
+            raise DataError(
+                f"image_shape={tuple(self.image_shape)} does not fit X's {n_values} features per "
+                f"sample (rows x cols must be {n_values})"
+            )
+        return X.reshape(X.shape[0], rows, cols)
 
     def _images(self, X):
         """``X`` as images ``(n, rows, cols)`` float64."""
         if X.ndim == 3:
             return X
-        shape = self.image_shape if self.image_shape is not None else (1, X.shape[1])
-        rows, cols = shape
-        if rows * cols != X.shape[1]:
-            raise ValueError(
-                f"image_shape={tuple(shape)} holds {rows * cols} values but X has "
-                f"{X.shape[1]} features per sample"
-            )
-        return X.reshape(X.shape[0], rows, cols)
+        return self._unflatten(X)
 
     def fit(self, X, y, groups=None, conditions=None):
         """Trains on images ``X`` with labels ``y`` (and, optionally, one group and one condition per
         image)."""
-        X, y = validate_data(
-            self, X, y, allow_nd=True, dtype=np.float64, ensure_min_samples=2
-        )
+        if self.sample == "stance":
+            movies = X
+            y = np.asarray(y)
+        else:
+            X, y = validate_data(
+                self,
+                X,
+                y,
+                allow_nd=True,
+                dtype=np.float64,
+                ensure_min_samples=2,
+                # presrs names the image and the sensel that is not a number.
+                ensure_all_finite=False,
+            )
+            movies = self._images(X)
         check_classification_targets(y)
-        self.classes_, encoded = np.unique(y, return_inverse=True)
+        self.classes_ = np.unique(y)
         if len(self.classes_) < 2:
             raise ValueError(
                 f"TerrainClassifier needs at least 2 classes, got {len(self.classes_)}"
             )
-        # Class indices as fixed-width text: the model's class order is then classes_'s order.
-        width = len(str(len(self.classes_)))
-        labels = [f"{i:0{width}d}" for i in encoded]
+        names = [str(c) for c in self.classes_]
+        if len(set(names)) != len(names):
+            raise DataError(
+                "y: two classes have the same text (e.g. 1 and '1'); the model names classes by "
+                "their text"
+            )
         self.model_ = Model.train(
-            self._images(X),
-            labels,
+            movies,
+            [str(label) for label in y],
             features=self.features,
             classifier=self.classifier,
             dims=self.dims,
@@ -99,23 +151,55 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
             choose=self.choose,
             groups=groups,
             conditions=conditions,
+            sample=self.sample,
+            stance_length=self.stance_length,
+            series_axis=self.series_axis,
         )
-        self._columns = np.array([int(c) for c in self.model_.classes_])
+        # The model's classes are the labels' texts, sorted as text: column j of its posteriors is
+        # classes_[_columns[j]].
+        position = {name: i for i, name in enumerate(names)}
+        self._columns = np.array([position[c] for c in self.model_.classes_])
+        self._labels = self.classes_[self._columns]
+        self._image_shape = None if self.sample == "stance" else movies.shape[1:]
         return self
+
+    def _samples(self, X):
+        """``X`` as the model takes a batch, after the checks scikit-learn asks for. A C-contiguous
+        float64 array of the training images' shape (or one such image) skips scikit-learn's
+        validation, which copies and costs more than classifying one image."""
+        if getattr(self, "model_", None) is None:
+            check_is_fitted(self)
+        if self.sample == "stance":
+            if getattr(X, "ndim", None) == 3:
+                return [X]
+            return X
+        shape = self._image_shape
+        if type(X) is np.ndarray and X.dtype == np.float64 and X.flags.c_contiguous:
+            if X.shape == shape:
+                return X[None]
+            if X.ndim == 3 and X.shape[1:] == shape:
+                return X
+        if X is None:
+            raise DataError("X: expected images (n, rows, cols), got None")
+        if getattr(X, "ndim", None) == 2 and tuple(X.shape) == tuple(shape):
+            X = np.asarray(X, dtype=np.float64)[None]
+        X = validate_data(
+            self, X, allow_nd=True, dtype=np.float64, reset=False, ensure_all_finite=False
+        )
+        return self._images(X)
 
     def predict_proba(self, X):
         """The posterior of every class, ``(n, n_classes)`` in ``classes_`` order."""
-        check_is_fitted(self)
-        X = validate_data(self, X, allow_nd=True, dtype=np.float64, reset=False)
-        posteriors = self.model_.predict_proba(self._images(X))
-        out = np.zeros((posteriors.shape[0], len(self.classes_)))
+        samples = self._samples(X)
+        posteriors = self.model_.predict_proba(samples)
+        out = np.empty_like(posteriors)
         out[:, self._columns] = posteriors
         return out
 
     def predict(self, X):
         """The label of every image, as given in ``y``."""
-        posteriors = self.predict_proba(X)
-        return self.classes_[np.argmax(posteriors, axis=1)]
+        samples = self._samples(X)
+        return self._labels[self.model_.predict_index(samples)]
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

@@ -16,12 +16,19 @@ pub struct Images<'py> {
     count: usize,
     /// Whether the input was a batch `(n, rows, cols)` rather than one image.
     pub batch: bool,
+    /// Whether the input was an array of Python objects (its `None`s read as NaN).
+    object: bool,
 }
 
 impl<'py> Images<'py> {
     /// The images of `obj` (`what` names the argument in errors).
     pub fn new(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Self> {
-        let array = float64_c_array(obj, what)?;
+        if obj.is_none() {
+            return Err(data_error(format!(
+                "{what}: expected a numpy array of images, got None"
+            )));
+        }
+        let (array, object) = float64_c_array(obj, what)?;
         let shape = array.shape().to_vec();
         let (count, rows, cols, batch) = match shape[..] {
             [rows, cols] => (1, rows, cols, false),
@@ -43,6 +50,7 @@ impl<'py> Images<'py> {
             grid: Grid::new(rows, cols),
             count,
             batch,
+            object,
         })
     }
 
@@ -69,6 +77,35 @@ impl<'py> Images<'py> {
     pub fn frames(&self) -> PyResult<Vec<FrameView<'_>>> {
         (0..self.count).map(|index| self.frame(index)).collect()
     }
+
+    /// An error naming the first value that is not a finite number (image, row and column, 0-based),
+    /// or `None` when every value is one. `image` names an image in the message (`image 7`,
+    /// `frame 7`).
+    pub fn non_finite(&self, what: &str, image: &str) -> Option<PyErr> {
+        let size = self.grid.len();
+        let at = self.values().iter().position(|v| !v.is_finite())?;
+        let value = self.values()[at];
+        let (index, within) = (at / size, at % size);
+        let (row, col) = (within / self.grid.cols, within % self.grid.cols);
+        let place = if self.batch {
+            format!("{image} {index}, row {row}, col {col}")
+        } else {
+            format!("row {row}, col {col}")
+        };
+        Some(data_error(format!(
+            "{what}: {place} (0-based) is {value}{}; every value must be a finite number",
+            if self.object {
+                " (a missing value in an array of dtype object)"
+            } else {
+                ""
+            }
+        )))
+    }
+
+    /// `Ok` when every value is a finite number, else the error of [`Images::non_finite`].
+    pub fn require_finite(&self, what: &str, image: &str) -> PyResult<()> {
+        self.non_finite(what, image).map_or(Ok(()), Err)
+    }
 }
 
 /// Image `index` of contiguous `values` of `grid`-sized images.
@@ -80,16 +117,17 @@ pub fn frame_view(values: &[f64], grid: Grid, index: usize) -> PyResult<FrameVie
     FrameView::new(grid, values, None).map_err(|err| data_error(err.to_string()))
 }
 
-/// `obj` as a C-contiguous float64 array: as it is when it already is one, else converted by numpy.
-/// Complex numbers, strings and other non-numbers are a `DataError` naming `what`.
+/// `obj` as a C-contiguous float64 array: as it is when it already is one, else converted by numpy;
+/// with whether it was an array of Python objects. Complex numbers, strings and other non-numbers are
+/// a `DataError` naming `what`.
 fn float64_c_array<'py>(
     obj: &Bound<'py, PyAny>,
     what: &str,
-) -> PyResult<PyReadonlyArrayDyn<'py, f64>> {
+) -> PyResult<(PyReadonlyArrayDyn<'py, f64>, bool)> {
     if let Ok(array) = obj.extract::<PyReadonlyArrayDyn<'py, f64>>()
         && array.is_c_contiguous()
     {
-        return Ok(array);
+        return Ok((array, false));
     }
     let py = obj.py();
     let numpy = py.import("numpy")?;
@@ -121,9 +159,11 @@ fn float64_c_array<'py>(
                 err.value(py)
             ))
         })?;
-    converted
+    let object = kind.as_deref() == Some("O");
+    let array = converted
         .extract::<PyReadonlyArrayDyn<'py, f64>>()
-        .map_err(|err| data_error(format!("{what}: cannot read as float64 numbers ({err})")))
+        .map_err(|err| data_error(format!("{what}: cannot read as float64 numbers ({err})")))?;
+    Ok((array, object))
 }
 
 /// Text labels from any sequence (a list, a numpy array, a pandas Series): each item as `str(item)`.

@@ -235,5 +235,5 @@ fn load(
             "labels: images need one label each (or pass a manifest's path instead)",
         ));
     };
-    dataset_of(data, labels, groups, conditions)
+    dataset_of(data, labels, groups, conditions, presrs::SampleKind::Frame)
 }

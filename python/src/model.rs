@@ -6,12 +6,15 @@ use std::str::FromStr;
 use std::sync::Mutex;
 
 use numpy::{PyArray1, PyArrayMethods};
-use presrs::core::FrameView;
-use presrs::core::pipeline::Session;
+use presrs::classify::whole_stance_sample;
+use presrs::core::pipeline::{Classification, Session};
 use presrs::core::split::ValidationSize;
+use presrs::core::stance::summary::{SummaryConfig, summarise};
+use presrs::core::{Frame, FrameView};
 use presrs::io::model_file::{ModelFile, load_model, parse_model, save_model};
+use presrs::io::output_path::check_output_file;
 use presrs::train::{TrainOptions, train};
-use presrs::{ClassifierChoice, CropChoice, Dataset, FeatureChoice, Method, Sample};
+use presrs::{ClassifierChoice, CropChoice, Dataset, FeatureChoice, Method, Sample, SampleKind};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyBytes, PyTuple};
@@ -20,6 +23,7 @@ use self_cell::self_cell;
 use crate::arrays::{Images, labels};
 use crate::errors::{IntoPyResult, data_error, warn};
 use crate::threads::detached;
+use presrs::Warning;
 
 type SessionSlot<'a> = Mutex<Session<'a>>;
 
@@ -78,16 +82,30 @@ impl Model {
         })
     }
 
-    /// Classifies every image of a batch in parallel, without the GIL; the first failure is an error
-    /// naming its image.
+    /// Classifies every image of a batch: a few in this thread with the shared session, more in
+    /// parallel without the GIL (starting the workers costs more than a few classifications). The
+    /// first failure is an error naming its image.
     fn classify_many(
         &self,
         py: Python<'_>,
-        images: &Images<'_>,
-    ) -> PyResult<Vec<presrs::core::pipeline::Classification>> {
-        let frames = images.frames()?;
+        frames: &[FrameView<'_>],
+    ) -> PyResult<Vec<Classification>> {
         let model = &self.file().model;
-        let results = detached(py, || model.classify_batch(&frames))?;
+        let results = if frames.len() < PARALLEL_FROM {
+            let classify_all = |session: &mut Session<'_>| -> Vec<_> {
+                frames
+                    .iter()
+                    .map(|frame| session.classify(frame).map(|p| p.to_classification()))
+                    .collect()
+            };
+            self.loaded
+                .with_dependent(|file, slot| match slot.try_lock() {
+                    Ok(mut session) => classify_all(&mut session),
+                    Err(_) => classify_all(&mut file.model.session()),
+                })
+        } else {
+            detached(py, || model.classify_batch(frames))?
+        };
         results
             .into_iter()
             .enumerate()
@@ -95,6 +113,68 @@ impl Model {
                 result.map_err(|err| data_error(format!("image {index} of the batch: {err}")))
             })
             .collect()
+    }
+
+    /// The samples of `x` as this model takes them: images as they are; a stance's movie summarised
+    /// and laid into the model's length (a warning when it was cut); a series transposed when its time
+    /// runs down the rows.
+    fn samples_of<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Samples<'py>> {
+        let model = &self.file().model;
+        match model.sample() {
+            SampleKind::Frame => Ok(Samples::Images(Images::new(x, "x")?)),
+            SampleKind::Series { time_in_rows } => {
+                let images = Images::new(x, "x")?;
+                images.require_finite("x", "series")?;
+                let frames = images
+                    .frames()?
+                    .iter()
+                    .map(|f| {
+                        if time_in_rows {
+                            f.transposed()
+                        } else {
+                            f.to_frame()
+                        }
+                    })
+                    .collect();
+                Ok(Samples::Owned(frames, images.batch))
+            }
+            SampleKind::Stance { summary, length } => {
+                let length = length.unwrap_or(model.image_grid().cols);
+                let one = x.getattr("ndim").and_then(|n| n.extract::<usize>()).ok() == Some(3);
+                let movies: Vec<Bound<'py, PyAny>> = if one {
+                    vec![x.clone()]
+                } else if x.is_none() {
+                    return Err(data_error(
+                        "x: expected a movie (frames, rows, cols) or a list of movies, got None",
+                    ));
+                } else {
+                    x.try_iter()?.collect::<PyResult<_>>()?
+                };
+                let mut frames = Vec::with_capacity(movies.len());
+                for (index, movie) in movies.iter().enumerate() {
+                    let what = if one {
+                        "x".to_owned()
+                    } else {
+                        format!("x[{index}]")
+                    };
+                    let movie = Images::new(movie, &what)?;
+                    if !movie.batch {
+                        return Err(data_error(format!(
+                            "{what}: the model classifies whole stances, so it takes a stance's \
+                             movie (frames, rows, cols), not one image"
+                        )));
+                    }
+                    movie.require_finite(&what, "frame")?;
+                    let (sample, warning) = whole_stance_sample(&movie.frames()?, &summary, length)
+                        .map_err(|err| data_error(format!("{what}: {err}")))?;
+                    if let Some(warning) = warning {
+                        warn(py, &Warning::from(format!("{what}: {}", warning.message())))?;
+                    }
+                    frames.push(sample);
+                }
+                Ok(Samples::Owned(frames, !one))
+            }
+        }
     }
 
     fn classes_array<'py>(&self, py: Python<'py>) -> PyResult<&Bound<'py, PyAny>> {
@@ -125,10 +205,15 @@ impl Model {
     /// `budget`: seconds the automatic choice may spend scoring candidates (the texture families,
     /// scored last, are cut first, with a warning); `None` or 0: no limit. `choose`: `best` (the
     /// highest validation mean) or `one-se` (the earliest candidate within one standard error of it).
+    /// `sample`: what an item of `images` is: `frame` (one image), `stance` (a stance's movie
+    /// `(frames, rows, cols)`, summarised over time as `presrs train --sample stance` does, laid into
+    /// `stance_length` frames, by default the longest's) or `series` (channels x time;
+    /// `series_axis="rows"` when time runs down the rows).
     #[staticmethod]
     #[pyo3(signature = (images, labels, *, features = "auto", classifier = "auto", groups = None,
         conditions = None, seed = 0, dims = None, per_class = None, validation = 0.35, crop = "auto",
-        full_search = false, validate_by = "auto", budget = Some(60.0), choose = "best"))]
+        full_search = false, validate_by = "auto", budget = Some(60.0), choose = "best",
+        sample = "frame", stance_length = None, series_axis = None))]
     #[allow(clippy::too_many_arguments)]
     fn train(
         py: Python<'_>,
@@ -147,7 +232,11 @@ impl Model {
         validate_by: &str,
         budget: Option<f64>,
         choose: &str,
+        sample: &str,
+        stance_length: Option<usize>,
+        series_axis: Option<&str>,
     ) -> PyResult<Self> {
+        let kind = sample_kind(sample, stance_length, series_axis)?;
         let method = method(
             features,
             classifier,
@@ -158,7 +247,10 @@ impl Model {
             budget,
             choose,
         )?;
-        let dataset = dataset_of(images, labels, groups, conditions)?;
+        let dataset = dataset_of(images, labels, groups, conditions, kind)?;
+        for warning in &dataset.warnings {
+            warn(py, warning)?;
+        }
         let options = TrainOptions {
             condition: None,
             per_class,
@@ -171,9 +263,15 @@ impl Model {
             warn(py, warning)?;
         }
         let command = format!(
-            "python: presrs.Model.train({} images, features={features:?}, classifier={classifier:?}, \
-             seed={seed})",
-            dataset.samples.len()
+            "python: presrs.Model.train({} {}s, features={features:?}, classifier={classifier:?}, \
+             sample={:?}, seed={seed})",
+            dataset.samples.len(),
+            if kind.is_frame() {
+                "image"
+            } else {
+                kind.name()
+            },
+            kind.name()
         );
         Ok(Self::new(training.model_file(
             &dataset,
@@ -189,8 +287,11 @@ impl Model {
         Ok(Self::new(load_model(&path).py_err()?))
     }
 
-    /// Writes the model file (atomically: a reader never sees half a file).
+    /// Writes the model file (atomically: a reader never sees half a file), after checking that its
+    /// folder exists and accepts it.
     fn save(&self, path: PathBuf) -> PyResult<()> {
+        // As the command line does before its work: a missing folder is named as such.
+        check_output_file(&path).py_err()?;
         save_model(&path, self.file()).py_err()
     }
 
@@ -209,17 +310,21 @@ impl Model {
         Ok(Self::new(parse_model(&bytes, "model JSON").py_err()?))
     }
 
-    /// The label of one image `(rows, cols)` (a `str`), or of every image of a batch
-    /// `(n, rows, cols)` (a numpy array of `classes_` values).
+    /// The label of one sample (a `str`), or of every sample of a batch (a numpy array of
+    /// `classes_` values). A sample is what the model was trained on: an image `(rows, cols)` (a batch
+    /// `(n, rows, cols)`), a stance's movie `(frames, rows, cols)` (a batch: a list of movies), or a
+    /// series `(channels, time)` (a batch `(n, channels, time)`).
     fn predict<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
-        let images = Images::new(x, "x")?;
-        if !images.batch {
-            let frame = images.frame(0)?;
-            let label = self.classify_one(&frame, |p| p.label.to_owned())?;
+        let samples = self.samples_of(py, x)?;
+        if !samples.batch() {
+            let label = self
+                .classify_one(&samples.view(0)?, |p| p.label.to_owned())
+                .map_err(|err| samples.explain(err))?;
             return Ok(label.into_pyobject(py)?.into_any());
         }
         let classes: Vec<usize> = self
-            .classify_many(py, &images)?
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?
             .into_iter()
             .map(|c| c.class)
             .collect();
@@ -227,26 +332,58 @@ impl Model {
         self.classes_array(py)?.call_method1("take", (indices,))
     }
 
-    /// The posterior of every class (in `classes_` order): shape `(n_classes,)` for one image,
+    /// The index in `classes_` of the label of one sample (an `int`), or of every sample of a batch
+    /// (an integer array): `predict` without making the labels.
+    fn predict_index<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let samples = self.samples_of(py, x)?;
+        if !samples.batch() {
+            let class = self
+                .classify_one(&samples.view(0)?, |p| p.class)
+                .map_err(|err| samples.explain(err))?;
+            return Ok(class.into_pyobject(py)?.into_any());
+        }
+        let classes: Vec<usize> = self
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?
+            .into_iter()
+            .map(|c| c.class)
+            .collect();
+        Ok(PyArray1::from_vec(py, classes).into_any())
+    }
+
+    /// The posterior of every class (in `classes_` order): shape `(n_classes,)` for one sample,
     /// `(n, n_classes)` for a batch.
     fn predict_proba<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let images = Images::new(x, "x")?;
-        if !images.batch {
-            let frame = images.frame(0)?;
-            let posteriors = self.classify_one(&frame, |p| p.posteriors.to_vec())?;
+        let samples = self.samples_of(py, x)?;
+        if !samples.batch() {
+            let posteriors = self
+                .classify_one(&samples.view(0)?, |p| p.posteriors.to_vec())
+                .map_err(|err| samples.explain(err))?;
             return Ok(PyArray1::from_vec(py, posteriors).into_any());
         }
         let classes = self.file().model.class_names().len();
-        let classified = self.classify_many(py, &images)?;
+        let classified = self
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?;
         let rows = classified.len();
         let flat: Vec<f64> = classified.into_iter().flat_map(|c| c.posteriors).collect();
         Ok(PyArray1::from_vec(py, flat)
             .reshape([rows, classes])?
             .into_any())
+    }
+
+    /// What a sample is for this model: `"frame"`, `"stance"` or `"series"`.
+    #[getter]
+    fn sample(&self) -> &'static str {
+        self.file().model.sample().name()
     }
 
     /// The class names, in the order of `predict_proba`'s columns.
@@ -343,30 +480,157 @@ pub fn validation_size(validation: f64) -> PyResult<ValidationSize> {
     }
 }
 
-/// A data set of images in memory with their labels and, when given, groups and conditions.
+/// The sample kind named by `sample=`, `stance_length=` and `series_axis=`.
+pub fn sample_kind(
+    sample: &str,
+    stance_length: Option<usize>,
+    series_axis: Option<&str>,
+) -> PyResult<SampleKind> {
+    if sample.trim() != "stance" && stance_length.is_some() {
+        return Err(data_error(format!(
+            "stance_length= applies to sample=\"stance\", not sample={sample:?}"
+        )));
+    }
+    if sample.trim() != "series" && series_axis.is_some() {
+        return Err(data_error(format!(
+            "series_axis= applies to sample=\"series\", not sample={sample:?}"
+        )));
+    }
+    SampleKind::parse(sample, stance_length, series_axis).map_err(|err| {
+        let argument = match sample.trim() {
+            "stance" => "stance_length",
+            "series" => "series_axis",
+            _ => "sample",
+        };
+        data_error(format!("{argument}: {err}"))
+    })
+}
+
+/// A data set of samples in memory with their labels and, when given, groups and conditions: images
+/// `(n, rows, cols)` for frames and series, a sequence of movies `(frames, rows, cols)` for stances.
 pub fn dataset_of(
     images: &Bound<'_, PyAny>,
     label_values: &Bound<'_, PyAny>,
     groups: Option<&Bound<'_, PyAny>>,
     conditions: Option<&Bound<'_, PyAny>>,
+    kind: SampleKind,
 ) -> PyResult<Dataset> {
+    let frames = match kind {
+        SampleKind::Stance { summary, .. } => stance_summaries(images, &summary)?,
+        SampleKind::Series { time_in_rows } => image_frames(images, time_in_rows)?,
+        SampleKind::Frame => image_frames(images, false)?,
+    };
+    let n = frames.len();
+    let names = labels(label_values, "labels", n)?;
+    let groups = groups.map(|g| labels(g, "groups", n)).transpose()?;
+    let conditions = conditions.map(|c| labels(c, "conditions", n)).transpose()?;
+    let mut samples = Vec::with_capacity(n);
+    for (index, (label, frame)) in names.into_iter().zip(frames).enumerate() {
+        let mut sample = Sample::new(frame, label, PathBuf::from("images"), index);
+        sample.group = groups.as_ref().map(|g| g[index].clone());
+        sample.condition = conditions.as_ref().map(|c| c[index].clone());
+        samples.push(sample);
+    }
+    let what = if kind.is_frame() {
+        "image"
+    } else {
+        kind.name()
+    };
+    Dataset::from_samples_of(format!("numpy {what}s ({n})"), samples, kind).py_err()
+}
+
+/// The images of a batch `(n, rows, cols)`, copied (transposed with `transpose`), each checked for
+/// values that are not numbers.
+fn image_frames(images: &Bound<'_, PyAny>, transpose: bool) -> PyResult<Vec<Frame>> {
     let images = Images::new(images, "images")?;
     if !images.batch {
         return Err(data_error(
             "images: expected a batch (n, rows, cols); for one image use images[None]",
         ));
     }
-    let n = images.len();
-    let names = labels(label_values, "labels", n)?;
-    let groups = groups.map(|g| labels(g, "groups", n)).transpose()?;
-    let conditions = conditions.map(|c| labels(c, "conditions", n)).transpose()?;
-    let mut samples = Vec::with_capacity(n);
-    for (index, label) in names.into_iter().enumerate() {
-        let frame = images.frame(index)?.to_frame();
-        let mut sample = Sample::new(frame, label, PathBuf::from("images"), index);
-        sample.group = groups.as_ref().map(|g| g[index].clone());
-        sample.condition = conditions.as_ref().map(|c| c[index].clone());
-        samples.push(sample);
+    images.require_finite("images", "image")?;
+    (0..images.len())
+        .map(|index| {
+            let frame = images.frame(index)?;
+            Ok(if transpose {
+                frame.transposed()
+            } else {
+                frame.to_frame()
+            })
+        })
+        .collect()
+}
+
+/// Each movie `(frames, rows, cols)` of `movies` (a sequence, or a 4-D array) summarised over time as
+/// whole-stance samples are.
+fn stance_summaries(movies: &Bound<'_, PyAny>, summary: &SummaryConfig) -> PyResult<Vec<Frame>> {
+    if movies.is_none() {
+        return Err(data_error(
+            "images: expected a sequence of movies (frames, rows, cols), got None",
+        ));
     }
-    Dataset::from_samples(format!("numpy images ({n})"), samples).py_err()
+    let mut out = Vec::new();
+    for (index, movie) in movies.try_iter()?.enumerate() {
+        let what = format!("images[{index}]");
+        out.push(movie_summary(&movie?, &what, summary)?);
+    }
+    Ok(out)
+}
+
+/// One stance's movie summarised (the CLI's `summarise`), `what` naming it in errors.
+fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, summary: &SummaryConfig) -> PyResult<Frame> {
+    let frames = Images::new(movie, what)?;
+    if !frames.batch {
+        return Err(data_error(format!(
+            "{what}: a whole-stance sample is a movie (frames, rows, cols), got one image {:?}",
+            (frames.grid().rows, frames.grid().cols)
+        )));
+    }
+    frames.require_finite(what, "frame")?;
+    summarise(&frames.frames()?, summary).map_err(|err| data_error(format!("{what}: {err}")))
+}
+
+/// Batches at least this long are classified in parallel.
+const PARALLEL_FROM: usize = 8;
+
+/// The samples of a call to `predict`: a numpy array's images read in place, or samples made from the
+/// input (stance summaries, transposed series), with whether the input was a batch.
+enum Samples<'py> {
+    Images(Images<'py>),
+    Owned(Vec<Frame>, bool),
+}
+
+impl Samples<'_> {
+    fn batch(&self) -> bool {
+        match self {
+            Self::Images(images) => images.batch,
+            Self::Owned(_, batch) => *batch,
+        }
+    }
+
+    fn view(&self, index: usize) -> PyResult<FrameView<'_>> {
+        match self {
+            Self::Images(images) => images.frame(index),
+            Self::Owned(frames, _) => frames
+                .get(index)
+                .map(Frame::view)
+                .ok_or_else(|| data_error("x: no sample to classify")),
+        }
+    }
+
+    fn views(&self) -> PyResult<Vec<FrameView<'_>>> {
+        match self {
+            Self::Images(images) => images.frames(),
+            Self::Owned(frames, _) => Ok(frames.iter().map(Frame::view).collect()),
+        }
+    }
+
+    /// The error of a failed classification, or a clearer one when the input holds a value that is
+    /// not a finite number (checked only after a failure: the hot path does not scan its input twice).
+    fn explain(&self, err: PyErr) -> PyErr {
+        match self {
+            Self::Images(images) => images.non_finite("x", "image").unwrap_or(err),
+            Self::Owned(..) => err,
+        }
+    }
 }

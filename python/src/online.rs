@@ -4,9 +4,8 @@
 use std::time::Instant;
 
 use presrs::core::online::{OnlineClassifier as CoreOnline, OnlineProfile};
-use presrs::core::stance::ValidSegmentParams;
 use presrs::io::model_file::ModelFile;
-use presrs::stream::event_values;
+use presrs::stream::{check_profile, event_values};
 use pyo3::prelude::*;
 use self_cell::self_cell;
 use serde_json::Value;
@@ -48,22 +47,28 @@ impl std::fmt::Debug for OnlineClassifier {
 
 #[pymethods]
 impl OnlineClassifier {
-    /// A classifier for `model`, with the model file's online profile (calibration, sample frame,
-    /// gait table) when it has one, else warm-up calibration on the first frames. `gait_table` adds
-    /// terrain -> gait entries to the profile's.
+    /// A classifier for `model`, with the model file's online profile (calibration, stance detector
+    /// settings, sample frame, gait table) when it has one, else warm-up calibration on the first
+    /// frames. `gait_table` adds terrain -> gait entries to the profile's. `decide_at`: a whole-stance
+    /// model decides K frames after touchdown, on the stance so far, instead of at lift-off.
     #[new]
-    #[pyo3(signature = (model, *, gait_table = None))]
+    #[pyo3(signature = (model, *, gait_table = None, decide_at = None))]
     fn new(
         model: &Bound<'_, Model>,
         gait_table: Option<std::collections::BTreeMap<String, String>>,
+        decide_at: Option<usize>,
     ) -> PyResult<Self> {
         let file = model.get().file().clone();
         let mut profile = file.online.clone().unwrap_or_default();
         profile.gait_table.extend(gait_table.unwrap_or_default());
+        if decide_at.is_some() {
+            profile.params.decide_at = decide_at;
+        }
+        check_profile(&file.model, &profile).py_err()?;
         let online = Online::try_new(Running { file, profile }, |running| {
             CoreOnline::new(
                 &running.file.model,
-                &ValidSegmentParams::default(),
+                &running.profile.segment,
                 &running.profile.params,
                 running.profile.calibration,
             )

@@ -150,3 +150,50 @@ def test_a_manifest_without_samples_says_what_to_do_in_words(tmp_path, load, hin
     message = _raised(presrs.evaluate, tmp_path / "manifest.csv", repeats=1)
     assert "4 of 4 files gave no sample" in message
     assert f"{hint} (an option of the presrs command line)" in message
+
+
+# Issue #35, Python: each message below names the argument and the image, in Python's words.
+
+
+def test_one_image_per_class_says_so(sim_images):
+    images, labels, _ = sim_images
+    first = [list(labels).index(c) for c in np.unique(labels)]
+    for classifier in ("pwe", "lda", "auto"):
+        message = _raised(
+            presrs.Model.train, images[first], labels[first], features="fft1d",
+            classifier=classifier,
+        )
+        assert "too few samples per class" in message and "has 1" in message, message
+
+
+def test_predict_none_says_none(paper_model):
+    message = _raised(paper_model.predict, None)
+    assert message == "x: expected a numpy array of images, got None"
+
+
+def test_an_object_array_names_the_missing_value(paper_model, sim_images):
+    images = sim_images[0][:3].astype(object)
+    images[1, 4, 5] = None
+    message = _raised(paper_model.predict, images)
+    assert "x: image 1, row 4, col 5 (0-based) is NaN" in message
+    assert "dtype object" in message
+    message = _raised(paper_model.predict_proba, images[1])
+    assert "x: row 4, col 5 (0-based) is NaN" in message
+
+
+def test_nan_in_training_images_names_the_image(sim_images):
+    images, labels, _ = sim_images
+    images = images.copy()
+    images[7, 3, 2] = np.nan
+    message = _raised(presrs.Model.train, images, labels, features="fft1d", classifier="pwe")
+    assert message.startswith("images: image 7, row 3, col 2 (0-based) is NaN")
+    images[7, 3, 2] = np.inf
+    message = _raised(presrs.Model.train, images, labels, features="fft1d", classifier="pwe")
+    assert "image 7, row 3, col 2 (0-based) is inf" in message
+
+
+def test_saving_into_a_missing_folder_says_so_first(paper_model, tmp_path):
+    with pytest.raises(presrs.FileError) as caught:
+        paper_model.save(tmp_path / "no" / "such" / "model.json")
+    assert "does not exist (create it first, or write elsewhere)" in str(caught.value)
+    _no_flag(str(caught.value))

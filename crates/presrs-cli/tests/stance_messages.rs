@@ -105,3 +105,59 @@ fn a_data_set_of_one_contact_movies_is_summarised_in_one_line_and_the_cause_name
     assert!(!stderr.contains("validation"), "{stderr}");
     assert!(!model.exists());
 }
+
+/// `--sample auto` races the sample kinds in `train` (both scores said, the winner stored); the
+/// commands that take one kind say so and name the kinds instead of treating auto as one of them.
+#[test]
+fn sample_auto_is_raced_in_train_and_refused_elsewhere_with_the_kinds_named() {
+    let manifest = shared("real/jiku-walk/manifest.csv");
+    let manifest = manifest.to_str().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("m.json");
+    let out = presrs(&[
+        "train",
+        "--manifest",
+        manifest,
+        "--one-sample-per-file",
+        "--sample",
+        "auto",
+        "--classifier",
+        "lda",
+        "--features",
+        "auto",
+        "--per-class",
+        "12",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("note: sample frame: "), "{stderr}");
+    assert!(stderr.contains("note: sample stance: "), "{stderr}");
+    assert!(stderr.contains(", chosen\n"), "{stderr}");
+    let stored = std::fs::read_to_string(&model).unwrap();
+    let chosen_stance = stderr
+        .lines()
+        .any(|l| l.starts_with("note: sample stance") && l.ends_with(", chosen"));
+    assert_eq!(
+        stored.contains("\"kind\": \"stance\""),
+        chosen_stance,
+        "{stored:.400}"
+    );
+
+    let out = presrs(&[
+        "eval",
+        "--manifest",
+        manifest,
+        "--one-sample-per-file",
+        "--sample",
+        "auto",
+    ]);
+    let stderr = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("--sample auto races one frame against the whole sample when training"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("frame, stance or series"), "{stderr}");
+}

@@ -95,6 +95,31 @@ fn offline_stances(path: &Path) -> usize {
     seg.complete().count()
 }
 
+/// `--decide-at` is for whole-stance models: with a one-frame model it is an error saying why, before
+/// any frame is read.
+#[test]
+fn decide_at_with_a_one_frame_model_is_refused() {
+    let (_, model) = fixture();
+    let output = presrs()
+        .args([
+            "stream",
+            "--model",
+            model.to_str().unwrap(),
+            "--decide-at",
+            "5",
+        ])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("--decide-at 5") && stderr.contains("whole-stance"),
+        "{stderr}"
+    );
+    assert!(output.stdout.is_empty(), "no event before the refusal");
+}
+
 #[test]
 fn stdin_tekscan_gives_one_decision_per_stance() {
     let (dir, model) = fixture();

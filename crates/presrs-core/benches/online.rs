@@ -6,16 +6,25 @@
 //!
 //! Before the criterion runs it prints the whole-stream throughput (frames/s) and the decision latency
 //! percentiles (time of the `push` of a frame that produced a decision), measured with `Instant`.
+//!
+//! A whole-stance model (`online/stance_*`: MiniRocket, 9,996 features, ridge; stances of 90 to 127
+//! frames laid into 128): `stance_stream` pushes a stream of stances frame by frame (each frame's
+//! summary column kept, each stance decided at its lift-off); `stance_push_flight` and
+//! `stance_push_loaded` one frame in flight and one inside a stance (no decision); `stance_decision`
+//! the decision alone (the kept stance laid out as the model's sample, and classified), and
+//! `stance_layout` its first part (the layout, with the area counted).
 
 use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use presrs_core::Frame;
-use presrs_core::online::{Calibration, OnlineClassifier, OnlineEvent, OnlineParams};
+use presrs_core::classifier::ClassifierKind;
+use presrs_core::online::{Calibration, OnlineClassifier, OnlineEvent, OnlineParams, StanceBuffer};
 use presrs_core::pipeline::TrainedModel;
+use presrs_core::sample::SampleKind;
 use presrs_core::stance::{ValidSegmentParams, segment};
-use presrs_core::testing::{bench_fixture, synthetic_stream};
+use presrs_core::testing::{bench_fixture, stance_model_with, stance_stream, synthetic_stream};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -140,5 +149,95 @@ fn online(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, online);
+/// The whole-stance model of the benchmark and a stream to judge.
+fn stance_setup() -> (TrainedModel, Vec<Frame>) {
+    let lens = |n: usize, seed: usize| -> Vec<usize> {
+        (0..n).map(|i| 90 + (i * 7 + seed) % 38).collect()
+    };
+    let (train, stances) = stance_stream(&lens(48, 0), 1);
+    let Ok(model) = stance_model_with(&train, &stances, 128, 10_000, 40, ClassifierKind::RIDGE)
+    else {
+        panic!("the whole-stance model failed to train");
+    };
+    (model, stance_stream(&lens(12, 3), 2).0)
+}
+
+fn whole_stance(c: &mut Criterion) {
+    let (model, frames) = stance_setup();
+    let mut group = c.benchmark_group("online");
+    group.throughput(Throughput::Elements(frames.len() as u64));
+    let mut cl = classifier(&model, &frames, false);
+    group.bench_function("stance_stream", |b| {
+        b.iter(|| {
+            for frame in &frames {
+                black_box(
+                    cl.push(black_box(&frame.view()))
+                        .map(|s| s.events.len())
+                        .ok(),
+                );
+            }
+        })
+    });
+    group.throughput(Throughput::Elements(1));
+    // Frame 0 is in flight, frame 40 inside the first stance (from frame 20): neither decides.
+    let flight = frames[0].clone();
+    let loaded = frames[40].clone();
+    group.bench_function("stance_push_flight", |b| {
+        b.iter(|| {
+            black_box(
+                cl.push(black_box(&flight.view()))
+                    .map(|s| s.events.len())
+                    .ok(),
+            )
+        })
+    });
+    let mut cl = classifier(&model, &frames, false);
+    for frame in &frames[..40] {
+        black_box(cl.push(&frame.view()).ok());
+    }
+    group.bench_function("stance_push_loaded", |b| {
+        b.iter(|| {
+            black_box(
+                cl.push(black_box(&loaded.view()))
+                    .map(|s| s.events.len())
+                    .ok(),
+            )
+        })
+    });
+    let SampleKind::Stance { summary, length } = model.sample() else {
+        panic!("not a whole-stance model");
+    };
+    let Ok(mut buffer) = StanceBuffer::new(summary, length.unwrap_or(128)) else {
+        panic!("no stance buffer");
+    };
+    if buffer.set_grid(frames[0].grid()).is_err() {
+        panic!("the frames do not fit the summary");
+    }
+    let stance_len = 90;
+    for (t, frame) in frames[20..20 + stance_len].iter().enumerate() {
+        buffer.keep(t, &frame.view());
+    }
+    group.bench_function("stance_layout", |b| {
+        b.iter(|| {
+            black_box(
+                buffer
+                    .sample(0, black_box(stance_len))
+                    .map(|s| s.values()[0])
+                    .ok(),
+            )
+        })
+    });
+    let mut session = model.session();
+    group.bench_function("stance_decision", |b| {
+        b.iter(|| {
+            let class = buffer
+                .sample(0, black_box(stance_len))
+                .and_then(|sample| session.classify(&sample).map(|p| p.class));
+            black_box(class.ok())
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, online, whole_stance);
 criterion_main!(benches);

@@ -46,6 +46,20 @@ pub enum Protocol {
     },
 }
 
+impl Protocol {
+    /// Models one repeat trains on `samples`: one per held-out group with leave-one-out, else one.
+    pub fn models_per_repeat(&self, samples: &[LabeledImage<'_>]) -> usize {
+        match self {
+            Self::LeaveOneOut { .. } => samples
+                .iter()
+                .filter_map(|s| s.group)
+                .collect::<std::collections::BTreeSet<_>>()
+                .len(),
+            Self::TrainCondition { .. } => 1,
+        }
+    }
+}
+
 /// What one repeat found.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RepeatResult {

@@ -14,6 +14,23 @@
 //! touchdown are classified as they arrive and their posteriors averaged; the fused decision is a
 //! separate event, emitted once the last offset has passed (or at lift-off, over the frames seen).
 //!
+//! **Whole-stance models** (trained on stance samples, [`SampleKind::Stance`]) classify a stance's
+//! summary, not a frame: the classifier keeps each frame's summary column as it arrives
+//! ([`StanceBuffer`], a ring of the model's stance length) and decides, with a
+//! [`DecisionKind::Stance`] decision that says what it waited for ([`StanceDecision`]):
+//! - at the stance's lift-off, on the whole stance, zero-padded to the model's length: the offline
+//!   classification of the same stance (`classify`), to the bit when the detector finds the same
+//!   touchdown and lift-off;
+//! - or, with [`OnlineParams::decide_at`] `= K`, at frame `touchdown + K`, on the stance so far (its
+//!   `K + 1` frames, zero-padded as offline padding does; if the lift-off comes first, at the lift-off);
+//! - a stance found longer than the model's length before its lift-off is decided then, on its first
+//!   `length` frames (`cut`), as offline cuts it; their `area` channel counts contact against the
+//!   highest sensel of those frames, where offline it is the whole stance's.
+//!
+//! Partial stances are not decided (in the one-contact mode the stream is one partial stance: it is,
+//! at the end of the stream). The detector's one-frame settings do not apply: `sample_offset` is
+//! ignored and fusion offsets are an error; `decide_at` on a one-frame model is an error.
+//!
 //! [`OnlineClassifier`] puts the segmenter and a [`Session`] together: one frame in, zero or more
 //! [`OnlineEvent`]s out, with all buffers allocated up front (no allocation per frame in steady state).
 
@@ -24,15 +41,19 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result};
 use crate::frame::{FrameView, Grid};
 use crate::pipeline::{Session, TrainedModel};
+use crate::sample::SampleKind;
 use crate::stance::causal::MAX_SEG_EVENTS;
 use crate::stance::{BaselineMode, SegmentParams, Segmentation, ValidSegmentParams};
 // The causal detector's types, which this module's API speaks in, nameable from here as before they
 // moved beside the offline segmentation.
 pub use crate::stance::causal::{
     Calibration, CausalSegmenter, Levels, Liftoff, MAX_FUSION_FRAMES, MAX_OFFSET_FRAMES,
-    MIN_QUIET_FRAMES, OnlineParams, PAPER_SAMPLE_OFFSET, RANGE_PRIOR_FRACTION, SegEvent, SegEvents,
-    Touchdown, sample_offset_for, typical_stance_frames,
+    MIN_QUIET_FRAMES, OnlineParams, OpenStance, PAPER_SAMPLE_OFFSET, RANGE_PRIOR_FRACTION,
+    SegEvent, SegEvents, Touchdown, sample_offset_for, typical_stance_frames,
 };
+pub use stance_buffer::StanceBuffer;
+
+mod stance_buffer;
 
 /// What a model needs to run online: the detector settings, its calibration and the terrain-to-gait
 /// table. Stored next to a model (in the model file or a JSON file of its own).
@@ -95,12 +116,37 @@ impl OnlineProfile {
     }
 }
 
-/// Whether a decision is the single sample frame or the fusion of several.
+/// Whether a decision is the single sample frame, the fusion of several, or a whole stance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DecisionKind {
     Single,
     Fused,
+    /// A whole-stance model's decision on the stance's summary (see [`StanceDecision`]).
+    Stance,
+}
+
+/// What a whole-stance decision waited for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DecidedAt {
+    /// The stance's lift-off: the whole stance.
+    Liftoff,
+    /// Frame `K` after touchdown ([`OnlineParams::decide_at`]): the stance so far.
+    Offset(usize),
+    /// The model's stance length, reached before the lift-off: the stance's first `length` frames.
+    Length(usize),
+}
+
+/// How a whole-stance model's decision was made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StanceDecision {
+    pub decided_at: DecidedAt,
+    /// The frame the decision waited for: the lift-off frame, touchdown + K, or the frame at which the
+    /// stance was known to be longer than the model's length.
+    pub waited_for: usize,
+    /// The stance is longer than the model's length: its first `length` frames were used.
+    pub cut: bool,
 }
 
 /// A classification of a stance. The posteriors are in [`Step::posteriors`].
@@ -113,10 +159,13 @@ pub struct Decision {
     pub sample_frame: usize,
     /// Frame whose arrival triggered the decision.
     pub frame: usize,
-    /// Frames whose posteriors were averaged (1 for single).
+    /// Frames whose posteriors were averaged (1 for single); for a whole stance, the frames
+    /// summarised.
     pub frames_used: usize,
     pub class: usize,
     pub confidence: f64,
+    /// For a whole-stance decision ([`DecisionKind::Stance`]): what it waited for.
+    pub stance: Option<StanceDecision>,
     /// Index of this decision's posteriors in the step's posterior buffer.
     slot: usize,
 }
@@ -207,6 +256,70 @@ pub struct OnlineClassifier<'m> {
     /// Why the frames of this step's [`Failure`]s could not be classified (empty unless one failed).
     errors: Vec<CoreError>,
     stats: OnlineStats,
+    /// A whole-stance model's state (`None` for a one-frame model).
+    whole: Option<WholeStance>,
+}
+
+/// What a whole-stance model keeps online: the stance's frames, when to decide, the stance under way.
+#[derive(Debug)]
+struct WholeStance {
+    buffer: StanceBuffer,
+    decide_at: Option<usize>,
+    /// Partial stances are decided too: in the one-contact mode the stream is one partial stance.
+    decide_partial: bool,
+    /// The stance under way and not yet decided: its id and touchdown frame.
+    open: Option<(u64, usize)>,
+    /// Stances are reported without a decision (the end of a stream that ended in the warm-up).
+    report_only: bool,
+}
+
+impl WholeStance {
+    /// The whole-stance state for `model` (`None` for a one-frame model), with `online`'s settings
+    /// checked against the kind of model: fusion is for one-frame models, `decide_at` for whole
+    /// stances.
+    fn for_model(
+        model: &TrainedModel,
+        params: &ValidSegmentParams,
+        online: &OnlineParams,
+    ) -> Result<Option<Self>> {
+        let SampleKind::Stance { summary, length } = model.sample() else {
+            return match online.decide_at {
+                Some(_) => Err(CoreError::Param {
+                    name: "decide_at",
+                    reason: "applies to whole-stance models (trained on stance samples); this \
+                             model classifies one frame of each stance, chosen by the sample offset"
+                        .into(),
+                }),
+                None => Ok(None),
+            };
+        };
+        if !online.fusion_offsets.is_empty() {
+            return Err(CoreError::Param {
+                name: "fusion_offsets",
+                reason: "a whole-stance model decides once per stance, on the stance's summary; \
+                         fusion averages one-frame decisions: leave the fusion offsets empty"
+                    .into(),
+            });
+        }
+        let buffer = StanceBuffer::new(summary, length.unwrap_or(model.image_grid().cols))?;
+        if model.crop().output_grid(buffer.sample_grid()).ok() != Some(model.image_grid()) {
+            return Err(CoreError::Shape {
+                what: "whole-stance model",
+                expected: format!(
+                    "a crop that keeps its {} stance summaries whole",
+                    buffer.sample_grid()
+                ),
+                got: format!("crop {} giving {} images", model.crop(), model.image_grid()),
+            });
+        }
+        Ok(Some(Self {
+            buffer,
+            decide_at: online.decide_at,
+            decide_partial: params.params().baseline == BaselineMode::Contact,
+            open: None,
+            report_only: false,
+        }))
+    }
 }
 
 impl<'m> OnlineClassifier<'m> {
@@ -217,7 +330,9 @@ impl<'m> OnlineClassifier<'m> {
         calibration: Option<Calibration>,
     ) -> Result<Self> {
         let n_classes = model.class_names().len();
+        let whole = WholeStance::for_model(model, params, online)?;
         Ok(Self {
+            whole,
             session: model.session(),
             segmenter: CausalSegmenter::new(params, online, calibration)?,
             grid: None,
@@ -267,6 +382,15 @@ impl<'m> OnlineClassifier<'m> {
         self.errors.clear();
         let grid = frame.grid();
         match self.grid {
+            None if self.whole.is_some() => {
+                if let Some(whole) = &mut self.whole
+                    && let Err(err) = whole.buffer.set_grid(grid)
+                {
+                    self.stats.rejected_frames += 1;
+                    return Err(err);
+                }
+                self.grid = Some(grid);
+            }
             None => {
                 let model = self.session.model();
                 if model.crop().output_grid(grid).ok() != Some(model.image_grid()) {
@@ -314,6 +438,13 @@ impl<'m> OnlineClassifier<'m> {
         self.events.clear();
         self.posteriors.clear();
         self.errors.clear();
+        // A stream that ends in the warm-up has its stances found at the end, their frames past: they
+        // are reported, not decided (as the one-frame path does).
+        if self.segmenter.warming_up()
+            && let Some(whole) = &mut self.whole
+        {
+            whole.report_only = true;
+        }
         let seg_events = self.segmenter.finish()?;
         let t = self.segmenter.frames_seen().saturating_sub(1);
         self.handle(seg_events, None, t);
@@ -383,6 +514,10 @@ impl<'m> OnlineClassifier<'m> {
     /// classified gives an [`OnlineEvent::Failed`], and the other events of the frame are kept.
     fn handle(&mut self, events: SegEvents, frame: Option<&FrameView<'_>>, t: usize) {
         self.current = None;
+        if self.whole.is_some() {
+            self.handle_whole(events, frame, t);
+            return;
+        }
         for event in events.iter() {
             match event {
                 SegEvent::Touchdown(touchdown) => self.touchdown(touchdown),
@@ -469,6 +604,7 @@ impl<'m> OnlineClassifier<'m> {
             frames_used: 1,
             class,
             confidence,
+            stance: None,
             slot,
         };
         self.stats.decisions += 1;
@@ -527,6 +663,7 @@ impl<'m> OnlineClassifier<'m> {
             frames_used: self.fusion_frames,
             class,
             confidence,
+            stance: None,
             slot,
         }));
         self.stats.fused_decisions += 1;
@@ -534,10 +671,164 @@ impl<'m> OnlineClassifier<'m> {
         self.fusion_frames = 0;
     }
 
+    /// A whole-stance model's step: the frame is kept (unless the stance under way already has the
+    /// model's length of frames), touchdowns open a stance, lift-offs decide it, and so do frame K
+    /// after touchdown and a stance found longer than the model's length. The detector's one-frame
+    /// requests (sample, fusion) do not apply.
+    fn handle_whole(&mut self, events: SegEvents, frame: Option<&FrameView<'_>>, t: usize) {
+        if let (Some(frame), Some(whole)) = (frame, self.whole.as_mut()) {
+            let length = whole.buffer.length();
+            if whole.open.is_none_or(|(_, start)| t < start + length) {
+                whole.buffer.keep(t, frame);
+            }
+        }
+        for event in events.iter() {
+            match event {
+                SegEvent::Touchdown(touchdown) => {
+                    self.touchdown(touchdown);
+                    if let Some(whole) = &mut self.whole
+                        && !whole.report_only
+                        && (!touchdown.partial || whole.decide_partial)
+                    {
+                        whole.open = Some((touchdown.stance_id, touchdown.touchdown_frame));
+                    }
+                }
+                SegEvent::Liftoff(liftoff) => {
+                    self.decide_at_liftoff(&liftoff);
+                    self.liftoff(liftoff);
+                }
+                SegEvent::HoldCurrent { .. }
+                | SegEvent::ClassifySample { .. }
+                | SegEvent::FuseCurrent { .. }
+                | SegEvent::FusionReady { .. } => {}
+            }
+        }
+        self.decide_before_liftoff(t);
+    }
+
+    /// The lift-off of the stance under way, not yet decided: decided on the whole stance (its first
+    /// `length` frames if longer), unless it is partial (cut by the end of the stream).
+    fn decide_at_liftoff(&mut self, liftoff: &Liftoff) {
+        let Some(whole) = &mut self.whole else {
+            return;
+        };
+        if whole.open.map(|(id, _)| id) != Some(liftoff.stance_id) {
+            return;
+        }
+        whole.open = None;
+        if liftoff.stance.partial && !whole.decide_partial {
+            return;
+        }
+        let how = StanceDecision {
+            decided_at: DecidedAt::Liftoff,
+            waited_for: liftoff.frame,
+            cut: liftoff.stance.len > whole.buffer.length(),
+        };
+        self.decide_whole(
+            liftoff.stance_id,
+            liftoff.stance.start,
+            liftoff.stance.len,
+            how,
+            liftoff.frame,
+        );
+    }
+
+    /// The stance under way is decided before its lift-off at frame `touchdown + K` (with
+    /// [`OnlineParams::decide_at`]) or once it is known to be longer than the model's length.
+    fn decide_before_liftoff(&mut self, t: usize) {
+        let Some(whole) = &self.whole else {
+            return;
+        };
+        let Some((stance_id, start)) = whole.open else {
+            return;
+        };
+        let length = whole.buffer.length();
+        if let Some(k) = whole.decide_at
+            && t >= start + k
+        {
+            let how = StanceDecision {
+                decided_at: DecidedAt::Offset(k),
+                waited_for: start + k,
+                cut: k + 1 > length,
+            };
+            self.decide_whole(stance_id, start, k + 1, how, t);
+            return;
+        }
+        let longer = self
+            .segmenter
+            .open_stance()
+            .is_some_and(|open| open.stance_id == stance_id && open.known_len > length);
+        if longer {
+            let how = StanceDecision {
+                decided_at: DecidedAt::Length(length),
+                waited_for: t,
+                cut: true,
+            };
+            self.decide_whole(stance_id, start, length, how, t);
+        }
+    }
+
+    /// Classifies the summary of `frames` frames from `start` (at most the model's length) at frame
+    /// `t`: a [`DecisionKind::Stance`] decision, or a failure.
+    fn decide_whole(
+        &mut self,
+        stance_id: u64,
+        start: usize,
+        frames: usize,
+        how: StanceDecision,
+        t: usize,
+    ) {
+        let Some(whole) = self.whole.as_mut() else {
+            return;
+        };
+        whole.open = None;
+        let frames = frames.min(whole.buffer.length());
+        let outcome = whole.buffer.sample(start, frames).and_then(|view| {
+            self.session.classify(&view).map(|prediction| {
+                self.posteriors.extend_from_slice(prediction.posteriors);
+                (prediction.class, prediction.confidence)
+            })
+        });
+        let (class, confidence) = match outcome {
+            Ok(result) => result,
+            Err(err) => {
+                let slot = self.keep_error(err);
+                self.events.push(OnlineEvent::Failed(Failure {
+                    stance_id,
+                    kind: DecisionKind::Stance,
+                    sample_frame: start,
+                    frame: t,
+                    slot,
+                }));
+                return;
+            }
+        };
+        let slot = (self.posteriors.len() / self.n_classes.max(1)).saturating_sub(1);
+        self.stats.decisions += 1;
+        self.decided_stance = Some(stance_id);
+        self.events.push(OnlineEvent::Decision(Decision {
+            stance_id,
+            kind: DecisionKind::Stance,
+            touchdown_frame: start,
+            sample_frame: start + frames.saturating_sub(1),
+            frame: t,
+            frames_used: frames,
+            class,
+            confidence,
+            stance: Some(how),
+            slot,
+        }));
+    }
+
     /// A stance ended: the held copy is released, and the lift-off says whether it was decided.
     fn liftoff(&mut self, mut liftoff: Liftoff) {
         self.held_valid = false;
-        liftoff.sampled &= self.decided_stance == Some(liftoff.stance_id);
+        let decided = self.decided_stance == Some(liftoff.stance_id);
+        if self.whole.is_some() {
+            liftoff.sampled = decided;
+        } else {
+            liftoff.sampled &= decided;
+        }
         self.events.push(OnlineEvent::Liftoff(liftoff));
     }
 }

@@ -8,7 +8,15 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::frame::Frame;
+use crate::classifier::ClassifierKind;
+use crate::crop::Crop;
+use crate::error::Result;
+use crate::features::{FeatureConfig, RocketFamily, RocketParams};
+use crate::frame::{Frame, Grid};
+use crate::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
+use crate::preprocess::Preprocess;
+use crate::sample::SampleKind;
+use crate::stance::summary::{SummaryConfig, pad_to, summarise};
 pub use crate::synthetic::bench_workload as bench_fixture;
 pub use crate::synthetic::{SYNTHETIC_CLASSES, synthetic_frame};
 
@@ -40,4 +48,91 @@ pub fn synthetic_stream(stances: usize, rng: &mut impl Rng) -> Vec<Frame> {
         }
     }
     frames
+}
+
+/// A synthetic 100 Hz movie of stances of `lens` frames (the `i`-th of class `i % 4`, a half-sine load
+/// over its print) after 20-frame flights with a few noisy sensels, drawn from `seed`; with each
+/// stance as `(first frame, frames, class)`.
+pub fn stance_stream(lens: &[usize], seed: u64) -> (Vec<Frame>, Vec<(usize, usize, usize)>) {
+    const FLIGHT_FRAMES: usize = 20;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut frames = Vec::new();
+    let mut stances = Vec::new();
+    for (i, &len) in lens.iter().enumerate() {
+        let print = synthetic_frame(i % 4, &mut rng);
+        for _ in 0..FLIGHT_FRAMES {
+            let mut flight = Frame::zeros(print.grid());
+            for _ in 0..3 {
+                let at = rng.random_range(0..flight.values().len());
+                flight.values_mut()[at] = rng.random_range(3.0..6.0);
+            }
+            frames.push(flight);
+        }
+        stances.push((frames.len(), len, i % 4));
+        for j in 0..len {
+            let scale = (std::f64::consts::PI * (j as f64 + 0.5) / len as f64).sin();
+            let mut frame = print.clone();
+            for v in frame.values_mut() {
+                *v = (*v * scale).round();
+            }
+            frames.push(frame);
+        }
+    }
+    frames.extend((0..FLIGHT_FRAMES).map(|_| Frame::zeros(Grid::new(44, 44))));
+    (frames, stances)
+}
+
+/// The sample a whole-stance model of `length` frames takes for `frames`: their summary
+/// ([`summarise`]) laid into the length ([`pad_to`]), as offline training and `classify` make it.
+pub fn stance_sample(frames: &[Frame], length: usize) -> Result<Frame> {
+    let views: Vec<_> = frames.iter().map(Frame::view).collect();
+    let summary = summarise(&views, &SummaryConfig::default())?;
+    Ok(pad_to(&summary.view(), length)?.0)
+}
+
+/// A whole-stance model of `length` frames, small and quick (168 MiniRocket features, 12 components,
+/// linear discriminant), trained on the `stances` (`(first frame, frames, class)`) of `frames`.
+pub fn stance_model(
+    frames: &[Frame],
+    stances: &[(usize, usize, usize)],
+    length: usize,
+) -> Result<TrainedModel> {
+    stance_model_with(frames, stances, length, 168, 12, ClassifierKind::LDA)
+}
+
+/// [`stance_model`] with `num_features` MiniRocket features, `dims` components and `classifier`.
+pub fn stance_model_with(
+    frames: &[Frame],
+    stances: &[(usize, usize, usize)],
+    length: usize,
+    num_features: usize,
+    dims: usize,
+    classifier: ClassifierKind,
+) -> Result<TrainedModel> {
+    let samples = stances
+        .iter()
+        .map(|&(start, len, class)| {
+            let sample = stance_sample(&frames[start..start + len], length)?;
+            Ok((sample, SYNTHETIC_CLASSES[class]))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let images: Vec<_> = samples
+        .iter()
+        .map(|(frame, label)| LabeledImage::new(frame.view(), label))
+        .collect();
+    let config = TrainConfig {
+        crop: Crop::NONE,
+        features: FeatureConfig::of::<RocketFamily>(RocketParams {
+            num_features,
+            ..RocketParams::default()
+        }),
+        dims,
+        classifier: classifier.default_config(),
+        preprocess: Preprocess::NONE,
+    }
+    .check()?;
+    train(&images, &[], &config)?.with_sample(SampleKind::Stance {
+        summary: SummaryConfig::default(),
+        length: None,
+    })
 }

@@ -16,7 +16,9 @@ use presrs_core::online::{Calibration, OnlineClassifier, OnlineParams};
 use presrs_core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
 use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::{ValidSegmentParams, segment};
-use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame, synthetic_stream};
+use presrs_core::testing::{
+    SYNTHETIC_CLASSES, stance_model, stance_stream, synthetic_frame, synthetic_stream,
+};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
@@ -169,5 +171,56 @@ fn steady_state_classification_does_not_allocate() {
             "{name}: online allocations after warm-up"
         );
         assert!(events > 0, "{name}: no events after warm-up");
+    }
+
+    whole_stance_models_do_not_allocate_per_frame();
+}
+
+/// A whole-stance model online: its first frame sizes the stance buffer; every later frame (kept,
+/// touchdowns, decisions at lift-off, at `decide_at` and at the cut, lift-offs) allocates nothing.
+fn whole_stance_models_do_not_allocate_per_frame() {
+    let lens: Vec<usize> = (0..24).map(|i| 10 + (i * 7) % 6).collect();
+    let (train_frames, stances) = stance_stream(&lens, 3);
+    let model = stance_model(&train_frames, &stances, 12).unwrap();
+    let test_lens: Vec<usize> = (0..10).map(|i| 9 + (i * 5) % 8).collect();
+    let (live, _) = stance_stream(&test_lens, 4);
+    for decide_at in [None, Some(4)] {
+        let online = OnlineParams {
+            decide_at,
+            ..OnlineParams::default()
+        };
+        let mut classifier = OnlineClassifier::new(
+            &model,
+            &ValidSegmentParams::default(),
+            &online,
+            Some(calibration(&live)),
+        )
+        .unwrap();
+        // The first stance is decided before counting: a session's MiniRocket scratch is a clone,
+        // which loses the spare capacity of its offsets, and grows it once on its first sample.
+        let first_stance_end = 20 + test_lens[0] + 10;
+        for frame in &live[..first_stance_end] {
+            classifier.push(&frame.view()).unwrap();
+        }
+        let mut decisions = 1;
+        let counts = count(|| {
+            for frame in &live[first_stance_end..] {
+                let step = classifier.push(&frame.view()).unwrap();
+                decisions += step
+                    .events
+                    .iter()
+                    .filter(|e| matches!(e, presrs_core::online::OnlineEvent::Decision(_)))
+                    .count();
+            }
+        });
+        assert_eq!(
+            counts,
+            (0, 0, 0),
+            "whole stance ({decide_at:?}): allocations"
+        );
+        assert_eq!(
+            decisions, 10,
+            "whole stance ({decide_at:?}): one decision a stance"
+        );
     }
 }

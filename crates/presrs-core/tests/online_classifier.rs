@@ -89,6 +89,7 @@ fn events_in_order_with_the_kth_frame_classified() {
                 match d.kind {
                     DecisionKind::Single => correct.0 += usize::from(d.class == class),
                     DecisionKind::Fused => correct.1 += usize::from(d.class == class),
+                    DecisionKind::Stance => panic!("a one-frame model decides no whole stance"),
                 }
             }
             log.push(*event);

@@ -72,6 +72,10 @@ pub enum Opt {
     ValidateBy,
     /// The one condition an evaluation trains on.
     TrainCondition,
+    /// What a sample is: one frame, a whole stance, a series.
+    Sample,
+    /// When a whole-stance model decides online: K frames after touchdown.
+    DecideAt,
 }
 
 /// What Python calls an option.
@@ -85,7 +89,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 24] = [
+    pub const ALL: [Opt; 26] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -110,6 +114,8 @@ impl Opt {
         Opt::Force,
         Opt::ValidateBy,
         Opt::TrainCondition,
+        Opt::Sample,
+        Opt::DecideAt,
     ];
 
     /// The command line's flag, e.g. `--per-class`.
@@ -139,6 +145,8 @@ impl Opt {
             Self::Force => "--force",
             Self::ValidateBy => "--validate-by",
             Self::TrainCondition => "--train-condition",
+            Self::Sample => "--sample",
+            Self::DecideAt => "--decide-at",
         }
     }
 
@@ -175,6 +183,8 @@ impl Opt {
             Self::Force => Words("permission to replace it (an option of the presrs command line)"),
             Self::ValidateBy => Argument("validate_by"),
             Self::TrainCondition => Argument("train_condition"),
+            Self::Sample => Argument("sample"),
+            Self::DecideAt => Argument("decide_at"),
         }
     }
 

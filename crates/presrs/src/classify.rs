@@ -4,11 +4,11 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use presrs_core::Recording;
 use presrs_core::pipeline::{Prediction, Session, TrainedModel};
 use presrs_core::sample::SampleKind;
 use presrs_core::stance::summary::{SummaryConfig, pad_to, summarise};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
+use presrs_core::{Frame, FrameView, Recording};
 use serde::Serialize;
 
 use crate::dataset::{DeadSenselFills, SampleOptions, read_corrected};
@@ -175,15 +175,7 @@ fn classify_stances(
             .filter_map(|index| recording.frame(index))
             .collect();
         let at = || format!("{name}: the stance at frame {}", stance.start);
-        let stance_summary = summarise(&frames, summary).with_context(at)?;
-        let (padded, cut) = pad_to(&stance_summary.view(), length).with_context(at)?;
-        let warning = cut.then(|| {
-            Warning::from(format!(
-                "the stance has {} frames, more than the model's {length}: its first {length} were \
-                 used",
-                stance.len
-            ))
-        });
+        let (padded, warning) = whole_stance_sample(&frames, summary, length).with_context(at)?;
         let prediction = session.classify(&padded.view()).with_context(at)?;
         classified.push(classified_of(
             model,
@@ -203,6 +195,25 @@ fn classify_stances(
         warnings,
         frames: classified,
     })
+}
+
+/// One stance's movie (touchdown to lift-off) as a whole-stance model's sample: summarised as the
+/// model's training stances were, laid into its `length` frames; the warning says when the stance was
+/// longer and cut.
+pub fn whole_stance_sample(
+    frames: &[FrameView<'_>],
+    summary: &SummaryConfig,
+    length: usize,
+) -> presrs_core::error::Result<(Frame, Option<Warning>)> {
+    let stance_summary = summarise(frames, summary)?;
+    let (padded, cut) = pad_to(&stance_summary.view(), length)?;
+    let warning = cut.then(|| {
+        Warning::from(format!(
+            "the stance has {} frames, more than the model's {length}: its first {length} were used",
+            frames.len()
+        ))
+    });
+    Ok((padded, warning))
 }
 
 fn classified_of(

@@ -264,6 +264,26 @@ impl Dataset {
         })
     }
 
+    /// [`Dataset::from_samples`] for samples of `kind`, made in memory as [`Dataset::load`] makes them
+    /// from files: a whole stance's sample is its movie's summary
+    /// ([`summarise`]), laid here into the kind's length (or
+    /// the longest stance's), with the warning of [`pad_stance_samples`]; a series' sample is its
+    /// channels x time array.
+    pub fn from_samples_of(
+        name: impl Into<PathBuf>,
+        mut samples: Vec<Sample>,
+        kind: SampleKind,
+    ) -> Result<Self> {
+        let mut warnings = Warnings::new();
+        if let SampleKind::Stance { length, .. } = kind {
+            warnings.extend(pad_stance_samples(&mut samples, length)?);
+        }
+        let mut dataset = Self::from_samples(name, samples)?;
+        dataset.sample = kind;
+        dataset.warnings = warnings;
+        Ok(dataset)
+    }
+
     /// Why a draw of `need` samples per class cannot be made, when that is the cause: every class of
     /// the manifest's rows (of `condition`, if given) with fewer than `need` samples, with its count,
     /// then why files gave no sample and the option to try (the data set's one-line summary), e.g.
@@ -271,6 +291,25 @@ impl Dataset {
     /// gave no sample: ... ; they are one contact each: try --one-sample-per-file`. `None` when every
     /// class has enough.
     pub fn too_few_samples(&self, condition: Option<&str>, need: usize) -> Option<Message> {
+        self.classes_short_of(condition, need, false)
+    }
+
+    /// [`Dataset::too_few_samples`], where a data set made in memory (no manifest rows) takes the
+    /// samples' own labels for its classes: why training failed, e.g. one image per class.
+    pub fn too_few_samples_to_train(
+        &self,
+        condition: Option<&str>,
+        need: usize,
+    ) -> Option<Message> {
+        self.classes_short_of(condition, need, true)
+    }
+
+    fn classes_short_of(
+        &self,
+        condition: Option<&str>,
+        need: usize,
+        labels_without_rows: bool,
+    ) -> Option<Message> {
         let mut classes: Vec<&str> = self
             .manifest
             .rows
@@ -278,14 +317,18 @@ impl Dataset {
             .filter(|row| condition.is_none() || row.condition.as_deref() == condition)
             .filter_map(|row| row.label.as_deref())
             .collect();
-        classes.sort_unstable();
-        classes.dedup();
         let labels: Vec<&str> = self
             .samples
             .iter()
             .filter(|sample| condition.is_none() || sample.condition.as_deref() == condition)
             .filter_map(|sample| sample.label.as_deref())
             .collect();
+        // Samples made in memory have no manifest rows: their own labels are the classes.
+        if labels_without_rows && self.manifest.rows.is_empty() {
+            classes.clone_from(&labels);
+        }
+        classes.sort_unstable();
+        classes.dedup();
         let short = presrs_core::split::classes_short_of(&labels, &classes, need);
         if short.is_empty() {
             return None;
@@ -497,7 +540,9 @@ pub fn load_samples(
         }
     }
     if let SampleKind::Stance { length, .. } = options.kind {
-        pad_stances(&mut loaded, length)?;
+        loaded
+            .warnings
+            .extend(pad_stance_samples(&mut loaded.samples, length)?);
     }
     loaded
         .warnings
@@ -797,34 +842,32 @@ fn row_series(
     })
 }
 
-/// Lays every whole-stance sample into one length: `length`, or the longest stance's; warns once
-/// about the stances cut to it.
-fn pad_stances(
-    loaded: &mut LoadedSamples,
+/// Lays every whole-stance sample into one length: `length`, or the longest stance's. The warning, when
+/// some were longer, says how many were cut to their first `length` frames.
+pub fn pad_stance_samples(
+    samples: &mut [Sample],
     length: Option<usize>,
-) -> std::result::Result<(), IoError> {
-    let longest = loaded
-        .samples
+) -> std::result::Result<Option<Warning>, IoError> {
+    let longest = samples
         .iter()
         .map(|s| s.frame.grid().cols)
         .max()
         .unwrap_or(0);
     let length = length.unwrap_or(longest);
     let mut cut = 0;
-    for sample in &mut loaded.samples {
+    for sample in samples.iter_mut() {
         let (padded, was_cut) = pad_to(&sample.frame.view(), length)
             .map_err(|err| IoError::format("stance samples", err.to_string()))?;
         sample.frame = padded;
         cut += usize::from(was_cut);
     }
-    if cut > 0 {
-        loaded.warnings.push(Warning::from(Message::from(format!(
+    Ok((cut > 0).then(|| {
+        Warning::from(Message::from(format!(
             "{cut} of {} stances are longer than {length} frames: their first {length} frames are \
              used (the longest has {longest})",
-            loaded.samples.len()
-        ))));
-    }
-    Ok(())
+            samples.len()
+        )))
+    }))
 }
 
 #[cfg(test)]

@@ -359,15 +359,7 @@ impl<'d> EvalSetup<'d> {
 
     /// Models trained per repeat: one, or one per held-out value.
     pub fn folds(&self) -> usize {
-        match &self.protocol {
-            Protocol::LeaveOneOut { .. } => {
-                let mut values: Vec<_> = self.samples.iter().filter_map(|s| s.group).collect();
-                values.sort_unstable();
-                values.dedup();
-                values.len()
-            }
-            Protocol::TrainCondition { .. } => 1,
-        }
+        self.protocol.models_per_repeat(&self.samples)
     }
 
     /// The labelled samples as the evaluation engine sees them.

@@ -22,6 +22,7 @@ pub mod progress_lines;
 pub mod replay;
 pub mod report;
 pub mod reproduce;
+pub mod sample_race;
 pub mod selection_table;
 pub mod simulation;
 pub mod stance_options;

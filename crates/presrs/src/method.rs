@@ -219,13 +219,9 @@ impl Method {
                     },
                     ..self.clone()
                 };
+                // The transforms are raced with every family: the race drops the clear losers, and
+                // the texture families come last, where a budget cuts first on large sets.
                 for feature in families.iter().filter(|f| f.is_costly() == texture) {
-                    // The transforms are raced with every FFT family (their features are cheap,
-                    // and the race drops the clear losers); with the texture ones, in a full search.
-                    let tried = intensity == given || self.full_search || !texture;
-                    if !tried {
-                        continue;
-                    }
                     for &classifier in &classifiers {
                         out.push(method.config(
                             grid,
@@ -249,7 +245,7 @@ impl Method {
             &[]
         };
         AutoChoice::new(candidates, self.validate_by)
-            .with_budget(self.budget)
+            .with_budget(if self.full_search { None } else { self.budget })
             .with_refined_dims(refine)
             .with_rule(self.choose)
     }
@@ -567,23 +563,17 @@ mod tests {
         assert!(auto.is_auto());
         let candidates = auto.candidates(grid, false).unwrap();
         let n_classifiers = ClassifierKind::auto_candidates().len();
-        // every family, and the FFT families with the two intensity transforms too
-        let fft_families = CANDIDATE_FEATURES.len() - 2;
-        assert_eq!(candidates.len(), (3 * fft_families + 2) * n_classifiers);
+        // every family with the two intensity transforms too
+        assert_eq!(
+            candidates.len(),
+            3 * CANDIDATE_FEATURES.len() * n_classifiers
+        );
         // the paper's method first; the texture families last, where a budget cuts
         assert_eq!(candidates[0], auto.paper_config(grid).unwrap());
         let texture = |c: &CheckedTrainConfig| c.config().features.is_costly();
         let first_texture = candidates.iter().position(texture).unwrap();
-        assert_eq!(first_texture, candidates.len() - 2 * n_classifiers);
+        assert_eq!(first_texture, candidates.len() - 3 * 2 * n_classifiers);
         assert!(candidates[first_texture..].iter().all(texture));
-        let full = Method {
-            full_search: true,
-            ..Method::default()
-        };
-        assert_eq!(
-            full.candidates(grid, false).unwrap().len(),
-            3 * CANDIDATE_FEATURES.len() * n_classifiers
-        );
         let intensities = |method: &Method| -> Vec<Intensity> {
             let mut seen: Vec<Intensity> = method
                 .candidates(grid, false)
@@ -596,9 +586,18 @@ mod tests {
         };
         // the cheap families under each transform, then the texture ones
         assert_eq!(
-            intensities(&full),
+            intensities(&auto),
             [Intensity::ALL, Intensity::ALL].concat()
         );
+        // a full search tries the same candidates, every one of them: no budget
+        let full = Method {
+            full_search: true,
+            ..Method::default()
+        };
+        assert_eq!(full.candidates(grid, false).unwrap(), candidates);
+        let full_candidates = full.candidates(grid, false).unwrap();
+        assert_eq!(full.auto_choice(&full_candidates).budget(), None);
+        assert_eq!(auto.auto_choice(&candidates).budget(), Some(DEFAULT_BUDGET));
         // a transform given is kept, not searched; a comparison does not multiply its rows
         let given = Method {
             preprocess: Preprocess {

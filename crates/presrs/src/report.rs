@@ -717,7 +717,7 @@ pub fn fault_sweep(
         (options.fault_repeats, options.seed),
         (
             "fault sweep",
-            (methods * models_per_repeat(samples, protocol) * options.fault_repeats) as u64,
+            (methods * protocol.models_per_repeat(samples) * options.fault_repeats) as u64,
         ),
         progress,
         |evaluation| {
@@ -745,19 +745,6 @@ pub fn fault_sweep(
     let seconds = started.elapsed().as_secs_f64();
     progress.note(&format!("fault sweep: {seconds:.1} s"));
     Ok((results, fault_sweep_note(options, protocol, seconds)))
-}
-
-/// The models one repeat of `protocol` trains per method (the evaluation advances the progress once
-/// for each): one per held-out group, or the one trained on a condition.
-fn models_per_repeat(samples: &[LabeledImage<'_>], protocol: &Protocol) -> usize {
-    match protocol {
-        Protocol::LeaveOneOut { .. } => samples
-            .iter()
-            .filter_map(|s| s.group)
-            .collect::<BTreeSet<_>>()
-            .len(),
-        Protocol::TrainCondition { .. } => 1,
-    }
 }
 
 /// One result per report of `method`: the first without a perturbation, then one per level of `sweep`.

@@ -117,7 +117,7 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     // it is one: say that first (with why files gave none).
     if !matches!(validation_check, Ok(Ok(()))) {
         let need = min_samples_per_class(options.per_class, options.validation);
-        if let Some(cause) = dataset.too_few_samples(options.condition.as_deref(), need) {
+        if let Some(cause) = dataset.too_few_samples_to_train(options.condition.as_deref(), need) {
             return Err(Error::data(
                 Message::from(format!("{name}: cannot train: ")).then(cause),
             ));
@@ -148,8 +148,19 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
             &method.train_config(grid)?,
         )
     }
-    .and_then(|model| model.with_sample(dataset.sample))
-    .with_context(|| format!("{name}: training failed"))?;
+    .and_then(|model| model.with_sample(dataset.sample));
+    let model = match model {
+        Ok(model) => model,
+        // A class with one sample cannot be fitted: when that is the cause, say it by name.
+        Err(err) => match dataset.too_few_samples_to_train(options.condition.as_deref(), 2) {
+            Some(cause) => {
+                return Err(Error::data(
+                    Message::from(format!("{name}: cannot train: ")).then(cause),
+                ));
+            }
+            None => return Err(err).with_context(|| format!("{name}: training failed")),
+        },
+    };
     let mut warnings = Warnings::new();
     if let Some(per_class) = options.per_class
         && !split.capped.is_empty()

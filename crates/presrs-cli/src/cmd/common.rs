@@ -34,8 +34,7 @@ pub struct PipelineArgs {
     /// data among the first five).
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
-    /// With auto: try the intensity transforms (sqrt, log1p) with every feature family, not only with
-    /// fft1d (about twice the time of the default search).
+    /// With auto: score every candidate whatever the time it takes (the same as --budget 0).
     #[arg(long)]
     pub full_search: bool,
     /// With auto: seconds the automatic choice may spend scoring its candidates, per model trained (in
@@ -123,8 +122,8 @@ fn parse_budget(text: &str) -> Result<Budget, String> {
 pub struct SampleArgs {
     /// What a sample is: frame (a frame of each stance, --stance-frame), stance (each stance's movie as
     /// load, contact area, centre of pressure and regional loads over time), or series (a 2-D array as
-    /// channels x time)
-    #[arg(long, default_value = "frame", value_parser = ["frame", "stance", "series"])]
+    /// channels x time); train also takes auto (one frame against the whole sample, by validation)
+    #[arg(long, default_value = "frame", value_parser = ["frame", "stance", "series", "auto"])]
     pub sample: String,
     /// With --sample stance: frames each stance is laid into (default: the longest stance)
     #[arg(long)]
@@ -237,11 +236,31 @@ impl StanceArgs {
 
 impl SampleArgs {
     pub fn options(&self) -> anyhow::Result<SampleOptions> {
-        let kind = SampleKind::parse(
-            &self.sample,
-            self.stance_length,
-            self.series_axis.as_deref(),
-        );
+        if self.is_auto() {
+            anyhow::bail!(
+                "--sample auto races one frame against the whole sample when training (presrs \
+                 train); name one here: frame, stance or series"
+            );
+        }
+        self.options_of(&self.sample)
+    }
+
+    /// `--sample auto`: the kind is raced when training.
+    pub fn is_auto(&self) -> bool {
+        self.sample == "auto"
+    }
+
+    /// The whole sample's settings for `--sample auto`.
+    pub fn whole_sample(&self) -> presrs::sample_race::WholeSample {
+        presrs::sample_race::WholeSample {
+            stance_length: self.stance_length,
+            time_in_rows: self.series_axis.as_deref() == Some("rows"),
+        }
+    }
+
+    /// The options with the sample kind `name` (the other settings as given).
+    pub fn options_of(&self, name: &str) -> anyhow::Result<SampleOptions> {
+        let kind = SampleKind::parse(name, self.stance_length, self.series_axis.as_deref());
         Ok(SampleOptions {
             kind: kind.map_err(anyhow::Error::msg)?,
             sample: self.stance_frame,
@@ -279,11 +298,16 @@ impl SampleArgs {
 /// Reads a manifest and all its samples (a spinner meanwhile); warnings go to stderr.
 pub fn load_manifest(path: &Path, samples: &SampleArgs) -> anyhow::Result<Dataset> {
     let dataset = Dataset::load(path, &samples.options()?, &TerminalProgress::default())?;
+    print_load_warnings(&dataset);
+    Ok(dataset)
+}
+
+/// A loaded data set's warnings and dead-sensel note, on stderr.
+pub fn print_load_warnings(dataset: &Dataset) {
     for warning in &dataset.warnings {
         stderr_line!("warning: {warning}");
     }
     note_dead_sensels(&dataset.dead_sensels);
-    Ok(dataset)
 }
 
 /// The one-line note on stderr of the dead sensels filled, if any.

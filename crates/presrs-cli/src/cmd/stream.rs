@@ -77,6 +77,9 @@ pub struct StreamArgs {
     /// Classify the K-th frame after touchdown (overrides the profile).
     #[arg(long)]
     pub sample_offset: Option<usize>,
+    /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at lift-off].
+    #[arg(long, value_name = "K")]
+    pub decide_at: Option<usize>,
     /// Also fuse the posteriors of these frame offsets after touchdown, comma separated (e.g. 4,5,6,7,8).
     #[arg(long, value_delimiter = ',')]
     pub fuse: Vec<usize>,
@@ -177,6 +180,7 @@ impl StreamArgs {
             sample_offset: self.sample_offset,
             fuse: self.fuse.clone(),
             gait: self.gait.clone(),
+            decide_at: self.decide_at,
         }
     }
 
@@ -203,6 +207,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         file.online.as_ref(),
         &args.overrides(),
     )?;
+    presrs::stream::check_profile(&file.model, &profile)?;
     let signals = StopSignals::register()?;
     let info = LiveInfo {
         source: if args.listen.is_some() {

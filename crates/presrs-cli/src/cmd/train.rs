@@ -11,13 +11,15 @@ use presrs::train::TrainOptions;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
-use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
+use super::common::{
+    PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings,
+};
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
 #[command(
     after_help = "By default the feature family and classifier are chosen automatically by validation \
-inside the training data (--features auto --classifier auto; --full-search for every family).\n\n\
+inside the training data (--features auto --classifier auto; --full-search: no time budget).\n\n\
 Examples (sim/ made by `presrs simulate --out sim`; the second is the paper's method and protocol: \
 1-D |FFT| + Parzen window, 20 images per terrain from gait G2, 7 of them for choosing sigma):
   presrs train --manifest sim/manifest.csv --out g2.model.json
@@ -79,7 +81,6 @@ pub struct TrainArgs {
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     presrs_io::output_path::check_output_file(&args.out)?;
-    let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = TrainOptions {
         condition: args.train_condition.clone(),
         per_class: args.per_class,
@@ -89,10 +90,26 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
     let progress = TerminalProgress::default();
-    progress.start("training", None);
-    let training = presrs::train::train(&dataset, &options);
-    progress.finish();
-    let training = training?;
+    let (dataset, training) = if args.samples.is_auto() {
+        let raced = presrs::sample_race::train_racing_samples(
+            &args.manifest,
+            &args.samples.options_of("frame")?,
+            args.samples.whole_sample(),
+            &options,
+            &progress,
+        )?;
+        for line in raced.race.lines() {
+            stderr_line!("note: {line}");
+        }
+        print_load_warnings(&raced.dataset);
+        (raced.dataset, raced.training)
+    } else {
+        let dataset = load_manifest(&args.manifest, &args.samples)?;
+        progress.start("training", None);
+        let training = presrs::train::train(&dataset, &options);
+        progress.finish();
+        (dataset, training?)
+    };
     for warning in &training.warnings {
         stderr_line!("warning: {warning}");
     }
@@ -108,7 +125,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         !args.samples.keep_dead_sensels,
         Some(std::env::args().collect::<Vec<_>>().join(" ")),
     );
-    let segment = args.samples.options()?.segment_params();
+    let segment = args.samples.options_of("frame")?.segment_params();
     let choice = if args.online_profile || args.gait_table.is_some() {
         ProfileChoice::Required
     } else if args.no_online_profile {

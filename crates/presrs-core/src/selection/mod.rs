@@ -142,6 +142,11 @@ impl<'c> AutoChoice<'c> {
         Self { budget, ..self }
     }
 
+    /// The time budget (`None`: every candidate is scored).
+    pub fn budget(&self) -> Option<Duration> {
+        self.budget
+    }
+
     /// With the best candidates scored again with these numbers of principal components.
     pub fn with_refined_dims(self, refine_dims: &'c [usize]) -> Self {
         Self {

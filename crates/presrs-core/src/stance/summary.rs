@@ -108,8 +108,12 @@ pub fn summarise(frames: &[FrameView<'_>], config: &SummaryConfig) -> Result<Fra
     })?;
     let grid = first.grid();
     config.check(grid)?;
+    let size = grid.len();
+    let mut loads = vec![0.0; size * frames.len()];
     let mut peak = 0.0_f64;
-    for (index, frame) in frames.iter().enumerate() {
+    for (index, (frame, frame_loads_out)) in
+        frames.iter().zip(loads.chunks_exact_mut(size)).enumerate()
+    {
         if frame.grid() != grid {
             return Err(CoreError::Shape {
                 what: "stance frame",
@@ -123,47 +127,108 @@ pub fn summarise(frames: &[FrameView<'_>], config: &SummaryConfig) -> Result<Fra
                 reason: format!("frame {index} of the stance holds {bad}; values must be finite"),
             });
         }
-        peak = frame.values().iter().fold(peak, |m, &v| m.max(v));
+        peak = peak.max(frame_loads(frame, frame_loads_out));
     }
     let contact_level = config.contact_fraction * peak;
     let length = frames.len();
-    let mut out = vec![0.0; config.channels() * length];
+    let channels = config.channels();
+    let mut out = vec![0.0; channels * length];
+    let mut column = vec![0.0; channels];
     let mut regions = vec![0.0; config.region_rows * config.region_cols];
-    for (t, frame) in frames.iter().enumerate() {
-        regions.fill(0.0);
-        let (mut load, mut area, mut row_moment, mut col_moment) = (0.0, 0.0, 0.0, 0.0);
-        for r in 0..grid.rows {
-            let block_row = block_of(r, grid.rows, config.region_rows);
-            for c in 0..grid.cols {
-                let value = if frame.is_present(r, c) {
-                    frame.get(r, c).max(0.0)
-                } else {
-                    0.0
-                };
-                load += value;
-                area += f64::from(u8::from(value > contact_level && value > 0.0));
-                row_moment += value * (r as f64 + 0.5);
-                col_moment += value * (c as f64 + 0.5);
-                regions[block_row * config.region_cols
-                    + block_of(c, grid.cols, config.region_cols)] += value;
-            }
-        }
-        let (cop_row, cop_col) = if load > 0.0 {
-            (
-                row_moment / load / grid.rows as f64,
-                col_moment / load / grid.cols as f64,
-            )
-        } else {
-            (0.0, 0.0)
-        };
-        let column = [load, area, cop_row, cop_col]
-            .into_iter()
-            .chain(regions.iter().copied());
-        for (channel, value) in column.enumerate() {
-            out[channel * length + t] = value;
+    for (t, frame_loads) in loads.chunks_exact(size).enumerate() {
+        loads_channels(frame_loads, grid, config, &mut regions, &mut column);
+        column[AREA_CHANNEL] = contact_area(frame_loads, contact_level);
+        for (channel, value) in column.iter().enumerate() {
+            out[channel * length + t] = *value;
         }
     }
     Frame::new(Grid::new(config.channels(), length), out)
+}
+
+/// The index of the `area` channel: the one channel that depends on the whole stance (its contact
+/// level is a fraction of the stance's highest sensel), so it is counted last ([`contact_area`]).
+pub const AREA_CHANNEL: usize = 1;
+
+/// Writes the load each sensel of `frame` counts with into `loads` (row-major, the frame's size): its
+/// value, at least 0; 0 where absent. Returns the frame's highest value (absent sensels included, as
+/// read), at least 0: a stance's contact level is `contact_fraction` times the highest of its frames'.
+pub fn frame_loads(frame: &FrameView<'_>, loads: &mut [f64]) -> f64 {
+    let mut peak = 0.0_f64;
+    match frame.present() {
+        None => {
+            for (load, &value) in loads.iter_mut().zip(frame.values()) {
+                peak = peak.max(value);
+                *load = value.max(0.0);
+            }
+        }
+        Some(present) => {
+            for ((load, &value), &here) in loads.iter_mut().zip(frame.values()).zip(present) {
+                peak = peak.max(value);
+                *load = if here { value.max(0.0) } else { 0.0 };
+            }
+        }
+    }
+    peak
+}
+
+/// The sensels of `loads` (a frame's [`frame_loads`]) in contact: above `contact_level` and above 0.
+pub fn contact_area(loads: &[f64], contact_level: f64) -> f64 {
+    loads
+        .iter()
+        .filter(|&&value| value > contact_level && value > 0.0)
+        .count() as f64
+}
+
+/// One frame's column of the summary from its [`frame_loads`] on `grid`: every channel but
+/// [`AREA_CHANNEL`] (left 0), which depend on the frame alone, so an online summary computes them as
+/// frames arrive. `regions` (one per region) and `column` ([`SummaryConfig::channels`] long) are the
+/// caller's buffers; `grid` must have passed [`SummaryConfig::check`].
+pub fn loads_channels(
+    loads: &[f64],
+    grid: Grid,
+    config: &SummaryConfig,
+    regions: &mut [f64],
+    column: &mut [f64],
+) {
+    regions.fill(0.0);
+    let (mut load, mut row_moment, mut col_moment) = (0.0, 0.0, 0.0);
+    for (r, row) in loads.chunks_exact(grid.cols).take(grid.rows).enumerate() {
+        let block_row = block_of(r, grid.rows, config.region_rows);
+        let row_centre = r as f64 + 0.5;
+        let mut c = 0;
+        // Column block j spans the columns whose `block_of` is j, up to `ceil((j + 1) cols / blocks)`.
+        for j in 0..config.region_cols {
+            let end = ((j + 1) * grid.cols)
+                .div_ceil(config.region_cols)
+                .min(grid.cols);
+            // The region's sum goes on in a register: the same additions in the same order.
+            let region = &mut regions[block_row * config.region_cols + j];
+            let mut sum = *region;
+            for &value in &row[c..end] {
+                load += value;
+                row_moment += value * row_centre;
+                col_moment += value * (c as f64 + 0.5);
+                sum += value;
+                c += 1;
+            }
+            *region = sum;
+        }
+    }
+    let (cop_row, cop_col) = if load > 0.0 {
+        (
+            row_moment / load / grid.rows as f64,
+            col_moment / load / grid.cols as f64,
+        )
+    } else {
+        (0.0, 0.0)
+    };
+    let fixed = [load, 0.0, cop_row, cop_col];
+    for (slot, value) in column
+        .iter_mut()
+        .zip(fixed.into_iter().chain(regions.iter().copied()))
+    {
+        *slot = value;
+    }
 }
 
 /// `summary` (`channels x frames`) laid into `length` frames: zeros after the stance when it is
@@ -204,6 +269,89 @@ mod tests {
         let mut frame = Frame::zeros(grid);
         frame.values_mut()[row * grid.cols + col] = value;
         frame
+    }
+
+    /// The summary by its definition, sensel by sensel (the first implementation): the oracle of the
+    /// split into per-frame loads, channels and area that the online path shares.
+    fn summarise_by_definition(frames: &[FrameView<'_>], config: &SummaryConfig) -> Vec<f64> {
+        let grid = frames[0].grid();
+        let peak = frames
+            .iter()
+            .flat_map(|f| f.values().iter().copied())
+            .fold(0.0_f64, f64::max);
+        let contact_level = config.contact_fraction * peak;
+        let length = frames.len();
+        let mut out = vec![0.0; config.channels() * length];
+        for (t, frame) in frames.iter().enumerate() {
+            let mut regions = vec![0.0; config.region_rows * config.region_cols];
+            let (mut load, mut area, mut row_moment, mut col_moment) = (0.0, 0.0, 0.0, 0.0);
+            for r in 0..grid.rows {
+                for c in 0..grid.cols {
+                    let value = if frame.is_present(r, c) {
+                        frame.get(r, c).max(0.0)
+                    } else {
+                        0.0
+                    };
+                    load += value;
+                    area += f64::from(u8::from(value > contact_level && value > 0.0));
+                    row_moment += value * (r as f64 + 0.5);
+                    col_moment += value * (c as f64 + 0.5);
+                    regions[block_of(r, grid.rows, config.region_rows) * config.region_cols
+                        + block_of(c, grid.cols, config.region_cols)] += value;
+                }
+            }
+            let (cop_row, cop_col) = if load > 0.0 {
+                (
+                    row_moment / load / grid.rows as f64,
+                    col_moment / load / grid.cols as f64,
+                )
+            } else {
+                (0.0, 0.0)
+            };
+            let column = [load, area, cop_row, cop_col].into_iter().chain(regions);
+            for (channel, value) in column.enumerate() {
+                out[channel * length + t] = value;
+            }
+        }
+        out
+    }
+
+    /// Bit for bit the definition's, on grids that the regions do and do not divide, with absent
+    /// sensels (holding values, as a view may) and negative readings.
+    #[test]
+    fn the_summary_is_its_definition_to_the_bit() {
+        for (rows, cols, region_rows, region_cols) in [(8, 4, 4, 2), (9, 7, 4, 3), (13, 5, 2, 5)] {
+            let grid = Grid::new(rows, cols);
+            let config = SummaryConfig {
+                region_rows,
+                region_cols,
+                contact_fraction: 0.05,
+            };
+            let values: Vec<Vec<f64>> = (0..6)
+                .map(|t| {
+                    (0..grid.len())
+                        .map(|i| ((i * 37 + t * 11) % 23) as f64 * 1.37 - 4.0 + (i as f64).sin())
+                        .collect()
+                })
+                .collect();
+            let masks: Vec<Vec<bool>> = (0..6)
+                .map(|t| (0..grid.len()).map(|i| (i + t) % 5 != 0).collect())
+                .collect();
+            let views: Vec<_> = values
+                .iter()
+                .zip(&masks)
+                .enumerate()
+                .map(|(t, (v, m))| {
+                    FrameView::new(grid, v, (t % 2 == 0).then_some(m.as_slice())).unwrap()
+                })
+                .collect();
+            let summary = summarise(&views, &config).unwrap();
+            assert_eq!(
+                summary.values(),
+                summarise_by_definition(&views, &config),
+                "{grid}"
+            );
+        }
     }
 
     #[test]

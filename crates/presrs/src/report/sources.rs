@@ -1,7 +1,7 @@
 //! Where a manifest report's extra inputs come from: the sensor and a few movies of the data set, and the
 //! velocity table and configuration of a `presrs simulate` folder.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use presrs_core::{Recording, SensorMeta};
@@ -20,6 +20,7 @@ pub(super) fn manifest_recordings(
 ) -> (Option<SensorMeta>, Vec<(String, Recording)>) {
     let read = sample_options.read.clone();
     let mut sources: Vec<(&Path, Option<&str>, Option<&str>)> = Vec::new();
+    let mut periods: BTreeMap<&Path, f64> = BTreeMap::new();
     let mut seen = BTreeSet::new();
     for s in &loaded.samples {
         if seen.insert(s.source.as_path()) {
@@ -28,6 +29,15 @@ pub(super) fn manifest_recordings(
                 s.label.as_deref(),
                 s.condition.as_deref(),
             ));
+        }
+        // The same frame period the samples were read with: the row's column, else the option.
+        let period = s
+            .columns
+            .get("frame_period_s")
+            .and_then(|text| text.trim().parse().ok())
+            .or(sample_options.frame_period_s);
+        if let Some(period) = period {
+            periods.entry(s.source.as_path()).or_insert(period);
         }
     }
     let meta = sources
@@ -48,9 +58,13 @@ pub(super) fn manifest_recordings(
         if labels_done.contains(&label) {
             continue;
         }
-        let Ok(parsed) = read_recording_with(path, &read) else {
+        let Ok(mut parsed) = read_recording_with(path, &read) else {
             continue;
         };
+        if let Some(&period) = periods.get(path) {
+            // Already checked when the samples were loaded; a file's own period wins, as there.
+            let _ = parsed.recording.set_frame_period_if_unknown(period);
+        }
         if parsed.recording.frame_count() < 10 {
             continue;
         }
@@ -140,4 +154,55 @@ pub(super) fn simulate_outputs(dir: &Path) -> Option<(VelocityTable, SimConfig)>
         },
         config,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use presrs_core::Grid;
+
+    use super::*;
+    use crate::progress::Quiet;
+
+    /// A movie of 30 frames of 4 x 3 with one press in the middle, as NPY (which states no period).
+    fn write_movie(path: &Path) {
+        let grid = Grid::new(4, 3);
+        let mut data = Vec::new();
+        for f in 0..30 {
+            let load = if (8..20).contains(&f) { 50.0 } else { 0.0 };
+            data.extend(std::iter::repeat_n(load, grid.len()));
+        }
+        let recording = Recording::new(grid, None, data, None, SensorMeta::default()).unwrap();
+        presrs_io::npy::write_recording_npy(&recording, path).unwrap();
+    }
+
+    /// The movies of the report's load curves are read with the period the samples were read with:
+    /// the `--frame-period` option, and a row's `frame_period_s` column before it.
+    #[test]
+    fn movies_keep_the_frame_period_of_the_option_and_the_column() {
+        let dir = tempfile::tempdir().unwrap();
+        write_movie(&dir.path().join("a.npy"));
+        write_movie(&dir.path().join("b.npy"));
+        let manifest = dir.path().join("manifest.csv");
+        std::fs::write(
+            &manifest,
+            "path,label,frame_period_s\na.npy,grass,0.02\nb.npy,wood,\n",
+        )
+        .unwrap();
+        let options = SampleOptions {
+            frame_period_s: Some(0.01),
+            ..SampleOptions::default()
+        };
+        let loaded = Dataset::load(&manifest, &options, &Quiet).unwrap();
+        let (_, movies) = manifest_recordings(&loaded, &options, None);
+        let periods: Vec<(String, Option<f64>)> = movies
+            .iter()
+            .map(|(name, r)| (name.clone(), r.frame_period_s()))
+            .collect();
+        assert_eq!(periods.len(), 2, "{periods:?}");
+        assert!(periods[0].0.starts_with("a.npy"), "{periods:?}");
+        assert_eq!(periods[0].1, Some(0.02));
+        assert_eq!(periods[1].1, Some(0.01));
+    }
 }

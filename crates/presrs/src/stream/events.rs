@@ -1,6 +1,6 @@
 //! The JSON lines a connection writes (`docs/stream-protocol.md`, "Server -> client").
 
-use presrs_core::online::{DecisionKind, OnlineEvent, OnlineProfile, Step};
+use presrs_core::online::{DecidedAt, DecisionKind, OnlineEvent, OnlineProfile, Step};
 use presrs_core::pipeline::TrainedModel;
 use serde_json::{Value, json};
 
@@ -84,7 +84,7 @@ fn decision(
         .zip(step.posteriors(d))
         .map(|(name, &p)| (name.clone(), json!(p)))
         .collect();
-    json!({
+    let mut line = json!({
         "event": "classification",
         "kind": kind_name(d.kind),
         "stance": d.stance_id,
@@ -99,13 +99,26 @@ fn decision(
         "latency_us": (latency_us * 10.0).round() / 10.0,
         "timestamp_us": timestamp_us,
         "gait": profile.gait_table.get(label),
-    })
+    });
+    // A whole stance's decision says what it waited for; a one-frame decision's line is as it was.
+    if let Some(how) = d.stance {
+        let decided_at = match how.decided_at {
+            DecidedAt::Liftoff => "liftoff",
+            DecidedAt::Offset(_) => "offset",
+            DecidedAt::Length(_) => "length",
+        };
+        line["decided_at"] = decided_at.into();
+        line["decided_at_frame"] = how.waited_for.into();
+        line["cut"] = how.cut.into();
+    }
+    line
 }
 
 fn kind_name(kind: DecisionKind) -> &'static str {
     match kind {
         DecisionKind::Single => "single",
         DecisionKind::Fused => "fused",
+        DecisionKind::Stance => "stance",
     }
 }
 

@@ -35,6 +35,9 @@ mod tap;
 use std::path::Path;
 
 use presrs_core::online::OnlineProfile;
+use presrs_core::pipeline::TrainedModel;
+use presrs_core::sample::SampleKind;
+use presrs_io::message::{Message, Opt};
 
 use crate::error::{Error, Result};
 
@@ -54,8 +57,8 @@ pub use shutdown::ShutdownHandle;
 pub use signals::{SignalWatch, StopSignals};
 pub use tap::{ConnectionTap, NoTap, OwnedTaps, Taps};
 
-/// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`
-/// and `--gait`).
+/// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`,
+/// `--decide-at` and `--gait`).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ProfileOverrides {
     /// Classify the k-th frame after touchdown.
@@ -64,6 +67,8 @@ pub struct ProfileOverrides {
     pub fuse: Vec<usize>,
     /// Terrain -> recommended gait, added to the profile's table.
     pub gait: Vec<(String, String)>,
+    /// A whole-stance model decides K frames after touchdown instead of at lift-off.
+    pub decide_at: Option<usize>,
 }
 
 /// The profile to run with: the JSON file `profile_file`, else one learned from the recordings of the
@@ -87,6 +92,9 @@ pub fn resolve_profile(
     if let Some(k) = overrides.sample_offset {
         profile.params.sample_offset = k;
     }
+    if overrides.decide_at.is_some() {
+        profile.params.decide_at = overrides.decide_at;
+    }
     if !overrides.fuse.is_empty() {
         profile.params.fusion_offsets.clone_from(&overrides.fuse);
     }
@@ -94,6 +102,27 @@ pub fn resolve_profile(
         profile.gait_table.insert(terrain.clone(), gait.clone());
     }
     Ok(profile)
+}
+
+/// Whether `profile` suits `model` online: `decide_at` is for whole-stance models (a one-frame model
+/// decides on its sample frame), fusion for one-frame models. The error names the option.
+pub fn check_profile(model: &TrainedModel, profile: &OnlineProfile) -> Result<()> {
+    let whole = matches!(model.sample(), SampleKind::Stance { .. });
+    if let (false, Some(k)) = (whole, profile.params.decide_at) {
+        return Err(Error::invalid(
+            Message::from("").opt_is(Opt::DecideAt, k).text(
+                " applies to whole-stance models (trained on stance samples); this model \
+                     classifies one frame of each stance, chosen by its sample offset",
+            ),
+        ));
+    }
+    if whole && !profile.params.fusion_offsets.is_empty() {
+        return Err(Error::invalid(
+            "a whole-stance model decides once per stance, on the stance's summary: fusion \
+             (of one-frame decisions) does not apply; leave the fusion offsets out",
+        ));
+    }
+    Ok(())
 }
 
 /// An online profile from its JSON file.

@@ -36,6 +36,18 @@ struct Group {
     fusion_done: bool,
 }
 
+/// A confirmed stance still under way ([`CausalSegmenter::open_stance`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OpenStance {
+    pub stance_id: u64,
+    /// First loaded frame (its touchdown).
+    pub start: usize,
+    /// Frames from `start` certain to be in the stance, whatever the frames still to come: its length
+    /// at lift-off is at least this.
+    pub known_len: usize,
+    pub partial: bool,
+}
+
 /// Levels the detector currently uses (all above baseline except `baseline`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Levels {
@@ -151,6 +163,27 @@ impl CausalSegmenter {
     /// The online parameters.
     pub fn online_params(&self) -> &OnlineParams {
         &self.online
+    }
+
+    /// The confirmed stance under way (between its touchdown and its lift-off events), if any.
+    pub fn open_stance(&self) -> Option<OpenStance> {
+        let group = self.group.filter(|group| group.confirmed)?;
+        // The frames certain to be in the stance whatever comes next: in the floor mode the end is
+        // found by looking back from the rest after the peak (at most FLOOR_LOOKBACK frames), so
+        // only the frames up to the peak, and those further back than that, are certain.
+        let known_end = if self.floor.is_some() {
+            (group.peak_frame + 1)
+                .max(self.t.saturating_sub(FLOOR_LOOKBACK))
+                .min(group.end)
+        } else {
+            group.end
+        };
+        Some(OpenStance {
+            stance_id: group.id,
+            start: group.start,
+            known_len: known_end.saturating_sub(group.start),
+            partial: group.partial,
+        })
     }
 
     fn apply_calibration(&mut self, cal: Calibration) {

@@ -27,7 +27,8 @@ pub struct Liftoff {
     pub frame: usize,
     /// Whether the stance got its (single-frame) decision. From [`CausalSegmenter`](crate::stance::CausalSegmenter), whether it asked
     /// for one; from [`OnlineClassifier`](crate::online::OnlineClassifier), whether a decision was made (false when the sample frame
-    /// could not be classified, see [`OnlineEvent::Failed`](crate::online::OnlineEvent::Failed)).
+    /// could not be classified, see [`OnlineEvent::Failed`](crate::online::OnlineEvent::Failed)); for a
+    /// whole-stance model, whether the stance was decided.
     pub sampled: bool,
 }
 

@@ -74,7 +74,7 @@ mod events;
 mod floor;
 mod settings;
 
-pub use detector::{CausalSegmenter, Levels};
+pub use detector::{CausalSegmenter, Levels, OpenStance};
 pub(crate) use events::MAX_SEG_EVENTS;
 pub use events::{Liftoff, SegEvent, SegEvents, Touchdown};
 pub use floor::MIN_REST_FRAMES;

@@ -102,6 +102,12 @@ pub struct OnlineParams {
     pub fusion_offsets: Vec<usize>,
     /// Without a calibration, the first frames are used to calibrate (default 128; at least 8).
     pub warmup_frames: usize,
+    /// For a whole-stance model (trained on stance samples): decide `K` frames after touchdown, on the
+    /// stance so far (frames touchdown to touchdown + K, zero-padded as offline), instead of at
+    /// lift-off (`None`, the default). At most [`MAX_OFFSET_FRAMES`]. A one-frame model has no use for
+    /// it (it decides on frame [`Self::sample_offset`]): the online classifier refuses it there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub decide_at: Option<usize>,
 }
 
 impl Default for OnlineParams {
@@ -110,6 +116,7 @@ impl Default for OnlineParams {
             sample_offset: PAPER_SAMPLE_OFFSET,
             fusion_offsets: Vec::new(),
             warmup_frames: 128,
+            decide_at: None,
         }
     }
 }
@@ -122,6 +129,16 @@ impl OnlineParams {
                 reason: format!(
                     "must be at most {MAX_OFFSET_FRAMES} frames after touchdown, got {}",
                     self.sample_offset
+                ),
+            });
+        }
+        if let Some(k) = self.decide_at
+            && k > MAX_OFFSET_FRAMES
+        {
+            return Err(CoreError::Param {
+                name: "decide_at",
+                reason: format!(
+                    "must be at most {MAX_OFFSET_FRAMES} frames after touchdown, got {k}"
                 ),
             });
         }
@@ -165,5 +182,21 @@ mod tests {
         assert_eq!(sample_offset_for(&[14, 14, 13, 15, 14]), 6);
         assert_eq!(sample_offset_for(&[17, 16, 16]), 7);
         assert_eq!(sample_offset_for(&[]), PAPER_SAMPLE_OFFSET);
+    }
+
+    /// Old settings (no `decide_at`) load as deciding at lift-off, and write back as they were.
+    #[test]
+    fn decide_at_defaults_to_liftoff_and_is_checked() {
+        let old: OnlineParams = serde_json::from_str(r#"{"sample_offset": 7}"#).unwrap();
+        assert_eq!(old.decide_at, None);
+        assert!(!serde_json::to_string(&old).unwrap().contains("decide_at"));
+        let k: OnlineParams = serde_json::from_str(r#"{"decide_at": 9}"#).unwrap();
+        assert_eq!(k.decide_at, Some(9));
+        assert!(k.check().is_ok());
+        let far = OnlineParams {
+            decide_at: Some(MAX_OFFSET_FRAMES + 1),
+            ..OnlineParams::default()
+        };
+        assert!(far.check().unwrap_err().to_string().contains("decide_at"));
     }
 }

@@ -131,6 +131,7 @@ function onLine(line) {
     case "classification":
       showDecision(e);
       log(`${e.kind} decision: stance ${e.stance} is ${e.label} (confidence ${e.confidence.toFixed(2)})` +
+          (e.decided_at ? `, at ${e.decided_at} (frame ${e.decided_at_frame}${e.cut ? ", cut" : ""})` : "") +
           (e.gait ? `, gait ${e.gait}` : ""), "classification");
       break;
     case "error":

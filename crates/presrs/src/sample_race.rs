@@ -1,0 +1,233 @@
+//! `--sample auto`: one frame against the whole sample, chosen by validation inside the training data.
+//!
+//! The paper judges a stance from one frame; a whole-stance model reads the stance's movie (or a
+//! taxel-time array as a series). Which one a data set rewards is an empirical question, so the
+//! automatic choice is run on each: the data set is read twice (the frame of each stance, and the
+//! whole sample: the stance summary for movies, the series for one-frame files), each is trained with
+//! the same draw seed and method, and the sample whose chosen candidate validates better wins; a tie
+//! goes to the frame (the paper's sample, cheaper and decidable before lift-off). The loser's score
+//! is kept, so the user reads what the choice was made on.
+
+use std::path::Path;
+
+use presrs_core::sample::SampleKind;
+use presrs_core::stance::summary::SummaryConfig;
+use presrs_io::message::{Message, Opt};
+
+use crate::dataset::{Dataset, SampleOptions};
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::train::{TrainOptions, Training, train, trained_on_movies};
+
+/// What the whole sample of `--sample auto` is when the data decide: the settings the whole kinds take.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WholeSample {
+    /// Frames each stance is laid into (`None`: the longest stance).
+    pub stance_length: Option<usize>,
+    /// A series' time runs down the rows (else along the columns).
+    pub time_in_rows: bool,
+}
+
+impl WholeSample {
+    /// The whole sample of a data set whose frames are `frames`: the stance for movies, the series for
+    /// one-frame files.
+    pub fn kind_for(&self, frames: &Dataset) -> SampleKind {
+        if trained_on_movies(frames) {
+            SampleKind::Stance {
+                summary: SummaryConfig::default(),
+                length: self.stance_length,
+            }
+        } else {
+            SampleKind::Series {
+                time_in_rows: self.time_in_rows,
+            }
+        }
+    }
+}
+
+/// One contender of the race.
+#[derive(Clone, Debug)]
+pub struct RaceEntry {
+    pub kind: SampleKind,
+    /// Samples the data set gave (0 when it could not be read this way).
+    pub samples: usize,
+    /// The chosen candidate's mean validation accuracy and its name, or why this sample could not be
+    /// trained.
+    pub outcome: std::result::Result<(f64, String), String>,
+}
+
+/// The race's outcome: both contenders, the frame first, and the winner.
+#[derive(Clone, Debug)]
+pub struct SampleRace {
+    pub entries: Vec<RaceEntry>,
+    pub chosen: usize,
+}
+
+impl SampleRace {
+    /// The winner's kind.
+    pub fn chosen_kind(&self) -> SampleKind {
+        self.entries[self.chosen].kind
+    }
+
+    /// One line per contender (`stance: 95.8 % in validation (rocket + svm), 120 samples, chosen`)
+    /// and the reason for the choice.
+    pub fn lines(&self) -> Vec<String> {
+        let mut lines: Vec<String> = self
+            .entries
+            .iter()
+            .enumerate()
+            .map(|(i, entry)| {
+                let mark = if i == self.chosen { ", chosen" } else { "" };
+                match &entry.outcome {
+                    Ok((accuracy, method)) => format!(
+                        "sample {}: {:.1} % in validation ({method}), {} samples{mark}",
+                        entry.kind.name(),
+                        100.0 * accuracy,
+                        entry.samples
+                    ),
+                    Err(why) => format!("sample {}: not trained: {why}", entry.kind.name()),
+                }
+            })
+            .collect();
+        lines.push(self.reason());
+        lines
+    }
+
+    fn reason(&self) -> String {
+        let winner = &self.entries[self.chosen];
+        let scores: Vec<f64> = self
+            .entries
+            .iter()
+            .filter_map(|e| e.outcome.as_ref().ok().map(|(a, _)| *a))
+            .collect();
+        if scores.len() < self.entries.len() {
+            format!(
+                "the {} sample is the only one that could be trained",
+                winner.kind.name()
+            )
+        } else if scores.windows(2).all(|w| w[0] == w[1]) {
+            "a tie in validation goes to one frame (the paper's sample, decided before lift-off)"
+                .to_owned()
+        } else {
+            format!(
+                "the {} sample validates best inside the training data",
+                winner.kind.name()
+            )
+        }
+    }
+}
+
+/// A training whose sample kind was raced: the winner's data set and model, and the race.
+#[derive(Debug)]
+pub struct RacedTraining {
+    pub dataset: Dataset,
+    pub training: Training,
+    pub race: SampleRace,
+}
+
+/// Reads `manifest` as frames (with `options`, whose kind is ignored) and as its whole sample
+/// ([`WholeSample::kind_for`]), trains each with `train_options` (an automatic choice: its validation
+/// scores decide) and keeps the better.
+pub fn train_racing_samples(
+    manifest: &Path,
+    options: &SampleOptions,
+    whole: WholeSample,
+    train_options: &TrainOptions,
+    progress: &dyn Progress,
+) -> Result<RacedTraining> {
+    if !train_options.method.is_auto() {
+        return Err(Error::invalid(
+            Message::new().opt_text(Opt::Sample, "auto").text(
+                " chooses the sample kind by the automatic choice's validation scores: leave the \
+                 features and the classifier to auto, or name the sample kind (frame, stance or \
+                 series)",
+            ),
+        ));
+    }
+    let read = |kind| {
+        let options = SampleOptions {
+            kind,
+            ..options.clone()
+        };
+        Dataset::load(manifest, &options, progress)
+    };
+    let frames = read(SampleKind::Frame)?;
+    let whole_kind = whole.kind_for(&frames);
+    let train_on = |dataset: &Dataset| {
+        progress.start(
+            &format!("training on the {} sample", dataset.sample.name()),
+            None,
+        );
+        let training = train(dataset, train_options);
+        progress.finish();
+        training
+    };
+    let frame_training = train_on(&frames);
+    let mut contenders = vec![(frames, frame_training)];
+    let unread = match read(whole_kind) {
+        Ok(dataset) => {
+            let training = train_on(&dataset);
+            contenders.push((dataset, training));
+            None
+        }
+        Err(err) => Some(RaceEntry {
+            kind: whole_kind,
+            samples: 0,
+            outcome: Err(err.to_string()),
+        }),
+    };
+    finish_race(contenders, unread)
+}
+
+/// The entry of a trained contender.
+fn entry_of(dataset: &Dataset, training: &Training) -> RaceEntry {
+    let chosen = training.model.selection().and_then(|s| s.chosen());
+    RaceEntry {
+        kind: dataset.sample,
+        samples: dataset.samples.len(),
+        outcome: chosen
+            .map(|c| {
+                (
+                    c.accuracy.mean,
+                    format!("{} + {}", c.features, c.classifier),
+                )
+            })
+            .ok_or_else(|| "no validation score".to_owned()),
+    }
+}
+
+/// The better of the trained contenders (the first, the frame, on a tie or when the other failed);
+/// `unread` is the whole sample's entry when the data set could not be read that way.
+fn finish_race(
+    contenders: Vec<(Dataset, Result<Training>)>,
+    unread: Option<RaceEntry>,
+) -> Result<RacedTraining> {
+    let mut entries: Vec<RaceEntry> = contenders
+        .iter()
+        .map(|(dataset, training)| match training {
+            Ok(training) => entry_of(dataset, training),
+            Err(err) => RaceEntry {
+                kind: dataset.sample,
+                samples: dataset.samples.len(),
+                outcome: Err(err.to_string()),
+            },
+        })
+        .collect();
+    entries.extend(unread);
+    let score = |e: &RaceEntry| e.outcome.as_ref().map_or(f64::NEG_INFINITY, |(a, _)| *a);
+    let mut chosen = 0;
+    for (i, entry) in entries.iter().enumerate() {
+        if score(entry) > score(&entries[chosen]) {
+            chosen = i;
+        }
+    }
+    let (dataset, training) = contenders
+        .into_iter()
+        .nth(chosen)
+        .ok_or_else(|| Error::data("no sample kind could be trained"))?;
+    Ok(RacedTraining {
+        dataset,
+        training: training?,
+        race: SampleRace { entries, chosen },
+    })
+}

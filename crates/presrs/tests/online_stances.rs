@@ -1,0 +1,205 @@
+//! A whole-stance model online on real movies (`real/jiku-walk`, plantar pressure, one foot contact a
+//! movie, read in place from the shared data folder): every movie streamed frame by frame through the
+//! online classifier, each decision checked against the offline path (`classify`, and the stance cut
+//! at `decide_at`), and the stream's JSON lines of a whole-stance decision.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::{Path, PathBuf};
+
+use presrs::classify::{ClassifyOptions, classify_recording};
+use presrs::core::Recording;
+use presrs::core::classifier::ClassifierKind;
+use presrs::core::crop::Crop;
+use presrs::core::features::{FeatureConfig, RocketFamily, RocketParams};
+use presrs::core::online::{
+    DecidedAt, Decision, DecisionKind, OnlineClassifier, OnlineEvent, OnlineParams, OnlineProfile,
+};
+use presrs::core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
+use presrs::core::preprocess::Preprocess;
+use presrs::core::sample::SampleKind;
+use presrs::core::stance::summary::{SummaryConfig, pad_to, summarise};
+use presrs::stream::event_values;
+use presrs::{Dataset, Quiet, SampleOptions};
+
+fn shared(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(path)
+}
+
+fn options() -> SampleOptions {
+    SampleOptions {
+        one_sample_per_file: true,
+        kind: SampleKind::Stance {
+            summary: SummaryConfig::default(),
+            length: None,
+        },
+        ..SampleOptions::default()
+    }
+}
+
+/// A small whole-stance model (168 MiniRocket features, linear discriminant) on every movie, and the
+/// movies, read as `classify` reads them.
+fn setup() -> (TrainedModel, Vec<(PathBuf, Recording)>) {
+    let options = options();
+    let dataset = Dataset::load(&shared("real/jiku-walk/manifest.csv"), &options, &Quiet).unwrap();
+    let images: Vec<_> = dataset
+        .samples
+        .iter()
+        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
+        .collect();
+    let config = TrainConfig {
+        crop: Crop::NONE,
+        features: FeatureConfig::of::<RocketFamily>(RocketParams {
+            num_features: 168,
+            ..RocketParams::default()
+        }),
+        dims: 20,
+        classifier: ClassifierKind::LDA.default_config(),
+        preprocess: Preprocess::NONE,
+    }
+    .check()
+    .unwrap();
+    let model = train(&images, &[], &config)
+        .unwrap()
+        .with_sample(options.kind)
+        .unwrap();
+    let movies = dataset
+        .samples
+        .iter()
+        .map(|s| {
+            let path = shared("real/jiku-walk").join(&s.source);
+            let read = presrs::dataset::read_corrected(
+                &path,
+                &options.read,
+                options.dead_sensels.as_ref(),
+            )
+            .unwrap();
+            (path, read.0.recording)
+        })
+        .collect();
+    (model, movies)
+}
+
+/// The decisions of one movie streamed frame by frame, with their posteriors and JSON lines.
+fn stream(
+    model: &TrainedModel,
+    recording: &Recording,
+    decide_at: Option<usize>,
+) -> Vec<(Decision, Vec<f64>, serde_json::Value)> {
+    let profile = OnlineProfile {
+        params: OnlineParams {
+            decide_at,
+            ..OnlineParams::default()
+        },
+        segment: options().segment_params(),
+        ..OnlineProfile::default()
+    };
+    let mut online = OnlineClassifier::new(model, &profile.segment, &profile.params, None).unwrap();
+    let mut out = Vec::new();
+    let mut keep = |step: presrs::core::online::Step<'_>| {
+        let lines = event_values(&step, model, &profile, 0.0, None);
+        for (event, line) in step.events.iter().zip(lines) {
+            assert!(!matches!(event, OnlineEvent::Failed(_)), "{line}");
+            if let OnlineEvent::Decision(d) = event {
+                out.push((*d, step.posteriors(d).to_vec(), line));
+            }
+        }
+    };
+    for index in 0..recording.frame_count() {
+        keep(online.push(&recording.frame(index).unwrap()).unwrap());
+    }
+    keep(online.finish().unwrap());
+    out
+}
+
+#[test]
+fn every_liftoff_decision_is_the_offline_classification_of_the_stance() {
+    let (model, movies) = setup();
+    assert_eq!(movies.len(), 120);
+    let classify = ClassifyOptions {
+        frame: None,
+        samples: options(),
+    };
+    let mut session = model.session();
+    let mut compared = 0;
+    for (path, recording) in &movies {
+        let name = path.display().to_string();
+        let offline =
+            classify_recording(&model, &mut session, recording, &name, &classify).unwrap();
+        let [offline] = offline.frames.as_slice() else {
+            panic!("{name}: one stance a movie offline");
+        };
+        let online = stream(&model, recording, None);
+        let [(decision, posteriors, line)] = online.as_slice() else {
+            panic!("{name}: one decision a movie online, got {online:?}");
+        };
+        // The same stance: the whole movie, touchdown at frame 0, decided as the stream ends.
+        assert_eq!(decision.kind, DecisionKind::Stance);
+        assert_eq!(decision.touchdown_frame, offline.frame, "{name}");
+        assert_eq!(decision.frames_used, recording.frame_count(), "{name}");
+        let how = decision.stance.unwrap();
+        assert_eq!(how.decided_at, DecidedAt::Liftoff);
+        assert_eq!(how.waited_for, recording.frame_count() - 1);
+        assert!(!how.cut);
+        // The same classification.
+        assert_eq!(model.class_names()[decision.class], offline.label, "{name}");
+        assert!(
+            (decision.confidence - offline.confidence).abs() < 1e-9,
+            "{name}"
+        );
+        for (class, p) in model.class_names().iter().zip(posteriors) {
+            assert!(
+                (p - offline.posteriors[class]).abs() < 1e-9,
+                "{name}: {class}"
+            );
+        }
+        // Its JSON line says what it waited for.
+        assert_eq!(line["kind"], "stance");
+        assert_eq!(line["decided_at"], "liftoff");
+        assert_eq!(line["decided_at_frame"], recording.frame_count() - 1);
+        assert_eq!(line["cut"], false);
+        assert_eq!(line["label"], offline.label.as_str());
+        compared += 1;
+    }
+    assert_eq!(compared, 120, "every movie, online as offline");
+}
+
+#[test]
+fn decide_at_k_is_the_offline_classification_of_the_stance_cut_at_k() {
+    let (model, movies) = setup();
+    let SampleKind::Stance { summary, length } = model.sample() else {
+        panic!("a whole-stance model");
+    };
+    let length = length.unwrap();
+    let k = 12;
+    let mut session = model.session();
+    for (path, recording) in movies.iter().step_by(7) {
+        let name = path.display().to_string();
+        assert!(recording.frame_count() > k + 1, "{name}");
+        let online = stream(&model, recording, Some(k));
+        let [(decision, posteriors, line)] = online.as_slice() else {
+            panic!("{name}: one decision, got {online:?}");
+        };
+        let how = decision.stance.unwrap();
+        assert_eq!(how.decided_at, DecidedAt::Offset(k));
+        assert_eq!(
+            (how.waited_for, decision.frame),
+            (k, k),
+            "decided as frame K arrives"
+        );
+        assert_eq!(decision.frames_used, k + 1);
+        assert_eq!(line["decided_at"], "offset");
+        assert_eq!(line["decided_at_frame"], k);
+        let frames: Vec<_> = (0..=k).map(|i| recording.frame(i).unwrap()).collect();
+        let cut = summarise(&frames, &summary).unwrap();
+        let (padded, _) = pad_to(&cut.view(), length).unwrap();
+        let prediction = session.classify(&padded.view()).unwrap();
+        assert_eq!(decision.class, prediction.class, "{name}");
+        assert!((decision.confidence - prediction.confidence).abs() < 1e-9);
+        for (a, b) in posteriors.iter().zip(prediction.posteriors) {
+            assert!((a - b).abs() < 1e-9, "{name}");
+        }
+    }
+}
