@@ -5,8 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use presrs::eval_document::{
-    CompareJson, EvalJson, PerturbedJson, chosen_counts, comparison_conditions, fault_results,
-    perturbation_pairs, protocol_heading, sigmas,
+    CompareJson, EvalJson, PerturbedJson, chosen_counts, fault_results, protocol_heading, sigmas,
 };
 use presrs::evaluate::{EvalOptions, EvalSetup, Holdout, PerturbationRow, calibration_line};
 use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
@@ -255,96 +254,10 @@ pub(crate) fn parse_leave_one_out(text: &str) -> Result<String, String> {
 
 /// The comparison table: one row per feature x classifier combination.
 pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::Result<()> {
-    let conditions = comparison_conditions(rows);
-    if let Some(report) = rows.iter().find_map(|row| row.report.as_ref().ok()) {
-        writeln!(
-            out,
-            "accuracy in % (mean +- std over {} repeat(s)) per tested condition",
-            report.repeats.len()
-        )?;
-    }
-    write!(out, "{:<18} {:<5}", "features", "clf")?;
-    for condition in &conditions {
-        write!(out, " {condition:>14}")?;
-    }
-    writeln!(
-        out,
-        " {:>14} {:>10} {:>10}",
-        "overall", "train ms", "classify us"
-    )?;
-    for row in rows {
-        write!(out, "{:<18} {:<5}", row.features, row.classifier)?;
-        match &row.report {
-            Ok(report) => {
-                for condition in &conditions {
-                    match report.per_condition.get(*condition) {
-                        Some(m) => write!(
-                            out,
-                            " {:>14}",
-                            format!("{:.1} +- {:.1}", 100.0 * m.mean, 100.0 * m.std)
-                        )?,
-                        None => write!(out, " {:>14}", "-")?,
-                    }
-                }
-                writeln!(
-                    out,
-                    " {:>14} {:>10.1} {:>10.1}",
-                    format!(
-                        "{:.1} +- {:.1}",
-                        100.0 * report.overall.mean,
-                        100.0 * report.overall.std
-                    ),
-                    1e3 * row.train_seconds.mean,
-                    report.median_classify_ns as f64 / 1e3
-                )?;
-            }
-            Err(err) => writeln!(out, " failed: {err}")?,
-        }
-    }
-    Ok(())
+    Ok(write!(out, "{}", presrs::eval_tables::comparison_table(rows))?)
 }
 
 /// The accuracy-against-fault table (one column per method).
 fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow::Result<()> {
-    if rows.is_empty() {
-        return Ok(());
-    }
-    let pairs = perturbation_pairs(rows);
-    let paper = pairs.iter().any(|(_, paper)| paper.is_some());
-    write!(
-        out,
-        "\naccuracy with perturbed test images\n{:<20} {:>20}",
-        "perturbation", "this pipeline"
-    )?;
-    if paper {
-        write!(out, " {:>20}", "paper (fft1d+pwe)")?;
-    }
-    writeln!(out)?;
-    let cell = |r: &PerturbationRow| {
-        format!(
-            "{:6.2} % +- {:.2}",
-            100.0 * r.accuracy,
-            100.0 * r.accuracy_std
-        )
-    };
-    for (r, paper) in pairs {
-        write!(out, "{:<20} {:>20}", r.perturbation, cell(r))?;
-        if let Some(p) = paper {
-            write!(out, " {:>20}", cell(p))?;
-        }
-        writeln!(out)?;
-    }
-    for r in rows.iter().filter(|r| r.unclassified > 0) {
-        let method = if r.method == "paper" {
-            "the paper's method"
-        } else {
-            "this pipeline"
-        };
-        writeln!(
-            out,
-            "{}: {} test image(s) could not be classified by {method} (counted as wrong)",
-            r.perturbation, r.unclassified
-        )?;
-    }
-    Ok(())
+    Ok(write!(out, "{}", presrs::eval_tables::perturbation_table(rows))?)
 }
