@@ -214,7 +214,7 @@ fn a_one_frame_stance_and_nan_in_a_movie_are_errors_naming_the_file() {
         let err = Dataset::load(&bad, &options, &Quiet)
             .unwrap_err()
             .to_string();
-        assert!(err.contains(&format!("line 2")), "{err}");
+        assert!(err.contains("line 2"), "{err}");
         assert!(err.contains(file) && err.contains(says), "{err}");
     }
     let err = classify(&model, &one, &options).unwrap_err().to_string();
