@@ -4,10 +4,6 @@
 //! (c - 4) d]` (-1 + 3 = 2), summed over its channels, and each of its biases counts the outputs above
 //! it. The sums and the counts are the SIMD kernels of `kernels::rocket`.
 //!
-//! A kernel of several channels first sums its channels' tripled series (over the span its taps read)
-//! and their tap sums (over the outputs it counts), then adds the three shifted taps of those sums: `(m
-//! - 1) (n + 8 d) + (m - 1) n + 3 n` additions for `m` channels and `n` outputs instead of `4 m n - 1`.
-//!
 //! The sums are those of the definition in another order, so an output can differ from the oracle's
 //! in its last bits; a feature changes only if such an output lies within that rounding of a bias.
 
@@ -39,9 +35,6 @@ pub struct RocketScratch {
     /// Rows of `width` values: `channels` rows of the series, then `channels` rows of three times it,
     /// each with `pad` zeros before and after; then `channels` rows of `length` tap sums.
     rows: Vec<f64>,
-    /// One combination's channels summed: their tripled series over the span its taps read (up to
-    /// `width` values), then their tap sums over its outputs (up to `length`), then slack.
-    combined: Vec<f64>,
     conv: Vec<f64>,
     offsets: Vec<usize>,
     counts: Vec<u64>,
@@ -65,10 +58,6 @@ impl RocketScratch {
         let rows = 2 * channels * self.width() + channels * length + ROUND;
         if self.rows.len() < rows {
             self.rows.resize(rows, 0.0);
-        }
-        let combined = self.width() + length + ROUND;
-        if self.combined.len() < combined {
-            self.combined.resize(combined, 0.0);
         }
         if self.conv.len() < rounded(length) {
             self.conv.resize(rounded(length), 0.0);
@@ -140,9 +129,8 @@ impl RocketScratch {
             ..
         } = *combination;
         let first_tap = self.pad - (KERNEL_LENGTH / 2) * dilation + outputs.start;
-        let computed = rounded(outputs.len());
         self.offsets.clear();
-        if let [channel] = *channels {
+        for &channel in channels {
             let tripled = self.tripled_row(channel) + first_tap;
             self.offsets.push(self.tap_sum_row(channel) + outputs.start);
             self.offsets.extend(
@@ -150,45 +138,10 @@ impl RocketScratch {
                     .iter()
                     .map(|&tap| tripled + tap * dilation),
             );
-            sum_at_offsets(&self.rows, &self.offsets, &mut self.conv[..computed]);
-        } else {
-            self.combine(channels, first_tap, dilation, outputs.clone());
-            let taps = self.width();
-            self.offsets.push(taps);
-            self.offsets
-                .extend(KERNEL_TAPS[kernel].iter().map(|&tap| tap * dilation));
-            sum_at_offsets(&self.combined, &self.offsets, &mut self.conv[..computed]);
         }
+        let computed = rounded(outputs.len());
+        sum_at_offsets(&self.rows, &self.offsets, &mut self.conv[..computed]);
         self.conv[outputs.len()..computed].fill(f64::NEG_INFINITY);
-    }
-
-    /// Sums `channels`' tripled series from `first_tap` over the span a kernel at `dilation` reads for
-    /// `outputs` (into `combined[..]`), and their tap sums at `outputs` (into `combined[width..]`).
-    fn combine(
-        &mut self,
-        channels: &[usize],
-        first_tap: usize,
-        dilation: usize,
-        outputs: Range<usize>,
-    ) {
-        let span = (KERNEL_LENGTH - 1) * dilation + outputs.len();
-        let (width, length, count) = (self.width(), self.length, self.channels);
-        let tripled_row = |c: usize| (count + c) * width;
-        let tap_sum_row = |c: usize| 2 * count * width + c * length;
-        self.offsets.clear();
-        self.offsets
-            .extend(channels.iter().map(|&c| tripled_row(c) + first_tap));
-        sum_at_offsets(&self.rows, &self.offsets, &mut self.combined[..span]);
-        self.offsets.clear();
-        self.offsets
-            .extend(channels.iter().map(|&c| tap_sum_row(c) + outputs.start));
-        let taps = width;
-        sum_at_offsets(
-            &self.rows,
-            &self.offsets,
-            &mut self.combined[taps..taps + outputs.len()],
-        );
-        self.offsets.clear();
     }
 
     /// The last output of [`convolve`](Self::convolve).
