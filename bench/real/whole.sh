@@ -4,7 +4,7 @@
 #
 #   bench/real/whole.sh                       # jiku-walk (stances) and icub20 (series)
 #   bench/real/whole.sh jiku-walk             # one set
-#   PRESRS=/path/to/presrs bench/real/whole.sh
+#   PRESRS=/path/to/presrs PROJECTION=/path/to/ridge_projection bench/real/whole.sh   # no builds
 #   ROCKET_PYTHON=/path/to/python bench/real/whole.sh   # an interpreter with aeon (default below)
 #
 # Protocol: leave one group out, all training data (no --per-class; 35 % of it validates), 3 repeats,
@@ -44,8 +44,12 @@ else
     (cd "$root" && CARGO_TARGET_DIR=$target cargo build --release --locked -p presrs-cli)
     presrs=$target/release/presrs
 fi
-(cd "$root" && CARGO_TARGET_DIR=$target cargo build --release --locked -p presrs --example ridge_projection)
-projection=$target/release/examples/ridge_projection
+if [ -n "${PROJECTION:-}" ]; then
+    projection=$PROJECTION
+else
+    (cd "$root" && CARGO_TARGET_DIR=$target cargo build --release --locked -p presrs --example ridge_projection)
+    projection=$target/release/examples/ridge_projection
+fi
 
 sample_of() {
     case $1 in
