@@ -180,6 +180,19 @@ fn stances_shorter_than_a_kernel_train_evaluate_and_classify() {
         said.ends_with("two.npy: 2 frames but no complete stance phase; nothing classified"),
         "{said}"
     );
+    // In a data set, it gives no sample, and the warning says why.
+    let with_two = dir.path().join("with_two.csv");
+    let text = std::fs::read_to_string(&manifest).unwrap() + "two.npy,b,g0\n";
+    std::fs::write(&with_two, text).unwrap();
+    let loaded = Dataset::load(&with_two, &options, &Quiet).unwrap();
+    assert_eq!(loaded.samples.len(), 16);
+    let warnings = loaded.warnings.render(presrs::Face::Cli).join("\n");
+    assert!(
+        warnings.contains(
+            "1 of 17 files gave no sample: two.npy ; each is shorter than a stance (at least 3 frames)"
+        ),
+        "{warnings}"
+    );
     let long = write_movie(dir.path(), "long.npy", &movie(40, "a", 3));
     let said = classify(&model, &long, &options).unwrap();
     assert!(
