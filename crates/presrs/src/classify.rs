@@ -96,9 +96,11 @@ pub fn classify_recording(
             frame,
             unloaded_frame_warning(recording, frame).map(Warning::from),
         )],
-        None if recording.frame_count() == 1 => {
+        // A series (taxels over time) may sum to zero or less: only a pressure image can be empty.
+        None if recording.frame_count() == 1 && model.sample().is_frame() => {
             vec![(0, unloaded_frame_warning(recording, 0).map(Warning::from))]
         }
+        None if recording.frame_count() == 1 => vec![(0, None)],
         None => {
             let segmentation = segment_recording(recording, &options.samples.segment_params())
                 .with_context(|| format!("{name}: cannot segment"))?;

@@ -650,7 +650,13 @@ impl EmptyFiles {
             names.push("...");
         }
         let most = |why: NoSample| self.files.iter().filter(|(_, w)| *w == why).count() * 2 > count;
-        let hint = if most(NoSample::OneContact) {
+        let hint = if most(NoSample::OneContact) && options.one_sample_per_file {
+            // Each file was its own stance already: it is too short to be one.
+            Message::from(format!(
+                "each is shorter than a stance (at least {} frames)",
+                options.segment_params().params().min_stance_frames
+            ))
+        } else if most(NoSample::OneContact) {
             Message::from(
                 "they are one contact each (loaded from the first frame to the last): try ",
             )

@@ -6,6 +6,11 @@
 //! centre of pressure in fractions of the grid), which would otherwise leave the combination to the
 //! channel of largest units. The scales and the fitted MiniRocket model are learned at training
 //! ([`FeatureFamily::fit`]) and stored in the model file with the settings.
+//!
+//! A series shorter than a kernel (9 values) is padded with zeros after its end to 9, at training and
+//! classification alike: a whole stance of a few frames is then that stance followed by no load, as
+//! longer stances are padded to the longest. The fitted model's length is 9 and it takes series of 1
+//! to 9 values (each padded the same way).
 
 use std::sync::Arc;
 
@@ -14,6 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result, check_len};
 use crate::features::family::{FeatureFamily, FitImages};
 use crate::features::rocket::config::{RocketConfig, check_shape};
+use crate::features::rocket::kernels::KERNEL_LENGTH;
 use crate::features::rocket::model::RocketModel;
 use crate::features::rocket::transform::RocketScratch;
 use crate::frame::Grid;
@@ -89,6 +95,28 @@ pub struct RocketExtractor {
     scratch: RocketScratch,
 }
 
+/// The length series of `length` values are transformed at: `length`, or 9 (a kernel's taps) for
+/// shorter ones, which are padded with zeros after their end.
+pub fn padded_length(length: usize) -> usize {
+    length.max(KERNEL_LENGTH)
+}
+
+/// `values` (series of `channels x length`, one after the other) each divided by its channel's scale
+/// and padded with zeros to [`padded_length`], into `out` (`channels x padded_length` per series).
+fn scale_and_pad(values: &[f64], length: usize, scales: &[f64], out: &mut [f64]) {
+    let padded = padded_length(length);
+    let rows = values.chunks_exact(length.max(1));
+    for ((row, dst), scale) in rows
+        .zip(out.chunks_exact_mut(padded))
+        .zip(scales.iter().cycle())
+    {
+        for (d, v) in dst.iter_mut().zip(row) {
+            *d = v / scale;
+        }
+        dst[length..].fill(0.0);
+    }
+}
+
 /// The fitted part, checked against the series' shape `grid` (channels x time).
 fn fitted_for(params: &RocketParams, grid: Grid) -> Result<&FittedRocket> {
     let fitted = params.fitted.as_ref().ok_or_else(|| CoreError::Param {
@@ -98,10 +126,20 @@ fn fitted_for(params: &RocketParams, grid: Grid) -> Result<&FittedRocket> {
             .into(),
     })?;
     let model = &fitted.model;
-    if Grid::new(model.channels(), model.length()) != grid {
+    if Grid::new(model.channels(), model.length()) != Grid::new(grid.rows, padded_length(grid.cols))
+    {
+        let short = if model.length() == KERNEL_LENGTH {
+            " (or fewer, padded to it)"
+        } else {
+            ""
+        };
         return Err(CoreError::Shape {
             what: "rocket series",
-            expected: format!("{} channels x {} frames", model.channels(), model.length()),
+            expected: format!(
+                "{} channels x {} frames{short}",
+                model.channels(),
+                model.length()
+            ),
             got: format!("{} x {}", grid.rows, grid.cols),
         });
     }
@@ -154,20 +192,17 @@ impl FeatureFamily for RocketFamily {
             rows: channels,
             cols: length,
         } = images.grid;
-        check_shape("rocket training series", channels, length)?;
-        if images.is_empty() {
+        let padded = padded_length(length);
+        check_shape("rocket training series", channels, padded)?;
+        if images.is_empty() || length == 0 {
             return Err(CoreError::NotEnoughData(
                 "rocket: no training series to fit on".into(),
             ));
         }
         let channel_scales = channel_spreads(images);
-        let mut scaled = images.values.to_vec();
-        for series in scaled.chunks_exact_mut(channels * length) {
-            for (row, scale) in series.chunks_exact_mut(length).zip(&channel_scales) {
-                row.iter_mut().for_each(|v| *v /= scale);
-            }
-        }
-        let model = RocketModel::fit(&params.config(), &scaled, channels, length)?;
+        let mut scaled = vec![0.0; images.len() * channels * padded];
+        scale_and_pad(images.values, length, &channel_scales, &mut scaled);
+        let model = RocketModel::fit(&params.config(), &scaled, channels, padded)?;
         Ok(RocketParams {
             fitted: Some(FittedRocket {
                 channel_scales,
@@ -178,7 +213,7 @@ impl FeatureFamily for RocketFamily {
     }
 
     fn output_len(params: &RocketParams, grid: Grid) -> Result<usize> {
-        check_shape("rocket series", grid.rows, grid.cols)?;
+        check_shape("rocket series", grid.rows, padded_length(grid.cols))?;
         match &params.fitted {
             Some(_) => Ok(fitted_for(params, grid)?.model.output_len()),
             None => Ok(params.config().output_len()),
@@ -199,7 +234,7 @@ impl FeatureFamily for RocketFamily {
         let fitted = fitted_for(params, grid)?;
         Ok(RocketExtractor {
             grid,
-            scaled: vec![0.0; grid.len()],
+            scaled: vec![0.0; fitted.model.sample_len()],
             scratch: fitted.model.scratch(),
             fitted: Arc::new(fitted.clone()),
         })
@@ -215,18 +250,13 @@ impl FeatureFamily for RocketFamily {
 
     fn extract_into(extractor: &mut RocketExtractor, image: &[f64], out: &mut [f64]) -> Result<()> {
         check_len("rocket series", extractor.grid.len(), image.len())?;
-        let length = extractor.grid.cols;
         let fitted = &extractor.fitted;
-        for ((dst, src), scale) in extractor
-            .scaled
-            .chunks_exact_mut(length)
-            .zip(image.chunks_exact(length))
-            .zip(&fitted.channel_scales)
-        {
-            for (d, s) in dst.iter_mut().zip(src) {
-                *d = s / scale;
-            }
-        }
+        scale_and_pad(
+            image,
+            extractor.grid.cols,
+            &fitted.channel_scales,
+            &mut extractor.scaled,
+        );
         fitted
             .model
             .transform_into(&extractor.scaled, out, &mut extractor.scratch)
@@ -324,6 +354,60 @@ mod tests {
         assert!(fitted.extractor(Grid::new(channels, length + 1)).is_err());
         let err = config.extractor(grid).unwrap_err().to_string();
         assert!(err.contains("not fitted"), "{err}");
+    }
+
+    /// Series shorter than a kernel are padded with zeros to 9 values, at fit and at extraction: the
+    /// features are the oracle's on the scaled series followed by zeros.
+    #[test]
+    fn short_series_are_padded_to_a_kernel() {
+        let (channels, length) = (2, 4);
+        let grid = Grid::new(channels, length);
+        let values = series(5, channels, length, 0.3);
+        let config = FeatureConfig::of::<RocketFamily>(RocketParams {
+            num_features: 168,
+            ..RocketParams::default()
+        });
+        let fitted = config
+            .fit(FitImages {
+                grid,
+                values: &values,
+            })
+            .unwrap();
+        let rocket = fitted
+            .params::<RocketFamily>()
+            .unwrap()
+            .fitted
+            .clone()
+            .unwrap();
+        assert_eq!(rocket.model.length(), KERNEL_LENGTH);
+        let sample = series(1, channels, length, 2.0);
+        let mut padded = vec![0.0; channels * KERNEL_LENGTH];
+        for ((dst, row), s) in padded
+            .chunks_exact_mut(KERNEL_LENGTH)
+            .zip(sample.chunks_exact(length))
+            .zip(&rocket.channel_scales)
+        {
+            for (d, v) in dst.iter_mut().zip(row) {
+                *d = v / s;
+            }
+        }
+        let features = fitted.extractor(grid).unwrap().extract(&sample).unwrap();
+        assert_eq!(features, oracle::transform(&rocket.model, &padded));
+        // Any length up to 9 pads the same way; 10 is another shape, and no channel is an error.
+        assert!(fitted.extractor(Grid::new(channels, 9)).is_ok());
+        let err = fitted
+            .extractor(Grid::new(channels, 10))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("or fewer, padded to it"), "{err}");
+        assert!(
+            FeatureConfig::of::<RocketFamily>(RocketParams::default())
+                .fit(FitImages {
+                    grid: Grid::new(0, 4),
+                    values: &[],
+                })
+                .is_err()
+        );
     }
 
     #[test]
