@@ -122,7 +122,8 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
 
     // auto is the default: the cheap feature families (fft1d, fft2d, fft2d_polar) x every classifier,
     // then each after the square root and log1p intensity transforms x every classifier, then the texture
-    // families (glcm, fft2d_polar+glcm) x every classifier; --dims given: no refinement of the dims
+    // families (glcm, fft2d_polar+glcm), also under each transform, x every classifier; --dims given: no
+    // refinement of the dims
     let auto = presrs(&[&["eval", "--json"][..], &common[..]].concat());
     assert!(
         auto.status.success(),
@@ -132,8 +133,8 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     let json: serde_json::Value = serde_json::from_slice(&auto.stdout).unwrap();
     let selection = &json["selections"][0];
     let scores = selection["scores"].as_array().unwrap();
-    assert_eq!(scores.len(), 55);
-    assert!(selection["chosen"].as_u64().unwrap() < 55);
+    assert_eq!(scores.len(), 75);
+    assert!(selection["chosen"].as_u64().unwrap() < 75);
     let texture = |s: &serde_json::Value| s["features"].as_str().unwrap().contains("glcm");
     assert!(scores[45..].iter().all(texture), "texture families last");
     assert!(!scores[..45].iter().any(texture));

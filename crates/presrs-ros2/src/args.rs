@@ -56,6 +56,10 @@ pub struct Ros2Args {
     #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
           value_parser = |t: &str| presrs::values::name_value(t, "TERRAIN=GAIT"))]
     pub gait: Vec<(String, String)>,
+    /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at
+    /// lift-off], as `presrs stream --decide-at`.
+    #[arg(long, value_name = "K")]
+    pub decide_at: Option<usize>,
 }
 
 impl Ros2Args {
@@ -77,6 +81,7 @@ impl Ros2Args {
     pub fn overrides(&self) -> ProfileOverrides {
         ProfileOverrides {
             gait: self.gait.clone(),
+            decide_at: self.decide_at,
             ..ProfileOverrides::default()
         }
     }

@@ -254,10 +254,18 @@ pub(crate) fn parse_leave_one_out(text: &str) -> Result<String, String> {
 
 /// The comparison table: one row per feature x classifier combination.
 pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::Result<()> {
-    Ok(write!(out, "{}", presrs::eval_tables::comparison_table(rows))?)
+    Ok(write!(
+        out,
+        "{}",
+        presrs::eval_tables::comparison_table(rows)
+    )?)
 }
 
 /// The accuracy-against-fault table (one column per method).
 fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow::Result<()> {
-    Ok(write!(out, "{}", presrs::eval_tables::perturbation_table(rows))?)
+    Ok(write!(
+        out,
+        "{}",
+        presrs::eval_tables::perturbation_table(rows)
+    )?)
 }

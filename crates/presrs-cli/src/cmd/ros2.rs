@@ -13,6 +13,7 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let file = presrs_io::model_file::load_model(&args.model)?;
     let online = file.online.as_ref();
     let profile = resolve_profile(args.profile.as_deref(), None, online, &args.overrides())?;
+    presrs::stream::check_profile(&file.model, &profile)?;
     let signals = StopSignals::register()?;
     let graph = NodeGraph::join(&options)?;
     writeln!(out, "{}", presrs_ros2::joined_event(&graph))?;
