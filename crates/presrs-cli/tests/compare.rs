@@ -151,14 +151,14 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
     let stderr = String::from_utf8_lossy(&cut.stderr);
     assert!(
         stderr.contains("the automatic choice was cut short (the time budget of")
-            && stderr.contains("50 of 55 candidates not tried")
+            && stderr.contains("70 of 75 candidates not tried")
             && stderr.contains("--budget 0 for no limit"),
         "{stderr}"
     );
     let json: serde_json::Value = serde_json::from_slice(&cut.stdout).unwrap();
     let scores = json["selections"][0]["scores"].as_array().unwrap();
     let skipped: Vec<bool> = scores.iter().map(|s| s["skipped"] == true).collect();
-    assert_eq!(skipped, [vec![false; 5], vec![true; 50]].concat());
+    assert_eq!(skipped, [vec![false; 5], vec![true; 70]].concat());
     let bad = presrs(&[&["eval", "--budget=-1"][..], &common[..]].concat());
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("0 or more"));
