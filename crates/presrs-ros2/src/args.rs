@@ -17,9 +17,11 @@ use crate::options::{InputQos, NodeOptions, domain_id, input_type, localhost_onl
 /// ends it cleanly; the exit code is 1 only when the input could not go on (frames of a size the
 /// model cannot use), or the node could not start.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Examples (docs/ros2.md: topics, QoS, discovery, a launch file):
+#[command(
+    after_help = "Examples (docs/ros2.md: topics, QoS, discovery, a launch file):
   presrs ros2 --model m.json --input /foot/pressure
-  presrs ros2 --model m.json --input pressure --namespace /hopper --domain-id 7")]
+  presrs ros2 --model m.json --input pressure --namespace /hopper --domain-id 7"
+)]
 pub struct Ros2Args {
     /// Model file from `presrs train` (read before the node joins the graph).
     #[arg(long)]
