@@ -115,6 +115,16 @@ impl Model {
             .collect()
     }
 
+    /// The class index of every sample of a batch (its failures explained in the caller's terms).
+    fn batch_classes(&self, py: Python<'_>, samples: &Samples<'_>) -> PyResult<Vec<usize>> {
+        Ok(self
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?
+            .into_iter()
+            .map(|c| c.class)
+            .collect())
+    }
+
     /// The samples of `x` as this model takes them: images as they are; a stance's movie summarised
     /// and laid into the model's length (a warning when it was cut); a series transposed when its time
     /// runs down the rows.
@@ -322,12 +332,7 @@ impl Model {
                 .map_err(|err| samples.explain(err))?;
             return Ok(label.into_pyobject(py)?.into_any());
         }
-        let classes: Vec<usize> = self
-            .classify_many(py, &samples.views()?)
-            .map_err(|err| samples.explain(err))?
-            .into_iter()
-            .map(|c| c.class)
-            .collect();
+        let classes = self.batch_classes(py, &samples)?;
         let indices = PyArray1::from_vec(py, classes);
         self.classes_array(py)?.call_method1("take", (indices,))
     }
@@ -346,12 +351,7 @@ impl Model {
                 .map_err(|err| samples.explain(err))?;
             return Ok(class.into_pyobject(py)?.into_any());
         }
-        let classes: Vec<usize> = self
-            .classify_many(py, &samples.views()?)
-            .map_err(|err| samples.explain(err))?
-            .into_iter()
-            .map(|c| c.class)
-            .collect();
+        let classes = self.batch_classes(py, &samples)?;
         Ok(PyArray1::from_vec(py, classes).into_any())
     }
 
