@@ -38,17 +38,24 @@ def median_us(call, inputs, calls):
 
 
 def push_us(model, movies):
-    """Median and mean time of `OnlineClassifier.push` per frame over `movies` (frames taken once)."""
+    """Median and mean time of `OnlineClassifier.push` per frame over `movies` (frames taken once),
+    and the median per kind of frame (what the push returned: nothing, a touchdown, a lift-off, a
+    classification), which tells the typical frame from the decision frames."""
     online = presrs.OnlineClassifier(model)
-    times = []
+    times, kinds = [], []
     for frames in movies:
         for frame in frames:
             start = time.perf_counter_ns()
-            online.push(frame)
+            events = online.push(frame)
             times.append(time.perf_counter_ns() - start)
+            kinds.append("+".join(sorted(e["event"] for e in events)) or "no event")
     online.finish()
     times = np.array(times[100:]) / 1e3  # after the detector's warm-up
-    return float(np.median(times)), float(np.mean(times)), len(times)
+    kinds = kinds[100:]
+    by_kind = {
+        kind: float(np.median(times[[k == kind for k in kinds]])) for kind in sorted(set(kinds))
+    }
+    return float(np.median(times)), float(np.mean(times)), len(times), by_kind
 
 
 def rust_single_us(cli, model_path, images, work):
@@ -76,9 +83,11 @@ def one_round(cli, est, images, movies, work):
     figures["TerrainClassifier.predict (one image)"] = median_us(est.predict, images, 20000)
     batches = [images[i : i + 1] for i in range(len(images))]
     figures["TerrainClassifier.predict (batch of 1)"] = median_us(est.predict, batches, 20000)
-    median, mean, frames = push_us(model, movies)
+    median, mean, frames, by_kind = push_us(model, movies)
     figures["OnlineClassifier.push median"] = median
     figures["OnlineClassifier.push mean"] = mean
+    for kind, value in by_kind.items():
+        figures[f"OnlineClassifier.push median, {kind} frames"] = value
     figures["push frames"] = frames
     return figures
 
