@@ -11,7 +11,9 @@ use presrs::evaluate::{EvalOptions, EvalSetup, Holdout, PerturbationRow, calibra
 use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
 use presrs_core::split::ValidationSize;
 
-use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest, write_json};
+use super::common::{
+    PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings, write_json,
+};
 
 /// Evaluate the pipeline on a manifest: accuracy per condition/group, overall, confusion, timing.
 #[derive(Debug, clap::Args)]
@@ -86,6 +88,9 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     for dir in [&args.report, &args.export_draws].into_iter().flatten() {
         presrs_io::output_path::check_output_dir(dir)?;
     }
+    if args.samples.is_auto() {
+        return run_racing(args, out);
+    }
     let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = EvalOptions {
         holdout: Holdout::resolve(
@@ -150,6 +155,85 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     print_report(&outcome.report, out)?;
     print_perturbations(&perturbed, out)?;
+    print_choices(&outcome, &eval, out)
+}
+
+/// `--sample auto`: the sample kinds raced inside every fold (`presrs::eval_race`).
+fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    if args.compare || !args.perturb.is_empty() || args.export_draws.is_some() {
+        anyhow::bail!(
+            "--sample auto races the sample kinds inside each fold and tests each fold's winner in its \
+             own sample; --compare, --perturb and --export-draws take one sample kind: name it with \
+             --sample frame, stance or series"
+        );
+    }
+    let progress = TerminalProgress::default();
+    let readings = presrs::eval_race::RaceReadings::load(
+        &args.manifest,
+        &args.samples.options_of("frame")?,
+        args.samples.whole_sample(),
+        &progress,
+    )?;
+    print_load_warnings(&readings.frames);
+    let said: Vec<String> = readings
+        .frames
+        .warnings
+        .iter()
+        .map(|w| w.to_string())
+        .collect();
+    for warning in &readings.whole.warnings {
+        if !said.contains(&warning.to_string()) {
+            stderr_line!("warning: {warning}");
+        }
+    }
+    let options = EvalOptions {
+        holdout: Holdout::resolve(
+            &readings.frames,
+            args.leave_one_out.clone(),
+            args.train_condition.clone(),
+            args.per_class,
+        ),
+        per_class: args.per_class,
+        validation: args.validation,
+        repeats: args.repeats,
+        seed: args.seed,
+        method: args.pipeline.method(),
+    };
+    let raced = presrs::eval_race::evaluate_racing_samples(&readings, &options, &progress)?;
+    let outcome = &raced.outcome;
+    for warning in &outcome.warnings {
+        stderr_line!("warning: {warning}");
+    }
+    if let Some(dir) = &args.report {
+        let path = presrs::report::write_eval_report(
+            &readings.frames,
+            &options,
+            outcome,
+            &[],
+            &args.samples.options_of("frame")?,
+            Some(&std::env::args().collect::<Vec<_>>().join(" ")),
+            dir,
+        )?;
+        stderr_line!("report written to {}", path.display());
+    }
+    let eval = EvalJson::of(outcome, &raced.never_trained);
+    if args.json {
+        return write_json(out, &eval);
+    }
+    print_report(&outcome.report, out)?;
+    writeln!(out)?;
+    for line in presrs::eval_race::race_lines(&outcome.sample_races) {
+        writeln!(out, "{line}")?;
+    }
+    print_choices(outcome, &eval, out)
+}
+
+/// The automatic choices' counts and their own estimate next to the test's.
+fn print_choices(
+    outcome: &presrs::evaluate::EvalOutcome,
+    eval: &EvalJson<'_>,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
     if let Some(first) = outcome.selections.first() {
         let (method, models) = (&first.method, outcome.selections.len());
         writeln!(

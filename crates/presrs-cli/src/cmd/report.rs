@@ -5,10 +5,12 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use presrs::report::{ReportOptions, report_dataset};
+use presrs::report::{ReportOptions, report_dataset, report_racing_samples};
 use presrs_core::split::ValidationSize;
 
-use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
+use super::common::{
+    PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings,
+};
 
 /// Write an HTML report of a data set: pressure images per label and condition (Fig. 5), feature
 /// spectra (Fig. 6), load curves, principal components, validation curve, confusion matrix, accuracy
@@ -66,7 +68,27 @@ pub struct ReportArgs {
 pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
     presrs_io::output_path::check_output_dir(&args.out)?;
-    let dataset = load_manifest(&args.manifest, &args.samples)?;
+    let progress = TerminalProgress::default();
+    let readings = if args.samples.is_auto() {
+        let readings = presrs::eval_race::RaceReadings::load(
+            &args.manifest,
+            &args.samples.options_of("frame")?,
+            args.samples.whole_sample(),
+            &progress,
+        )?;
+        print_load_warnings(&readings.frames);
+        Some(readings)
+    } else {
+        None
+    };
+    let loaded;
+    let dataset = match &readings {
+        Some(readings) => &readings.frames,
+        None => {
+            loaded = load_manifest(&args.manifest, &args.samples)?;
+            &loaded
+        }
+    };
     let options = ReportOptions {
         model: args.model.clone(),
         train_condition: args.train_condition.clone(),
@@ -77,10 +99,16 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         fault_repeats: args.fault_repeats,
         seed: args.seed,
         method: args.pipeline.method(),
-        samples: args.samples.options()?,
+        samples: match readings {
+            Some(_) => args.samples.options_of("frame")?,
+            None => args.samples.options()?,
+        },
         command_line: Some(std::env::args().collect::<Vec<_>>().join(" ")),
     };
-    let summary = report_dataset(&dataset, &options, &args.out, &TerminalProgress::default())?;
+    let summary = match &readings {
+        Some(readings) => report_racing_samples(readings, &options, &args.out, &progress)?,
+        None => report_dataset(dataset, &options, &args.out, &progress)?,
+    };
     for warning in &summary.warnings {
         stderr_line!("warning: {warning}");
     }
