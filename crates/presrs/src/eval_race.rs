@@ -29,6 +29,7 @@ use crate::sample_race::{FoldRace, RaceEntry, SampleRace, WholeSample};
 /// A data set read both ways for the race: as frames, and as its whole sample.
 #[derive(Debug)]
 pub struct RaceReadings {
+    /// Its warnings are both readings' (each said once).
     pub frames: Dataset,
     pub whole: Dataset,
 }
@@ -59,6 +60,14 @@ impl RaceReadings {
             )
         })?;
         same_units(&frames, &whole)?;
+        let mut frames = frames;
+        // What only the whole reading found (a stance too short to summarise) is said with the rest.
+        let said: Vec<String> = frames.warnings.iter().map(ToString::to_string).collect();
+        let new: Vec<_> = (whole.warnings.iter())
+            .filter(|w| !said.contains(&w.to_string()))
+            .cloned()
+            .collect();
+        frames.warnings.extend(new);
         Ok(Self { frames, whole })
     }
 }

@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use presrs::eval_race::RaceReadings;
 use presrs::report::{ReportOptions, report_dataset, report_racing_samples};
 use presrs_core::split::ValidationSize;
 
@@ -68,27 +69,6 @@ pub struct ReportArgs {
 pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
     presrs_io::output_path::check_output_dir(&args.out)?;
-    let progress = TerminalProgress::default();
-    let readings = if args.samples.is_auto() {
-        let readings = presrs::eval_race::RaceReadings::load(
-            &args.manifest,
-            &args.samples.options_of("frame")?,
-            args.samples.whole_sample(),
-            &progress,
-        )?;
-        print_load_warnings(&readings.frames);
-        Some(readings)
-    } else {
-        None
-    };
-    let loaded;
-    let dataset = match &readings {
-        Some(readings) => &readings.frames,
-        None => {
-            loaded = load_manifest(&args.manifest, &args.samples)?;
-            &loaded
-        }
-    };
     let options = ReportOptions {
         model: args.model.clone(),
         train_condition: args.train_condition.clone(),
@@ -99,15 +79,18 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         fault_repeats: args.fault_repeats,
         seed: args.seed,
         method: args.pipeline.method(),
-        samples: match readings {
-            Some(_) => args.samples.options_of("frame")?,
-            None => args.samples.options()?,
-        },
+        samples: args.samples.options_or_frames()?,
         command_line: Some(std::env::args().collect::<Vec<_>>().join(" ")),
     };
-    let summary = match &readings {
-        Some(readings) => report_racing_samples(readings, &options, &args.out, &progress)?,
-        None => report_dataset(dataset, &options, &args.out, &progress)?,
+    let progress = TerminalProgress::default();
+    let summary = if args.samples.is_auto() {
+        let whole = args.samples.whole_sample();
+        let readings = RaceReadings::load(&args.manifest, &options.samples, whole, &progress)?;
+        print_load_warnings(&readings.frames);
+        report_racing_samples(&readings, &options, &args.out, &progress)?
+    } else {
+        let dataset = load_manifest(&args.manifest, &args.samples)?;
+        report_dataset(&dataset, &options, &args.out, &progress)?
     };
     for warning in &summary.warnings {
         stderr_line!("warning: {warning}");
