@@ -239,9 +239,8 @@ pub fn evaluate_racing_samples(
     }
     let frames = EvalSetup::new(&readings.frames, options)?;
     let whole = EvalSetup::new(&readings.whole, options)?;
-    let contenders = [&frames, &whole];
     let mut candidates = Vec::new();
-    for setup in contenders {
+    for setup in [&frames, &whole] {
         let samples = setup.samples();
         let grid = samples[0].frame.grid();
         candidates.push(method.candidates_for(grid, false, &setup.dataset().sample)?);
@@ -249,41 +248,18 @@ pub fn evaluate_racing_samples(
     let kinds = [readings.frames.sample, readings.whole.sample];
     let views: [&[LabeledImage<'_>]; 2] = [frames.samples(), whole.samples()];
     let done: Mutex<Vec<(FoldRace, Option<Selection>)>> = Mutex::new(Vec::new());
+    let contenders = Contenders {
+        views,
+        kinds,
+        candidates: &candidates,
+        method,
+    };
     let trainer = |fold: &FoldSets<'_>| {
-        let mut trained = Vec::with_capacity(2);
-        for (k, view) in views.iter().enumerate() {
-            let images =
-                |set: &[usize]| -> Vec<LabeledImage<'_>> { set.iter().map(|&i| view[i]).collect() };
-            let model = presrs_core::selection::train_auto(
-                &images(fold.train),
-                &images(fold.validation),
-                &method.auto_choice(&candidates[k]),
-                fold.seed,
-            )
-            .and_then(|model| model.with_sample(kinds[k]));
-            trained.push(model);
-        }
-        let entries: Vec<RaceEntry> = trained
-            .iter()
-            .zip(kinds)
-            .map(|(model, kind)| {
-                let model = model.as_ref().map_err(ToString::to_string);
-                RaceEntry::of_model(kind, fold.train.len() + fold.validation.len(), model)
-            })
-            .collect();
-        let race = SampleRace::decide(entries);
-        let view = race.chosen;
-        let model: TrainedModel = trained.swap_remove(view)?;
+        let (model, race) = contenders.race(fold)?;
         if let Ok(mut done) = done.lock() {
-            let fold_race = FoldRace {
-                seed: fold.seed,
-                fold: fold.fold,
-                held_out: fold.held_out.map(str::to_owned),
-                race,
-            };
-            done.push((fold_race, model.selection().cloned()));
+            done.push((race, model.model.selection().cloned()));
         }
-        Ok(FoldModel { model, view })
+        Ok(model)
     };
     let evaluation_of = |evaluation: &presrs_core::evaluation::Evaluation<'_, '_>| {
         evaluation.run_views(&views, &trainer)
@@ -318,4 +294,48 @@ pub fn evaluate_racing_samples(
         outcome,
         never_trained: frames.never_trained.clone(),
     })
+}
+
+/// The two readings of a race and what each trains with.
+struct Contenders<'r, 's> {
+    views: [&'r [LabeledImage<'s>]; 2],
+    kinds: [SampleKind; 2],
+    candidates: &'r [Vec<presrs_core::CheckedTrainConfig>],
+    method: &'r crate::method::Method,
+}
+
+impl Contenders<'_, '_> {
+    /// The race of one fold: the automatic choice on the fold's training units in each reading, and
+    /// the winner's model with the reading it is tested in.
+    fn race(&self, fold: &FoldSets<'_>) -> presrs_core::error::Result<(FoldModel, FoldRace)> {
+        let mut trained = Vec::with_capacity(2);
+        for (k, view) in self.views.iter().enumerate() {
+            let images =
+                |set: &[usize]| -> Vec<LabeledImage<'_>> { set.iter().map(|&i| view[i]).collect() };
+            let model = presrs_core::selection::train_auto(
+                &images(fold.train),
+                &images(fold.validation),
+                &self.method.auto_choice(&self.candidates[k]),
+                fold.seed,
+            )
+            .and_then(|model| model.with_sample(self.kinds[k]));
+            trained.push(model);
+        }
+        let units = fold.train.len() + fold.validation.len();
+        let entries: Vec<RaceEntry> = (trained.iter().zip(self.kinds))
+            .map(|(model, kind)| {
+                RaceEntry::of_model(kind, units, model.as_ref().map_err(ToString::to_string))
+            })
+            .collect();
+        let race = SampleRace::decide(entries);
+        let view = race.chosen;
+        let model: TrainedModel = trained.swap_remove(view)?;
+        let race = FoldRace {
+            seed: fold.seed,
+            fold: fold.fold,
+            held_out: fold.held_out.map(str::to_owned),
+            race,
+        };
+        Ok((FoldModel { model, view }, race))
+    }
 }
