@@ -270,3 +270,41 @@ fn readings_of_other_units_and_fixed_methods_are_refused() {
         .to_string();
     assert!(err.contains("--sample auto"), "{err}");
 }
+
+/// `report --sample auto`: the report's evaluation is the race in every fold, and its notes say each
+/// fold's race; a given model (one kind) is refused.
+#[test]
+fn the_report_races_in_every_fold_and_says_so() {
+    use presrs::report::{ReportOptions, report_racing_samples};
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = write_set_with(dir.path(), None);
+    let readings = readings(&manifest, SampleOptions::default()).unwrap();
+    let options = ReportOptions {
+        leave_one_out: Some("group".to_owned()),
+        per_class: 10,
+        validation: presrs::core::split::ValidationSize::Fraction(0.35),
+        repeats: 1,
+        fault_repeats: 0,
+        method: lda_auto(),
+        ..ReportOptions::default()
+    };
+    let out = dir.path().join("report");
+    let summary = report_racing_samples(&readings, &options, &out, &Quiet).unwrap();
+    let (name, report) = summary.evaluation.unwrap();
+    assert_eq!(name, "leave one group out");
+    assert!(report.overall.mean >= 0.8, "{:?}", report.overall);
+    let html = std::fs::read_to_string(&summary.index).unwrap();
+    assert!(
+        html.contains("The sample kinds raced: sample race"),
+        "{html:.2000}"
+    );
+    assert!(html.contains("g3 held out: frame "), "{html:.2000}");
+    let with_model = ReportOptions {
+        model: Some(dir.path().join("model.json")),
+        ..options
+    };
+    let err = report_racing_samples(&readings, &with_model, &dir.path().join("r2"), &Quiet)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("--sample auto"), "{err}");
+}
