@@ -197,6 +197,7 @@ def evaluate(
     validate_by: str = "auto",
     budget: Optional[float] = 60.0,
     choose: str = "best",
+    sample: str = "frame",
     progress: Union[bool, Callable[[str, int, Optional[int]], Any], None] = None,
 ) -> Evaluation: ...
 def simulate(

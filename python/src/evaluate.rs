@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use numpy::{PyArray1, PyArrayMethods};
 use presrs::eval_document::EvalJson;
+use presrs::eval_race::{RaceReadings, evaluate_racing_samples};
 use presrs::evaluate::{CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout};
+use presrs::sample_race::WholeSample;
 use presrs::{Dataset, Face, Progress, Quiet, SampleOptions, Warnings};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
@@ -130,13 +132,15 @@ impl Evaluation {
 /// protocol), `repeats` times; without it (and without a protocol), on G2 when there is such a
 /// condition, else leaving one group out when every image has a group (as `presrs report`). `leave_one_out="group"` (or `"condition"`, or a manifest column) holds
 /// out each value in turn; `train_condition` trains on one condition only. The method options are
-/// `Model.train`'s. `progress=True` writes a line to `sys.stderr` every few seconds; a callable is
-/// called with `(task, done, total)` instead.
+/// `Model.train`'s. `sample="auto"` (a manifest only) races each stance's frame against its whole
+/// sample inside every fold, as `presrs eval --sample auto` does (`to_dict()["sample_races"]`).
+/// `progress=True` writes a line to `sys.stderr` every few seconds; a callable is called with
+/// `(task, done, total)` instead.
 #[pyfunction]
 #[pyo3(signature = (data, labels = None, *, groups = None, conditions = None, leave_one_out = None,
     train_condition = None, per_class = None, validation = 0.35, repeats = 10, seed = 1,
     features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false,
-    validate_by = "auto", budget = Some(60.0), choose = "best", progress = None))]
+    validate_by = "auto", budget = Some(60.0), choose = "best", sample = "frame", progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     py: Python<'_>,
@@ -158,6 +162,7 @@ pub fn evaluate(
     validate_by: &str,
     budget: Option<f64>,
     choose: &str,
+    sample: &str,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Evaluation> {
     let reporter = PyProgress::from_arg(progress)?;
@@ -173,24 +178,45 @@ pub fn evaluate(
             "leave_one_out and train_condition: choose one protocol",
         ));
     }
-    let dataset = load(py, data, labels, groups, conditions, progress)?;
-    let options = EvalOptions {
-        holdout: Holdout::resolve(&dataset, leave_one_out, train_condition, per_class),
+    let method = method(
+        features,
+        classifier,
+        crop,
+        dims,
+        full_search,
+        validate_by,
+        budget,
+        choose,
+    )?;
+    let validation = validation_size(validation)?;
+    let options_for = |dataset: &Dataset| EvalOptions {
+        holdout: Holdout::resolve(
+            dataset,
+            leave_one_out.clone(),
+            train_condition.clone(),
+            per_class,
+        ),
         per_class,
-        validation: validation_size(validation)?,
+        validation,
         repeats,
         seed,
-        method: method(
-            features,
-            classifier,
-            crop,
-            dims,
-            full_search,
-            validate_by,
-            budget,
-            choose,
-        )?,
+        method: method.clone(),
     };
+    match sample.trim() {
+        "frame" => {}
+        "auto" => {
+            let path = manifest_path(data, [labels, groups, conditions])?;
+            return evaluate_racing(py, &path, options_for, progress);
+        }
+        other => {
+            return Err(data_error(format!(
+                "sample={other:?}: evaluate takes \"frame\" (each stance's frame) or \"auto\" (a \
+                 manifest's frames raced against its whole samples inside every fold)"
+            )));
+        }
+    }
+    let dataset = load(py, data, labels, groups, conditions, progress)?;
+    let options = options_for(&dataset);
     for warning in &dataset.warnings {
         warn(py, warning)?;
     }
@@ -206,6 +232,59 @@ pub fn evaluate(
         never_trained: setup.never_trained,
         warnings,
     })
+}
+
+/// `sample="auto"`: the manifest read as frames and as its whole samples, the kinds raced inside every
+/// fold (`presrs::eval_race`).
+fn evaluate_racing(
+    py: Python<'_>,
+    path: &std::path::Path,
+    options_for: impl Fn(&Dataset) -> EvalOptions,
+    progress: &dyn Progress,
+) -> PyResult<Evaluation> {
+    let whole = WholeSample::default();
+    let readings = detached(py, || {
+        RaceReadings::load(path, &SampleOptions::default(), whole, progress)
+    })?
+    .py_err()?;
+    for warning in &readings.frames.warnings {
+        warn(py, warning)?;
+    }
+    let options = options_for(&readings.frames);
+    let raced = detached(py, || {
+        evaluate_racing_samples(&readings, &options, progress)
+    })?
+    .py_err()?;
+    let warnings = raced.outcome.warnings.clone();
+    for warning in &warnings {
+        warn(py, warning)?;
+    }
+    Ok(Evaluation {
+        outcome: raced.outcome,
+        never_trained: raced.never_trained,
+        warnings,
+    })
+}
+
+/// The path of `data` when it is a manifest's (with none of `extra`: a manifest gives its own labels,
+/// groups and conditions); `sample="auto"` reads a manifest's files twice.
+fn manifest_path(
+    data: &Bound<'_, PyAny>,
+    extra: [Option<&Bound<'_, PyAny>>; 3],
+) -> PyResult<PathBuf> {
+    let is_path = data.is_instance_of::<PyString>() || data.hasattr("__fspath__")?;
+    if !is_path {
+        return Err(data_error(
+            "sample=\"auto\" reads a manifest's files both as frames and as whole stances (or \
+             series): pass a manifest's path",
+        ));
+    }
+    if extra.iter().any(Option::is_some) {
+        return Err(data_error(
+            "a manifest gives its own labels, groups and conditions: pass only its path",
+        ));
+    }
+    data.extract()
 }
 
 /// A manifest's data set, or one of arrays in memory.

@@ -114,3 +114,34 @@ def test_online_push_refuses_a_batch_and_names_the_frame(paper_model):
     online.push(np.zeros((44, 44)))
     with pytest.raises(presrs.DataError, match="frame 1"):
         online.push(np.zeros((10, 10)))
+
+
+def test_evaluate_races_the_sample_kinds_as_presrs_eval_does(cli, sim_dir):
+    """`sample="auto"`: the sample kinds raced inside every fold, the same document as the CLI's."""
+    manifest = sim_dir / "manifest.csv"
+    ours = presrs.evaluate(
+        manifest, sample="auto", per_class=4, repeats=1, seed=4, classifier="lda", budget=0
+    )
+    doc = json.loads(
+        cli(
+            "eval", "--manifest", manifest, "--sample", "auto", "--per-class", 4,
+            "--repeats", 1, "--seed", 4, "--classifier", "lda", "--budget", 0, "--json",
+        )
+    )
+    mine = ours.to_dict()
+    assert mine["sample_races"] == doc["sample_races"]
+    assert [e["sample"] for e in mine["sample_races"][0]["entries"]] == ["frame", "stance"]
+    assert ours.accuracy == pytest.approx(doc["overall_accuracy"], abs=1e-12)
+
+
+def test_sample_auto_errors_name_python_arguments(sim_dir):
+    # a fixed method has no validation score to race on
+    with pytest.raises(presrs.DataError) as caught:
+        presrs.evaluate(
+            sim_dir / "manifest.csv", sample="auto", features="fft1d", classifier="pwe",
+            per_class=4,
+        )
+    assert "sample=" in str(caught.value) and "--" not in str(caught.value)
+    # arrays in memory are one reading
+    with pytest.raises(presrs.DataError, match="manifest's path"):
+        presrs.evaluate(np.zeros((4, 3, 3)), ["a", "b", "a", "b"], sample="auto")

@@ -106,10 +106,11 @@ fn a_data_set_of_one_contact_movies_is_summarised_in_one_line_and_the_cause_name
     assert!(!model.exists());
 }
 
-/// `--sample auto` races the sample kinds in `train` (both scores said, the winner stored); the
-/// commands that take one kind say so and name the kinds instead of treating auto as one of them.
+/// `--sample auto` races the sample kinds in `train` (both scores said, the winner stored) and in
+/// every fold of `eval`; the commands that take one kind say so and name the kinds instead of treating
+/// auto as one of them.
 #[test]
-fn sample_auto_is_raced_in_train_and_refused_elsewhere_with_the_kinds_named() {
+fn sample_auto_is_raced_in_train_and_eval_and_refused_elsewhere_with_the_kinds_named() {
     let manifest = shared("real/jiku-walk/manifest.csv");
     let manifest = manifest.to_str().unwrap();
     let dir = tempfile::tempdir().unwrap();
@@ -145,6 +146,7 @@ fn sample_auto_is_raced_in_train_and_refused_elsewhere_with_the_kinds_named() {
         "{stored:.400}"
     );
 
+    // eval races inside every fold, and says per fold which kind won, both scores and why
     let out = presrs(&[
         "eval",
         "--manifest",
@@ -152,12 +154,59 @@ fn sample_auto_is_raced_in_train_and_refused_elsewhere_with_the_kinds_named() {
         "--one-sample-per-file",
         "--sample",
         "auto",
+        "--classifier",
+        "lda",
+        "--features",
+        "auto",
+        "--repeats",
+        "1",
+    ]);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.contains("overall "), "{stdout}");
+    assert!(stdout.contains("folds won of 2: "), "{stdout}");
+    let folds: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("seed 1, s0"))
+        .collect();
+    assert_eq!(folds.len(), 2, "{stdout}");
+    for fold in folds {
+        assert!(
+            fold.contains(": frame ") && fold.contains(", stance "),
+            "{fold}"
+        );
+    }
+    // a command that reads one kind says so and names the kinds
+    let movie = shared("real/jiku-walk/s00_t00.npy");
+    let out = presrs(&[
+        "inspect",
+        movie.to_str().unwrap(),
+        "--one-sample-per-file",
+        "--sample",
+        "auto",
     ]);
     let stderr = text(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        stderr.contains("--sample auto races one frame against the whole sample when training"),
+        stderr
+            .contains("--sample auto races one frame against the whole sample (presrs train, eval"),
         "{stderr}"
     );
     assert!(stderr.contains("frame, stance or series"), "{stderr}");
+    // the race takes one automatic choice per kind: other options that read one kind are refused
+    let out = presrs(&[
+        "eval",
+        "--manifest",
+        manifest,
+        "--one-sample-per-file",
+        "--sample",
+        "auto",
+        "--compare",
+    ]);
+    let stderr = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("--compare, --perturb and --export-draws take one sample kind"),
+        "{stderr}"
+    );
 }

@@ -133,9 +133,31 @@ pub struct EvalReport {
     pub reliability: Reliability,
 }
 
-/// A function that trains a model from training and validation sample indices (and a seed).
-type Trainer<'f> =
-    dyn Fn(&[usize], &[usize], u64) -> Result<crate::pipeline::TrainedModel> + Sync + 'f;
+/// A function that trains a fold's model from its sets, and says which reading of the samples it
+/// classifies.
+pub type Trainer<'f> = dyn Fn(&FoldSets<'_>) -> Result<FoldModel> + Sync + 'f;
+
+/// One fold as its trainer sees it ([`Evaluation::run_views`]): which fold, and its training and
+/// validation sets (indices into the samples; the test set is never shown).
+#[derive(Clone, Copy, Debug)]
+pub struct FoldSets<'f> {
+    /// The repeat's seed (the evaluation's seed + repeat).
+    pub seed: u64,
+    /// The fold's place in its repeat, from 0 (the order of [`Evaluation::draws`]).
+    pub fold: usize,
+    /// With leave-one-out, the held-out value.
+    pub held_out: Option<&'f str>,
+    pub train: &'f [usize],
+    pub validation: &'f [usize],
+}
+
+/// A fold's model and the reading of the samples it classifies: an index into the `views` of
+/// [`Evaluation::run_views`] (0 for the evaluation's own samples everywhere else).
+#[derive(Clone, Debug)]
+pub struct FoldModel {
+    pub model: crate::pipeline::TrainedModel,
+    pub view: usize,
+}
 
 /// Changes a test image before it is classified: `(sample index, image, repeat seed) -> image` (fault
 /// injection, see [`crate::perturb`]). Training and validation images are never changed. A changed image
@@ -225,10 +247,10 @@ impl Evaluation<'_, '_> {
             |set: &[usize]| -> Vec<LabeledImage<'_>> { set.iter().map(|&i| samples[i]).collect() };
         match models {
             Models::Config(config) => {
-                let (reports, first_model) =
-                    self.run_with(perturbs, &|train_set, validation_set, _| {
-                        train(&images(train_set), &images(validation_set), config)
-                    })?;
+                let (reports, first_model) = self.run_with(&[samples], perturbs, &|fold| {
+                    let model = train(&images(fold.train), &images(fold.validation), config)?;
+                    Ok(FoldModel { model, view: 0 })
+                })?;
                 Ok(Evaluated {
                     reports,
                     selections: Vec::new(),
@@ -237,27 +259,74 @@ impl Evaluation<'_, '_> {
             }
             Models::Auto(choice) => {
                 let selections = std::sync::Mutex::new(Vec::new());
-                let (reports, first_model) =
-                    self.run_with(perturbs, &|train_set, validation_set, fold_seed| {
-                        let model = crate::selection::train_auto(
-                            &images(train_set),
-                            &images(validation_set),
-                            &choice,
-                            fold_seed,
-                        )?;
-                        if let (Some(selection), Ok(mut list)) =
-                            (model.selection(), selections.lock())
-                        {
-                            list.push(selection.clone());
-                        }
-                        Ok(model)
-                    })?;
+                let (reports, first_model) = self.run_with(&[samples], perturbs, &|fold| {
+                    let model = crate::selection::train_auto(
+                        &images(fold.train),
+                        &images(fold.validation),
+                        &choice,
+                        fold.seed,
+                    )?;
+                    if let (Some(selection), Ok(mut list)) = (model.selection(), selections.lock())
+                    {
+                        list.push(selection.clone());
+                    }
+                    Ok(FoldModel { model, view: 0 })
+                })?;
                 Ok(Evaluated {
                     reports,
                     selections: selections.into_inner().unwrap_or_default(),
                     first_model,
                 })
             }
+        }
+    }
+
+    /// Trains every fold's model with `trainer` and tests it on the fold's test units in the reading
+    /// its [`FoldModel::view`] names: `views` are readings of the evaluation's samples (the same units
+    /// in the same order, so the same labels, conditions and groups; e.g. each stance's frame and its
+    /// whole movie), and the draws are the evaluation's own. The test images are as they are.
+    pub fn run_views(
+        &self,
+        views: &[&[LabeledImage<'_>]],
+        trainer: &Trainer<'_>,
+    ) -> Result<(EvalReport, Option<FirstModel>)> {
+        for (k, view) in views.iter().enumerate() {
+            self.check_same_units(k, view)?;
+        }
+        let (mut reports, first_model) = self.run_with(views, &[None], trainer)?;
+        let report = reports
+            .pop()
+            .ok_or_else(|| CoreError::NotEnoughData("no evaluation was run".into()))?;
+        Ok((report, first_model))
+    }
+
+    /// An error unless `view` (reading `k`) has the samples' units: as many, each with the same label,
+    /// condition and group.
+    fn check_same_units(&self, k: usize, view: &[LabeledImage<'_>]) -> Result<()> {
+        if view.len() != self.samples.len() {
+            return Err(CoreError::Shape {
+                what: "reading of the evaluated samples",
+                expected: format!("{} samples", self.samples.len()),
+                got: format!("{} in reading {k}", view.len()),
+            });
+        }
+        let differs =
+            self.samples.iter().zip(view).position(|(a, b)| {
+                (a.label, a.condition, a.group) != (b.label, b.condition, b.group)
+            });
+        match differs {
+            Some(i) => Err(CoreError::Shape {
+                what: "reading of the evaluated samples",
+                expected: format!(
+                    "sample {i} labelled {} (condition {:?}, group {:?})",
+                    self.samples[i].label, self.samples[i].condition, self.samples[i].group
+                ),
+                got: format!(
+                    "{} (condition {:?}, group {:?}) in reading {k}",
+                    view[i].label, view[i].condition, view[i].group
+                ),
+            }),
+            None => Ok(()),
         }
     }
 
@@ -332,6 +401,7 @@ impl Evaluation<'_, '_> {
     /// test images classified under each of `perturbs`. Also returns the first model trained.
     fn run_with(
         &self,
+        views: &[&[LabeledImage<'_>]],
         perturbs: &[Option<&TestTransform<'_>>],
         trainer: &Trainer<'_>,
     ) -> Result<(Vec<EvalReport>, Option<FirstModel>)> {
@@ -356,6 +426,7 @@ impl Evaluation<'_, '_> {
             let repeat_seed = self.seed.wrapping_add(repeat as u64);
             self.run_repeat(
                 repeat_seed,
+                views,
                 perturbs,
                 trainer,
                 &mut tallies,
@@ -374,6 +445,7 @@ impl Evaluation<'_, '_> {
     fn run_repeat(
         &self,
         repeat_seed: u64,
+        views: &[&[LabeledImage<'_>]],
         perturbs: &[Option<&TestTransform<'_>>],
         trainer: &Trainer<'_>,
         tallies: &mut [Tally],
@@ -394,9 +466,13 @@ impl Evaluation<'_, '_> {
             train_seconds: 0.0,
             folds: folds.len(),
         };
-        let trained = train_folds(&folds, trainer, repeat_seed, self.progress);
+        let trained = train_folds(&folds, samples, trainer, repeat_seed, self.progress);
         for (fold, (model, seconds)) in folds.into_iter().zip(trained) {
-            let model = model?;
+            let FoldModel { model, view } = model?;
+            let tested = views.get(view).copied().ok_or_else(|| CoreError::Param {
+                name: "view",
+                reason: format!("a fold's model reads view {view} of {}", views.len()),
+            })?;
             result.train_seconds += seconds;
             if first_model.is_none() {
                 *first_model = Some(FirstModel::of(&model, &fold, samples, repeat_seed));
@@ -410,8 +486,7 @@ impl Evaluation<'_, '_> {
                 .zip(tallies.iter_mut())
                 .zip(correct_by_condition.iter_mut())
             {
-                let outcomes =
-                    classify_test_set(&model, &fold.test, samples, *perturb, repeat_seed);
+                let outcomes = classify_test_set(&model, &fold.test, tested, *perturb, repeat_seed);
                 tally.add_fold(correct, &fold, samples, &model, outcomes)?;
             }
         }
@@ -427,15 +502,23 @@ impl Evaluation<'_, '_> {
 /// training time in seconds; `progress` is called after each.
 fn train_folds(
     folds: &[Fold],
+    samples: &[LabeledImage<'_>],
     trainer: &Trainer<'_>,
     repeat_seed: u64,
     progress: &(dyn Fn() + Sync),
-) -> Vec<(Result<crate::pipeline::TrainedModel>, f64)> {
+) -> Vec<(Result<FoldModel>, f64)> {
     folds
         .par_iter()
-        .map(|fold| {
+        .enumerate()
+        .map(|(k, fold)| {
             let start = Instant::now();
-            let model = trainer(&fold.train, &fold.validation, repeat_seed);
+            let model = trainer(&FoldSets {
+                seed: repeat_seed,
+                fold: k,
+                held_out: fold.held_out(samples),
+                train: &fold.train,
+                validation: &fold.validation,
+            });
             progress();
             (model, start.elapsed().as_secs_f64())
         })
@@ -489,11 +572,7 @@ impl FirstModel {
         Self {
             model: model.clone(),
             seed,
-            held_out: fold
-                .by_group
-                .then(|| fold.test.first().and_then(|&i| samples[i].group))
-                .flatten()
-                .map(str::to_owned),
+            held_out: fold.held_out(samples).map(str::to_owned),
             n_train: fold.train.len(),
             n_validation: fold.validation.len(),
             n_test: fold.test.len(),
@@ -769,6 +848,13 @@ struct Fold {
 }
 
 impl Fold {
+    /// With leave-one-out, the held-out value (that of the first test sample).
+    fn held_out<'s>(&self, samples: &[LabeledImage<'s>]) -> Option<&'s str> {
+        self.by_group
+            .then(|| self.test.first().and_then(|&i| samples[i].group))
+            .flatten()
+    }
+
     fn key_of(&self, sample: &LabeledImage<'_>) -> String {
         let key = if self.by_group {
             sample.group
@@ -892,7 +978,12 @@ mod tests {
     use rand::SeedableRng;
 
     fn data() -> Vec<(Frame, &'static str, &'static str)> {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        data_seeded(11)
+    }
+
+    /// 48 synthetic images of each condition, the classes in turn; the noise from `seed`.
+    fn data_seeded(seed: u64) -> Vec<(Frame, &'static str, &'static str)> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let mut out = Vec::new();
         for condition in ["G1", "G2", "G3"] {
             for i in 0..48 {
@@ -1116,23 +1207,30 @@ mod tests {
             let evaluation = evaluation(&samples, &protocol, 2, 5);
             let seen = std::sync::Mutex::new(Vec::new());
             let reports = evaluation
-                .run_with(&[None], &|train_set, validation_set, seed| {
-                    seen.lock()
-                        .unwrap()
-                        .push((seed, train_set.to_vec(), validation_set.to_vec()));
+                .run_with(&[&samples], &[None], &|fold| {
+                    seen.lock().unwrap().push((
+                        fold.seed,
+                        fold.fold,
+                        fold.held_out.map(str::to_owned),
+                        fold.train.to_vec(),
+                        fold.validation.to_vec(),
+                    ));
                     let images = |set: &[usize]| -> Vec<LabeledImage<'_>> {
                         set.iter().map(|&i| samples[i]).collect()
                     };
-                    train(&images(train_set), &images(validation_set), &config)
+                    let model = train(&images(fold.train), &images(fold.validation), &config)?;
+                    Ok(FoldModel { model, view: 0 })
                 })
                 .unwrap();
             let draws = evaluation.draws().unwrap();
-            let seen = seen.into_inner().unwrap();
+            let mut seen = seen.into_inner().unwrap();
+            // (folds train in parallel: in the draws' order by repeat seed, then place in the repeat)
+            seen.sort_by_key(|(seed, fold, ..)| (*seed, *fold));
             assert_eq!(draws.len(), seen.len());
-            for (draw, (seed, train_set, validation_set)) in draws.iter().zip(&seen) {
+            for (draw, (seed, _, held_out, train_set, validation_set)) in draws.iter().zip(&seen) {
                 assert_eq!(
-                    (draw.seed, &draw.train, &draw.validation),
-                    (*seed, train_set, validation_set)
+                    (draw.seed, &draw.held_out, &draw.train, &draw.validation),
+                    (*seed, held_out, train_set, validation_set)
                 );
                 // the test set is every sample outside the training pool's draw (leave-one-out: the
                 // held-out value's samples)
@@ -1303,6 +1401,62 @@ mod tests {
             .unwrap();
         assert_eq!(alone.confusion, report.confusion);
         assert_eq!(alone.per_condition, report.per_condition);
+    }
+
+    /// Each fold's model may read another view of the same units: a fold tested in view `k` scores what
+    /// an evaluation of view `k` alone scores on that fold (the same draws), and views of other units
+    /// are refused.
+    #[test]
+    fn each_fold_is_tested_in_the_view_its_model_reads() {
+        let (plain, other) = (data(), data_seeded(12));
+        let (plain, other) = (samples(&plain), samples(&other));
+        let protocol = Protocol::LeaveOneOut {
+            column: "condition".into(),
+            per_class: Some(8),
+            validation: ValidationSize::Count(3),
+        };
+        let config = paper_config_with_dims(10);
+        let views: [&[LabeledImage<'_>]; 2] = [&plain, &other];
+        let (report, first) = evaluation(&plain, &protocol, 2, 3)
+            .run_views(&views, &|fold| {
+                let view = usize::from(fold.held_out == Some("G1"));
+                let images = |set: &[usize]| -> Vec<LabeledImage<'_>> {
+                    set.iter().map(|&i| views[view][i]).collect()
+                };
+                let model = train(&images(fold.train), &images(fold.validation), &config)?;
+                Ok(FoldModel { model, view })
+            })
+            .unwrap();
+        let alone = |samples: &[LabeledImage<'_>]| {
+            evaluation(samples, &protocol, 2, 3)
+                .run(Models::Config(&config))
+                .unwrap()
+        };
+        let (plain_alone, other_alone) = (alone(&plain), alone(&other));
+        assert_eq!(report.per_condition["G1"], other_alone.per_condition["G1"]);
+        for held_out in ["G2", "G3"] {
+            assert_eq!(
+                report.per_condition[held_out],
+                plain_alone.per_condition[held_out]
+            );
+        }
+        assert_ne!(
+            plain_alone.per_condition["G1"],
+            other_alone.per_condition["G1"]
+        );
+        assert_eq!(first.unwrap().held_out.as_deref(), Some("G1"));
+        // another unit order, or fewer units: refused before any training
+        let mut swapped = other.clone();
+        swapped.swap(0, 1);
+        let fewer = &other[1..];
+        for bad in [&swapped[..], fewer] {
+            let err = evaluation(&plain, &protocol, 1, 3)
+                .run_views(&[&plain, bad], &|_| {
+                    unreachable!("trained on mismatched views")
+                })
+                .unwrap_err();
+            assert!(err.to_string().contains("in reading 1"), "{err}");
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@ use presrs_core::selection::Selection;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::eval_race::FoldRaceJson;
 use crate::evaluate::{CalibrationJson, EvalOutcome, InternalEstimate, PerturbationRow};
 use crate::method::{ClassifierChoice, FeatureChoice, Method};
 
@@ -37,6 +38,10 @@ pub struct EvalJson<'r> {
     /// condition); those samples are wrong whatever the model.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub labels_never_trained: BTreeMap<String, Vec<String>>,
+    /// With `--sample auto`: every fold's race of the sample kinds (both validation scores, the
+    /// winner and why), in the draws' order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub sample_races: Vec<FoldRaceJson>,
 }
 
 /// The confusion matrix of every repeat: counts and rows scaled to 1.
@@ -66,6 +71,7 @@ impl<'r> EvalJson<'r> {
             selections: &outcome.selections,
             internal_estimate: outcome.internal_estimate(),
             labels_never_trained: labels_never_trained.clone(),
+            sample_races: outcome.sample_races.iter().map(FoldRaceJson::of).collect(),
             ..Self::new(&outcome.report)
         }
     }
@@ -110,6 +116,7 @@ impl<'r> EvalJson<'r> {
             selections: &[],
             internal_estimate: None,
             labels_never_trained: BTreeMap::new(),
+            sample_races: Vec::new(),
         }
     }
 }

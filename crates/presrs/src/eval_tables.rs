@@ -3,10 +3,11 @@
 
 use std::fmt::Write;
 
-use presrs_core::evaluation::ComparisonRow;
+use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
 
+use crate::eval_document::{chosen_counts, protocol_heading, sigmas};
 use crate::eval_document::{comparison_conditions, perturbation_pairs};
-use crate::evaluate::PerturbationRow;
+use crate::evaluate::{EvalOutcome, InternalEstimate, PerturbationRow, calibration_line};
 
 /// The comparison table: one row per feature x classifier combination, one column per tested
 /// condition, then overall accuracy and the training and classification times.
@@ -102,4 +103,105 @@ pub fn perturbation_table(rows: &[PerturbationRow]) -> String {
         );
     }
     out
+}
+
+/// What `eval` prints after its tables: with `--sample auto` every fold's sample race, then the
+/// automatic choices (how often each candidate was chosen) and their own estimate (`internal`) next
+/// to the test's accuracy.
+pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) -> String {
+    let mut out = String::new();
+    for line in crate::eval_race::race_lines(&outcome.sample_races) {
+        let _ = writeln!(out, "{line}");
+    }
+    if let Some(first) = outcome.selections.first() {
+        let (method, models) = (&first.method, outcome.selections.len());
+        let _ = writeln!(
+            out,
+            "\nautomatic choice ({method}), over {models} trained model(s):"
+        );
+        for (name, count) in chosen_counts(&outcome.selections) {
+            let _ = writeln!(out, "  {name}: {count}");
+        }
+    }
+    if let Some(internal) = internal {
+        let _ = writeln!(
+            out,
+            "internal estimate (validation inside the training data): {:.2} % +- {:.2}; test: {:.2} %",
+            100.0 * internal.accuracy.mean,
+            100.0 * internal.accuracy.std,
+            100.0 * outcome.report.overall.mean
+        );
+    }
+    out
+}
+
+/// The human-readable tables of an evaluation: accuracy per tested condition and overall, the
+/// confusion matrix with recall and precision, the confidences, the Parzen sigmas, the counts and the
+/// classification time.
+pub fn report_table(report: &EvalReport) -> String {
+    let mut text = String::new();
+    let out = &mut text;
+    let percent = |m: &MeanStd| format!("{:6.2} % +- {:.2}", 100.0 * m.mean, 100.0 * m.std);
+    let heading = protocol_heading(&report.protocol);
+    let _ = writeln!(out, "{heading}; {} repeat(s)", report.repeats.len());
+    let _ = writeln!(out, "{:<16} {:>20}", "tested", "accuracy");
+    for (name, accuracy) in &report.per_condition {
+        let _ = writeln!(out, "{:<16} {:>20}", name, percent(accuracy));
+    }
+    let _ = writeln!(out, "{:<16} {:>20}", "overall", percent(&report.overall));
+    let confusion = &report.confusion;
+    let width = confusion
+        .labels
+        .iter()
+        .map(String::len)
+        .max()
+        .unwrap_or(4)
+        .max(6);
+    let _ = writeln!(
+        out,
+        "\nconfusion (rows: true, columns: predicted; all repeats)"
+    );
+    let _ = write!(out, "{:<width$}", "");
+    for label in &confusion.labels {
+        let _ = write!(out, " {label:>width$}");
+    }
+    let _ = writeln!(out, " {:>9} {:>9}", "recall", "precision");
+    let (recall, precision) = (confusion.recall(), confusion.precision());
+    for (i, row) in confusion.counts.iter().enumerate() {
+        let _ = write!(out, "{:<width$}", confusion.labels[i]);
+        for count in row {
+            let _ = write!(out, " {count:>width$}");
+        }
+        let _ = writeln!(
+            out,
+            " {:>8.1}% {:>8.1}%",
+            100.0 * recall[i],
+            100.0 * precision[i]
+        );
+    }
+    if let Some(line) = calibration_line(&report.reliability) {
+        let _ = writeln!(out, "{line}");
+    }
+    let sigmas = sigmas(report);
+    if !sigmas.is_empty() {
+        let sigma = MeanStd::of(&sigmas);
+        let _ = writeln!(
+            out,
+            "\nParzen sigma chosen on validation: {:.4} +- {:.4}",
+            sigma.mean, sigma.std
+        );
+    }
+    let first = &report.repeats[0];
+    let _ = writeln!(
+        out,
+        "per repeat: {}; training {:.3} s",
+        first.counts_text(),
+        first.train_seconds
+    );
+    let _ = writeln!(
+        out,
+        "median classification time: {:.2} us per image (paper: 245 us on a 2.67 GHz Core 2 Duo)",
+        report.median_classify_ns as f64 / 1e3
+    );
+    text
 }

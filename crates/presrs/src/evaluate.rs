@@ -137,6 +137,9 @@ pub struct EvalOutcome {
     pub warnings: Warnings,
     /// The first model trained (first repeat, first fold), as a report shows it.
     pub first_model: Option<presrs_core::evaluation::FirstModel>,
+    /// With `--sample auto`, every fold's race of the sample kinds, in the draws' order
+    /// (`crate::eval_race`); empty otherwise.
+    pub sample_races: Vec<crate::sample_race::FoldRace>,
 }
 
 /// What the automatic choice expected of its chosen candidates, inside the training data: to set next
@@ -371,6 +374,11 @@ impl<'d> EvalSetup<'d> {
         &self.protocol
     }
 
+    /// The data set evaluated.
+    pub fn dataset(&self) -> &'d Dataset {
+        self.dataset
+    }
+
     /// Evaluates the options' method (a fixed one, or the automatic choice in every fold).
     pub fn evaluate(&self, progress: &dyn Progress) -> Result<EvalOutcome> {
         let method = &self.options.method;
@@ -420,6 +428,7 @@ impl<'d> EvalSetup<'d> {
             selections,
             warnings,
             first_model,
+            sample_races: Vec::new(),
         })
     }
 

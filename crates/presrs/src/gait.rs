@@ -347,6 +347,9 @@ pub struct TrackOptions {
     pub fixed_gaits: Vec<String>,
     /// The adaptive run's gait at the start line (default: the second configured gait).
     pub start_gait: Option<String>,
+    /// A whole-stance model decides K frames after touchdown instead of at lift-off (an error with a
+    /// one-frame model, as in `stream`).
+    pub decide_at: Option<usize>,
 }
 
 /// What [`compare_on_track`] found.
@@ -381,13 +384,18 @@ pub fn compare_on_track(
             .with_context(|| format!("cannot read the model {}", path.display()))?;
         let model = &file.model;
         let class_names = model.class_names().to_vec();
-        let profile = file.online.clone().unwrap_or_else(|| {
+        let mut profile = file.online.clone().unwrap_or_else(|| {
             notes.push(format!(
                 "note: {} has no online profile; warm-up calibration, k = 6 (train with --online-profile)",
                 path.display()
             ));
             OnlineProfile::default()
         });
+        if options.decide_at.is_some() {
+            profile.params.decide_at = options.decide_at;
+        }
+        crate::stream::check_profile(model, &profile)
+            .with_context(|| format!("cannot run {} adaptively", path.display()))?;
         if profile.gait_table.is_empty() {
             let table = measure_gait_table(
                 config,

@@ -9,6 +9,7 @@ pub mod dataset;
 pub mod describe;
 pub mod error;
 pub mod eval_document;
+pub mod eval_race;
 pub mod eval_tables;
 pub mod evaluate;
 pub mod feature_table;

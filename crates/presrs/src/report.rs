@@ -337,9 +337,22 @@ pub fn write_eval_report(
         evaluations,
         sample_options,
         (faults, fault_note),
-        &provenance(command_line),
+        &race_notes(outcome, command_line),
         out_dir,
     )
+}
+
+/// The notes after the samples' line: with `--sample auto`, the sample race of every fold; then the
+/// provenance.
+fn race_notes(outcome: &EvalOutcome, command_line: Option<&str>) -> Vec<String> {
+    let mut notes = crate::eval_race::race_lines(&outcome.sample_races);
+    if let Some(first) = notes.first_mut() {
+        // The folds' lines under the first, as one note each.
+        first.insert_str(0, "The sample kinds raced: ");
+        first.push('.');
+    }
+    notes.push(provenance(command_line));
+    notes
 }
 
 /// What the samples are, in words: single images, frames the manifest names, and stance frames of
@@ -394,7 +407,7 @@ fn write_manifest_report(
     evaluations: Vec<Evaluation<'_>>,
     sample_options: &SampleOptions,
     (faults, fault_note): (&[FaultResult], String),
-    provenance: &str,
+    notes: &[String],
     out_dir: &Path,
 ) -> Result<PathBuf> {
     let manifest_path = loaded.path();
@@ -423,15 +436,13 @@ fn write_manifest_report(
         .unwrap_or_default();
     let title = format!("presrs report: {}", manifest_path.display());
     let mut inputs = ReportInputs::new(title, samples);
-    inputs.notes = vec![
-        format!(
-            "{} images from {}: {}.",
-            samples.len(),
-            manifest_path.display(),
-            describe_samples(samples, sample_options)
-        ),
-        provenance.to_owned(),
-    ];
+    inputs.notes = vec![format!(
+        "{} images from {}: {}.",
+        samples.len(),
+        manifest_path.display(),
+        describe_samples(samples, sample_options)
+    )];
+    inputs.notes.extend(notes.iter().cloned());
     inputs.sensor = meta.as_ref();
     inputs.model = model.as_ref().map(|m| m.0);
     inputs.model_note = model.map(|m| m.1);
@@ -554,13 +565,74 @@ pub fn report_dataset(
         evaluations,
         &options.samples,
         (&faults.0, faults.1),
-        &provenance(options.command_line.as_deref()),
+        &[provenance(options.command_line.as_deref())],
         out_dir,
     )?;
     Ok(ReportSummary {
         index,
         evaluation,
         warnings,
+    })
+}
+
+/// `presrs report --sample auto`: the report of the data set read both ways (`readings`), its
+/// evaluation racing the sample kinds in every fold as `presrs eval --sample auto` does (the races in
+/// the notes, the first fold's winner as the model shown). A given model has one sample kind (name it
+/// instead), and the fault sweep perturbs frames, so neither applies.
+pub fn report_racing_samples(
+    readings: &crate::eval_race::RaceReadings,
+    options: &ReportOptions,
+    out_dir: &Path,
+    progress: &dyn Progress,
+) -> Result<ReportSummary> {
+    let dataset = &readings.frames;
+    if options.model.is_some() {
+        return Err(Error::invalid(
+            presrs_io::message::Message::new()
+                .opt_text(presrs_io::message::Opt::Sample, "auto")
+                .text(
+                    " races the sample kinds when training; a given model has its own: name its \
+                     sample kind (frame, stance or series)",
+                ),
+        ));
+    }
+    let (eval_options, notes) = report_eval_options(dataset, options);
+    notes.iter().for_each(|note| progress.note(note));
+    let raced = crate::eval_race::evaluate_racing_samples(readings, &eval_options, progress)
+        .map_err(|err| {
+            Error::data(format!(
+                "{}: cannot evaluate the method for the report: {err}",
+                dataset.path().display()
+            ))
+        })?;
+    let outcome = raced.outcome;
+    let name = eval_options.holdout.describe();
+    let evaluation = (options.repeats > 0).then(|| (name.clone(), outcome.report.clone()));
+    let evaluations: Vec<Evaluation<'_>> = evaluation
+        .iter()
+        .map(|(title, report)| Evaluation {
+            name: title.clone(),
+            report,
+            reference: BTreeMap::new(),
+        })
+        .collect();
+    let model = outcome.first_model.as_ref().map(|first| {
+        let note = first_model_note(first, &eval_options);
+        (&first.model, note)
+    });
+    let index = write_manifest_report(
+        dataset,
+        model,
+        evaluations,
+        &options.samples,
+        (&[], String::new()),
+        &race_notes(&outcome, options.command_line.as_deref()),
+        out_dir,
+    )?;
+    Ok(ReportSummary {
+        index,
+        evaluation,
+        warnings: outcome.warnings,
     })
 }
 

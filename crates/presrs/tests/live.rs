@@ -320,3 +320,113 @@ fn get_fails(addr: SocketAddr) -> bool {
     let mut buf = [0u8; 16];
     !matches!(stream.read(&mut buf), Ok(n) if n > 0)
 }
+
+/// A whole-stance model's decisions reach the live view with what they waited for: `decided_at` and
+/// `decided_at_frame` in the classification lines every viewer gets and in `/state`, and the page
+/// shows them. A `jiku-walk` movie (one foot contact, read in place from the shared data folder) is
+/// replayed through the session `presrs view` runs, decided at lift-off and at frame 12.
+#[test]
+fn a_whole_stance_models_decisions_show_what_they_waited_for() {
+    use presrs::core::classifier::ClassifierKind;
+    use presrs::core::crop::Crop;
+    use presrs::core::features::{FeatureConfig, RocketFamily, RocketParams};
+    use presrs::core::online::{OnlineParams, OnlineProfile};
+    use presrs::core::pipeline::{LabeledImage, TrainConfig, train};
+    use presrs::core::preprocess::Preprocess;
+    use presrs::core::sample::SampleKind;
+    use presrs::core::stance::summary::SummaryConfig;
+    use presrs::live::{ReplayOptions, replay_recording};
+
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real");
+    let options = presrs::SampleOptions {
+        one_sample_per_file: true,
+        kind: SampleKind::Stance {
+            summary: SummaryConfig::default(),
+            length: None,
+        },
+        ..presrs::SampleOptions::default()
+    };
+    let manifest = data.join("jiku-walk/manifest.csv");
+    let dataset = presrs::Dataset::load(&manifest, &options, &presrs::Quiet).unwrap();
+    let images: Vec<_> = dataset
+        .samples
+        .iter()
+        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
+        .collect();
+    let config = TrainConfig {
+        crop: Crop::NONE,
+        features: FeatureConfig::of::<RocketFamily>(RocketParams {
+            num_features: 168,
+            ..RocketParams::default()
+        }),
+        dims: 20,
+        classifier: ClassifierKind::LDA.default_config(),
+        preprocess: Preprocess::NONE,
+    }
+    .check()
+    .unwrap();
+    let model = train(&images, &[], &config)
+        .unwrap()
+        .with_sample(options.kind)
+        .unwrap();
+    let path = data.join("jiku-walk").join(&dataset.samples[0].source);
+    let (read, _) =
+        presrs::dataset::read_corrected(&path, &options.read, options.dead_sensels.as_ref())
+            .unwrap();
+    let recording = read.recording;
+    let last = recording.frame_count() - 1;
+    for (decide_at, said, frame) in [(None, "liftoff", last), (Some(12), "offset", 12)] {
+        let profile = OnlineProfile {
+            params: OnlineParams {
+                decide_at,
+                ..OnlineParams::default()
+            },
+            segment: options.segment_params(),
+            ..OnlineProfile::default()
+        };
+        let hub = LiveHub::new(LiveInfo {
+            source: "replay".into(),
+            units: "raw".into(),
+            classes: model.class_names().to_vec(),
+        });
+        let server = start(&hub, 30.0);
+        let replay = ReplayOptions {
+            speed: 1000.0,
+            ..ReplayOptions::default()
+        };
+        let mut output = Vec::new();
+        replay_recording(
+            &recording,
+            "s00",
+            Some((&model, &profile)),
+            &hub,
+            &mut output,
+            &replay,
+            &|_| {},
+        )
+        .unwrap();
+        let lines: Vec<Value> = hub
+            .recent_lines()
+            .iter()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .filter(|l: &Value| l["event"] == "classification")
+            .collect();
+        let [line] = lines.as_slice() else {
+            panic!(
+                "{decide_at:?}: one decision, got {lines:?}; hub {:?}; output {}",
+                hub.recent_lines(),
+                String::from_utf8_lossy(&output)
+            );
+        };
+        assert_eq!(line["kind"], "stance");
+        assert_eq!(line["decided_at"], said);
+        assert_eq!(line["decided_at_frame"], frame);
+        let state: Value = serde_json::from_str(&get(server.local_addr(), "/state").1).unwrap();
+        assert_eq!(state["classification"]["decided_at"], said);
+        assert_eq!(state["classification"]["decided_at_frame"], frame);
+        server.stop();
+    }
+    // the page says what a decision waited for
+    let script = include_str!("../src/live/page/app.js");
+    assert!(script.contains("e.decided_at_frame"));
+}

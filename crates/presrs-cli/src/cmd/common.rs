@@ -122,7 +122,8 @@ fn parse_budget(text: &str) -> Result<Budget, String> {
 pub struct SampleArgs {
     /// What a sample is: frame (a frame of each stance, --stance-frame), stance (each stance's movie as
     /// load, contact area, centre of pressure and regional loads over time), or series (a 2-D array as
-    /// channels x time); train also takes auto (one frame against the whole sample, by validation)
+    /// channels x time); train, eval and report also take auto (one frame against the whole sample,
+    /// by validation inside the training data)
     #[arg(long, default_value = "frame", value_parser = ["frame", "stance", "series", "auto"])]
     pub sample: String,
     /// With --sample stance: frames each stance is laid into (default: the longest stance)
@@ -238,11 +239,20 @@ impl SampleArgs {
     pub fn options(&self) -> anyhow::Result<SampleOptions> {
         if self.is_auto() {
             anyhow::bail!(
-                "--sample auto races one frame against the whole sample when training (presrs \
-                 train); name one here: frame, stance or series"
+                "--sample auto races one frame against the whole sample (presrs train, eval and \
+                 report); name one here: frame, stance or series"
             );
         }
         self.options_of(&self.sample)
+    }
+
+    /// The options, as frames with `--sample auto` (a race reads the frames first).
+    pub fn options_or_frames(&self) -> anyhow::Result<SampleOptions> {
+        self.options_of(if self.is_auto() {
+            "frame"
+        } else {
+            &self.sample
+        })
     }
 
     /// `--sample auto`: the kind is raced when training.

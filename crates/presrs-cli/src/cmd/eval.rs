@@ -4,14 +4,14 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs::eval_document::{
-    CompareJson, EvalJson, PerturbedJson, chosen_counts, fault_results, protocol_heading, sigmas,
-};
-use presrs::evaluate::{EvalOptions, EvalSetup, Holdout, PerturbationRow, calibration_line};
-use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
+use presrs::eval_document::{CompareJson, EvalJson, PerturbedJson, fault_results};
+use presrs::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
+use presrs_core::evaluation::{ComparisonRow, EvalReport};
 use presrs_core::split::ValidationSize;
 
-use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest, write_json};
+use super::common::{
+    PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings, write_json,
+};
 
 /// Evaluate the pipeline on a manifest: accuracy per condition/group, overall, confusion, timing.
 #[derive(Debug, clap::Args)]
@@ -86,20 +86,11 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     for dir in [&args.report, &args.export_draws].into_iter().flatten() {
         presrs_io::output_path::check_output_dir(dir)?;
     }
+    if args.samples.is_auto() {
+        return run_racing(args, out);
+    }
     let dataset = load_manifest(&args.manifest, &args.samples)?;
-    let options = EvalOptions {
-        holdout: Holdout::resolve(
-            &dataset,
-            args.leave_one_out.clone(),
-            args.train_condition.clone(),
-            args.per_class,
-        ),
-        per_class: args.per_class,
-        validation: args.validation,
-        repeats: args.repeats,
-        seed: args.seed,
-        method: args.pipeline.method(),
-    };
+    let options = eval_options(args, &dataset);
     let setup = EvalSetup::new(&dataset, &options)?;
     for warning in &setup.warnings {
         stderr_line!("warning: {warning}");
@@ -122,18 +113,8 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         stderr_line!("warning: {warning}");
     }
     let perturbed = setup.perturbed(&args.perturb, &outcome.report, &progress)?;
-    if let Some(dir) = &args.report {
-        let path = presrs::report::write_eval_report(
-            &dataset,
-            &options,
-            &outcome,
-            &fault_results(&perturbed, options.method.is_auto()),
-            &args.samples.options()?,
-            Some(&std::env::args().collect::<Vec<_>>().join(" ")),
-            dir,
-        )?;
-        stderr_line!("report written to {}", path.display());
-    }
+    let faults = fault_results(&perturbed, options.method.is_auto());
+    write_report(args, (&dataset, &options), &outcome, &faults)?;
     let eval = EvalJson::of(&outcome, &setup.never_trained);
     if args.json && perturbed.is_empty() {
         return write_json(out, &eval);
@@ -150,93 +131,93 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     print_report(&outcome.report, out)?;
     print_perturbations(&perturbed, out)?;
-    if let Some(first) = outcome.selections.first() {
-        let (method, models) = (&first.method, outcome.selections.len());
-        writeln!(
-            out,
-            "\nautomatic choice ({method}), over {models} trained model(s):"
-        )?;
-        for (name, count) in chosen_counts(&outcome.selections) {
-            writeln!(out, "  {name}: {count}")?;
-        }
+    print_choices(&outcome, &eval, out)
+}
+
+/// `--sample auto`: the sample kinds raced inside every fold (`presrs::eval_race`).
+fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        !args.compare && args.perturb.is_empty() && args.export_draws.is_none(),
+        "--sample auto tests each fold's winner in its own sample; --compare, --perturb and \
+         --export-draws take one sample kind: name it with --sample frame, stance or series"
+    );
+    let progress = TerminalProgress::default();
+    let frames = args.samples.options_or_frames()?;
+    let whole = args.samples.whole_sample();
+    let readings =
+        presrs::eval_race::RaceReadings::load(&args.manifest, &frames, whole, &progress)?;
+    print_load_warnings(&readings.frames);
+    let options = eval_options(args, &readings.frames);
+    let raced = presrs::eval_race::evaluate_racing_samples(&readings, &options, &progress)?;
+    for warning in &raced.outcome.warnings {
+        stderr_line!("warning: {warning}");
     }
-    if let Some(internal) = &eval.internal_estimate {
-        writeln!(
-            out,
-            "internal estimate (validation inside the training data): {:.2} % +- {:.2}; test: {:.2} %",
-            100.0 * internal.accuracy.mean,
-            100.0 * internal.accuracy.std,
-            100.0 * outcome.report.overall.mean
+    write_report(args, (&readings.frames, &options), &raced.outcome, &[])?;
+    let eval = EvalJson::of(&raced.outcome, &raced.never_trained);
+    if args.json {
+        return write_json(out, &eval);
+    }
+    print_report(&raced.outcome.report, out)?;
+    print_choices(&raced.outcome, &eval, out)
+}
+
+fn eval_options(args: &EvalArgs, dataset: &presrs::Dataset) -> EvalOptions {
+    let (loo, condition) = (args.leave_one_out.clone(), args.train_condition.clone());
+    EvalOptions {
+        holdout: Holdout::resolve(dataset, loo, condition, args.per_class),
+        per_class: args.per_class,
+        validation: args.validation,
+        repeats: args.repeats,
+        seed: args.seed,
+        method: args.pipeline.method(),
+    }
+}
+
+/// `--report DIR`: the evaluation's HTML report.
+fn write_report(
+    args: &EvalArgs,
+    (dataset, options): (&presrs::Dataset, &EvalOptions),
+    outcome: &EvalOutcome,
+    faults: &[presrs_report::FaultResult],
+) -> anyhow::Result<()> {
+    if let Some(dir) = &args.report {
+        let line = std::env::args().collect::<Vec<_>>().join(" ");
+        let samples = args.samples.options_or_frames()?;
+        let path = presrs::report::write_eval_report(
+            dataset,
+            options,
+            outcome,
+            faults,
+            &samples,
+            Some(&line),
+            dir,
         )?;
+        stderr_line!("report written to {}", path.display());
     }
     Ok(())
 }
 
-/// The human-readable tables of an evaluation.
+/// The sample races, the automatic choices' counts and their own estimate next to the test's.
+fn print_choices(
+    outcome: &EvalOutcome,
+    eval: &EvalJson<'_>,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    let internal = eval.internal_estimate.as_ref();
+    Ok(write!(
+        out,
+        "{}",
+        presrs::eval_tables::choices_text(outcome, internal)
+    )?)
+}
+
+/// The human-readable tables of an evaluation (`presrs::eval_tables::report_table`).
 pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<()> {
-    let percent = |m: &MeanStd| format!("{:6.2} % +- {:.2}", 100.0 * m.mean, 100.0 * m.std);
-    let heading = protocol_heading(&report.protocol);
-    writeln!(out, "{heading}; {} repeat(s)", report.repeats.len())?;
-    writeln!(out, "{:<16} {:>20}", "tested", "accuracy")?;
-    for (name, accuracy) in &report.per_condition {
-        writeln!(out, "{:<16} {:>20}", name, percent(accuracy))?;
-    }
-    writeln!(out, "{:<16} {:>20}", "overall", percent(&report.overall))?;
-    let confusion = &report.confusion;
-    let width = confusion
-        .labels
-        .iter()
-        .map(String::len)
-        .max()
-        .unwrap_or(4)
-        .max(6);
-    writeln!(
+    Ok(write!(
         out,
-        "\nconfusion (rows: true, columns: predicted; all repeats)"
-    )?;
-    write!(out, "{:<width$}", "")?;
-    for label in &confusion.labels {
-        write!(out, " {label:>width$}")?;
-    }
-    writeln!(out, " {:>9} {:>9}", "recall", "precision")?;
-    let (recall, precision) = (confusion.recall(), confusion.precision());
-    for (i, row) in confusion.counts.iter().enumerate() {
-        write!(out, "{:<width$}", confusion.labels[i])?;
-        for count in row {
-            write!(out, " {count:>width$}")?;
-        }
-        writeln!(
-            out,
-            " {:>8.1}% {:>8.1}%",
-            100.0 * recall[i],
-            100.0 * precision[i]
-        )?;
-    }
-    if let Some(line) = calibration_line(&report.reliability) {
-        writeln!(out, "{line}")?;
-    }
-    let sigmas = sigmas(report);
-    if !sigmas.is_empty() {
-        let sigma = MeanStd::of(&sigmas);
-        writeln!(
-            out,
-            "\nParzen sigma chosen on validation: {:.4} +- {:.4}",
-            sigma.mean, sigma.std
-        )?;
-    }
-    let first = &report.repeats[0];
-    writeln!(
-        out,
-        "per repeat: {}; training {:.3} s",
-        first.counts_text(),
-        first.train_seconds
-    )?;
-    writeln!(
-        out,
-        "median classification time: {:.2} us per image (paper: 245 us on a 2.67 GHz Core 2 Duo)",
-        report.median_classify_ns as f64 / 1e3
-    )?;
-    Ok(())
+        "{}",
+        presrs::eval_tables::report_table(report)
+    )?)
 }
 
 /// `--leave-one-out`: any column but `label` (holding out a class leaves none of its samples to train on).

@@ -5,10 +5,13 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use presrs::report::{ReportOptions, report_dataset};
+use presrs::eval_race::RaceReadings;
+use presrs::report::{ReportOptions, report_dataset, report_racing_samples};
 use presrs_core::split::ValidationSize;
 
-use super::common::{PipelineArgs, SampleArgs, TerminalProgress, load_manifest};
+use super::common::{
+    PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings,
+};
 
 /// Write an HTML report of a data set: pressure images per label and condition (Fig. 5), feature
 /// spectra (Fig. 6), load curves, principal components, validation curve, confusion matrix, accuracy
@@ -66,7 +69,6 @@ pub struct ReportArgs {
 pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
     presrs_io::output_path::check_output_dir(&args.out)?;
-    let dataset = load_manifest(&args.manifest, &args.samples)?;
     let options = ReportOptions {
         model: args.model.clone(),
         train_condition: args.train_condition.clone(),
@@ -77,10 +79,19 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         fault_repeats: args.fault_repeats,
         seed: args.seed,
         method: args.pipeline.method(),
-        samples: args.samples.options()?,
+        samples: args.samples.options_or_frames()?,
         command_line: Some(std::env::args().collect::<Vec<_>>().join(" ")),
     };
-    let summary = report_dataset(&dataset, &options, &args.out, &TerminalProgress::default())?;
+    let progress = TerminalProgress::default();
+    let summary = if args.samples.is_auto() {
+        let whole = args.samples.whole_sample();
+        let readings = RaceReadings::load(&args.manifest, &options.samples, whole, &progress)?;
+        print_load_warnings(&readings.frames);
+        report_racing_samples(&readings, &options, &args.out, &progress)?
+    } else {
+        let dataset = load_manifest(&args.manifest, &args.samples)?;
+        report_dataset(&dataset, &options, &args.out, &progress)?
+    };
     for warning in &summary.warnings {
         stderr_line!("warning: {warning}");
     }

@@ -84,6 +84,9 @@ pub struct SimulateArgs {
     /// variant such as G3@0.62 [default: the second gait of the configuration, G2].
     #[arg(long, requires = "adaptive")]
     pub start_gait: Option<String>,
+    /// With a whole-stance --adaptive model: decide K frames after touchdown instead of at lift-off.
+    #[arg(long, value_name = "K", requires = "adaptive")]
+    pub decide_at: Option<usize>,
     /// Runs per policy, at least 1 (seeds --seed, --seed + 1, ...); every policy runs on the same seeds.
     #[arg(long, default_value_t = 3, requires = "track", value_parser = super::usage::positive_count)]
     pub repeats: usize,
@@ -170,6 +173,7 @@ pub fn run_track_comparison(
         confirm: args.confirm,
         fixed_gaits: args.fixed_gait.clone(),
         start_gait: args.start_gait.clone(),
+        decide_at: args.decide_at,
     };
     let outcome = compare_on_track(config, spec, &options, &TerminalProgress::default())?;
     for note in &outcome.notes {

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
 use presrs_core::pipeline::TrainedModel;
+use presrs_core::sample::SampleKind;
 use presrs_core::{FrameView, Grid};
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
 use presrs_io::mcap::BagFrames;
@@ -364,8 +365,12 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
 }
 
 /// Why `grid` frames cannot be classified by `model` (its crop does not give the grid it was trained
-/// on), or `None` when they can.
+/// on), or `None` when they can. A whole-stance model classifies the stance's summary, whose channels
+/// any sensor's frames give (the online classifier checks that one stream keeps one size).
 fn unusable_for_model(model: &TrainedModel, grid: Grid) -> Option<String> {
+    if matches!(model.sample(), SampleKind::Stance { .. }) {
+        return None;
+    }
     let crop = model.crop();
     match crop.window(grid) {
         Ok((_, _, cropped)) if cropped == model.image_grid() => None,
