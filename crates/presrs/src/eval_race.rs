@@ -156,6 +156,15 @@ pub fn race_lines(races: &[FoldRace]) -> Vec<String> {
         races.len(),
         won.join(", ")
     )];
+    let ties = races.iter().filter(|r| r.race.is_tie()).count();
+    if ties > 0 {
+        lines.push(format!(
+            "{ties} of {} race(s) tied in validation: there the fold's training data cannot tell the \
+             sample kinds apart and the frame was kept by rule, so the test above may not show the \
+             better kind; evaluate each sample kind on its own to compare them on the held-out data",
+            races.len()
+        ));
+    }
     lines.extend(races.iter().map(FoldRace::line));
     lines
 }
@@ -337,5 +346,55 @@ impl Contenders<'_, '_> {
             race,
         };
         Ok((FoldModel { model, view }, race))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn race(held_out: &str, frame: f64, stance: f64) -> FoldRace {
+        let entry = |kind, score: f64| RaceEntry {
+            kind,
+            samples: 60,
+            outcome: Ok((score, "fft1d + pwe".to_owned())),
+        };
+        let stance_kind = SampleKind::Stance {
+            summary: Default::default(),
+            length: None,
+        };
+        FoldRace {
+            seed: 1,
+            fold: 0,
+            held_out: Some(held_out.to_owned()),
+            race: SampleRace::decide(vec![
+                entry(SampleKind::Frame, frame),
+                entry(stance_kind, stance),
+            ]),
+        }
+    }
+
+    /// A tie is the rule's choice, not the data's: the lines say how many folds it decided.
+    #[test]
+    fn tied_races_are_counted_and_said() {
+        let races = [
+            race("s00", 1.0, 1.0),
+            race("s01", 0.9, 1.0),
+            race("s02", 1.0, 1.0),
+        ];
+        assert!(races[0].race.is_tie() && !races[1].race.is_tie());
+        let lines = race_lines(&races);
+        assert!(
+            lines[0].ends_with("folds won of 3: frame 2, stance 1"),
+            "{lines:?}"
+        );
+        assert!(
+            lines[1].starts_with("2 of 3 race(s) tied in validation")
+                && lines[1].contains("the frame was kept by rule"),
+            "{lines:?}"
+        );
+        assert_eq!(lines.len(), 2 + races.len());
+        let untied = race_lines(&races[1..2]);
+        assert!(untied.iter().all(|l| !l.contains("tied")), "{untied:?}");
     }
 }

@@ -107,20 +107,32 @@ impl SampleRace {
         Self { entries, chosen }
     }
 
+    /// The contenders' validation scores, of those that could be trained.
+    fn scores(&self) -> Vec<f64> {
+        self.entries
+            .iter()
+            .filter_map(|e| e.outcome.as_ref().ok().map(|(a, _)| *a))
+            .collect()
+    }
+
+    /// Every contender was trained and they validated equally: the choice was the rule's, not the
+    /// data's.
+    pub fn is_tie(&self) -> bool {
+        let scores = self.scores();
+        scores.len() == self.entries.len()
+            && scores.len() > 1
+            && scores.windows(2).all(|w| w[0] == w[1])
+    }
+
     /// Why the winner won, in one sentence.
     pub fn reason(&self) -> String {
         let winner = &self.entries[self.chosen];
-        let scores: Vec<f64> = self
-            .entries
-            .iter()
-            .filter_map(|e| e.outcome.as_ref().ok().map(|(a, _)| *a))
-            .collect();
-        if scores.len() < self.entries.len() {
+        if self.scores().len() < self.entries.len() {
             format!(
                 "the {} sample is the only one that could be trained",
                 winner.kind.name()
             )
-        } else if scores.windows(2).all(|w| w[0] == w[1]) {
+        } else if self.is_tie() {
             "a tie in validation goes to one frame (the paper's sample, decided before lift-off)"
                 .to_owned()
         } else {
