@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
 use presrs_core::pipeline::TrainedModel;
+use presrs_core::sample::SampleKind;
 use presrs_core::{FrameView, Grid};
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
 use presrs_io::mcap::BagFrames;
@@ -366,6 +367,11 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
 /// Why `grid` frames cannot be classified by `model` (its crop does not give the grid it was trained
 /// on), or `None` when they can.
 fn unusable_for_model(model: &TrainedModel, grid: Grid) -> Option<String> {
+    // A whole-stance model classifies the stance's summary, not the frame: any frame size will do (the
+    // online classifier checks that the size stays that of the first frame).
+    if matches!(model.sample(), SampleKind::Stance { .. }) {
+        return None;
+    }
     let crop = model.crop();
     match crop.window(grid) {
         Ok((_, _, cropped)) if cropped == model.image_grid() => None,
