@@ -91,7 +91,13 @@ impl LoopState {
                 self.counters.dropped += (sequence - last - 1) as u64
             }
             Some(_) => {}
-            None => self.counters.publishers += 1,
+            None => {
+                self.counters.publishers += 1;
+                // A writer numbers its samples from 1: those before the first one taken were
+                // published before it matched the node, or lost before the node took one; DDS
+                // (RustDDS: no SAMPLE_LOST status) cannot tell which, so they are not `dropped`.
+                self.counters.before_first += u64::try_from(sequence - 1).unwrap_or(0);
+            }
         }
         let index = self.counters.received;
         self.counters.received += 1;
