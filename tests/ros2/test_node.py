@@ -46,9 +46,12 @@ def assert_same_decisions(peer, reference, payloads):
             ref["touchdown_frame"], ref["sample_frame"], ref["frame"])
         for name, p in zip(mine.class_names, mine.posteriors):
             assert abs(p - ref["posteriors"][name]) <= TOL
-        # The decision is stamped with its sample frame's header stamp.
-        stamp_us = (mine.header.stamp.sec * 10**9 + mine.header.stamp.nanosec) // 1000
-        assert stamp_us == ref["timestamp_us"]
+        # The decision is stamped with its sample frame's header stamp (the stream's timestamp_us is
+        # the triggering frame's, the same frame for a one-frame decision; none at the stream's end).
+        assert mine.header.stamp == stamp_of(payloads[ref["sample_frame"]])
+        if ref["frame"] == ref["sample_frame"] and ref["timestamp_us"] is not None:
+            stamp_us = (mine.header.stamp.sec * 10**9 + mine.header.stamp.nanosec) // 1000
+            assert stamp_us == ref["timestamp_us"]
         assert mine.gait == (ref["gait"] or "")
         # What a whole-stance decision waited for, and that frame's stamp; nothing for one-frame ones.
         assert mine.decided_at == t.DECIDED_AT[ref.get("decided_at", "none")]
