@@ -258,7 +258,10 @@ mod tests {
         assert_eq!(d.touchdown_stamp, Time { sec: 2, nanosec: 0 });
         assert_eq!(d.liftoff_stamp, Time::default());
         assert_eq!(d.decided_at, TerrainDecision::DECIDED_AT_NONE);
-        assert_eq!((d.decided_at_frame, d.decided_at_stamp), (0, Time::default()));
+        assert_eq!(
+            (d.decided_at_frame, d.decided_at_stamp),
+            (0, Time::default())
+        );
         assert_eq!(
             (d.gait.as_str(), d.header.frame_id.as_str()),
             ("walk", "foot")
