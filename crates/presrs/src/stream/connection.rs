@@ -365,10 +365,9 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
 }
 
 /// Why `grid` frames cannot be classified by `model` (its crop does not give the grid it was trained
-/// on), or `None` when they can.
+/// on), or `None` when they can. A whole-stance model classifies the stance's summary, whose channels
+/// any sensor's frames give (the online classifier checks that one stream keeps one size).
 fn unusable_for_model(model: &TrainedModel, grid: Grid) -> Option<String> {
-    // A whole-stance model classifies the stance's summary, not the frame: any frame size will do (the
-    // online classifier checks that the size stays that of the first frame).
     if matches!(model.sample(), SampleKind::Stance { .. }) {
         return None;
     }
