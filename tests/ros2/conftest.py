@@ -53,12 +53,12 @@ def bag_images(bag):
 
 
 class Case:
-    """A model, a bag of frames, and what `presrs stream` makes of the bag."""
+    """A model, a bag of frames, and what `presrs stream` (with `stream_args`) makes of the bag."""
 
-    def __init__(self, model, bag):
+    def __init__(self, model, bag, *stream_args):
         self.model = model
         self.bag = bag
-        self.reference = json_lines(run_cli("stream", "--format", "mcap", "--model", model,
+        self.reference = json_lines(run_cli("stream", "--format", "mcap", "--model", model, *stream_args,
                                             stdin=Path(bag).read_bytes()).stdout)
         self.payloads = bag_images(bag)
 
@@ -102,6 +102,30 @@ def sim(tmp_path_factory):
             "--gait-table", "wood=G1,carpet=G2,clay=G3,grass=G2")
     run_cli("convert", d / "set" / "recordings" / "grass_G2_000.asf", d / "grass.mcap")
     return Case(model, d / "grass.mcap")
+
+
+@pytest.fixture(scope="session")
+def walk(tmp_path_factory):
+    """A whole-stance model (MiniRocket and ridge on the stance's summary, with its online profile) of
+    every third jiku-walk recording (one stance a file, 63 x 33; its length, the longest stance's, is
+    about 80 frames), and bags at 100 Hz of one recording (54 frames, decided at its end) and of two
+    one after the other (one stance of 128 frames, longer than the model's)."""
+    import numpy as np
+
+    d = tmp_path_factory.mktemp("walk")
+    src = SHARED / "real" / "jiku-walk"
+    rows = (src / "manifest.csv").read_text().splitlines()
+    # 40 stances of 3 classes keep the training short.
+    (d / "manifest.csv").write_text("\n".join([rows[0]] + [f"{src}/{r}" for r in rows[1::3]]) + "\n")
+    model = d / "walk.model.json"
+    run_cli("train", "--manifest", d / "manifest.csv", "--out", model, "--sample", "stance",
+            "--one-sample-per-file", "--features", "rocket", "--classifier", "ridge", "--online-profile")
+    bags = {}
+    for name, movies in (("one", ["s00_t00.npy"]), ("two", ["s00_t00.npy", "s00_t01.npy"])):
+        np.save(d / f"{name}.npy", np.concatenate([np.load(src / m) for m in movies]))
+        run_cli("convert", d / f"{name}.npy", d / f"{name}.mcap", "--frame-period", "0.01")
+        bags[name] = d / f"{name}.mcap"
+    return model, bags
 
 
 _domains = itertools.count()

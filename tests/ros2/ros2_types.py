@@ -85,7 +85,10 @@ class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::Diagnosti
     status: sequence[DiagnosticStatus]
 
 
-# ros/presrs_msgs/msg/TerrainDecision.msg
+# ros/presrs_msgs/msg/TerrainDecision.msg (its DECIDED_AT_* constants: DECIDED_AT below)
+DECIDED_AT = {"none": 0, "liftoff": 1, "offset": 2, "length": 3}
+
+
 @dataclass
 class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecision_"):
     header: Header
@@ -100,6 +103,10 @@ class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecisi
     sample_frame: uint64
     frame: uint64
     frames_used: uint32
+    decided_at: uint8
+    decided_at_frame: uint64
+    decided_at_stamp: Time
+    cut: bool
     touchdown_stamp: Time
     liftoff_stamp: Time
     gait: str

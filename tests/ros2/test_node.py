@@ -9,7 +9,7 @@ import time
 import pytest
 
 import ros2_types as t
-from conftest import run_cli, wait_until
+from conftest import Case, run_cli, wait_until
 from dds_peer import Peer, image, publish_from_process
 
 # Decisions equal the stream's: the same label, class and frames; the confidence and posteriors to 1e-9.
@@ -29,7 +29,12 @@ def without_latency(events):
     return [{k: v for k, v in e.items() if k != "latency_us"} for e in events]
 
 
-def assert_same_decisions(peer, reference):
+def stamp_of(payload):
+    """The header stamp of a frame's CDR bytes."""
+    return t.Image.deserialize(payload).header.stamp
+
+
+def assert_same_decisions(peer, reference, payloads):
     decisions = [e for e in reference if e["event"] == "classification"]
     got = peer.got[peer.decisions]
     assert len(got) == len(decisions)
@@ -41,10 +46,21 @@ def assert_same_decisions(peer, reference):
             ref["touchdown_frame"], ref["sample_frame"], ref["frame"])
         for name, p in zip(mine.class_names, mine.posteriors):
             assert abs(p - ref["posteriors"][name]) <= TOL
-        # The decision is stamped with its sample frame's header stamp.
-        stamp_us = (mine.header.stamp.sec * 10**9 + mine.header.stamp.nanosec) // 1000
-        assert stamp_us == ref["timestamp_us"]
+        # The decision is stamped with its sample frame's header stamp (the stream's timestamp_us is
+        # the triggering frame's, the same frame for a one-frame decision; none at the stream's end).
+        assert mine.header.stamp == stamp_of(payloads[ref["sample_frame"]])
+        if ref["frame"] == ref["sample_frame"] and ref["timestamp_us"] is not None:
+            stamp_us = (mine.header.stamp.sec * 10**9 + mine.header.stamp.nanosec) // 1000
+            assert stamp_us == ref["timestamp_us"]
         assert mine.gait == (ref["gait"] or "")
+        # What a whole-stance decision waited for, and that frame's stamp; nothing for one-frame ones.
+        assert mine.decided_at == t.DECIDED_AT[ref.get("decided_at", "none")]
+        assert mine.decided_at_frame == ref.get("decided_at_frame", 0)
+        assert mine.cut == ref.get("cut", False)
+        if "decided_at_frame" in ref:
+            assert mine.decided_at_stamp == stamp_of(payloads[ref["decided_at_frame"]])
+        else:
+            assert (mine.decided_at_stamp.sec, mine.decided_at_stamp.nanosec) == (0, 0)
     liftoffs = [e for e in reference if e["event"] == "liftoff"]
     stances = [s for s in peer.got[peer.stances] if s.event == LIFTOFF]
     assert [(s.stance, s.touchdown_frame, s.end_frame) for s in stances] == [
@@ -68,7 +84,7 @@ def run_parity(case, domain, node_factory, *node_args, reliable=True, period=0.0
 
 def test_the_real_recording_gives_the_streams_decisions(fras, domain, node_factory):
     peer, node, stderr = run_parity(fras, domain, node_factory, "--input-qos", "reliable")
-    assert_same_decisions(peer, fras.reference)
+    assert_same_decisions(peer, fras.reference, fras.payloads)
     # The JSON events on the String topic and on stdout are the stream's, latency aside.
     assert without_latency(peer.json_events()) == without_latency(fras.reference)
     assert without_latency(node.stdout[1:]) == without_latency(fras.reference)
@@ -77,13 +93,66 @@ def test_the_real_recording_gives_the_streams_decisions(fras, domain, node_facto
 
 def test_a_simulated_run_at_100_hz_on_sensor_data_qos(sim, domain, node_factory):
     peer, node, _ = run_parity(sim, domain, node_factory, reliable=False, period=0.01)
-    assert_same_decisions(peer, sim.reference)
+    assert_same_decisions(peer, sim.reference, sim.payloads)
     # The gait command of each decision, on its own topic.
     gaits = [m.data for m in peer.got[peer.gait]]
     assert gaits == [e["gait"] for e in sim.reference if e["event"] == "classification"]
     assert gaits and set(gaits) == {"G2"}
     end = [e for e in peer.json_events() if e["event"] == "end"][0]
     assert end["frames"] == len(sim.payloads) and end["rejected_frames"] == 0
+
+
+@pytest.mark.parametrize("bag, decide_at, waited_for", [
+    ("one", None, "liftoff"),  # at the stance's end: here the stream's, when the node stops
+    ("two", None, "length"),  # the stance grew longer than the model's samples
+    ("one", 12, "offset"),  # --decide-at 12
+])
+def test_a_whole_stance_decision_says_what_it_waited_for(walk, bag, decide_at, waited_for, domain,
+                                                         node_factory):
+    model, bags = walk
+    extra = ["--decide-at", str(decide_at)] if decide_at else []
+    case = Case(model, bags[bag], *extra)
+    decisions = [e for e in case.reference if e["event"] == "classification"]
+    assert [e["decided_at"] for e in decisions] == [waited_for]
+    peer = Peer(domain, reliable=True)
+    node = node_factory(case.model, domain, "--input-qos", "reliable", *extra)
+    assert peer.wait_matched(30), "the node's topics were not discovered within 30 s"
+    publish_all(peer, case.payloads)
+
+    def all_taken(p):
+        return any(int(diagnostics_values(d)["frames_received"]) == len(case.payloads)
+                   for d in p.got[p.diagnostics])
+
+    # A decision at lift-off comes when the stance ends: here when the input does (the node stops).
+    assert peer.wait_for(all_taken, 20)
+    code, stderr = node.stop(signal.SIGINT)
+    assert code == 0, stderr
+    assert peer.wait_for(lambda p: any(e["event"] == "end" for e in p.json_events()), 10)
+    assert_same_decisions(peer, case.reference, case.payloads)
+    assert [d.kind for d in peer.got[peer.decisions]] == ["stance"]
+    assert without_latency(peer.json_events()) == without_latency(case.reference)
+
+
+def test_frames_sent_before_the_node_matched_are_counted_apart_from_drops(fras, domain, node_factory):
+    # A publisher that wrote 10 frames before the node existed: its first frame taken is its 11th.
+    peer = Peer(domain, reliable=True)
+    publish_all(peer, fras.payloads[:10])
+    node = node_factory(fras.model, domain, "--input-qos", "reliable")
+    assert peer.wait_matched(30), "the node's topics were not discovered within 30 s"
+    publish_all(peer, fras.payloads)
+    assert peer.wait_for(lambda p: any(diagnostics_values(d)["frames_received"] == "205"
+                                       for d in p.got[p.diagnostics]), 20)
+    code, stderr = node.stop(signal.SIGINT)
+    assert code == 0, stderr
+
+    def ended(p):
+        return [d for d in p.got[p.diagnostics] if diagnostics_values(d)["state"] == "ended"]
+
+    assert peer.wait_for(ended, 10)
+    v = diagnostics_values(ended(peer)[-1])
+    assert (v["frames_received"], v["frames_dropped"], v["frames_before_first_taken"]) == (
+        "205", "0", "10")
+    assert "10 frames sent before the first one taken from their publisher" in stderr
 
 
 def pause(node):

@@ -17,6 +17,10 @@ pub struct NodeCounters {
     /// Frames lost before the node took them: gaps in their publishers' sequence numbers (a burst
     /// faster than the node, which the input QoS history could not hold, or lost on the way).
     pub dropped: u64,
+    /// Frames each publisher had sent before the first one the node took from it: published before
+    /// it matched the node (never meant for it), or lost in a burst before the node took one. DDS
+    /// does not say which (docs/ros2.md), so they are not in `dropped`.
+    pub before_first: u64,
     /// Outputs that could not be published.
     pub publish_failures: u64,
     pub touchdowns: u64,
@@ -89,6 +93,7 @@ impl DiagnosticsReport<'_> {
             ("input_rate_hz", format!("{rate:.1}")),
             ("frames_received", now.received.to_string()),
             ("frames_dropped", now.dropped.to_string()),
+            ("frames_before_first_taken", now.before_first.to_string()),
             ("frames_rejected_undecodable", now.undecodable.to_string()),
             ("stances", now.touchdowns.to_string()),
             ("decisions", now.decisions.to_string()),

@@ -83,10 +83,35 @@ pub struct TerrainDecision {
     pub sample_frame: u64,
     pub frame: u64,
     pub frames_used: u32,
+    /// What a whole-stance decision waited for: [`TerrainDecision::DECIDED_AT_LIFTOFF`],
+    /// [`DECIDED_AT_OFFSET`](TerrainDecision::DECIDED_AT_OFFSET),
+    /// [`DECIDED_AT_LENGTH`](TerrainDecision::DECIDED_AT_LENGTH), or
+    /// [`DECIDED_AT_NONE`](TerrainDecision::DECIDED_AT_NONE) for one-frame and fused decisions.
+    pub decided_at: u8,
+    pub decided_at_frame: u64,
+    pub decided_at_stamp: Time,
+    pub cut: bool,
     pub touchdown_stamp: Time,
     pub liftoff_stamp: Time,
     pub gait: String,
     pub latency_us: f64,
+}
+
+impl TerrainDecision {
+    pub const DECIDED_AT_NONE: u8 = 0;
+    pub const DECIDED_AT_LIFTOFF: u8 = 1;
+    pub const DECIDED_AT_OFFSET: u8 = 2;
+    pub const DECIDED_AT_LENGTH: u8 = 3;
+
+    /// The constant of a JSON event's `decided_at` (absent: [`TerrainDecision::DECIDED_AT_NONE`]).
+    fn decided_at_of(name: Option<&str>) -> u8 {
+        match name {
+            Some("liftoff") => Self::DECIDED_AT_LIFTOFF,
+            Some("offset") => Self::DECIDED_AT_OFFSET,
+            Some("length") => Self::DECIDED_AT_LENGTH,
+            _ => Self::DECIDED_AT_NONE,
+        }
+    }
 }
 
 /// `presrs_msgs/msg/StanceEvent` (`ros/presrs_msgs/msg/StanceEvent.msg`).
@@ -156,6 +181,10 @@ pub fn decision_message(
         sample_frame: u64_of(event, "sample_frame"),
         frame: u64_of(event, "frame"),
         frames_used: u64_of(event, "frames_used") as u32,
+        decided_at: TerrainDecision::decided_at_of(event["decided_at"].as_str()),
+        decided_at_frame: u64_of(event, "decided_at_frame"),
+        decided_at_stamp: stamp_at(stamps, event, "decided_at_frame"),
+        cut: event["cut"].as_bool().unwrap_or(false),
         touchdown_stamp: stamp_at(stamps, event, "touchdown_frame"),
         liftoff_stamp: stamp_at(stamps, event, "end_frame"),
         gait: event["gait"].as_str().unwrap_or_default().to_owned(),
@@ -228,10 +257,42 @@ mod tests {
         );
         assert_eq!(d.touchdown_stamp, Time { sec: 2, nanosec: 0 });
         assert_eq!(d.liftoff_stamp, Time::default());
+        assert_eq!(d.decided_at, TerrainDecision::DECIDED_AT_NONE);
+        assert_eq!(
+            (d.decided_at_frame, d.decided_at_stamp),
+            (0, Time::default())
+        );
         assert_eq!(
             (d.gait.as_str(), d.header.frame_id.as_str()),
             ("walk", "foot")
         );
+    }
+
+    #[test]
+    fn a_whole_stance_decision_says_what_it_waited_for_and_when() {
+        let names = vec!["fast".to_owned(), "slow".to_owned()];
+        for (name, constant) in [
+            ("liftoff", TerrainDecision::DECIDED_AT_LIFTOFF),
+            ("offset", TerrainDecision::DECIDED_AT_OFFSET),
+            ("length", TerrainDecision::DECIDED_AT_LENGTH),
+        ] {
+            let event = json!({"event": "classification", "kind": "stance", "stance": 0,
+                "label": "slow", "class": 1, "confidence": 0.5,
+                "posteriors": {"fast": 0.5, "slow": 0.5}, "sample_frame": 33, "frame": 35,
+                "frames_used": 24, "touchdown_frame": 10, "decided_at": name,
+                "decided_at_frame": 34, "cut": name == "length"});
+            let d = decision_message(&event, &names, &Tenths, "foot");
+            assert_eq!(d.decided_at, constant, "{name}");
+            assert_eq!(d.decided_at_frame, 34);
+            assert_eq!(
+                d.decided_at_stamp,
+                Time {
+                    sec: 3,
+                    nanosec: 400_000_000
+                }
+            );
+            assert_eq!(d.cut, name == "length");
+        }
     }
 
     #[test]

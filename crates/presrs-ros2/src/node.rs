@@ -91,7 +91,13 @@ impl LoopState {
                 self.counters.dropped += (sequence - last - 1) as u64
             }
             Some(_) => {}
-            None => self.counters.publishers += 1,
+            None => {
+                self.counters.publishers += 1;
+                // A writer numbers its samples from 1: those before the first one taken were
+                // published before it matched the node, or lost before the node took one; DDS
+                // (RustDDS: no SAMPLE_LOST status) cannot tell which, so they are not `dropped`.
+                self.counters.before_first += u64::try_from(sequence - 1).unwrap_or(0);
+            }
         }
         let index = self.counters.received;
         self.counters.received += 1;
@@ -218,13 +224,14 @@ pub fn run_node(
     };
     let frame_id = options.name.clone();
     let mut emit = |line: String| -> bool {
-        on_line(&line);
         let event: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
         let mut s = state.borrow_mut();
         s.counters.note_event(&event);
         let names = model.class_names();
-        let published = publish_event(&outputs, &event, line, names, &s.stamps, &frame_id);
+        // On the wire first (a robot waits for it), then stdout (a pipe that may be slow to read).
+        let published = publish_event(&outputs, &event, &line, names, &s.stamps, &frame_id);
         s.counters.publish_failures += u64::from(!published);
+        on_line(&line);
         published
     };
     let session = run_frames(model, profile, next, &mut emit, notify)?;
@@ -237,17 +244,17 @@ pub fn run_node(
     })
 }
 
-/// Publishes one event: the JSON string, and its typed message and gait command when it has them.
-/// False when any of them could not be published.
+/// Publishes one event: its typed message and gait command when it has them (first: a decision is
+/// what a robot waits for), then the JSON string. False when any of them could not be published.
 fn publish_event(
     outputs: &Outputs,
     event: &Value,
-    line: String,
+    line: &str,
     class_names: &[String],
     stamps: &StampBook,
     frame_id: &str,
 ) -> bool {
-    let mut ok = outputs.events.publish(StringMsg { data: line }).is_ok();
+    let mut ok = true;
     match event["event"].as_str() {
         Some("classification") => {
             let decision = decision_message(event, class_names, stamps, frame_id);
@@ -264,6 +271,8 @@ fn publish_event(
         }
         _ => {}
     }
+    let data = line.to_owned();
+    ok &= outputs.events.publish(StringMsg { data }).is_ok();
     ok
 }
 

@@ -23,7 +23,8 @@ pub fn summary_text(input: &str, summary: &NodeSummary) -> String {
     format!(
         "{input}: {} messages received, {} frames classified, {} stances, {} decisions ({} fused), \
          {} rejected frames, {} errors, {} frames dropped before the node took them, {} publish \
-         failures",
+         failures, {} frames sent before the first one taken from their publisher (before it \
+         matched, or lost)",
         c.received,
         s.stats.frames,
         s.stats.stances,
@@ -33,5 +34,6 @@ pub fn summary_text(input: &str, summary: &NodeSummary) -> String {
         s.errors,
         c.dropped,
         c.publish_failures,
+        c.before_first,
     )
 }

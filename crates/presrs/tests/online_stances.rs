@@ -19,7 +19,8 @@ use presrs::core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
 use presrs::core::preprocess::Preprocess;
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::summary::{SummaryConfig, pad_to, summarise};
-use presrs::stream::event_values;
+use presrs::io::frame_protocol::{Dtype, encode_frame};
+use presrs::stream::{ConnectionOptions, InputFormat, event_values, run_connection};
 use presrs::{Dataset, Quiet, SampleOptions};
 
 fn shared(path: &str) -> PathBuf {
@@ -200,6 +201,59 @@ fn decide_at_k_is_the_offline_classification_of_the_stance_cut_at_k() {
         assert!((decision.confidence - prediction.confidence).abs() < 1e-9);
         for (a, b) in posteriors.iter().zip(prediction.posteriors) {
             assert!((a - b).abs() < 1e-9, "{name}");
+        }
+    }
+}
+
+#[test]
+fn the_stream_session_takes_a_movies_frames_and_decides_as_the_online_classifier() {
+    // The frames are the sensor's (63 x 33), not the model's images (its summaries): the session
+    // must not ask them to match the model's image grid, as it does for a one-frame model.
+    let (model, movies) = setup();
+    let profile = OnlineProfile {
+        segment: options().segment_params(),
+        ..OnlineProfile::default()
+    };
+    let options = ConnectionOptions {
+        format: InputFormat::Binary,
+        name: "movie".into(),
+        ..ConnectionOptions::default()
+    };
+    for (path, recording) in movies.iter().step_by(20) {
+        let name = path.display().to_string();
+        let grid = recording.grid();
+        let (mut bytes, mut frame) = (Vec::new(), Vec::new());
+        for index in 0..recording.frame_count() {
+            let values = recording.frame(index).unwrap().values();
+            let stamp = index as u64 * 10_000;
+            encode_frame(&mut frame, grid.rows, grid.cols, Dtype::F64, stamp, values).unwrap();
+            bytes.extend_from_slice(&frame);
+        }
+        let mut output = Vec::new();
+        let summary = run_connection(
+            &model,
+            &profile,
+            bytes.as_slice(),
+            &mut output,
+            &options,
+            &|_| {},
+        )
+        .unwrap();
+        assert_eq!((summary.rejected_frames, summary.errors), (0, 0), "{name}");
+        let lines: Vec<serde_json::Value> = String::from_utf8(output)
+            .unwrap()
+            .lines()
+            .map(|line| serde_json::from_str(line).unwrap())
+            .filter(|line: &serde_json::Value| line["event"] == "classification")
+            .collect();
+        let direct = stream(&model, recording, None);
+        assert_eq!(lines.len(), direct.len(), "{name}");
+        for (line, (_, _, expected)) in lines.iter().zip(&direct) {
+            for key in ["label", "decided_at", "decided_at_frame", "frame", "cut"] {
+                assert_eq!(line[key], expected[key], "{name}: {key}");
+            }
+            let confidence = line["confidence"].as_f64().unwrap();
+            assert!((confidence - expected["confidence"].as_f64().unwrap()).abs() < 1e-9);
         }
     }
 }
