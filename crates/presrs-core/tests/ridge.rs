@@ -392,7 +392,7 @@ fn the_model_does_not_depend_on_the_thread_count() {
 }
 
 /// The pipeline's path without the PCA step against numpy's |FFT| and scikit-learn's `StandardScaler`
-/// + `RidgeClassifierCV` on the same images (fixtures/ridge/make_pipeline_fixture.py): training keeps
+/// and `RidgeClassifierCV` on the same images (fixtures/ridge/make_pipeline_fixture.py): training keeps
 /// every feature (no PCA), chooses the same alpha, and gives the same coefficients, decisions and
 /// predictions.
 #[test]
