@@ -6,6 +6,7 @@
 //! gives (the test `cached_scores_equal_training_each_candidate_on_each_fold` checks it), at a fraction
 //! of the cost.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
@@ -408,17 +409,23 @@ fn score_fold(
         let members: Vec<usize> = (0..configs.len())
             .filter(|&m| configs[m].pca_dims() == dims)
             .collect();
+        // (without a PCA the fold's rows are used as they are, not copied: ~10,000 features a row)
         let projected = match dims {
             Some(dims) => Pca::fit(&train_rows, table.n_features, dims).and_then(|pca| {
                 let train = project_rows(&pca, &train_rows)?;
                 let validation = project_rows(&pca, &validation_rows)?;
                 let test = project_test(&pca, table, &fold.test)?;
-                Ok((pca.n_components(), train, validation, test))
+                Ok((
+                    pca.n_components(),
+                    Cow::Owned(train),
+                    Cow::Owned(validation),
+                    test,
+                ))
             }),
             None => Ok((
                 table.n_features,
-                train_rows.clone(),
-                validation_rows.clone(),
+                Cow::Borrowed(train_rows.as_slice()),
+                Cow::Borrowed(validation_rows.as_slice()),
                 fast_rows(table, &fold.test),
             )),
         };
