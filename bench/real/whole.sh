@@ -6,6 +6,7 @@
 #   bench/real/whole.sh jiku-walk             # one set
 #   PRESRS=/path/to/presrs PROJECTION=/path/to/ridge_projection bench/real/whole.sh   # no builds
 #   ROCKET_PYTHON=/path/to/python bench/real/whole.sh   # an interpreter with aeon (default below)
+#   AUTO_FLAGS="--budget 0" bench/real/whole.sh jiku-walk   # more options for the auto rows
 #
 # Protocol: leave one group out, all training data (no --per-class; 35 % of it validates), 3 repeats,
 # seed 1. jiku-walk: `--sample stance --one-sample-per-file` (each movie one stance, summarised);
@@ -28,7 +29,7 @@ sets=()
 for arg in "$@"; do
     case $arg in
         jiku-walk|icub20) sets+=("$arg") ;;
-        -h|--help) sed -n '2,16p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h|--help) sed -n '2,17p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "whole.sh: unknown argument $arg (try --help)" >&2; exit 2 ;;
     esac
 done
@@ -67,8 +68,9 @@ for set in "${sets[@]}"; do
     sample=($(sample_of "$set"))
     manifest=$data/$set/manifest.csv
     echo "== $set: presrs auto" >&2
-    "$presrs" eval --manifest "$manifest" "${common[@]}" "${sample[@]}" --export-draws "$out/draws" \
-        > "$out/auto.json"
+    # shellcheck disable=SC2086
+    "$presrs" eval --manifest "$manifest" "${common[@]}" "${sample[@]}" ${AUTO_FLAGS:-} \
+        --export-draws "$out/draws" > "$out/auto.json"
     echo "== $set: presrs rocket + ridge" >&2
     "$presrs" eval --manifest "$manifest" "${common[@]}" "${sample[@]}" --features rocket \
         --classifier ridge > "$out/rocket_ridge.json"

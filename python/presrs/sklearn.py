@@ -28,10 +28,12 @@ __all__ = ["TerrainClassifier"]
 
 
 class TerrainClassifier(ClassifierMixin, BaseEstimator):
-    """presrs's pipeline (crop, features, PCA, classifier) as a scikit-learn classifier.
+    """presrs's pipeline (crop, features, PCA, classifier; ridge takes every feature, without the PCA) as a
+    scikit-learn classifier.
 
     Parameters are those of :meth:`presrs.Model.train`: ``features`` and ``classifier`` take the
-    command line's names (``"auto"`` chooses by validation), ``dims`` the principal components kept,
+    command line's names (``"auto"`` chooses by validation), ``dims`` the principal components kept
+    (not used by ridge, which has no PCA step),
     ``validation`` the share (or count) of each class that validates the hyper-parameters, ``seed`` the
     random draw. ``image_shape`` says how to unflatten a 2-D ``X`` (one of its sizes may be ``-1``);
     ``validate_by`` how the automatic choice validates (``auto``, ``group``, ``condition``, ``split``;

@@ -39,7 +39,9 @@ fn pca_stage(c: &mut Criterion) {
     else {
         panic!("feature extraction failed");
     };
-    let pca = model.pca();
+    let Some(pca) = model.pca() else {
+        panic!("the paper's model has a PCA step");
+    };
     let cols = pca.n_features();
     let mut out = vec![0.0; pca.n_components()];
 

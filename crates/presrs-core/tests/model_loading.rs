@@ -250,3 +250,36 @@ fn training_cannot_make_a_model_too_large_to_load() {
     let err = train(&images, &[], &config).unwrap_err().to_string();
     assert!(err.contains("fft_len") && err.contains("limit"), "{err}");
 }
+
+/// A ridge model has no PCA step (it takes every feature); a file must not drop the PCA of a classifier
+/// that takes principal components, nor give ridge vectors of another length than the features.
+#[test]
+fn a_model_without_a_pca_is_only_one_whose_classifier_takes_every_feature() {
+    let (ridge, _) = model_json(ClassifierKind::RIDGE);
+    assert!(ridge.get("pca").is_none(), "a ridge model stores no PCA");
+    rejects(
+        ClassifierKind::RIDGE,
+        &[
+            (
+                &|v| v["features"]["fft_len"] = json!(4096),
+                "2049 features per image but the classifier takes 1025",
+            ),
+            (
+                &|v| {
+                    let (with_pca, _) = model_json(ClassifierKind::LDA);
+                    v["pca"] = with_pca["pca"].clone();
+                },
+                "the PCA gives 2 components",
+            ),
+        ],
+    );
+    rejects(
+        ClassifierKind::LDA,
+        &[(
+            &|v| {
+                v.as_object_mut().unwrap().remove("pca");
+            },
+            "no PCA, but the lda classifier takes principal components",
+        )],
+    );
+}

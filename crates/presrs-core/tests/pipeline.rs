@@ -20,8 +20,8 @@ fn images<'a>(set: &'a [(Frame, &'static str)]) -> Vec<LabeledImage<'a>> {
 fn bench_fixture_has_the_paper_shapes_and_learns() {
     let (model, frames) = bench_fixture(11, 200).unwrap();
     assert_eq!(model.image_grid(), Grid::new(38, 41));
-    assert_eq!(model.pca().n_features(), 1025);
-    assert_eq!(model.pca().n_components(), 51);
+    assert_eq!(model.pca().unwrap().n_features(), 1025);
+    assert_eq!(model.pca().unwrap().n_components(), 51);
     assert_eq!(model.class_names(), SYNTHETIC_CLASSES);
     assert_eq!(model.summary().train_per_class, vec![13; 4]);
     assert_eq!(model.summary().validation_per_class, vec![7; 4]);
@@ -206,7 +206,7 @@ fn session_features_are_the_paper_features_of_the_cropped_image() {
         .extract_fast_into(cropped.values(), &mut single)
         .unwrap();
     assert_eq!(session.fast_features(&view).unwrap(), single.as_slice());
-    let pca = model.pca();
+    let pca = model.pca().unwrap();
     let mut fast = vec![0.0; pca.n_components()];
     pca.project_fast_into(&single, &mut pca.scratch(), &mut fast)
         .unwrap();
@@ -289,8 +289,8 @@ fn dims_are_capped_by_the_training_set_and_other_settings_work() {
     .unwrap();
     let model = train(&images(&train_set), &images(&validation_set), &config).unwrap();
     assert_eq!(model.image_grid(), Grid::new(44, 44));
-    assert_eq!(model.pca().n_features(), 1001);
-    assert_eq!(model.pca().n_components(), 11);
+    assert_eq!(model.pca().unwrap().n_features(), 1001);
+    assert_eq!(model.pca().unwrap().n_components(), 11);
     assert_eq!(model.sigma(), Some(100.0));
     assert!(model.validation_curve().is_empty());
     assert!(model.session().classify(&train_set[0].0.view()).is_ok());

@@ -390,3 +390,94 @@ fn the_model_does_not_depend_on_the_thread_count() {
         assert_eq!(fit_with(threads), one, "{threads} threads");
     }
 }
+
+/// The pipeline's path without the PCA step against numpy's |FFT| and scikit-learn's `StandardScaler`
+/// and `RidgeClassifierCV` on the same images (fixtures/ridge/make_pipeline_fixture.py): training keeps
+/// every feature (no PCA), chooses the same alpha, and gives the same coefficients, decisions and
+/// predictions.
+#[test]
+fn the_pipeline_without_a_pca_equals_standard_scaler_and_ridge_classifier_cv() {
+    use presrs_core::features::{FeatureConfig, Fft1dConfig, Fft1dFamily};
+    use presrs_core::pipeline::{LabeledImage, TrainConfig, train};
+    use presrs_core::{Crop, Frame, Grid};
+
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/ridge/ridge_pipeline_sklearn.json"
+    );
+    let fixture: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let grid = Grid::new(
+        fixture["rows"].as_u64().unwrap() as usize,
+        fixture["cols"].as_u64().unwrap() as usize,
+    );
+    let frames = |key: &str| -> Vec<Frame> {
+        floats(&fixture[key])
+            .chunks_exact(grid.len())
+            .map(|values| Frame::new(grid, values.to_vec()).unwrap())
+            .collect()
+    };
+    let (train_frames, test_frames) = (frames("train_images"), frames("test_images"));
+    let labels: Vec<String> = fixture["train_labels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap().to_owned())
+        .collect();
+    let images: Vec<LabeledImage<'_>> = train_frames
+        .iter()
+        .zip(&labels)
+        .map(|(frame, label)| LabeledImage::new(frame.view(), label))
+        .collect();
+    let config = TrainConfig {
+        crop: Crop::NONE,
+        features: FeatureConfig::of::<Fft1dFamily>(Fft1dConfig {
+            fft_len: fixture["fft_len"].as_u64().map(|n| n as usize),
+        }),
+        classifier: ClassifierKind::RIDGE.default_config(),
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    assert_eq!(config.config().pca_dims(), None);
+    let model = train(&images, &[], &config).unwrap();
+    assert!(model.pca().is_none());
+    assert_eq!(model.classifier_dims(), FFT_FEATURES);
+    let ridge = model.classifier().get::<RidgeFamily>().unwrap();
+    assert_eq!(ridge.alpha(), fixture["alpha"].as_f64().unwrap());
+    for (class, expected) in fixture["coef"].as_array().unwrap().iter().enumerate() {
+        let difference = max_difference(ridge.coefficients(class).unwrap(), &floats(expected));
+        assert!(
+            difference < 1e-8,
+            "class {class}: coefficients {difference}"
+        );
+    }
+    let intercepts = max_difference(ridge.intercepts(), &floats(&fixture["intercept"]));
+    assert!(intercepts < 1e-12, "intercepts {intercepts}");
+
+    let expected_decisions = floats(&fixture["decision_function"]);
+    let mut session = model.session();
+    let mut scratch = ridge.scratch();
+    let mut decisions = vec![0.0; model.class_names().len()];
+    for (i, frame) in test_frames.iter().enumerate() {
+        // On the exact features, the decisions; classification's own (single-precision |FFT|)
+        // features give the same label.
+        let features = session.features(&frame.view()).unwrap().to_vec();
+        ridge
+            .decisions_into(&features, &mut scratch, &mut decisions)
+            .unwrap();
+        let expected = &expected_decisions[i * decisions.len()..(i + 1) * decisions.len()];
+        let difference = max_difference(&decisions, expected);
+        assert!(difference < 1e-8, "image {i}: decisions {difference}");
+        let prediction = session.classify(&frame.view()).unwrap();
+        assert_eq!(prediction.label, fixture["predict"][i].as_str().unwrap());
+    }
+    // The batch path (no basis to share without a PCA) gives each frame's session result.
+    let views: Vec<_> = test_frames.iter().map(Frame::view).collect();
+    for (view, batched) in views.iter().zip(model.classify_batch(&views)) {
+        let single = session.classify(view).unwrap().to_classification();
+        assert_eq!(batched.unwrap(), single);
+    }
+}
+
+/// `rfft` of 128 points keeps 65 bins.
+const FFT_FEATURES: usize = 65;

@@ -139,15 +139,17 @@ fn stage_times(model: &TrainedModel, frames: &[Frame], iterations: usize) -> Res
             black_box(session.fast_features(&frame).is_ok());
         }
     });
-    let pca = model.pca();
-    let mut scratch = pca.scratch();
-    let mut projected = vec![0.0; pca.n_components()];
-    let pca_ns = median_ns(iterations, |i| {
-        let result = match &features[i % frames.len()] {
-            StageFeatures::Single(x) => pca.project_fast_into(x, &mut scratch, &mut projected),
-            StageFeatures::Double(x) => pca.project_fast_into(x, &mut scratch, &mut projected),
-        };
-        black_box(result.is_ok());
+    // (no PCA step, no time: the classifier takes the features as they are)
+    let pca_ns = model.pca().map_or(0, |pca| {
+        let mut scratch = pca.scratch();
+        let mut projected = vec![0.0; pca.n_components()];
+        median_ns(iterations, |i| {
+            let result = match &features[i % frames.len()] {
+                StageFeatures::Single(x) => pca.project_fast_into(x, &mut scratch, &mut projected),
+                StageFeatures::Double(x) => pca.project_fast_into(x, &mut scratch, &mut projected),
+            };
+            black_box(result.is_ok());
+        })
     });
     let classifier = model.classifier();
     let mut classifier_scratch = classifier.scratch();
@@ -488,7 +490,7 @@ fn export(
         frame.view().extend_absent_as_zero(&mut images);
     }
     let mut session = model.session();
-    let (n_features, n_components) = (model.pca().n_features(), model.pca().n_components());
+    let (n_features, n_components) = (model.n_features(), model.classifier_dims());
     let mut features = Vec::with_capacity(frames.len() * n_features);
     let mut reduced = Vec::with_capacity(frames.len() * n_components);
     let mut predictions = Vec::with_capacity(frames.len());

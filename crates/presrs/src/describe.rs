@@ -69,17 +69,17 @@ pub fn describe_model(file: &ModelFile) -> String {
     text
 }
 
-/// The image path of `model` in one line: crop, image size, preprocessing, features, PCA (and the
-/// Parzen window's sigma).
+/// The image path of `model` in one line: crop, image size, preprocessing, features, PCA or none (and
+/// the Parzen window's sigma).
 pub fn pipeline_summary(model: &TrainedModel) -> String {
     format!(
-        "crop {} -> {} image, preprocessing {}, {} features ({}), PCA {} components{}",
+        "crop {} -> {} image, preprocessing {}, {} features ({}), {}{}",
         model.crop(),
         model.image_grid(),
         model.preprocess(),
-        model.pca().n_features(),
+        model.n_features(),
         model.features().name(),
-        model.pca().n_components(),
+        model.describe_projection(),
         model
             .sigma()
             .map_or_else(String::new, |s| format!(", sigma {s:.4}"))

@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
-use crate::method::Method;
+use crate::method::{ClassifierChoice, Method};
 use crate::progress::Progress;
 use presrs_io::message::{Message, Opt, Warnings};
 
@@ -412,6 +412,7 @@ impl<'d> EvalSetup<'d> {
         // (one fold per repeat: with leave-one-out, n_train sums the folds)
         if let Some(n_train) = report.repeats.iter().map(|r| r.n_train).min()
             && let Some(dims) = method.dims
+            && !matches!(method.classifier, ClassifierChoice::Kind(kind) if kind.takes_all_features())
             && self.folds() == 1
             && dims >= n_train
         {

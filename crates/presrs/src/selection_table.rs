@@ -68,18 +68,18 @@ fn percent(score: &CandidateScore) -> String {
 }
 
 /// Why the model keeps fewer principal components than the chosen candidate asks for (`None` when it
-/// keeps them all): a PCA keeps at most one fewer than its training images, and no more than the
+/// keeps them all, or has no PCA step): a PCA keeps at most one fewer than its training images, and no more than the
 /// features.
 pub fn components_note(
     chosen: &CandidateScore,
     model: &TrainedModel,
     n_train: usize,
 ) -> Option<String> {
-    let (asked, kept) = (chosen.config.dims, model.pca().n_components());
+    let (asked, kept) = (chosen.config.dims, model.pca()?.n_components());
     if kept >= asked {
         return None;
     }
-    let features = model.pca().n_features();
+    let features = model.n_features();
     let bound = if features <= n_train.saturating_sub(1) {
         format!("no more than its {features} features")
     } else {

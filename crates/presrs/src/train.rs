@@ -176,15 +176,15 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     let selections = model.selection().cloned();
     warnings.extend(crate::method::validation_warning(selections.as_slice()));
     warnings.extend(crate::method::budget_warning(selections.as_slice()));
-    let kept = model.pca().n_components();
     if let Some(dims) = method.dims
+        && let Some(kept) = model.pca().map(|pca| pca.n_components())
         && kept < dims
     {
         warnings.push(Message::new().opt_is(Opt::Dims, dims).text(format!(
             ": kept {kept} principal components, the most that {} training images of {} features \
              allow (at most one fewer than the training images, and no more than the features)",
             split.train.len(),
-            model.pca().n_features()
+            model.n_features()
         )));
     }
     let count = |indices: &[usize]| {

@@ -43,6 +43,11 @@ fn options() -> SampleOptions {
 /// A small whole-stance model (168 MiniRocket features, linear discriminant) on every movie, and the
 /// movies, read as `classify` reads them.
 fn setup() -> (TrainedModel, Vec<(PathBuf, Recording)>) {
+    setup_with(ClassifierKind::LDA)
+}
+
+/// [`setup`] with another classifier (ridge: no PCA step, the classifier takes the 168 features).
+fn setup_with(classifier: ClassifierKind) -> (TrainedModel, Vec<(PathBuf, Recording)>) {
     let options = options();
     let dataset = Dataset::load(&shared("real/jiku-walk/manifest.csv"), &options, &Quiet).unwrap();
     let images: Vec<_> = dataset
@@ -57,7 +62,7 @@ fn setup() -> (TrainedModel, Vec<(PathBuf, Recording)>) {
             ..RocketParams::default()
         }),
         dims: 20,
-        classifier: ClassifierKind::LDA.default_config(),
+        classifier: classifier.default_config(),
         preprocess: Preprocess::NONE,
     }
     .check()
@@ -165,6 +170,36 @@ fn every_liftoff_decision_is_the_offline_classification_of_the_stance() {
         compared += 1;
     }
     assert_eq!(compared, 120, "every movie, online as offline");
+}
+
+#[test]
+fn a_ridge_model_without_a_pca_decides_online_as_offline() {
+    let (model, movies) = setup_with(ClassifierKind::RIDGE);
+    assert!(model.pca().is_none());
+    let classify = ClassifyOptions {
+        frame: None,
+        samples: options(),
+    };
+    let mut session = model.session();
+    for (path, recording) in movies.iter().step_by(5) {
+        let name = path.display().to_string();
+        let offline =
+            classify_recording(&model, &mut session, recording, &name, &classify).unwrap();
+        let [offline] = offline.frames.as_slice() else {
+            panic!("{name}: one stance a movie offline");
+        };
+        let online = stream(&model, recording, None);
+        let [(decision, posteriors, _)] = online.as_slice() else {
+            panic!("{name}: one decision a movie online, got {online:?}");
+        };
+        assert_eq!(model.class_names()[decision.class], offline.label, "{name}");
+        for (class, p) in model.class_names().iter().zip(posteriors) {
+            assert!(
+                (p - offline.posteriors[class]).abs() < 1e-9,
+                "{name}: {class}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -30,7 +30,7 @@ pub struct PipelineArgs {
     pub features: FeatureChoice,
     /// Classifier: pwe (Parzen window, the paper's), mle (Gaussian, shrunk full covariance per class),
     /// lda (shared covariance), svm (one-vs-one, linear or RBF, C and gamma chosen on validation), knn,
-    /// ridge (one-vs-rest, for rocket); or auto (the default: chosen by validation inside the training
+    /// ridge (one-vs-rest, for rocket; it takes every feature, standardised, with no PCA step); or auto (the default: chosen by validation inside the training
     /// data among the first five).
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
@@ -48,7 +48,8 @@ pub struct PipelineArgs {
     #[arg(long, default_value = "best", value_parser = |t: &str| t.parse::<presrs::method::ChoiceRule>())]
     pub choose: presrs::method::ChoiceRule,
     /// Principal components kept, at least 1 (at most the number of training images minus one, and the
-    /// number of features: a larger value is lowered to that, with a warning when given) [default: 51].
+    /// number of features: a larger value is lowered to that, with a warning when given) [default: 51];
+    /// ridge has no PCA step and ignores it.
     #[arg(long, value_name = "DIMS", value_parser = presrs::values::positive_count)]
     pub dims: Option<usize>,
     /// Divide each cropped image by its total load (sum of its values): features that do not depend on

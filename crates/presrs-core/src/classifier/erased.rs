@@ -15,6 +15,7 @@ pub(crate) trait DynFamily: Send + Sync {
     /// The family's own type: two registrations of one name are the same family only if it matches.
     fn family_type(&self) -> TypeId;
     fn joins_auto(&self) -> bool;
+    fn takes_all_features(&self) -> bool;
     fn default_config(&self) -> Box<dyn DynConfig>;
     fn config_from_value(&self, value: serde_json::Value) -> Result<Box<dyn DynConfig>>;
     fn model_from_value(&self, value: serde_json::Value) -> Result<Box<dyn DynModel>>;
@@ -96,6 +97,10 @@ impl<F: ClassifierFamily> DynFamily for Erased<F> {
 
     fn joins_auto(&self) -> bool {
         F::JOINS_AUTO
+    }
+
+    fn takes_all_features(&self) -> bool {
+        F::TAKES_ALL_FEATURES
     }
 
     fn default_config(&self) -> Box<dyn DynConfig> {

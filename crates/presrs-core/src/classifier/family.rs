@@ -38,6 +38,10 @@ pub trait ClassifierFamily: Send + Sync + 'static {
     const NAME: &'static str;
     /// Whether the automatic choice tries it.
     const JOINS_AUTO: bool = true;
+    /// Whether it takes every feature rather than the principal components: a family that standardises
+    /// and regularises on its own (ridge, whose fit is cheap in its Gram form) skips the PCA step, which
+    /// keeps the directions of largest variance, not those that separate the classes.
+    const TAKES_ALL_FEATURES: bool = false;
 
     /// Hyper-parameters; `Default` is what users get when they only name the family.
     type Config: Clone + Debug + Default + PartialEq + Serialize + DeserializeOwned + Send + Sync;

@@ -59,6 +59,12 @@ impl ClassifierKind {
         self.0
     }
 
+    /// Whether the family takes every feature, without the PCA step
+    /// ([`ClassifierFamily::TAKES_ALL_FEATURES`](crate::classifier::ClassifierFamily::TAKES_ALL_FEATURES)).
+    pub fn takes_all_features(self) -> bool {
+        self.0.takes_all_features()
+    }
+
     /// Every registered family: the built-in ones, then those registered at run time.
     pub fn all() -> Vec<Self> {
         let registered = REGISTERED

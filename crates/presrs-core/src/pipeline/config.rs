@@ -15,7 +15,8 @@ pub struct TrainConfig {
     /// The region of each image that is used (applied before the features).
     pub crop: Crop,
     pub features: FeatureConfig,
-    /// Number of principal components kept (capped at `n_train - 1` and at the feature count).
+    /// Number of principal components kept (capped at `n_train - 1` and at the feature count); unused
+    /// when the classifier takes every feature ([`TrainConfig::pca_dims`]).
     pub dims: usize,
     pub classifier: ClassifierConfig,
     /// Steps after the crop (fill absent sensels, normalise the load); none by default (the paper).
@@ -38,6 +39,13 @@ impl Default for TrainConfig {
 }
 
 impl TrainConfig {
+    /// The principal components the PCA step keeps at most, or `None` when the classifier takes every
+    /// feature and there is no PCA step (ridge:
+    /// [`ClassifierKind::takes_all_features`](crate::classifier::ClassifierKind::takes_all_features)).
+    pub fn pca_dims(&self) -> Option<usize> {
+        (!self.classifier.kind().takes_all_features()).then_some(self.dims)
+    }
+
     /// Checks the parameters once; the result is what [`train`](crate::pipeline::train) takes.
     pub fn check(self) -> Result<CheckedTrainConfig> {
         if self.dims == 0 {

@@ -49,7 +49,10 @@ pub(crate) struct ModelFields {
     /// The grid of the images after cropping.
     pub(crate) image_grid: Grid,
     pub(crate) features: FeatureConfig,
-    pub(crate) pca: Pca,
+    /// The PCA step; absent when the classifier takes every feature (ridge), which only models written
+    /// since that path exist have (older files always hold one, and load and classify as before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) pca: Option<Pca>,
     pub(crate) classifier: ClassifierModel,
     pub(crate) class_names: Vec<String>,
     pub(crate) summary: TrainingSummary,
@@ -127,24 +130,12 @@ impl TryFrom<ModelFields> for TrainedModel {
         fields.features.check()?;
         check_sizes(&fields.features, fields.image_grid)?;
         let n_features = fields.features.output_len(fields.image_grid)?;
-        if n_features != fields.pca.n_features() {
-            return Err(bad(format!(
-                "{n_features} features per image but the PCA takes {}",
-                fields.pca.n_features()
-            )));
-        }
+        check_projection(&fields, n_features)?;
         let extractor = fields.features.extractor(fields.image_grid)?;
         if extractor.output_len() != n_features {
             return Err(bad(format!(
                 "the extractor gives {} features per image, its configuration {n_features}",
                 extractor.output_len()
-            )));
-        }
-        if fields.pca.n_components() != fields.classifier.dims() {
-            return Err(bad(format!(
-                "the PCA gives {} components but the classifier takes {}",
-                fields.pca.n_components(),
-                fields.classifier.dims()
             )));
         }
         if fields.class_names.len() != fields.classifier.n_classes() {
@@ -156,6 +147,35 @@ impl TryFrom<ModelFields> for TrainedModel {
         }
         check_sample(&fields.sample, fields.image_grid)?;
         Ok(Self { fields, extractor })
+    }
+}
+
+/// The features against the PCA and the PCA against the classifier; without a PCA, the classifier must
+/// take every feature (a file that drops the PCA of another classifier is refused).
+fn check_projection(fields: &ModelFields, n_features: usize) -> Result<()> {
+    let bad = |reason: String| CoreError::Param {
+        name: "trained model",
+        reason,
+    };
+    let classifier_dims = fields.classifier.dims();
+    match &fields.pca {
+        Some(pca) if pca.n_features() != n_features => Err(bad(format!(
+            "{n_features} features per image but the PCA takes {}",
+            pca.n_features()
+        ))),
+        Some(pca) if pca.n_components() != classifier_dims => Err(bad(format!(
+            "the PCA gives {} components but the classifier takes {classifier_dims}",
+            pca.n_components()
+        ))),
+        Some(_) => Ok(()),
+        None if !fields.classifier.kind().takes_all_features() => Err(bad(format!(
+            "no PCA, but the {} classifier takes principal components",
+            fields.classifier.kind().as_str()
+        ))),
+        None if classifier_dims != n_features => Err(bad(format!(
+            "{n_features} features per image but the classifier takes {classifier_dims}"
+        ))),
+        None => Ok(()),
     }
 }
 
@@ -220,8 +240,28 @@ impl TrainedModel {
         &self.fields.features
     }
 
-    pub fn pca(&self) -> &Pca {
-        &self.fields.pca
+    /// The PCA step, when there is one (`None`: the classifier takes every feature, as ridge does).
+    pub fn pca(&self) -> Option<&Pca> {
+        self.fields.pca.as_ref()
+    }
+
+    /// Features per image (what the PCA, or the classifier without one, takes).
+    pub fn n_features(&self) -> usize {
+        self.extractor.output_len()
+    }
+
+    /// What the classifier sees, in words: `PCA 51 components`, or `no PCA: 9996 standardised
+    /// features` (a classifier that takes every feature standardises them itself).
+    pub fn describe_projection(&self) -> String {
+        match &self.fields.pca {
+            Some(pca) => format!("PCA {} components", pca.n_components()),
+            None => format!("no PCA: {} standardised features", self.n_features()),
+        }
+    }
+
+    /// Length of the vectors the classifier sees: the principal components kept, or every feature.
+    pub fn classifier_dims(&self) -> usize {
+        self.fields.classifier.dims()
     }
 
     pub fn classifier(&self) -> &ClassifierModel {

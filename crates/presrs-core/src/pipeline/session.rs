@@ -8,7 +8,7 @@ use crate::classifier::ClassifierScratch;
 use crate::error::{CoreError, Result, check_len};
 use crate::features::Precision;
 use crate::frame::FrameView;
-use crate::pca::ProjectionScratch;
+use crate::pca::{Pca, ProjectionScratch};
 use crate::pipeline::extract::Preprocessor;
 use crate::pipeline::model::TrainedModel;
 
@@ -24,9 +24,9 @@ impl TrainedModel {
                 fields.image_grid,
                 self.extractor.clone(),
             ),
-            features: vec![0.0; fields.pca.n_features()],
-            projection: fields.pca.scratch(),
-            reduced: vec![0.0; fields.pca.n_components()],
+            features: vec![0.0; self.n_features()],
+            projection: fields.pca.as_ref().map(Pca::scratch).unwrap_or_default(),
+            reduced: vec![0.0; fields.pca.as_ref().map_or(0, Pca::n_components)],
             scratch: fields.classifier.scratch(),
             posteriors: vec![0.0; fields.class_names.len()],
         }
@@ -35,7 +35,7 @@ impl TrainedModel {
     /// Classifies many frames in parallel; results in input order, each equal (bit for bit) to what a
     /// [`Session`] gives for that frame. Frames go in blocks of [`BATCH_BLOCK`] per rayon task: the
     /// features of a block are projected together, so the PCA basis is read once per block rather than
-    /// once per frame.
+    /// once per frame (without a PCA, each frame of a block goes through the session).
     pub fn classify_batch(&self, frames: &[FrameView<'_>]) -> Vec<Result<Classification>> {
         frames
             .par_chunks(BATCH_BLOCK)
@@ -100,12 +100,12 @@ impl<'m> Session<'m> {
     pub fn classify(&mut self, frame: &FrameView<'_>) -> Result<Prediction<'_>> {
         self.reduce(frame)?;
         let model = self.model;
-        let class = classify_reduced(
-            model,
-            &self.reduced,
-            &mut self.scratch,
-            &mut self.posteriors,
-        )?;
+        let reduced = if model.fields.pca.is_some() {
+            &self.reduced
+        } else {
+            &self.features
+        };
+        let class = classify_reduced(model, reduced, &mut self.scratch, &mut self.posteriors)?;
         Ok(Prediction {
             class,
             label: &model.fields.class_names[class],
@@ -137,10 +137,14 @@ impl<'m> Session<'m> {
         self.preprocessor.fast_f32_features(frame)
     }
 
-    /// The PCA-reduced feature vector of `frame` (what the classifier sees): the
-    /// [`fast_features`](Self::fast_features) and the PCA's fixed-point projection.
+    /// The vector of `frame` the classifier sees: the [`fast_features`](Self::fast_features) and the
+    /// PCA's fixed-point projection, or the fast features themselves when there is no PCA step.
     pub fn reduce(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
-        let pca = &self.model.fields.pca;
+        let Some(pca) = &self.model.fields.pca else {
+            self.preprocessor
+                .features_into(frame, &mut self.features, Precision::Fast)?;
+            return Ok(&self.features);
+        };
         match self.preprocessor.fast_f32_features(frame)? {
             // The same values as `fast_features` gives, without widening them to f64 and back.
             Some(features) => {
@@ -204,7 +208,13 @@ impl<'m> BatchSession<'m> {
     fn classify_block(&mut self, frames: &[FrameView<'_>]) -> Vec<Result<Classification>> {
         let session = &mut self.session;
         let model = session.model;
-        let pca = &model.fields.pca;
+        let Some(pca) = &model.fields.pca else {
+            // No basis to share: each frame as a session classifies it.
+            return frames
+                .iter()
+                .map(|frame| Ok(session.classify(frame)?.to_classification()))
+                .collect();
+        };
         let (n_features, dims) = (pca.n_features(), pca.n_components());
         self.features.resize(frames.len() * n_features, 0.0);
         self.reduced.resize(frames.len() * dims, 0.0);

@@ -1,4 +1,5 @@
-//! Training: the classes of a training set, its features, the PCA and the classifier, into a model.
+//! Training: the classes of a training set, its features, the PCA (unless the classifier takes every
+//! feature) and the classifier, into a model.
 
 use crate::classifier::LabeledVectors;
 use crate::error::{CoreError, Result};
@@ -31,15 +32,24 @@ pub fn train(
     let train_features = features_of(train, &preprocessor, Precision::Exact)?;
     let validation_features = features_of(validation, &preprocessor, Precision::Exact)?;
 
-    let pca = Pca::fit(&train_features, n_features, config.dims)?;
-    let dims = pca.n_components();
+    let (pca, train_vectors, validation_vectors) = match config.pca_dims() {
+        Some(dims) => {
+            let pca = Pca::fit(&train_features, n_features, dims)?;
+            let train_vectors = project_rows(&pca, &train_features)?;
+            let validation_vectors = project_rows(&pca, &validation_features)?;
+            (Some(pca), train_vectors, validation_vectors)
+        }
+        // The classifier takes every feature (and standardises them itself).
+        None => (None, train_features, validation_features),
+    };
+    let dims = pca.as_ref().map_or(n_features, Pca::n_components);
     let classifier = config.classifier.fit(
         LabeledVectors {
-            vectors: &project_rows(&pca, &train_features)?,
+            vectors: &train_vectors,
             classes: &train_classes,
         },
         LabeledVectors {
-            vectors: &project_rows(&pca, &validation_features)?,
+            vectors: &validation_vectors,
             classes: &validation_classes,
         },
         class_names.len(),

@@ -257,7 +257,11 @@ fn dims_variants(scores: &[CandidateScore], dims: &[usize]) -> Result<Vec<Checke
     // (a stable sort: ties keep the candidates' order)
     ranked.sort_by(|a, b| b.accuracy.mean.total_cmp(&a.accuracy.mean));
     let mut variants = Vec::new();
-    for score in ranked.into_iter().take(REFINED) {
+    // (a candidate without a PCA step has no dims to refine, and leaves its place to the next)
+    let refinable = ranked
+        .into_iter()
+        .filter(|score| score.config.pca_dims().is_some());
+    for score in refinable.take(REFINED) {
         for &d in dims.iter().filter(|&&d| d != score.config.dims) {
             variants.push(
                 crate::pipeline::TrainConfig {

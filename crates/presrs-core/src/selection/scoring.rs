@@ -1,10 +1,12 @@
 //! Scoring the candidates of an automatic choice on its folds, each feature configuration's features
 //! computed once (and kept for the race's second phase and the refinement of the dims) and each fold's
-//! PCA fitted once per number of components, then shared by every classifier that uses them. Gives, candidate for candidate, the scores that training each candidate
+//! PCA fitted once per number of components, then shared by every classifier that uses them (a
+//! classifier that takes every feature, ridge, sees them without a PCA). Gives, candidate for candidate, the scores that training each candidate
 //! on each fold with [`crate::pipeline::train`] and classifying the held-out images with a session
 //! gives (the test `cached_scores_equal_training_each_candidate_on_each_fold` checks it), at a fraction
 //! of the cost.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
@@ -375,7 +377,8 @@ fn fold_scores<'f>(
     candidate_score(config, accuracies, None)
 }
 
-/// Every member's accuracy on one fold: one PCA per number of components, shared by the classifiers.
+/// Every member's accuracy on one fold: one PCA per number of components, shared by the classifiers
+/// (those that take every feature share the features as they are).
 /// A candidate that cannot be trained gives its reason; a held-out image that cannot be classified (a
 /// non-finite value) is an error of the whole choice, as in classification.
 fn score_fold(
@@ -397,20 +400,35 @@ fn score_fold(
     };
     let train_rows = table.exact_rows(&fold.train);
     let validation_rows = table.exact_rows(&fold.validation);
-    let mut dims_wanted: Vec<usize> = configs.iter().map(|config| config.dims).collect();
+    // `None`: the classifiers that take every feature, without a PCA.
+    let mut dims_wanted: Vec<Option<usize>> = configs.iter().map(|c| c.pca_dims()).collect();
     dims_wanted.sort_unstable();
     dims_wanted.dedup();
     let mut results = vec![Err(String::new()); configs.len()];
     for dims in dims_wanted {
         let members: Vec<usize> = (0..configs.len())
-            .filter(|&m| configs[m].dims == dims)
+            .filter(|&m| configs[m].pca_dims() == dims)
             .collect();
-        let projected = Pca::fit(&train_rows, table.n_features, dims).and_then(|pca| {
-            let train = project_rows(&pca, &train_rows)?;
-            let validation = project_rows(&pca, &validation_rows)?;
-            let test = project_test(&pca, table, &fold.test)?;
-            Ok((pca.n_components(), train, validation, test))
-        });
+        // (without a PCA the fold's rows are used as they are, not copied: ~10,000 features a row)
+        let projected = match dims {
+            Some(dims) => Pca::fit(&train_rows, table.n_features, dims).and_then(|pca| {
+                let train = project_rows(&pca, &train_rows)?;
+                let validation = project_rows(&pca, &validation_rows)?;
+                let test = project_test(&pca, table, &fold.test)?;
+                Ok((
+                    pca.n_components(),
+                    Cow::Owned(train),
+                    Cow::Owned(validation),
+                    test,
+                ))
+            }),
+            None => Ok((
+                table.n_features,
+                Cow::Borrowed(train_rows.as_slice()),
+                Cow::Borrowed(validation_rows.as_slice()),
+                fast_rows(table, &fold.test),
+            )),
+        };
         let (dims, train, validation, test) = match projected {
             Ok(projected) => projected,
             Err(err) => {
@@ -463,6 +481,13 @@ fn score_fold(
         }
     }
     Ok(results)
+}
+
+/// The held-out images' features as a classification session computes them (without a PCA step).
+fn fast_rows(table: &FeatureTable, test: &[usize]) -> Vec<f64> {
+    test.iter()
+        .flat_map(|&i| table.fast_row(i).iter().copied())
+        .collect()
 }
 
 /// The held-out images projected as a classification session projects them (its features, then the

@@ -695,3 +695,49 @@ fn a_race_drops_against_the_best_of_every_group_on_the_first_folds() {
     assert_eq!(raced[0].per_fold.len(), RACE_FOLDS);
     assert_eq!(raced[1], full[1]);
 }
+
+/// A candidate whose classifier takes every feature (ridge) has no PCA, so no dims to refine: the
+/// refinement tries other dims with the best candidates that have one, and a ridge winner is trained
+/// without a PCA.
+#[test]
+fn ridge_is_not_refined_and_its_model_has_no_pca() {
+    use crate::classifier::ClassifierKind;
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let frames: Vec<Frame> = (0..48)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect();
+    let images = grouped(&frames);
+    let with = |classifier: ClassifierKind| {
+        TrainConfig {
+            classifier: classifier.default_config(),
+            dims: 8,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    let candidates = [with(ClassifierKind::RIDGE), with(ClassifierKind::LDA)];
+    let choice = AutoChoice::new(&candidates, ValidateBy::Group).with_refined_dims(&[4, 8]);
+    let selection = select(&images, &choice, 1).unwrap();
+    let names: Vec<(String, usize)> = selection
+        .scores
+        .iter()
+        .map(|score| (score.classifier.clone(), score.config.dims))
+        .collect();
+    // The two candidates, then LDA with 4 dims: ridge, even if it scored best, gets no variant.
+    assert_eq!(
+        names,
+        [("ridge".into(), 8), ("lda".into(), 8), ("lda".into(), 4)]
+    );
+    assert!(selection.scores.iter().all(|score| score.error.is_none()));
+    let model = train_auto(
+        &images[..32],
+        &images[32..],
+        &AutoChoice::new(&candidates[..1], ValidateBy::Split),
+        1,
+    )
+    .unwrap();
+    assert!(model.pca().is_none());
+    assert_eq!(model.classifier_dims(), model.n_features());
+}

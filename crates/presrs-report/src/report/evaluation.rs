@@ -22,6 +22,8 @@ pub(super) fn validation_section<'a>(model: &TrainedModel) -> Option<Section<'a>
         .iter()
         .filter_map(|p| Some((p.sigma, p.mean_log_posterior?.exp())))
         .collect();
+    // (a validation curve is the Parzen window's, which always sees principal components)
+    let pca = model.pca()?;
     if curve.is_empty() {
         return None;
     }
@@ -36,8 +38,8 @@ pub(super) fn validation_section<'a>(model: &TrainedModel) -> Option<Section<'a>
                 curve,
                 confidence,
                 chosen_sigma: model.sigma(),
-                explained: model.pca().explained_variance_ratio(),
-                kept: model.pca().n_components(),
+                explained: pca.explained_variance_ratio(),
+                kept: pca.n_components(),
             }),
             "Left: accuracy on the validation images of a model trained on the training \
              images only, for each Parzen width σ tried, and the geometric mean of the \

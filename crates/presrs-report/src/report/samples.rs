@@ -180,12 +180,11 @@ pub(super) fn data_section<'a>(inputs: &ReportInputs<'_>, g: &Groups<'a>) -> Sec
     if let Some(model) = inputs.model {
         let _ = write!(
             summary,
-            "<p>Model: classes {}; crop {} → {} image; {} principal components; classifier {} \
-             ({}).{}</p>",
+            "<p>Model: classes {}; crop {} → {} image; {}; classifier {} ({}).{}</p>",
             esc(&model.class_names().join(", ")),
             model.crop(),
             model.image_grid(),
-            model.pca().n_components(),
+            model.describe_projection(),
             esc(model.classifier().kind().as_str()),
             esc(&model.classifier().describe()),
             inputs
@@ -466,10 +465,16 @@ pub(super) fn pca_section<'a>(
         .collect();
     let fitted;
     let (pca, pca_note): (Option<&Pca>, &str) = match inputs.model {
-        Some(model) if model.pca().n_features() == n_features => (
-            Some(model.pca()),
-            "the model's principal components (fitted on its training images)",
-        ),
+        Some(model)
+            if model
+                .pca()
+                .is_some_and(|pca| pca.n_features() == n_features) =>
+        {
+            (
+                model.pca(),
+                "the model's principal components (fitted on its training images)",
+            )
+        }
         _ if usable.len() >= 3 => {
             let flat: Vec<f64> = usable.iter().flat_map(|(_, f)| f.iter().copied()).collect();
             fitted = Pca::fit(&flat, n_features, 2).ok();
