@@ -187,6 +187,9 @@ def latency_run(case, domain, replays, period, wire=False):
                     time.sleep(wait)
             sent.append(time.monotonic_ns())
             pub.write(ser)
+    # One pass's decisions times the replays. The recording begins in contact (a partial stance that
+    # one pass does not decide); after another replay that stance is whole, so the node decides
+    # `replays - 1` more.
     expected = replays * sum(e["event"] == "classification" for e in case.reference)
     time.sleep(1.0)
     stop.set()
@@ -200,7 +203,7 @@ def latency_run(case, domain, replays, period, wire=False):
     code, stderr = node.stop(signal.SIGINT)
     lat = [(now - sent[frame]) / 1000 for frame, now, _ in received if frame < len(sent)]
     inside = [node_us for _, _, node_us in received]
-    result = {"decisions": len(received), "expected": expected, **percentiles(lat),
+    result = {"decisions": len(received), "one_pass_decisions_x_replays": expected, **percentiles(lat),
               "inside_node_p50_us": round(float(np.median(inside)), 1) if inside else None,
               "node_summary": stderr.strip().splitlines()[-1]}
     if legs is not None:
