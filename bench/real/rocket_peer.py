@@ -13,7 +13,11 @@ over time:
 * `... + StandardScaler + RidgeClassifierCV`: the same with the features standardised first, as aeon's
   own `MiniRocketClassifier` pipeline (`StandardScaler(with_mean=False)`);
 * `... + PCA(51) + StandardScaler + RidgeClassifierCV` (with `--pca`): presrs's path before ridge saw the
-  full features (the 51 principal components, each standardised), to measure what the PCA step costs.
+  full features (the 51 principal components, each standardised), to measure what the PCA step costs;
+* `aeon MiniRocket on presrs's input (channels / spread) + StandardScaler + RidgeClassifierCV` (with
+  `--channel-scaled`): each channel divided by its standard deviation over the samples MiniRocket is
+  fitted on, as presrs's rocket family does before its convolutions; the same input and classifier as
+  presrs's rocket + ridge, so the two MiniRockets are compared alone.
 
 Ridge has nothing to validate outside its own leave-one-out, so every peer trains on training +
 validation at once: the images presrs's models learn from. Accuracy per repeat is pooled over the
@@ -57,6 +61,10 @@ PEERS = [
     ("aeon MiniRocket + RidgeClassifierCV", ridge),
     ("aeon MiniRocket + StandardScaler + RidgeClassifierCV", scaled_ridge),
 ]
+SCALED_PEER = (
+    "aeon MiniRocket on presrs's input (channels / spread) + StandardScaler + RidgeClassifierCV",
+    scaled_ridge,
+)
 PCA_PEER = ("aeon MiniRocket + PCA(51) + StandardScaler + RidgeClassifierCV", pca_ridge)
 
 
@@ -70,7 +78,16 @@ def load(export: Path) -> tuple[np.ndarray, dict]:
     return images.astype(np.float64), document
 
 
-def evaluate(images: np.ndarray, document: dict, peers, threads: int) -> list[dict]:
+def channel_scaled(images: np.ndarray, fit_on: np.ndarray) -> np.ndarray:
+    """`images` with each channel (row) divided by its standard deviation over every value of the
+    samples `fit_on` (1 for a constant channel): presrs's rocket family's input."""
+    channels = images.shape[1]
+    spread = images[fit_on].transpose(1, 0, 2).reshape(channels, -1).std(axis=1)
+    spread[~(np.isfinite(spread) & (spread > 0))] = 1.0
+    return images / spread[None, :, None]
+
+
+def evaluate(images: np.ndarray, document: dict, peers, threads: int, scale: bool = False) -> list[dict]:
     labels = np.array(document["labels"])
     draws = document["draws"]
     repeats = sorted({d["repeat"] for d in draws})
@@ -83,12 +100,13 @@ def evaluate(images: np.ndarray, document: dict, peers, threads: int) -> list[di
         for draw in (d for d in draws if d["repeat"] == repeat):
             tr, va, te = (np.array(draw[k], dtype=int) for k in ("train", "validation", "test"))
             fit_on = np.concatenate([tr, va])
+            x = channel_scaled(images, fit_on) if scale else images
             start = time.perf_counter()
-            rocket = MiniRocket(n_kernels=10_000, random_state=0, n_jobs=threads).fit(images[fit_on])
-            x_fit = rocket.transform(images[fit_on])
+            rocket = MiniRocket(n_kernels=10_000, random_state=0, n_jobs=threads).fit(x[fit_on])
+            x_fit = rocket.transform(x[fit_on])
             fit_seconds = time.perf_counter() - start
             start = time.perf_counter()
-            x_test = rocket.transform(images[te])
+            x_test = rocket.transform(x[te])
             test_seconds = time.perf_counter() - start
             transform_seconds += test_seconds
             for name, make in peers:
@@ -126,11 +144,15 @@ def main() -> int:
     parser.add_argument("--export", type=Path, required=True, help="the folder `presrs eval --export-draws` wrote")
     parser.add_argument("--out", type=Path, help="write the rows as JSON here (default: stdout)")
     parser.add_argument("--pca", action="store_true", help="also the PCA(51) variant")
+    parser.add_argument("--channel-scaled", action="store_true", help="also the peer on presrs's scaled channels")
     parser.add_argument("--threads", type=int, default=2, help="aeon's n_jobs (default 2)")
     args = parser.parse_args()
     images, document = load(args.export)
     peers = PEERS + ([PCA_PEER] if args.pca else [])
     rows = evaluate(images, document, peers, args.threads)
+    if args.channel_scaled:
+        scaled = evaluate(images, document, [SCALED_PEER], args.threads, scale=True)
+        rows += scaled
     text = json.dumps({"manifest": document.get("manifest"), "shape": list(images.shape[1:]), "peers": rows}, indent=1)
     if args.out:
         args.out.write_text(text + "\n")
