@@ -77,7 +77,7 @@ for set in "${sets[@]}"; do
     echo "== $set: rocket + ridge with and without the PCA step" >&2
     "$projection" "$out/draws" > "$out/projection.txt"
     echo "== $set: aeon MiniRocket + RidgeClassifierCV" >&2
-    "$python" "$here/rocket_peer.py" --export "$out/draws" --pca --out "$out/peer.json"
+    "$python" "$here/rocket_peer.py" --export "$out/draws" --pca --channel-scaled --out "$out/peer.json"
 done
 
 python3 - "$results" "${sets[@]}" <<'EOF'
