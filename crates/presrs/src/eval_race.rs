@@ -43,13 +43,7 @@ impl RaceReadings {
         whole: WholeSample,
         progress: &dyn Progress,
     ) -> Result<Self> {
-        let read = |kind| {
-            let options = SampleOptions {
-                kind,
-                ..options.clone()
-            };
-            Dataset::load(manifest, &options, progress)
-        };
+        let read = |kind| crate::sample_race::read_as(manifest, options, kind, progress);
         let frames = read(SampleKind::Frame)?;
         let whole_kind = whole.kind_for(&frames);
         let whole = read(whole_kind).with_context(|| {

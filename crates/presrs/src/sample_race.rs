@@ -191,6 +191,20 @@ pub struct RacedTraining {
     pub race: SampleRace,
 }
 
+/// The data set of `manifest` read as `kind` samples, the other options as given.
+pub(crate) fn read_as(
+    manifest: &Path,
+    options: &SampleOptions,
+    kind: SampleKind,
+    progress: &dyn Progress,
+) -> Result<Dataset> {
+    let options = SampleOptions {
+        kind,
+        ..options.clone()
+    };
+    Dataset::load(manifest, &options, progress)
+}
+
 /// Reads `manifest` as frames (with `options`, whose kind is ignored) and as its whole sample
 /// ([`WholeSample::kind_for`]), trains each with `train_options` (an automatic choice: its validation
 /// scores decide) and keeps the better.
@@ -204,13 +218,7 @@ pub fn train_racing_samples(
     if !train_options.method.is_auto() {
         return Err(fixed_method_cannot_race());
     }
-    let read = |kind| {
-        let options = SampleOptions {
-            kind,
-            ..options.clone()
-        };
-        Dataset::load(manifest, &options, progress)
-    };
+    let read = |kind| read_as(manifest, options, kind, progress);
     let frames = read(SampleKind::Frame)?;
     let whole_kind = whole.kind_for(&frames);
     let train_on = |dataset: &Dataset| {
