@@ -4,14 +4,13 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use presrs::core::classifier::ClassifierKind;
-use presrs::core::crop::Crop;
-use presrs::core::features::{FeatureConfig, RocketFamily, RocketParams};
 use presrs::core::pipeline::{LabeledImage, TrainConfig, train};
-use presrs::core::preprocess::Preprocess;
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::ValidSegmentParams;
 use presrs::core::stance::summary::SummaryConfig;
@@ -52,27 +51,7 @@ fn stance_model(manifest: &Path, table: &BTreeMap<String, String>) -> PathBuf {
     };
     let dataset = Dataset::load(manifest, &options, &Quiet).unwrap();
     assert!(dataset.samples.len() >= 40, "{}", dataset.samples.len());
-    let images: Vec<_> = dataset
-        .samples
-        .iter()
-        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
-        .collect();
-    let config = TrainConfig {
-        crop: Crop::NONE,
-        features: FeatureConfig::of::<RocketFamily>(RocketParams {
-            num_features: 168,
-            ..RocketParams::default()
-        }),
-        dims: 10,
-        classifier: ClassifierKind::LDA.default_config(),
-        preprocess: Preprocess::NONE,
-    }
-    .check()
-    .unwrap();
-    let model = train(&images, &[], &config)
-        .unwrap()
-        .with_sample(dataset.sample)
-        .unwrap();
+    let model = common::small_rocket_model(&dataset, ClassifierKind::LDA, 10, dataset.sample);
     let mut profile =
         presrs::train::learn_online_profile(manifest, &ValidSegmentParams::default()).unwrap();
     profile.gait_table = table.clone();

@@ -4,6 +4,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::time::{Duration, Instant};
@@ -328,11 +330,7 @@ fn get_fails(addr: SocketAddr) -> bool {
 #[test]
 fn a_whole_stance_models_decisions_show_what_they_waited_for() {
     use presrs::core::classifier::ClassifierKind;
-    use presrs::core::crop::Crop;
-    use presrs::core::features::{FeatureConfig, RocketFamily, RocketParams};
     use presrs::core::online::{OnlineParams, OnlineProfile};
-    use presrs::core::pipeline::{LabeledImage, TrainConfig, train};
-    use presrs::core::preprocess::Preprocess;
     use presrs::core::sample::SampleKind;
     use presrs::core::stance::summary::SummaryConfig;
     use presrs::live::{ReplayOptions, replay_recording};
@@ -348,27 +346,7 @@ fn a_whole_stance_models_decisions_show_what_they_waited_for() {
     };
     let manifest = data.join("jiku-walk/manifest.csv");
     let dataset = presrs::Dataset::load(&manifest, &options, &presrs::Quiet).unwrap();
-    let images: Vec<_> = dataset
-        .samples
-        .iter()
-        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
-        .collect();
-    let config = TrainConfig {
-        crop: Crop::NONE,
-        features: FeatureConfig::of::<RocketFamily>(RocketParams {
-            num_features: 168,
-            ..RocketParams::default()
-        }),
-        dims: 20,
-        classifier: ClassifierKind::LDA.default_config(),
-        preprocess: Preprocess::NONE,
-    }
-    .check()
-    .unwrap();
-    let model = train(&images, &[], &config)
-        .unwrap()
-        .with_sample(options.kind)
-        .unwrap();
+    let model = common::small_rocket_model(&dataset, ClassifierKind::LDA, 20, options.kind);
     let path = data.join("jiku-walk").join(&dataset.samples[0].source);
     let (read, _) =
         presrs::dataset::read_corrected(&path, &options.read, options.dead_sensels.as_ref())

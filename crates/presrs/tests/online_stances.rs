@@ -5,18 +5,17 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use presrs::classify::{ClassifyOptions, classify_recording};
 use presrs::core::Recording;
 use presrs::core::classifier::ClassifierKind;
-use presrs::core::crop::Crop;
-use presrs::core::features::{FeatureConfig, RocketFamily, RocketParams};
 use presrs::core::online::{
     DecidedAt, Decision, DecisionKind, OnlineClassifier, OnlineEvent, OnlineParams, OnlineProfile,
 };
-use presrs::core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
-use presrs::core::preprocess::Preprocess;
+use presrs::core::pipeline::TrainedModel;
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::summary::{SummaryConfig, pad_to, summarise};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
@@ -50,27 +49,7 @@ fn setup() -> (TrainedModel, Vec<(PathBuf, Recording)>) {
 fn setup_with(classifier: ClassifierKind) -> (TrainedModel, Vec<(PathBuf, Recording)>) {
     let options = options();
     let dataset = Dataset::load(&shared("real/jiku-walk/manifest.csv"), &options, &Quiet).unwrap();
-    let images: Vec<_> = dataset
-        .samples
-        .iter()
-        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
-        .collect();
-    let config = TrainConfig {
-        crop: Crop::NONE,
-        features: FeatureConfig::of::<RocketFamily>(RocketParams {
-            num_features: 168,
-            ..RocketParams::default()
-        }),
-        dims: 20,
-        classifier: classifier.default_config(),
-        preprocess: Preprocess::NONE,
-    }
-    .check()
-    .unwrap();
-    let model = train(&images, &[], &config)
-        .unwrap()
-        .with_sample(options.kind)
-        .unwrap();
+    let model = common::small_rocket_model(&dataset, classifier, 20, options.kind);
     let movies = dataset
         .samples
         .iter()

@@ -1,0 +1,40 @@
+//! Scaffolding shared by the whole-stance tests: a small MiniRocket model trained on a data set.
+
+use presrs::Dataset;
+use presrs::core::classifier::ClassifierKind;
+use presrs::core::crop::Crop;
+use presrs::core::features::{FeatureConfig, RocketFamily, RocketParams};
+use presrs::core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
+use presrs::core::preprocess::Preprocess;
+use presrs::core::sample::SampleKind;
+
+/// A model of 168 MiniRocket features, `dims` components and `classifier`, trained on every sample of
+/// `dataset` (no validation images) and stored with `sample`, the kind it classifies.
+pub fn small_rocket_model(
+    dataset: &Dataset,
+    classifier: ClassifierKind,
+    dims: usize,
+    sample: SampleKind,
+) -> TrainedModel {
+    let images: Vec<_> = dataset
+        .samples
+        .iter()
+        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
+        .collect();
+    let config = TrainConfig {
+        crop: Crop::NONE,
+        features: FeatureConfig::of::<RocketFamily>(RocketParams {
+            num_features: 168,
+            ..RocketParams::default()
+        }),
+        dims,
+        classifier: classifier.default_config(),
+        preprocess: Preprocess::NONE,
+    }
+    .check()
+    .unwrap();
+    train(&images, &[], &config)
+        .unwrap()
+        .with_sample(sample)
+        .unwrap()
+}
