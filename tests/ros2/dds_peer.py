@@ -82,6 +82,23 @@ class Peer:
     def publish(self, message):
         self.writer.write(message)
 
+    def serialized(self, payloads):
+        """The bag's CDR payloads as this peer's writer writes them (Cyclone's serialization, padded
+        to 4 bytes), for `publish_serialized`."""
+        out = []
+        for data in payloads:
+            ser = self.input_type.deserialize(data).serialize(use_version_2=self.writer._use_version_2)
+            out.append(ser.ljust((len(ser) + 3) & ~3, b"\0"))
+        return out
+
+    def publish_serialized(self, ser):
+        """Writes bytes serialized once, as a driver hands over its buffer: hundreds of thousands of
+        frames a second, far faster than `publish` (which serializes in Python each time)."""
+        from cyclonedds._clayer import ddspy_write
+
+        if ddspy_write(self.writer._ref, ser) < 0:
+            raise RuntimeError("Cyclone could not write a frame")
+
     def poll(self):
         """Takes what has arrived on every output."""
         for r in self.readers:
