@@ -223,13 +223,12 @@ pub fn run_node(
         }
     };
     let frame_id = options.name.clone();
-    let mut emit = |line: String| -> bool {
-        let event: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
+    let mut emit = |event: &Value, line: String| -> bool {
         let mut s = state.borrow_mut();
-        s.counters.note_event(&event);
+        s.counters.note_event(event);
         let names = model.class_names();
         // On the wire first (a robot waits for it), then stdout (a pipe that may be slow to read).
-        let published = publish_event(&outputs, &event, &line, names, &s.stamps, &frame_id);
+        let published = publish_event(&outputs, event, &line, names, &s.stamps, &frame_id);
         s.counters.publish_failures += u64::from(!published);
         on_line(&line);
         published

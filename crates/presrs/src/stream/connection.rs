@@ -10,8 +10,9 @@ use presrs_core::{FrameView, Grid};
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
 use presrs_io::mcap::BagFrames;
 use presrs_io::tekscan_stream::TekscanStream;
+use serde_json::Value;
 
-use super::events::{end_line, error_line, event_lines};
+use super::events::{end_event, error_event, event_values};
 use super::shutdown::ShutdownHandle;
 pub use super::summary::ConnectionSummary;
 use super::tap::{ConnectionTap, NoTap};
@@ -107,7 +108,7 @@ pub fn run_connection_tapped<R: BufRead>(
     // A closed output (`presrs stream | head`): nobody reads the decisions any more, so the connection
     // ends as if the input had (a live input may never end by itself).
     let closed = std::cell::Cell::new(false);
-    let mut emit = |line: String| -> bool {
+    let mut emit = |_: &Value, line: String| -> bool {
         let written = writeln!(output, "{line}").and_then(|()| output.flush());
         if let Err(err) = &written {
             closed.set(closed.get() || err.kind() == std::io::ErrorKind::BrokenPipe);
@@ -170,7 +171,7 @@ struct Connection<'a, 'm> {
     profile: &'a OnlineProfile,
     classifier: OnlineClassifier<'m>,
     summary: ConnectionSummary,
-    emit: &'a mut dyn FnMut(String) -> bool,
+    emit: &'a mut dyn FnMut(&Value, String) -> bool,
     notify: &'a dyn Fn(&ConnectionNotice),
     tap: &'a mut dyn ConnectionTap,
     /// Errors reported so far (the first few are noticed).
@@ -178,9 +179,10 @@ struct Connection<'a, 'm> {
 }
 
 impl Connection<'_, '_> {
-    fn emit(&mut self, line: String) {
+    fn emit(&mut self, event: Value) {
+        let line = event.to_string();
         self.tap.line(&line);
-        if !(self.emit)(line) {
+        if !(self.emit)(&event, line) {
             self.summary.dropped_events += 1;
         }
     }
@@ -194,7 +196,7 @@ impl Connection<'_, '_> {
             (self.notify)(&ConnectionNotice::ErrorsMuted);
         }
         self.reported += 1;
-        self.emit(error_line(message, fatal));
+        self.emit(error_event(message, fatal));
     }
 
     /// Classifies one frame (input frame `index`, as it came), emitting its events or its error. False
@@ -228,17 +230,17 @@ impl Connection<'_, '_> {
             {
                 Ok(step) => {
                     let latency_us = arrival.elapsed().as_secs_f64() * 1e6;
-                    // A frame taken but not classified is an `error` line (event_lines) and one of
+                    // A frame taken but not classified is an `error` event (event_values) and one of
                     // the connection's errors.
                     let failed = step
                         .events
                         .iter()
                         .filter(|event| matches!(event, OnlineEvent::Failed(_)))
                         .count();
-                    let lines =
-                        event_lines(&step, self.model, self.profile, latency_us, timestamp_us);
+                    let events =
+                        event_values(&step, self.model, self.profile, latency_us, timestamp_us);
                     self.summary.errors += failed as u64;
-                    lines.into_iter().for_each(|line| self.emit(line));
+                    events.into_iter().for_each(|event| self.emit(event));
                     Ok(())
                 }
                 Err(err) => Err(err.to_string()),
@@ -263,24 +265,25 @@ impl Connection<'_, '_> {
 
 /// The per-frame session of a face that reads frames its own way (a ROS 2 node): the same session,
 /// classifier, error policy, JSON lines and summary as [`run_connection`], over `next` until it returns
-/// [`Input::End`] or [`Input::Fatal`]; every JSON line goes to `emit` (false: the line was dropped).
+/// [`Input::End`] or [`Input::Fatal`]; every event goes to `emit` as its JSON value and its line (false:
+/// the line was dropped), so that a face that builds messages of its own need not parse the line back.
 pub fn run_frames(
     model: &TrainedModel,
     profile: &OnlineProfile,
     next: impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input,
-    emit: &mut dyn FnMut(String) -> bool,
+    emit: &mut dyn FnMut(&Value, String) -> bool,
     notify: &dyn Fn(&ConnectionNotice),
 ) -> Result<ConnectionSummary> {
     drive_connection(model, profile, next, emit, notify, &mut NoTap)
 }
 
-/// Runs the online classifier over `next` until it ends, handing every JSON line to `emit` (which
+/// Runs the online classifier over `next` until it ends, handing every event (value and line) to `emit` (which
 /// returns false when it had to drop the line).
 pub(super) fn drive_connection(
     model: &TrainedModel,
     profile: &OnlineProfile,
     mut next: impl FnMut(&mut Vec<f64>, &mut Vec<bool>) -> Input,
-    emit: &mut dyn FnMut(String) -> bool,
+    emit: &mut dyn FnMut(&Value, String) -> bool,
     notify: &dyn Fn(&ConnectionNotice),
     tap: &mut dyn ConnectionTap,
 ) -> Result<ConnectionSummary> {
@@ -344,14 +347,14 @@ pub(super) fn drive_connection(
 
 /// Ends the connection: the stances still open, the warm-up notice if it never ended, the `end` line.
 fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSummary> {
-    let lines = event_lines(
+    let events = event_values(
         &conn.classifier.finish()?,
         conn.model,
         conn.profile,
         0.0,
         None,
     );
-    lines.into_iter().for_each(|line| conn.emit(line));
+    events.into_iter().for_each(|event| conn.emit(event));
     conn.summary.stats = conn.classifier.stats();
     let frames = conn.summary.stats.frames;
     if warming_up && frames > 0 {
@@ -359,7 +362,7 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
         conn.summary.warmup_unfinished = true;
         (conn.notify)(&ConnectionNotice::WarmupUnfinished { frames });
     }
-    let end = end_line(&conn.summary);
+    let end = end_event(&conn.summary);
     conn.emit(end);
     Ok(conn.summary)
 }

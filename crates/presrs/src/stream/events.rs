@@ -6,20 +6,6 @@ use serde_json::{Value, json};
 
 use super::summary::ConnectionSummary;
 
-/// The JSON lines of one step of the classifier.
-pub(super) fn event_lines(
-    step: &Step<'_>,
-    model: &TrainedModel,
-    profile: &OnlineProfile,
-    latency_us: f64,
-    timestamp_us: Option<u64>,
-) -> Vec<String> {
-    event_values(step, model, profile, latency_us, timestamp_us)
-        .into_iter()
-        .map(|value| value.to_string())
-        .collect()
-}
-
 /// The events of one step of the classifier as JSON values (`docs/stream-protocol.md`: touchdown,
 /// classification, error, liftoff), for a face that is not a stream (the Python package).
 pub fn event_values(
@@ -122,13 +108,18 @@ fn kind_name(kind: DecisionKind) -> &'static str {
     }
 }
 
-/// An `error` line.
-pub(super) fn error_line(message: &str, fatal: bool) -> String {
-    json!({"event": "error", "message": message, "fatal": fatal}).to_string()
+/// An `error` event.
+pub(super) fn error_event(message: &str, fatal: bool) -> Value {
+    json!({"event": "error", "message": message, "fatal": fatal})
 }
 
-/// The `end` line: the connection's counters.
-pub(super) fn end_line(summary: &ConnectionSummary) -> String {
+/// An `error` line.
+pub(super) fn error_line(message: &str, fatal: bool) -> String {
+    error_event(message, fatal).to_string()
+}
+
+/// The `end` event: the connection's counters.
+pub(super) fn end_event(summary: &ConnectionSummary) -> Value {
     let s = summary.stats;
     let mut end = json!({
         "event": "end",
@@ -144,5 +135,5 @@ pub(super) fn end_line(summary: &ConnectionSummary) -> String {
     if let Some(note) = summary.note() {
         end["note"] = note.into();
     }
-    end.to_string()
+    end
 }

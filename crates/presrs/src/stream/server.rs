@@ -269,7 +269,7 @@ impl StreamServer {
         let connection_notice = |notice: &ConnectionNotice| {
             notify(&ServerNotice::Connection { peer: name, notice });
         };
-        let mut emit = |line: String| output.send(line);
+        let mut emit = |_: &serde_json::Value, line: String| output.send(line);
         let mut tap: Box<dyn ConnectionTap + Send> = match &self.taps {
             Some(taps) => taps(name),
             None => Box::new(NoTap),
