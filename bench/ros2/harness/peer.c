@@ -51,6 +51,26 @@ static dds_qos_t *peer_qos(int reliable) {
   return qos;
 }
 
+/* Until the node's end of `entity` (a writer's reader, or a reader's writer) is matched: 30 s at most. */
+static void wait_matched(dds_entity_t entity, int is_writer) {
+  for (int tries = 0;; tries++) {
+    uint32_t matched;
+    if (is_writer) {
+      dds_publication_matched_status_t st;
+      dds_get_publication_matched_status(entity, &st);
+      matched = st.current_count;
+    } else {
+      dds_subscription_matched_status_t st;
+      dds_get_subscription_matched_status(entity, &st);
+      matched = st.current_count;
+    }
+    if (matched > 0) return;
+    if (tries == 1500) die(is_writer ? "the node's reader was not found within 30 s"
+                                     : "the node's writer was not found within 30 s", 0);
+    dds_sleepfor(DDS_MSECS(20));
+  }
+}
+
 /* --- the frames file: u32 count, then per frame u32 height, width, step, u8 is_bigendian, and three
  * u32-length-prefixed byte strings (encoding, frame_id, data), i32 sec, u32 nanosec; little-endian. */
 
@@ -126,12 +146,7 @@ static int publish(int argc, char **argv) {
   dds_delete_qos(qos);
   if (writer < 0) die("writer", writer);
 
-  dds_publication_matched_status_t matched = {0};
-  for (int tries = 0; matched.current_count == 0; tries++) {
-    if (tries == 1500) die("the node's reader was not found within 30 s", 0);
-    dds_sleepfor(DDS_MSECS(20));
-    dds_get_publication_matched_status(writer, &matched);
-  }
+  wait_matched(writer, 1);
   dds_sleepfor(DDS_MSECS(500));
 
   int64_t start = monotonic_ns();
@@ -172,12 +187,7 @@ static int subscribe(int argc, char **argv) {
   dds_delete_qos(qos);
   if (reader < 0) die("reader", reader);
 
-  dds_subscription_matched_status_t matched = {0};
-  for (int tries = 0; matched.current_count == 0; tries++) {
-    if (tries == 1500) die("the node's writer was not found within 30 s", 0);
-    dds_sleepfor(DDS_MSECS(20));
-    dds_get_subscription_matched_status(reader, &matched);
-  }
+  wait_matched(reader, 0);
   printf("ready\n");
   fflush(stdout);
 
