@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use presrs::core::classifier::ClassifierKind;
-use presrs::core::pipeline::{LabeledImage, TrainConfig, train};
+use presrs::core::pipeline::{TrainConfig, train};
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::ValidSegmentParams;
 use presrs::core::stance::summary::SummaryConfig;
@@ -138,11 +138,7 @@ fn decide_at_with_a_one_frame_model_is_refused() {
     let config = SimConfig::default();
     let manifest = write_movies(dir.path(), &config);
     let dataset = Dataset::load(&manifest, &SampleOptions::default(), &Quiet).unwrap();
-    let images: Vec<_> = dataset
-        .samples
-        .iter()
-        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
-        .collect();
+    let images = common::labeled_images(&dataset);
     let config_paper = TrainConfig {
         classifier: ClassifierKind::LDA.default_config(),
         ..TrainConfig::default()

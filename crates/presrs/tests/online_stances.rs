@@ -9,13 +9,13 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use presrs::classify::{ClassifyOptions, classify_recording};
+use presrs::classify::{Classified, ClassifyOptions, classify_recording};
 use presrs::core::Recording;
 use presrs::core::classifier::ClassifierKind;
 use presrs::core::online::{
     DecidedAt, Decision, DecisionKind, OnlineClassifier, OnlineEvent, OnlineParams, OnlineProfile,
 };
-use presrs::core::pipeline::TrainedModel;
+use presrs::core::pipeline::{Session, TrainedModel};
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::summary::{SummaryConfig, pad_to, summarise};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
@@ -99,27 +99,54 @@ fn stream(
     out
 }
 
-#[test]
-fn every_liftoff_decision_is_the_offline_classification_of_the_stance() {
-    let (model, movies) = setup();
-    assert_eq!(movies.len(), 120);
+/// One movie, whose one stance is classified offline (`classify_recording`) and decided once online
+/// (`stream`, at lift-off): the offline result, and the decision with its posteriors and JSON line.
+fn offline_and_online(
+    model: &TrainedModel,
+    session: &mut Session<'_>,
+    recording: &Recording,
+    name: &str,
+) -> (Classified, (Decision, Vec<f64>, serde_json::Value)) {
     let classify = ClassifyOptions {
         frame: None,
         samples: options(),
     };
+    let offline = classify_recording(model, session, recording, name, &classify).unwrap();
+    let [offline] = <[Classified; 1]>::try_from(offline.frames).unwrap_or_else(|frames| {
+        panic!("{name}: one stance a movie offline, got {}", frames.len())
+    });
+    let online = stream(model, recording, None);
+    let [online] = <[_; 1]>::try_from(online)
+        .unwrap_or_else(|online| panic!("{name}: one decision a movie online, got {online:?}"));
+    (offline, online)
+}
+
+/// The online decision's class and posteriors are the offline classification's, to 1e-9.
+fn assert_same_classification(
+    model: &TrainedModel,
+    (decision, posteriors): (&Decision, &[f64]),
+    offline: &Classified,
+    name: &str,
+) {
+    assert_eq!(model.class_names()[decision.class], offline.label, "{name}");
+    for (class, p) in model.class_names().iter().zip(posteriors) {
+        assert!(
+            (p - offline.posteriors[class]).abs() < 1e-9,
+            "{name}: {class}"
+        );
+    }
+}
+
+#[test]
+fn every_liftoff_decision_is_the_offline_classification_of_the_stance() {
+    let (model, movies) = setup();
+    assert_eq!(movies.len(), 120);
     let mut session = model.session();
     let mut compared = 0;
     for (path, recording) in &movies {
         let name = path.display().to_string();
-        let offline =
-            classify_recording(&model, &mut session, recording, &name, &classify).unwrap();
-        let [offline] = offline.frames.as_slice() else {
-            panic!("{name}: one stance a movie offline");
-        };
-        let online = stream(&model, recording, None);
-        let [(decision, posteriors, line)] = online.as_slice() else {
-            panic!("{name}: one decision a movie online, got {online:?}");
-        };
+        let (offline, (decision, posteriors, line)) =
+            offline_and_online(&model, &mut session, recording, &name);
         // The same stance: the whole movie, touchdown at frame 0, decided as the stream ends.
         assert_eq!(decision.kind, DecisionKind::Stance);
         assert_eq!(decision.touchdown_frame, offline.frame, "{name}");
@@ -129,17 +156,11 @@ fn every_liftoff_decision_is_the_offline_classification_of_the_stance() {
         assert_eq!(how.waited_for, recording.frame_count() - 1);
         assert!(!how.cut);
         // The same classification.
-        assert_eq!(model.class_names()[decision.class], offline.label, "{name}");
+        assert_same_classification(&model, (&decision, &posteriors), &offline, &name);
         assert!(
             (decision.confidence - offline.confidence).abs() < 1e-9,
             "{name}"
         );
-        for (class, p) in model.class_names().iter().zip(posteriors) {
-            assert!(
-                (p - offline.posteriors[class]).abs() < 1e-9,
-                "{name}: {class}"
-            );
-        }
         // Its JSON line says what it waited for.
         assert_eq!(line["kind"], "stance");
         assert_eq!(line["decided_at"], "liftoff");
@@ -155,29 +176,12 @@ fn every_liftoff_decision_is_the_offline_classification_of_the_stance() {
 fn a_ridge_model_without_a_pca_decides_online_as_offline() {
     let (model, movies) = setup_with(ClassifierKind::RIDGE);
     assert!(model.pca().is_none());
-    let classify = ClassifyOptions {
-        frame: None,
-        samples: options(),
-    };
     let mut session = model.session();
     for (path, recording) in movies.iter().step_by(5) {
         let name = path.display().to_string();
-        let offline =
-            classify_recording(&model, &mut session, recording, &name, &classify).unwrap();
-        let [offline] = offline.frames.as_slice() else {
-            panic!("{name}: one stance a movie offline");
-        };
-        let online = stream(&model, recording, None);
-        let [(decision, posteriors, _)] = online.as_slice() else {
-            panic!("{name}: one decision a movie online, got {online:?}");
-        };
-        assert_eq!(model.class_names()[decision.class], offline.label, "{name}");
-        for (class, p) in model.class_names().iter().zip(posteriors) {
-            assert!(
-                (p - offline.posteriors[class]).abs() < 1e-9,
-                "{name}: {class}"
-            );
-        }
+        let (offline, (decision, posteriors, _)) =
+            offline_and_online(&model, &mut session, recording, &name);
+        assert_same_classification(&model, (&decision, &posteriors), &offline, &name);
     }
 }
 

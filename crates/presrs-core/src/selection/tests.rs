@@ -4,6 +4,15 @@ use std::collections::BTreeMap;
 use crate::frame::{Frame, Grid};
 use crate::pipeline::TrainConfig;
 
+/// `count` synthetic frames of four classes (frame `i` of class `i % 4`), seeded.
+fn four_class_frames(count: usize, seed: u64) -> Vec<Frame> {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    (0..count)
+        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
+        .collect()
+}
+
 /// Four images of `frame`, labelled a, b, a, b.
 fn blank_images(frame: &Frame) -> Vec<LabeledImage<'_>> {
     ["a", "b", "a", "b"]
@@ -31,11 +40,7 @@ fn grouped(frames: &[Frame]) -> Vec<LabeledImage<'_>> {
 /// condition, else splits; a validation the data cannot give is an error that says why.
 #[test]
 fn validation_follows_the_groups_then_the_conditions() {
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-    let frames: Vec<Frame> = (0..64)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(64, 3);
     let images = grouped(&frames);
     let lda = TrainConfig {
         classifier: crate::classifier::ClassifierKind::LDA.default_config(),
@@ -201,11 +206,7 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
     use crate::classifier::ClassifierKind;
     use crate::features::FeatureKind;
     use crate::preprocess::{Intensity, Preprocess};
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-    let frames: Vec<Frame> = (0..64)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(64, 11);
     let images = grouped(&frames);
     let config = |features: &[FeatureKind], classifier: ClassifierKind, dims, intensity| {
         TrainConfig {
@@ -284,11 +285,7 @@ fn cached_scores_equal_training_each_candidate_on_each_fold() {
 #[test]
 fn a_spent_budget_scores_the_first_feature_group_only() {
     use crate::classifier::ClassifierKind;
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-    let frames: Vec<Frame> = (0..48)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(48, 3);
     let images = grouped(&frames);
     let with = |features: crate::features::FeatureConfig, classifier: ClassifierKind| {
         TrainConfig {
@@ -378,11 +375,7 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
 #[test]
 fn a_race_drops_clear_losers_after_the_first_folds_only() {
     use crate::classifier::ClassifierKind;
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-    let frames: Vec<Frame> = (0..96)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(96, 5);
     let images = grouped(&frames);
     let config = |classifier: ClassifierKind, dims| {
         TrainConfig {
@@ -450,11 +443,7 @@ fn a_race_drops_clear_losers_after_the_first_folds_only() {
 /// every group held out exactly once, never split across folds, and the method says so.
 #[test]
 fn many_groups_are_merged_whole_into_five_folds() {
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
-    let frames: Vec<Frame> = (0..84)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(84, 2);
     const GROUPS: [&str; 7] = ["p0", "p1", "p2", "p3", "p4", "p5", "p6"];
     let images: Vec<LabeledImage<'_>> = frames
         .iter()
@@ -510,11 +499,7 @@ fn many_groups_are_merged_whole_into_five_folds() {
 /// as in one gait of the simulator's trials).
 #[test]
 fn a_fold_holding_a_class_training_lacks_falls_back_and_says_so() {
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
-    let frames: Vec<Frame> = (0..48)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(48, 4);
     // One group per class (the class's trial), and two conditions that each hold every class.
     let images: Vec<LabeledImage<'_>> = frames
         .iter()
@@ -585,11 +570,7 @@ fn a_fold_holding_a_class_training_lacks_falls_back_and_says_so() {
 #[test]
 fn a_cut_candidate_names_the_whole_budget_rounded() {
     use crate::classifier::ClassifierKind;
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-    let frames: Vec<Frame> = (0..32)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(32, 3);
     let images = grouped(&frames);
     let with = |features: crate::features::FeatureConfig| {
         TrainConfig {
@@ -644,11 +625,7 @@ fn a_cut_candidate_names_the_whole_budget_rounded() {
 #[test]
 fn a_race_drops_against_the_best_of_every_group_on_the_first_folds() {
     use crate::classifier::ClassifierKind;
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-    let frames: Vec<Frame> = (0..64)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(64, 5);
     let images = grouped(&frames);
     let config = |features: crate::features::FeatureConfig, dims| {
         TrainConfig {
@@ -702,11 +679,7 @@ fn a_race_drops_against_the_best_of_every_group_on_the_first_folds() {
 #[test]
 fn ridge_is_not_refined_and_its_model_has_no_pca() {
     use crate::classifier::ClassifierKind;
-    use rand::SeedableRng;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-    let frames: Vec<Frame> = (0..48)
-        .map(|i| crate::testing::synthetic_frame(i % 4, &mut rng))
-        .collect();
+    let frames = four_class_frames(48, 7);
     let images = grouped(&frames);
     let with = |classifier: ClassifierKind| {
         TrainConfig {

@@ -8,6 +8,15 @@ use presrs::core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
 use presrs::core::preprocess::Preprocess;
 use presrs::core::sample::SampleKind;
 
+/// Every sample of `dataset` with its label, as `train` takes them.
+pub fn labeled_images(dataset: &Dataset) -> Vec<LabeledImage<'_>> {
+    dataset
+        .samples
+        .iter()
+        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
+        .collect()
+}
+
 /// A model of 168 MiniRocket features, `dims` components and `classifier`, trained on every sample of
 /// `dataset` (no validation images) and stored with `sample`, the kind it classifies.
 pub fn small_rocket_model(
@@ -16,11 +25,7 @@ pub fn small_rocket_model(
     dims: usize,
     sample: SampleKind,
 ) -> TrainedModel {
-    let images: Vec<_> = dataset
-        .samples
-        .iter()
-        .map(|s| LabeledImage::new(s.frame.view(), s.label.as_deref().unwrap()))
-        .collect();
+    let images = labeled_images(dataset);
     let config = TrainConfig {
         crop: Crop::NONE,
         features: FeatureConfig::of::<RocketFamily>(RocketParams {
