@@ -5,10 +5,9 @@ use std::time::Instant;
 
 use presrs::core::online::{OnlineClassifier as CoreOnline, OnlineProfile};
 use presrs::io::model_file::ModelFile;
-use presrs::stream::{check_profile, event_values};
+use presrs::session::{EventTiming, SessionEvent, check_profile, step_events};
 use pyo3::prelude::*;
 use self_cell::self_cell;
-use serde_json::Value;
 
 use crate::arrays::Images;
 use crate::errors::{IntoPyResult, data_error};
@@ -101,12 +100,15 @@ impl OnlineClassifier {
                 .push(&view)
                 .map_err(|err| data_error(format!("frame {index}: {err}")))?;
             let latency_us = started.elapsed().as_secs_f64() * 1e6;
-            Ok::<_, PyErr>(event_values(
+            let timing = EventTiming {
+                latency_us,
+                timestamp_us,
+            };
+            Ok::<_, PyErr>(step_events(
                 &step,
                 &running.file.model,
                 &running.profile,
-                latency_us,
-                timestamp_us,
+                timing,
             ))
         })?;
         self.frames += 1;
@@ -117,12 +119,11 @@ impl OnlineClassifier {
     fn finish<'py>(&mut self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
         let values = self.online.with_dependent_mut(|running, online| {
             let step = online.finish().py_err()?;
-            Ok::<_, PyErr>(event_values(
+            Ok::<_, PyErr>(step_events(
                 &step,
                 &running.file.model,
                 &running.profile,
-                0.0,
-                None,
+                EventTiming::default(),
             ))
         })?;
         to_dicts(py, &values)
@@ -150,9 +151,10 @@ impl OnlineClassifier {
     }
 }
 
-fn to_dicts<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Vec<Bound<'py, PyAny>>> {
-    values
+/// The events as the dicts of their JSON lines (`docs/stream-protocol.md`), from the typed events.
+fn to_dicts<'py>(py: Python<'py>, events: &[SessionEvent]) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    events
         .iter()
-        .map(|value| crate::json::to_py(py, value))
+        .map(|event| Ok(pythonize::pythonize(py, event)?))
         .collect()
 }

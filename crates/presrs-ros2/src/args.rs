@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use presrs::stream::ProfileOverrides;
+use presrs::session::ProfileOverrides;
 use presrs_io::mcap::FrameType;
 
 use crate::error::Result;

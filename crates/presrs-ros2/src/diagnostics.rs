@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use serde_json::Value;
+use presrs::session::SessionEvent;
 
 use crate::messages::{DiagnosticArray, DiagnosticStatus, Header, KeyValue, Time};
 
@@ -34,16 +34,16 @@ pub struct NodeCounters {
 }
 
 impl NodeCounters {
-    /// Counts one JSON event of the session.
-    pub fn note_event(&mut self, event: &Value) {
-        match event["event"].as_str() {
-            Some("touchdown") => self.touchdowns += 1,
-            Some("classification") => self.decisions += 1,
-            Some("error") => {
+    /// Counts one event of the session.
+    pub fn note_event(&mut self, event: &SessionEvent) {
+        match event {
+            SessionEvent::Touchdown(_) => self.touchdowns += 1,
+            SessionEvent::Classification(_) => self.decisions += 1,
+            SessionEvent::Error(error) => {
                 self.errors += 1;
-                self.last_error = event["message"].as_str().map(str::to_owned);
+                self.last_error = Some(error.message.clone());
             }
-            _ => {}
+            SessionEvent::Liftoff(_) | SessionEvent::End(_) => {}
         }
     }
 }
@@ -132,7 +132,6 @@ impl DiagnosticsReport<'_> {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
-    use serde_json::json;
 
     fn report<'a>(now: &'a NodeCounters, before: &'a NodeCounters) -> DiagnosticsReport<'a> {
         DiagnosticsReport {
@@ -151,7 +150,7 @@ mod tests {
         let before = NodeCounters::default();
         let mut now = before.clone();
         now.received = 200;
-        now.note_event(&json!({"event": "error", "message": "input frame 3 rejected: x"}));
+        now.note_event(&SessionEvent::error("input frame 3 rejected: x", false));
         let message = report(&now, &before).message();
         let status = &message.status[0];
         assert_eq!(status.level, DiagnosticStatus::ERROR);

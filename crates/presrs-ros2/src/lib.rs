@@ -4,7 +4,7 @@
 //! subscribes to a pressure topic (`sensor_msgs/msg/Image` mono8/mono16/16UC1/32FC1 in either byte
 //! order, or a 2-D `std_msgs/msg/Float32MultiArray` / `UInt16MultiArray`), decodes each message with
 //! the bag reader's own decoder (`presrs_io::mcap::decode_frame`, through [`raw`]), and runs the same
-//! per-frame session as `presrs stream` ([`presrs::stream::run_frames`]). Every JSON event goes out
+//! per-frame session as `presrs stream` ([`presrs::session::run_frames`]). Every JSON event goes out
 //! on a `std_msgs/msg/String` topic as is, decisions and stance events as typed messages
 //! (`ros/presrs_msgs`, [`messages`]), the recommended gait on its own topic, and the counters on
 //! `/diagnostics`.

@@ -1,12 +1,14 @@
 //! The messages the node publishes, as serde types in the field order of their `.msg` files (CDR is
-//! positional), and the typed messages made from the stream's JSON events.
+//! positional), and the typed messages made from the session's typed events
+//! ([`presrs::session::SessionEvent`]).
 //!
 //! `presrs_msgs/msg/TerrainDecision` and `StanceEvent` are defined in `ros/presrs_msgs/msg/`; the rest
 //! are ROS 2's own (`std_msgs/msg/String`, `diagnostic_msgs/msg/DiagnosticArray`).
 
+use presrs::core::online::DecisionKind;
+use presrs::session::{Classification, DecisionPoint, SessionEvent};
 use presrs_io::mcap::Stamp;
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
 
 /// `builtin_interfaces/msg/Time`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -103,13 +105,12 @@ impl TerrainDecision {
     pub const DECIDED_AT_OFFSET: u8 = 2;
     pub const DECIDED_AT_LENGTH: u8 = 3;
 
-    /// The constant of a JSON event's `decided_at` (absent: [`TerrainDecision::DECIDED_AT_NONE`]).
-    fn decided_at_of(name: Option<&str>) -> u8 {
-        match name {
-            Some("liftoff") => Self::DECIDED_AT_LIFTOFF,
-            Some("offset") => Self::DECIDED_AT_OFFSET,
-            Some("length") => Self::DECIDED_AT_LENGTH,
-            _ => Self::DECIDED_AT_NONE,
+    /// The constant of a whole-stance decision's point.
+    fn decided_at_of(point: DecisionPoint) -> u8 {
+        match point {
+            DecisionPoint::Liftoff => Self::DECIDED_AT_LIFTOFF,
+            DecisionPoint::Offset => Self::DECIDED_AT_OFFSET,
+            DecisionPoint::Length => Self::DECIDED_AT_LENGTH,
         }
     }
 }
@@ -143,90 +144,112 @@ pub trait FrameStamps {
     fn stamp_of(&self, index: u64) -> Option<Time>;
 }
 
-fn u64_of(event: &Value, key: &str) -> u64 {
-    event[key].as_u64().unwrap_or(0)
+fn stamp_of(stamps: &dyn FrameStamps, frame: u64) -> Time {
+    stamps.stamp_of(frame).unwrap_or_default()
 }
 
-fn stamp_at(stamps: &dyn FrameStamps, event: &Value, key: &str) -> Time {
-    event[key]
-        .as_u64()
-        .and_then(|index| stamps.stamp_of(index))
-        .unwrap_or_default()
+/// Saturates an index the message holds in 32 bits (a class index or a frame count never comes near).
+fn u32_of(value: impl TryInto<u32>) -> u32 {
+    value.try_into().unwrap_or(u32::MAX)
 }
 
-/// The typed decision of a `classification` event; `class_names` the model's, in its order.
+/// The typed decision of a `classification` event, field by field from the session's own event.
 pub fn decision_message(
-    event: &Value,
-    class_names: &[String],
+    decision: &Classification,
     stamps: &dyn FrameStamps,
     frame_id: &str,
 ) -> TerrainDecision {
-    let posteriors = class_names
-        .iter()
-        .map(|name| event["posteriors"][name].as_f64().unwrap_or(f64::NAN))
-        .collect();
+    let whole = decision.whole_stance;
+    let decided_at_frame = whole.map_or(0, |w| w.decided_at_frame);
+    // A decision taken at lift-off waited for the lift-off frame; any other came before it.
+    let liftoff = whole.filter(|w| w.decided_at == DecisionPoint::Liftoff);
     TerrainDecision {
         header: Header {
-            stamp: stamp_at(stamps, event, "sample_frame"),
+            stamp: stamp_of(stamps, decision.sample_frame),
             frame_id: frame_id.to_owned(),
         },
-        stance: u64_of(event, "stance"),
-        kind: event["kind"].as_str().unwrap_or_default().to_owned(),
-        label: event["label"].as_str().unwrap_or_default().to_owned(),
-        class_index: u64_of(event, "class") as u32,
-        class_names: class_names.to_vec(),
-        confidence: event["confidence"].as_f64().unwrap_or(f64::NAN),
-        posteriors,
-        touchdown_frame: u64_of(event, "touchdown_frame"),
-        sample_frame: u64_of(event, "sample_frame"),
-        frame: u64_of(event, "frame"),
-        frames_used: u64_of(event, "frames_used") as u32,
-        decided_at: TerrainDecision::decided_at_of(event["decided_at"].as_str()),
-        decided_at_frame: u64_of(event, "decided_at_frame"),
-        decided_at_stamp: stamp_at(stamps, event, "decided_at_frame"),
-        cut: event["cut"].as_bool().unwrap_or(false),
-        touchdown_stamp: stamp_at(stamps, event, "touchdown_frame"),
-        liftoff_stamp: stamp_at(stamps, event, "end_frame"),
-        gait: event["gait"].as_str().unwrap_or_default().to_owned(),
-        latency_us: event["latency_us"].as_f64().unwrap_or(0.0),
+        stance: decision.stance,
+        kind: kind_name(decision.kind).to_owned(),
+        label: decision.label.clone(),
+        class_index: u32_of(decision.class),
+        class_names: decision.posteriors.names().map(str::to_owned).collect(),
+        confidence: decision.confidence,
+        posteriors: decision.posteriors.values().collect(),
+        touchdown_frame: decision.touchdown_frame,
+        sample_frame: decision.sample_frame,
+        frame: decision.frame,
+        frames_used: u32_of(decision.frames_used),
+        decided_at: whole.map_or(TerrainDecision::DECIDED_AT_NONE, |w| {
+            TerrainDecision::decided_at_of(w.decided_at)
+        }),
+        decided_at_frame,
+        decided_at_stamp: whole.map_or_else(Time::default, |_| stamp_of(stamps, decided_at_frame)),
+        cut: whole.is_some_and(|w| w.cut),
+        touchdown_stamp: stamp_of(stamps, decision.touchdown_frame),
+        liftoff_stamp: liftoff.map_or_else(Time::default, |w| stamp_of(stamps, w.decided_at_frame)),
+        gait: decision.gait.clone().unwrap_or_default(),
+        latency_us: decision.latency_us,
+    }
+}
+
+fn kind_name(kind: DecisionKind) -> &'static str {
+    match kind {
+        DecisionKind::Single => "single",
+        DecisionKind::Fused => "fused",
+        DecisionKind::Stance => "stance",
     }
 }
 
 /// The typed stance event of a `touchdown` or `liftoff` event (`None` for other events).
 pub fn stance_message(
-    event: &Value,
+    event: &SessionEvent,
     stamps: &dyn FrameStamps,
     frame_id: &str,
 ) -> Option<StanceEvent> {
-    let kind = match event["event"].as_str()? {
-        "touchdown" => StanceEvent::TOUCHDOWN,
-        "liftoff" => StanceEvent::LIFTOFF,
-        _ => return None,
+    let header = |frame| Header {
+        stamp: stamp_of(stamps, frame),
+        frame_id: frame_id.to_owned(),
     };
-    Some(StanceEvent {
-        header: Header {
-            stamp: stamp_at(stamps, event, "frame"),
-            frame_id: frame_id.to_owned(),
-        },
-        event: kind,
-        stance: u64_of(event, "stance"),
-        touchdown_frame: u64_of(event, "touchdown_frame"),
-        end_frame: u64_of(event, "end_frame"),
-        frame: u64_of(event, "frame"),
-        partial: event["partial"].as_bool().unwrap_or(false),
-        peak_frame: u64_of(event, "peak_frame"),
-        peak_load: event["peak_load"].as_f64().unwrap_or(0.0),
-        sampled: event["sampled"].as_bool().unwrap_or(false),
-        touchdown_stamp: stamp_at(stamps, event, "touchdown_frame"),
-        liftoff_stamp: stamp_at(stamps, event, "end_frame"),
-    })
+    match event {
+        SessionEvent::Touchdown(td) => Some(StanceEvent {
+            header: header(td.frame),
+            event: StanceEvent::TOUCHDOWN,
+            stance: td.stance,
+            touchdown_frame: td.touchdown_frame,
+            // Not known yet: the stance has not ended.
+            end_frame: 0,
+            frame: td.frame,
+            partial: td.partial,
+            peak_frame: 0,
+            peak_load: 0.0,
+            sampled: false,
+            touchdown_stamp: stamp_of(stamps, td.touchdown_frame),
+            liftoff_stamp: Time::default(),
+        }),
+        SessionEvent::Liftoff(lo) => Some(StanceEvent {
+            header: header(lo.frame),
+            event: StanceEvent::LIFTOFF,
+            stance: lo.stance,
+            touchdown_frame: lo.touchdown_frame,
+            end_frame: lo.end_frame,
+            frame: lo.frame,
+            partial: lo.partial,
+            peak_frame: lo.peak_frame,
+            peak_load: lo.peak_load,
+            sampled: lo.sampled,
+            touchdown_stamp: stamp_of(stamps, lo.touchdown_frame),
+            liftoff_stamp: stamp_of(stamps, lo.end_frame),
+        }),
+        _ => None,
+    }
 }
 
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use presrs::session::{Liftoff, Posteriors, Touchdown, WholeStance};
+
     use super::*;
-    use serde_json::json;
 
     struct Tenths;
     impl FrameStamps for Tenths {
@@ -238,24 +261,38 @@ mod tests {
         }
     }
 
+    fn tenths(index: u64) -> Time {
+        Tenths.stamp_of(index).unwrap()
+    }
+
+    fn decision(whole_stance: Option<WholeStance>) -> Classification {
+        Classification {
+            kind: DecisionKind::Single,
+            stance: 3,
+            label: "sand".to_owned(),
+            class: 1,
+            confidence: 0.75,
+            posteriors: Posteriors(vec![("grass".to_owned(), 0.25), ("sand".to_owned(), 0.75)]),
+            sample_frame: 26,
+            frame: 26,
+            frames_used: 1,
+            touchdown_frame: 20,
+            latency_us: 12.5,
+            timestamp_us: Some(2_600_000),
+            gait: Some("walk".to_owned()),
+            whole_stance,
+        }
+    }
+
     #[test]
     fn a_classification_event_becomes_a_decision_with_the_frames_stamps() {
-        let names = vec!["grass".to_owned(), "sand".to_owned()];
-        let event = json!({"event": "classification", "kind": "single", "stance": 3, "label": "sand",
-            "class": 1, "confidence": 0.75, "posteriors": {"grass": 0.25, "sand": 0.75},
-            "sample_frame": 26, "frame": 26, "frames_used": 1, "touchdown_frame": 20,
-            "latency_us": 12.5, "timestamp_us": 2_600_000, "gait": "walk"});
-        let d = decision_message(&event, &names, &Tenths, "foot");
+        let d = decision_message(&decision(None), &Tenths, "foot");
         assert_eq!((d.label.as_str(), d.class_index, d.stance), ("sand", 1, 3));
+        assert_eq!(d.class_names, ["grass", "sand"]);
         assert_eq!(d.posteriors, [0.25, 0.75]);
-        assert_eq!(
-            d.header.stamp,
-            Time {
-                sec: 2,
-                nanosec: 600_000_000
-            }
-        );
-        assert_eq!(d.touchdown_stamp, Time { sec: 2, nanosec: 0 });
+        assert_eq!(d.kind, "single");
+        assert_eq!(d.header.stamp, tenths(26));
+        assert_eq!(d.touchdown_stamp, tenths(20));
         assert_eq!(d.liftoff_stamp, Time::default());
         assert_eq!(d.decided_at, TerrainDecision::DECIDED_AT_NONE);
         assert_eq!(
@@ -263,55 +300,73 @@ mod tests {
             (0, Time::default())
         );
         assert_eq!(
-            (d.gait.as_str(), d.header.frame_id.as_str()),
-            ("walk", "foot")
+            (d.gait.as_str(), d.header.frame_id.as_str(), d.latency_us),
+            ("walk", "foot", 12.5)
         );
     }
 
     #[test]
     fn a_whole_stance_decision_says_what_it_waited_for_and_when() {
-        let names = vec!["fast".to_owned(), "slow".to_owned()];
-        for (name, constant) in [
-            ("liftoff", TerrainDecision::DECIDED_AT_LIFTOFF),
-            ("offset", TerrainDecision::DECIDED_AT_OFFSET),
-            ("length", TerrainDecision::DECIDED_AT_LENGTH),
+        for (point, constant) in [
+            (DecisionPoint::Liftoff, TerrainDecision::DECIDED_AT_LIFTOFF),
+            (DecisionPoint::Offset, TerrainDecision::DECIDED_AT_OFFSET),
+            (DecisionPoint::Length, TerrainDecision::DECIDED_AT_LENGTH),
         ] {
-            let event = json!({"event": "classification", "kind": "stance", "stance": 0,
-                "label": "slow", "class": 1, "confidence": 0.5,
-                "posteriors": {"fast": 0.5, "slow": 0.5}, "sample_frame": 33, "frame": 35,
-                "frames_used": 24, "touchdown_frame": 10, "decided_at": name,
-                "decided_at_frame": 34, "cut": name == "length"});
-            let d = decision_message(&event, &names, &Tenths, "foot");
-            assert_eq!(d.decided_at, constant, "{name}");
+            let whole = WholeStance {
+                decided_at: point,
+                decided_at_frame: 34,
+                cut: point == DecisionPoint::Length,
+            };
+            let d = decision_message(&decision(Some(whole)), &Tenths, "foot");
+            assert_eq!(d.decided_at, constant, "{point:?}");
             assert_eq!(d.decided_at_frame, 34);
-            assert_eq!(
-                d.decided_at_stamp,
-                Time {
-                    sec: 3,
-                    nanosec: 400_000_000
-                }
-            );
-            assert_eq!(d.cut, name == "length");
+            assert_eq!(d.decided_at_stamp, tenths(34));
+            assert_eq!(d.cut, point == DecisionPoint::Length);
+            // Only a decision at lift-off knows the lift-off's stamp.
+            let liftoff = if point == DecisionPoint::Liftoff {
+                tenths(34)
+            } else {
+                Time::default()
+            };
+            assert_eq!(d.liftoff_stamp, liftoff, "{point:?}");
         }
     }
 
     #[test]
     fn touchdown_and_liftoff_become_stance_events_and_others_none() {
-        let liftoff = json!({"event": "liftoff", "stance": 1, "touchdown_frame": 10, "end_frame": 19,
-            "len": 10, "peak_frame": 14, "peak_load": 5.5, "partial": false, "sampled": true,
-            "frame": 21});
+        let liftoff = SessionEvent::Liftoff(Liftoff {
+            stance: 1,
+            touchdown_frame: 10,
+            end_frame: 19,
+            len: 10,
+            peak_frame: 14,
+            peak_load: 5.5,
+            partial: false,
+            sampled: true,
+            frame: 21,
+        });
         let s = stance_message(&liftoff, &Tenths, "").unwrap();
         assert_eq!(
             (s.event, s.end_frame, s.frame, s.peak_frame),
             (StanceEvent::LIFTOFF, 19, 21, 14)
         );
+        assert_eq!(s.liftoff_stamp, tenths(19));
+        assert_eq!(s.header.stamp, tenths(21));
+        let touchdown = SessionEvent::Touchdown(Touchdown {
+            stance: 2,
+            touchdown_frame: 30,
+            frame: 33,
+            partial: true,
+        });
+        let t = stance_message(&touchdown, &Tenths, "").unwrap();
         assert_eq!(
-            s.liftoff_stamp,
-            Time {
-                sec: 1,
-                nanosec: 900_000_000
-            }
+            (t.event, t.stance, t.partial),
+            (StanceEvent::TOUCHDOWN, 2, true)
         );
-        assert!(stance_message(&json!({"event": "end"}), &Tenths, "").is_none());
+        assert_eq!(
+            (t.touchdown_stamp, t.liftoff_stamp),
+            (tenths(30), Time::default())
+        );
+        assert!(stance_message(&SessionEvent::error("x", false), &Tenths, "").is_none());
     }
 }

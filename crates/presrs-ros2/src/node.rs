@@ -1,12 +1,14 @@
-//! The node's loop: frames from the input topic through the stream's own per-frame session
-//! ([`presrs::stream::run_frames`]: the same classifier, error policy and JSON events as
-//! `presrs stream`), every event out as a typed message, a JSON string, and the gait command.
+//! The node's loop: frames from the input topic through the library's per-frame session
+//! ([`presrs::session::run_frames`]: the same classifier, error policy and events as
+//! `presrs stream`), every typed event out as a typed message, a JSON string, and the gait command.
 
 use std::cell::RefCell;
 use std::collections::{HashMap, VecDeque};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use presrs::stream::{ConnectionNotice, ConnectionSummary, Input, run_frames};
+use presrs::session::{
+    ConnectionNotice, ConnectionSummary, Input, SessionEvent, SessionObserver, run_frames,
+};
 use presrs_core::Grid;
 use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::TrainedModel;
@@ -14,7 +16,6 @@ use presrs_io::mcap::{FrameType, Stamp, decode_frame};
 use ros2_client::dds::rustdds::GUID;
 use ros2_client::dds::rustdds::mio1::Events;
 use ros2_client::dds::rustdds::no_key::DeserializedCacheChange;
-use serde_json::Value;
 
 use crate::diagnostics::{DiagnosticsReport, NodeCounters};
 use crate::error::Result;
@@ -222,18 +223,13 @@ pub fn run_node(
             }
         }
     };
-    let frame_id = options.name.clone();
-    let mut emit = |event: &Value, line: String| -> bool {
-        let mut s = state.borrow_mut();
-        s.counters.note_event(event);
-        let names = model.class_names();
-        // On the wire first (a robot waits for it), then stdout (a pipe that may be slow to read).
-        let published = publish_event(&outputs, event, &line, names, &s.stamps, &frame_id);
-        s.counters.publish_failures += u64::from(!published);
-        on_line(&line);
-        published
+    let mut publisher = Publisher {
+        state: &state,
+        outputs: &outputs,
+        frame_id: &options.name,
+        on_line,
     };
-    let session = run_frames(model, profile, next, &mut emit, notify)?;
+    let session = run_frames(model, profile, next, &mut publisher, notify)?;
     let mut s = state.into_inner();
     report(&mut s, true);
     std::thread::sleep(options.linger);
@@ -243,32 +239,52 @@ pub fn run_node(
     })
 }
 
+/// The session's observer in the node: each event counted, published, and handed to `on_line`.
+struct Publisher<'a> {
+    state: &'a RefCell<LoopState>,
+    outputs: &'a Outputs,
+    frame_id: &'a str,
+    on_line: &'a mut dyn FnMut(&str),
+}
+
+impl SessionObserver for Publisher<'_> {
+    fn event(&mut self, event: &SessionEvent) -> bool {
+        let mut s = self.state.borrow_mut();
+        s.counters.note_event(event);
+        let line = event.to_line();
+        // On the wire first (a robot waits for it), then stdout (a pipe that may be slow to read).
+        let published = publish_event(self.outputs, event, &line, &s.stamps, self.frame_id);
+        s.counters.publish_failures += u64::from(!published);
+        (self.on_line)(&line);
+        published
+    }
+}
+
 /// Publishes one event: its typed message and gait command when it has them (first: a decision is
 /// what a robot waits for), then the JSON string. False when any of them could not be published.
 fn publish_event(
     outputs: &Outputs,
-    event: &Value,
+    event: &SessionEvent,
     line: &str,
-    class_names: &[String],
     stamps: &StampBook,
     frame_id: &str,
 ) -> bool {
     let mut ok = true;
-    match event["event"].as_str() {
-        Some("classification") => {
-            let decision = decision_message(event, class_names, stamps, frame_id);
+    match event {
+        SessionEvent::Classification(decision) => {
+            let decision = decision_message(decision, stamps, frame_id);
             let gait = decision.gait.clone();
             ok &= outputs.decisions.publish(decision).is_ok();
             if !gait.is_empty() {
                 ok &= outputs.gait.publish(StringMsg { data: gait }).is_ok();
             }
         }
-        Some("touchdown" | "liftoff") => {
+        SessionEvent::Touchdown(_) | SessionEvent::Liftoff(_) => {
             if let Some(stance) = stance_message(event, stamps, frame_id) {
                 ok &= outputs.stances.publish(stance).is_ok();
             }
         }
-        _ => {}
+        SessionEvent::Error(_) | SessionEvent::End(_) => {}
     }
     let data = line.to_owned();
     ok &= outputs.events.publish(StringMsg { data }).is_ok();

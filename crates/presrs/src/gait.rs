@@ -394,7 +394,7 @@ pub fn compare_on_track(
         if options.decide_at.is_some() {
             profile.params.decide_at = options.decide_at;
         }
-        crate::stream::check_profile(model, &profile)
+        crate::session::check_profile(model, &profile)
             .with_context(|| format!("cannot run {} adaptively", path.display()))?;
         if profile.gait_table.is_empty() {
             let table = measure_gait_table(

@@ -26,6 +26,7 @@ pub mod report;
 pub mod reproduce;
 pub mod sample_race;
 pub mod selection_table;
+pub mod session;
 pub mod simulation;
 pub mod stance_options;
 pub mod stoppable_input;

@@ -4,7 +4,8 @@
 
 use serde_json::json;
 
-use crate::stream::{ConnectionNotice, ConnectionSummary, ServeSummary, ServerNotice};
+use crate::session::{ConnectionNotice, ConnectionSummary};
+use crate::stream::{ServeSummary, ServerNotice};
 
 /// A connection's notice as the log says it.
 pub fn notice_text(notice: &ConnectionNotice) -> String {

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use presrs::core::Grid;
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer, base64, sse_event};
-use presrs::stream::ConnectionTap;
+use presrs::session::{SessionEvent, SessionObserver, Touchdown};
 use serde_json::Value;
 
 fn hub() -> LiveHub {
@@ -166,8 +166,14 @@ fn port_0_serves_the_page_its_files_and_a_snapshot() {
     assert_eq!(get(addr, "/nothing").0, "HTTP/1.1 404 Not Found");
     let mut tap = hub.tap();
     tap.frame(0, Grid::new(1, 2), &[1.0, 2.0], None, None);
-    tap.line(r#"{"event":"classification","label":"wood","confidence":0.9}"#);
-    tap.line(r#"{"event":"liftoff"}"#);
+    let wood: SessionEvent = serde_json::from_str(
+        r#"{"event":"classification","kind":"single","stance":0,"label":"wood","class":1,
+            "confidence":0.9,"posteriors":{"clay":0.1,"wood":0.9},"sample_frame":0,"frame":0,
+            "frames_used":1,"touchdown_frame":0,"latency_us":1.0,"timestamp_us":null,"gait":null}"#,
+    )
+    .unwrap();
+    tap.event(&wood);
+    tap.event(&SessionEvent::error("a later line", false));
     let state: Value = serde_json::from_str(&get(addr, "/state?x=1").1).unwrap();
     assert_eq!(state["frames"], 1);
     assert_eq!(state["units"], "kPa");
@@ -199,7 +205,12 @@ fn feed(
             let t = Instant::now();
             tap.frame(n, grid, &values, None, None);
             if n % 50 == 0 {
-                tap.line(&format!("{{\"event\":\"touchdown\",\"frame\":{n}}}"));
+                tap.event(&SessionEvent::Touchdown(Touchdown {
+                    stance: n / 50,
+                    touchdown_frame: n,
+                    frame: n,
+                    partial: false,
+                }));
             }
             longest = longest.max(t.elapsed());
             n += 1;

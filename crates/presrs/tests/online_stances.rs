@@ -19,7 +19,8 @@ use presrs::core::pipeline::{Session, TrainedModel};
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::summary::{SummaryConfig, pad_to, summarise};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
-use presrs::stream::{ConnectionOptions, InputFormat, event_values, run_connection};
+use presrs::session::{EventTiming, step_events};
+use presrs::stream::{ConnectionOptions, InputFormat, run_connection};
 use presrs::{Dataset, Quiet, SampleOptions};
 
 fn shared(path: &str) -> PathBuf {
@@ -84,7 +85,10 @@ fn stream(
     let mut online = OnlineClassifier::new(model, &profile.segment, &profile.params, None).unwrap();
     let mut out = Vec::new();
     let mut keep = |step: presrs::core::online::Step<'_>| {
-        let lines = event_values(&step, model, &profile, 0.0, None);
+        let events = step_events(&step, model, &profile, EventTiming::default());
+        let lines = events
+            .iter()
+            .map(|event| serde_json::to_value(event).unwrap());
         for (event, line) in step.events.iter().zip(lines) {
             assert!(!matches!(event, OnlineEvent::Failed(_)), "{line}");
             if let OnlineEvent::Decision(d) = event {

@@ -15,9 +15,10 @@ use presrs::core::online::{Calibration, OnlineProfile};
 use presrs::core::pipeline::{LabeledImage, TrainedModel, train};
 use presrs::core::{Frame, Grid};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
+use presrs::session::{SessionEvent, SessionObserver};
 use presrs::stream::{
-    ConnectionOptions, ConnectionTap, InputFormat, ServerNotice, ServerOptions, ShutdownHandle,
-    StreamServer, run_connection, run_connection_tapped,
+    ConnectionOptions, InputFormat, ServerNotice, ServerOptions, ShutdownHandle, StreamServer,
+    run_connection, run_connection_observed,
 };
 use serde_json::Value;
 
@@ -277,7 +278,7 @@ struct Seen {
     lines: Vec<String>,
 }
 
-impl ConnectionTap for Seen {
+impl SessionObserver for Seen {
     fn frame(
         &mut self,
         index: u64,
@@ -288,8 +289,9 @@ impl ConnectionTap for Seen {
     ) {
         self.frames.push((index, grid, values.to_vec()));
     }
-    fn line(&mut self, line: &str) {
-        self.lines.push(line.to_owned());
+    fn event(&mut self, event: &SessionEvent) -> bool {
+        self.lines.push(event.to_line());
+        true
     }
 }
 
@@ -304,7 +306,7 @@ fn a_tap_sees_every_frame_and_exactly_the_lines_written() {
     let mut output = Vec::new();
     let mut seen = Seen::default();
     let (model, profile) = (model(), profile());
-    let summary = run_connection_tapped(
+    let summary = run_connection_observed(
         &model,
         &profile,
         &bytes[..],

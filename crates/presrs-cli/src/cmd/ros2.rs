@@ -3,7 +3,8 @@
 
 use std::io::Write;
 
-use presrs::stream::{StopSignals, resolve_profile};
+use presrs::session::resolve_profile;
+use presrs::stream::StopSignals;
 pub use presrs_ros2::Ros2Args;
 use presrs_ros2::{NodeGraph, run_node};
 
@@ -13,7 +14,7 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let file = presrs_io::model_file::load_model(&args.model)?;
     let online = file.online.as_ref();
     let profile = resolve_profile(args.profile.as_deref(), None, online, &args.overrides())?;
-    presrs::stream::check_profile(&file.model, &profile)?;
+    presrs::session::check_profile(&file.model, &profile)?;
     let signals = StopSignals::register()?;
     let graph = NodeGraph::join(&options)?;
     writeln!(out, "{}", presrs_ros2::joined_event(&graph))?;

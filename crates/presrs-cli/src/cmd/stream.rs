@@ -21,11 +21,13 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
+use presrs::session::{
+    ConnectionNotice, NoObserver, Observers, ProfileOverrides, SessionObserver, resolve_profile,
+};
 use presrs::stoppable_input::StoppableInput;
 use presrs::stream::{
-    BagRecorder, BagReport, ConnectionBags, ConnectionNotice, ConnectionOptions, ConnectionTap,
-    InputFormat, ProfileOverrides, ServerNotice, ServerOptions, ShutdownHandle, StopSignals,
-    StreamServer, Taps, resolve_profile, run_connection_tapped,
+    BagRecorder, BagReport, ConnectionBags, ConnectionOptions, InputFormat, ServerNotice,
+    ServerOptions, ShutdownHandle, StopSignals, StreamServer, run_connection_observed,
 };
 use presrs::stream_log::{
     input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
@@ -207,7 +209,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         file.online.as_ref(),
         &args.overrides(),
     )?;
-    presrs::stream::check_profile(&file.model, &profile)?;
+    presrs::session::check_profile(&file.model, &profile)?;
     let signals = StopSignals::register()?;
     let info = LiveInfo {
         source: if args.listen.is_some() {
@@ -223,9 +225,9 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     match args.listen {
         None => {
             let mut tap = live.as_ref().map(|(hub, _)| hub.tap());
-            let tap: &mut dyn ConnectionTap = match tap.as_mut() {
+            let tap: &mut dyn SessionObserver = match tap.as_mut() {
                 Some(tap) => tap,
-                None => &mut presrs::stream::NoTap,
+                None => &mut NoObserver,
             };
             run_stdin(args, &file.model, &profile, signals, tap, out)
         }
@@ -234,13 +236,13 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             let hub = live.as_ref().map(|(hub, _)| hub.clone());
             let bags = (args.record.as_deref()).map(|path| ConnectionBags::new(path, bag_report()));
             if hub.is_some() || bags.is_some() {
-                server = server.with_taps(Arc::new(move |peer: &str| {
-                    let mut taps: Vec<Box<dyn ConnectionTap + Send>> = Vec::new();
+                server = server.with_observers(Arc::new(move |peer: &str| {
+                    let mut taps: Vec<Box<dyn SessionObserver + Send>> = Vec::new();
                     if let Some(hub) = &hub {
                         taps.push(Box::new(hub.exclusive_tap(peer)));
                     }
-                    taps.extend(bags.as_ref().map(|bags| bags.tap(peer)));
-                    Box::new(Taps(taps))
+                    taps.extend(bags.as_ref().map(|bags| bags.observer(peer)));
+                    Box::new(Observers(taps))
                 }));
             }
             let local = server.local_addr();
@@ -265,7 +267,7 @@ fn run_stdin(
     model: &presrs::core::TrainedModel,
     profile: &presrs::core::online::OnlineProfile,
     signals: StopSignals,
-    tap: &mut dyn ConnectionTap,
+    tap: &mut dyn SessionObserver,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
     let stop = ShutdownHandle::default();
@@ -286,12 +288,12 @@ fn run_stdin(
     });
     let input = std::io::BufReader::with_capacity(64 * 1024, input);
     let summary = match &args.record {
-        None => run_connection_tapped(model, profile, input, out, &options, &log, tap)?,
+        None => run_connection_observed(model, profile, input, out, &options, &log, tap)?,
         Some(path) => {
             let mut bag = BagRecorder::create(path)?;
             let summary = {
-                let mut taps: Taps<&mut dyn ConnectionTap> = Taps(vec![tap, &mut bag]);
-                run_connection_tapped(model, profile, input, out, &options, &log, &mut taps)?
+                let mut taps: Observers<&mut dyn SessionObserver> = Observers(vec![tap, &mut bag]);
+                run_connection_observed(model, profile, input, out, &options, &log, &mut taps)?
             };
             let recorded = bag.finish()?;
             stderr_line!("presrs stream: {}", recorded.text());

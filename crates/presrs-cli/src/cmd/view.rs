@@ -6,7 +6,8 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use presrs::live::{LiveInfo, ReplayOptions, replay_period_s, replay_recording};
-use presrs::stream::{ConnectionNotice, ProfileOverrides, ShutdownHandle, resolve_profile};
+use presrs::session::{ConnectionNotice, ProfileOverrides, resolve_profile};
+use presrs::stream::ShutdownHandle;
 use presrs_io::model_file::load_model;
 
 use presrs::stream_log::{notice_text, summary_text};

@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use presrs_core::Grid;
 
-use crate::stream::ConnectionTap;
+use crate::session::{Classification, SessionEvent, SessionObserver};
 
 /// Total loads kept for a viewer that connects late or falls behind (the trace it can draw).
 pub const LOAD_HISTORY: usize = 2048;
@@ -53,6 +53,8 @@ struct State {
     /// (line_seq, line).
     lines: VecDeque<(u64, String)>,
     line_seq: u64,
+    /// The latest classification, as the session made it.
+    last_decision: Option<Classification>,
     /// The exclusive tap being shown (0: none), and the last id given out.
     owner: u64,
     last_tap: u64,
@@ -189,6 +191,11 @@ impl LiveHub {
         ViewerGuard { hub: self.clone() }
     }
 
+    /// The latest classification shown.
+    pub fn last_decision(&self) -> Option<Classification> {
+        self.lock().last_decision.clone()
+    }
+
     /// The lines kept (oldest first).
     pub fn recent_lines(&self) -> Vec<String> {
         self.lock().lines.iter().map(|(_, l)| l.clone()).collect()
@@ -233,7 +240,7 @@ impl Drop for ViewerGuard {
     }
 }
 
-/// The [`ConnectionTap`] of a live view: it never waits for a viewer. Each frame costs its total load and
+/// The [`SessionObserver`] of a live view: it never waits for a viewer. Each frame costs its total load and
 /// a copy into the hub's one frame slot (the viewers take the latest
 /// frame, skipping those in between); lines go to a bounded history.
 #[derive(Debug)]
@@ -253,7 +260,7 @@ impl Drop for LiveTap {
     }
 }
 
-impl ConnectionTap for LiveTap {
+impl SessionObserver for LiveTap {
     fn frame(
         &mut self,
         index: u64,
@@ -308,17 +315,23 @@ impl ConnectionTap for LiveTap {
         }
     }
 
-    fn line(&mut self, line: &str) {
+    /// Kept as its JSON line for the page's log, and a classification as the typed last decision.
+    fn event(&mut self, event: &SessionEvent) -> bool {
+        let line = event.to_line();
         let mut state = self.hub.lock();
         if !state.admit(self.id, &self.source) {
-            return;
+            return true;
+        }
+        if let SessionEvent::Classification(decision) = event {
+            state.last_decision = Some(decision.clone());
         }
         state.line_seq += 1;
         let seq = state.line_seq;
         if state.lines.len() == LINE_HISTORY {
             state.lines.pop_front();
         }
-        state.lines.push_back((seq, line.to_owned()));
+        state.lines.push_back((seq, line));
+        true
     }
 }
 
@@ -339,7 +352,7 @@ mod tests {
         for i in 0..5 {
             tap.frame(i, grid, &[i as f64, 1.0, 2.0, 3.0], None, None);
         }
-        tap.line("{\"event\":\"touchdown\"}");
+        tap.event(&SessionEvent::error("a line", false));
         let update = hub.update(&mut cursor);
         let frame = update.frame.unwrap();
         assert_eq!(
@@ -370,7 +383,7 @@ mod tests {
         let grid = Grid::new(1, 1);
         for i in 0..(3 * LOAD_HISTORY as u64) {
             tap.frame(i, grid, &[1.0], None, None);
-            tap.line("{}");
+            tap.event(&SessionEvent::error("a line", false));
         }
         let mut cursor = Cursor::default();
         let update = hub.update(&mut cursor);
@@ -405,7 +418,7 @@ mod tests {
         let mut second = hub.exclusive_tap("b");
         first.frame(0, grid, &[1.0], None, None);
         second.frame(0, grid, &[2.0], None, None);
-        second.line("{}");
+        second.event(&SessionEvent::error("a line", false));
         assert_eq!(hub.info().source, "a");
         drop(first);
         second.frame(1, grid, &[3.0], None, None);

@@ -35,6 +35,7 @@ use super::events::{EventStream, Stopped};
 use super::hub::LiveHub;
 use super::write_timeout::WriteTimeout;
 use crate::error::{Error, Result};
+use crate::session::SessionEvent;
 
 const PAGE: &str = include_str!("page/index.html");
 const SCRIPT: &str = include_str!("page/app.js");
@@ -272,12 +273,7 @@ fn with_headers(body: LiveBody, kind: &'static str) -> Response<LiveBody> {
 /// A snapshot: the source, units, classes, frames seen, viewers, and the latest classification.
 pub fn state_json(hub: &LiveHub) -> serde_json::Value {
     let info = hub.info();
-    let last = hub
-        .recent_lines()
-        .iter()
-        .rev()
-        .filter_map(|line| serde_json::from_str::<serde_json::Value>(line).ok())
-        .find(|value| value["event"] == "classification");
+    let last = hub.last_decision().map(SessionEvent::Classification);
     json!({
         "source": info.source,
         "units": info.units,

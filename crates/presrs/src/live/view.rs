@@ -11,10 +11,8 @@ use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, Dtype, encode_frame};
 
 use super::hub::LiveHub;
 use crate::error::{Error, Result};
-use crate::stream::{
-    ConnectionNotice, ConnectionOptions, ConnectionSummary, ConnectionTap, InputFormat,
-    ShutdownHandle, run_connection_tapped,
-};
+use crate::session::{ConnectionNotice, ConnectionSummary, SessionObserver};
+use crate::stream::{ConnectionOptions, InputFormat, ShutdownHandle, run_connection_observed};
 
 /// How a recording is replayed.
 #[derive(Clone, Debug, PartialEq)]
@@ -99,7 +97,7 @@ pub fn replay_recording(
         topic: None,
         frame_period_s: None,
     };
-    let summary = run_connection_tapped(
+    let summary = run_connection_observed(
         model,
         profile,
         BufReader::new(paced),

@@ -14,8 +14,8 @@ use presrs_io::IoError;
 use presrs_io::atomic::AtomicFile;
 use presrs_io::mcap::{BagWriter, ImageEncoding};
 
-use super::tap::ConnectionTap;
 use crate::error::Result;
+use crate::session::{NoObserver, SessionEvent, SessionObserver};
 
 /// The topic of the frames (`sensor_msgs/msg/Image`, `mono16` for integer counts, else `32FC1`).
 pub const FRAMES_TOPIC: &str = "/presrs/frames";
@@ -157,9 +157,9 @@ impl ConnectionBags {
         self.path.with_file_name(name)
     }
 
-    /// The tap of a new connection from `peer`: a bag being recorded (nothing when it cannot be
+    /// The observer of a new connection from `peer`: a bag being recorded (nothing when it cannot be
     /// created, which is reported at once).
-    pub fn tap(&self, peer: &str) -> Box<dyn ConnectionTap + Send> {
+    pub fn observer(&self, peer: &str) -> Box<dyn SessionObserver + Send> {
         let n = self.connections.fetch_add(1, Ordering::SeqCst) + 1;
         match BagRecorder::create(&self.path_of(n)) {
             Ok(recorder) => Box::new(ConnectionBag {
@@ -169,7 +169,7 @@ impl ConnectionBags {
             }),
             Err(err) => {
                 (self.report)(peer, Err(err));
-                Box::new(super::tap::NoTap)
+                Box::new(NoObserver)
             }
         }
     }
@@ -182,7 +182,7 @@ struct ConnectionBag {
     report: BagReport,
 }
 
-impl ConnectionTap for ConnectionBag {
+impl SessionObserver for ConnectionBag {
     fn frame(
         &mut self,
         index: u64,
@@ -196,10 +196,11 @@ impl ConnectionTap for ConnectionBag {
         }
     }
 
-    fn line(&mut self, line: &str) {
+    fn event(&mut self, event: &SessionEvent) -> bool {
         if let Some(recorder) = &mut self.recorder {
-            recorder.line(line);
+            recorder.event(event);
         }
+        true
     }
 
     fn end(&mut self) {
@@ -209,7 +210,7 @@ impl ConnectionTap for ConnectionBag {
     }
 }
 
-/// A [`ConnectionTap`] writing a bag. Frames are stamped with the input's own times when it gives them
+/// A [`SessionObserver`] writing a bag. Frames are stamped with the input's own times when it gives them
 /// (the TekScan frame period, MCAP stamps, the sender's timestamps), else the wall clock when they are
 /// read; the bag's [`RECORDING_METADATA`] record says which. Each line is logged at the time of the
 /// frame before it. A write that fails stops the recording; [`BagRecorder::finish`] then reports it.
@@ -302,7 +303,7 @@ impl BagRecorder {
     }
 }
 
-impl ConnectionTap for BagRecorder {
+impl SessionObserver for BagRecorder {
     fn frame(
         &mut self,
         _index: u64,
@@ -322,13 +323,16 @@ impl ConnectionTap for BagRecorder {
         self.keep(written);
     }
 
-    fn line(&mut self, line: &str) {
+    /// Logged at the time of the frame before it; a failed recording is reported by `finish`, not
+    /// here (the session's output is not the bag).
+    fn event(&mut self, event: &SessionEvent) -> bool {
         if self.failed.is_some() {
-            return;
+            return true;
         }
-        let written = self.bag.write_json(self.time_ns, line);
+        let written = self.bag.write_json(self.time_ns, &event.to_line());
         self.lines += 1;
         self.keep(written);
+        true
     }
 }
 

@@ -7,6 +7,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
 use std::thread::JoinHandle;
 
+use crate::session::{SessionEvent, SessionObserver};
+
 /// A bounded queue of output lines to a writer thread: `send` never blocks; when the queue is full the
 /// line is dropped and counted.
 pub struct BoundedOutput {
@@ -61,6 +63,13 @@ impl std::fmt::Debug for BoundedOutput {
         f.debug_struct("BoundedOutput")
             .field("dropped", &self.dropped())
             .finish()
+    }
+}
+
+/// A session's events as JSON lines through the queue; an event that did not fit is dropped.
+impl SessionObserver for BoundedOutput {
+    fn event(&mut self, event: &SessionEvent) -> bool {
+        self.send(event.to_line())
     }
 }
 

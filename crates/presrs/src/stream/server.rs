@@ -11,12 +11,14 @@ use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::TrainedModel;
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 
-use super::connection::{ConnectionNotice, ConnectionSummary, binary_source, drive_connection};
-use super::events::error_line;
+use super::connection::binary_source;
 use super::output::BoundedOutput;
 use super::shutdown::ShutdownHandle;
-use super::tap::{ConnectionTap, NoTap};
 use crate::error::{Error, Result};
+use crate::session::{
+    ConnectionNotice, ConnectionSummary, NoObserver, Observers, SessionEvent, SessionObserver,
+    run_frames,
+};
 
 /// The server's limits.
 #[derive(Clone, Debug, PartialEq)]
@@ -90,9 +92,9 @@ pub struct ServeSummary {
     pub refused: usize,
 }
 
-/// Makes the [`ConnectionTap`] of each client's connection, given the client's name (its address): what
+/// Makes the [`SessionObserver`] of each client's connection, given the client's name (its address): what
 /// else sees the connections of a server (a live view).
-pub type TapFactory = Arc<dyn Fn(&str) -> Box<dyn ConnectionTap + Send> + Send + Sync>;
+pub type ObserverFactory = Arc<dyn Fn(&str) -> Box<dyn SessionObserver + Send> + Send + Sync>;
 
 /// The stream server, bound and ready to [`serve`](Self::serve). The model is shared read-only by the
 /// connections; each has its own detector and classifier.
@@ -103,7 +105,7 @@ pub struct StreamServer {
     profile: OnlineProfile,
     options: ServerOptions,
     stop: ShutdownHandle,
-    taps: Option<TapFactory>,
+    observers: Option<ObserverFactory>,
 }
 
 impl std::fmt::Debug for StreamServer {
@@ -111,7 +113,7 @@ impl std::fmt::Debug for StreamServer {
         f.debug_struct("StreamServer")
             .field("local", &self.local)
             .field("options", &self.options)
-            .field("taps", &self.taps.is_some())
+            .field("observers", &self.observers.is_some())
             .finish_non_exhaustive()
     }
 }
@@ -145,14 +147,14 @@ impl StreamServer {
             profile,
             options,
             stop: ShutdownHandle::default(),
-            taps: None,
+            observers: None,
         })
     }
 
-    /// Gives each client's connection the tap `taps` makes for it.
+    /// Gives each client's connection the observer `observers` makes for it.
     #[must_use]
-    pub fn with_taps(mut self, taps: TapFactory) -> Self {
-        self.taps = Some(taps);
+    pub fn with_observers(mut self, observers: ObserverFactory) -> Self {
+        self.observers = Some(observers);
         self
     }
 
@@ -217,7 +219,8 @@ impl StreamServer {
     ) {
         let max_clients = self.options.max_clients;
         notify(&ServerNotice::Refused { peer, max_clients });
-        let line = error_line(&format!("server full ({max_clients} clients)"), true);
+        let line =
+            SessionEvent::error(format!("server full ({max_clients} clients)"), true).to_line();
         let _ = stream.set_nonblocking(false);
         let _ = writeln!(stream, "{line}");
     }
@@ -269,20 +272,18 @@ impl StreamServer {
         let connection_notice = |notice: &ConnectionNotice| {
             notify(&ServerNotice::Connection { peer: name, notice });
         };
-        let mut emit = |_: &serde_json::Value, line: String| output.send(line);
-        let mut tap: Box<dyn ConnectionTap + Send> = match &self.taps {
-            Some(taps) => taps(name),
-            None => Box::new(NoTap),
+        let mut observer: Box<dyn SessionObserver + Send> = match &self.observers {
+            Some(observers) => observers(name),
+            None => Box::new(NoObserver),
         };
-        let result = drive_connection(
+        let result = run_frames(
             &self.model,
             &self.profile,
             binary_source(reader, name, self.options.max_frame_bytes),
-            &mut emit,
+            &mut Observers::<&mut dyn SessionObserver>(vec![observer.as_mut(), &mut output]),
             &connection_notice,
-            tap.as_mut(),
         );
-        tap.end();
+        observer.end();
         let dropped_in_writer = output.dropped();
         output.close();
         let _ = writer.join();

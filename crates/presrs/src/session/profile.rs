@@ -1,0 +1,87 @@
+//! The online profile a session runs with: chosen (a profile file, a calibration manifest, the model
+//! file's own, or the defaults), changed by the face's options, and checked against the model.
+
+use std::path::Path;
+
+use presrs_core::online::OnlineProfile;
+use presrs_core::pipeline::TrainedModel;
+use presrs_core::sample::SampleKind;
+use presrs_io::message::{Message, Opt};
+
+use crate::error::{Error, Result};
+
+/// Changes to a profile, applied after it is chosen (the command line's `--sample-offset`, `--fuse`,
+/// `--decide-at` and `--gait`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ProfileOverrides {
+    /// Classify the k-th frame after touchdown.
+    pub sample_offset: Option<usize>,
+    /// Also fuse the posteriors of these offsets after touchdown (empty: keep the profile's).
+    pub fuse: Vec<usize>,
+    /// Terrain -> recommended gait, added to the profile's table.
+    pub gait: Vec<(String, String)>,
+    /// A whole-stance model decides K frames after touchdown instead of at lift-off.
+    pub decide_at: Option<usize>,
+}
+
+/// The profile to run with: the JSON file `profile_file`, else one learned from the recordings of the
+/// manifest `calibrate`, else the model file's `model_profile`, else the defaults (warm-up
+/// calibration); then `overrides`.
+pub fn resolve_profile(
+    profile_file: Option<&Path>,
+    calibrate: Option<&Path>,
+    model_profile: Option<&OnlineProfile>,
+    overrides: &ProfileOverrides,
+) -> Result<OnlineProfile> {
+    let mut profile = if let Some(path) = profile_file {
+        read_profile(path)?
+    } else if let Some(manifest) = calibrate {
+        // With the detector settings the model was trained with, if it says.
+        let segment = model_profile.map(|profile| profile.segment.clone());
+        crate::train::learn_online_profile(manifest, &segment.unwrap_or_default())?
+    } else {
+        model_profile.cloned().unwrap_or_default()
+    };
+    if let Some(k) = overrides.sample_offset {
+        profile.params.sample_offset = k;
+    }
+    if overrides.decide_at.is_some() {
+        profile.params.decide_at = overrides.decide_at;
+    }
+    if !overrides.fuse.is_empty() {
+        profile.params.fusion_offsets.clone_from(&overrides.fuse);
+    }
+    for (terrain, gait) in &overrides.gait {
+        profile.gait_table.insert(terrain.clone(), gait.clone());
+    }
+    Ok(profile)
+}
+
+/// Whether `profile` suits `model` online: `decide_at` is for whole-stance models (a one-frame model
+/// decides on its sample frame), fusion for one-frame models. The error names the option.
+pub fn check_profile(model: &TrainedModel, profile: &OnlineProfile) -> Result<()> {
+    let whole = matches!(model.sample(), SampleKind::Stance { .. });
+    if let (false, Some(k)) = (whole, profile.params.decide_at) {
+        return Err(Error::invalid(
+            Message::from("").opt_is(Opt::DecideAt, k).text(
+                " applies to whole-stance models (trained on stance samples); this model \
+                     classifies one frame of each stance, chosen by its sample offset",
+            ),
+        ));
+    }
+    if whole && !profile.params.fusion_offsets.is_empty() {
+        return Err(Error::invalid(
+            "a whole-stance model decides once per stance, on the stance's summary: fusion \
+             (of one-frame decisions) does not apply; leave the fusion offsets out",
+        ));
+    }
+    Ok(())
+}
+
+/// An online profile from its JSON file.
+pub fn read_profile(path: &Path) -> Result<OnlineProfile> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|err| Error::system(format!("cannot read the profile {}", path.display()), err))?;
+    serde_json::from_str(&text)
+        .map_err(|err| Error::data(format!("invalid online profile {}: {err}", path.display())))
+}
