@@ -10,6 +10,7 @@ macro_rules! stderr_line {
 }
 
 mod cmd;
+mod printer;
 
 use std::io::Write;
 use std::process::ExitCode;

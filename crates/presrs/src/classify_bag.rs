@@ -1,5 +1,5 @@
 //! `presrs classify --mcap OUT.mcap`: the classified recordings as one ROS 2 bag — their frames on
-//! [`FRAMES_TOPIC`](crate::stream::FRAMES_TOPIC) and, on [`DECISIONS_TOPIC`](crate::stream::DECISIONS_TOPIC), each stance's `touchdown` and `liftoff` and each sample's
+//! [`FRAMES_TOPIC`](presrs_io::mcap::FRAMES_TOPIC) and, on [`DECISIONS_TOPIC`](presrs_io::mcap::DECISIONS_TOPIC), each stance's `touchdown` and `liftoff` and each sample's
 //! `classification` (file, frame, label, confidence, posteriors, gait), stamped with their frames.
 
 use std::collections::BTreeMap;
@@ -12,7 +12,7 @@ use serde_json::json;
 use crate::classify::{Classified, ClassifyOptions};
 use crate::dataset::{apply_frame_period_option, read_corrected};
 use crate::error::{Error, Result};
-use crate::stream::DecisionBag;
+use presrs_io::mcap::DecisionBag;
 
 /// A bag of classified recordings being written; it appears under its name at [`Self::finish`].
 pub struct ClassifyBag {
@@ -110,6 +110,6 @@ impl ClassifyBag {
 
     /// Ends the bag and renames it into place; returns its path.
     pub fn finish(self) -> Result<PathBuf> {
-        self.bag.finish()
+        Ok(self.bag.finish()?)
     }
 }

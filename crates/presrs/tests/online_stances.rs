@@ -18,9 +18,7 @@ use presrs::core::online::{
 use presrs::core::pipeline::{Session, TrainedModel};
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::summary::{SummaryConfig, pad_to, summarise};
-use presrs::io::frame_protocol::{Dtype, encode_frame};
-use presrs::session::{EventTiming, step_events};
-use presrs::stream::{ConnectionOptions, InputFormat, run_connection};
+use presrs::session::{EventTiming, Input, JsonLines, run_frames, step_events};
 use presrs::{Dataset, Quiet, SampleOptions};
 
 fn shared(path: &str) -> PathBuf {
@@ -236,28 +234,29 @@ fn the_stream_session_takes_a_movies_frames_and_decides_as_the_online_classifier
         segment: options().segment_params(),
         ..OnlineProfile::default()
     };
-    let options = ConnectionOptions {
-        format: InputFormat::Binary,
-        name: "movie".into(),
-        ..ConnectionOptions::default()
-    };
     for (path, recording) in movies.iter().step_by(20) {
         let name = path.display().to_string();
-        let grid = recording.grid();
-        let (mut bytes, mut frame) = (Vec::new(), Vec::new());
-        for index in 0..recording.frame_count() {
-            let values = recording.frame(index).unwrap().values();
-            let stamp = index as u64 * 10_000;
-            encode_frame(&mut frame, grid.rows, grid.cols, Dtype::F64, stamp, values).unwrap();
-            bytes.extend_from_slice(&frame);
-        }
+        let mut index = 0;
+        let next = |values: &mut Vec<f64>, _: &mut Vec<bool>| {
+            let Some(frame) = recording.frame(index) else {
+                return Input::End;
+            };
+            index += 1;
+            values.clear();
+            values.extend_from_slice(frame.values());
+            Input::Frame {
+                grid: recording.grid(),
+                has_mask: false,
+                timestamp_us: Some(index as u64 * 10_000),
+                arrival: std::time::Instant::now(),
+            }
+        };
         let mut output = Vec::new();
-        let summary = run_connection(
+        let summary = run_frames(
             &model,
             &profile,
-            bytes.as_slice(),
-            &mut output,
-            &options,
+            next,
+            &mut JsonLines::new(&mut output),
             &|_| {},
         )
         .unwrap();

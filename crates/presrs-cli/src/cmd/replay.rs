@@ -1,6 +1,6 @@
 //! `presrs replay`: send a recording to `presrs stream --listen` as a live stream (demos and tests).
 //!
-//! The sending is [`presrs::replay`]'s: frames in the binary protocol of `docs/stream-protocol.md`, at
+//! The sending is [`presrs_stream::replay`]'s: frames in the binary protocol of `docs/stream-protocol.md`, at
 //! `--rate` frames per second on an absolute schedule or as fast as possible (`max`). The server's JSON
 //! lines are printed to stdout as they arrive; a summary goes to stderr.
 
@@ -9,7 +9,7 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use presrs::replay::{Rate, Replay};
+use presrs_stream::replay::{Rate, Replay};
 
 /// Send a recording as a live frame stream to `presrs stream --listen`.
 #[derive(Debug, clap::Args)]

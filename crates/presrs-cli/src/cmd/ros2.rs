@@ -4,9 +4,9 @@
 use std::io::Write;
 
 use presrs::session::resolve_profile;
-use presrs::stream::StopSignals;
 pub use presrs_ros2::Ros2Args;
 use presrs_ros2::{NodeGraph, run_node};
+use presrs_stream::StopSignals;
 
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = args.node_options(|key| std::env::var(key).ok())?;
@@ -21,7 +21,12 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     out.flush()?;
     let stop = graph.stop_handle();
     let signal_thread = signals.on_first(move || stop.stop());
-    let log = |notice: &_| stderr_line!("presrs ros2: {}", presrs::stream_log::notice_text(notice));
+    let log = |notice: &_| {
+        stderr_line!(
+            "presrs ros2: {}",
+            crate::printer::stream_log::notice_text(notice)
+        )
+    };
     // A closed stdout does not stop the node: its outputs are the topics.
     let mut print = |line: &str| drop(writeln!(out, "{line}").and_then(|()| out.flush()));
     let summary = run_node(graph, &file.model, &profile, &mut print, &log)?;

@@ -1,5 +1,5 @@
 //! `presrs stream`: online terrain classification of a live frame stream — the arguments, the call
-//! into [`presrs::stream`] (which holds the workflow: sessions, the server, the JSON events), and what
+//! into [`presrs_stream`] (the transports: the server, the stdin connection) around [`presrs::session`] (the session and its events), and what
 //! goes to stderr.
 //!
 //! Input: TekScan ASCII frames on stdin as they are written (`--format tekscan`, the default), binary
@@ -8,7 +8,7 @@
 //! JSON lines to stdout, or back to each client. A finite input (stdin) with any rejected frame or error
 //! exits with code 1 once it has been read to its end; the server (`--listen`) logs each connection's
 //! summary and keeps serving. `--http ADDR` also serves the live view in the browser
-//! ([`presrs::live`]; [`HttpArgs`] is shared with `presrs view`).
+//! ([`presrs_stream::live`]; [`HttpArgs`] is shared with `presrs view`).
 //!
 //! SIGINT and SIGTERM end the run cleanly: on stdin the input is taken as ended (the session writes its
 //! `end` line), the server stops (each connection gets its `end` line, then a `stopped` line on stdout);
@@ -20,20 +20,20 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
+use crate::printer::stream_log::{
+    input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
+};
 use presrs::session::{
     ConnectionNotice, NoObserver, Observers, ProfileOverrides, SessionObserver, resolve_profile,
 };
-use presrs::stoppable_input::StoppableInput;
-use presrs::stream::{
+use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
+use presrs_io::model_file::load_model;
+use presrs_stream::live::{LiveHub, LiveInfo, LiveOptions, LiveServer};
+use presrs_stream::stoppable_input::StoppableInput;
+use presrs_stream::{
     BagRecorder, BagReport, ConnectionBags, ConnectionOptions, InputFormat, ServerNotice,
     ServerOptions, ShutdownHandle, StopSignals, StreamServer, run_connection_observed,
 };
-use presrs::stream_log::{
-    input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
-};
-use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
-use presrs_io::model_file::load_model;
 
 /// Input format on stdin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

@@ -1,16 +1,16 @@
 //! `presrs view FILE`: replay a recording into the live view in the browser, at its frame rate, through
-//! the online classifier when a model is given ([`presrs::live::replay_recording`]).
+//! the online classifier when a model is given ([`presrs_stream::live::replay_recording`]).
 
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
-use presrs::live::{LiveInfo, ReplayOptions, replay_period_s, replay_recording};
 use presrs::session::{ConnectionNotice, ProfileOverrides, resolve_profile};
-use presrs::stream::ShutdownHandle;
 use presrs_io::model_file::load_model;
+use presrs_stream::ShutdownHandle;
+use presrs_stream::live::{LiveInfo, ReplayOptions, replay_period_s, replay_recording};
 
-use presrs::stream_log::{notice_text, summary_text};
+use crate::printer::stream_log::{notice_text, summary_text};
 
 use super::stream::HttpArgs;
 
@@ -91,7 +91,7 @@ pub fn run(args: &ViewArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let Some((hub, server)) = args.http.start(Some(addr), info, "view")? else {
         anyhow::bail!("no address to serve the live view on");
     };
-    let signals = presrs::stream::StopSignals::register()?;
+    let signals = presrs_stream::StopSignals::register()?;
     let stop = options.stop.clone().unwrap_or_default();
     let stopper = stop.clone();
     let signal_thread = signals.on_first(move || stopper.stop());

@@ -17,10 +17,14 @@
 //! read back.
 
 mod cdr;
+mod decisions;
 mod reader;
 mod writer;
 
 pub use cdr::{IMAGE_MSGDEF, Image, Stamp, decode_image, encode_image};
+pub use decisions::{
+    DECISIONS_SCHEMA, DECISIONS_SCHEMA_NAME, DECISIONS_TOPIC, DecisionBag, FRAMES_TOPIC,
+};
 pub use reader::{
     BagFrame, BagFrames, FrameType, TopicInfo, decode_frame, frame_timing, list_topics, parse_mcap,
 };

@@ -17,7 +17,6 @@ use crate::error::Result;
 
 /// What a connection tells the person watching it, as it happens.
 #[derive(Clone, Debug, PartialEq, Eq)]
-#[non_exhaustive]
 pub enum ConnectionNotice {
     /// An `error` event's message (only the first [`MAX_ERROR_NOTICES`] of a connection).
     Error(String),

@@ -3,7 +3,7 @@
 //! the current terrain, its confidence and the recommended gait, and the decision log.
 //!
 //! - [`LiveHub`] holds what the viewers are shown; its [`LiveTap`] (a
-//!   [`SessionObserver`](crate::session::SessionObserver)) feeds it from a connection and never waits for a viewer:
+//!   [`SessionObserver`](presrs::session::SessionObserver)) feeds it from a connection and never waits for a viewer:
 //!   the latest frame goes to one slot, the total loads and the
 //!   JSON lines to bounded histories.
 //! - [`LiveServer`] serves it over HTTP/1.1 (hyper, on a tokio runtime of its own thread): `GET /` the

@@ -13,8 +13,8 @@ use presrs_io::mcap::BagFrames;
 use presrs_io::tekscan_stream::TekscanStream;
 
 use super::shutdown::ShutdownHandle;
-use crate::error::Result;
-use crate::session::{
+use presrs::error::Result;
+use presrs::session::{
     ConnectionNotice, ConnectionSummary, Input, JsonLines, NoObserver, Observers, SessionObserver,
     run_frames,
 };

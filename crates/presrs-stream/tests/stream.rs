@@ -16,7 +16,7 @@ use presrs::core::pipeline::{LabeledImage, TrainedModel, train};
 use presrs::core::{Frame, Grid};
 use presrs::io::frame_protocol::{Dtype, encode_frame};
 use presrs::session::{SessionEvent, SessionObserver};
-use presrs::stream::{
+use presrs_stream::{
     ConnectionOptions, InputFormat, ServerNotice, ServerOptions, ShutdownHandle, StreamServer,
     run_connection, run_connection_observed,
 };

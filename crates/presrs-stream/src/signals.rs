@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex};
 use signal_hook::consts::{SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
 
-use crate::error::{Error, Result};
+use presrs::error::{Error, Result};
 
 /// SIGINT and SIGTERM, caught from [`register`](Self::register) on: registered before the work starts, so
 /// that a signal during loading is not lost, and handed a stop function once there is something to stop.

@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use presrs_core::Grid;
 
-use crate::session::{Classification, SessionEvent, SessionObserver};
+use presrs::session::{Classification, SessionEvent, SessionObserver};
 
 /// Total loads kept for a viewer that connects late or falls behind (the trace it can draw).
 pub const LOAD_HISTORY: usize = 2048;

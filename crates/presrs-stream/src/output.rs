@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
 use std::thread::JoinHandle;
 
-use crate::session::{SessionEvent, SessionObserver};
+use presrs::session::{SessionEvent, SessionObserver};
 
 /// A bounded queue of output lines to a writer thread: `send` never blocks; when the queue is full the
 /// line is dropped and counted.

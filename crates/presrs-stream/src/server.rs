@@ -14,8 +14,8 @@ use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use super::connection::binary_source;
 use super::output::BoundedOutput;
 use super::shutdown::ShutdownHandle;
-use crate::error::{Error, Result};
-use crate::session::{
+use presrs::error::{Error, Result};
+use presrs::session::{
     ConnectionNotice, ConnectionSummary, NoObserver, Observers, SessionEvent, SessionObserver,
     run_frames,
 };
@@ -50,7 +50,6 @@ impl Default for ServerOptions {
 
 /// What the server tells the person watching it, as it happens. `peer` names the client (its address).
 #[derive(Debug)]
-#[non_exhaustive]
 pub enum ServerNotice<'a> {
     /// Accepting a connection failed (the server goes on).
     AcceptFailed(&'a std::io::Error),

@@ -4,6 +4,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+#[path = "../../presrs/tests/common/mod.rs"]
 mod common;
 
 use std::io::{BufRead, BufReader, Read, Write};
@@ -11,8 +12,8 @@ use std::net::{SocketAddr, TcpStream};
 use std::time::{Duration, Instant};
 
 use presrs::core::Grid;
-use presrs::live::{LiveHub, LiveInfo, LiveOptions, LiveServer, base64, sse_event};
 use presrs::session::{SessionEvent, SessionObserver, Touchdown};
+use presrs_stream::live::{LiveHub, LiveInfo, LiveOptions, LiveServer, base64, sse_event};
 use serde_json::Value;
 
 fn hub() -> LiveHub {
@@ -344,7 +345,7 @@ fn a_whole_stance_models_decisions_show_what_they_waited_for() {
     use presrs::core::online::{OnlineParams, OnlineProfile};
     use presrs::core::sample::SampleKind;
     use presrs::core::stance::summary::SummaryConfig;
-    use presrs::live::{ReplayOptions, replay_recording};
+    use presrs_stream::live::{ReplayOptions, replay_recording};
 
     let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real");
     let options = presrs::SampleOptions {

@@ -4,8 +4,8 @@
 
 use serde_json::json;
 
-use crate::session::{ConnectionNotice, ConnectionSummary};
-use crate::stream::{ServeSummary, ServerNotice};
+use presrs::session::{ConnectionNotice, ConnectionSummary};
+use presrs_stream::{ServeSummary, ServerNotice};
 
 /// A connection's notice as the log says it.
 pub fn notice_text(notice: &ConnectionNotice) -> String {

@@ -34,8 +34,8 @@ use tokio::task::JoinSet;
 use super::events::{EventStream, Stopped};
 use super::hub::LiveHub;
 use super::write_timeout::WriteTimeout;
-use crate::error::{Error, Result};
-use crate::session::SessionEvent;
+use presrs::error::{Error, Result};
+use presrs::session::SessionEvent;
 
 const PAGE: &str = include_str!("page/index.html");
 const SCRIPT: &str = include_str!("page/app.js");

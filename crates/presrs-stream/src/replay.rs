@@ -14,7 +14,7 @@ use presrs_core::Grid;
 use presrs_core::Recording;
 use presrs_io::frame_protocol::{Dtype, write_frame};
 
-use crate::error::{Context, Error, Result};
+use presrs::error::{Context, Error, Result};
 
 /// Frames per second, or as fast as possible.
 #[derive(Clone, Copy, Debug, PartialEq)]

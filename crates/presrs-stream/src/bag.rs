@@ -1,9 +1,7 @@
-//! Recording a stream connection as a ROS 2 bag (MCAP): the frames read on [`FRAMES_TOPIC`] and every JSON
-//! line the connection emitted on [`DECISIONS_TOPIC`], written as the connection runs and renamed into place
+//! Recording a stream connection as a ROS 2 bag (MCAP, [`DecisionBag`]): the frames read and every
+//! event the connection emitted, written as the connection runs and renamed into place
 //! when it ends ([`BagRecorder::finish`]); a connection that fails or is dropped leaves no file behind.
 
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -11,55 +9,10 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use presrs_core::Grid;
 use presrs_io::IoError;
-use presrs_io::atomic::AtomicFile;
-use presrs_io::mcap::{BagWriter, ImageEncoding};
+use presrs_io::mcap::{DecisionBag, ImageEncoding};
 
-use crate::error::Result;
-use crate::session::{NoObserver, SessionEvent, SessionObserver};
-
-/// The topic of the frames (`sensor_msgs/msg/Image`, `mono16` for integer counts, else `32FC1`).
-pub const FRAMES_TOPIC: &str = "/presrs/frames";
-/// The topic of the connection's JSON lines (`touchdown`, `classification`, `liftoff`, `error`, `end`),
-/// JSON messages with the schema [`DECISIONS_SCHEMA`].
-pub const DECISIONS_TOPIC: &str = "/presrs/decisions";
-/// The schema name of [`DECISIONS_TOPIC`].
-pub const DECISIONS_SCHEMA_NAME: &str = "presrs/Decision";
-
-/// The JSON Schema of the decision lines (`docs/interface.md` describes each event's fields).
-pub const DECISIONS_SCHEMA: &str = r#"{
-  "title": "presrs decision",
-  "description": "One JSON line of presrs stream: touchdown, classification, liftoff, error or end.",
-  "type": "object",
-  "properties": {
-    "event": {"type": "string", "enum": ["touchdown", "classification", "liftoff", "error", "end"]},
-    "file": {"type": "string", "description": "classify --mcap: the recording"},
-    "kind": {"type": "string"},
-    "stance": {"type": ["integer", "null"]},
-    "frame": {"type": "integer"},
-    "touchdown_frame": {"type": "integer"},
-    "sample_frame": {"type": "integer"},
-    "end_frame": {"type": "integer"},
-    "peak_frame": {"type": "integer"},
-    "peak_load": {"type": "number"},
-    "len": {"type": "integer"},
-    "partial": {"type": "boolean"},
-    "sampled": {"type": "boolean"},
-    "label": {"type": "string"},
-    "class": {"type": "integer"},
-    "confidence": {"type": "number"},
-    "posteriors": {"type": "object", "additionalProperties": {"type": "number"}},
-    "frames_used": {"type": "integer"},
-    "decided_at": {"type": "string", "enum": ["liftoff", "offset", "length"], "description": "a whole-stance decision: what it waited for"},
-    "decided_at_frame": {"type": "integer"},
-    "cut": {"type": "boolean"},
-    "latency_us": {"type": "number"},
-    "timestamp_us": {"type": ["integer", "null"]},
-    "gait": {"type": ["string", "null"]},
-    "message": {"type": "string"},
-    "fatal": {"type": "boolean"}
-  },
-  "required": ["event"]
-}"#;
+use presrs::error::Result;
+use presrs::session::{NoObserver, SessionEvent, SessionObserver};
 
 /// What a recorded bag holds.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -333,73 +286,5 @@ impl SessionObserver for BagRecorder {
         self.lines += 1;
         self.keep(written);
         true
-    }
-}
-
-/// A bag with the frames and decisions topics, written to a hidden temporary file that takes its name
-/// at [`DecisionBag::finish`]: what `stream --record` and `classify --mcap` write.
-pub(crate) struct DecisionBag {
-    bag: BagWriter<BufWriter<File>>,
-    file: AtomicFile,
-    frames_channel: u16,
-    decisions_channel: u16,
-}
-
-impl DecisionBag {
-    pub(crate) fn create(path: &Path) -> Result<Self> {
-        let (file, handle) = AtomicFile::create(path)?;
-        let name = presrs_io::error::display_name(path);
-        let mut bag = BagWriter::new(BufWriter::with_capacity(1 << 16, handle), &name)?;
-        let frames_channel = bag.add_image_topic(FRAMES_TOPIC)?;
-        let decisions_channel =
-            bag.add_json_topic(DECISIONS_TOPIC, DECISIONS_SCHEMA_NAME, DECISIONS_SCHEMA)?;
-        Ok(Self {
-            bag,
-            file,
-            frames_channel,
-            decisions_channel,
-        })
-    }
-
-    pub(crate) fn path(&self) -> &Path {
-        self.file.path()
-    }
-
-    pub(crate) fn write_image(
-        &mut self,
-        time_ns: u64,
-        grid: Grid,
-        values: &[f64],
-        encoding: ImageEncoding,
-    ) -> std::result::Result<(), IoError> {
-        self.bag
-            .write_image(self.frames_channel, time_ns, grid, values, encoding)
-    }
-
-    pub(crate) fn write_json(
-        &mut self,
-        time_ns: u64,
-        line: &str,
-    ) -> std::result::Result<(), IoError> {
-        self.bag.write_json(self.decisions_channel, time_ns, line)
-    }
-
-    pub(crate) fn write_metadata(
-        &mut self,
-        name: &str,
-        entries: std::collections::BTreeMap<String, String>,
-    ) -> std::result::Result<(), IoError> {
-        self.bag.write_metadata(name, entries)
-    }
-
-    /// Ends the bag (its summary and footer) and renames it into place; returns its path.
-    pub(crate) fn finish(self) -> Result<PathBuf> {
-        let path = self.file.path().to_path_buf();
-        let buffered = self.bag.finish()?;
-        buffered
-            .into_inner()
-            .map_err(|err| IoError::io("write", &path, err.into_error()))?;
-        self.file.commit()?;
-        Ok(path)
     }
 }

@@ -10,9 +10,9 @@ use presrs_core::pipeline::TrainedModel;
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, Dtype, encode_frame};
 
 use super::hub::LiveHub;
-use crate::error::{Error, Result};
-use crate::session::{ConnectionNotice, ConnectionSummary, SessionObserver};
-use crate::stream::{ConnectionOptions, InputFormat, ShutdownHandle, run_connection_observed};
+use crate::{ConnectionOptions, InputFormat, ShutdownHandle, run_connection_observed};
+use presrs::error::{Error, Result};
+use presrs::session::{ConnectionNotice, ConnectionSummary, SessionObserver};
 
 /// How a recording is replayed.
 #[derive(Clone, Debug, PartialEq)]
