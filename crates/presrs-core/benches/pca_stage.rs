@@ -11,7 +11,7 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, ColMut, ColRef, MatRef, Par};
-use presrs_core::pca::Pca;
+use presrs_core::projection::pca::Pca;
 use presrs_core::testing::bench_fixture;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -24,9 +24,6 @@ pub mod synthetic;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 
-/// The PCA, at its old path (`presrs_core::pca`); it lives in [`projection`].
-pub use projection::pca;
-
 pub use crop::Crop;
 pub use error::CoreError;
 pub use frame::{Frame, FrameView, Grid};

@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used)] // helpers of integration tests are test code too
 
-use presrs_core::pca::Pca;
+use presrs_core::projection::pca::Pca;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

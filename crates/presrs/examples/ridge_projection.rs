@@ -11,7 +11,7 @@ use std::time::Instant;
 use presrs::core::Grid;
 use presrs::core::classifier::{ClassifierConfig, LabeledVectors, RidgeConfig, RidgeFamily};
 use presrs::core::features::{FeatureConfig, FitImages, RocketFamily, RocketParams};
-use presrs::core::pca::Pca;
+use presrs::core::projection::pca::Pca;
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 

@@ -8,9 +8,9 @@ use crate::crop::Crop;
 use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
 use crate::frame::Grid;
-use crate::pca::Pca;
 use crate::pipeline::config::TrainConfig;
 use crate::preprocess::Preprocess;
+use crate::projection::pca::Pca;
 use crate::sample::SampleKind;
 use crate::selection::record::Selection;
 

@@ -8,9 +8,9 @@ use crate::classifier::ClassifierScratch;
 use crate::error::{CoreError, Result, check_len};
 use crate::features::Precision;
 use crate::frame::FrameView;
-use crate::pca::{Pca, ProjectionScratch};
 use crate::pipeline::extract::Preprocessor;
 use crate::pipeline::model::TrainedModel;
+use crate::projection::pca::{Pca, ProjectionScratch};
 
 impl TrainedModel {
     /// A classification session with its own buffers (one per thread).
@@ -132,7 +132,7 @@ impl<'m> Session<'m> {
     /// The features of `frame` in the precision classification computes them in, f32, when it takes the
     /// common path (1-D |FFT| features, no absent sensels, no load normalisation; `None` otherwise, and
     /// [`fast_features`](Self::fast_features) gives them): the values of `fast_features`, before they
-    /// are widened to f64. [`Pca::project_fast_into`](crate::pca::Pca::project_fast_into) reads them as they are.
+    /// are widened to f64. [`Pca::project_fast_into`](crate::projection::pca::Pca::project_fast_into) reads them as they are.
     pub fn fast_features_f32(&mut self, frame: &FrameView<'_>) -> Result<Option<&[f32]>> {
         self.preprocessor.fast_f32_features(frame)
     }

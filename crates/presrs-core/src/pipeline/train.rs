@@ -4,10 +4,10 @@
 use crate::classifier::LabeledVectors;
 use crate::error::{CoreError, Result};
 use crate::features::Precision;
-use crate::pca::Pca;
 use crate::pipeline::config::CheckedTrainConfig;
 use crate::pipeline::extract::{LabeledImage, features_of, fitted_config, preprocessor_for};
 use crate::pipeline::model::{FORMAT_VERSION, ModelFields, TrainedModel, TrainingSummary};
+use crate::projection::pca::Pca;
 use crate::sample::SampleKind;
 
 /// Trains the pipeline (see the module documentation). Classes are the distinct training labels, sorted;

@@ -17,10 +17,10 @@ use super::{RACE_FOLDS, RACE_MIN_FOLDS, RACE_Z};
 use crate::classifier::LabeledVectors;
 use crate::error::{CoreError, Result};
 use crate::metrics::MeanStd;
-use crate::pca::Pca;
 use crate::pipeline::config::{CheckedTrainConfig, TrainConfig};
 use crate::pipeline::extract::{FeatureTable, LabeledImage};
 use crate::pipeline::train::{class_indices, class_names_of, project_rows};
+use crate::projection::pca::Pca;
 use crate::selection::record::CandidateScore;
 
 /// Candidates that share crop, preprocessing and features (indices into the candidate list, in order).

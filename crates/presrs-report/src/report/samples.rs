@@ -6,8 +6,8 @@ use std::fmt::Write as _;
 
 use presrs_core::Crop;
 use presrs_core::features::{FeatureConfig, Fft1dFamily};
-use presrs_core::pca::Pca;
 use presrs_core::pipeline::{TrainedModel, extract_features};
+use presrs_core::projection::pca::Pca;
 use presrs_core::{FrameView, Grid, Recording};
 use rayon::prelude::*;
 
