@@ -9,7 +9,7 @@ use presrs_core::sample::SampleKind;
 use presrs_core::{FrameView, Grid};
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
 use presrs_io::mcap::BagFrames;
-use presrs_io::tekscan_stream::TekscanStream;
+use presrs_io::tekscan::TekscanStream;
 use serde_json::Value;
 
 use super::events::{end_event, error_event, event_values};
