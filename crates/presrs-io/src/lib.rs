@@ -12,7 +12,6 @@ pub mod output_path;
 mod parsed;
 pub mod png;
 pub mod tekscan;
-pub mod tekscan_stream;
 pub mod text;
 mod textutil;
 

@@ -103,20 +103,46 @@ pub(crate) fn is_blank(line: &str) -> bool {
 /// (`1,,3`).
 pub(crate) fn split_cells<'a>(line: &'a str, cells: &mut Vec<&'a str>) -> Result<(), usize> {
     cells.clear();
+    for_each_cell(line, |_, cell| {
+        cells.push(cell);
+        true
+    })
+    .map(|_| ())
+}
+
+/// Calls `visit(index, cell)` for each cell of a data line, split as [`split_cells`] splits it, until
+/// `visit` returns false (without collecting the cells). Returns the number of cells (counting on past
+/// a stop), or `Err(k)` when cell `k` is empty between two commas.
+pub(crate) fn for_each_cell<'a>(
+    line: &'a str,
+    mut visit: impl FnMut(usize, &'a str) -> bool,
+) -> Result<usize, usize> {
     let line = line.trim();
+    let mut count = 0;
+    let mut go = true;
+    let mut cell = |c: &'a str, count: &mut usize| {
+        if go {
+            go = visit(*count, c);
+        }
+        *count += 1;
+    };
     if !line.contains(',') {
-        cells.extend(line.split_whitespace());
-        return Ok(());
+        for c in line.split_whitespace() {
+            cell(c, &mut count);
+        }
+        return Ok(count);
     }
     let line = line.trim_end_matches(|c: char| c == ',' || c.is_whitespace());
     for piece in line.split(',') {
         let piece = piece.trim();
         if piece.is_empty() {
-            return Err(cells.len());
+            return Err(count);
         }
-        cells.extend(piece.split_whitespace());
+        for c in piece.split_whitespace() {
+            cell(c, &mut count);
+        }
     }
-    Ok(())
+    Ok(count)
 }
 
 /// One parsed cell of a data line.

@@ -19,7 +19,7 @@ use presrs_core::{LabeledImage, TrainConfig};
 use presrs_io::ReadOptions;
 use presrs_io::frame_protocol::{Dtype, FrameReader, encode_frame};
 use presrs_io::model_file::{ModelFile, Provenance, parse_model};
-use presrs_io::tekscan_stream::TekscanStream;
+use presrs_io::tekscan::TekscanStream;
 
 /// SplitMix64: a tiny seeded generator, so that every run mutates the same way.
 struct Rng(u64);

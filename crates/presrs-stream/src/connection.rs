@@ -10,7 +10,7 @@ use presrs_core::online::OnlineProfile;
 use presrs_core::pipeline::TrainedModel;
 use presrs_io::frame_protocol::{DEFAULT_MAX_PAYLOAD_BYTES, FrameError, FrameReader};
 use presrs_io::mcap::BagFrames;
-use presrs_io::tekscan_stream::TekscanStream;
+use presrs_io::tekscan::TekscanStream;
 
 use super::shutdown::ShutdownHandle;
 use presrs::error::Result;

@@ -1,11 +1,11 @@
 //! The header: `KEY value` lines up to `ASCII_DATA` (see the module documentation of
-//! [`crate::tekscan`]).
+//! [`crate::tekscan`]), read one line at a time by both the stream and the whole-file reader.
 
 use std::collections::HashMap;
 
 use presrs_core::{Grid, PressureUnit, SensorMeta};
 
-use super::lines::{frame_line, is_ascii_data};
+use super::lines::{clip, frame_line, is_ascii_data};
 use crate::error::IoError;
 use crate::message::Warnings;
 use crate::textutil::is_blank;
@@ -28,16 +28,24 @@ const KNOWN_KEYS: &[&str] = &[
 ];
 
 /// What the header says.
+#[derive(Clone, Debug)]
 pub(super) struct Header {
     pub(super) grid: Grid,
     pub(super) period: Option<f64>,
     pub(super) meta: SensorMeta,
     pub(super) start_frame: Option<(usize, i64)>,
     pub(super) end_frame: Option<(usize, i64)>,
-    /// Index into the file's lines of the first data line.
-    pub(super) data_start: usize,
-    /// Line number of the `ASCII_DATA` line (or of the last header line).
+    /// Line number of the `ASCII_DATA` line (or of the `Frame` line that ended the header).
     pub(super) end_line: usize,
+}
+
+/// Where the header ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum HeaderEnd {
+    /// On an `ASCII_DATA` line: the data starts on the next line.
+    AsciiData,
+    /// On a `Frame N` line (a file without `ASCII_DATA`): the data starts on this line.
+    FrameLine,
 }
 
 /// Where the header reader is: a small state machine over the lines up to `ASCII_DATA`.
@@ -50,10 +58,11 @@ enum State {
     AfterLabel,
 }
 
-/// What the header has said so far.
-struct Reader<'a> {
+/// Reads the header one line at a time ([`Self::line`]), then [`Self::finish`] gives what it says.
+pub(super) struct HeaderReader<'a> {
     file: &'a str,
     warnings: &'a mut Warnings,
+    state: State,
     meta: SensorMeta,
     rows: Option<usize>,
     cols: Option<usize>,
@@ -66,52 +75,30 @@ struct Reader<'a> {
     /// The line of each known key's first occurrence.
     seen: HashMap<String, usize>,
     /// A `Frame N` line ends the header only in files without an `ASCII_DATA` line (so that a comment
-    /// such as `Frame 3 was bad` in a normal header is kept as text).
+    /// such as `Frame 3 was bad` in a normal header is kept as text); only a reader of the whole
+    /// file knows that in advance.
     frame_line_ends: bool,
 }
 
-/// Reads the header from the file's `lines`; the driver of the state machine, one line at a time.
-pub(super) fn parse_header(
-    lines: &[(usize, &str)],
-    file: &str,
-    warnings: &mut Warnings,
-) -> Result<Header, IoError> {
-    let mut reader = Reader::new(lines, file, warnings);
-    let mut state = State::Keys;
-    for (index, &(line_no, raw)) in lines.iter().enumerate() {
-        let line = raw.trim();
-        let token = line.split_whitespace().next().unwrap_or("");
-        state = if is_blank(line) {
-            State::Keys // a label's text is the line right after it, not the next non-blank one
-        } else if is_ascii_data(token) {
-            return reader.finish(index + 1, line_no);
-        } else if reader.frame_line_ends && frame_line(line).is_some() {
-            return reader.finish(index, line_no);
-        } else {
-            reader.key_line(state, line_no, line, token)?
-        };
-    }
-    Err(no_ascii_data(lines, file))
-}
-
-/// The file ended without an `ASCII_DATA` line (nor a `Frame N` line in a file without one).
-fn no_ascii_data(lines: &[(usize, &str)], file: &str) -> IoError {
+/// The input ended without an `ASCII_DATA` line (nor a `Frame N` line in a file without one); its
+/// last line is `last_line`.
+pub(super) fn no_ascii_data(file: &str, last_line: usize) -> IoError {
     IoError::parse(
         file,
-        lines.last().map_or(1, |&(n, _)| n),
-        "expected an `ASCII_DATA` line ending the TekScan header, found the end of the file \
-         (is this a TekScan ASCII export?)",
+        last_line.max(1),
+        "the input ended before `ASCII_DATA`: expected an `ASCII_DATA` line ending the TekScan \
+         header (is this a TekScan ASCII export?)",
     )
 }
 
-impl<'a> Reader<'a> {
-    fn new(lines: &[(usize, &str)], file: &'a str, warnings: &'a mut Warnings) -> Self {
-        let has_ascii_data = lines
-            .iter()
-            .any(|(_, line)| is_ascii_data(line.split_whitespace().next().unwrap_or("")));
+impl<'a> HeaderReader<'a> {
+    /// A reader for the header of `file`; `frame_line_ends`: a `Frame N` line ends the header (the
+    /// file has no `ASCII_DATA` line).
+    pub(super) fn new(file: &'a str, frame_line_ends: bool, warnings: &'a mut Warnings) -> Self {
         Self {
             file,
             warnings,
+            state: State::Keys,
             meta: SensorMeta::default(),
             rows: None,
             cols: None,
@@ -120,8 +107,24 @@ impl<'a> Reader<'a> {
             end_frame: None,
             saturation: None,
             seen: HashMap::new(),
-            frame_line_ends: !has_ascii_data,
+            frame_line_ends,
         }
+    }
+
+    /// Reads line `line_no`; `Some(end)` when the header ends there (then call [`Self::finish`]).
+    pub(super) fn line(&mut self, line_no: usize, raw: &str) -> Result<Option<HeaderEnd>, IoError> {
+        let line = raw.trim();
+        let token = line.split_whitespace().next().unwrap_or("");
+        self.state = if is_blank(line) {
+            State::Keys // a label's text is the line right after it, not the next non-blank one
+        } else if is_ascii_data(token) {
+            return Ok(Some(HeaderEnd::AsciiData));
+        } else if self.frame_line_ends && frame_line(line).is_some() {
+            return Ok(Some(HeaderEnd::FrameLine));
+        } else {
+            self.key_line(self.state, line_no, line, token)?
+        };
+        Ok(None)
     }
 
     /// A non-blank line starting with `token`: free text, another key, a repeated known key or a
@@ -262,10 +265,10 @@ impl<'a> Reader<'a> {
         }
     }
 
-    /// The header ends (data from line index `data_start`, the end on line `end_line`): ROWS and COLS
-    /// must have been given, and SATURATION_PRESSURE can now be read in the final UNITS.
-    fn finish(mut self, data_start: usize, end_line: usize) -> Result<Header, IoError> {
-        let grid = self.grid(end_line)?;
+    /// The header ended on line `end_line` (`ended_by` says how): ROWS and COLS must have been given,
+    /// and SATURATION_PRESSURE can now be read in the final UNITS.
+    pub(super) fn finish(mut self, end_line: usize, ended_by: &str) -> Result<Header, IoError> {
+        let grid = self.grid(end_line, ended_by)?;
         self.place_saturation();
         Ok(Header {
             grid,
@@ -273,13 +276,12 @@ impl<'a> Reader<'a> {
             meta: self.meta,
             start_frame: self.start_frame,
             end_frame: self.end_frame,
-            data_start,
             end_line,
         })
     }
 
     /// `ROWS x COLS`, both required (the error names the ones missing), the product within `usize`.
-    fn grid(&self, end_line: usize) -> Result<Grid, IoError> {
+    fn grid(&self, end_line: usize, ended_by: &str) -> Result<Grid, IoError> {
         let (rows, cols) = match (self.rows, self.cols) {
             (Some(r), Some(c)) => (r, c),
             (r, c) => {
@@ -291,8 +293,10 @@ impl<'a> Reader<'a> {
                     self.file,
                     end_line,
                     format!(
-                        "the header has no {} line; expected `ROWS <n>` and `COLS <n>` before the data",
-                        missing.join(" or ")
+                        "the header has no {} line; expected `ROWS <n>` and `COLS <n>` before the data \
+                         (`{}` before `ROWS` and `COLS`: the frame size is unknown)",
+                        missing.join(" or "),
+                        clip(ended_by)
                     ),
                 ));
             }

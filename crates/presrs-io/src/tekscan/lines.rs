@@ -6,9 +6,8 @@ pub(super) fn is_ascii_data(token: &str) -> bool {
 }
 
 /// `Frame 12, timestamp 728` -> `(12, Some(", timestamp 728"))`; `None` if the line is not a frame line.
-/// `Some(Err(..))` if it starts with `Frame ` but the number is malformed. Shared with the stream reader
-/// ([`crate::tekscan_stream`]) so that both read `Frame` lines alike.
-pub(crate) fn frame_line(line: &str) -> Option<Result<(i64, Option<&str>), String>> {
+/// `Some(Err(..))` if it starts with `Frame ` but the number is malformed.
+pub(super) fn frame_line(line: &str) -> Option<Result<(i64, Option<&str>), String>> {
     let head = line.get(..5)?;
     if !head.eq_ignore_ascii_case("frame") {
         return None;

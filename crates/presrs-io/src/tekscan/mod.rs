@@ -1,4 +1,12 @@
-//! TekScan ASCII movies and snapshots (`.asf`, sometimes `.csv`): reader and writer.
+//! TekScan ASCII movies and snapshots (`.asf`, sometimes `.csv`): reader, stream reader and writer.
+//!
+//! One parser reads both a live stream and a whole file: [`TekscanStream`] (`stream.rs`) reads a
+//! text one frame at a time, with the header read line by line (`header.rs`), rows parsed by
+//! `rows.rs` and lines by `line_reader.rs`; [`parse_tekscan`] (`file.rs`) drives it over a file's text,
+//! stopping at the first fault, and collects its frames into a [`Recording`] with the checks only a
+//! whole file allows (frame numbers, truncation, the announced frame count). A fault in the frames is
+//! one type (`fault.rs`) worded for either reader; the stream's module docs list what a stream and a
+//! file treat differently.
 //!
 //! See `docs/tekscan-ascii.md` for the format. What this module does where the format notes are
 //! silent:
@@ -39,9 +47,13 @@
 //! * **Memory.** Nothing is allocated from the header's `ROWS x COLS` alone: the data grows as rows are
 //!   read, and reservations are capped by the size of the input.
 
-mod frames;
+mod fault;
+mod file;
 mod header;
+mod line_reader;
 mod lines;
+mod rows;
+mod stream;
 #[cfg(test)]
 mod tests;
 mod write;
@@ -50,14 +62,11 @@ use std::path::Path;
 
 use presrs_core::Recording;
 
-use self::frames::{check_frame_count, parse_frames};
-use self::header::parse_header;
 use crate::error::{IoError, display_name};
-use crate::message::Warnings;
-use crate::textutil::{decode_text, is_blank, numbered_lines};
+use crate::textutil::{decode_text, numbered_lines};
 use crate::{Parsed, ReadOptions};
 
-pub(crate) use self::lines::frame_line;
+pub use self::stream::{MAX_STREAM_SENSELS, StreamFrame, StreamHeader, TekscanStream};
 pub use self::write::{write_tekscan, write_tekscan_file};
 
 /// The result of parsing a TekScan file: the recording and any warnings (see [`Parsed`]).
@@ -90,40 +99,5 @@ pub fn parse_tekscan(
     source_name: &str,
     options: &ReadOptions,
 ) -> Result<ParsedTekscan, IoError> {
-    let lines = numbered_lines(text);
-    if lines.iter().all(|(_, line)| is_blank(line)) {
-        return Err(IoError::format(
-            source_name,
-            "empty file: expected a TekScan ASCII header (`DATA_TYPE MOVIE`, `ROWS`, `COLS`, ..., \
-             `ASCII_DATA`) followed by frames",
-        ));
-    }
-    let mut warnings = Warnings::new();
-    let header = parse_header(&lines, source_name, &mut warnings)?;
-    let data_lines = &lines[header.data_start..];
-    let body = parse_frames(
-        &header,
-        data_lines,
-        text.len(),
-        source_name,
-        options,
-        &mut warnings,
-    )?;
-    check_frame_count(&header, &body, source_name, options, &mut warnings)?;
-    let recording = Recording::with_info(
-        header.grid,
-        header.period,
-        body.data,
-        body.mask,
-        body.info,
-        header.meta,
-    )
-    .map_err(|source| IoError::Model {
-        file: source_name.to_owned(),
-        source,
-    })?;
-    Ok(Parsed {
-        recording,
-        warnings,
-    })
+    file::parse_file(text, source_name, options)
 }

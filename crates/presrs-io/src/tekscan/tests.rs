@@ -1,6 +1,6 @@
 use presrs_core::{FrameInfo, Grid, PressureUnit, SensorMeta};
 
-use super::frames::MAX_GAP_WARNINGS;
+use super::file::MAX_GAP_WARNINGS;
 use super::*;
 
 fn strict(text: &str) -> Result<Parsed, IoError> {

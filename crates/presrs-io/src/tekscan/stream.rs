@@ -1,21 +1,38 @@
-//! Incremental reading of a TekScan ASCII movie as it is written (stdin, a pipe, a growing file): one
-//! frame at a time, nothing held but the current frame.
+//! Incremental reading of a TekScan ASCII text, one frame at a time, nothing held but the current
+//! frame. This is the one frame parser: `presrs stream` uses it on stdin, a pipe or a growing file,
+//! and the whole-file reader ([`crate::tekscan`]) drives it over a file's text.
 //!
-//! The header is read up to `ASCII_DATA`; only `ROWS`, `COLS` (required) and `SECONDS_PER_FRAME` are
-//! interpreted (the whole-file reader [`crate::tekscan`] keeps everything else; a live stream does not
-//! need it). Then frames: a `Frame N` line followed by `ROWS` data lines of `COLS` cells (numbers or `B`
-//! for no sensel), or, in files without `Frame` lines, every `ROWS` data lines. `Frame` lines are read
-//! as the whole-file reader reads them (`Frame 12, timestamp 728`, `Frame -2`, `Frame +3`; `Frame12` is
-//! not a `Frame` line). Blank and comma-only lines are skipped; `@@` ends a recording.
+//! The header is read by the whole-file reader's rules (see [`crate::tekscan`]) up to `ASCII_DATA`; a
+//! stream keeps [`StreamHeader`] of it. Then frames: a `Frame N` line followed by `ROWS` data lines of
+//! `COLS` cells (numbers or `B` for no sensel), or, in texts without `Frame` lines, every `ROWS` data
+//! lines, numbered from `START_FRAME` (default 1). `Frame 12, timestamp 728`, `Frame -2` and `Frame +3`
+//! are `Frame` lines; `Frame12` is not. Blank and comma-only lines are skipped; `@@` ends a recording.
+//! Lines break at `\n`, `\r\n` or a lone `\r`.
+//!
+//! **A stream and a file** differ in what can be known and what a fault costs:
+//!
+//! * a stream caps its lines in length (header lines at 64 KiB, data lines at 64 bytes a cell and at
+//!   least 1 KiB), its header at 10,000 lines and its frames at [`MAX_STREAM_SENSELS`] (a line without
+//!   end cannot eat memory); a file, already in memory, has no caps;
+//! * a stream goes on after a fault (below); the whole-file reader stops at the first;
+//! * in a stream, recordings may follow one another (below); in a file, only blank lines may follow
+//!   `@@`;
+//! * in a file, every frame starts with a `Frame` line or none does, and every frame has the first
+//!   frame's outline (its `B` cells); in a stream, a `Frame` line always starts a frame, even after
+//!   frames without, and each frame says whether it has absent sensels ([`StreamFrame::has_absent`]);
+//! * a file without an `ASCII_DATA` line ends its header at the first `Frame` line; a stream, which
+//!   cannot look ahead, needs `ASCII_DATA`;
+//! * a row with several faults is reported by its first bad cell in a stream, by its cell count in a
+//!   file (a last row cut inside a number reads as truncated), and the messages of a few faults are
+//!   worded differently (see `fault.rs`).
 //!
 //! **Recordings one after another** (`cat a.asf b.asf | presrs stream`): after `@@`, or where a
 //! `DATA_TYPE` line comes instead of the next frame, another header may follow. When its frames have the
 //! same size the stream goes on with them; otherwise that is an error and the stream stops
 //! ([`TekscanStream::stopped`]): one stream carries frames of one size.
 //!
-//! **Faults.** Lines are capped in length (a line without end cannot eat memory). Each fault is an error
-//! naming the line (and the frame, row and column when there are some), after which the stream can go
-//! on ([`TekscanStream::next_frame`] can be called again):
+//! **Faults.** Each fault is an error naming the line (and the frame, row and column when there are
+//! some), after which the stream can go on ([`TekscanStream::next_frame`] can be called again):
 //!
 //! * a bad row (wrong cell count, a cell that is not a number or `B`, a line too long or not UTF-8)
 //!   drops its frame. With `Frame` lines the reader then skips to the next `Frame` line; without them
@@ -27,22 +44,27 @@
 //! * in a stream with `Frame` lines, a data row after a complete frame and before the next `Frame`
 //!   line is an error, and the reader skips to the next `Frame` line.
 //!
-//! A `Frame` line is always taken as the start of a frame, even in a stream that had none so far.
-//! Frame numbers are reported as written ([`StreamFrame::number`]); gaps are not checked here.
+//! Frame numbers are reported as written ([`StreamFrame::number`]); their order and gaps are checked
+//! by the whole-file reader only.
 
-use std::io::{BufRead, Read};
+use std::io::BufRead;
 
 use presrs_core::Grid;
 
+use super::fault::{Fault, FaultKind, FrameAt, Reading};
+use super::header::{Header, HeaderEnd, HeaderReader, no_ascii_data};
+use super::line_reader::{Line, LineReader};
+use super::lines::frame_line;
+use super::rows::{Precedence, parse_row};
 use crate::error::IoError;
-use crate::tekscan::frame_line;
-use crate::textutil::{is_blank, parse_cell};
+use crate::message::Warnings;
+use crate::textutil::is_blank;
 
-/// Longest header line accepted, bytes.
+/// Longest header line a stream accepts, bytes.
 const MAX_HEADER_LINE: usize = 64 * 1024;
-/// Header lines accepted before `ASCII_DATA`.
+/// Header lines a stream accepts before `ASCII_DATA`.
 const MAX_HEADER_LINES: usize = 10_000;
-/// Largest grid accepted (sensels).
+/// Largest grid a stream accepts (sensels).
 pub const MAX_STREAM_SENSELS: usize = 1 << 20;
 
 /// What the header says.
@@ -55,12 +77,22 @@ pub struct StreamHeader {
 /// A frame read by [`TekscanStream::next_frame`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StreamFrame {
-    /// The number on its `Frame` line (or counted from 1 without `Frame` lines).
+    /// The number on its `Frame` line (or counted from `START_FRAME`, default 1, without `Frame` lines).
     pub number: i64,
     /// Line of its `Frame` line (of its first row without `Frame` lines).
     pub line: usize,
     /// Whether some sensel is `B` (absent): the mask is meaningful.
     pub has_absent: bool,
+}
+
+/// Where a frame started: its `Frame` line, or its first row.
+#[derive(Clone, Debug)]
+struct Started {
+    number: i64,
+    line: usize,
+    framed: bool,
+    /// The rest of its `Frame` line after the number (`, timestamp 728`).
+    suffix: Option<String>,
 }
 
 /// The frame [`TekscanStream::next_frame`] is reading.
@@ -69,8 +101,19 @@ struct FrameInProgress {
     row: usize,
     /// Whether some sensel read so far is absent.
     has_absent: bool,
-    /// The frame, once its `Frame` line or first row is read: (number, line).
-    current: Option<(i64, usize)>,
+    /// The frame, once its `Frame` line or first row is read.
+    current: Option<Started>,
+}
+
+impl FrameInProgress {
+    fn at(&self) -> Option<FrameAt> {
+        self.current.as_ref().map(|started| FrameAt {
+            number: started.number,
+            line: started.line,
+            framed: started.framed,
+            rows_done: self.row,
+        })
+    }
 }
 
 /// What [`TekscanStream::next_frame`] does after one line.
@@ -83,58 +126,82 @@ enum LineOutcome {
     Finished(Option<StreamFrame>),
 }
 
-/// What [`TekscanStream::next_line`] read.
-enum Line {
-    /// The end of the input.
-    End,
-    /// A line of text, in `self.line`.
-    Text,
-    /// A line that cannot be read as text (too long, not UTF-8): why. It counts as a line.
-    Bad(String),
+/// Why [`TekscanStream::read_frame`] gave no frame: an error (the input, the header), or a fault in
+/// the frames, which each reader words (and the whole-file reader may excuse) its own way.
+pub(super) enum Stop {
+    Error(IoError),
+    Fault(Fault),
 }
 
-/// Reads a TekScan ASCII movie frame by frame (see the module docs).
+/// Reads a TekScan ASCII text frame by frame (see the module docs).
 #[derive(Debug)]
 pub struct TekscanStream<R> {
-    reader: R,
+    lines: LineReader<R>,
     source_name: String,
-    line_no: usize,
-    line: Vec<u8>,
+    reading: Reading,
+    /// A file without `ASCII_DATA`: its header ends at the first `Frame` line.
+    frame_line_ends: bool,
     header: Option<StreamHeader>,
-    /// A `Frame` line read while the frame before it was reported short: (number, line).
-    pending_frame: Option<(i64, usize)>,
-    /// Frames counted in a stream without `Frame` lines.
-    counted: i64,
+    /// The whole header of the first recording, until the whole-file reader takes it.
+    details: Option<Header>,
+    /// The header's warnings (kept when reading a file).
+    warnings: Warnings,
+    /// The current recording's START_FRAME (its line and value): frames without `Frame` lines are
+    /// numbered from it.
+    start_frame: Option<(usize, i64)>,
+    /// A `Frame` line read while the frame before it was reported short.
+    pending_frame: Option<Started>,
+    /// Frames started in the current recording without `Frame` lines.
+    counted: usize,
     /// Whether frames start with `Frame` lines (known from the first `Frame` line or data row).
     framed: Option<bool>,
+    /// The last complete frame with a `Frame` line: its number and that line.
+    last_framed: Option<(i64, usize)>,
+    /// Reading a file: the first complete frame's number and outline (presence of each sensel).
+    outline: Option<(i64, Vec<bool>)>,
+    /// The `Frame` line suffix of the last frame returned.
+    suffix: Option<String>,
+    /// Reading a file: the line of the `@@` that ended it.
+    terminator: Option<usize>,
     /// After a fault in a stream with `Frame` lines: skip data rows until the next `Frame` line.
     resync: bool,
     /// After a fault in a stream without `Frame` lines: rows of the broken frame still to skip.
     skip_rows: usize,
-    /// The rest of an over-long line is still to be read and dropped.
-    discard_line: bool,
-    /// The line in `self.line` is to be read again (the first line of a following recording's header).
-    replay_line: bool,
     ended: bool,
     /// The stream stopped on an error it cannot go on from (a following recording of another size).
     stopped: bool,
 }
 
 impl<R: BufRead> TekscanStream<R> {
+    /// A stream (see the module docs); `source_name` names it in errors.
     pub fn new(reader: R, source_name: &str) -> Self {
+        Self::reading(reader, source_name, Reading::Stream, false)
+    }
+
+    /// A whole file's text (see the module docs); `has_ascii_data`: the file has an `ASCII_DATA` line.
+    pub(super) fn of_file(reader: R, source_name: &str, has_ascii_data: bool) -> Self {
+        Self::reading(reader, source_name, Reading::File, !has_ascii_data)
+    }
+
+    fn reading(reader: R, source_name: &str, reading: Reading, frame_line_ends: bool) -> Self {
         Self {
-            reader,
+            lines: LineReader::new(reader),
             source_name: source_name.to_owned(),
-            line_no: 0,
-            line: Vec::new(),
+            reading,
+            frame_line_ends,
             header: None,
+            details: None,
+            warnings: Warnings::new(),
+            start_frame: None,
             pending_frame: None,
             counted: 0,
             framed: None,
+            last_framed: None,
+            outline: None,
+            suffix: None,
+            terminator: None,
             resync: false,
             skip_rows: 0,
-            discard_line: false,
-            replay_line: false,
             ended: false,
             stopped: false,
         }
@@ -150,62 +217,32 @@ impl<R: BufRead> TekscanStream<R> {
         self.header
     }
 
+    /// The whole header and its warnings, once read (for the whole-file reader).
+    pub(super) fn take_header(&mut self) -> Option<(Header, Warnings)> {
+        let header = self.details.take()?;
+        Some((header, std::mem::take(&mut self.warnings)))
+    }
+
+    /// The rest of the last frame's `Frame` line after its number (`, timestamp 728`).
+    pub(super) fn take_suffix(&mut self) -> Option<String> {
+        self.suffix.take()
+    }
+
+    /// The line of the `@@` that ended a file, once read.
+    pub(super) fn terminator(&self) -> Option<usize> {
+        self.terminator
+    }
+
     fn read_error(&self, err: &std::io::Error) -> IoError {
         IoError::format(&self.source_name, format!("cannot read: {err}"))
     }
 
-    /// Reads the next line (without its end) into `self.line`. Capped at `limit` bytes (the rest of a
-    /// longer line is dropped before the next line is read); must be UTF-8. An error only when the
-    /// input cannot be read.
-    fn next_line(&mut self, limit: usize) -> Result<Line, IoError> {
-        if std::mem::take(&mut self.replay_line) {
-            self.line_no += 1;
-            return Ok(Line::Text);
+    /// `limit` for a stream; a file has no caps.
+    fn cap(&self, limit: usize) -> usize {
+        match self.reading {
+            Reading::Stream => limit,
+            Reading::File => usize::MAX,
         }
-        if self.discard_line {
-            self.discard_rest_of_line()?;
-        }
-        self.line.clear();
-        let mut take = Read::take(&mut self.reader, limit as u64 + 1);
-        let n = take
-            .read_until(b'\n', &mut self.line)
-            .map_err(|err| self.read_error(&err))?;
-        if n == 0 {
-            return Ok(Line::End);
-        }
-        self.line_no += 1;
-        if self.line.len() > limit && self.line.last() != Some(&b'\n') {
-            self.discard_line = true;
-            return Ok(Line::Bad(format!("line longer than {limit} bytes")));
-        }
-        while matches!(self.line.last(), Some(b'\n' | b'\r')) {
-            self.line.pop();
-        }
-        if std::str::from_utf8(&self.line).is_err() {
-            return Ok(Line::Bad("not UTF-8 / ASCII text".to_owned()));
-        }
-        Ok(Line::Text)
-    }
-
-    /// Reads and drops input up to and including the next line end (or to the end of the input).
-    fn discard_rest_of_line(&mut self) -> Result<(), IoError> {
-        loop {
-            let (used, done) = match self.reader.fill_buf() {
-                Ok([]) => (0, true),
-                Ok(buf) => match buf.iter().position(|&b| b == b'\n') {
-                    Some(at) => (at + 1, true),
-                    None => (buf.len(), false),
-                },
-                Err(err) if err.kind() == std::io::ErrorKind::Interrupted => (0, false),
-                Err(err) => return Err(self.read_error(&err)),
-            };
-            self.reader.consume(used);
-            if done {
-                break;
-            }
-        }
-        self.discard_line = false;
-        Ok(())
     }
 
     /// Reads the header (up to `ASCII_DATA`). Called by [`Self::next_frame`] if needed.
@@ -213,82 +250,69 @@ impl<R: BufRead> TekscanStream<R> {
         if let Some(header) = self.header {
             return Ok(header);
         }
-        let (mut rows, mut cols, mut period) = (None, None, None);
+        let details = self.parse_header()?;
+        let header = StreamHeader {
+            grid: details.grid,
+            period_s: details.period,
+        };
+        self.start_frame = details.start_frame;
+        self.details = Some(details);
+        self.header = Some(header);
+        Ok(header)
+    }
+
+    /// Reads a header from the next line on, within a stream's limits.
+    fn parse_header(&mut self) -> Result<Header, IoError> {
         let name = self.source_name.clone();
-        for _ in 0..MAX_HEADER_LINES {
-            let line_no = self.line_no + 1;
-            let line = match self.next_line(MAX_HEADER_LINE)? {
-                Line::Text => std::str::from_utf8(&self.line).unwrap_or(""),
-                Line::Bad(message) => return Err(IoError::parse(&name, line_no, message)),
-                Line::End => {
-                    return Err(IoError::parse(
-                        &name,
-                        line_no,
-                        "the stream ended before `ASCII_DATA` (no TekScan header)",
-                    ));
-                }
-            };
-            let mut tokens = line.split_whitespace();
-            let key = tokens
-                .next()
-                .unwrap_or("")
-                .trim_end_matches(':')
-                .to_ascii_uppercase();
-            let value = tokens.next().unwrap_or("");
-            let dim = |what: &str| -> Result<usize, IoError> {
-                value
-                    .parse::<usize>()
-                    .ok()
-                    .filter(|&v| v > 0)
-                    .ok_or_else(|| {
-                        IoError::parse(
-                            &name,
-                            line_no,
-                            format!("{what} must be a positive integer, found `{value}`"),
-                        )
-                    })
-            };
-            match key.as_str() {
-                "ROWS" => rows = Some(dim("ROWS")?),
-                "COLS" => cols = Some(dim("COLS")?),
-                "SECONDS_PER_FRAME" => {
-                    period = value
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|p| p.is_finite() && *p > 0.0);
-                }
-                "ASCII_DATA" => {
-                    let (Some(rows), Some(cols)) = (rows, cols) else {
-                        return Err(IoError::parse(
-                            &name,
-                            line_no,
-                            "`ASCII_DATA` before `ROWS` and `COLS`: the frame size is unknown",
-                        ));
-                    };
-                    if rows.saturating_mul(cols) > MAX_STREAM_SENSELS {
-                        return Err(IoError::parse(
-                            &name,
-                            line_no,
-                            format!(
-                                "{rows}x{cols} frames exceed the limit of {MAX_STREAM_SENSELS} sensels"
-                            ),
-                        ));
-                    }
-                    let header = StreamHeader {
-                        grid: Grid::new(rows, cols),
-                        period_s: period,
-                    };
-                    self.header = Some(header);
-                    return Ok(header);
-                }
-                _ => {}
+        let (line_limit, max_lines) = (self.cap(MAX_HEADER_LINE), self.cap(MAX_HEADER_LINES));
+        let mut warnings = Warnings::new();
+        let mut reader = HeaderReader::new(&name, self.frame_line_ends, &mut warnings);
+        let mut read = 0;
+        let (end, end_line) = loop {
+            if read == max_lines {
+                return Err(IoError::parse(
+                    &name,
+                    self.lines.line_no(),
+                    format!("no `ASCII_DATA` line within the first {MAX_HEADER_LINES} lines"),
+                ));
             }
+            read += 1;
+            let line_no = self.lines.line_no() + 1;
+            match self.lines.next(line_limit) {
+                Ok(Line::Text) => {}
+                Ok(Line::Bad(message)) => return Err(IoError::parse(&name, line_no, message)),
+                Ok(Line::End) => return Err(no_ascii_data(&name, self.lines.line_no())),
+                Err(err) => return Err(self.read_error(&err)),
+            }
+            if let Some(end) = reader.line(line_no, self.lines.text())? {
+                break (end, line_no);
+            }
+        };
+        let ended_by = match end {
+            HeaderEnd::AsciiData => "ASCII_DATA".to_owned(),
+            HeaderEnd::FrameLine => {
+                // The `Frame` line is the first line of the data.
+                let line = self.lines.text().trim().to_owned();
+                self.lines.unread();
+                line
+            }
+        };
+        let header = reader.finish(end_line, &ended_by)?;
+        let Grid { rows, cols } = header.grid;
+        match self.reading {
+            Reading::Stream if rows.saturating_mul(cols) > MAX_STREAM_SENSELS => {
+                return Err(IoError::parse(
+                    &name,
+                    end_line,
+                    format!(
+                        "{rows}x{cols} frames exceed the limit of {MAX_STREAM_SENSELS} sensels"
+                    ),
+                ));
+            }
+            Reading::Stream => {}
+            Reading::File => self.warnings.extend(warnings),
         }
-        Err(IoError::parse(
-            &name,
-            self.line_no,
-            format!("no `ASCII_DATA` line within the first {MAX_HEADER_LINES} lines"),
-        ))
+        Ok(header)
     }
 
     /// Reads the next frame into `values` and `present` (resized to the grid, allocations reused).
@@ -300,11 +324,23 @@ impl<R: BufRead> TekscanStream<R> {
         values: &mut Vec<f64>,
         present: &mut Vec<bool>,
     ) -> Result<Option<StreamFrame>, IoError> {
-        let header = self.read_header()?;
+        self.read_frame(values, present).map_err(|stop| match stop {
+            Stop::Error(err) => err,
+            Stop::Fault(fault) => fault.into_error(&self.source_name, self.reading),
+        })
+    }
+
+    /// [`Self::next_frame`], with a fault in the frames kept typed.
+    pub(super) fn read_frame(
+        &mut self,
+        values: &mut Vec<f64>,
+        present: &mut Vec<bool>,
+    ) -> Result<Option<StreamFrame>, Stop> {
+        let header = self.read_header().map_err(Stop::Error)?;
         if self.ended {
             return Ok(None);
         }
-        let limit = header.grid.cols.saturating_mul(64).max(1024);
+        let limit = self.cap(header.grid.cols.saturating_mul(64).max(1024));
         values.clear();
         present.clear();
         let mut frame = FrameInProgress {
@@ -313,10 +349,11 @@ impl<R: BufRead> TekscanStream<R> {
             current: self.pending_frame.take(),
         };
         loop {
-            let unreadable = match self.next_line(limit)? {
-                Line::End => return self.end_of_input(&frame, header.grid.rows),
-                Line::Text => None,
-                Line::Bad(message) => Some(message),
+            let unreadable = match self.lines.next(limit) {
+                Ok(Line::End) => return self.end_of_input(&frame, header.grid.rows),
+                Ok(Line::Text) => None,
+                Ok(Line::Bad(message)) => Some(message),
+                Err(err) => return Err(Stop::Error(self.read_error(&err))),
             };
             if unreadable.is_none() {
                 match self.structure_line(header.grid, &mut frame)? {
@@ -332,40 +369,55 @@ impl<R: BufRead> TekscanStream<R> {
         }
     }
 
-    /// The input ended: the end of the stream between frames, an error inside one.
+    /// A fault on the line just read.
+    fn fault(&self, frame: Option<FrameAt>, kind: FaultKind) -> Stop {
+        Stop::Fault(Fault {
+            line: self.lines.line_no(),
+            frame,
+            kind,
+        })
+    }
+
+    /// The input ended: the end of the stream between frames, a fault inside one.
     fn end_of_input(
         &mut self,
         frame: &FrameInProgress,
         rows: usize,
-    ) -> Result<Option<StreamFrame>, IoError> {
+    ) -> Result<Option<StreamFrame>, Stop> {
         self.ended = true;
-        let Some((number, _)) = frame.current else {
-            return Ok(None);
-        };
-        Err(IoError::parse(
-            &self.source_name,
-            self.line_no,
-            format!(
-                "the stream ended inside frame {number} ({} of {rows} rows)",
-                frame.row
-            ),
-        ))
+        match frame.at() {
+            None => Ok(None),
+            Some(at) => Err(self.fault(Some(at), FaultKind::EndedInsideFrame { rows })),
+        }
     }
 
-    /// A readable line in `self.line` that may not be a data row: a blank line, the end of a
-    /// recording (`@@` or another header), or a `Frame` line. Anything else is a data row.
+    /// A readable line that may not be a data row: a blank line, the end of a recording (`@@` or
+    /// another header), or a `Frame` line. Anything else is a data row.
     fn structure_line(
         &mut self,
         grid: Grid,
         frame: &mut FrameInProgress,
-    ) -> Result<LineOutcome, IoError> {
-        let rows = grid.rows;
-        let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
+    ) -> Result<LineOutcome, Stop> {
+        let line = self.lines.text().trim();
         if is_blank(line) {
             return Ok(LineOutcome::NextLine);
         }
-        let header_next = line.to_ascii_uppercase().starts_with("DATA_TYPE");
-        if frame.current.is_none() && (line == "@@" || header_next) {
+        if let Some(at) = self.terminator {
+            let found = line.to_owned();
+            return Err(self.fault(None, FaultKind::AfterTerminator { at, found }));
+        }
+        let terminator = line == "@@";
+        let header_next = self.reading == Reading::Stream
+            && line
+                .get(..9)
+                .is_some_and(|head| head.eq_ignore_ascii_case("DATA_TYPE"));
+        // Only owned parts are kept: the line borrows the reader.
+        let parsed = frame_line(line).map(|parsed| parsed.map(|(n, s)| (n, s.map(str::to_owned))));
+        if frame.current.is_none() && (terminator || header_next) {
+            if self.reading == Reading::File {
+                self.terminator = Some(self.lines.line_no());
+                return Ok(LineOutcome::NextLine);
+            }
             // The end of a recording; another may follow.
             if self.next_recording(grid, header_next)? {
                 return Ok(LineOutcome::NextLine);
@@ -373,20 +425,13 @@ impl<R: BufRead> TekscanStream<R> {
             self.ended = true;
             return Ok(LineOutcome::Finished(None));
         }
-        if line == "@@" {
+        if terminator {
             self.ended = true;
-            let Some((number, _)) = frame.current else {
-                return Ok(LineOutcome::Finished(None));
-            };
-            return Err(IoError::parse(
-                &self.source_name,
-                self.line_no,
-                format!("`@@` inside frame {number} ({} of {rows} rows)", frame.row),
-            ));
+            let rows = grid.rows;
+            return Err(self.fault(frame.at(), FaultKind::ShortBeforeTerminator { rows }));
         }
-        // Only the number is kept: the rest of the line borrows `self.line`.
-        match frame_line(line).map(|parsed| parsed.map(|(number, _)| number)) {
-            Some(parsed) => self.frame_start(parsed, rows, frame),
+        match parsed {
+            Some(parsed) => self.frame_start(parsed, grid.rows, frame),
             None => Ok(LineOutcome::DataRow),
         }
     }
@@ -395,37 +440,39 @@ impl<R: BufRead> TekscanStream<R> {
     /// (the line is then kept for the next call), or is itself broken (its rows are then skipped).
     fn frame_start(
         &mut self,
-        parsed: Result<i64, String>,
+        parsed: Result<(i64, Option<String>), String>,
         rows: usize,
         frame: &mut FrameInProgress,
-    ) -> Result<LineOutcome, IoError> {
-        let line_no = self.line_no;
+    ) -> Result<LineOutcome, Stop> {
+        let (number, suffix) = match parsed {
+            Ok(parsed) => parsed,
+            Err(message) => {
+                self.framed = Some(true);
+                self.resync = true;
+                self.skip_rows = 0;
+                let kind = FaultKind::BadFrameLine { message, rows };
+                return Err(self.fault(frame.at(), kind));
+            }
+        };
+        if self.reading == Reading::File && self.framed == Some(false) {
+            return Err(self.fault(frame.at(), FaultKind::FrameLineAfterSnapshots));
+        }
         self.framed = Some(true);
         self.resync = false;
         self.skip_rows = 0;
-        let row = frame.row;
-        let unfinished = frame
-            .current
-            .map(|(prev, _)| format!("frame {prev} has {row} rows, expected {rows} (ROWS)"));
-        match (parsed, unfinished) {
-            (Ok(number), None) => {
-                frame.current = Some((number, line_no));
-                Ok(LineOutcome::NextLine)
-            }
-            // The previous frame is short (or empty); this line starts the next one.
-            (Ok(number), Some(unfinished)) => {
-                self.pending_frame = Some((number, line_no));
-                Err(IoError::parse(&self.source_name, line_no, unfinished))
-            }
-            (Err(message), unfinished) => {
-                self.resync = true;
-                let message = match unfinished {
-                    Some(unfinished) => format!("{message}; and {unfinished}"),
-                    None => format!("{message}; its rows are skipped"),
-                };
-                Err(IoError::parse(&self.source_name, line_no, message))
-            }
+        let started = Started {
+            number,
+            line: self.lines.line_no(),
+            framed: true,
+            suffix,
+        };
+        if frame.current.is_some() {
+            // The frame before is short (or empty); this line starts the next one.
+            self.pending_frame = Some(started);
+            return Err(self.fault(frame.at(), FaultKind::ShortBeforeFrameLine { rows }));
         }
+        frame.current = Some(started);
+        Ok(LineOutcome::NextLine)
     }
 
     /// A data row (or a line that cannot be one, `unreadable` saying why): appended to the frame, the
@@ -437,7 +484,7 @@ impl<R: BufRead> TekscanStream<R> {
         frame: &mut FrameInProgress,
         values: &mut Vec<f64>,
         present: &mut Vec<bool>,
-    ) -> Result<LineOutcome, IoError> {
+    ) -> Result<LineOutcome, Stop> {
         let Grid { rows, cols } = grid;
         if self.resync {
             return Ok(LineOutcome::NextLine);
@@ -446,116 +493,159 @@ impl<R: BufRead> TekscanStream<R> {
             self.skip_rows -= 1;
             return Ok(LineOutcome::NextLine);
         }
-        let line_no = self.line_no;
-        let (number, first) = self.frame_of_row(frame, rows)?;
+        self.frame_of_row(frame, rows)?;
         let row = frame.row;
         let result = match unreadable {
-            Some(message) => Err(format!("frame {number} row {}: {message}", row + 1)),
+            Some(why) => Err(FaultKind::Unreadable { row, why }),
             None => {
-                let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
+                let outline = self.outline.as_ref().map(|(first, mask)| {
+                    let at = (row * cols).min(mask.len());
+                    (*first, &mask[at..(at + cols).min(mask.len())])
+                });
+                let precedence = match self.reading {
+                    Reading::File => Precedence::CountFirst,
+                    Reading::Stream => Precedence::CellsFirst,
+                };
                 parse_row(
-                    line,
-                    number,
-                    row,
+                    self.lines.text(),
                     cols,
                     values,
                     present,
-                    &mut frame.has_absent,
+                    outline,
+                    precedence,
                 )
+                .map_err(|fault| FaultKind::Row { row, fault })
             }
         };
-        if let Err(message) = result {
-            if self.framed == Some(true) {
-                self.resync = true;
-            } else {
-                self.skip_rows = rows - row - 1;
+        match result {
+            Ok(absent) => frame.has_absent |= absent,
+            Err(kind) => {
+                if self.framed == Some(true) {
+                    self.resync = true;
+                } else {
+                    self.skip_rows = rows - row - 1;
+                }
+                return Err(self.fault(frame.at(), kind));
             }
-            return Err(IoError::parse(&self.source_name, line_no, message));
         }
         frame.row += 1;
         if frame.row < rows {
             return Ok(LineOutcome::NextLine);
         }
-        Ok(LineOutcome::Finished(Some(StreamFrame {
-            number,
-            line: first,
-            has_absent: frame.has_absent,
-        })))
+        Ok(LineOutcome::Finished(self.complete(frame, present)))
     }
 
-    /// The frame a data row belongs to: the current one; a new, counted one in a stream without
-    /// `Frame` lines; an error (and a resynchronisation) after a complete frame in one with them.
-    fn frame_of_row(
-        &mut self,
-        frame: &mut FrameInProgress,
-        rows: usize,
-    ) -> Result<(i64, usize), IoError> {
-        let line_no = self.line_no;
-        match frame.current {
-            Some(current) => Ok(current),
-            None if self.framed == Some(true) => {
-                self.resync = true;
-                Err(IoError::parse(
-                    &self.source_name,
-                    line_no,
-                    format!(
-                        "a row of data after a complete frame ({rows} rows, ROWS); expected a \
-                         `Frame` line or `@@`. Skipping to the next `Frame` line"
-                    ),
-                ))
-            }
-            None => {
-                self.framed = Some(false);
-                self.counted += 1;
-                let current = (self.counted, line_no);
-                frame.current = Some(current);
-                Ok(current)
-            }
+    /// The frame is complete: remembered as the last one (and as the outline of a file).
+    fn complete(&mut self, frame: &mut FrameInProgress, present: &[bool]) -> Option<StreamFrame> {
+        let started = frame.current.take()?;
+        if started.framed {
+            self.last_framed = Some((started.number, started.line));
         }
+        if self.reading == Reading::File && self.outline.is_none() {
+            self.outline = Some((started.number, present.to_vec()));
+        }
+        self.suffix = started.suffix;
+        Some(StreamFrame {
+            number: started.number,
+            line: started.line,
+            has_absent: frame.has_absent,
+        })
     }
-}
 
-impl<R: BufRead> TekscanStream<R> {
-    /// Makes the line in `self.line` the next one read again.
-    fn unread_line(&mut self) {
-        self.replay_line = true;
-        self.line_no -= 1;
+    /// Makes sure the data row has a frame: the current one; a new, counted one in a stream without
+    /// `Frame` lines; a fault (and a resynchronisation) after a complete frame in one with them.
+    fn frame_of_row(&mut self, frame: &mut FrameInProgress, rows: usize) -> Result<(), Stop> {
+        if frame.current.is_some() {
+            return Ok(());
+        }
+        if self.framed == Some(true) {
+            self.resync = true;
+            let (number, first_line) = self.last_framed.unwrap_or_default();
+            let kind = FaultKind::RowAfterFrame {
+                number,
+                first_line,
+                rows,
+            };
+            return Err(self.fault(None, kind));
+        }
+        self.framed = Some(false);
+        let number = match self.snapshot_number() {
+            Ok(number) => number,
+            Err(message) => {
+                self.skip_rows = rows - 1;
+                return Err(self.fault(None, FaultKind::Unnumbered { message }));
+            }
+        };
+        self.counted += 1;
+        frame.current = Some(Started {
+            number,
+            line: self.lines.line_no(),
+            framed: false,
+            suffix: None,
+        });
+        Ok(())
     }
 
-    /// After the end of a recording (`@@`, or a header line `again` in `self.line`): false at the end
-    /// of the input; true when another recording's header follows with frames of `grid`, whose frames
+    /// The number of the next frame without a `Frame` line: counted on from START_FRAME, which a
+    /// crafted value near `i64::MAX` leaves no room for.
+    fn snapshot_number(&self) -> Result<i64, String> {
+        let start = self.start_frame.map_or(1, |(_, s)| s);
+        let n = self.counted;
+        i64::try_from(n)
+            .ok()
+            .and_then(|n| start.checked_add(n))
+            .ok_or_else(|| {
+                let from = self
+                    .start_frame
+                    .map_or_else(String::new, |(at, _)| format!(" (line {at})"));
+                format!(
+                    "frame {} of the file cannot be numbered: START_FRAME {start}{from} + {n} is \
+                     beyond the largest frame number ({})",
+                    n + 1,
+                    i64::MAX
+                )
+            })
+    }
+
+    /// After the end of a recording (`@@`, or a header line `again` just read): false at the end of
+    /// the input; true when another recording's header follows with frames of `grid`, whose frames
     /// are then read on; an error, and the stream stopped, when it cannot be read or its frames have
     /// another size.
-    fn next_recording(&mut self, grid: Grid, again: bool) -> Result<bool, IoError> {
+    fn next_recording(&mut self, grid: Grid, again: bool) -> Result<bool, Stop> {
         if again {
-            self.unread_line();
+            self.lines.unread();
         }
         loop {
-            match self.next_line(MAX_HEADER_LINE)? {
-                Line::End => return Ok(false),
-                Line::Text => {
-                    let line = std::str::from_utf8(&self.line).unwrap_or("").trim();
+            match self.lines.next(MAX_HEADER_LINE) {
+                Ok(Line::End) => return Ok(false),
+                Ok(Line::Text) => {
+                    let line = self.lines.text().trim();
                     if !is_blank(line) && line != "@@" {
                         break;
                     }
                 }
-                Line::Bad(message) => {
+                Ok(Line::Bad(message)) => {
                     self.ended = true;
                     self.stopped = true;
                     let message = format!("after the end of a recording: {message}");
-                    return Err(IoError::parse(&self.source_name, self.line_no, message));
+                    let line_no = self.lines.line_no();
+                    return Err(Stop::Error(IoError::parse(
+                        &self.source_name,
+                        line_no,
+                        message,
+                    )));
                 }
+                Err(err) => return Err(Stop::Error(self.read_error(&err))),
             }
         }
-        let first = self.header.take();
-        let line_no = self.line_no;
-        self.unread_line();
-        let next = self.read_header();
-        self.header = first;
-        let message = match next {
+        let line_no = self.lines.line_no();
+        self.lines.unread();
+        let message = match self.parse_header() {
             Ok(next) if next.grid == grid => {
                 self.framed = None;
                 self.counted = 0;
+                self.last_framed = None;
+                self.start_frame = next.start_frame;
                 return Ok(true);
             }
             Ok(next) => format!(
@@ -567,94 +657,12 @@ impl<R: BufRead> TekscanStream<R> {
         };
         self.ended = true;
         self.stopped = true;
-        Err(IoError::parse(&self.source_name, line_no, message))
+        Err(Stop::Error(IoError::parse(
+            &self.source_name,
+            line_no,
+            message,
+        )))
     }
-}
-
-/// Appends the cells of data row `row` (0-based) of frame `number` to `values` and `present`; on a bad
-/// row, appends nothing and says what is wrong.
-fn parse_row(
-    line: &str,
-    number: i64,
-    row: usize,
-    cols: usize,
-    values: &mut Vec<f64>,
-    present: &mut Vec<bool>,
-    has_absent: &mut bool,
-) -> Result<(), String> {
-    let start_len = values.len();
-    let mut cell_error = None;
-    let mut absent = false;
-    let split = for_each_cell(line, |c, cell| {
-        if c >= cols {
-            return false;
-        }
-        match parse_cell(cell) {
-            Ok(parsed) => absent |= !parsed.push_to(values, present),
-            Err(err) => {
-                cell_error = Some(format!(
-                    "frame {number} row {} column {}: `{cell}`: {}",
-                    row + 1,
-                    c + 1,
-                    err.expected(true)
-                ));
-                return false;
-            }
-        }
-        true
-    });
-    let result = match (split, cell_error) {
-        (_, Some(message)) => Err(message),
-        (Err(at), None) => Err(format!(
-            "frame {number} row {} column {} is empty",
-            row + 1,
-            at + 1
-        )),
-        (Ok(count), None) if count != cols => Err(format!(
-            "frame {number} row {} has {count} values, expected {cols} (COLS)",
-            row + 1
-        )),
-        (Ok(_), None) => Ok(()),
-    };
-    if result.is_err() {
-        values.truncate(start_len);
-        present.truncate(start_len);
-    } else {
-        *has_absent |= absent;
-    }
-    result
-}
-
-/// Calls `visit(index, cell)` for each cell of a data line, split as [`crate::textutil`] splits them
-/// (commas and whitespace separate cells, trailing commas allowed) until `visit` returns false. Returns
-/// the number of cells (counting on past a stop), or `Err(k)` when cell `k` is empty between two commas.
-fn for_each_cell(line: &str, mut visit: impl FnMut(usize, &str) -> bool) -> Result<usize, usize> {
-    let line = line.trim();
-    let mut count = 0;
-    let mut go = true;
-    let mut cell = |c: &str, count: &mut usize| {
-        if go {
-            go = visit(*count, c);
-        }
-        *count += 1;
-    };
-    if !line.contains(',') {
-        for c in line.split_whitespace() {
-            cell(c, &mut count);
-        }
-        return Ok(count);
-    }
-    let line = line.trim_end_matches(|c: char| c == ',' || c.is_whitespace());
-    for piece in line.split(',') {
-        let piece = piece.trim();
-        if piece.is_empty() {
-            return Err(count);
-        }
-        for c in piece.split_whitespace() {
-            cell(c, &mut count);
-        }
-    }
-    Ok(count)
 }
 
 #[cfg(test)]
