@@ -2,30 +2,72 @@
 //! positional), and the typed messages made from the stream's JSON events.
 //!
 //! `presrs_msgs/msg/TerrainDecision` and `StanceEvent` are defined in `ros/presrs_msgs/msg/`; the rest
-//! are ROS 2's own (`std_msgs/msg/String`, `diagnostic_msgs/msg/DiagnosticArray`).
+//! are ROS 2's own. `builtin_interfaces/msg/Time` is ros2-client's [`Time`] (it goes over the wire as
+//! `sec: i32, nanosec: u32`, a `nanosec` of a second or more folded into `sec`); the others are written
+//! here because neither ros2-client nor its dependencies define them (`std_msgs/msg/Header`,
+//! `std_msgs/msg/String`, `diagnostic_msgs/msg/KeyValue`, `DiagnosticStatus`, `DiagnosticArray`).
 
 use presrs_io::mcap::Stamp;
+pub use ros2_client::builtin_interfaces::Time;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-/// `builtin_interfaces/msg/Time`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Time {
-    pub sec: i32,
-    pub nanosec: u32,
+/// The `builtin_interfaces/msg/Time` of a frame's header stamp.
+pub fn time_of(stamp: Stamp) -> Time {
+    Time::new(stamp.sec, stamp.nanosec)
 }
 
-impl From<Stamp> for Time {
-    fn from(stamp: Stamp) -> Self {
-        Self {
-            sec: stamp.sec,
-            nanosec: stamp.nanosec,
+#[cfg(test)]
+mod time_tests {
+    use super::*;
+    use ros2_client::dds::rustdds::RepresentationIdentifier;
+    use ros2_client::dds::rustdds::serialization::to_writer_with_rep_id;
+
+    /// The `.msg` file's layout, field for field.
+    #[derive(Serialize)]
+    struct MsgTime {
+        sec: i32,
+        nanosec: u32,
+    }
+
+    fn cdr(value: &impl Serialize) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        to_writer_with_rep_id(&mut bytes, value, RepresentationIdentifier::CDR_LE).unwrap();
+        bytes
+    }
+
+    #[test]
+    fn ros2_clients_time_is_the_msg_files_time_on_the_wire() {
+        for (sec, nanosec) in [
+            (0, 0),
+            (2, 600_000_000),
+            (-1, 500_000_000),
+            (i32::MAX, 999_999_999),
+        ] {
+            let stamp = Stamp { sec, nanosec };
+            assert_eq!(
+                cdr(&time_of(stamp)),
+                cdr(&MsgTime { sec, nanosec }),
+                "{stamp:?}"
+            );
         }
+        // A stamp's nanoseconds of a second or more go into its seconds.
+        let folded = time_of(Stamp {
+            sec: 1,
+            nanosec: 1_500_000_000,
+        });
+        assert_eq!(
+            cdr(&folded),
+            cdr(&MsgTime {
+                sec: 2,
+                nanosec: 500_000_000
+            })
+        );
     }
 }
 
 /// `std_msgs/msg/Header`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Header {
     pub stamp: Time,
     pub frame_id: String,
@@ -62,14 +104,14 @@ impl DiagnosticStatus {
 }
 
 /// `diagnostic_msgs/msg/DiagnosticArray`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct DiagnosticArray {
     pub header: Header,
     pub status: Vec<DiagnosticStatus>,
 }
 
 /// `presrs_msgs/msg/TerrainDecision` (`ros/presrs_msgs/msg/TerrainDecision.msg`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TerrainDecision {
     pub header: Header,
     pub stance: u64,
@@ -115,7 +157,7 @@ impl TerrainDecision {
 }
 
 /// `presrs_msgs/msg/StanceEvent` (`ros/presrs_msgs/msg/StanceEvent.msg`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StanceEvent {
     pub header: Header,
     /// [`StanceEvent::TOUCHDOWN`] or [`StanceEvent::LIFTOFF`].
@@ -151,7 +193,7 @@ fn stamp_at(stamps: &dyn FrameStamps, event: &Value, key: &str) -> Time {
     event[key]
         .as_u64()
         .and_then(|index| stamps.stamp_of(index))
-        .unwrap_or_default()
+        .unwrap_or(Time::ZERO)
 }
 
 /// The typed decision of a `classification` event; `class_names` the model's, in its order.
@@ -231,10 +273,10 @@ mod tests {
     struct Tenths;
     impl FrameStamps for Tenths {
         fn stamp_of(&self, index: u64) -> Option<Time> {
-            Some(Time {
-                sec: (index / 10) as i32,
-                nanosec: (index % 10) as u32 * 100_000_000,
-            })
+            Some(Time::new(
+                (index / 10) as i32,
+                (index % 10) as u32 * 100_000_000,
+            ))
         }
     }
 
@@ -248,20 +290,11 @@ mod tests {
         let d = decision_message(&event, &names, &Tenths, "foot");
         assert_eq!((d.label.as_str(), d.class_index, d.stance), ("sand", 1, 3));
         assert_eq!(d.posteriors, [0.25, 0.75]);
-        assert_eq!(
-            d.header.stamp,
-            Time {
-                sec: 2,
-                nanosec: 600_000_000
-            }
-        );
-        assert_eq!(d.touchdown_stamp, Time { sec: 2, nanosec: 0 });
-        assert_eq!(d.liftoff_stamp, Time::default());
+        assert_eq!(d.header.stamp, Time::new(2, 600_000_000));
+        assert_eq!(d.touchdown_stamp, Time::new(2, 0));
+        assert_eq!(d.liftoff_stamp, Time::ZERO);
         assert_eq!(d.decided_at, TerrainDecision::DECIDED_AT_NONE);
-        assert_eq!(
-            (d.decided_at_frame, d.decided_at_stamp),
-            (0, Time::default())
-        );
+        assert_eq!((d.decided_at_frame, d.decided_at_stamp), (0, Time::ZERO));
         assert_eq!(
             (d.gait.as_str(), d.header.frame_id.as_str()),
             ("walk", "foot")
@@ -284,13 +317,7 @@ mod tests {
             let d = decision_message(&event, &names, &Tenths, "foot");
             assert_eq!(d.decided_at, constant, "{name}");
             assert_eq!(d.decided_at_frame, 34);
-            assert_eq!(
-                d.decided_at_stamp,
-                Time {
-                    sec: 3,
-                    nanosec: 400_000_000
-                }
-            );
+            assert_eq!(d.decided_at_stamp, Time::new(3, 400_000_000));
             assert_eq!(d.cut, name == "length");
         }
     }
@@ -305,13 +332,7 @@ mod tests {
             (s.event, s.end_frame, s.frame, s.peak_frame),
             (StanceEvent::LIFTOFF, 19, 21, 14)
         );
-        assert_eq!(
-            s.liftoff_stamp,
-            Time {
-                sec: 1,
-                nanosec: 900_000_000
-            }
-        );
+        assert_eq!(s.liftoff_stamp, Time::new(1, 900_000_000));
         assert!(stance_message(&json!({"event": "end"}), &Tenths, "").is_none());
     }
 }
