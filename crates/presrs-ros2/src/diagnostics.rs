@@ -140,7 +140,7 @@ mod tests {
             now,
             before,
             period: Duration::from_secs(2),
-            stamp: Time::default(),
+            stamp: Time::ZERO,
             ended: false,
         }
     }

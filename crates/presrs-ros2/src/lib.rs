@@ -12,8 +12,6 @@
 //! Order of use: [`NodeOptions`] (checked: ROS 2 names, domain id), load the model, [`NodeGraph::join`],
 //! then [`run_node`] until the [`NodeStop`] handle is called. See `docs/ros2.md`.
 
-#[cfg(feature = "cli")]
-pub mod args;
 pub mod diagnostics;
 pub mod error;
 pub mod graph;
@@ -24,8 +22,6 @@ pub mod options;
 pub mod raw;
 pub mod report;
 
-#[cfg(feature = "cli")]
-pub use args::Ros2Args;
 pub use diagnostics::NodeCounters;
 pub use error::{Result, Ros2Error};
 pub use graph::{NodeGraph, NodeStop};

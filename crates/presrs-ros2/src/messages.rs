@@ -3,31 +3,73 @@
 //! ([`presrs::session::SessionEvent`]).
 //!
 //! `presrs_msgs/msg/TerrainDecision` and `StanceEvent` are defined in `ros/presrs_msgs/msg/`; the rest
-//! are ROS 2's own (`std_msgs/msg/String`, `diagnostic_msgs/msg/DiagnosticArray`).
+//! are ROS 2's own. `builtin_interfaces/msg/Time` is ros2-client's [`Time`] (it goes over the wire as
+//! `sec: i32, nanosec: u32`, a `nanosec` of a second or more folded into `sec`); the others are written
+//! here because neither ros2-client nor its dependencies define them (`std_msgs/msg/Header`,
+//! `std_msgs/msg/String`, `diagnostic_msgs/msg/KeyValue`, `DiagnosticStatus`, `DiagnosticArray`).
 
 use presrs::core::online::DecisionKind;
 use presrs::session::{Classification, DecisionPoint, SessionEvent};
 use presrs_io::mcap::Stamp;
+pub use ros2_client::builtin_interfaces::Time;
 use serde::{Deserialize, Serialize};
 
-/// `builtin_interfaces/msg/Time`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Time {
-    pub sec: i32,
-    pub nanosec: u32,
+/// The `builtin_interfaces/msg/Time` of a frame's header stamp.
+pub fn time_of(stamp: Stamp) -> Time {
+    Time::new(stamp.sec, stamp.nanosec)
 }
 
-impl From<Stamp> for Time {
-    fn from(stamp: Stamp) -> Self {
-        Self {
-            sec: stamp.sec,
-            nanosec: stamp.nanosec,
+#[cfg(test)]
+mod time_tests {
+    use super::*;
+    use ros2_client::dds::rustdds::RepresentationIdentifier;
+    use ros2_client::dds::rustdds::serialization::to_writer_with_rep_id;
+
+    /// The `.msg` file's layout, field for field.
+    #[derive(Serialize)]
+    struct MsgTime {
+        sec: i32,
+        nanosec: u32,
+    }
+
+    fn cdr(value: &impl Serialize) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        to_writer_with_rep_id(&mut bytes, value, RepresentationIdentifier::CDR_LE).unwrap();
+        bytes
+    }
+
+    #[test]
+    fn ros2_clients_time_is_the_msg_files_time_on_the_wire() {
+        for (sec, nanosec) in [
+            (0, 0),
+            (2, 600_000_000),
+            (-1, 500_000_000),
+            (i32::MAX, 999_999_999),
+        ] {
+            let stamp = Stamp { sec, nanosec };
+            assert_eq!(
+                cdr(&time_of(stamp)),
+                cdr(&MsgTime { sec, nanosec }),
+                "{stamp:?}"
+            );
         }
+        // A stamp's nanoseconds of a second or more go into its seconds.
+        let folded = time_of(Stamp {
+            sec: 1,
+            nanosec: 1_500_000_000,
+        });
+        assert_eq!(
+            cdr(&folded),
+            cdr(&MsgTime {
+                sec: 2,
+                nanosec: 500_000_000
+            })
+        );
     }
 }
 
 /// `std_msgs/msg/Header`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Header {
     pub stamp: Time,
     pub frame_id: String,
@@ -64,14 +106,14 @@ impl DiagnosticStatus {
 }
 
 /// `diagnostic_msgs/msg/DiagnosticArray`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct DiagnosticArray {
     pub header: Header,
     pub status: Vec<DiagnosticStatus>,
 }
 
 /// `presrs_msgs/msg/TerrainDecision` (`ros/presrs_msgs/msg/TerrainDecision.msg`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TerrainDecision {
     pub header: Header,
     pub stance: u64,
@@ -116,7 +158,7 @@ impl TerrainDecision {
 }
 
 /// `presrs_msgs/msg/StanceEvent` (`ros/presrs_msgs/msg/StanceEvent.msg`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StanceEvent {
     pub header: Header,
     /// [`StanceEvent::TOUCHDOWN`] or [`StanceEvent::LIFTOFF`].
@@ -145,7 +187,7 @@ pub trait FrameStamps {
 }
 
 fn stamp_of(stamps: &dyn FrameStamps, frame: u64) -> Time {
-    stamps.stamp_of(frame).unwrap_or_default()
+    stamps.stamp_of(frame).unwrap_or(Time::ZERO)
 }
 
 /// Saturates an index the message holds in 32 bits (a class index or a frame count never comes near).
@@ -183,10 +225,10 @@ pub fn decision_message(
             TerrainDecision::decided_at_of(w.decided_at)
         }),
         decided_at_frame,
-        decided_at_stamp: whole.map_or_else(Time::default, |_| stamp_of(stamps, decided_at_frame)),
+        decided_at_stamp: whole.map_or(Time::ZERO, |_| stamp_of(stamps, decided_at_frame)),
         cut: whole.is_some_and(|w| w.cut),
         touchdown_stamp: stamp_of(stamps, decision.touchdown_frame),
-        liftoff_stamp: liftoff.map_or_else(Time::default, |w| stamp_of(stamps, w.decided_at_frame)),
+        liftoff_stamp: liftoff.map_or(Time::ZERO, |w| stamp_of(stamps, w.decided_at_frame)),
         gait: decision.gait.clone().unwrap_or_default(),
         latency_us: decision.latency_us,
     }
@@ -224,7 +266,7 @@ pub fn stance_message(
             peak_load: 0.0,
             sampled: false,
             touchdown_stamp: stamp_of(stamps, td.touchdown_frame),
-            liftoff_stamp: Time::default(),
+            liftoff_stamp: Time::ZERO,
         }),
         SessionEvent::Liftoff(lo) => Some(StanceEvent {
             header: header(lo.frame),
@@ -254,10 +296,10 @@ mod tests {
     struct Tenths;
     impl FrameStamps for Tenths {
         fn stamp_of(&self, index: u64) -> Option<Time> {
-            Some(Time {
-                sec: (index / 10) as i32,
-                nanosec: (index % 10) as u32 * 100_000_000,
-            })
+            Some(Time::new(
+                (index / 10) as i32,
+                (index % 10) as u32 * 100_000_000,
+            ))
         }
     }
 
@@ -293,12 +335,9 @@ mod tests {
         assert_eq!(d.kind, "single");
         assert_eq!(d.header.stamp, tenths(26));
         assert_eq!(d.touchdown_stamp, tenths(20));
-        assert_eq!(d.liftoff_stamp, Time::default());
+        assert_eq!(d.liftoff_stamp, Time::ZERO);
         assert_eq!(d.decided_at, TerrainDecision::DECIDED_AT_NONE);
-        assert_eq!(
-            (d.decided_at_frame, d.decided_at_stamp),
-            (0, Time::default())
-        );
+        assert_eq!((d.decided_at_frame, d.decided_at_stamp), (0, Time::ZERO));
         assert_eq!(
             (d.gait.as_str(), d.header.frame_id.as_str(), d.latency_us),
             ("walk", "foot", 12.5)
@@ -326,7 +365,7 @@ mod tests {
             let liftoff = if point == DecisionPoint::Liftoff {
                 tenths(34)
             } else {
-                Time::default()
+                Time::ZERO
             };
             assert_eq!(d.liftoff_stamp, liftoff, "{point:?}");
         }
@@ -365,7 +404,7 @@ mod tests {
         );
         assert_eq!(
             (t.touchdown_stamp, t.liftoff_stamp),
-            (tenths(30), Time::default())
+            (tenths(30), Time::ZERO)
         );
         assert!(stance_message(&SessionEvent::error("x", false), &Tenths, "").is_none());
     }

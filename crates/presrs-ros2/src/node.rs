@@ -20,7 +20,7 @@ use ros2_client::dds::rustdds::no_key::DeserializedCacheChange;
 use crate::diagnostics::{DiagnosticsReport, NodeCounters};
 use crate::error::Result;
 use crate::graph::{NodeGraph, Outputs};
-use crate::messages::{FrameStamps, StringMsg, Time, decision_message, stance_message};
+use crate::messages::{FrameStamps, StringMsg, Time, decision_message, stance_message, time_of};
 use crate::raw::RawCdr;
 
 /// The node waits for frames at most this long before it looks at its stop flag again.
@@ -107,7 +107,7 @@ impl LoopState {
                 // Header stamps as given (a bag's first frame may be at 0); arrays have none.
                 let stamp = stamp.unwrap_or_else(wall_clock);
                 if *self.first_grid.get_or_insert(grid) == grid {
-                    self.stamps.push(Time::from(stamp));
+                    self.stamps.push(time_of(stamp));
                 }
                 Input::Frame {
                     grid,
@@ -145,7 +145,7 @@ impl LoopState {
             now: &self.counters,
             before: &self.at_last_report,
             period: self.last_report.elapsed(),
-            stamp: Time::from(wall_clock()),
+            stamp: time_of(wall_clock()),
             ended,
         }
         .message();
@@ -299,16 +299,13 @@ mod tests {
     fn the_stamp_book_forgets_the_oldest_frames_only() {
         let mut book = StampBook::default();
         for i in 0..(STAMPS_KEPT as u64 + 3) {
-            book.push(Time {
-                sec: i as i32,
-                nanosec: 0,
-            });
+            book.push(Time::new(i as i32, 0));
         }
         assert_eq!(book.stamp_of(0), None);
         assert_eq!(book.stamp_of(2), None);
-        assert_eq!(book.stamp_of(3).map(|t| t.sec), Some(3));
+        assert_eq!(book.stamp_of(3), Some(Time::new(3, 0)));
         let last = STAMPS_KEPT as u64 + 2;
-        assert_eq!(book.stamp_of(last).map(|t| t.sec), Some(last as i32));
+        assert_eq!(book.stamp_of(last), Some(Time::new(last as i32, 0)));
         assert_eq!(book.stamp_of(last + 1), None);
     }
 }

@@ -16,10 +16,7 @@ use serde_json::Value;
 struct Seconds;
 impl FrameStamps for Seconds {
     fn stamp_of(&self, index: u64) -> Option<Time> {
-        Some(Time {
-            sec: index as i32,
-            nanosec: index as u32 * 1_000_000,
-        })
+        Some(Time::new(index as i32, index as u32 * 1_000_000))
     }
 }
 

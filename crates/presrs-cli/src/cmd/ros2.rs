@@ -1,12 +1,110 @@
-//! `presrs ros2`: the ROS 2 node ([`presrs_ros2`], whose options `Ros2Args` are): the call, and what
-//! goes to stdout (the `joined` line, the JSON events) and stderr (notices, the summary).
+//! `presrs ros2`: the ROS 2 node ([`presrs_ros2`]): its command line, the call, and what goes to stdout
+//! (the `joined` line, the JSON events) and stderr (notices, the summary).
 
 use std::io::Write;
+use std::path::PathBuf;
 
-use presrs::session::resolve_profile;
-pub use presrs_ros2::Ros2Args;
-use presrs_ros2::{NodeGraph, run_node};
+use presrs::session::{ProfileOverrides, resolve_profile};
 use presrs_stream::StopSignals;
+use presrs_io::mcap::FrameType;
+use presrs_ros2::options::MAX_DOMAIN_ID;
+use presrs_ros2::{
+    InputQos, NodeGraph, NodeOptions, domain_id, input_type, localhost_only_from_env, run_node,
+};
+
+/// Run as a ROS 2 node: pressure frames from a topic in, terrain decisions out (docs/ros2.md).
+///
+/// Publishes presrs_msgs/TerrainDecision on presrs/decisions, presrs_msgs/StanceEvent on
+/// presrs/stance_events, the JSON events of `presrs stream` (also printed on stdout, after a `joined`
+/// line) on presrs/events, the recommended gait on presrs/gait, and /diagnostics. SIGINT or SIGTERM
+/// ends it cleanly; the exit code is 1 only when the input could not go on (frames of a size the
+/// model cannot use), or the node could not start.
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Examples (docs/ros2.md: topics, QoS, discovery, a launch file):
+  presrs ros2 --model m.json --input /foot/pressure
+  presrs ros2 --model m.json --input pressure --namespace /hopper --domain-id 7"
+)]
+pub struct Ros2Args {
+    /// Model file from `presrs train` (read before the node joins the graph).
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The pressure topic (a relative name is in the namespace).
+    #[arg(long, value_name = "TOPIC")]
+    pub input: String,
+    /// Its type: sensor_msgs/msg/Image (mono8, mono16, 16UC1, 32FC1), std_msgs/msg/Float32MultiArray
+    /// or std_msgs/msg/UInt16MultiArray (2-D layout).
+    #[arg(long, default_value = "sensor_msgs/msg/Image", value_name = "TYPE",
+          value_parser = |t: &str| input_type(t).map_err(|e| e.to_string()))]
+    pub input_type: FrameType,
+    /// Input QoS: sensor-data (best effort, keep the last 5 frames) or reliable (keep the last 1000);
+    /// --input-depth sets how many.
+    #[arg(long, default_value = "sensor-data", value_name = "PROFILE")]
+    pub input_qos: String,
+    /// Frames the input QoS history keeps [default: the profile's].
+    #[arg(long, value_name = "N")]
+    pub input_depth: Option<usize>,
+    /// ROS 2 domain id, 0 to 232 [default: ROS_DOMAIN_ID, else 0].
+    #[arg(long, value_parser = domain_id_arg)]
+    pub domain_id: Option<u16>,
+    /// Node name.
+    #[arg(long, default_value = "presrs")]
+    pub name: String,
+    /// Node namespace (absolute).
+    #[arg(long, default_value = "/")]
+    pub namespace: String,
+    /// Discovery and traffic on the loopback interface only (also ROS_LOCALHOST_ONLY=1 or
+    /// ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST).
+    #[arg(long)]
+    pub localhost_only: bool,
+    /// Online profile JSON (detector settings, calibration, gait table) [default: the model file's].
+    #[arg(long)]
+    pub profile: Option<PathBuf>,
+    /// Recommended gait per terrain, TERRAIN=GAIT, comma separated (added to the profile's table).
+    #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
+          value_parser = |t: &str| presrs::values::name_value(t, "TERRAIN=GAIT"))]
+    pub gait: Vec<(String, String)>,
+    /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at
+    /// lift-off], as `presrs stream --decide-at`.
+    #[arg(long, value_name = "K")]
+    pub decide_at: Option<usize>,
+}
+
+impl Ros2Args {
+    /// The node's options, the environment read through `var` (`ROS_DOMAIN_ID`, localhost only), and
+    /// checked.
+    pub fn node_options(
+        &self,
+        var: impl Fn(&str) -> Option<String>,
+    ) -> presrs_ros2::Result<NodeOptions> {
+        let domain = domain_id(self.domain_id, var("ROS_DOMAIN_ID").as_deref())?;
+        let mut options = NodeOptions::new(&self.input, domain);
+        options.name.clone_from(&self.name);
+        options.namespace.clone_from(&self.namespace);
+        options.input_type = self.input_type;
+        options.input_qos = InputQos::named(&self.input_qos, self.input_depth)?;
+        options.localhost_only = self.localhost_only || localhost_only_from_env(var);
+        options.check()?;
+        Ok(options)
+    }
+
+    /// The changes to the model's online profile.
+    pub fn overrides(&self) -> ProfileOverrides {
+        ProfileOverrides {
+            gait: self.gait.clone(),
+            decide_at: self.decide_at,
+            ..ProfileOverrides::default()
+        }
+    }
+}
+
+/// A `--domain-id` in ROS 2's range; out of it, a usage error (exit 2) as for any bad option value.
+fn domain_id_arg(text: &str) -> Result<u16, String> {
+    text.parse::<u16>()
+        .ok()
+        .filter(|&id| id <= MAX_DOMAIN_ID)
+        .ok_or_else(|| format!("ROS 2 domain ids are 0 to {MAX_DOMAIN_ID}"))
+}
 
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = args.node_options(|key| std::env::var(key).ok())?;
