@@ -5,10 +5,10 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use numpy::{PyArray1, PyArrayMethods};
-use presrs::eval_document::EvalJson;
-use presrs::eval_race::{RaceReadings, evaluate_racing_samples};
-use presrs::evaluate::{CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout};
-use presrs::sample_race::WholeSample;
+use presrs::eval::document::EvalJson;
+use presrs::eval::race::{RaceReadings, evaluate_racing_samples};
+use presrs::eval::{CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout};
+use presrs::train::sample_race::WholeSample;
 use presrs::{Dataset, Face, Progress, Quiet, SampleOptions, Warnings};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
@@ -235,7 +235,7 @@ pub fn evaluate(
 }
 
 /// `sample="auto"`: the manifest read as frames and as its whole samples, the kinds raced inside every
-/// fold (`presrs::eval_race`).
+/// fold (`presrs::eval::race`).
 fn evaluate_racing(
     py: Python<'_>,
     path: &std::path::Path,

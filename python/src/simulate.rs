@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use presrs::Warnings;
-use presrs::sim::dataset::{DatasetSpec, simulate_dataset};
+use presrs::simulator::dataset::{DatasetSpec, simulate_dataset};
 use pyo3::prelude::*;
 
 use crate::errors::IntoPyResult;
@@ -52,7 +52,7 @@ pub fn simulate(
     load_kg: Option<f64>,
     config: Option<PathBuf>,
 ) -> PyResult<Vec<Trial>> {
-    let config = presrs::simulation::load_config(config.as_deref()).py_err()?;
+    let config = presrs::sim::load_config(config.as_deref()).py_err()?;
     let mut spec = DatasetSpec::paper(seed);
     if let Some(terrains) = terrains {
         spec.terrains = terrains;

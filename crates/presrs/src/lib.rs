@@ -2,30 +2,24 @@
 
 pub mod bench;
 pub mod classify;
-pub mod classify_bag;
 pub mod classify_document;
 pub mod convert;
 pub mod dataset;
 pub mod describe;
 pub mod error;
-pub mod eval_document;
-pub mod eval_race;
+pub mod eval;
 pub mod eval_tables;
-pub mod evaluate;
 pub mod feature_table;
-pub mod gait;
 pub mod inspect;
 pub mod method;
 pub mod plot;
-pub mod profile;
 pub mod progress;
 pub mod progress_lines;
 pub mod report;
 pub mod reproduce;
-pub mod sample_race;
 pub mod selection_table;
 pub mod session;
-pub mod simulation;
+pub mod sim;
 pub mod stance_options;
 pub mod train;
 pub mod values;
@@ -43,7 +37,7 @@ pub use presrs_core as core;
 /// File formats, manifests, model files and the stream protocol.
 pub use presrs_io as io;
 /// The hopper simulator: dynamics, terrain, skin, sensor, tracks.
-pub use presrs_sim as sim;
+pub use presrs_sim as simulator;
 
 /// The top-level README's examples, compiled (and run where they can be) by `cargo test --doc`.
 #[cfg(doctest)]

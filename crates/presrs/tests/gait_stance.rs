@@ -1,4 +1,4 @@
-//! The gait loop (`presrs simulate --track ... --adaptive MODEL`, `presrs::gait::compare_on_track`)
+//! The gait loop (`presrs simulate --track ... --adaptive MODEL`, `presrs::sim::gait::compare_on_track`)
 //! with a whole-stance model: a small stance model trained on simulated movies decides on the track
 //! (at lift-off, or `decide_at` frames after touchdown), and the gait switches as its table says.
 
@@ -14,9 +14,9 @@ use presrs::core::pipeline::{TrainConfig, train};
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::ValidSegmentParams;
 use presrs::core::stance::summary::SummaryConfig;
-use presrs::gait::{GaitSweep, TrackOptions, compare_on_track};
+use presrs::sim::gait::{GaitSweep, TrackOptions, compare_on_track};
 use presrs::io::model_file::{ModelFile, Provenance, save_model};
-use presrs::sim::{DatasetSpec, SimConfig, simulate_dataset};
+use presrs::simulator::{DatasetSpec, SimConfig, simulate_dataset};
 use presrs::{Dataset, Quiet, SampleOptions};
 
 /// Simulated movies of wood and grass in every gait, a few hops each, written with their manifest.

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use presrs::evaluate::{EvalOptions, EvalSetup, Holdout};
+use presrs::eval::{EvalOptions, EvalSetup, Holdout};
 use presrs::train::{TrainOptions, train};
 use presrs::{Dataset, Error, Method, Quiet, Recorder, SampleOptions};
 

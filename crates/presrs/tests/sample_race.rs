@@ -1,4 +1,4 @@
-//! `--sample auto` (`presrs::sample_race`): one frame against the whole stance, chosen by validation.
+//! `--sample auto` (`presrs::train::sample_race`): one frame against the whole stance, chosen by validation.
 //!
 //! Movies whose classes differ only in how fast the foot loads (the same plateau, so the same
 //! mid-stance frame) can only be told apart from the whole stance: the race must choose it, and say
@@ -10,10 +10,10 @@ use std::path::Path;
 
 use presrs::core::classifier::ClassifierKind;
 use presrs::core::{Grid, Recording, SensorMeta};
-use presrs::eval_race::{RaceReadings, evaluate_racing_samples, race_lines};
-use presrs::evaluate::{EvalOptions, EvalSetup, Holdout};
+use presrs::eval::race::{RaceReadings, evaluate_racing_samples, race_lines};
+use presrs::eval::{EvalOptions, EvalSetup, Holdout};
 use presrs::method::{ClassifierChoice, FeatureChoice};
-use presrs::sample_race::{WholeSample, train_racing_samples};
+use presrs::train::sample_race::{WholeSample, train_racing_samples};
 use presrs::train::TrainOptions;
 use presrs::{Method, Quiet, SampleKind, SampleOptions};
 use rand::{Rng, SeedableRng};
@@ -208,7 +208,7 @@ fn eval_races_in_every_fold_and_tests_each_winner_in_its_own_sample() {
             && lines[1].contains("; the stance sample validates best inside the training data"),
         "{lines:?}"
     );
-    let json = serde_json::to_value(presrs::eval_document::EvalJson::of(
+    let json = serde_json::to_value(presrs::eval::document::EvalJson::of(
         outcome,
         &raced.never_trained,
     ))
@@ -236,7 +236,7 @@ fn the_held_out_units_never_inform_a_folds_race() {
             .sample_races
     };
     let (plain, changed) = (races(&plain), races(&changed));
-    let scores = |race: &presrs::sample_race::FoldRace| {
+    let scores = |race: &presrs::train::sample_race::FoldRace| {
         race.race
             .entries
             .iter()

@@ -16,7 +16,7 @@ use presrs::core::features::FeatureKind;
 use presrs::core::pipeline::TrainedModel;
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::summary::SummaryConfig;
-use presrs::evaluate::{EvalOptions, EvalSetup, Holdout};
+use presrs::eval::{EvalOptions, EvalSetup, Holdout};
 use presrs::io::npy::write_npy_f64;
 use presrs::train::{TrainOptions, train};
 use presrs::{ClassifierChoice, Dataset, FeatureChoice, Method, Quiet, SampleOptions};

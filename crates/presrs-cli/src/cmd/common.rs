@@ -262,8 +262,8 @@ impl SampleArgs {
     }
 
     /// The whole sample's settings for `--sample auto`.
-    pub fn whole_sample(&self) -> presrs::sample_race::WholeSample {
-        presrs::sample_race::WholeSample {
+    pub fn whole_sample(&self) -> presrs::train::sample_race::WholeSample {
+        presrs::train::sample_race::WholeSample {
             stance_length: self.stance_length,
             time_in_rows: self.series_axis.as_deref() == Some("rows"),
         }

@@ -4,8 +4,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs::eval_document::{CompareJson, EvalJson, PerturbedJson, fault_results};
-use presrs::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
+use presrs::eval::document::{CompareJson, EvalJson, PerturbedJson, fault_results};
+use presrs::eval::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
 use presrs_core::evaluation::{ComparisonRow, EvalReport};
 use presrs_core::split::ValidationSize;
 
@@ -134,7 +134,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     print_choices(&outcome, &eval, out)
 }
 
-/// `--sample auto`: the sample kinds raced inside every fold (`presrs::eval_race`).
+/// `--sample auto`: the sample kinds raced inside every fold (`presrs::eval::race`).
 fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     anyhow::ensure!(
         !args.compare && args.perturb.is_empty() && args.export_draws.is_none(),
@@ -145,10 +145,10 @@ fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let frames = args.samples.options_or_frames()?;
     let whole = args.samples.whole_sample();
     let readings =
-        presrs::eval_race::RaceReadings::load(&args.manifest, &frames, whole, &progress)?;
+        presrs::eval::race::RaceReadings::load(&args.manifest, &frames, whole, &progress)?;
     print_load_warnings(&readings.frames);
     let options = eval_options(args, &readings.frames);
-    let raced = presrs::eval_race::evaluate_racing_samples(&readings, &options, &progress)?;
+    let raced = presrs::eval::race::evaluate_racing_samples(&readings, &options, &progress)?;
     for warning in &raced.outcome.warnings {
         stderr_line!("warning: {warning}");
     }

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use presrs::eval_race::RaceReadings;
+use presrs::eval::race::RaceReadings;
 use presrs::report::{ReportOptions, report_dataset, report_racing_samples};
 use presrs_core::split::ValidationSize;
 

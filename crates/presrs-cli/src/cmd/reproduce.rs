@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs::evaluate::calibration_line;
+use presrs::eval::calibration_line;
 use presrs::report::PAPER_TABLE2;
 use presrs::reproduce::{
     PAPER_CLASSIFY_NS, ReproduceOptions, Reproduction, check_options, reproduce,

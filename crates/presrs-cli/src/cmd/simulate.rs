@@ -1,14 +1,14 @@
 //! `presrs simulate`: write the built-in simulated dataset (TekScan movies + manifest + ground truth).
 //!
-//! The folder layout is [`presrs::simulation`]'s.
+//! The folder layout is [`presrs::sim`]'s.
 //!
-//! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`presrs::gait`], [`run_track_comparison`]).
+//! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`presrs::sim::gait`], [`run_track_comparison`]).
 
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs::gait::{TrackOptions, compare_on_track};
-use presrs::simulation::{dataset_names, load_config, read_terrain_image, write_dataset};
+use presrs::sim::gait::{TrackOptions, compare_on_track};
+use presrs::sim::{dataset_names, load_config, read_terrain_image, write_dataset};
 use presrs::values::TerrainImage;
 use presrs_sim::{DatasetSpec, SimConfig};
 
@@ -68,9 +68,9 @@ pub struct SimulateArgs {
     /// With --adaptive and a model without a terrain-to-gait table: the `beta_des` grid searched around
     /// each configured gait when measuring it, FROM:TO:STEP in radians, or none (the configured gaits
     /// only). Variants are named BASE@BETA, e.g. G3@0.62.
-    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = presrs::gait::GaitSweep::DEFAULT_TEXT,
-          value_parser = presrs::gait::parse_gait_sweep)]
-    pub gait_sweep: presrs::gait::GaitSweep,
+    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = presrs::sim::gait::GaitSweep::DEFAULT_TEXT,
+          value_parser = presrs::sim::gait::parse_gait_sweep)]
+    pub gait_sweep: presrs::sim::gait::GaitSweep,
     /// The adaptive run switches gait only after this many consecutive stances classified as the same
     /// terrain (1: on every decision, the default: on 3 m segments a delay costs more than the wrong
     /// switches it saves).
@@ -107,7 +107,7 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let Some(out_dir) = args.out.as_deref() else {
         anyhow::bail!("--out DIR is required");
     };
-    presrs::simulation::check_dataset_out(out_dir, args.force)?;
+    presrs::sim::check_dataset_out(out_dir, args.force)?;
     let image_names: Vec<&str> = args.terrain_image.iter().map(|i| i.name.as_str()).collect();
     let (terrains, gaits) = dataset_names(&args.terrains, &image_names, &args.gaits, &config)
         .map_err(|message| {
@@ -156,8 +156,8 @@ pub fn run_track_comparison(
         .transpose()?;
     // Gait names are judged with the configuration, before anything runs.
     if let Err(message) =
-        presrs::simulation::check_gaits(presrs::Opt::StartGait, &args.start_gait, config).and_then(
-            |()| presrs::simulation::check_gaits(presrs::Opt::FixedGait, &args.fixed_gait, config),
+        presrs::sim::check_gaits(presrs::Opt::StartGait, &args.start_gait, config).and_then(
+            |()| presrs::sim::check_gaits(presrs::Opt::FixedGait, &args.fixed_gait, config),
         )
     {
         return Err(super::usage::UsageError::error(

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::Progress;
-use presrs::profile::{
+use presrs::train::profile::{
     GaitTableSim, ProfileChoice, ProfileRequest, model_profile, profile_summary,
 };
 use presrs::train::TrainOptions;
@@ -70,9 +70,9 @@ pub struct TrainArgs {
     pub sim_config: Option<PathBuf>,
     /// For `--gait-table sim`: the `beta_des` grid searched around each configured gait, FROM:TO:STEP in
     /// radians, or none (the configured gaits only). Variants are named BASE@BETA, e.g. G3@0.62.
-    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = presrs::gait::GaitSweep::DEFAULT_TEXT,
-          value_parser = presrs::gait::parse_gait_sweep)]
-    pub gait_sweep: presrs::gait::GaitSweep,
+    #[arg(long, value_name = "none|FROM:TO:STEP", default_value = presrs::sim::gait::GaitSweep::DEFAULT_TEXT,
+          value_parser = presrs::sim::gait::parse_gait_sweep)]
+    pub gait_sweep: presrs::sim::gait::GaitSweep,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -91,7 +91,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
     let progress = TerminalProgress::default();
     let (dataset, training) = if args.samples.is_auto() {
-        let raced = presrs::sample_race::train_racing_samples(
+        let raced = presrs::train::sample_race::train_racing_samples(
             &args.manifest,
             &args.samples.options_of("frame")?,
             args.samples.whole_sample(),

@@ -4,7 +4,7 @@ use std::io::Write;
 
 use presrs_core::evaluation::MeanStd;
 
-use crate::evaluate::calibration_line;
+use crate::eval::calibration_line;
 use crate::report::PAPER_TABLE2;
 
 use super::results::{ComparisonSummary, Draw, LoadCheck, Results};

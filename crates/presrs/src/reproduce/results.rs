@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
 use serde::Serialize;
 
-use crate::evaluate::CalibrationJson;
+use crate::eval::CalibrationJson;
 
 /// Where a data set came from.
 #[derive(Debug, Clone, Serialize)]

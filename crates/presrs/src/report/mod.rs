@@ -31,7 +31,7 @@ pub use presrs_report::{
 
 use crate::dataset::{Dataset, Sample, SampleOptions};
 use crate::error::{Context, Error, Result};
-use crate::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, run_counted};
+use crate::eval::{EvalOptions, EvalOutcome, EvalSetup, Holdout, run_counted};
 use crate::method::Method;
 use crate::progress::Progress;
 use crate::train::split_images;
@@ -345,7 +345,7 @@ pub fn write_eval_report(
 /// The notes after the samples' line: with `--sample auto`, the sample race of every fold; then the
 /// provenance.
 fn race_notes(outcome: &EvalOutcome, command_line: Option<&str>) -> Vec<String> {
-    let mut notes = crate::eval_race::race_lines(&outcome.sample_races);
+    let mut notes = crate::eval::race::race_lines(&outcome.sample_races);
     if let Some(first) = notes.first_mut() {
         // The folds' lines under the first, as one note each.
         first.insert_str(0, "The sample kinds raced: ");
@@ -580,7 +580,7 @@ pub fn report_dataset(
 /// the notes, the first fold's winner as the model shown). A given model has one sample kind (name it
 /// instead), and the fault sweep perturbs frames, so neither applies.
 pub fn report_racing_samples(
-    readings: &crate::eval_race::RaceReadings,
+    readings: &crate::eval::race::RaceReadings,
     options: &ReportOptions,
     out_dir: &Path,
     progress: &dyn Progress,
@@ -598,7 +598,7 @@ pub fn report_racing_samples(
     }
     let (eval_options, notes) = report_eval_options(dataset, options);
     notes.iter().for_each(|note| progress.note(note));
-    let raced = crate::eval_race::evaluate_racing_samples(readings, &eval_options, progress)
+    let raced = crate::eval::race::evaluate_racing_samples(readings, &eval_options, progress)
         .map_err(|err| {
             Error::data(format!(
                 "{}: cannot evaluate the method for the report: {err}",

@@ -1,4 +1,4 @@
-//! `eval --sample auto` and `report --sample auto`: the sample race ([`crate::sample_race`]) inside
+//! `eval --sample auto` and `report --sample auto`: the sample race ([`crate::train::sample_race`]) inside
 //! every fold of an evaluation.
 //!
 //! The data set is read twice, as frames and as its whole sample (the stance for movies, the series
@@ -22,9 +22,9 @@ use serde::Serialize;
 
 use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Context, Error, Result};
-use crate::evaluate::{EvalOptions, EvalOutcome, EvalSetup, run_counted};
+use crate::eval::{EvalOptions, EvalOutcome, EvalSetup, run_counted};
 use crate::progress::Progress;
-use crate::sample_race::{FoldRace, RaceEntry, SampleRace, WholeSample};
+use crate::train::sample_race::{FoldRace, RaceEntry, SampleRace, WholeSample};
 
 /// A data set read both ways for the race: as frames, and as its whole sample.
 #[derive(Debug)]
@@ -43,7 +43,7 @@ impl RaceReadings {
         whole: WholeSample,
         progress: &dyn Progress,
     ) -> Result<Self> {
-        let read = |kind| crate::sample_race::read_as(manifest, options, kind, progress);
+        let read = |kind| crate::train::sample_race::read_as(manifest, options, kind, progress);
         let frames = read(SampleKind::Frame)?;
         let whole_kind = whole.kind_for(&frames);
         let whole = read(whole_kind).with_context(|| {
@@ -238,7 +238,7 @@ pub fn evaluate_racing_samples(
 ) -> Result<RacedEvaluation> {
     let method = &options.method;
     if !method.is_auto() {
-        return Err(crate::sample_race::fixed_method_cannot_race());
+        return Err(crate::train::sample_race::fixed_method_cannot_race());
     }
     let frames = EvalSetup::new(&readings.frames, options)?;
     let whole = EvalSetup::new(&readings.whole, options)?;

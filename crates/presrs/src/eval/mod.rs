@@ -2,6 +2,9 @@
 //! the automatic choice, every method side by side, and accuracy with perturbed test images. Progress
 //! goes to a [`Progress`]; errors name the manifest.
 
+pub mod document;
+pub mod race;
+
 use std::collections::BTreeMap;
 
 use presrs_core::evaluation::{
@@ -138,8 +141,8 @@ pub struct EvalOutcome {
     /// The first model trained (first repeat, first fold), as a report shows it.
     pub first_model: Option<presrs_core::evaluation::FirstModel>,
     /// With `--sample auto`, every fold's race of the sample kinds, in the draws' order
-    /// (`crate::eval_race`); empty otherwise.
-    pub sample_races: Vec<crate::sample_race::FoldRace>,
+    /// (`crate::eval::race`); empty otherwise.
+    pub sample_races: Vec<crate::train::sample_race::FoldRace>,
 }
 
 /// What the automatic choice expected of its chosen candidates, inside the training data: to set next

@@ -1,6 +1,8 @@
 //! Classifying recordings with a trained model: the chosen frame of each file, or the sample frame of
 //! every stance phase of a movie, with a warning where the label may mean little.
 
+pub mod bag;
+
 use std::collections::BTreeMap;
 use std::path::Path;
 

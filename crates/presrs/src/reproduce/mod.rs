@@ -1,7 +1,7 @@
 //! The paper's experiment end to end on the built-in simulator (Tables I and II).
 //!
 //! The data set lives in `DIR/dataset/` (the layout `presrs simulate --out` writes, see
-//! [`crate::simulation`]), the heavier hopper's of the load-independence test in `DIR/dataset-load1.30/`
+//! [`crate::sim`]), the heavier hopper's of the load-independence test in `DIR/dataset-load1.30/`
 //! (the factor is 1 + `--extra-load`). A folder whose `stamp.json` says it was made with the same
 //! presrs version, seed, hops per gait, load and simulator configuration, whose files all match the
 //! stamp, and whose first trial this build's simulator still makes (it is simulated again: about 2 % of
@@ -30,11 +30,11 @@ use presrs_sim::{DatasetSpec, SimConfig, SimulatedDataset, TrialOutput, Velocity
 
 use crate::dataset::Sample;
 use crate::error::{Context, Error, Result};
-use crate::evaluate::{CalibrationJson, run_counted};
+use crate::eval::{CalibrationJson, run_counted};
 use crate::method::CANDIDATE_FEATURES;
 use crate::progress::Progress;
 use crate::report::{PAPER_TABLE2, SimulationReportData, write_simulation_report};
-use crate::simulation::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
+use crate::sim::{DatasetKey, check_simulator, read_dataset, write_dataset_with};
 use crate::train::split_images;
 use presrs_io::message::{Message, Opt};
 

@@ -15,6 +15,8 @@
 //!   hops per gait, load, the SHA-256 of the configuration) and the size and SHA-256 of every file
 //!   above. A folder without a stamp is an unfinished (or older) data set.
 
+pub mod gait;
+
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -1,6 +1,9 @@
 //! Training from a data set: the draw (condition, per class, validation share, seed), a fixed method or
 //! the automatic choice, the model file with its provenance, and the online profile.
 
+pub mod profile;
+pub mod sample_race;
+
 use std::collections::BTreeMap;
 use std::path::Path;
 

@@ -9,8 +9,8 @@ use presrs_core::selection::Selection;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::eval_race::FoldRaceJson;
-use crate::evaluate::{CalibrationJson, EvalOutcome, InternalEstimate, PerturbationRow};
+use crate::eval::race::FoldRaceJson;
+use crate::eval::{CalibrationJson, EvalOutcome, InternalEstimate, PerturbationRow};
 use crate::method::{ClassifierChoice, FeatureChoice, Method};
 
 /// The `--json` document (the contract's fields first).

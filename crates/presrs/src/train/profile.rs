@@ -10,7 +10,7 @@ use presrs_core::stance::ValidSegmentParams;
 
 use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
-use crate::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
+use crate::sim::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
 use crate::progress::Progress;
 use crate::train::{learn_online_profile, trained_on_movies};
 
@@ -159,7 +159,7 @@ pub fn gait_table(
     match source {
         GaitTableSource::Given(table) => Ok((table.clone(), None)),
         GaitTableSource::Simulated => {
-            let config = crate::simulation::load_config(sim.config)?;
+            let config = crate::sim::load_config(sim.config)?;
             let measured = measure_gait_table(&config, sim.seed, class_names, sim.sweep, progress)?;
             Ok((measured.table.best.clone(), Some(measured)))
         }
