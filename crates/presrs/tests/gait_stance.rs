@@ -14,8 +14,8 @@ use presrs::core::pipeline::{TrainConfig, train};
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::ValidSegmentParams;
 use presrs::core::stance::summary::SummaryConfig;
-use presrs::sim::gait::{GaitSweep, TrackOptions, compare_on_track};
 use presrs::io::model_file::{ModelFile, Provenance, save_model};
+use presrs::sim::gait::{GaitSweep, TrackOptions, compare_on_track};
 use presrs::simulator::{DatasetSpec, SimConfig, simulate_dataset};
 use presrs::{Dataset, Quiet, SampleOptions};
 

@@ -5,12 +5,12 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::session::{ProfileOverrides, resolve_profile};
-use presrs_stream::StopSignals;
 use presrs_io::mcap::FrameType;
 use presrs_ros2::options::MAX_DOMAIN_ID;
 use presrs_ros2::{
     InputQos, NodeGraph, NodeOptions, domain_id, input_type, localhost_only_from_env, run_node,
 };
+use presrs_stream::StopSignals;
 
 /// Run as a ROS 2 node: pressure frames from a topic in, terrain decisions out (docs/ros2.md).
 ///

@@ -155,10 +155,8 @@ pub fn run_track_comparison(
         .map(presrs_io::output_path::check_output_file)
         .transpose()?;
     // Gait names are judged with the configuration, before anything runs.
-    if let Err(message) =
-        presrs::sim::check_gaits(presrs::Opt::StartGait, &args.start_gait, config).and_then(
-            |()| presrs::sim::check_gaits(presrs::Opt::FixedGait, &args.fixed_gait, config),
-        )
+    if let Err(message) = presrs::sim::check_gaits(presrs::Opt::StartGait, &args.start_gait, config)
+        .and_then(|()| presrs::sim::check_gaits(presrs::Opt::FixedGait, &args.fixed_gait, config))
     {
         return Err(super::usage::UsageError::error(
             "simulate",

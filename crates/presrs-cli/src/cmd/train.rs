@@ -4,10 +4,10 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::Progress;
+use presrs::train::TrainOptions;
 use presrs::train::profile::{
     GaitTableSim, ProfileChoice, ProfileRequest, model_profile, profile_summary,
 };
-use presrs::train::TrainOptions;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 

@@ -10,8 +10,8 @@ use presrs_core::stance::ValidSegmentParams;
 
 use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
-use crate::sim::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
 use crate::progress::Progress;
+use crate::sim::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
 use crate::train::{learn_online_profile, trained_on_movies};
 
 /// Whether a model file gets an online profile.
