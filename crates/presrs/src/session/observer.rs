@@ -115,10 +115,10 @@ impl<W: Write> SessionObserver for JsonLines<W> {
     fn event(&mut self, event: &SessionEvent) -> bool {
         let written =
             writeln!(self.output, "{}", event.to_line()).and_then(|()| self.output.flush());
-        if let Err(err) = &written {
-            if err.kind() == std::io::ErrorKind::BrokenPipe {
-                self.closed.store(true, Ordering::Relaxed);
-            }
+        if let Err(err) = &written
+            && err.kind() == std::io::ErrorKind::BrokenPipe
+        {
+            self.closed.store(true, Ordering::Relaxed);
         }
         written.is_ok()
     }
