@@ -347,7 +347,8 @@ mod tests {
 
     #[test]
     fn a_sample_is_made_the_one_way_for_each_kind() {
-        let image = Frame::new(Grid::new(2, 3), vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]).unwrap();
+        let values = (0..48).map(f64::from).collect();
+        let image = Frame::new(Grid::new(8, 6), values).unwrap();
         let one = [image.view()];
         let (frame, cut) = SampleKind::Frame.sample_of(&one, None).unwrap();
         assert_eq!((frame, cut), (image.clone(), false));

@@ -53,10 +53,12 @@ pub struct TrainedFile {
 /// Reads the data set of `request.manifest` (each recording once), trains on it (racing the sample
 /// kinds with `auto`) and learns the online profile from the recordings already read, under the same
 /// options (`--axes`, topics, frame period, leniency, dead sensels): the model file `presrs train`
-/// writes.
+/// writes. `data_read` is shown the data set as soon as it is read (with `auto`, once the race is
+/// run, with the race), before training or the profile can fail: a face says its warnings then.
 pub fn train_model_file(
     request: &TrainRequest<'_>,
     progress: &dyn Progress,
+    data_read: &mut dyn FnMut(&Dataset, Option<&SampleRace>),
 ) -> Result<TrainedFile> {
     let (dataset, training, race) = match request.sample {
         SampleChoice::Auto => {
@@ -67,6 +69,7 @@ pub fn train_model_file(
                 &request.train,
                 progress,
             )?;
+            data_read(&raced.dataset, Some(&raced.race));
             (raced.dataset, raced.training, Some(raced.race))
         }
         SampleChoice::Kind(kind) => {
@@ -75,6 +78,7 @@ pub fn train_model_file(
                 ..request.samples.clone()
             };
             let dataset = Dataset::load(request.manifest, &options, progress)?;
+            data_read(&dataset, None);
             progress.start("training", None);
             let training = train(&dataset, &request.train);
             progress.finish();

@@ -112,13 +112,12 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     };
     // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
     let progress = TerminalProgress::default();
-    let trained = train_model_file(&request, &progress)?;
-    if let Some(race) = &trained.race {
-        for line in race.lines() {
+    let trained = train_model_file(&request, &progress, &mut |dataset, race| {
+        for line in race.iter().flat_map(|race| race.lines()) {
             stderr_line!("note: {line}");
         }
-    }
-    print_load_warnings(&trained.dataset);
+        print_load_warnings(dataset);
+    })?;
     let (training, file) = (&trained.training, &trained.file);
     for warning in &training.warnings {
         stderr_line!("warning: {warning}");
