@@ -5,11 +5,12 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use numpy::{PyArray1, PyArrayMethods};
+use presrs::core::sample::SampleChoice;
 use presrs::eval::document::EvalJson;
 use presrs::eval::race::{RaceReadings, evaluate_racing_samples};
 use presrs::eval::{CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout};
 use presrs::train::sample_race::WholeSample;
-use presrs::{Dataset, Face, Progress, Quiet, SampleOptions, Warnings};
+use presrs::{Dataset, Face, Progress, Quiet, SampleKind, SampleOptions, Warnings};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
@@ -202,16 +203,17 @@ pub fn evaluate(
         seed,
         method: method.clone(),
     };
-    match sample.trim() {
-        "frame" => {}
-        "auto" => {
+    match sample.parse::<SampleChoice>() {
+        Ok(SampleChoice::Kind(SampleKind::Frame)) => {}
+        Ok(SampleChoice::Auto) => {
             let path = manifest_path(data, [labels, groups, conditions])?;
             return evaluate_racing(py, &path, options_for, progress);
         }
-        other => {
+        Ok(SampleChoice::Kind(_)) | Err(_) => {
             return Err(data_error(format!(
-                "sample={other:?}: evaluate takes \"frame\" (each stance's frame) or \"auto\" (a \
-                 manifest's frames raced against its whole samples inside every fold)"
+                "sample={:?}: evaluate takes \"frame\" (each stance's frame) or \"auto\" (a \
+                 manifest's frames raced against its whole samples inside every fold)",
+                sample.trim()
             )));
         }
     }
@@ -314,5 +316,5 @@ fn load(
             "labels: images need one label each (or pass a manifest's path instead)",
         ));
     };
-    dataset_of(data, labels, groups, conditions, presrs::SampleKind::Frame)
+    dataset_of(data, labels, groups, conditions, SampleKind::Frame)
 }

@@ -6,10 +6,10 @@ use std::str::FromStr;
 use std::sync::Mutex;
 
 use numpy::{PyArray1, PyArrayMethods};
-use presrs::classify::whole_stance_sample;
+use presrs::classify::model_sample;
 use presrs::core::pipeline::{Classification, Session};
+use presrs::core::sample::SampleChoice;
 use presrs::core::split::ValidationSize;
-use presrs::core::stance::summary::{SummaryConfig, summarise};
 use presrs::core::{Frame, FrameView};
 use presrs::io::model_file::{ModelFile, load_model, parse_model, save_model};
 use presrs::io::output_path::check_output_file;
@@ -131,25 +131,19 @@ impl Model {
     fn samples_of<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Samples<'py>> {
         let model = &self.file().model;
         match model.sample() {
+            // An image is its own sample: read in place, not copied.
             SampleKind::Frame => Ok(Samples::Images(Images::new(x, "x")?)),
-            SampleKind::Series { time_in_rows } => {
+            SampleKind::Series { .. } => {
                 let images = Images::new(x, "x")?;
                 images.require_finite("x", "series")?;
                 let frames = images
                     .frames()?
                     .iter()
-                    .map(|f| {
-                        if time_in_rows {
-                            f.transposed()
-                        } else {
-                            f.to_frame()
-                        }
-                    })
-                    .collect();
+                    .map(|f| Ok(model_sample(model, &[*f]).py_err()?.0))
+                    .collect::<PyResult<_>>()?;
                 Ok(Samples::Owned(frames, images.batch))
             }
-            SampleKind::Stance { summary, length } => {
-                let length = length.unwrap_or(model.image_grid().cols);
+            SampleKind::Stance { .. } => {
                 let one = x.getattr("ndim").and_then(|n| n.extract::<usize>()).ok() == Some(3);
                 let movies: Vec<Bound<'py, PyAny>> = if one {
                     vec![x.clone()]
@@ -175,7 +169,7 @@ impl Model {
                         )));
                     }
                     movie.require_finite(&what, "frame")?;
-                    let (sample, warning) = whole_stance_sample(&movie.frames()?, &summary, length)
+                    let (sample, warning) = model_sample(model, &movie.frames()?)
                         .map_err(|err| data_error(format!("{what}: {err}")))?;
                     if let Some(warning) = warning {
                         warn(py, &Warning::from(format!("{what}: {}", warning.message())))?;
@@ -480,7 +474,8 @@ pub fn validation_size(validation: f64) -> PyResult<ValidationSize> {
     }
 }
 
-/// The sample kind named by `sample=`, `stance_length=` and `series_axis=`.
+/// The sample kind named by `sample=`, `stance_length=` and `series_axis=` (a model is trained on one:
+/// `auto` is for evaluations).
 pub fn sample_kind(
     sample: &str,
     stance_length: Option<usize>,
@@ -496,13 +491,20 @@ pub fn sample_kind(
             "series_axis= applies to sample=\"series\", not sample={sample:?}"
         )));
     }
-    SampleKind::parse(sample, stance_length, series_axis).map_err(|err| {
+    let choice = SampleChoice::parse(sample, stance_length, series_axis).map_err(|err| {
         let argument = match sample.trim() {
             "stance" => "stance_length",
             "series" => "series_axis",
             _ => "sample",
         };
         data_error(format!("{argument}: {err}"))
+    })?;
+    choice.kind().ok_or_else(|| {
+        data_error(
+            "sample=\"auto\" races one frame against the whole sample inside an evaluation \
+             (presrs.evaluate); a model is trained on one kind: name it (\"frame\", \"stance\" or \
+             \"series\")",
+        )
     })
 }
 
@@ -516,9 +518,8 @@ pub fn dataset_of(
     kind: SampleKind,
 ) -> PyResult<Dataset> {
     let frames = match kind {
-        SampleKind::Stance { summary, .. } => stance_summaries(images, &summary)?,
-        SampleKind::Series { time_in_rows } => image_frames(images, time_in_rows)?,
-        SampleKind::Frame => image_frames(images, false)?,
+        SampleKind::Stance { .. } => stance_summaries(images, kind)?,
+        SampleKind::Frame | SampleKind::Series { .. } => image_samples(images, kind)?,
     };
     let n = frames.len();
     let names = labels(label_values, "labels", n)?;
@@ -539,9 +540,9 @@ pub fn dataset_of(
     Dataset::from_samples_of(format!("numpy {what}s ({n})"), samples, kind).py_err()
 }
 
-/// The images of a batch `(n, rows, cols)`, copied (transposed with `transpose`), each checked for
-/// values that are not numbers.
-fn image_frames(images: &Bound<'_, PyAny>, transpose: bool) -> PyResult<Vec<Frame>> {
+/// The images of a batch `(n, rows, cols)`, each checked for values that are not numbers, as samples of
+/// `kind` (a frame or a series: [`SampleKind::sample_of`]).
+fn image_samples(images: &Bound<'_, PyAny>, kind: SampleKind) -> PyResult<Vec<Frame>> {
     let images = Images::new(images, "images")?;
     if !images.batch {
         return Err(data_error(
@@ -550,20 +551,13 @@ fn image_frames(images: &Bound<'_, PyAny>, transpose: bool) -> PyResult<Vec<Fram
     }
     images.require_finite("images", "image")?;
     (0..images.len())
-        .map(|index| {
-            let frame = images.frame(index)?;
-            Ok(if transpose {
-                frame.transposed()
-            } else {
-                frame.to_frame()
-            })
-        })
+        .map(|index| Ok(kind.sample_of(&[images.frame(index)?], None).py_err()?.0))
         .collect()
 }
 
-/// Each movie `(frames, rows, cols)` of `movies` (a sequence, or a 4-D array) summarised over time as
-/// whole-stance samples are.
-fn stance_summaries(movies: &Bound<'_, PyAny>, summary: &SummaryConfig) -> PyResult<Vec<Frame>> {
+/// Each movie `(frames, rows, cols)` of `movies` (a sequence, or a 4-D array) as a whole-stance sample
+/// of `kind`, summarised over time (laid into one length later, with the rest of the data set).
+fn stance_summaries(movies: &Bound<'_, PyAny>, kind: SampleKind) -> PyResult<Vec<Frame>> {
     if movies.is_none() {
         return Err(data_error(
             "images: expected a sequence of movies (frames, rows, cols), got None",
@@ -572,13 +566,13 @@ fn stance_summaries(movies: &Bound<'_, PyAny>, summary: &SummaryConfig) -> PyRes
     let mut out = Vec::new();
     for (index, movie) in movies.try_iter()?.enumerate() {
         let what = format!("images[{index}]");
-        out.push(movie_summary(&movie?, &what, summary)?);
+        out.push(movie_summary(&movie?, &what, kind)?);
     }
     Ok(out)
 }
 
-/// One stance's movie summarised (the CLI's `summarise`), `what` naming it in errors.
-fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, summary: &SummaryConfig) -> PyResult<Frame> {
+/// One stance's movie summarised (as the CLI's data sets are), `what` naming it in errors.
+fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, kind: SampleKind) -> PyResult<Frame> {
     let frames = Images::new(movie, what)?;
     if !frames.batch {
         return Err(data_error(format!(
@@ -587,7 +581,9 @@ fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, summary: &SummaryConfig) 
         )));
     }
     frames.require_finite(what, "frame")?;
-    summarise(&frames.frames()?, summary).map_err(|err| data_error(format!("{what}: {err}")))
+    kind.sample_of(&frames.frames()?, None)
+        .map(|(summary, _)| summary)
+        .map_err(|err| data_error(format!("{what}: {err}")))
 }
 
 /// Batches at least this long are classified in parallel.

@@ -13,13 +13,13 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correct_dead_sensels};
-pub use presrs_core::sample::SampleKind;
-use presrs_core::stance::summary::{pad_to, summarise};
+pub use presrs_core::sample::{SampleChoice, SampleKind};
+use presrs_core::stance::summary::pad_to;
 use presrs_core::stance::{
     BaselineMode, SampleFrame, SegmentParams, Segmentation, Stance, ValidSegmentParams,
     segment_recording,
 };
-use presrs_core::{Grid, Recording};
+use presrs_core::{FrameView, Grid, Recording};
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 
@@ -160,6 +160,8 @@ pub struct LoadedSamples {
     pub warnings: Warnings,
     /// The dead sensels filled (with [`SampleOptions::dead_sensels`]), by recording.
     pub dead_sensels: DeadSenselFills,
+    /// Every movie read, by file and topic: what an online profile is learned from.
+    pub movie_loads: Vec<MovieLoad>,
 }
 
 /// A data set: a manifest and the samples its files give, stance sampling and dead-sensel correction
@@ -176,6 +178,9 @@ pub struct Dataset {
     pub dead_sensels: DeadSenselFills,
     /// What a sample is (one frame, a whole stance, a series): models trained on the set say so.
     pub sample: SampleKind,
+    /// The total load per frame of every movie read (none for samples made in memory), as read for
+    /// the samples: the online profile is learned from them, not from a second reading.
+    pub movie_loads: Vec<MovieLoad>,
 }
 
 impl Dataset {
@@ -214,6 +219,7 @@ impl Dataset {
             warnings: loaded.warnings,
             dead_sensels: loaded.dead_sensels,
             sample: options.kind,
+            movie_loads: loaded.movie_loads,
         })
     }
 
@@ -261,12 +267,13 @@ impl Dataset {
             warnings: Warnings::new(),
             dead_sensels: DeadSenselFills::default(),
             sample: SampleKind::Frame,
+            movie_loads: Vec::new(),
         })
     }
 
     /// [`Dataset::from_samples`] for samples of `kind`, made in memory as [`Dataset::load`] makes them
     /// from files: a whole stance's sample is its movie's summary
-    /// ([`summarise`]), laid here into the kind's length (or
+    /// ([`summarise`](presrs_core::stance::summary::summarise)), laid here into the kind's length (or
     /// the longest stance's), with the warning of [`pad_stance_samples`]; a series' sample is its
     /// channels x time array.
     pub fn from_samples_of(
@@ -443,7 +450,131 @@ pub fn load_samples(
     manifest: &Manifest,
     options: &SampleOptions,
 ) -> std::result::Result<LoadedSamples, IoError> {
-    // A recording is a file and, for a bag, the topic of the row's `topic` column (else the options').
+    let read = read_recordings(manifest, options)?;
+    let mut loaded = LoadedSamples {
+        movie_loads: read.movie_loads(),
+        dead_sensels: read.fills,
+        ..LoadedSamples::default()
+    };
+    for parsed in read.by_key.values() {
+        loaded.warnings.extend(parsed.warnings.iter().cloned());
+    }
+    loaded.warnings.sort_by_text();
+    let mut empty = EmptyFiles::default();
+    for row in &manifest.rows {
+        let Some(parsed) = read.by_key.get(&row_key(row)) else {
+            continue;
+        };
+        let recording = &parsed.recording;
+        for (frame_index, frames) in row_units(manifest, row, recording, options, &mut empty)? {
+            let (frame, _) = options
+                .kind
+                .sample_of(&frames, None)
+                .map_err(|err| manifest.row_error(row, format!("`{}`: {err}", row.path_text)))?;
+            loaded.samples.push(Sample {
+                frame,
+                label: row.label.clone(),
+                condition: row.condition.clone(),
+                group: row.group.clone(),
+                load: row.load,
+                source: row.path.clone(),
+                frame_index,
+                line: Some(row.line),
+                columns: row_columns(row),
+            });
+        }
+    }
+    if let SampleKind::Stance { length, .. } = options.kind {
+        loaded
+            .warnings
+            .extend(pad_stance_samples(&mut loaded.samples, length)?);
+    }
+    loaded
+        .warnings
+        .extend(empty.summary(manifest.rows.len(), options));
+    Ok(loaded)
+}
+
+/// What one manifest row gives, as the frames each sample is made of, with the 0-based frame it
+/// starts at: a whole stance's frames (each stance of a movie), one 2-D array (a series), or one
+/// frame (each frame the row or its stances choose).
+fn row_units<'r>(
+    manifest: &Manifest,
+    row: &ManifestRow,
+    recording: &'r Recording,
+    options: &SampleOptions,
+    empty: &mut EmptyFiles,
+) -> std::result::Result<Vec<(usize, Vec<FrameView<'r>>)>, IoError> {
+    Ok(match options.kind {
+        SampleKind::Stance { .. } => row_stances(manifest, row, recording, options, empty)?
+            .into_iter()
+            .map(|stance| {
+                let frames = (stance.start..stance.end())
+                    .filter_map(|index| recording.frame(index))
+                    .collect();
+                (stance.start, frames)
+            })
+            .collect(),
+        SampleKind::Series { .. } => vec![(0, vec![row_series(manifest, row, recording)?])],
+        SampleKind::Frame => row_frames(manifest, row, recording, options, empty)?
+            .into_iter()
+            .filter_map(|index| Some((index, vec![recording.frame(index)?])))
+            .collect(),
+    })
+}
+
+/// A movie of a manifest, as read for its data set (its row's topic and the read options, dead sensels
+/// filled as asked): its total load per frame, what an online profile is learned from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovieLoad {
+    pub path: PathBuf,
+    /// The topic of a bag's row (its `topic` column), else the read options' topic.
+    pub topic: Option<String>,
+    pub total_per_frame: Vec<f64>,
+}
+
+/// The total load per frame of every movie (a recording of more than one frame) `manifest` lists, each
+/// read once as [`load_samples`] reads it (`options`' reading settings; no sample is taken).
+pub fn read_movie_loads(
+    manifest: &Manifest,
+    options: &SampleOptions,
+) -> std::result::Result<Vec<MovieLoad>, IoError> {
+    Ok(read_recordings(manifest, options)?.movie_loads())
+}
+
+/// Every recording of a manifest, read once, and the dead sensels filled in them.
+struct ReadRecordings<'m> {
+    by_key: HashMap<RecordingKey<'m>, Parsed>,
+    fills: DeadSenselFills,
+}
+
+impl ReadRecordings<'_> {
+    /// The movies' total loads, ordered by file and topic.
+    fn movie_loads(&self) -> Vec<MovieLoad> {
+        let mut movies: Vec<(&RecordingKey<'_>, &Parsed)> = self
+            .by_key
+            .iter()
+            .filter(|(_, parsed)| parsed.recording.frame_count() > 1)
+            .collect();
+        movies.sort_by(|a, b| a.0.cmp(b.0));
+        movies
+            .into_iter()
+            .map(|(&(path, topic), parsed)| MovieLoad {
+                path: path.clone(),
+                topic: topic.map(str::to_owned),
+                total_per_frame: parsed.recording.total_per_frame(),
+            })
+            .collect()
+    }
+}
+
+/// Reads every recording of `manifest` once, in parallel: a file and, for a bag, the topic of the row's
+/// `topic` column (else the options'), with the read options, dead sensels filled as asked, and the
+/// frame period of the option and of the `frame_period_s` column.
+fn read_recordings<'m>(
+    manifest: &'m Manifest,
+    options: &SampleOptions,
+) -> std::result::Result<ReadRecordings<'m>, IoError> {
     let mut unique: Vec<RecordingKey<'_>> = manifest.rows.iter().map(row_key).collect();
     unique.sort();
     unique.dedup();
@@ -464,7 +595,7 @@ pub fn load_samples(
             ((path, topic), read)
         })
         .collect();
-    let mut by_path: HashMap<RecordingKey<'_>, Parsed> = HashMap::with_capacity(recordings.len());
+    let mut by_key: HashMap<RecordingKey<'_>, Parsed> = HashMap::with_capacity(recordings.len());
     let mut fills = DeadSenselFills::default();
     for (key, parsed) in recordings {
         let path = key.0;
@@ -485,69 +616,10 @@ pub fn load_samples(
                 .map_err(|err| IoError::format(&path.display().to_string(), err.to_string()))?;
         }
         fills.add(path.clone(), filled);
-        by_path.insert(key, parsed);
+        by_key.insert(key, parsed);
     }
-    apply_frame_period_column(manifest, &mut by_path)?;
-    let mut loaded = LoadedSamples {
-        dead_sensels: fills,
-        ..LoadedSamples::default()
-    };
-    for parsed in by_path.values() {
-        loaded.warnings.extend(parsed.warnings.iter().cloned());
-    }
-    loaded.warnings.sort_by_text();
-    let mut empty = EmptyFiles::default();
-    for row in &manifest.rows {
-        let Some(parsed) = by_path.get(&row_key(row)) else {
-            continue;
-        };
-        let sample = |frame, frame_index| Sample {
-            frame,
-            label: row.label.clone(),
-            condition: row.condition.clone(),
-            group: row.group.clone(),
-            load: row.load,
-            source: row.path.clone(),
-            frame_index,
-            line: Some(row.line),
-            columns: row_columns(row),
-        };
-        if let SampleKind::Stance { summary, .. } = options.kind {
-            for stance in row_stances(manifest, row, &parsed.recording, options, &mut empty)? {
-                let frames: Vec<_> = (stance.start..stance.end())
-                    .filter_map(|index| parsed.recording.frame(index))
-                    .collect();
-                let summary = summarise(&frames, &summary).map_err(|err| {
-                    manifest.row_error(row, format!("`{}`: {err}", row.path_text))
-                })?;
-                loaded.samples.push(sample(summary, stance.start));
-            }
-            continue;
-        }
-        if let SampleKind::Series { time_in_rows } = options.kind {
-            loaded.samples.push(sample(
-                row_series(manifest, row, &parsed.recording, time_in_rows)?,
-                0,
-            ));
-            continue;
-        }
-        let frames = row_frames(manifest, row, &parsed.recording, options, &mut empty)?;
-        for frame_index in frames {
-            let Some(view) = parsed.recording.frame(frame_index) else {
-                continue;
-            };
-            loaded.samples.push(sample(view.to_frame(), frame_index));
-        }
-    }
-    if let SampleKind::Stance { length, .. } = options.kind {
-        loaded
-            .warnings
-            .extend(pad_stance_samples(&mut loaded.samples, length)?);
-    }
-    loaded
-        .warnings
-        .extend(empty.summary(manifest.rows.len(), options));
-    Ok(loaded)
+    apply_frame_period_column(manifest, &mut by_key)?;
+    Ok(ReadRecordings { by_key, fills })
 }
 
 /// A recording of a manifest: a file, and the topic of its row's `topic` column (a bag's).
@@ -820,32 +892,24 @@ fn row_stances(
     Ok(stances)
 }
 
-/// A one-frame file as a series sample: channels in rows, time in columns (transposed when time is in
-/// the file's rows).
-fn row_series(
+/// The one 2-D array of a one-frame file, for a series sample (a movie, or a row naming a frame, is an
+/// error).
+fn row_series<'r>(
     manifest: &Manifest,
     row: &ManifestRow,
-    recording: &Recording,
-    time_in_rows: bool,
-) -> std::result::Result<presrs_core::Frame, IoError> {
-    let frame = match recording.frame(0) {
-        Some(frame) if recording.frame_count() == 1 && row.frame.is_none() => frame,
-        _ => {
-            return Err(manifest.row_error(
-                row,
-                format!(
-                    "`{}` is a movie (or the row names a frame): a series sample is one 2-D array \
-                     of channels x time; for a movie of pressure images use whole-stance samples",
-                    row.path_text
-                ),
-            ));
-        }
-    };
-    Ok(if time_in_rows {
-        frame.transposed()
-    } else {
-        frame.to_frame()
-    })
+    recording: &'r Recording,
+) -> std::result::Result<FrameView<'r>, IoError> {
+    match recording.frame(0) {
+        Some(frame) if recording.frame_count() == 1 && row.frame.is_none() => Ok(frame),
+        _ => Err(manifest.row_error(
+            row,
+            format!(
+                "`{}` is a movie (or the row names a frame): a series sample is one 2-D array of \
+                 channels x time; for a movie of pressure images use whole-stance samples",
+                row.path_text
+            ),
+        )),
+    }
 }
 
 /// Lays every whole-stance sample into one length: `length`, or the longest stance's. The warning, when

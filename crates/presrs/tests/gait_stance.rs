@@ -52,8 +52,12 @@ fn stance_model(manifest: &Path, table: &BTreeMap<String, String>) -> PathBuf {
     let dataset = Dataset::load(manifest, &options, &Quiet).unwrap();
     assert!(dataset.samples.len() >= 40, "{}", dataset.samples.len());
     let model = common::small_rocket_model(&dataset, ClassifierKind::LDA, 10, dataset.sample);
-    let mut profile =
-        presrs::train::learn_online_profile(manifest, &ValidSegmentParams::default()).unwrap();
+    let mut profile = presrs::train::manifest_online_profile(
+        manifest,
+        &SampleOptions::default(),
+        &ValidSegmentParams::default(),
+    )
+    .unwrap();
     profile.gait_table = table.clone();
     let mut file = ModelFile::new(model, Provenance::default());
     file.online = Some(profile);

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use presrs::dataset::{DeadSenselFills, SampleKind, SampleOptions, read_corrected};
+use presrs::dataset::{DeadSenselFills, SampleChoice, SampleKind, SampleOptions, read_corrected};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
 use presrs::progress_lines::{ProgressLines, progress_interval};
 use presrs::stance_options::StanceOptions;
@@ -125,8 +125,8 @@ pub struct SampleArgs {
     /// load, contact area, centre of pressure and regional loads over time), or series (a 2-D array as
     /// channels x time); train, eval and report also take auto (one frame against the whole sample,
     /// by validation inside the training data)
-    #[arg(long, default_value = "frame", value_parser = ["frame", "stance", "series", "auto"])]
-    pub sample: String,
+    #[arg(long, default_value = "frame", value_parser = sample_choice_parser())]
+    pub sample: SampleChoice,
     /// With --sample stance: frames each stance is laid into (default: the longest stance)
     #[arg(long)]
     pub stance_length: Option<usize>,
@@ -237,28 +237,29 @@ impl StanceArgs {
 }
 
 impl SampleArgs {
+    /// The sample options of the kind named; `--sample auto` is refused (it is for train, eval and
+    /// report).
     pub fn options(&self) -> anyhow::Result<SampleOptions> {
-        if self.is_auto() {
-            anyhow::bail!(
+        match self.choice()? {
+            SampleChoice::Auto => anyhow::bail!(
                 "--sample auto races one frame against the whole sample (presrs train, eval and \
                  report); name one here: frame, stance or series"
-            );
+            ),
+            SampleChoice::Kind(kind) => self.options_of(kind),
         }
-        self.options_of(&self.sample)
+    }
+
+    /// `--sample` with `--stance-length` and `--series-axis` applied to the kind named.
+    pub fn choice(&self) -> anyhow::Result<SampleChoice> {
+        let time_in_rows = self.series_axis.as_deref() == Some("rows");
+        self.sample
+            .with_settings(self.stance_length, time_in_rows)
+            .map_err(anyhow::Error::msg)
     }
 
     /// The options, as frames with `--sample auto` (a race reads the frames first).
     pub fn options_or_frames(&self) -> anyhow::Result<SampleOptions> {
-        self.options_of(if self.is_auto() {
-            "frame"
-        } else {
-            &self.sample
-        })
-    }
-
-    /// `--sample auto`: the kind is raced when training.
-    pub fn is_auto(&self) -> bool {
-        self.sample == "auto"
+        self.options_of(self.choice()?.kind().unwrap_or(SampleKind::Frame))
     }
 
     /// The whole sample's settings for `--sample auto`.
@@ -269,11 +270,10 @@ impl SampleArgs {
         }
     }
 
-    /// The options with the sample kind `name` (the other settings as given).
-    pub fn options_of(&self, name: &str) -> anyhow::Result<SampleOptions> {
-        let kind = SampleKind::parse(name, self.stance_length, self.series_axis.as_deref());
+    /// The options with the sample kind `kind` (the other settings as given).
+    pub fn options_of(&self, kind: SampleKind) -> anyhow::Result<SampleOptions> {
         Ok(SampleOptions {
-            kind: kind.map_err(anyhow::Error::msg)?,
+            kind,
             sample: self.stance_frame,
             include_partial: self.include_partial,
             read: self.read_options(),
@@ -304,6 +304,13 @@ impl SampleArgs {
     pub fn read_options(&self) -> ReadOptions {
         self.axes.read_options(self.lenient)
     }
+}
+
+/// `--sample`: one of [`SampleChoice::NAMES`] (a bad value is a usage error listing them).
+fn sample_choice_parser() -> impl clap::builder::TypedValueParser<Value = SampleChoice> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(SampleChoice::NAMES)
+        .try_map(|name| name.parse::<SampleChoice>())
 }
 
 /// Reads a manifest and all its samples (a spinner meanwhile); warnings go to stderr.

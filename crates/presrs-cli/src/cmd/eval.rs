@@ -86,7 +86,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     for dir in [&args.report, &args.export_draws].into_iter().flatten() {
         presrs_io::output_path::check_output_dir(dir)?;
     }
-    if args.samples.is_auto() {
+    if args.samples.choice()?.is_auto() {
         return run_racing(args, out);
     }
     let dataset = load_manifest(&args.manifest, &args.samples)?;

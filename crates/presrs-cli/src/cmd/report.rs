@@ -83,7 +83,7 @@ pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         command_line: Some(std::env::args().collect::<Vec<_>>().join(" ")),
     };
     let progress = TerminalProgress::default();
-    let summary = if args.samples.is_auto() {
+    let summary = if args.samples.choice()?.is_auto() {
         let whole = args.samples.whole_sample();
         let readings = RaceReadings::load(&args.manifest, &options.samples, whole, &progress)?;
         print_load_warnings(&readings.frames);

@@ -3,17 +3,13 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs::Progress;
-use presrs::train::TrainOptions;
 use presrs::train::profile::{
-    GaitTableSim, ProfileChoice, ProfileRequest, model_profile, profile_summary,
+    GaitTableSim, ProfileChoice, ProfileRequest, TrainRequest, profile_summary, train_model_file,
 };
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
-use super::common::{
-    PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings,
-};
+use super::common::{PipelineArgs, SampleArgs, TerminalProgress, print_load_warnings};
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
@@ -50,7 +46,7 @@ pub struct TrainArgs {
     /// Write an online profile into the model file (calibration and sample frame learned from the
     /// manifest's recordings by offline segmentation), for `presrs stream` and `presrs simulate --adaptive`:
     /// a stream then classifies from its first stance, with no warm-up. The default when the training
-    /// samples come from movies (it reads them once more); this flag asks for it on other data too, and
+    /// samples come from movies (learned from them as read for training); this flag asks for it on other data too, and
     /// fails if it cannot be learned.
     #[arg(long)]
     pub online_profile: bool,
@@ -88,44 +84,6 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         seed: args.seed,
         method: args.pipeline.method(),
     };
-    // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
-    let progress = TerminalProgress::default();
-    let (dataset, training) = if args.samples.is_auto() {
-        let raced = presrs::train::sample_race::train_racing_samples(
-            &args.manifest,
-            &args.samples.options_of("frame")?,
-            args.samples.whole_sample(),
-            &options,
-            &progress,
-        )?;
-        for line in raced.race.lines() {
-            stderr_line!("note: {line}");
-        }
-        print_load_warnings(&raced.dataset);
-        (raced.dataset, raced.training)
-    } else {
-        let dataset = load_manifest(&args.manifest, &args.samples)?;
-        progress.start("training", None);
-        let training = presrs::train::train(&dataset, &options);
-        progress.finish();
-        (dataset, training?)
-    };
-    for warning in &training.warnings {
-        stderr_line!("warning: {warning}");
-    }
-    let model = &training.model;
-    if let Some(selection) = model.selection() {
-        for line in presrs::selection_table::selection_lines(selection, model, training.n_train()) {
-            writeln!(out, "{line}")?;
-        }
-    }
-    let mut file = training.model_file(
-        &dataset,
-        &options,
-        !args.samples.keep_dead_sensels,
-        Some(std::env::args().collect::<Vec<_>>().join(" ")),
-    );
-    let segment = args.samples.options_of("frame")?.segment_params();
     let choice = if args.online_profile || args.gait_table.is_some() {
         ProfileChoice::Required
     } else if args.no_online_profile {
@@ -138,28 +96,44 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         seed: args.seed,
         sweep: args.gait_sweep,
     };
-    let request = ProfileRequest {
-        choice,
-        gait_table: args.gait_table.as_deref(),
-        sim,
+    let request = TrainRequest {
+        manifest: &args.manifest,
+        sample: args.samples.choice()?,
+        samples: args.samples.options_or_frames()?,
+        whole: args.samples.whole_sample(),
+        train: options,
+        profile: ProfileRequest {
+            choice,
+            gait_table: args.gait_table.as_deref(),
+            sim,
+        },
+        command: Some(std::env::args().collect::<Vec<_>>().join(" ")),
     };
-    let classes = model.class_names();
-    let learned = model_profile(
-        &dataset,
-        &args.manifest,
-        &segment,
-        classes,
-        &request,
-        &progress,
-    )?;
-    if let Some(warning) = &learned.warning {
+    // The automatic choice can take a while: a spinner on a terminal, a line every few seconds otherwise.
+    let progress = TerminalProgress::default();
+    let trained = train_model_file(&request, &progress, &mut |dataset, race| {
+        for line in race.iter().flat_map(|race| race.lines()) {
+            stderr_line!("note: {line}");
+        }
+        print_load_warnings(dataset);
+    })?;
+    let (training, file) = (&trained.training, &trained.file);
+    for warning in &training.warnings {
         stderr_line!("warning: {warning}");
     }
-    if let Some(measured) = &learned.measured {
+    let model = &training.model;
+    if let Some(selection) = model.selection() {
+        for line in presrs::selection_table::selection_lines(selection, model, training.n_train()) {
+            writeln!(out, "{line}")?;
+        }
+    }
+    if let Some(warning) = &trained.profile.warning {
+        stderr_line!("warning: {warning}");
+    }
+    if let Some(measured) = &trained.profile.measured {
         write!(out, "{}", measured.format())?;
     }
-    file.online = learned.profile;
-    save_model(&args.out, &file)?;
+    save_model(&args.out, file)?;
     writeln!(
         out,
         "trained {} on {} images ({} training + {} validation) of {} classes: {}",

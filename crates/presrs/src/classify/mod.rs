@@ -8,7 +8,6 @@ use std::path::Path;
 
 use presrs_core::pipeline::{Prediction, Session, TrainedModel};
 use presrs_core::sample::SampleKind;
-use presrs_core::stance::summary::{SummaryConfig, pad_to, summarise};
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
 use presrs_core::{Frame, FrameView, Recording};
 use serde::Serialize;
@@ -79,8 +78,8 @@ pub fn classify_recording(
     name: &str,
     options: &ClassifyOptions,
 ) -> Result<FileClassification> {
-    if let SampleKind::Stance { summary, length } = model.sample() {
-        return classify_stances(model, session, recording, name, options, &summary, length);
+    if let SampleKind::Stance { .. } = model.sample() {
+        return classify_stances(model, session, recording, name, options);
     }
     let mut warnings = Warnings::new();
     let frames = match options.frame {
@@ -128,17 +127,9 @@ pub fn classify_recording(
         let Some(frame) = recording.frame(index) else {
             continue;
         };
-        let transposed;
-        let frame = match model.sample() {
-            SampleKind::Series { time_in_rows: true } => {
-                transposed = frame.transposed();
-                transposed.view()
-            }
-            _ => frame,
-        };
-        let prediction = session
-            .classify(&frame)
-            .with_context(|| format!("{name}: frame {index}"))?;
+        let at = || format!("{name}: frame {index}");
+        let (sample, _) = model_sample(model, &[frame]).with_context(at)?;
+        let prediction = session.classify(&sample.view()).with_context(at)?;
         classified.push(classified_of(model, name, index, &prediction, warning));
     }
     Ok(FileClassification {
@@ -155,8 +146,6 @@ fn classify_stances(
     recording: &Recording,
     name: &str,
     options: &ClassifyOptions,
-    summary: &SummaryConfig,
-    length: Option<usize>,
 ) -> Result<FileClassification> {
     let mut warnings = Warnings::new();
     if options.frame.is_some() || recording.frame_count() == 1 {
@@ -165,7 +154,6 @@ fn classify_stances(
              takes movies, not one frame"
         )));
     }
-    let length = length.unwrap_or(model.image_grid().cols);
     let segmentation = segment_recording(recording, &options.samples.segment_params())
         .with_context(|| format!("{name}: cannot segment"))?;
     let include_partial = options.samples.include_partial();
@@ -179,7 +167,7 @@ fn classify_stances(
             .filter_map(|index| recording.frame(index))
             .collect();
         let at = || format!("{name}: the stance at frame {}", stance.start);
-        let (padded, warning) = whole_stance_sample(&frames, summary, length).with_context(at)?;
+        let (padded, warning) = model_sample(model, &frames).with_context(at)?;
         let prediction = session.classify(&padded.view()).with_context(at)?;
         classified.push(classified_of(
             model,
@@ -201,23 +189,26 @@ fn classify_stances(
     })
 }
 
-/// One stance's movie (touchdown to lift-off) as a whole-stance model's sample: summarised as the
-/// model's training stances were, laid into its `length` frames; the warning says when the stance was
-/// longer and cut.
-pub fn whole_stance_sample(
+/// The sample `model` takes from a recording's `frames` ([`SampleKind::sample_of`]): one frame as it
+/// is, one 2-D array as a series, or a stance's movie (touchdown to lift-off) summarised as the model's
+/// training stances were and laid into its length (the one its features take); the warning says when
+/// the stance was longer and cut.
+pub fn model_sample(
+    model: &TrainedModel,
     frames: &[FrameView<'_>],
-    summary: &SummaryConfig,
-    length: usize,
 ) -> presrs_core::error::Result<(Frame, Option<Warning>)> {
-    let stance_summary = summarise(frames, summary)?;
-    let (padded, cut) = pad_to(&stance_summary.view(), length)?;
-    let warning = cut.then(|| {
+    let length = match model.sample() {
+        SampleKind::Stance { length, .. } => Some(length.unwrap_or(model.image_grid().cols)),
+        SampleKind::Frame | SampleKind::Series { .. } => None,
+    };
+    let (sample, cut) = model.sample().sample_of(frames, length)?;
+    let warning = length.filter(|_| cut).map(|length| {
         Warning::from(format!(
             "the stance has {} frames, more than the model's {length}: its first {length} were used",
             frames.len()
         ))
     });
-    Ok((padded, warning))
+    Ok((sample, warning))
 }
 
 fn classified_of(

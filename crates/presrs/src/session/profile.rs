@@ -36,9 +36,14 @@ pub fn resolve_profile(
     let mut profile = if let Some(path) = profile_file {
         read_profile(path)?
     } else if let Some(manifest) = calibrate {
-        // With the detector settings the model was trained with, if it says.
+        // With the detector settings the model was trained with, if it says; the recordings read as a
+        // data set's are (the default options), by the same code.
         let segment = model_profile.map(|profile| profile.segment.clone());
-        crate::train::learn_online_profile(manifest, &segment.unwrap_or_default())?
+        crate::train::manifest_online_profile(
+            manifest,
+            &crate::dataset::SampleOptions::default(),
+            &segment.unwrap_or_default(),
+        )?
     } else {
         model_profile.cloned().unwrap_or_default()
     };

@@ -15,7 +15,7 @@ use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::message::{Message, Opt, Warnings};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
-use crate::dataset::{Dataset, Sample, sample_labels};
+use crate::dataset::{Dataset, MovieLoad, Sample, SampleOptions, read_movie_loads, sample_labels};
 use crate::error::{Context, Error, Result};
 use crate::method::Method;
 
@@ -247,18 +247,30 @@ pub fn trained_on_movies(dataset: &Dataset) -> bool {
 }
 
 /// The online profile (detector settings, calibration and sample frame) learned by segmenting, offline
-/// with `params` (those of training: the profile keeps them), every movie a manifest lists.
-pub fn learn_online_profile(manifest: &Path, params: &ValidSegmentParams) -> Result<OnlineProfile> {
-    let manifest = presrs_io::manifest::read_manifest(manifest)?;
-    let mut paths: Vec<&Path> = manifest.rows.iter().map(|row| row.path.as_path()).collect();
-    paths.sort();
-    paths.dedup();
-    let mut segmentations = Vec::new();
-    for path in paths {
-        let recording = presrs_io::read_recording(path)?;
-        if recording.frame_count() > 1 {
-            segmentations.push(segment(&recording.total_per_frame(), params)?);
-        }
-    }
+/// with `params` (those of training: the profile keeps them), every movie of a data set as it was read
+/// for its samples ([`Dataset::movie_loads`]).
+pub fn learn_online_profile(
+    movies: &[MovieLoad],
+    params: &ValidSegmentParams,
+) -> Result<OnlineProfile> {
+    let segmentations = movies
+        .iter()
+        .map(|movie| {
+            segment(&movie.total_per_frame, params)
+                .with_context(|| format!("{}: cannot segment", movie.path.display()))
+        })
+        .collect::<Result<Vec<_>>>()?;
     Ok(OnlineProfile::learn_with(&segmentations, params))
+}
+
+/// [`learn_online_profile`] from every movie the manifest at `manifest` lists, read as a data set's
+/// recordings are with `options` (format options, a row's topic, dead sensels, frame period; no sample
+/// is taken): `presrs stream --calibrate`.
+pub fn manifest_online_profile(
+    manifest: &Path,
+    options: &SampleOptions,
+    params: &ValidSegmentParams,
+) -> Result<OnlineProfile> {
+    let manifest = presrs_io::manifest::read_manifest(manifest)?;
+    learn_online_profile(&read_movie_loads(&manifest, options)?, params)
 }

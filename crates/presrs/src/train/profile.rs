@@ -1,23 +1,116 @@
-//! The online profile `presrs train` writes into a model file: whether it is learned (by default when
-//! the training samples come from movies), and its terrain-to-gait table (measured with the simulator
-//! or given).
+//! The model file `presrs train` writes, made in one pass ([`train_model_file`]): the data set read
+//! once, the model trained on it, and the online profile learned from the recordings already read, under
+//! the same options; whether a profile is learned (by default when the training samples come from
+//! movies), and its terrain-to-gait table (measured with the simulator or given).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use presrs_core::online::OnlineProfile;
+use presrs_core::sample::SampleChoice;
 use presrs_core::stance::ValidSegmentParams;
+use presrs_io::model_file::ModelFile;
 
-use crate::dataset::Dataset;
+use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Context, Error, Result};
 use crate::progress::Progress;
-use crate::sim::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
-use crate::train::{learn_online_profile, trained_on_movies};
+use crate::train::sample_race::{SampleRace, WholeSample, train_racing_samples};
+use crate::train::{TrainOptions, Training, learn_online_profile, train, trained_on_movies};
+
+/// What `presrs train` is asked: the data set (a manifest, its files read and sampled as `samples`
+/// says, the sample kind chosen by `sample`), the training and the online profile.
+#[derive(Clone, Debug)]
+pub struct TrainRequest<'a> {
+    pub manifest: &'a Path,
+    /// The sample kind, or `auto`: one frame raced against the whole sample `whole`.
+    pub sample: SampleChoice,
+    /// How the manifest's files are read and sampled (their kind is `sample`'s).
+    pub samples: SampleOptions,
+    /// The whole sample `auto` races.
+    pub whole: WholeSample,
+    pub train: TrainOptions,
+    pub profile: ProfileRequest<'a>,
+    /// The command line stored in the model's provenance.
+    pub command: Option<String>,
+}
+
+/// A model file and how it was made.
+#[derive(Debug)]
+pub struct TrainedFile {
+    /// The model, its provenance and its online profile.
+    pub file: ModelFile,
+    /// The data set it was trained on (the race's winner with `auto`).
+    pub dataset: Dataset,
+    pub training: Training,
+    /// With `auto`: the race of the sample kinds.
+    pub race: Option<SampleRace>,
+    /// Why no profile was learned, and a simulated gait table's measurement (the profile itself is
+    /// the file's).
+    pub profile: ModelProfile,
+}
+
+/// Reads the data set of `request.manifest` (each recording once), trains on it (racing the sample
+/// kinds with `auto`) and learns the online profile from the recordings already read, under the same
+/// options (`--axes`, topics, frame period, leniency, dead sensels): the model file `presrs train`
+/// writes. `data_read` is shown the data set as soon as it is read (with `auto`, once the race is
+/// run, with the race), before training or the profile can fail: a face says its warnings then.
+pub fn train_model_file(
+    request: &TrainRequest<'_>,
+    progress: &dyn Progress,
+    data_read: &mut dyn FnMut(&Dataset, Option<&SampleRace>),
+) -> Result<TrainedFile> {
+    let (dataset, training, race) = match request.sample {
+        SampleChoice::Auto => {
+            let raced = train_racing_samples(
+                request.manifest,
+                &request.samples,
+                request.whole,
+                &request.train,
+                progress,
+            )?;
+            data_read(&raced.dataset, Some(&raced.race));
+            (raced.dataset, raced.training, Some(raced.race))
+        }
+        SampleChoice::Kind(kind) => {
+            let options = SampleOptions {
+                kind,
+                ..request.samples.clone()
+            };
+            let dataset = Dataset::load(request.manifest, &options, progress)?;
+            data_read(&dataset, None);
+            progress.start("training", None);
+            let training = train(&dataset, &request.train);
+            progress.finish();
+            (dataset, training?, None)
+        }
+    };
+    let mut file = training.model_file(
+        &dataset,
+        &request.train,
+        request.samples.dead_sensels.is_some(),
+        request.command.clone(),
+    );
+    let mut profile = model_profile(
+        &dataset,
+        &request.samples.segment_params(),
+        training.model.class_names(),
+        &request.profile,
+        progress,
+    )?;
+    file.online = profile.profile.take();
+    Ok(TrainedFile {
+        file,
+        dataset,
+        training,
+        race,
+        profile,
+    })
+}
 
 /// Whether a model file gets an online profile.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ProfileChoice {
-    /// When the training samples come from movies (it reads them once more); a profile that cannot be
+    /// When the training samples come from movies (learned from them as read); a profile that cannot be
     /// learned is a warning, and the model is written without one.
     #[default]
     WhenMovies,
@@ -47,18 +140,17 @@ pub struct ModelProfile {
     pub measured: Option<MeasuredGaitTable>,
 }
 
-/// The online profile of a model of `class_names` trained on `dataset` (read from `manifest`), learned
-/// by offline segmentation with `params` (those of training) as `request` says, with its
-/// terrain-to-gait table.
+/// The online profile of a model of `class_names` trained on `dataset`, learned by offline segmentation
+/// with `params` (those of training) of the movies as the data set read them, as `request` says, with
+/// its terrain-to-gait table.
 pub fn model_profile(
     dataset: &Dataset,
-    manifest: &Path,
     params: &ValidSegmentParams,
     class_names: &[String],
     request: &ProfileRequest<'_>,
     progress: &dyn Progress,
 ) -> Result<ModelProfile> {
-    let mut learned = learn_profile(dataset, manifest, params, request.choice)?;
+    let mut learned = learn_profile(dataset, params, request.choice)?;
     if let (Some(profile), Some(source)) = (&mut learned.profile, request.gait_table) {
         let (table, measured) = gait_table(
             &source.parse::<GaitTableSource>()?,
@@ -75,14 +167,15 @@ pub fn model_profile(
 /// The profile alone, as `choice` says.
 fn learn_profile(
     dataset: &Dataset,
-    manifest: &Path,
     params: &ValidSegmentParams,
     choice: ProfileChoice,
 ) -> Result<ModelProfile> {
+    let manifest = dataset.path();
+    let learn = || learn_online_profile(&dataset.movie_loads, params);
     match choice {
         ProfileChoice::Never => Ok(ModelProfile::default()),
         ProfileChoice::WhenMovies if !trained_on_movies(dataset) => Ok(ModelProfile::default()),
-        ProfileChoice::WhenMovies => Ok(match learn_online_profile(manifest, params) {
+        ProfileChoice::WhenMovies => Ok(match learn() {
             Ok(profile) => ModelProfile {
                 profile: Some(profile),
                 ..ModelProfile::default()
@@ -96,7 +189,7 @@ fn learn_profile(
             },
         }),
         ProfileChoice::Required => {
-            let profile = learn_online_profile(manifest, params).with_context(|| {
+            let profile = learn().with_context(|| {
                 format!("{}: cannot learn the online profile", manifest.display())
             })?;
             Ok(ModelProfile {
