@@ -3,6 +3,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
+use presrs::train::TrainOptions;
 use presrs::train::profile::{
     GaitTableSim, ProfileChoice, ProfileRequest, TrainRequest, profile_summary, train_model_file,
 };

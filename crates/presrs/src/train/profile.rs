@@ -14,6 +14,7 @@ use presrs_io::model_file::ModelFile;
 use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Context, Error, Result};
 use crate::progress::Progress;
+use crate::sim::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
 use crate::train::sample_race::{SampleRace, WholeSample, train_racing_samples};
 use crate::train::{TrainOptions, Training, learn_online_profile, train, trained_on_movies};
 
