@@ -7,7 +7,6 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs::dataset::{DeadSenselFills, SampleKind, SampleOptions, read_corrected};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
-use presrs::progress_lines::{ProgressLines, progress_interval};
 use presrs::stance_options::StanceOptions;
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
@@ -15,6 +14,8 @@ use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::{BaselineMode, SampleFrame, ValidSegmentParams};
 use presrs_io::{ArrayAxes, ReadOptions};
+
+use crate::printer::progress_lines::{ProgressLines, progress_interval};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
 #[derive(Debug, Clone, clap::Args)]

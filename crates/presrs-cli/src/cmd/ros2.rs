@@ -8,6 +8,8 @@ use presrs::stream::StopSignals;
 pub use presrs_ros2::Ros2Args;
 use presrs_ros2::{NodeGraph, run_node};
 
+use crate::printer::stream_log::notice_text;
+
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = args.node_options(|key| std::env::var(key).ok())?;
     // The model and the profile before the node joins the graph: a bad one announces nothing.
@@ -21,7 +23,7 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     out.flush()?;
     let stop = graph.stop_handle();
     let signal_thread = signals.on_first(move || stop.stop());
-    let log = |notice: &_| stderr_line!("presrs ros2: {}", presrs::stream_log::notice_text(notice));
+    let log = |notice: &_| stderr_line!("presrs ros2: {}", notice_text(notice));
     // A closed stdout does not stop the node: its outputs are the topics.
     let mut print = |line: &str| drop(writeln!(out, "{line}").and_then(|()| out.flush()));
     let summary = run_node(graph, &file.model, &profile, &mut print, &log)?;

@@ -29,11 +29,12 @@ use presrs::stream::{
     BagRecorder, BagReport, ConnectionBags, ConnectionOptions, InputFormat, ServerNotice,
     ServerOptions, ShutdownHandle, StopSignals, StreamServer, run_connection_observed,
 };
-use presrs::stream_log::{
-    input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
-};
 use presrs_io::frame_protocol::DEFAULT_MAX_PAYLOAD_BYTES;
 use presrs_io::model_file::load_model;
+
+use crate::printer::stream_log::{
+    input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
+};
 
 /// Input format on stdin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

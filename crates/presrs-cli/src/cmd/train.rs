@@ -4,9 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::Progress;
-use presrs::profile::{
-    GaitTableSim, ProfileChoice, ProfileRequest, model_profile, profile_summary,
-};
+use presrs::profile::{GaitTableSim, ProfileChoice, ProfileRequest, model_profile};
 use presrs::train::TrainOptions;
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
@@ -14,6 +12,8 @@ use presrs_io::model_file::save_model;
 use super::common::{
     PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings,
 };
+use crate::printer::profile_summary::profile_summary;
+use crate::printer::selection_table::selection_lines;
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
@@ -115,7 +115,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let model = &training.model;
     if let Some(selection) = model.selection() {
-        for line in presrs::selection_table::selection_lines(selection, model, training.n_train()) {
+        for line in selection_lines(selection, model, training.n_train()) {
             writeln!(out, "{line}")?;
         }
     }

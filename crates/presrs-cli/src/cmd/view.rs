@@ -10,9 +10,8 @@ use presrs::session::{ConnectionNotice, ProfileOverrides, resolve_profile};
 use presrs::stream::ShutdownHandle;
 use presrs_io::model_file::load_model;
 
-use presrs::stream_log::{notice_text, summary_text};
-
 use super::stream::HttpArgs;
+use crate::printer::stream_log::{notice_text, summary_text};
 
 /// Where `presrs view` serves without `--http`.
 const DEFAULT_ADDR: SocketAddr = SocketAddr::V4(std::net::SocketAddrV4::new(
