@@ -1,5 +1,6 @@
 //! The `presrs` command line: thin — parse, call the libraries, print. The binary (`main.rs`) only
-//! calls [`run`]; the commands are in `cmd/`, what they print in `printer/`.
+//! calls [`run`]; the commands are in `cmd/`, what they print in `printer/`, option values checked from
+//! their text in `args/`.
 
 /// `eprintln!` that ignores a failed write: a closed or full stderr (`presrs ... 2>&1 | head -1`) must not
 /// turn a run into a panic, and there is nowhere left to report it.
@@ -10,6 +11,7 @@ macro_rules! stderr_line {
     }};
 }
 
+mod args;
 mod cmd;
 mod printer;
 

@@ -59,7 +59,7 @@ pub struct Ros2Args {
     pub profile: Option<PathBuf>,
     /// Recommended gait per terrain, TERRAIN=GAIT, comma separated (added to the profile's table).
     #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
-          value_parser = |t: &str| presrs::values::name_value(t, "TERRAIN=GAIT"))]
+          value_parser = |t: &str| t.split_once('=').map(|(n, v)| (n.trim().to_owned(), v.trim().to_owned())).filter(|(n, v)| !n.is_empty() && !v.is_empty()).ok_or_else(|| format!("expected TERRAIN=GAIT, got {t:?}")))]
     pub gait: Vec<(String, String)>,
     /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at
     /// lift-off], as `presrs stream --decide-at`.

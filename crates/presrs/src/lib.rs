@@ -28,7 +28,6 @@ pub mod stance_options;
 pub mod stoppable_input;
 pub mod stream;
 pub mod train;
-pub mod values;
 
 pub use dataset::{Dataset, Sample, SampleKind, SampleOptions};
 pub use describe::describe_model;

@@ -51,7 +51,7 @@ pub struct PipelineArgs {
     /// Principal components kept, at least 1 (at most the number of training images minus one, and the
     /// number of features: a larger value is lowered to that, with a warning when given) [default: 51];
     /// ridge has no PCA step and ignores it.
-    #[arg(long, value_name = "DIMS", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "DIMS", value_parser = crate::args::values::positive_count)]
     pub dims: Option<usize>,
     /// Divide each cropped image by its total load (sum of its values): features that do not depend on
     /// the robot's load, without knowing it. Stored in the model; off in the paper's method.
@@ -183,22 +183,22 @@ pub struct StanceArgs {
     pub stance_baseline: BaselineMode,
     /// A stance must somewhere exceed this fraction of the load range above the baseline (or floor)
     /// [default: 0.10].
-    #[arg(long, value_name = "FRACTION", value_parser = presrs::values::fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = crate::args::values::fraction)]
     pub stance_threshold: Option<f64>,
     /// Hysteresis: a frame belongs to a stance while its load exceeds this fraction of the load range
     /// above the baseline (or floor), at most --stance-threshold [default: 0.01].
-    #[arg(long, value_name = "FRACTION", value_parser = presrs::values::fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = crate::args::values::fraction)]
     pub stance_hysteresis: Option<f64>,
     /// Shortest stance kept, in frames [default: 3].
-    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "FRAMES", value_parser = crate::args::values::positive_count)]
     pub stance_min_frames: Option<usize>,
     /// Longest stance kept, in frames (default: no limit); with --stance-baseline auto a longer one
     /// is taken for a standing preload and measured from the local floor.
-    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "FRAMES", value_parser = crate::args::values::positive_count)]
     pub stance_max_frames: Option<usize>,
     /// Fewest unloaded frames between two stances: a shorter dropout inside a stance is bridged
     /// [default: 3].
-    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "FRAMES", value_parser = crate::args::values::positive_count)]
     pub stance_min_gap: Option<usize>,
     /// Every movie is one contact (trials cut to one foot contact, loaded from the first frame to the
     /// last): one sample from each, the whole recording being its stance.
@@ -206,7 +206,7 @@ pub struct StanceArgs {
     pub one_sample_per_file: bool,
     /// Frame period in seconds of files whose format states none (.npy, text, PNG); a manifest's
     /// `frame_period_s` column gives it per file.
-    #[arg(long, value_name = "SECONDS", value_parser = presrs::values::period_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = crate::args::values::period_seconds)]
     pub frame_period: Option<f64>,
 }
 

@@ -66,7 +66,7 @@ pub struct ReproduceArgs {
     /// Extra load of the load-independence test, as a fraction of the nominal body mass: the heavier
     /// hopper weighs nominal x (1 + EXTRA_LOAD), so it must be above -1 (a negative value tests a
     /// lighter hopper).
-    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, value_parser = presrs::values::extra_load)]
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, value_parser = crate::args::values::extra_load)]
     pub extra_load: f64,
     /// Skip the comparison of every feature family x classifier (same draws as Table II).
     #[arg(long)]

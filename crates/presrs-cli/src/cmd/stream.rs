@@ -108,7 +108,7 @@ pub struct StreamArgs {
     /// With --format tekscan: the frame period in seconds when the header states no SECONDS_PER_FRAME
     /// (the frames' times, in the JSON lines and a --record bag; else untimed, and a bag takes the
     /// wall clock).
-    #[arg(long, value_name = "SECONDS", value_parser = presrs::values::period_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = crate::args::values::period_seconds)]
     pub frame_period: Option<f64>,
     /// With --format mcap: the topic to read [default: the only topic holding frames].
     #[arg(long, value_name = "NAME")]

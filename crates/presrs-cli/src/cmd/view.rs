@@ -50,7 +50,7 @@ pub struct ViewArgs {
     #[arg(long, value_parser = super::usage::positive_number)]
     pub frame_period: Option<f64>,
     /// Wait before the first frame, seconds (time to open the page).
-    #[arg(long, default_value_t = 0.0, value_parser = presrs::values::non_negative_seconds)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::args::values::non_negative_seconds)]
     pub delay: f64,
     /// Keep serving after the last frame until SIGINT or SIGTERM.
     #[arg(long)]
