@@ -267,6 +267,29 @@ mod tests {
         }
     }
 
+    /// The detector's settings that `presrs features walk.asf` with the stance options `options` gives.
+    fn stance_params(options: &[&str]) -> anyhow::Result<presrs_core::stance::ValidSegmentParams> {
+        let words = [&["presrs", "features", "walk.asf"], options].concat();
+        match Cli::try_parse_from(words).unwrap().command {
+            Command::Features(args) => args.samples.stance.segment_params(),
+            other => panic!("parsed as {other:?}"),
+        }
+    }
+
+    #[test]
+    fn stance_options_not_given_keep_the_defaults_and_a_gap_bridges_one_frame_less() {
+        let default = presrs_core::stance::SegmentParams::default();
+        assert_eq!(stance_params(&[]).unwrap(), default.check().unwrap());
+        let gap = stance_params(&["--stance-min-gap", "5"]).unwrap();
+        assert_eq!(gap.params().max_gap_frames, 4);
+        let clash = ["--stance-threshold", "0.05", "--stance-hysteresis", "0.5"];
+        let err = error_message(&stance_params(&clash).unwrap_err());
+        assert!(
+            err.starts_with("the --stance-* options do not fit together: "),
+            "{err}"
+        );
+    }
+
     #[test]
     fn a_closed_pipe_in_a_json_error_is_recognised() {
         let closed = std::io::Error::from(std::io::ErrorKind::BrokenPipe);

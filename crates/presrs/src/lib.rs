@@ -24,7 +24,6 @@ pub mod reproduce;
 pub mod sample_race;
 pub mod session;
 pub mod simulation;
-pub mod stance_options;
 pub mod stoppable_input;
 pub mod stream;
 pub mod train;

@@ -7,12 +7,11 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs::dataset::{DeadSenselFills, SampleKind, SampleOptions, read_corrected};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
-use presrs::stance_options::StanceOptions;
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::preprocess::Preprocess;
-use presrs_core::stance::{BaselineMode, SampleFrame, ValidSegmentParams};
+use presrs_core::stance::{BaselineMode, SampleFrame, SegmentParams, ValidSegmentParams};
 use presrs_io::{ArrayAxes, ReadOptions};
 
 use crate::printer::progress_lines::{ProgressLines, progress_interval};
@@ -223,17 +222,25 @@ impl AxesArg {
 }
 
 impl StanceArgs {
-    /// The detector's settings these options give (the defaults for those not given).
+    /// The detector's settings these options give (the defaults for those not given), checked to fit
+    /// together.
     pub fn segment_params(&self) -> anyhow::Result<ValidSegmentParams> {
-        let options = StanceOptions {
+        let default = SegmentParams::default();
+        let params = SegmentParams {
             baseline: self.stance_baseline,
-            threshold: self.stance_threshold,
-            hysteresis: self.stance_hysteresis,
-            min_frames: self.stance_min_frames,
-            max_frames: self.stance_max_frames,
-            min_gap: self.stance_min_gap,
+            on_fraction: self.stance_threshold.unwrap_or(default.on_fraction),
+            off_fraction: self.stance_hysteresis.unwrap_or(default.off_fraction),
+            min_stance_frames: self.stance_min_frames.unwrap_or(default.min_stance_frames),
+            max_stance_frames: self.stance_max_frames,
+            // A gap of N unloaded frames ends a stance: dropouts of up to N - 1 are bridged.
+            max_gap_frames: self
+                .stance_min_gap
+                .map_or(default.max_gap_frames, |gap| gap.saturating_sub(1)),
+            ..default
         };
-        Ok(options.segment_params()?)
+        params
+            .check()
+            .context("the --stance-* options do not fit together")
     }
 }
 
