@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs::eval_document::{CompareJson, EvalJson, PerturbedJson, fault_results};
+use presrs::eval_document::{CompareJson, EvalJson, PerturbedJson, perturbation_fault_results};
 use presrs::evaluate::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
 use presrs_core::evaluation::{ComparisonRow, EvalReport};
 use presrs_core::split::ValidationSize;
@@ -114,7 +114,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         stderr_line!("warning: {warning}");
     }
     let perturbed = setup.perturbed(&args.perturb, &outcome.report, &progress)?;
-    let faults = fault_results(&perturbed, options.method.is_auto());
+    let faults = perturbation_fault_results(&perturbed, options.method.is_auto());
     write_report(args, (&dataset, &options), &outcome, &faults)?;
     let eval = EvalJson::of(&outcome, &setup.never_trained);
     if args.json && perturbed.is_empty() {
