@@ -2,27 +2,21 @@
 
 pub mod bench;
 pub mod classify;
-pub mod classify_document;
 pub mod convert;
 pub mod dataset;
 pub mod describe;
 pub mod error;
 pub mod eval;
-pub mod eval_tables;
-pub mod feature_table;
+pub mod frame_features;
 pub mod inspect;
 pub mod method;
 pub mod plot;
 pub mod progress;
-pub mod progress_lines;
 pub mod report;
 pub mod reproduce;
-pub mod selection_table;
 pub mod session;
 pub mod sim;
-pub mod stance_options;
 pub mod train;
-pub mod values;
 
 pub use dataset::{Dataset, Sample, SampleKind, SampleOptions};
 pub use describe::describe_model;

@@ -5,11 +5,12 @@ use std::path::PathBuf;
 
 use presrs::classify::bag::ClassifyBag;
 use presrs::classify::{ClassifyOptions, classify_file};
-use presrs::classify_document::{ClassifyJson, FileError};
+use presrs::classify::bag::ClassifyBag;
 use presrs::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
 
 use super::common::{SampleArgs, note_dead_sensels, write_json};
+use crate::printer::classify_document::{ClassifyJson, FileError};
 
 /// Classify frames of recording files: one line per sample (file, frame, label, confidence).
 #[derive(Debug, clap::Args)]

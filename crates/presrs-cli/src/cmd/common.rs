@@ -7,14 +7,14 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use presrs::dataset::{DeadSenselFills, SampleChoice, SampleKind, SampleOptions, read_corrected};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
-use presrs::progress_lines::{ProgressLines, progress_interval};
-use presrs::stance_options::StanceOptions;
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
 use presrs_core::dead_sensels::DeadSenselConfig;
 use presrs_core::preprocess::Preprocess;
-use presrs_core::stance::{BaselineMode, SampleFrame, ValidSegmentParams};
+use presrs_core::stance::{BaselineMode, SampleFrame, SegmentParams, ValidSegmentParams};
 use presrs_io::{ArrayAxes, ReadOptions};
+
+use crate::printer::progress_lines::{ProgressLines, progress_interval};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
 #[derive(Debug, Clone, clap::Args)]
@@ -50,7 +50,7 @@ pub struct PipelineArgs {
     /// Principal components kept, at least 1 (at most the number of training images minus one, and the
     /// number of features: a larger value is lowered to that, with a warning when given) [default: 51];
     /// ridge has no PCA step and ignores it.
-    #[arg(long, value_name = "DIMS", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "DIMS", value_parser = crate::args::values::positive_count)]
     pub dims: Option<usize>,
     /// Divide each cropped image by its total load (sum of its values): features that do not depend on
     /// the robot's load, without knowing it. Stored in the model; off in the paper's method.
@@ -182,22 +182,22 @@ pub struct StanceArgs {
     pub stance_baseline: BaselineMode,
     /// A stance must somewhere exceed this fraction of the load range above the baseline (or floor)
     /// [default: 0.10].
-    #[arg(long, value_name = "FRACTION", value_parser = presrs::values::fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = crate::args::values::fraction)]
     pub stance_threshold: Option<f64>,
     /// Hysteresis: a frame belongs to a stance while its load exceeds this fraction of the load range
     /// above the baseline (or floor), at most --stance-threshold [default: 0.01].
-    #[arg(long, value_name = "FRACTION", value_parser = presrs::values::fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = crate::args::values::fraction)]
     pub stance_hysteresis: Option<f64>,
     /// Shortest stance kept, in frames [default: 3].
-    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "FRAMES", value_parser = crate::args::values::positive_count)]
     pub stance_min_frames: Option<usize>,
     /// Longest stance kept, in frames (default: no limit); with --stance-baseline auto a longer one
     /// is taken for a standing preload and measured from the local floor.
-    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "FRAMES", value_parser = crate::args::values::positive_count)]
     pub stance_max_frames: Option<usize>,
     /// Fewest unloaded frames between two stances: a shorter dropout inside a stance is bridged
     /// [default: 3].
-    #[arg(long, value_name = "FRAMES", value_parser = presrs::values::positive_count)]
+    #[arg(long, value_name = "FRAMES", value_parser = crate::args::values::positive_count)]
     pub stance_min_gap: Option<usize>,
     /// Every movie is one contact (trials cut to one foot contact, loaded from the first frame to the
     /// last): one sample from each, the whole recording being its stance.
@@ -205,7 +205,7 @@ pub struct StanceArgs {
     pub one_sample_per_file: bool,
     /// Frame period in seconds of files whose format states none (.npy, text, PNG); a manifest's
     /// `frame_period_s` column gives it per file.
-    #[arg(long, value_name = "SECONDS", value_parser = presrs::values::period_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = crate::args::values::period_seconds)]
     pub frame_period: Option<f64>,
 }
 
@@ -222,17 +222,25 @@ impl AxesArg {
 }
 
 impl StanceArgs {
-    /// The detector's settings these options give (the defaults for those not given).
+    /// The detector's settings these options give (the defaults for those not given), checked to fit
+    /// together.
     pub fn segment_params(&self) -> anyhow::Result<ValidSegmentParams> {
-        let options = StanceOptions {
+        let default = SegmentParams::default();
+        let params = SegmentParams {
             baseline: self.stance_baseline,
-            threshold: self.stance_threshold,
-            hysteresis: self.stance_hysteresis,
-            min_frames: self.stance_min_frames,
-            max_frames: self.stance_max_frames,
-            min_gap: self.stance_min_gap,
+            on_fraction: self.stance_threshold.unwrap_or(default.on_fraction),
+            off_fraction: self.stance_hysteresis.unwrap_or(default.off_fraction),
+            min_stance_frames: self.stance_min_frames.unwrap_or(default.min_stance_frames),
+            max_stance_frames: self.stance_max_frames,
+            // A gap of N unloaded frames ends a stance: dropouts of up to N - 1 are bridged.
+            max_gap_frames: self
+                .stance_min_gap
+                .map_or(default.max_gap_frames, |gap| gap.saturating_sub(1)),
+            ..default
         };
-        Ok(options.segment_params()?)
+        params
+            .check()
+            .context("the --stance-* options do not fit together")
     }
 }
 

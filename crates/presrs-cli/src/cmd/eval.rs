@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use presrs::eval::document::{CompareJson, EvalJson, PerturbedJson, fault_results};
+use presrs::eval::document::{CompareJson, EvalJson, PerturbedJson, perturbation_fault_results};
 use presrs::eval::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
 use presrs_core::evaluation::{ComparisonRow, EvalReport};
 use presrs_core::split::ValidationSize;
@@ -12,6 +12,7 @@ use presrs_core::split::ValidationSize;
 use super::common::{
     PipelineArgs, SampleArgs, TerminalProgress, load_manifest, print_load_warnings, write_json,
 };
+use crate::printer::eval_tables;
 
 /// Evaluate the pipeline on a manifest: accuracy per condition/group, overall, confusion, timing.
 #[derive(Debug, clap::Args)]
@@ -113,7 +114,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         stderr_line!("warning: {warning}");
     }
     let perturbed = setup.perturbed(&args.perturb, &outcome.report, &progress)?;
-    let faults = fault_results(&perturbed, options.method.is_auto());
+    let faults = perturbation_fault_results(&perturbed, options.method.is_auto());
     write_report(args, (&dataset, &options), &outcome, &faults)?;
     let eval = EvalJson::of(&outcome, &setup.never_trained);
     if args.json && perturbed.is_empty() {
@@ -207,17 +208,13 @@ fn print_choices(
     Ok(write!(
         out,
         "{}",
-        presrs::eval_tables::choices_text(outcome, internal)
+        eval_tables::choices_text(outcome, internal)
     )?)
 }
 
-/// The human-readable tables of an evaluation (`presrs::eval_tables::report_table`).
+/// The human-readable tables of an evaluation (`crate::printer::eval_tables::report_table`).
 pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<()> {
-    Ok(write!(
-        out,
-        "{}",
-        presrs::eval_tables::report_table(report)
-    )?)
+    Ok(write!(out, "{}", eval_tables::report_table(report))?)
 }
 
 /// `--leave-one-out`: any column but `label` (holding out a class leaves none of its samples to train on).
@@ -235,18 +232,10 @@ pub(crate) fn parse_leave_one_out(text: &str) -> Result<String, String> {
 
 /// The comparison table: one row per feature x classifier combination.
 pub fn print_comparison(rows: &[ComparisonRow], out: &mut dyn Write) -> anyhow::Result<()> {
-    Ok(write!(
-        out,
-        "{}",
-        presrs::eval_tables::comparison_table(rows)
-    )?)
+    Ok(write!(out, "{}", eval_tables::comparison_table(rows))?)
 }
 
 /// The accuracy-against-fault table (one column per method).
 fn print_perturbations(rows: &[PerturbationRow], out: &mut dyn Write) -> anyhow::Result<()> {
-    Ok(write!(
-        out,
-        "{}",
-        presrs::eval_tables::perturbation_table(rows)
-    )?)
+    Ok(write!(out, "{}", eval_tables::perturbation_table(rows))?)
 }

@@ -3,10 +3,11 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use presrs::feature_table::{FeatureTable, feature_frames};
+use presrs::frame_features::{FrameFeatures, feature_frames};
 use presrs_core::features::FeatureKind;
 
 use super::common::{CropArg, SampleArgs};
+use crate::printer::feature_csv;
 
 /// Print feature vectors as CSV: a header `frame,` and the features' names, then one row per frame.
 #[derive(Debug, clap::Args)]
@@ -53,21 +54,17 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         samples.stance_frame,
         samples.include_partial,
     )?;
-    let table = FeatureTable::new(recording, &name, args.crop.crop, &args.features)?;
+    let table = FrameFeatures::new(recording, &name, args.crop.crop, &args.features)?;
     let mut header_written = false;
     for index in frames {
         let Some(features) = table.row(index)? else {
             continue;
         };
         if !header_written {
-            writeln!(out, "frame,{}", table.names.join(","))?;
+            writeln!(out, "{}", feature_csv::header(&table.names))?;
             header_written = true;
         }
-        write!(out, "{index}")?;
-        for value in &features {
-            write!(out, ",{value}")?;
-        }
-        writeln!(out)?;
+        writeln!(out, "{}", feature_csv::row(index, &features))?;
     }
     Ok(())
 }

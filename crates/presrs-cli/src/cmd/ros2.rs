@@ -12,6 +12,8 @@ use presrs_ros2::{
 };
 use presrs_stream::StopSignals;
 
+use crate::printer::stream_log::notice_text;
+
 /// Run as a ROS 2 node: pressure frames from a topic in, terrain decisions out (docs/ros2.md).
 ///
 /// Publishes presrs_msgs/TerrainDecision on presrs/decisions, presrs_msgs/StanceEvent on
@@ -62,7 +64,7 @@ pub struct Ros2Args {
     pub profile: Option<PathBuf>,
     /// Recommended gait per terrain, TERRAIN=GAIT, comma separated (added to the profile's table).
     #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
-          value_parser = |t: &str| presrs::values::name_value(t, "TERRAIN=GAIT"))]
+          value_parser = |t: &str| crate::args::values::name_value(t, "TERRAIN=GAIT"))]
     pub gait: Vec<(String, String)>,
     /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at
     /// lift-off], as `presrs stream --decide-at`.
@@ -106,6 +108,7 @@ fn domain_id_arg(text: &str) -> Result<u16, String> {
         .ok_or_else(|| format!("ROS 2 domain ids are 0 to {MAX_DOMAIN_ID}"))
 }
 
+
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = args.node_options(|key| std::env::var(key).ok())?;
     // The model and the profile before the node joins the graph: a bad one announces nothing.
@@ -119,12 +122,7 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     out.flush()?;
     let stop = graph.stop_handle();
     let signal_thread = signals.on_first(move || stop.stop());
-    let log = |notice: &_| {
-        stderr_line!(
-            "presrs ros2: {}",
-            crate::printer::stream_log::notice_text(notice)
-        )
-    };
+    let log = |notice: &_| stderr_line!("presrs ros2: {}", notice_text(notice));
     // A closed stdout does not stop the node: its outputs are the topics.
     let mut print = |line: &str| drop(writeln!(out, "{line}").and_then(|()| out.flush()));
     let summary = run_node(graph, &file.model, &profile, &mut print, &log)?;

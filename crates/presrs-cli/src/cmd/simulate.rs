@@ -9,10 +9,10 @@ use std::path::PathBuf;
 
 use presrs::sim::gait::{TrackOptions, compare_on_track};
 use presrs::sim::{dataset_names, load_config, read_terrain_image, write_dataset};
-use presrs::values::TerrainImage;
 use presrs_sim::{DatasetSpec, SimConfig};
 
 use super::common::TerminalProgress;
+use crate::args::values::TerrainImage;
 
 /// Simulate the one-legged hopper with PreSRS on the paper's terrains and gaits.
 #[derive(Debug, clap::Args)]
@@ -52,12 +52,12 @@ pub struct SimulateArgs {
     /// A terrain given as a greyscale height-map image, NAME=PNG (repeatable), e.g.
     /// --terrain-image photo_grass=grass.png. NAME must differ from the
     /// built-in terrains' names and from the other images'.
-    #[arg(long, value_name = "NAME=PNG", value_parser = presrs::values::terrain_image)]
+    #[arg(long, value_name = "NAME=PNG", value_parser = crate::args::values::terrain_image)]
     pub terrain_image: Vec<TerrainImage>,
     /// Run a track instead of writing a data set: terrain:metres segments in sequence (built-in
     /// terrains), e.g. wood:3,grass:3,clay:3,carpet:3. Each fixed gait runs it (and the adaptive policy
     /// with --adaptive). Not with --terrains or --terrain-image, which choose a data set's terrains.
-    #[arg(long, value_name = "SPEC", value_parser = presrs::values::track,
+    #[arg(long, value_name = "SPEC", value_parser = crate::args::values::track,
           conflicts_with_all = ["terrains", "terrain_image"])]
     pub track: Option<String>,
     /// Model file for the adaptive run: every stance is classified online (the model's online profile)

@@ -20,9 +20,6 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::printer::stream_log::{
-    input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
-};
 use presrs::session::{
     ConnectionNotice, NoObserver, Observers, ProfileOverrides, SessionObserver, resolve_profile,
 };
@@ -33,6 +30,10 @@ use presrs_stream::stoppable_input::StoppableInput;
 use presrs_stream::{
     BagRecorder, BagReport, ConnectionBags, ConnectionOptions, InputFormat, ServerNotice,
     ServerOptions, ShutdownHandle, StopSignals, StreamServer, run_connection_observed,
+};
+
+use crate::printer::stream_log::{
+    input_failure, listening_event, notice_text, server_notice_text, stopped_event, summary_text,
 };
 
 /// Input format on stdin.
@@ -107,7 +108,7 @@ pub struct StreamArgs {
     /// With --format tekscan: the frame period in seconds when the header states no SECONDS_PER_FRAME
     /// (the frames' times, in the JSON lines and a --record bag; else untimed, and a bag takes the
     /// wall clock).
-    #[arg(long, value_name = "SECONDS", value_parser = presrs::values::period_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = crate::args::values::period_seconds)]
     pub frame_period: Option<f64>,
     /// With --format mcap: the topic to read [default: the only topic holding frames].
     #[arg(long, value_name = "NAME")]

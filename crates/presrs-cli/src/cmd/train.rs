@@ -5,11 +5,12 @@ use std::path::PathBuf;
 
 use presrs::train::TrainOptions;
 use presrs::train::profile::{
-    GaitTableSim, ProfileChoice, ProfileRequest, TrainRequest, profile_summary, train_model_file,
+    GaitTableSim, ProfileChoice, ProfileRequest, TrainRequest, train_model_file,
 };
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
+use crate::printer::profile_summary::profile_summary;
 use super::common::{PipelineArgs, SampleArgs, TerminalProgress, print_load_warnings};
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
@@ -124,7 +125,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let model = &training.model;
     if let Some(selection) = model.selection() {
-        for line in presrs::selection_table::selection_lines(selection, model, training.n_train()) {
+        for line in crate::printer::selection_table::selection_lines(selection, model, training.n_train()) {
             writeln!(out, "{line}")?;
         }
     }

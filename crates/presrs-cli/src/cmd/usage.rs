@@ -1,5 +1,5 @@
-//! Bad usage: parsers of option values that can be judged alone ([`presrs::values`]; clap reports their
-//! errors, exit code 2), and [`UsageError`] for what can only be judged with other options or the
+//! Bad usage: parsers of option values that can be judged alone ([`crate::args::values`]; clap reports
+//! their errors, exit code 2), and [`UsageError`] for what can only be judged with other options or the
 //! configuration.
 
 use clap::error::ErrorKind;
@@ -41,6 +41,6 @@ impl UsageError {
     }
 }
 
-pub use presrs::values::{
+pub use crate::args::values::{
     loopback_addr, name_value, positive_count, positive_number, positive_seconds, socket_addr,
 };

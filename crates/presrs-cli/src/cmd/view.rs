@@ -10,9 +10,8 @@ use presrs_io::model_file::load_model;
 use presrs_stream::ShutdownHandle;
 use presrs_stream::live::{LiveInfo, ReplayOptions, replay_period_s, replay_recording};
 
-use crate::printer::stream_log::{notice_text, summary_text};
-
 use super::stream::HttpArgs;
+use crate::printer::stream_log::{notice_text, summary_text};
 
 /// Where `presrs view` serves without `--http`.
 const DEFAULT_ADDR: SocketAddr = SocketAddr::V4(std::net::SocketAddrV4::new(
@@ -51,7 +50,7 @@ pub struct ViewArgs {
     #[arg(long, value_parser = super::usage::positive_number)]
     pub frame_period: Option<f64>,
     /// Wait before the first frame, seconds (time to open the page).
-    #[arg(long, default_value_t = 0.0, value_parser = presrs::values::non_negative_seconds)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::args::values::non_negative_seconds)]
     pub delay: f64,
     /// Keep serving after the last frame until SIGINT or SIGTERM.
     #[arg(long)]

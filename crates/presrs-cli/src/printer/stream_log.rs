@@ -2,6 +2,8 @@
 //! event): a connection's notices, a connection's summary, the server's notices, an error with its causes
 //! in one line.
 
+use presrs::session::{ConnectionNotice, ConnectionSummary};
+use presrs::stream::{ServeSummary, ServerNotice};
 use serde_json::json;
 
 use presrs::session::{ConnectionNotice, ConnectionSummary};
@@ -22,6 +24,7 @@ pub fn notice_text(notice: &ConnectionNotice) -> String {
              (give --calibrate MANIFEST or --profile, or a model with an online profile, to classify from \
              the first frame)"
         ),
+        // A notice newer than this log (the enum is non-exhaustive): said as it is rather than lost.
     }
 }
 
@@ -50,6 +53,7 @@ pub fn server_notice_text(notice: &ServerNotice<'_>) -> String {
         ServerNotice::Connection { peer, notice } => format!("{peer}: {}", notice_text(notice)),
         ServerNotice::Ended { peer, summary } => summary_text(peer, summary),
         ServerNotice::Failed { peer, error } => format!("{peer}: {}", chain_text(*error)),
+        // A notice newer than this log (the enum is non-exhaustive): said as it is rather than lost.
     }
 }
 

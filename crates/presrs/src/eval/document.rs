@@ -311,9 +311,12 @@ pub fn perturbation_pairs(
         .collect()
 }
 
-/// The perturbation rows as the report's fault results: `configured` is the automatic choice with
+/// `eval --perturb`'s rows as the report's fault results: `configured` is the automatic choice with
 /// `auto`, else this pipeline.
-pub fn fault_results(rows: &[PerturbationRow], auto: bool) -> Vec<presrs_report::FaultResult> {
+pub fn perturbation_fault_results(
+    rows: &[PerturbationRow],
+    auto: bool,
+) -> Vec<presrs_report::FaultResult> {
     rows.iter()
         .map(|r| presrs_report::FaultResult {
             perturbation: r.perturbation.parse().ok(),

@@ -810,17 +810,18 @@ pub fn fault_sweep(
         let c = paper.config();
         format!("{} + {}", c.features.name(), c.classifier.kind().as_str())
     };
-    let mut results = fault_results(&paper_name, paper_reports, &sweep);
+    let mut results = sweep_fault_results(&paper_name, paper_reports, &sweep);
     if auto {
-        results.extend(fault_results(AUTO_METHOD, auto_reports, &sweep));
+        results.extend(sweep_fault_results(AUTO_METHOD, auto_reports, &sweep));
     }
     let seconds = started.elapsed().as_secs_f64();
     progress.note(&format!("fault sweep: {seconds:.1} s"));
     Ok((results, fault_sweep_note(options, protocol, seconds)))
 }
 
-/// One result per report of `method`: the first without a perturbation, then one per level of `sweep`.
-fn fault_results(
+/// The fault sweep's results of `method`, one per report: the first without a perturbation, then one
+/// per level of `sweep`.
+fn sweep_fault_results(
     method: &str,
     reports: Vec<EvalReport>,
     sweep: &[presrs_core::perturb::Perturbation],

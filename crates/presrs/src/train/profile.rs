@@ -260,29 +260,6 @@ pub fn gait_table(
     }
 }
 
-/// One line on a model's online profile: its sample frame, calibration and terrain-to-gait table.
-pub fn profile_summary(profile: &OnlineProfile) -> String {
-    let table: Vec<String> = profile
-        .gait_table
-        .iter()
-        .map(|(t, g)| format!("{t}={g}"))
-        .collect();
-    format!(
-        "online profile: sample frame k = {}, {}, gait table {}",
-        profile.params.sample_offset,
-        if profile.calibration.is_some() {
-            "calibrated"
-        } else {
-            "warm-up calibration"
-        },
-        if table.is_empty() {
-            "empty".to_owned()
-        } else {
-            table.join(",")
-        }
-    )
-}
-
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]

@@ -1,8 +1,7 @@
 //! The `presrs classify --json` document: every sample classified, and the files that could not be.
 
+use presrs::classify::Classified;
 use serde::Serialize;
-
-use crate::classify::Classified;
 
 /// A file that could not be classified.
 #[derive(Debug, Serialize)]

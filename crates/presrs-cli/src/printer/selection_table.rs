@@ -2,10 +2,9 @@
 //! one marked), the choice next to the paper's method, the internal estimate, and why the model keeps
 //! fewer principal components than the chosen candidate names, when it does.
 
+use presrs::method::paper_score;
 use presrs_core::TrainedModel;
 use presrs_core::selection::{CandidateScore, Selection};
-
-use crate::method::paper_score;
 
 /// The table's lines, in order. `n_train` is the number of images the model was trained on (without
 /// the validation ones): what bounds its principal components.

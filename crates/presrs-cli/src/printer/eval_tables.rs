@@ -3,11 +3,10 @@
 
 use std::fmt::Write;
 
+use presrs::eval::document::{chosen_counts, protocol_heading, sigmas};
+use presrs::eval::document::{comparison_conditions, perturbation_pairs};
+use presrs::eval::{EvalOutcome, InternalEstimate, PerturbationRow, calibration_line};
 use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
-
-use crate::eval::document::{chosen_counts, protocol_heading, sigmas};
-use crate::eval::document::{comparison_conditions, perturbation_pairs};
-use crate::eval::{EvalOutcome, InternalEstimate, PerturbationRow, calibration_line};
 
 /// The comparison table: one row per feature x classifier combination, one column per tested
 /// condition, then overall accuracy and the training and classification times.
@@ -110,7 +109,7 @@ pub fn perturbation_table(rows: &[PerturbationRow]) -> String {
 /// to the test's accuracy.
 pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) -> String {
     let mut out = String::new();
-    for line in crate::eval::race::race_lines(&outcome.sample_races) {
+    for line in presrs::eval::race::race_lines(&outcome.sample_races) {
         let _ = writeln!(out, "{line}");
     }
     if let Some(first) = outcome.selections.first() {

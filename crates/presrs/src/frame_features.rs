@@ -1,5 +1,5 @@
-//! `presrs features`: which frames of a recording are described, and their feature vectors with the
-//! features' names.
+//! The features of a recording's frames (what `presrs features` prints): which frames are described,
+//! and their feature vectors with the features' names.
 
 use presrs_core::features::{FeatureConfig, FeatureKind};
 use presrs_core::pipeline::extract_features;
@@ -43,9 +43,9 @@ pub fn feature_frames(
     }
 }
 
-/// The features of a recording's frames: the crop and families, and the name of every column.
+/// The features of a recording's frames: the crop and families, and the name of every feature.
 #[derive(Clone, Debug)]
-pub struct FeatureTable<'r> {
+pub struct FrameFeatures<'r> {
     recording: &'r Recording,
     name: String,
     crop: Crop,
@@ -54,8 +54,8 @@ pub struct FeatureTable<'r> {
     pub names: Vec<String>,
 }
 
-impl<'r> FeatureTable<'r> {
-    /// The table of `recording` (`name` in errors) with `crop` and the families `kinds` (joined as
+impl<'r> FrameFeatures<'r> {
+    /// The features of `recording` (`name` in errors) with `crop` and the families `kinds` (joined as
     /// in a model: each part scaled to unit norm).
     pub fn new(
         recording: &'r Recording,
