@@ -108,7 +108,6 @@ fn domain_id_arg(text: &str) -> Result<u16, String> {
         .ok_or_else(|| format!("ROS 2 domain ids are 0 to {MAX_DOMAIN_ID}"))
 }
 
-
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = args.node_options(|key| std::env::var(key).ok())?;
     // The model and the profile before the node joins the graph: a bad one announces nothing.

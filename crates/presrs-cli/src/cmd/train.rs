@@ -10,8 +10,8 @@ use presrs::train::profile::{
 use presrs_core::split::ValidationSize;
 use presrs_io::model_file::save_model;
 
-use crate::printer::profile_summary::profile_summary;
 use super::common::{PipelineArgs, SampleArgs, TerminalProgress, print_load_warnings};
+use crate::printer::profile_summary::profile_summary;
 
 /// Train a classifier from a dataset manifest (CSV: path,label and optionally condition,group,frame,load).
 #[derive(Debug, clap::Args)]
@@ -125,7 +125,9 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     let model = &training.model;
     if let Some(selection) = model.selection() {
-        for line in crate::printer::selection_table::selection_lines(selection, model, training.n_train()) {
+        for line in
+            crate::printer::selection_table::selection_lines(selection, model, training.n_train())
+        {
             writeln!(out, "{line}")?;
         }
     }
