@@ -4,7 +4,6 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::classify::bag::ClassifyBag;
-use presrs::classify::bag::ClassifyBag;
 use presrs::classify::{ClassifyOptions, classify_file};
 use presrs::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;

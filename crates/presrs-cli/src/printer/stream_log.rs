@@ -3,11 +3,8 @@
 //! in one line.
 
 use presrs::session::{ConnectionNotice, ConnectionSummary};
-use presrs::stream::{ServeSummary, ServerNotice};
-use serde_json::json;
-
-use presrs::session::{ConnectionNotice, ConnectionSummary};
 use presrs_stream::{ServeSummary, ServerNotice};
+use serde_json::json;
 
 /// A connection's notice as the log says it.
 pub fn notice_text(notice: &ConnectionNotice) -> String {
