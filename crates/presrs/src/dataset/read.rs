@@ -12,7 +12,7 @@ use presrs_io::message::{Message, Opt};
 use presrs_io::{IoError, Parsed, ReadOptions, read_recording_with};
 use rayon::prelude::*;
 
-use super::SampleOptions;
+use super::options::SampleOptions;
 use crate::error::{Error, Result};
 
 /// Reads a recording and, with `dead_sensels`, fills its dead sensels
