@@ -2,7 +2,7 @@
 //!
 //! A manifest row names a file and, optionally, a frame. A row with a frame gives that frame; a row of a
 //! one-frame file gives its frame; a row of a movie without a frame gives one sample per complete stance
-//! phase (the mid-stance frame by default, see [`SampleFrame`]). Files are read once each, in parallel.
+//! phase (the mid-stance frame by default, see [`SampleFrame`](presrs_core::stance::SampleFrame)). Files are read once each, in parallel.
 //!
 //! Dead sensels (silent in every frame while their neighbours carry load) are found and filled from
 //! their neighbours in every recording of at least three frames before any frame is taken from it

@@ -89,7 +89,7 @@ pub struct MovieLoad {
 }
 
 /// The total load per frame of every movie (a recording of more than one frame) `manifest` lists, each
-/// read once as [`load_samples`] reads it (`options`' reading settings; no sample is taken).
+/// read once as [`load_samples`](super::load_samples) reads it (`options`' reading settings; no sample is taken).
 pub fn read_movie_loads(
     manifest: &Manifest,
     options: &SampleOptions,
