@@ -8,7 +8,6 @@
 //! here because neither ros2-client nor its dependencies define them (`std_msgs/msg/Header`,
 //! `std_msgs/msg/String`, `diagnostic_msgs/msg/KeyValue`, `DiagnosticStatus`, `DiagnosticArray`).
 
-use presrs::core::online::DecisionKind;
 use presrs::session::{Classification, DecisionPoint, SessionEvent};
 use presrs_io::mcap::Stamp;
 pub use ros2_client::builtin_interfaces::Time;
@@ -211,7 +210,7 @@ pub fn decision_message(
             frame_id: frame_id.to_owned(),
         },
         stance: decision.stance,
-        kind: kind_name(decision.kind).to_owned(),
+        kind: decision.kind.name().to_owned(),
         label: decision.label.clone(),
         class_index: u32_of(decision.class),
         class_names: decision.posteriors.names().map(str::to_owned).collect(),
@@ -231,14 +230,6 @@ pub fn decision_message(
         liftoff_stamp: liftoff.map_or(Time::ZERO, |w| stamp_of(stamps, w.decided_at_frame)),
         gait: decision.gait.clone().unwrap_or_default(),
         latency_us: decision.latency_us,
-    }
-}
-
-fn kind_name(kind: DecisionKind) -> &'static str {
-    match kind {
-        DecisionKind::Single => "single",
-        DecisionKind::Fused => "fused",
-        DecisionKind::Stance => "stance",
     }
 }
 
@@ -289,6 +280,7 @@ pub fn stance_message(
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use presrs::core::online::DecisionKind;
     use presrs::session::{Liftoff, Posteriors, Touchdown, WholeStance};
 
     use super::*;

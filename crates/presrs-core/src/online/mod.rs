@@ -126,6 +126,17 @@ pub enum DecisionKind {
     Stance,
 }
 
+impl DecisionKind {
+    /// Its name in the stream protocol and the ROS 2 message (as serde writes it).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Single => "single",
+            Self::Fused => "fused",
+            Self::Stance => "stance",
+        }
+    }
+}
+
 /// What a whole-stance decision waited for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -248,7 +248,7 @@ pub fn step_events(
                     "stance {}: frame {} could not be classified ({} decision): {}",
                     f.stance_id,
                     f.sample_frame,
-                    kind_name(f.kind),
+                    f.kind.name(),
                     step.error(f)
                         .map_or_else(|| "unknown error".to_owned(), ToString::to_string)
                 ),
@@ -308,13 +308,5 @@ fn classification(
             cut: how.cut,
         }),
         label,
-    }
-}
-
-fn kind_name(kind: DecisionKind) -> &'static str {
-    match kind {
-        DecisionKind::Single => "single",
-        DecisionKind::Fused => "fused",
-        DecisionKind::Stance => "stance",
     }
 }
