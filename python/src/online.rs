@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use presrs::core::online::{OnlineClassifier as CoreOnline, OnlineProfile};
+use presrs::core::online::{DecideAt, OnlineClassifier as CoreOnline, OnlineProfile};
 use presrs::io::model_file::ModelFile;
 use presrs::session::{EventTiming, SessionEvent, check_profile, step_events};
 use pyo3::prelude::*;
@@ -49,19 +49,21 @@ impl OnlineClassifier {
     /// A classifier for `model`, with the model file's online profile (calibration, stance detector
     /// settings, sample frame, gait table) when it has one, else warm-up calibration on the first
     /// frames. `gait_table` adds terrain -> gait entries to the profile's. `decide_at`: a whole-stance
-    /// model decides K frames after touchdown, on the stance so far, instead of at lift-off.
+    /// model decides K frames after touchdown, on the stance so far, or (`"auto"`) at its first
+    /// decision point confident enough, instead of at lift-off; only at a moment the model was trained
+    /// for (`presrs train --decide-at`), else a `ValueError` says how to train one.
     #[new]
     #[pyo3(signature = (model, *, gait_table = None, decide_at = None))]
     fn new(
         model: &Bound<'_, Model>,
         gait_table: Option<std::collections::BTreeMap<String, String>>,
-        decide_at: Option<usize>,
+        decide_at: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let file = model.get().file().clone();
         let mut profile = file.online.clone().unwrap_or_default();
         profile.gait_table.extend(gait_table.unwrap_or_default());
-        if decide_at.is_some() {
-            profile.params.decide_at = decide_at;
+        if let Some(decide_at) = decide_at {
+            profile.params.decide_at = Some(decide_at_of(decide_at)?);
         }
         check_profile(&file.model, &profile).py_err()?;
         let online = Online::try_new(Running { file, profile }, |running| {
@@ -157,4 +159,17 @@ fn to_dicts<'py>(py: Python<'py>, events: &[SessionEvent]) -> PyResult<Vec<Bound
         .iter()
         .map(|event| Ok(pythonize::pythonize(py, event)?))
         .collect()
+}
+
+/// `decide_at` from Python: a number of frames after touchdown, or `"auto"`.
+fn decide_at_of(value: &Bound<'_, PyAny>) -> PyResult<DecideAt> {
+    if let Ok(k) = value.extract::<usize>() {
+        return Ok(DecideAt::Frames(k));
+    }
+    match value.extract::<String>() {
+        Ok(text) if text.trim() == "auto" => Ok(DecideAt::AUTO),
+        _ => Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "decide_at: expected a number of frames after touchdown or \"auto\", got {value}"
+        ))),
+    }
 }

@@ -1,7 +1,8 @@
 """`OnlineClassifier` with a whole-stance model (trained with `--sample stance` on the shared `jiku-walk`
 movies, one contact each): one decision a movie, at the stance's lift-off (the end of the movie) and the
-same as `presrs classify`'s, or `decide_at` frames after touchdown; `decide_at` refused with a one-frame
-model, in Python's words."""
+same as `presrs classify`'s, or `decide_at` frames after touchdown (a point the model was trained for),
+or at its first confident point (`"auto"`); `decide_at` refused with a one-frame model, and at a moment
+the model was not trained for, in Python's words."""
 
 import json
 
@@ -22,6 +23,18 @@ pytestmark = pytest.mark.skipif(
 @pytest.fixture(scope="module")
 def stance_model(cli, tmp_path_factory):
     path = tmp_path_factory.mktemp("stance") / "stance.json"
+    cli(
+        "train", "--manifest", JIKU / "manifest.csv", "--out", path,
+        "--sample", "stance", "--one-sample-per-file", "--features", "rocket",
+        "--classifier", "lda", "--dims", "20", "--seed", "1", "--online-profile",
+        "--decide-at", "5,10,whole",
+    )
+    return path
+
+
+@pytest.fixture(scope="module")
+def whole_only_model(cli, tmp_path_factory):
+    path = tmp_path_factory.mktemp("whole") / "whole.json"
     cli(
         "train", "--manifest", JIKU / "manifest.csv", "--out", path,
         "--sample", "stance", "--one-sample-per-file", "--features", "rocket",
@@ -81,6 +94,37 @@ def test_decide_at_decides_as_frame_k_arrives(stance_model):
     assert decision["decided_at_frame"] == 10
     assert decision["frame"] == 10
     assert decision["frames_used"] == 11
+    assert (decision["early_rule"], decision["early_reason"]) == ("fixed", "fixed")
+    assert decision["early_point"] == 10
+
+
+def test_auto_decides_at_a_trained_point_or_the_liftoff(stance_model):
+    model = presrs.Model.load(stance_model)
+    recording, events = stream(model, MOVIES[0], decide_at="auto")
+    (decision,) = decisions(events)
+    assert decision["early_rule"] == "auto"
+    assert decision["early_threshold"] is not None
+    if decision["early_reason"] == "confident":
+        assert decision["early_point"] in (5, 10)
+        assert decision["frame"] == decision["early_point"]
+        assert decision["confidence"] >= decision["early_threshold"]
+    else:
+        assert decision["early_reason"] == "not_confident"
+        assert decision["decided_at"] == "liftoff"
+
+
+@pytest.mark.parametrize("decide_at", [7, "auto"])
+def test_a_moment_the_model_was_not_trained_for_is_refused_in_python_words(
+    stance_model, whole_only_model, decide_at
+):
+    for path in [whole_only_model] + ([stance_model] if decide_at == 7 else []):
+        with pytest.raises(ValueError) as info:
+            presrs.OnlineClassifier(presrs.Model.load(path), decide_at=decide_at)
+        message = str(info.value)
+        assert "not trained to decide at" in message
+        assert 'sample="stance"' in message
+        assert f"decide_at={decide_at!r}".replace("'", '"') in message
+        assert "--" not in message
 
 
 def test_decide_at_with_a_one_frame_model_is_refused_in_python_words(paper_model):

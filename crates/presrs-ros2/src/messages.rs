@@ -138,6 +138,15 @@ pub struct TerrainDecision {
     pub liftoff_stamp: Time,
     pub gait: String,
     pub latency_us: f64,
+    /// Early decisions (`--decide-at K` or `auto`): the rule, `fixed` or `auto` (empty without
+    /// `--decide-at`); why then (`fixed`, `confident`, `not_confident`, `ended_first`); the decision
+    /// point whose classifier decided (-1: the whole-stance classifier); the frames after touchdown
+    /// at which it decided; `auto`'s threshold (0 otherwise).
+    pub early_rule: String,
+    pub early_reason: String,
+    pub early_point: i64,
+    pub early_frames: u64,
+    pub early_threshold: f64,
 }
 
 impl TerrainDecision {
@@ -201,6 +210,7 @@ pub fn decision_message(
     frame_id: &str,
 ) -> TerrainDecision {
     let whole = decision.whole_stance;
+    let early = decision.early;
     let decided_at_frame = whole.map_or(0, |w| w.decided_at_frame);
     // A decision taken at lift-off waited for the lift-off frame; any other came before it.
     let liftoff = whole.filter(|w| w.decided_at == DecisionPoint::Liftoff);
@@ -230,6 +240,13 @@ pub fn decision_message(
         liftoff_stamp: liftoff.map_or(Time::ZERO, |w| stamp_of(stamps, w.decided_at_frame)),
         gait: decision.gait.clone().unwrap_or_default(),
         latency_us: decision.latency_us,
+        early_rule: early.map_or(String::new(), |e| e.early_rule.name().to_owned()),
+        early_reason: early.map_or(String::new(), |e| e.early_reason.name().to_owned()),
+        early_point: early
+            .and_then(|e| e.early_point)
+            .map_or(-1, |k| i64::try_from(k).unwrap_or(i64::MAX)),
+        early_frames: early.map_or(0, |e| e.early_frames),
+        early_threshold: early.and_then(|e| e.early_threshold).unwrap_or(0.0),
     }
 }
 
@@ -315,6 +332,7 @@ mod tests {
             timestamp_us: Some(2_600_000),
             gait: Some("walk".to_owned()),
             whole_stance,
+            early: None,
         }
     }
 

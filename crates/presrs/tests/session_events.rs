@@ -3,10 +3,10 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use presrs::core::online::DecisionKind;
+use presrs::core::online::{DecisionKind, EarlyReason};
 use presrs::session::{
-    Classification, DecisionPoint, End, ErrorEvent, Liftoff, Posteriors, SessionEvent, Touchdown,
-    WholeStance,
+    Classification, DecisionPoint, EarlyDecisionEvent, EarlyRule, End, ErrorEvent, Liftoff,
+    Posteriors, SessionEvent, Touchdown, WholeStance,
 };
 
 fn decision(whole_stance: Option<WholeStance>) -> Classification {
@@ -29,6 +29,7 @@ fn decision(whole_stance: Option<WholeStance>) -> Classification {
         timestamp_us: None,
         gait: Some("G1".to_owned()),
         whole_stance,
+        early: None,
     }
 }
 
@@ -55,6 +56,40 @@ fn golden() -> Vec<(SessionEvent, &'static str)> {
                 cut: false,
             }))),
             r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"offset","decided_at_frame":32,"cut":false}"#,
+        ),
+        (
+            SessionEvent::Classification(Classification {
+                early: Some(EarlyDecisionEvent {
+                    early_rule: EarlyRule::Auto,
+                    early_reason: EarlyReason::Confident,
+                    early_point: Some(12),
+                    early_frames: 12,
+                    early_threshold: Some(0.875),
+                }),
+                ..decision(Some(WholeStance {
+                    decided_at: DecisionPoint::Offset,
+                    decided_at_frame: 32,
+                    cut: false,
+                }))
+            }),
+            r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"offset","decided_at_frame":32,"cut":false,"early_rule":"auto","early_reason":"confident","early_point":12,"early_frames":12,"early_threshold":0.875}"#,
+        ),
+        (
+            SessionEvent::Classification(Classification {
+                early: Some(EarlyDecisionEvent {
+                    early_rule: EarlyRule::Fixed,
+                    early_reason: EarlyReason::EndedFirst,
+                    early_point: None,
+                    early_frames: 9,
+                    early_threshold: None,
+                }),
+                ..decision(Some(WholeStance {
+                    decided_at: DecisionPoint::Liftoff,
+                    decided_at_frame: 29,
+                    cut: false,
+                }))
+            }),
+            r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"liftoff","decided_at_frame":29,"cut":false,"early_rule":"fixed","early_reason":"ended_first","early_point":null,"early_frames":9,"early_threshold":null}"#,
         ),
         (
             SessionEvent::Liftoff(Liftoff {

@@ -289,6 +289,7 @@ impl SampleArgs {
             segment: self.stance.segment_params()?,
             one_sample_per_file: self.stance.one_sample_per_file,
             frame_period_s: self.stance.frame_period,
+            decision_points: Vec::new(),
         })
     }
 

@@ -77,6 +77,13 @@ pub struct EvalArgs {
     /// evaluated on the same images with the same draws (bench/real/ does).
     #[arg(long, value_name = "DIR")]
     pub export_draws: Option<PathBuf>,
+    /// With --sample stance: evaluate early decisions at these frames after touchdown
+    /// (`8,16,32,whole`, or `auto`: 10-50 % of the median stance), each fold training a classifier
+    /// per point and `auto`'s threshold, beside the one-frame model at the same offsets: accuracy
+    /// against decision time, and `auto`'s accuracy and mean decision time.
+    #[arg(long, value_name = "K,...,whole|auto",
+          value_parser = |t: &str| t.parse::<presrs::train::early::DecisionPoints>())]
+    pub decide_at: Option<presrs::train::early::DecisionPoints>,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -86,6 +93,9 @@ pub struct EvalArgs {
 pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     for dir in [&args.report, &args.export_draws].into_iter().flatten() {
         presrs_io::output_path::check_output_dir(dir)?;
+    }
+    if let Some(points) = &args.decide_at {
+        return run_early(args, points, out);
     }
     if args.samples.choice()?.is_auto() {
         return run_racing(args, out);
@@ -133,6 +143,39 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     print_report(&outcome.report, out)?;
     print_perturbations(&perturbed, out)?;
     print_choices(&outcome, &eval, out)
+}
+
+/// `--decide-at`: early decisions on the protocol's draws (`presrs::eval::early`).
+fn run_early(
+    args: &EvalArgs,
+    points: &presrs::train::early::DecisionPoints,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    let progress = TerminalProgress::default();
+    let options = args.samples.options()?;
+    let dataset = presrs::train::profile::load_with_points(
+        &args.manifest,
+        options.clone(),
+        points,
+        &progress,
+    )?;
+    print_load_warnings(&dataset);
+    let eval_options = eval_options(args, &dataset);
+    let setup = EvalSetup::new(&dataset, &eval_options)?;
+    for warning in &setup.warnings {
+        stderr_line!("warning: {warning}");
+    }
+    let frames =
+        presrs::eval::early::FrameReadings::load(&args.manifest, &options, &dataset, &progress)?;
+    let early = presrs::eval::early::evaluate_early(&setup, Some(&frames), &progress)?;
+    if args.json {
+        return write_json(out, &early);
+    }
+    Ok(write!(
+        out,
+        "{}",
+        crate::printer::early_table::early_table(&early)
+    )?)
 }
 
 /// `--sample auto`: the sample kinds raced inside every fold (`presrs::eval::race`).

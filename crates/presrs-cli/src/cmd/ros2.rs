@@ -1,6 +1,7 @@
 //! `presrs ros2`: the ROS 2 node ([`presrs_ros2`]): its command line, the call, and what goes to stdout
 //! (the `joined` line, the JSON events) and stderr (notices, the summary).
 
+use presrs_core::online::DecideAt;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -66,10 +67,10 @@ pub struct Ros2Args {
     #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
           value_parser = |t: &str| crate::args::values::name_value(t, "TERRAIN=GAIT"))]
     pub gait: Vec<(String, String)>,
-    /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at
-    /// lift-off], as `presrs stream --decide-at`.
-    #[arg(long, value_name = "K")]
-    pub decide_at: Option<usize>,
+    /// A whole-stance model decides K frames after touchdown, on the stance so far, or at its first
+    /// confident decision point (`auto`) [default: at lift-off], as `presrs stream --decide-at`.
+    #[arg(long, value_name = "K|auto")]
+    pub decide_at: Option<DecideAt>,
 }
 
 impl Ros2Args {

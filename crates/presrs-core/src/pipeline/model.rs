@@ -9,6 +9,7 @@ use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
 use crate::frame::Grid;
 use crate::pipeline::config::TrainConfig;
+use crate::pipeline::early::EarlyDecisions;
 use crate::preprocess::Preprocess;
 use crate::projection::pca::Pca;
 use crate::sample::SampleKind;
@@ -62,6 +63,10 @@ pub(crate) struct ModelFields {
     /// What a sample is, when not one frame (absent from files of one-frame models).
     #[serde(default, skip_serializing_if = "SampleKind::is_frame")]
     pub(crate) sample: SampleKind,
+    /// A whole-stance model's classifiers for decision points before lift-off (absent from files
+    /// written before them, and from models trained for the whole stance only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) early: Option<Box<EarlyDecisions>>,
 }
 
 pub(crate) const FORMAT_VERSION: u32 = 1;
@@ -146,7 +151,11 @@ impl TryFrom<ModelFields> for TrainedModel {
             )));
         }
         check_sample(&fields.sample, fields.image_grid)?;
-        Ok(Self { fields, extractor })
+        let model = Self { fields, extractor };
+        if let Some(early) = &model.fields.early {
+            early.check(&model)?;
+        }
+        Ok(model)
     }
 }
 
@@ -290,6 +299,66 @@ impl TrainedModel {
     /// the model was trained by [`crate::selection::train_auto`].
     pub fn selection(&self) -> Option<&Selection> {
         self.fields.selection.as_ref()
+    }
+
+    /// The classifiers for decision points before lift-off, when trained for them.
+    pub fn early(&self) -> Option<&EarlyDecisions> {
+        self.fields.early.as_deref()
+    }
+
+    /// This whole-stance model with classifiers for decision points before lift-off (checked against
+    /// it: see [`EarlyDecisions`]).
+    pub fn with_early(mut self, early: EarlyDecisions) -> Result<Self> {
+        if !matches!(self.fields.sample, SampleKind::Stance { .. }) {
+            return Err(CoreError::Param {
+                name: "early decisions",
+                reason: "decision points before lift-off are for whole-stance models".into(),
+            });
+        }
+        early.check(&self)?;
+        self.fields.early = Some(Box::new(early));
+        Ok(self)
+    }
+
+    /// Whether this model was trained to decide at `decide_at` (see
+    /// [`crate::online::DecideAt`]): `K` frames after touchdown is one of its decision points, or (a
+    /// whole-stance model) at least its length less one (its whole sample); `auto` needs decision
+    /// points and their threshold. `Err` says what it was trained for, in words.
+    pub fn trained_for(
+        &self,
+        decide_at: crate::online::DecideAt,
+    ) -> std::result::Result<(), String> {
+        use crate::online::DecideAt;
+        let SampleKind::Stance { .. } = self.fields.sample else {
+            return Err("one frame of each stance, chosen by the sample offset".into());
+        };
+        let length = self.fields.image_grid.cols;
+        let points = self.early().map(EarlyDecisions::frames).unwrap_or_default();
+        let fits = match decide_at {
+            DecideAt::Frames(k) => k + 1 >= length || points.contains(&k),
+            DecideAt::Auto(_) => self
+                .early()
+                .is_some_and(|e| e.auto.is_some() && !e.points.is_empty()),
+        };
+        if fits {
+            return Ok(());
+        }
+        let list: Vec<String> = points.iter().map(ToString::to_string).collect();
+        let auto = self
+            .early()
+            .is_some_and(|e| e.auto.is_some() && !e.points.is_empty());
+        let whole = format!(
+            "the whole stance (at lift-off, or {} frames after touchdown and later)",
+            length - 1
+        );
+        Err(match (list.is_empty(), auto) {
+            (true, _) => format!("{whole} only"),
+            (false, false) => format!("{} frames after touchdown and {whole}", list.join(", ")),
+            (false, true) => format!(
+                "{} frames after touchdown (and auto among them) and {whole}",
+                list.join(", ")
+            ),
+        })
     }
 
     /// This model with `selection` recorded.

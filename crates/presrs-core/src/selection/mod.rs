@@ -28,7 +28,7 @@
 //! are not scored on the others ([`CandidateScore::dropped_early`]; never chosen), and the rest finish,
 //! the most promising groups first, so that a budget cuts the least promising.
 
-mod folds;
+pub(crate) mod folds;
 pub(crate) mod record;
 mod scoring;
 #[cfg(test)]

@@ -44,6 +44,22 @@ pub struct LoadedSamples {
     pub dead_sensels: DeadSenselFills,
     /// Every movie read, by file and topic: what an online profile is learned from.
     pub movie_loads: Vec<MovieLoad>,
+    /// Whole-stance samples: each stance's length, and the stance cut at each decision point asked.
+    pub stances: StanceCuts,
+}
+
+/// What whole-stance samples need for early decisions, in the samples' order: each stance's length, and
+/// each stance cut at every decision point of [`SampleOptions::decision_points`] (its first `K + 1`
+/// frames summarised, laid into `K + 1` frames: a stance that ends first is padded with zeros). Empty
+/// for other kinds.
+#[derive(Clone, Debug, Default)]
+pub struct StanceCuts {
+    /// Each sample's stance length, frames.
+    pub stance_frames: Vec<usize>,
+    /// Each sample's frame period, seconds, when its recording states one.
+    pub frame_periods: Vec<Option<f64>>,
+    /// Per decision point (frames after touchdown, increasing), each sample's stance cut there.
+    pub points: Vec<(usize, Vec<presrs_core::Frame>)>,
 }
 
 /// A data set: a manifest and the samples its files give, stance sampling and dead-sensel correction
@@ -63,6 +79,8 @@ pub struct Dataset {
     /// The total load per frame of every movie read (none for samples made in memory), as read for
     /// the samples: the online profile is learned from them, not from a second reading.
     pub movie_loads: Vec<MovieLoad>,
+    /// Whole-stance samples: each stance's length and its cuts at the decision points asked.
+    pub stances: StanceCuts,
 }
 
 impl Dataset {
@@ -102,6 +120,7 @@ impl Dataset {
             dead_sensels: loaded.dead_sensels,
             sample: options.kind,
             movie_loads: loaded.movie_loads,
+            stances: loaded.stances,
         })
     }
 
@@ -150,6 +169,7 @@ impl Dataset {
             dead_sensels: DeadSenselFills::default(),
             sample: SampleKind::Frame,
             movie_loads: Vec::new(),
+            stances: StanceCuts::default(),
         })
     }
 
@@ -353,6 +373,15 @@ pub fn load_samples(
                 .kind
                 .sample_of(&frames, None)
                 .map_err(|err| manifest.row_error(row, format!("`{}`: {err}", row.path_text)))?;
+            if let SampleKind::Stance { .. } = options.kind {
+                loaded
+                    .stances
+                    .frame_periods
+                    .push(recording.frame_period_s());
+                cut_stance(&mut loaded.stances, &frames, options).map_err(|err| {
+                    manifest.row_error(row, format!("`{}`: {err}", row.path_text))
+                })?;
+            }
             loaded.samples.push(Sample {
                 frame,
                 label: row.label.clone(),
@@ -370,11 +399,39 @@ pub fn load_samples(
         loaded
             .warnings
             .extend(pad_stance_samples(&mut loaded.samples, length)?);
+        // A point's samples are its own length, K + 1 frames: no padding after the frames it sees.
+        for (k, cuts) in &mut loaded.stances.points {
+            for cut in cuts.iter_mut() {
+                *cut = pad_to(&cut.view(), *k + 1)
+                    .map_err(|err| IoError::format("stance samples", err.to_string()))?
+                    .0;
+            }
+        }
     }
     loaded
         .warnings
         .extend(empty.summary(manifest.rows.len(), options));
     Ok(loaded)
+}
+
+/// Records a whole stance's length and its summaries cut at the decision points of `options`.
+fn cut_stance(
+    cuts: &mut StanceCuts,
+    frames: &[FrameView<'_>],
+    options: &SampleOptions,
+) -> presrs_core::error::Result<()> {
+    cuts.stance_frames.push(frames.len());
+    if cuts.points.is_empty() {
+        let mut points = options.decision_points.clone();
+        points.sort_unstable();
+        points.dedup();
+        cuts.points = points.into_iter().map(|k| (k, Vec::new())).collect();
+    }
+    for (k, samples) in &mut cuts.points {
+        let used = frames.len().min(*k + 1);
+        samples.push(options.kind.sample_of(&frames[..used], None)?.0);
+    }
+    Ok(())
 }
 
 /// What one manifest row gives, as the frames each sample is made of, with the 0-based frame it
