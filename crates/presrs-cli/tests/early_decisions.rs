@@ -86,7 +86,15 @@ fn a_moment_the_model_was_not_trained_for_is_refused_by_every_command_line_face(
             decide_at,
         );
         assert_refused(
-            &["ros2", "--model", model, "--decide-at", decide_at],
+            &[
+                "ros2",
+                "--model",
+                model,
+                "--input",
+                "/foot/pressure",
+                "--decide-at",
+                decide_at,
+            ],
             decide_at,
         );
         assert_refused(
@@ -102,7 +110,8 @@ fn a_moment_the_model_was_not_trained_for_is_refused_by_every_command_line_face(
             decide_at,
         );
     }
-    // What the model was trained for starts (stdin closed at once: no frame, a clean end).
+    // What the model was trained for starts (stdin closed at once: the stream reads, finds no frame,
+    // and ends with its summary line).
     for decide_at in ["8", "auto"] {
         let output = presrs(&[
             "stream",
@@ -111,6 +120,8 @@ fn a_moment_the_model_was_not_trained_for_is_refused_by_every_command_line_face(
             "--decide-at",
             decide_at,
         ]);
-        assert!(output.status.success(), "{decide_at}: {}", stderr(&output));
+        let err = stderr(&output);
+        assert!(!err.contains("not trained"), "{decide_at}: {err}");
+        assert!(err.contains("0 frames, 0 stances"), "{decide_at}: {err}");
     }
 }

@@ -119,14 +119,17 @@ impl OnlineClassifier<'_> {
             let k = *k;
             whole.next_point += 1;
             let posteriors = &mut self.posteriors;
-            let outcome = whole.buffer.sample_in(start, k + 1, k + 1).and_then(|view| {
-                session.classify(&view).map(|p| {
-                    if p.confidence >= threshold {
-                        posteriors.extend_from_slice(p.posteriors);
-                    }
-                    (p.class, p.confidence)
-                })
-            });
+            let outcome = whole
+                .buffer
+                .sample_in(start, k + 1, k + 1)
+                .and_then(|view| {
+                    session.classify(&view).map(|p| {
+                        if p.confidence >= threshold {
+                            posteriors.extend_from_slice(p.posteriors);
+                        }
+                        (p.class, p.confidence)
+                    })
+                });
             let how = StanceDecision {
                 decided_at: DecidedAt::Offset(k),
                 waited_for: start + k,

@@ -854,12 +854,15 @@ impl<'m> OnlineClassifier<'m> {
             Some((_, session)) => session,
             None => &mut self.session,
         };
-        let outcome = whole.buffer.sample_in(start, frames, length).and_then(|view| {
-            session.classify(&view).map(|prediction| {
-                self.posteriors.extend_from_slice(prediction.posteriors);
-                (prediction.class, prediction.confidence)
-            })
-        });
+        let outcome = whole
+            .buffer
+            .sample_in(start, frames, length)
+            .and_then(|view| {
+                session.classify(&view).map(|prediction| {
+                    self.posteriors.extend_from_slice(prediction.posteriors);
+                    (prediction.class, prediction.confidence)
+                })
+            });
         self.push_whole_decision(stance_id, start, frames, how, t, outcome);
     }
 

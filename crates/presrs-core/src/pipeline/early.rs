@@ -22,9 +22,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result};
 use crate::frame::Grid;
 use crate::pipeline::extract::LabeledImage;
-use crate::sample::SampleKind;
 use crate::pipeline::model::TrainedModel;
 use crate::pipeline::train::train;
+use crate::sample::SampleKind;
 use crate::selection::ValidateBy;
 use crate::selection::folds::make_folds;
 
