@@ -17,121 +17,15 @@
 //! accuracy of `auto`'s decisions over those stances is at most [`AUTO_TOLERANCE`] below the
 //! whole-stance classifier's accuracy on the same stances.
 
-use serde::{Deserialize, Serialize};
-
 use crate::error::{CoreError, Result};
-use crate::frame::Grid;
 use crate::pipeline::extract::LabeledImage;
-use crate::pipeline::model::TrainedModel;
+use crate::pipeline::model::{AutoThreshold, DecisionPoint, EarlyDecisions, TrainedModel};
 use crate::pipeline::train::train;
-use crate::sample::SampleKind;
 use crate::selection::ValidateBy;
 use crate::selection::folds::make_folds;
 
 /// How far below the whole-stance classifier's validation accuracy `auto`'s may fall (one point).
 pub const AUTO_TOLERANCE: f64 = 0.01;
-
-/// One decision point: `frames` after touchdown, with the model trained on stances cut there (samples of
-/// `frames + 1` frames).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DecisionPoint {
-    /// `K`: the stance's first `K + 1` frames.
-    pub frames: usize,
-    pub model: TrainedModel,
-}
-
-/// The threshold `auto` decides with, and what validation measured with it.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AutoThreshold {
-    /// A point decides when its confidence is at least this (above 1: never, lift-off decides).
-    pub threshold: f64,
-    /// Validation accuracy of the whole-stance classifier, and of `auto` with this threshold.
-    pub whole_accuracy: f64,
-    pub auto_accuracy: f64,
-    /// Mean frame after touchdown at which `auto` decided in validation, and as a share of each
-    /// stance's length (a lift-off decision counts as the whole length).
-    pub mean_decision_frame: f64,
-    pub mean_decision_share: f64,
-    /// Held-out stances the threshold was learned on.
-    pub validation_stances: usize,
-}
-
-/// A whole-stance model's classifiers for decision points before lift-off.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EarlyDecisions {
-    /// In increasing `frames`, each before the model's length.
-    pub points: Vec<DecisionPoint>,
-    /// What `auto` decides with (absent: `auto` is refused).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub auto: Option<AutoThreshold>,
-}
-
-impl EarlyDecisions {
-    /// The points' frames after touchdown, increasing.
-    pub fn frames(&self) -> Vec<usize> {
-        self.points.iter().map(|point| point.frames).collect()
-    }
-
-    /// The model of point `frames`.
-    pub fn point(&self, frames: usize) -> Option<&TrainedModel> {
-        self.points
-            .iter()
-            .find(|point| point.frames == frames)
-            .map(|point| &point.model)
-    }
-
-    /// Checks the points against their whole-stance `model`: increasing, before its length, stance
-    /// models of its sample and classes, with no points of their own; a threshold that is a number.
-    pub(crate) fn check(&self, model: &TrainedModel) -> Result<()> {
-        let bad = |reason: String| CoreError::Param {
-            name: "early decisions",
-            reason,
-        };
-        let length = model.image_grid().cols;
-        let mut last = None;
-        for point in &self.points {
-            if last.is_some_and(|last| point.frames <= last) || point.frames + 1 >= length {
-                return Err(bad(format!(
-                    "decision points must increase and come before the model's length ({length} \
-                     frames); got {:?}",
-                    self.frames()
-                )));
-            }
-            last = Some(point.frames);
-            let sub = &point.model;
-            let own = match model.sample() {
-                SampleKind::Stance { summary, .. } => SampleKind::Stance {
-                    summary,
-                    length: Some(point.frames + 1),
-                },
-                other => other,
-            };
-            if sub.sample() != own
-                || sub.class_names() != model.class_names()
-                || sub.image_grid() != Grid::new(model.image_grid().rows, point.frames + 1)
-                || sub.early().is_some()
-            {
-                return Err(bad(format!(
-                    "the model of point {} does not take the whole-stance model's samples and \
-                     classes",
-                    point.frames
-                )));
-            }
-        }
-        if let Some(auto) = &self.auto
-            && (!auto.threshold.is_finite() || auto.threshold < 0.0)
-        {
-            return Err(bad(format!(
-                "threshold {} is not a confidence",
-                auto.threshold
-            )));
-        }
-        Ok(())
-    }
-}
 
 /// Stances as images for early decisions: each whole (laid into the model's length), each cut at every
 /// point `K` (laid into `K + 1` frames), and each stance's length; all in the same order.

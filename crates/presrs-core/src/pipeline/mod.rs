@@ -22,12 +22,14 @@ pub(crate) mod train;
 
 pub use config::{CheckedTrainConfig, TrainConfig};
 pub use early::{
-    AUTO_TOLERANCE, AutoThreshold, DecisionPoint, EarlyDecisions, HeldOutStance, OfflineDecision,
-    StanceImages, classify_held_out, classify_stances, held_out_stances, learn_threshold,
-    train_early, train_like,
+    AUTO_TOLERANCE, HeldOutStance, OfflineDecision, StanceImages, classify_held_out,
+    classify_stances, held_out_stances, learn_threshold, train_early, train_like,
 };
 pub use extract::{LabeledImage, extract_features, extract_features_many, extract_features_with};
-pub use model::{MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN, TrainedModel, TrainingSummary};
+pub use model::{
+    AutoThreshold, DecisionPoint, EarlyDecisions, MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN,
+    TrainedModel, TrainingSummary,
+};
 pub use session::{BATCH_BLOCK, Classification, Prediction, Session};
 pub use train::train;
 

@@ -9,7 +9,6 @@ use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
 use crate::frame::Grid;
 use crate::pipeline::config::TrainConfig;
-use crate::pipeline::early::EarlyDecisions;
 use crate::preprocess::Preprocess;
 use crate::projection::pca::Pca;
 use crate::sample::SampleKind;
@@ -70,6 +69,111 @@ pub(crate) struct ModelFields {
 }
 
 pub(crate) const FORMAT_VERSION: u32 = 1;
+
+// The early decisions a model stores (trained by `crate::pipeline::early`), here beside the model they
+// hold and are held by.
+
+/// One decision point: `frames` after touchdown, with the model trained on stances cut there (samples of
+/// `frames + 1` frames).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DecisionPoint {
+    /// `K`: the stance's first `K + 1` frames.
+    pub frames: usize,
+    pub model: TrainedModel,
+}
+
+/// The threshold `auto` decides with, and what validation measured with it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AutoThreshold {
+    /// A point decides when its confidence is at least this (above 1: never, lift-off decides).
+    pub threshold: f64,
+    /// Validation accuracy of the whole-stance classifier, and of `auto` with this threshold.
+    pub whole_accuracy: f64,
+    pub auto_accuracy: f64,
+    /// Mean frame after touchdown at which `auto` decided in validation, and as a share of each
+    /// stance's length (a lift-off decision counts as the whole length).
+    pub mean_decision_frame: f64,
+    pub mean_decision_share: f64,
+    /// Held-out stances the threshold was learned on.
+    pub validation_stances: usize,
+}
+
+/// A whole-stance model's classifiers for decision points before lift-off.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EarlyDecisions {
+    /// In increasing `frames`, each before the model's length.
+    pub points: Vec<DecisionPoint>,
+    /// What `auto` decides with (absent: `auto` is refused).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub auto: Option<AutoThreshold>,
+}
+
+impl EarlyDecisions {
+    /// The points' frames after touchdown, increasing.
+    pub fn frames(&self) -> Vec<usize> {
+        self.points.iter().map(|point| point.frames).collect()
+    }
+
+    /// The model of point `frames`.
+    pub fn point(&self, frames: usize) -> Option<&TrainedModel> {
+        self.points
+            .iter()
+            .find(|point| point.frames == frames)
+            .map(|point| &point.model)
+    }
+
+    /// Checks the points against their whole-stance `model`: increasing, before its length, stance
+    /// models of its sample and classes, with no points of their own; a threshold that is a number.
+    pub(crate) fn check(&self, model: &TrainedModel) -> Result<()> {
+        let bad = |reason: String| CoreError::Param {
+            name: "early decisions",
+            reason,
+        };
+        let length = model.image_grid().cols;
+        let mut last = None;
+        for point in &self.points {
+            if last.is_some_and(|last| point.frames <= last) || point.frames + 1 >= length {
+                return Err(bad(format!(
+                    "decision points must increase and come before the model's length ({length} \
+                     frames); got {:?}",
+                    self.frames()
+                )));
+            }
+            last = Some(point.frames);
+            let sub = &point.model;
+            let own = match model.sample() {
+                SampleKind::Stance { summary, .. } => SampleKind::Stance {
+                    summary,
+                    length: Some(point.frames + 1),
+                },
+                other => other,
+            };
+            if sub.sample() != own
+                || sub.class_names() != model.class_names()
+                || sub.image_grid() != Grid::new(model.image_grid().rows, point.frames + 1)
+                || sub.early().is_some()
+            {
+                return Err(bad(format!(
+                    "the model of point {} does not take the whole-stance model's samples and \
+                     classes",
+                    point.frames
+                )));
+            }
+        }
+        if let Some(auto) = &self.auto
+            && (!auto.threshold.is_finite() || auto.threshold < 0.0)
+        {
+            return Err(bad(format!(
+                "threshold {} is not a confidence",
+                auto.threshold
+            )));
+        }
+        Ok(())
+    }
+}
 
 /// The largest image a model takes once cropped, in sensels (`image_grid` rows x cols): the streaming
 /// readers' limit, far above any pressure sensor (the paper's array has 44 x 44). Training on larger
