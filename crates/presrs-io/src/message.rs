@@ -76,6 +76,16 @@ pub enum Opt {
     Sample,
     /// When a whole-stance model decides online: K frames after touchdown.
     DecideAt,
+    /// Frames each whole-stance sample is laid into.
+    StanceLength,
+    /// The axis that is time in a series sample.
+    SeriesAxis,
+    /// Which frame of each stance a one-frame sample is.
+    StanceFrame,
+    /// The frame a one-frame model classifies online: K frames after touchdown.
+    SampleOffset,
+    /// The frame offsets whose posteriors a one-frame model fuses online.
+    Fuse,
 }
 
 /// What Python calls an option.
@@ -89,7 +99,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 26] = [
+    pub const ALL: [Opt; 31] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -116,6 +126,11 @@ impl Opt {
         Opt::TrainCondition,
         Opt::Sample,
         Opt::DecideAt,
+        Opt::StanceLength,
+        Opt::SeriesAxis,
+        Opt::StanceFrame,
+        Opt::SampleOffset,
+        Opt::Fuse,
     ];
 
     /// The command line's flag, e.g. `--per-class`.
@@ -147,6 +162,11 @@ impl Opt {
             Self::TrainCondition => "--train-condition",
             Self::Sample => "--sample",
             Self::DecideAt => "--decide-at",
+            Self::StanceLength => "--stance-length",
+            Self::SeriesAxis => "--series-axis",
+            Self::StanceFrame => "--stance-frame",
+            Self::SampleOffset => "--sample-offset",
+            Self::Fuse => "--fuse",
         }
     }
 
@@ -185,6 +205,11 @@ impl Opt {
             Self::TrainCondition => Argument("train_condition"),
             Self::Sample => Argument("sample"),
             Self::DecideAt => Argument("decide_at"),
+            Self::StanceLength => Argument("stance_length"),
+            Self::SeriesAxis => Argument("series_axis"),
+            Self::StanceFrame => Words("the stance frame (an option of the presrs command line)"),
+            Self::SampleOffset => Words("the sample offset (an option of the presrs command line)"),
+            Self::Fuse => Words("the fusion offsets (an option of the presrs command line)"),
         }
     }
 
