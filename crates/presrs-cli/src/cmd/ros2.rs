@@ -12,6 +12,7 @@ use presrs_ros2::{
 };
 use presrs_stream::StopSignals;
 
+use super::usage::UsageError;
 use crate::printer::stream_log::notice_text;
 
 /// Run as a ROS 2 node: pressure frames from a topic in, terrain decisions out (docs/ros2.md).
@@ -109,9 +110,15 @@ fn domain_id_arg(text: &str) -> Result<u16, String> {
 }
 
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let options = args.node_options(|key| std::env::var(key).ok())?;
+    // A bad name, QoS, depth or domain id (given, or in ROS_DOMAIN_ID, as clap treats an option's
+    // environment variable) is bad usage: exit code 2, as docs/ros2.md says.
+    let options = args
+        .node_options(|key| std::env::var(key).ok())
+        .map_err(|err| UsageError::error("ros2", err))?;
     // The model and the profile before the node joins the graph: a bad one announces nothing.
     let file = presrs_io::model_file::load_model(&args.model)?;
+    presrs::session::check_overrides(&file.model, &args.overrides())
+        .map_err(|err| UsageError::error("ros2", err))?;
     let online = file.online.as_ref();
     let profile = resolve_profile(args.profile.as_deref(), None, online, &args.overrides())?;
     presrs::session::check_profile(&file.model, &profile)?;

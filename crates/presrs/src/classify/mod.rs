@@ -148,11 +148,28 @@ fn classify_stances(
     options: &ClassifyOptions,
 ) -> Result<FileClassification> {
     let mut warnings = Warnings::new();
-    if options.frame.is_some() || recording.frame_count() == 1 {
-        return Err(Error::invalid(format!(
-            "{name}: the model classifies whole stances (it was trained on stance samples), so it \
-             takes movies, not one frame"
-        )));
+    if let Some(frame) = options.frame {
+        return Err(Error::invalid(
+            Message::from(format!(
+                "{name}: the model classifies whole stances, touchdown to lift-off (it was trained \
+                 on stance samples), and "
+            ))
+            .opt_is(Opt::Frame, frame)
+            .text(" picks one frame: leave ")
+            .opt(Opt::Frame)
+            .text(" out to classify each stance of the movie whole, or classify frames with a model trained on ")
+            .opt_text(Opt::Sample, "frame"),
+        ));
+    }
+    if recording.frame_count() == 1 {
+        return Err(Error::invalid(
+            Message::from(format!(
+                "{name}: the model classifies whole stances, touchdown to lift-off (it was trained \
+                 on stance samples), so it takes movies, not one frame: give it a movie, or \
+                 classify this frame with a model trained on "
+            ))
+            .opt_text(Opt::Sample, "frame"),
+        ));
     }
     let segmentation = segment_recording(recording, &options.samples.segment_params())
         .with_context(|| format!("{name}: cannot segment"))?;

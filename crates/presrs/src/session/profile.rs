@@ -75,12 +75,73 @@ pub fn check_profile(model: &TrainedModel, profile: &OnlineProfile) -> Result<()
         ));
     }
     if whole && !profile.params.fusion_offsets.is_empty() {
-        return Err(Error::invalid(
-            "a whole-stance model decides once per stance, on the stance's summary: fusion \
-             (of one-frame decisions) does not apply; leave the fusion offsets out",
-        ));
+        return Err(Error::invalid(fusion_with_a_whole_stance_model(
+            &profile.params.fusion_offsets,
+        )));
     }
     Ok(())
+}
+
+/// Why fusion does not apply to a whole-stance model: the profile's `fusion_offsets` (which `--fuse`
+/// sets), named with the option.
+fn fusion_with_a_whole_stance_model(offsets: &[usize]) -> Message {
+    Message::new()
+        .text(format!(
+            "the profile's fusion offsets {} (set by ",
+            offsets_text(offsets)
+        ))
+        .opt(Opt::Fuse)
+        .text(
+            ") fuse one-frame decisions, but a whole-stance model decides once per stance, on the \
+             stance's summary: leave them out",
+        )
+}
+
+/// `4,5,6`: offsets as `--fuse` takes them.
+fn offsets_text(offsets: &[usize]) -> String {
+    let offsets: Vec<String> = offsets.iter().map(ToString::to_string).collect();
+    offsets.join(",")
+}
+
+/// Whether the options a face was given (`overrides`) suit `model`, before any profile is chosen:
+/// each names itself in the error. Every one is refused when it does nothing with the model, as
+/// [`check_profile`] refuses a profile that does: the model is known when they are given, and a
+/// setting silently ignored would leave the user reading decisions made otherwise than they asked
+/// (a whole-stance model decides at lift-off, not on the frame `sample_offset` names).
+pub fn check_overrides(model: &TrainedModel, overrides: &ProfileOverrides) -> Result<()> {
+    let whole = matches!(model.sample(), SampleKind::Stance { .. });
+    if let (true, Some(k)) = (whole, overrides.sample_offset) {
+        return Err(Error::invalid(
+            Message::new()
+                .opt_is(Opt::SampleOffset, k)
+                .text(
+                    " picks the frame a one-frame model classifies; this model classifies whole \
+                     stances (it was trained on stance samples), at lift-off: leave it out, or give ",
+                )
+                .opt_is(Opt::DecideAt, k)
+                .text(" to decide on the stance so far, that many frames after touchdown"),
+        ));
+    }
+    if whole && !overrides.fuse.is_empty() {
+        return Err(Error::invalid(
+            Message::new()
+                .opt_is(Opt::Fuse, offsets_text(&overrides.fuse))
+                .text(
+                    " fuses one-frame decisions, but a whole-stance model decides once per stance, \
+                     on the stance's summary: leave it out (with ",
+                )
+                .opt_is(Opt::DecideAt, "K")
+                .text(" it decides K frames after touchdown instead of at lift-off)"),
+        ));
+    }
+    let profile = OnlineProfile {
+        params: presrs_core::online::OnlineParams {
+            decide_at: overrides.decide_at,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    check_profile(model, &profile)
 }
 
 /// An online profile from its JSON file.
