@@ -87,6 +87,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     for dir in [&args.report, &args.export_draws].into_iter().flatten() {
         presrs_io::output_path::check_output_dir(dir)?;
     }
+    args.samples.check_settings("eval")?;
     if args.samples.choice()?.is_auto() {
         return run_racing(args, out);
     }

@@ -79,6 +79,7 @@ pub struct TrainArgs {
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     presrs_io::output_path::check_output_file(&args.out)?;
+    args.samples.check_settings("train")?;
     let options = TrainOptions {
         condition: args.train_condition.clone(),
         per_class: args.per_class,
