@@ -236,6 +236,25 @@ impl SampleKind {
             Self::Series { .. } => "series",
         }
     }
+
+    /// What samples of this kind are called in text, in the plural: `images`, `stances`, `series`.
+    pub fn nouns(&self) -> &'static str {
+        match self {
+            Self::Frame => "images",
+            Self::Stance { .. } => "stances",
+            Self::Series { .. } => "series",
+        }
+    }
+
+    /// A sample's `grid` in this kind's own terms: `63x33 image`, `12 channels x 83 frames` (a stance's
+    /// summary: channels over the frames of the stance), `8 channels x 100 time steps` (a series).
+    pub fn shape_text(&self, grid: crate::frame::Grid) -> String {
+        match self {
+            Self::Frame => format!("{grid} image"),
+            Self::Stance { .. } => format!("{} channels x {} frames", grid.rows, grid.cols),
+            Self::Series { .. } => format!("{} channels x {} time steps", grid.rows, grid.cols),
+        }
+    }
 }
 
 /// One image and what is known about it.

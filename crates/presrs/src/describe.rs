@@ -59,7 +59,8 @@ pub fn describe_model(file: &ModelFile) -> String {
     if trained > 0 {
         let _ = write!(
             origin,
-            " ({trained} training + {validated} validation images)"
+            " ({trained} training + {validated} validation {})",
+            model.sample().nouns()
         );
     }
     if let Some(seed) = provenance.seed {
@@ -69,13 +70,13 @@ pub fn describe_model(file: &ModelFile) -> String {
     text
 }
 
-/// The image path of `model` in one line: crop, image size, preprocessing, features, PCA or none (and
-/// the Parzen window's sigma).
+/// The image path of `model` in one line: crop, the sample's size in its kind's terms (`38x41 image`,
+/// `12 channels x 83 frames`), preprocessing, features, PCA or none (and the Parzen window's sigma).
 pub fn pipeline_summary(model: &TrainedModel) -> String {
     format!(
-        "crop {} -> {} image, preprocessing {}, {} features ({}), {}{}",
+        "crop {} -> {}, preprocessing {}, {} features ({}), {}{}",
         model.crop(),
-        model.image_grid(),
+        model.sample().shape_text(model.image_grid()),
         model.preprocess(),
         model.n_features(),
         model.features().name(),

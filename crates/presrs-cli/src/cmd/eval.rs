@@ -131,7 +131,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             },
         );
     }
-    print_report(&outcome.report, out)?;
+    print_report(&outcome.report, Some(dataset.sample), out)?;
     print_perturbations(&perturbed, out)?;
     print_choices(&outcome, &eval, out)
 }
@@ -159,7 +159,7 @@ fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.json {
         return write_json(out, &eval);
     }
-    print_report(&raced.outcome.report, out)?;
+    print_report(&raced.outcome.report, None, out)?;
     print_choices(&raced.outcome, &eval, out)
 }
 
@@ -213,9 +213,18 @@ fn print_choices(
     )?)
 }
 
-/// The human-readable tables of an evaluation (`crate::printer::eval_tables::report_table`).
-pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<()> {
-    Ok(write!(out, "{}", eval_tables::report_table(report))?)
+/// The human-readable tables of an evaluation (`crate::printer::eval_tables::report_table`) of
+/// `sample`s (`None`: raced).
+pub fn print_report(
+    report: &EvalReport,
+    sample: Option<presrs_core::sample::SampleKind>,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    Ok(write!(
+        out,
+        "{}",
+        eval_tables::report_table(report, sample)
+    )?)
 }
 
 /// `--leave-one-out`: any column but `label` (holding out a class leaves none of its samples to train on).

@@ -141,9 +141,10 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     save_model(&args.out, file)?;
     writeln!(
         out,
-        "trained {} on {} images ({} training + {} validation) of {} classes: {}",
+        "trained {} on {} {} ({} training + {} validation) of {} classes: {}",
         model.classifier().kind(),
         training.n_train() + training.n_validation(),
+        model.sample().nouns(),
         training.n_train(),
         training.n_validation(),
         model.class_names().len(),

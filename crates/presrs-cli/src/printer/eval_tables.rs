@@ -7,6 +7,7 @@ use presrs::eval::document::{chosen_counts, protocol_heading, sigmas};
 use presrs::eval::document::{comparison_conditions, perturbation_pairs};
 use presrs::eval::{EvalOutcome, InternalEstimate, PerturbationRow, calibration_line};
 use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
+use presrs_core::sample::SampleKind;
 
 /// The comparison table: one row per feature x classifier combination, one column per tested
 /// condition, then overall accuracy and the training and classification times.
@@ -136,8 +137,10 @@ pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) 
 
 /// The human-readable tables of an evaluation: accuracy per tested condition and overall, the
 /// confusion matrix with recall and precision, the confidences, the Parzen sigmas, the counts and the
-/// classification time.
-pub fn report_table(report: &EvalReport) -> String {
+/// classification time. `sample` is the kind every model was trained on (`None`: raced, each fold's
+/// own): counts are of its samples, and only one-frame samples have their time set next to the
+/// paper's per-image figure (a whole stance's summary is another computation).
+pub fn report_table(report: &EvalReport, sample: Option<SampleKind>) -> String {
     let mut text = String::new();
     let out = &mut text;
     let percent = |m: &MeanStd| format!("{:6.2} % +- {:.2}", 100.0 * m.mean, 100.0 * m.std);
@@ -191,16 +194,26 @@ pub fn report_table(report: &EvalReport) -> String {
         );
     }
     let first = &report.repeats[0];
+    let nouns = sample.map_or("samples", |kind| kind.nouns());
     let _ = writeln!(
         out,
         "per repeat: {}; training {:.3} s",
-        first.counts_text(),
+        first.counts_text_of(nouns),
         first.train_seconds
     );
-    let _ = writeln!(
-        out,
-        "median classification time: {:.2} us per image (paper: 245 us on a 2.67 GHz Core 2 Duo)",
-        report.median_classify_ns as f64 / 1e3
-    );
+    let micros = report.median_classify_ns as f64 / 1e3;
+    let _ = match sample {
+        Some(SampleKind::Frame) => writeln!(
+            out,
+            "median classification time: {micros:.2} us per image (paper: 245 us on a 2.67 GHz \
+             Core 2 Duo)"
+        ),
+        Some(kind) => writeln!(
+            out,
+            "median classification time: {micros:.2} us per {}",
+            kind.name()
+        ),
+        None => writeln!(out, "median classification time: {micros:.2} us per sample"),
+    };
     text
 }

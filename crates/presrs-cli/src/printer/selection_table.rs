@@ -6,7 +6,7 @@ use presrs::method::paper_score;
 use presrs_core::TrainedModel;
 use presrs_core::selection::{CandidateScore, Selection};
 
-/// The table's lines, in order. `n_train` is the number of images the model was trained on (without
+/// The table's lines, in order. `n_train` is the number of samples the model was trained on (without
 /// the validation ones): what bounds its principal components.
 pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usize) -> Vec<String> {
     let mut lines = vec![format!("automatic choice ({}):", selection.method)];
@@ -79,13 +79,14 @@ pub fn components_note(
         return None;
     }
     let features = model.n_features();
+    let nouns = model.sample().nouns();
     let bound = if features <= n_train.saturating_sub(1) {
         format!("no more than its {features} features")
     } else {
-        format!("at most one fewer than its {n_train} training images")
+        format!("at most one fewer than its {n_train} training {nouns}")
     };
     Some(format!(
         "the model keeps {kept} of the {asked} principal components asked for: {bound} (the \
-         validation folds, trained on fewer images, may have kept fewer still)"
+         validation folds, trained on fewer {nouns}, may have kept fewer still)"
     ))
 }

@@ -38,7 +38,8 @@ impl CandidateScore {
     }
 
     /// The candidate in words: its features (after an intensity transform, if any) + its classifier,
-    /// and its principal components (`fft1d (sqrt) + pwe, 51 dims`).
+    /// and its principal components (`fft1d (sqrt) + pwe, 51 dims`), or `all features` for a
+    /// classifier that takes every feature without a PCA step (`rocket + ridge, all features`).
     pub fn name(&self) -> String {
         let intensity = self.config.preprocess.intensity;
         let transform = if intensity.is_none() {
@@ -46,10 +47,12 @@ impl CandidateScore {
         } else {
             format!(" ({intensity})")
         };
-        format!(
-            "{}{transform} + {}, {} dims",
-            self.features, self.classifier, self.config.dims
-        )
+        let dims = if self.config.classifier.kind().takes_all_features() {
+            "all features".to_owned()
+        } else {
+            format!("{} dims", self.config.dims)
+        };
+        format!("{}{transform} + {}, {dims}", self.features, self.classifier)
     }
 }
 
