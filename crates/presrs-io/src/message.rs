@@ -185,12 +185,8 @@ impl Opt {
             Self::Dims => Argument("dims"),
             Self::Classifier => Argument("classifier"),
             Self::Budget => Argument("budget"),
-            Self::IncludePartial => {
-                Words("sampling partial stances too (an option of the presrs command line)")
-            }
-            Self::OneSamplePerFile => {
-                Words("one sample per file (an option of the presrs command line)")
-            }
+            Self::IncludePartial => Argument("include_partial"),
+            Self::OneSamplePerFile => Argument("one_sample_per_file"),
             Self::Terrains => Argument("terrains"),
             Self::TerrainImage => Words("a terrain height-map image"),
             Self::Gaits => Argument("gaits"),
@@ -551,8 +547,7 @@ mod tests {
         );
         assert_eq!(
             message.render(Face::Python),
-            "a.csv: leave_one_out=\"site\": no such column; try sampling partial stances too \
-             (an option of the presrs command line)"
+            "a.csv: leave_one_out=\"site\": no such column; try include_partial="
         );
         assert_eq!(
             message.options().collect::<Vec<_>>(),
