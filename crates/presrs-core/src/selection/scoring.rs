@@ -49,6 +49,7 @@ fn feature_groups(candidates: &[CheckedTrainConfig]) -> Vec<FeatureGroup> {
 
 /// The features of each feature group scored so far (or why they could not be computed), kept across
 /// the race's two phases and the refinement of the dims, which would otherwise compute them again.
+#[derive(Default)]
 pub(super) struct Tables<'o> {
     entries: Vec<(TrainConfig, std::result::Result<FeatureTable, String>)>,
     /// Told when a group's features begin.
