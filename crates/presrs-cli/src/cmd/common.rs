@@ -436,6 +436,18 @@ impl Progress for TerminalProgress {
         }
     }
 
+    /// On a terminal the bar's message; otherwise a line at once (stages are few, and a log should
+    /// say where the time went).
+    fn stage(&self, stage: &str) {
+        if std::io::stderr().is_terminal() {
+            if let Some(bar) = self.bar().as_ref() {
+                bar.set_message(stage.to_owned());
+            }
+        } else {
+            stderr_line!("progress: {stage}");
+        }
+    }
+
     fn warn(&self, warning: &presrs::Warning) {
         self.line("warning", &warning.render(presrs::Face::Cli));
     }

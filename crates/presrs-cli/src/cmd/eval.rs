@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use presrs::eval::document::{CompareJson, EvalJson, PerturbedJson, perturbation_fault_results};
 use presrs::eval::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
+use presrs::resources::MemoryUse;
 use presrs_core::evaluation::{ComparisonRow, EvalReport};
 use presrs_core::split::ValidationSize;
 
@@ -117,7 +118,8 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let perturbed = setup.perturbed(&args.perturb, &outcome.report, &progress)?;
     let faults = perturbation_fault_results(&perturbed, options.method.is_auto());
     write_report(args, (&dataset, &options), &outcome, &faults)?;
-    let eval = EvalJson::of(&outcome, &setup.never_trained);
+    let mut eval = EvalJson::of(&outcome, &setup.never_trained);
+    eval.memory = MemoryUse::now(dataset.samples.len());
     if args.json && perturbed.is_empty() {
         return write_json(out, &eval);
     }
@@ -133,7 +135,16 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     print_report(&outcome.report, Some(dataset.sample), out)?;
     print_perturbations(&perturbed, out)?;
-    print_choices(&outcome, &eval, out)
+    print_choices(&outcome, &eval, out)?;
+    print_memory(&eval, out)
+}
+
+/// The run's peak memory, last (measured once the run is over).
+fn print_memory(eval: &EvalJson<'_>, out: &mut dyn Write) -> anyhow::Result<()> {
+    if let Some(memory) = &eval.memory {
+        writeln!(out, "{}", memory.line())?;
+    }
+    Ok(())
 }
 
 /// `--sample auto`: the sample kinds raced inside every fold (`presrs::eval::race`).
@@ -155,12 +166,14 @@ fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         stderr_line!("warning: {warning}");
     }
     write_report(args, (&readings.frames, &options), &raced.outcome, &[])?;
-    let eval = EvalJson::of(&raced.outcome, &raced.never_trained);
+    let mut eval = EvalJson::of(&raced.outcome, &raced.never_trained);
+    eval.memory = MemoryUse::now(readings.frames.samples.len());
     if args.json {
         return write_json(out, &eval);
     }
     print_report(&raced.outcome.report, None, out)?;
-    print_choices(&raced.outcome, &eval, out)
+    print_choices(&raced.outcome, &eval, out)?;
+    print_memory(&eval, out)
 }
 
 fn eval_options(args: &EvalArgs, dataset: &presrs::Dataset) -> EvalOptions {

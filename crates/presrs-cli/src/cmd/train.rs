@@ -155,5 +155,8 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         writeln!(out, "{}", profile_summary(profile))?;
     }
     writeln!(out, "model written to {}", args.out.display())?;
+    if let Some(memory) = presrs::resources::MemoryUse::now(trained.dataset.samples.len()) {
+        writeln!(out, "{}", memory.line())?;
+    }
     Ok(())
 }

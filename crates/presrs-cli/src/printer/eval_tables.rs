@@ -123,6 +123,9 @@ pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) 
             let _ = writeln!(out, "  {name}: {count}");
         }
     }
+    if let Some(line) = selection_costs_line(&outcome.selections) {
+        let _ = writeln!(out, "{line}");
+    }
     if let Some(internal) = internal {
         let _ = writeln!(
             out,
@@ -133,6 +136,33 @@ pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) 
         );
     }
     out
+}
+
+/// Where the automatic choices' time went, summed over the trained models: the scoring (what each
+/// model's budget bounds) and the winners' training on all their samples, which comes after it; with
+/// the subsample the candidates were scored on when there was one.
+pub fn selection_costs_line(selections: &[presrs_core::selection::Selection]) -> Option<String> {
+    let costs: Vec<_> = selections.iter().filter_map(|s| s.cost.as_ref()).collect();
+    let first = costs.first()?;
+    let sum = |field: fn(&presrs_core::selection::SelectionCost) -> f64| {
+        costs.iter().map(|&c| field(c)).sum::<f64>()
+    };
+    let scored = if first.subsampled() {
+        format!(
+            "candidates scored on stratified subsamples of {} samples (of {} in the first model)",
+            first.scored_on, first.samples
+        )
+    } else {
+        "candidates scored on all the training samples".to_owned()
+    };
+    Some(format!(
+        "time over {} models: {scored}; scoring {:.1} s (features {:.1} s; each model's budget bounds \
+         it), training the winners {:.1} s, not covered by the budget",
+        costs.len(),
+        sum(|c| c.scoring_seconds),
+        sum(|c| c.features_seconds),
+        sum(|c| c.final_fit_seconds)
+    ))
 }
 
 /// The human-readable tables of an evaluation: accuracy per tested condition and overall, the

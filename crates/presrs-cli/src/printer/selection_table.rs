@@ -54,7 +54,28 @@ pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usi
         percent(chosen),
         selection.method
     ));
+    lines.extend(cost_line(selection));
     lines
+}
+
+/// On how many samples the candidates were scored and where the time went: the scoring (what the
+/// budget bounds, the features included) and the winner's training on every sample, which comes after
+/// the budget (`None` for a model that did not record it).
+pub fn cost_line(selection: &Selection) -> Option<String> {
+    let cost = selection.cost.as_ref()?;
+    let scored = if cost.subsampled() {
+        format!(
+            "scored on a stratified subsample of {} of the {} samples",
+            cost.scored_on, cost.samples
+        )
+    } else {
+        format!("scored on all {} samples", cost.samples)
+    };
+    Some(format!(
+        "time: {scored} in {:.1} s (features {:.1} s; the budget bounds this); training the winner on \
+         all {} samples {:.1} s, not covered by the budget",
+        cost.scoring_seconds, cost.features_seconds, cost.samples, cost.final_fit_seconds
+    ))
 }
 
 /// `85.00 % +- 2.00`

@@ -102,6 +102,18 @@ impl Training {
 /// method, or the automatic choice validated inside the training data (across its conditions when it
 /// spans several).
 pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
+    train_with_progress(dataset, options, &crate::progress::Quiet)
+}
+
+/// [`train`], telling `progress` which stage of the automatic choice runs ([`Progress::stage`]:
+/// features, scoring, training the winner).
+///
+/// [`Progress::stage`]: crate::progress::Progress::stage
+pub fn train_with_progress(
+    dataset: &Dataset,
+    options: &TrainOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Training> {
     let name = dataset.path().display().to_string();
     dataset.require_labels("training needs a label for every sample")?;
     let pool: Vec<&Sample> = dataset.of_condition(options.condition.as_deref())?;
@@ -138,10 +150,14 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         group: pool[i].group.as_deref(),
     });
     let model = if method.is_auto() {
+        let candidates = method.candidates_for(grid, false, &dataset.sample)?;
+        let tell = |stage: &str| progress.stage(stage);
         presrs_core::selection::train_auto(
             &train_images,
             &validation_images,
-            &method.auto_choice(&method.candidates_for(grid, false, &dataset.sample)?),
+            &method
+                .auto_choice(&candidates)
+                .with_stages(presrs_core::selection::StageObserver(&tell)),
             options.seed,
         )
     } else {

@@ -17,7 +17,7 @@ use presrs_io::message::{Message, Opt, Warning};
 use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use crate::train::{TrainOptions, Training, train, trained_on_movies};
+use crate::train::{TrainOptions, Training, train_with_progress, trained_on_movies};
 use presrs_core::pipeline::TrainedModel;
 
 /// What the whole sample of `--sample auto` is when the data decide: the settings the whole kinds take.
@@ -226,7 +226,7 @@ pub fn train_racing_samples(
             &format!("training on the {} sample", dataset.sample.name()),
             None,
         );
-        let training = train(dataset, train_options);
+        let training = train_with_progress(dataset, train_options, progress);
         progress.finish();
         training
     };
