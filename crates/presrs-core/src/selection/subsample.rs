@@ -15,6 +15,9 @@ use crate::pipeline::extract::LabeledImage;
 /// accuracy has a standard error under 1.6 points; the winner is trained on every sample.
 pub const SCORING_SAMPLES: usize = 4000;
 
+/// A stratum: label, group and condition.
+type Stratum<'a> = (&'a str, Option<&'a str>, Option<&'a str>);
+
 /// `at_most` of `images` (indices, increasing), drawn per stratum, a stratum being the images of one
 /// label, group and condition (so that every class keeps its share in every fold the choice makes),
 /// each stratum's share in proportion to its size (largest remainders get the rest; ties to the
@@ -28,7 +31,7 @@ pub(super) fn stratified_subsample(
     if images.len() <= at_most {
         return None;
     }
-    let mut strata: BTreeMap<(&str, Option<&str>, Option<&str>), Vec<usize>> = BTreeMap::new();
+    let mut strata: BTreeMap<Stratum<'_>, Vec<usize>> = BTreeMap::new();
     for (i, image) in images.iter().enumerate() {
         strata
             .entry((image.label, image.group, image.condition))
