@@ -10,7 +10,7 @@ use presrs::classify::model_sample;
 use presrs::core::pipeline::{Classification, Session};
 use presrs::core::sample::SampleChoice;
 use presrs::core::split::ValidationSize;
-use presrs::core::{Frame, FrameView};
+use presrs::core::{Frame, FrameView, Grid};
 use presrs::io::model_file::{ModelFile, load_model, parse_model, save_model};
 use presrs::io::output_path::check_output_file;
 use presrs::train::{TrainOptions, train};
@@ -539,9 +539,9 @@ pub fn dataset_of(
     conditions: Option<&Bound<'_, PyAny>>,
     kind: SampleKind,
 ) -> PyResult<Dataset> {
-    let frames = match kind {
+    let (frames, sensor) = match kind {
         SampleKind::Stance { .. } => stance_summaries(images, kind)?,
-        SampleKind::Frame | SampleKind::Series { .. } => image_samples(images, kind)?,
+        SampleKind::Frame | SampleKind::Series { .. } => (image_samples(images, kind)?, None),
     };
     let n = frames.len();
     let names = labels(label_values, "labels", n)?;
@@ -563,7 +563,12 @@ pub fn dataset_of(
     } else {
         kind.name()
     };
-    Dataset::from_samples_of(format!("numpy {what}s ({n})"), samples, kind).py_err()
+    let mut dataset =
+        Dataset::from_samples_of(format!("numpy {what}s ({n})"), samples, kind).py_err()?;
+    if sensor.is_some() {
+        dataset.sensor = sensor;
+    }
+    Ok(dataset)
 }
 
 /// The images of a batch `(n, rows, cols)`, each checked for values that are not numbers, as samples of
@@ -582,23 +587,46 @@ fn image_samples(images: &Bound<'_, PyAny>, kind: SampleKind) -> PyResult<Vec<Fr
 }
 
 /// Each movie `(frames, rows, cols)` of `movies` (a sequence, or a 4-D array) as a whole-stance sample
-/// of `kind`, summarised over time (laid into one length later, with the rest of the data set).
-fn stance_summaries(movies: &Bound<'_, PyAny>, kind: SampleKind) -> PyResult<Vec<Frame>> {
+/// of `kind`, summarised over time (laid into one length later, with the rest of the data set), and
+/// the one sensor grid they share (a model of summaries takes one sensor: movies of another grid than
+/// the first are refused, naming both).
+fn stance_summaries(
+    movies: &Bound<'_, PyAny>,
+    kind: SampleKind,
+) -> PyResult<(Vec<Frame>, Option<Grid>)> {
     if movies.is_none() {
         return Err(data_error(
             "images: expected a sequence of movies (frames, rows, cols), got None",
         ));
     }
     let mut out = Vec::new();
+    let mut sensor: Option<Grid> = None;
     for (index, movie) in movies.try_iter()?.enumerate() {
         let what = format!("images[{index}]");
-        out.push(movie_summary(&movie?, &what, kind)?);
+        let (summary, grid) = movie_summary(&movie?, &what, kind)?;
+        match sensor {
+            Some(first) if first != grid => {
+                return Err(data_error(format!(
+                    "{what}: a movie of {grid} frames where images[0] has {first}: a stance model \
+                     is trained on one sensor; crop or resample the movies to one grid, or train a \
+                     model per sensor"
+                )));
+            }
+            Some(_) => {}
+            None => sensor = Some(grid),
+        }
+        out.push(summary);
     }
-    Ok(out)
+    Ok((out, sensor))
 }
 
-/// One stance's movie summarised (as the CLI's data sets are), `what` naming it in errors.
-fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, kind: SampleKind) -> PyResult<Frame> {
+/// One stance's movie summarised (as the CLI's data sets are), with its frames' grid; `what` names it
+/// in errors.
+fn movie_summary(
+    movie: &Bound<'_, PyAny>,
+    what: &str,
+    kind: SampleKind,
+) -> PyResult<(Frame, Grid)> {
     let frames = Images::new(movie, what)?;
     if !frames.batch {
         return Err(data_error(format!(
@@ -608,7 +636,7 @@ fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, kind: SampleKind) -> PyRe
     }
     frames.require_finite(what, "frame")?;
     kind.sample_of(&frames.frames()?, None)
-        .map(|(summary, _)| summary)
+        .map(|(summary, _)| (summary, frames.grid()))
         .map_err(|err| data_error(format!("{what}: {err}")))
 }
 

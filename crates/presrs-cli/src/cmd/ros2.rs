@@ -60,9 +60,15 @@ pub struct Ros2Args {
     /// ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST).
     #[arg(long)]
     pub localhost_only: bool,
-    /// Online profile JSON (detector settings, calibration, gait table) [default: the model file's].
+    /// Online profile JSON (detector settings, calibration, gait table) [default: learned from
+    /// --calibrate when given, else the model file's, else warm-up calibration on the first 128
+    /// frames].
     #[arg(long)]
     pub profile: Option<PathBuf>,
+    /// Learn the calibration and sample offset k from the recordings of this manifest (e.g. the
+    /// training manifest), as `presrs stream --calibrate`.
+    #[arg(long, value_name = "MANIFEST")]
+    pub calibrate: Option<PathBuf>,
     /// Recommended gait per terrain, TERRAIN=GAIT, comma separated (added to the profile's table).
     #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
           value_parser = |t: &str| crate::args::values::name_value(t, "TERRAIN=GAIT"))]
@@ -120,7 +126,12 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     presrs::session::check_overrides(&file.model, &args.overrides())
         .map_err(|err| UsageError::error("ros2", err))?;
     let online = file.online.as_ref();
-    let profile = resolve_profile(args.profile.as_deref(), None, online, &args.overrides())?;
+    let profile = resolve_profile(
+        args.profile.as_deref(),
+        args.calibrate.as_deref(),
+        online,
+        &args.overrides(),
+    )?;
     presrs::session::check_profile(&file.model, &profile)?;
     let signals = StopSignals::register()?;
     let graph = NodeGraph::join(&options)?;

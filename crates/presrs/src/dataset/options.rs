@@ -2,7 +2,7 @@
 //! the manifest's recordings are read.
 
 use presrs_core::dead_sensels::DeadSenselConfig;
-use presrs_core::sample::{SampleChoice, SampleKind};
+use presrs_core::sample::{SampleChoice, SampleKind, Sampling};
 use presrs_core::stance::{BaselineMode, SampleFrame, SegmentParams, ValidSegmentParams};
 use presrs_io::ReadOptions;
 use presrs_io::message::{Message, Opt, Warnings};
@@ -137,4 +137,34 @@ pub fn check_sample_settings(
         )));
     }
     Ok(warnings)
+}
+
+impl SampleOptions {
+    /// How these options take samples from recordings, as a model stores it.
+    pub fn sampling(&self) -> Sampling {
+        Sampling {
+            segment: self.segment.clone(),
+            one_sample_per_file: self.one_sample_per_file,
+            stance_frame: self.sample,
+            include_partial: self.include_partial,
+        }
+    }
+
+    /// These options with a model's `sampling` in place of the settings left at their defaults: the
+    /// stance detector's settings (unless some were given, which then apply with
+    /// [`Self::one_sample_per_file`] as given), one sample per file, the stance frame, partial
+    /// stances. So a model trained on one-contact trials classifies such a trial as it was trained.
+    pub fn or_model(&self, sampling: &Sampling) -> Self {
+        let default = Self::default();
+        let mut options = self.clone();
+        if self.segment == default.segment && !self.one_sample_per_file {
+            options.segment = sampling.segment.clone();
+            options.one_sample_per_file = sampling.one_sample_per_file;
+        }
+        if self.sample == default.sample {
+            options.sample = sampling.stance_frame;
+        }
+        options.include_partial |= sampling.include_partial;
+        options
+    }
 }

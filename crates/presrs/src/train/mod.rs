@@ -15,7 +15,9 @@ use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::message::{Message, Opt, Warnings};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
-use crate::dataset::{Dataset, MovieLoad, Sample, SampleOptions, read_movie_loads, sample_labels};
+use crate::dataset::{
+    Dataset, MovieLoad, Sample, SampleKind, SampleOptions, read_movie_loads, sample_labels,
+};
 use crate::error::{Context, Error, Result};
 use crate::method::Method;
 
@@ -167,7 +169,12 @@ pub fn train_with_progress(
             &method.train_config(grid)?,
         )
     }
-    .and_then(|model| model.with_sample(dataset.sample));
+    .and_then(|model| model.with_sample(dataset.sample))
+    .map(|model| {
+        model
+            .with_sensor(dataset.sensor)
+            .with_sampling(dataset.sampling.clone())
+    });
     let model = match model {
         Ok(model) => model,
         // A class with one sample cannot be fitted: when that is the cause, say it by name.
@@ -259,7 +266,10 @@ pub fn split_images<'s>(
 /// Whether `dataset` holds samples taken from movies (a stance's frame past the first): a model trained
 /// on it is meant for a stream, so `train` writes an online profile by default.
 pub fn trained_on_movies(dataset: &Dataset) -> bool {
-    dataset.samples.iter().any(|sample| sample.frame_index > 0)
+    // A stance sample starts at its touchdown: frame 0 of a trial cut to one contact.
+    let stances_of_movies =
+        matches!(dataset.sample, SampleKind::Stance { .. }) && !dataset.movie_loads.is_empty();
+    stances_of_movies || dataset.samples.iter().any(|sample| sample.frame_index > 0)
 }
 
 /// The online profile (detector settings, calibration and sample frame) learned by segmenting, offline
