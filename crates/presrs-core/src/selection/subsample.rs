@@ -11,8 +11,8 @@ use rand_chacha::ChaCha8Rng;
 use crate::pipeline::extract::LabeledImage;
 
 /// The most samples the automatic choice scores its candidates on by default: more are subsampled,
-/// stratified ([`stratified_subsample`]). 4,000 samples leave a held-out fold of 1,000 or more, whose
-/// accuracy has a standard error under 1.6 points; the winner is trained on every sample.
+/// stratified by label, group and condition. 4,000 samples leave a held-out fold of 1,000 or more,
+/// whose accuracy has a standard error under 1.6 points; the winner is trained on every sample.
 pub const SCORING_SAMPLES: usize = 4000;
 
 /// A stratum: label, group and condition.
