@@ -125,3 +125,68 @@ fn a_moment_the_model_was_not_trained_for_is_refused_by_every_command_line_face(
         assert!(err.contains("0 frames, 0 stances"), "{decide_at}: {err}");
     }
 }
+
+/// `eval --decide-at` on a few `jiku-walk` subjects' movies, leave one subject out: the table of the
+/// points (the one-frame model beside each) and `auto`'s line on stdout, and with `--report` the HTML
+/// report's section of accuracy against decision time, its figure beside the page.
+#[test]
+fn eval_decide_at_prints_the_curve_and_reports_it() {
+    let dir = tempfile::tempdir().unwrap();
+    // Thirty movies of each subject keep the run short.
+    let source = std::fs::read_to_string(shared("real/jiku-walk/manifest.csv")).unwrap();
+    let mut rows = vec![source.lines().next().unwrap().to_owned()];
+    for subject in ["s00", "s01"] {
+        rows.extend(
+            source
+                .lines()
+                .filter(|line| line.starts_with(subject))
+                .take(30)
+                .map(|line| {
+                    let path = shared("real/jiku-walk").join(line.split(',').next().unwrap());
+                    let rest = line.split_once(',').unwrap().1;
+                    format!("{},{rest}", path.display())
+                }),
+        );
+    }
+    let manifest = dir.path().join("manifest.csv");
+    std::fs::write(&manifest, rows.join("\n") + "\n").unwrap();
+    let report = dir.path().join("report");
+    let output = presrs(&[
+        "eval",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--sample",
+        "stance",
+        "--one-sample-per-file",
+        "--leave-one-out",
+        "group",
+        "--repeats",
+        "1",
+        "--features",
+        "rocket",
+        "--classifier",
+        "lda",
+        "--dims",
+        "10",
+        "--decide-at",
+        "8,16",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = stdout(&output);
+    assert!(
+        table.contains("early decisions (60 held-out stances, 2 folds"),
+        "{table}"
+    );
+    assert!(table.contains("one frame %") && table.contains("lift-off"));
+    assert!(table.contains("auto: "), "{table}");
+    let page = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(
+        page.contains("Early decisions: accuracy against decision time"),
+        "no early section"
+    );
+    assert!(page.contains("8.0 frames") && page.contains("16.0 frames"));
+    assert!(page.contains("auto: mean"));
+    assert!(report.join("early_decisions.png").is_file());
+}

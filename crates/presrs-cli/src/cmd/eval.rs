@@ -180,6 +180,22 @@ fn run_early(
     let frames =
         presrs::eval::early::FrameReadings::load(&args.manifest, &options, &dataset, &progress)?;
     let early = presrs::eval::early::evaluate_early(&setup, Some(&frames), &progress)?;
+    if let Some(dir) = &args.report {
+        let note = format!(
+            "{}, {} fold(s)",
+            eval_options.holdout.describe(),
+            early.folds
+        );
+        let line = std::env::args().collect::<Vec<_>>().join(" ");
+        let path = presrs::report::write_early_report(
+            &dataset,
+            early.curve(note),
+            &options,
+            Some(&line),
+            dir,
+        )?;
+        stderr_line!("report written to {}", path.display());
+    }
     if args.json {
         return write_json(out, &early);
     }

@@ -70,6 +70,33 @@ pub struct EarlyEvaluation {
     pub folds: usize,
 }
 
+impl EarlyEvaluation {
+    /// The curve as the HTML report shows it; `note` says how the stances were held out.
+    pub fn curve(&self, note: String) -> presrs_report::EarlyCurve {
+        presrs_report::EarlyCurve {
+            points: self
+                .points
+                .iter()
+                .map(|point| presrs_report::EarlyCurvePoint {
+                    frames: point.frames,
+                    accuracy: point.accuracy,
+                    frame_accuracy: point.frame_accuracy,
+                })
+                .collect(),
+            whole_accuracy: self.whole_accuracy,
+            auto: Some(presrs_report::EarlyAutoResult {
+                accuracy: self.auto.accuracy,
+                mean_frames: self.auto.mean_frames,
+                decided_early: self.auto.decided_early,
+            }),
+            median_stance_frames: self.median_stance_frames,
+            frame_period_ms: self.frame_period_ms,
+            tested: self.tested,
+            note,
+        }
+    }
+}
+
 /// The data set read as frames `K` after touchdown, for the one-frame model beside each point.
 #[derive(Debug)]
 pub struct FrameReadings {
