@@ -14,8 +14,11 @@
 //! split into the automatic choice's inner folds (by group, condition or stratified splits), each fold's
 //! classifiers are trained on the rest, and each held-out stance is classified at every point and
 //! whole. The rule: the lowest threshold (among the confidences seen, and "never") at which the
-//! accuracy of `auto`'s decisions over those stances is at most [`AUTO_TOLERANCE`] below the
-//! whole-stance classifier's accuracy on the same stances.
+//! early decisions are safe *with a margin for the few stances validation has*: over the stances
+//! `auto` decides before their lift-off, the Wilson lower bound (z = [`AUTO_BOUND_Z`]) of its
+//! accuracy is at most [`AUTO_TOLERANCE`] below the whole-stance classifier's accuracy on the same
+//! stances. A point estimate alone let one subject's 60 stances, where early points look as good as
+//! the whole stance, set a threshold that was too bold on another subject.
 
 use crate::error::{CoreError, Result};
 use crate::pipeline::extract::LabeledImage;
@@ -24,8 +27,12 @@ use crate::pipeline::train::train;
 use crate::selection::ValidateBy;
 use crate::selection::folds::make_folds;
 
-/// How far below the whole-stance classifier's validation accuracy `auto`'s may fall (one point).
-pub const AUTO_TOLERANCE: f64 = 0.01;
+/// How far below the whole-stance classifier's validation accuracy the lower bound of `auto`'s early
+/// decisions' accuracy may fall (two points: the loss the early decision may cost).
+pub const AUTO_TOLERANCE: f64 = 0.02;
+
+/// The z of the lower bound on the early decisions' validation accuracy (one-sided, about 84 %).
+pub const AUTO_BOUND_Z: f64 = 1.0;
 
 /// Stances as images for early decisions: each whole (laid into the model's length), each cut at every
 /// point `K` (laid into `K + 1` frames), and each stance's length; all in the same order.
@@ -123,13 +130,22 @@ impl HeldOutStance {
     }
 }
 
+/// Trains a decision point's classifier on the stances cut there (training, validation): how a
+/// whole-stance model from the automatic choice has a method chosen for each point (the method that
+/// suits the whole stance need not suit its first frames).
+pub type ChoosePoint<'f> =
+    &'f dyn Fn(&[LabeledImage<'_>], &[LabeledImage<'_>]) -> Result<TrainedModel>;
+
 /// Trains the early decisions of `whole` (a whole-stance model trained on `train.whole` with
-/// `validation.whole` validating): each point's model with the whole model's method on the stances cut
-/// there, and `auto`'s threshold from the inner folds of all those stances (see the module docs).
+/// `validation.whole` validating): each point's model on the stances cut there, by `choose` when
+/// given (a method chosen per point) or else with the whole model's method, and `auto`'s threshold
+/// from the inner folds of all those stances, each point retrained there with its own method (see the
+/// module docs).
 pub fn train_early(
     whole: &TrainedModel,
     train_set: &StanceImages<'_>,
     validation: &StanceImages<'_>,
+    choose: Option<ChoosePoint<'_>>,
     seed: u64,
 ) -> Result<EarlyDecisions> {
     train_set.check()?;
@@ -140,15 +156,18 @@ pub fn train_early(
         if frames + 1 >= length {
             continue;
         }
-        let model = train_like(whole, cut, cut_validation)?;
+        let model = match choose {
+            Some(choose) => choose(cut, cut_validation)?.with_sample(whole.sample())?,
+            None => train_like(whole, cut, cut_validation)?,
+        };
         points.push(DecisionPoint {
             frames: *frames,
             model,
         });
     }
     let all = train_set.joined(validation);
+    let held_out = held_out_stances(whole, &all, &points, seed)?;
     let kept: Vec<usize> = points.iter().map(|p| p.frames).collect();
-    let held_out = held_out_stances(whole, &all, &kept, seed)?;
     let auto = learn_threshold(&held_out, &kept);
     let early = EarlyDecisions {
         points,
@@ -169,11 +188,12 @@ pub fn train_like(
 }
 
 /// Every stance of `all` held out once (the inner folds of the automatic choice) and classified at
-/// `frames`' points and whole by models of `whole`'s method trained on the fold's others.
+/// `points` and whole by models of their methods (`whole`'s, and each point's own) trained on the
+/// fold's others.
 pub fn held_out_stances(
     whole: &TrainedModel,
     all: &StanceImages<'_>,
-    frames: &[usize],
+    points: &[DecisionPoint],
     seed: u64,
 ) -> Result<Vec<HeldOutStance>> {
     let folds = make_folds(&all.whole, ValidateBy::Auto, seed)?;
@@ -187,20 +207,20 @@ pub fn held_out_stances(
             &train_part,
             &validation_part,
             &test,
-            frames,
+            points,
         )?);
     }
     Ok(held_out)
 }
 
-/// `test`'s stances classified at every point of `frames` and whole, by models of `like`'s method
-/// trained on `train_part` (validated on `validation`).
+/// `test`'s stances classified at every point of `points` and whole, by models of `like`'s method
+/// (whole) and each point's (its own model's) trained on `train_part` (validated on `validation`).
 pub fn classify_held_out(
     like: &TrainedModel,
     train_part: &StanceImages<'_>,
     validation: &StanceImages<'_>,
     test: &StanceImages<'_>,
-    frames: &[usize],
+    points: &[DecisionPoint],
 ) -> Result<Vec<HeldOutStance>> {
     let whole_model = train_like(like, &train_part.whole, &validation.whole)?;
     let class_names = whole_model.class_names().to_vec();
@@ -215,8 +235,9 @@ pub fn classify_held_out(
         };
     let whole = outcomes(&whole_model, &test.whole)?;
     let mut per_point = Vec::new();
-    for &k in frames {
-        let model = train_like(like, &cut_at(train_part, k), &cut_at(validation, k))?;
+    for point in points {
+        let k = point.frames;
+        let model = train_like(&point.model, &cut_at(train_part, k), &cut_at(validation, k))?;
         per_point.push(outcomes(&model, &cut_at(test, k))?);
     }
     test.whole
@@ -234,10 +255,10 @@ pub fn classify_held_out(
             Ok(HeldOutStance {
                 class,
                 stance_frames,
-                points: frames
+                points: points
                     .iter()
                     .zip(&per_point)
-                    .map(|(&k, outcome)| (k < stance_frames).then(|| outcome[i]))
+                    .map(|(point, outcome)| (point.frames < stance_frames).then(|| outcome[i]))
                     .collect(),
                 whole: whole[i],
             })
@@ -313,8 +334,9 @@ fn cut_at<'a>(set: &StanceImages<'a>, k: usize) -> Vec<LabeledImage<'a>> {
         .unwrap_or_default()
 }
 
-/// The rule of the module docs over `held_out` stances: the lowest threshold whose accuracy is within
-/// [`AUTO_TOLERANCE`] of the whole-stance classifier's.
+/// The rule of the module docs over `held_out` stances: the lowest threshold whose early decisions'
+/// accuracy, at its lower bound, is within [`AUTO_TOLERANCE`] of the whole-stance classifier's on
+/// the same stances.
 pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThreshold {
     let never = 1.0 + f64::EPSILON.sqrt();
     let whole_accuracy = accuracy(held_out, |stance| stance.whole.0);
@@ -328,10 +350,7 @@ pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThre
     let threshold = candidates
         .iter()
         .copied()
-        .find(|&t| {
-            accuracy(held_out, |stance| stance.decide(frames, t).class)
-                >= whole_accuracy - AUTO_TOLERANCE - 1e-12
-        })
+        .find(|&t| early_decisions_are_safe(held_out, frames, t))
         .unwrap_or(never);
     let decisions: Vec<OfflineDecision> = held_out
         .iter()
@@ -351,6 +370,38 @@ pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThre
             / n,
         validation_stances: held_out.len(),
     }
+}
+
+/// Whether `auto` with `threshold` is safe on `held_out`: no stance decided early, or the lower bound
+/// of the early decisions' accuracy within [`AUTO_TOLERANCE`] of the whole stance's on them.
+fn early_decisions_are_safe(held_out: &[HeldOutStance], frames: &[usize], threshold: f64) -> bool {
+    let (mut early, mut right, mut whole_right) = (0usize, 0usize, 0usize);
+    for stance in held_out {
+        let decision = stance.decide(frames, threshold);
+        if decision.point.is_some() {
+            early += 1;
+            right += usize::from(decision.class == stance.class);
+            whole_right += usize::from(stance.whole.0 == stance.class);
+        }
+    }
+    if early == 0 {
+        return true;
+    }
+    let whole = whole_right as f64 / early as f64;
+    wilson_lower_bound(right, early, AUTO_BOUND_Z) >= whole - AUTO_TOLERANCE - 1e-12
+}
+
+/// The Wilson score interval's lower bound of a proportion `right / n` at `z` (0 when `n` is 0).
+pub fn wilson_lower_bound(right: usize, n: usize, z: f64) -> f64 {
+    if n == 0 {
+        return 0.0;
+    }
+    let n = n as f64;
+    let p = right as f64 / n;
+    let z2 = z * z;
+    let centre = p + z2 / (2.0 * n);
+    let spread = z * (p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt();
+    ((centre - spread) / (1.0 + z2 / n)).max(0.0)
 }
 
 /// The share of `stances` whose class `decided` gives right (0 without stances).
@@ -375,29 +426,46 @@ mod tests {
         }
     }
 
-    /// `auto` decides at the first confident point; the threshold is the lowest that keeps the
-    /// accuracy within a point of the whole stance's, so a confident wrong early answer raises it.
+    /// `auto` decides at the first confident point; the threshold is the lowest whose early decisions
+    /// are safe at their lower bound, so a confident wrong early answer raises it, and so do too few
+    /// right ones to trust.
     #[test]
-    fn the_threshold_is_the_lowest_that_keeps_the_whole_stance_accuracy() {
+    fn the_threshold_is_the_lowest_whose_early_decisions_are_safe_at_their_lower_bound() {
         let frames = [4, 8];
-        let stances = vec![
-            stance(0, &[(1, 0.7), (0, 0.95)], (0, 0.99)),
-            stance(1, &[(1, 0.9), (1, 0.97)], (1, 0.99)),
-            stance(0, &[(0, 0.8), (0, 0.9)], (0, 0.99)),
-        ];
+        // Sixty stances right early at 0.9 and above; one wrong at 0.7.
+        let mut stances = vec![stance(0, &[(1, 0.7), (0, 0.95)], (0, 0.99))];
+        for i in 0..60 {
+            let class = i % 2;
+            stances.push(stance(class, &[(class, 0.9), (class, 0.97)], (class, 0.99)));
+        }
         let auto = learn_threshold(&stances, &frames);
-        // 0.7 decides the first stance wrong at frame 4; 0.8 does not.
-        assert_eq!(auto.threshold, 0.8);
+        // 0.7 decides the first stance wrong at frame 4; 0.9 does not.
+        assert_eq!(auto.threshold, 0.9);
         assert_eq!((auto.whole_accuracy, auto.auto_accuracy), (1.0, 1.0));
-        assert_eq!(auto.mean_decision_frame, (8.0 + 4.0 + 4.0) / 3.0);
+        assert_eq!(auto.mean_decision_frame, (8.0 + 60.0 * 4.0) / 61.0);
         let late = stances[0].decide(&frames, 0.99);
         assert_eq!((late.point, late.frame), (None, 20));
+        // Three stances right early are too few to be sure of two points: auto waits.
+        let few = learn_threshold(&stances[1..4], &frames);
+        assert!(few.threshold > 1.0, "{}", few.threshold);
         // A stance that lifts off before a point has no outcome there.
         let short = HeldOutStance {
             points: vec![Some((0, 0.99)), None],
             ..stances[0].clone()
         };
         assert_eq!(short.decide(&frames, 0.999).point, None);
+    }
+
+    #[test]
+    fn the_wilson_bound_is_below_the_share_and_tightens_with_more_stances() {
+        assert_eq!(wilson_lower_bound(0, 0, 1.0), 0.0);
+        let (few, many) = (
+            wilson_lower_bound(10, 10, 1.0),
+            wilson_lower_bound(100, 100, 1.0),
+        );
+        assert!(few < many && many < 1.0, "{few} {many}");
+        assert!((wilson_lower_bound(100, 100, 1.0) - 100.0 / 101.0).abs() < 1e-12);
+        assert!(wilson_lower_bound(50, 100, 1.0) < 0.5);
     }
 
     /// A model with points writes them and reads them back (deciding alike); a file whose point is

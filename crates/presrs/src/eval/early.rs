@@ -163,7 +163,11 @@ pub fn evaluate_early(
             (part(&draw.train), part(&draw.validation), part(&draw.test));
         let whole = train_whole(method, dataset, &train_set, &validation, draw.seed)
             .with_context(|| format!("{name}: training a fold"))?;
-        let early = train_early(&whole, &train_set, &validation, draw.seed)
+        let chooser = crate::train::early::point_chooser(method, &dataset.sample, draw.seed);
+        let choose = chooser
+            .as_ref()
+            .map(|f| f as presrs_core::pipeline::ChoosePoint<'_>);
+        let early = train_early(&whole, &train_set, &validation, choose, draw.seed)
             .with_context(|| format!("{name}: training a fold's decision points"))?;
         thresholds.push(early.auto.map_or(f64::INFINITY, |auto| auto.threshold));
         let model = whole.with_early(early)?;

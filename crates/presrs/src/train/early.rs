@@ -3,11 +3,14 @@
 //! points' classifiers and `auto`'s threshold added to the model ([`presrs_core::pipeline::train_early`]).
 
 use presrs_core::TrainedModel;
+use presrs_core::error::CoreError;
 use presrs_core::pipeline::{LabeledImage, StanceImages, train_early};
+use presrs_core::sample::SampleKind;
 use presrs_core::split::Split;
 
 use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
+use crate::method::Method;
 
 /// Shares of the median training stance at which `--decide-at auto` puts its decision points: early
 /// enough that deciding at one of them decides within the first half of a typical stance.
@@ -110,12 +113,49 @@ pub fn stance_images<'d>(
     }
 }
 
+/// A decision point's classifier chosen as a whole-stance model of `method` is when `method` leaves
+/// a choice (features or classifier `auto`): the automatic choice among its candidates for the stances
+/// cut at the point, validated on the cut validation stances. `None` for a fixed method (the points
+/// take the whole-stance model's).
+pub fn point_chooser<'m>(
+    method: &'m Method,
+    sample: &'m SampleKind,
+    seed: u64,
+) -> Option<
+    impl Fn(&[LabeledImage<'_>], &[LabeledImage<'_>]) -> presrs_core::error::Result<TrainedModel> + 'm,
+> {
+    method.is_auto().then_some(
+        move |train: &[LabeledImage<'_>], validation: &[LabeledImage<'_>]| {
+            let grid = train
+                .first()
+                .map(|image| image.frame.grid())
+                .ok_or_else(|| CoreError::Param {
+                    name: "decision point",
+                    reason: "no training stance reaches the point".into(),
+                })?;
+            let candidates =
+                method
+                    .candidates_for(grid, false, sample)
+                    .map_err(|err| CoreError::Param {
+                        name: "decision point",
+                        reason: err.to_string(),
+                    })?;
+            presrs_core::selection::train_auto(
+                train,
+                validation,
+                &method.auto_choice(&candidates),
+                seed,
+            )
+        },
+    )
+}
+
 /// `model` with the early decisions of the data set's decision points, trained on the draw `split` of
-/// the samples at `pool` (indices into the data set; `labels` by pool index). Unchanged when the data
-/// set holds no cuts.
+/// the samples at `pool` (indices into the data set; `labels` by pool index), each point's method
+/// chosen as the model's was (`method`, [`point_chooser`]). Unchanged when the data set holds no cuts.
 pub fn with_early_decisions(
     model: TrainedModel,
-    dataset: &Dataset,
+    (dataset, method): (&Dataset, &Method),
     pool: &[usize],
     split: &Split,
     labels: &[&str],
@@ -131,7 +171,11 @@ pub fn with_early_decisions(
     }
     let train_set = stance_images(dataset, pool, &split.train, labels);
     let validation = stance_images(dataset, pool, &split.validation, labels);
-    let early = train_early(&model, &train_set, &validation, seed).with_context(|| {
+    let chooser = point_chooser(method, &dataset.sample, seed);
+    let choose = chooser
+        .as_ref()
+        .map(|f| f as presrs_core::pipeline::ChoosePoint<'_>);
+    let early = train_early(&model, &train_set, &validation, choose, seed).with_context(|| {
         format!(
             "{}: cannot train the decision points",
             dataset.path().display()

@@ -196,8 +196,14 @@ pub fn train_with_progress(
                 .is_none_or(|condition| dataset.samples[i].condition.as_deref() == Some(condition))
         })
         .collect();
-    let model =
-        early::with_early_decisions(model, dataset, &pool_indices, &split, &labels, options.seed)?;
+    let model = early::with_early_decisions(
+        model,
+        (dataset, method),
+        &pool_indices,
+        &split,
+        &labels,
+        options.seed,
+    )?;
     let mut warnings = Warnings::new();
     if let Some(per_class) = options.per_class
         && !split.capped.is_empty()
