@@ -37,7 +37,7 @@ fn curve_panel(early: &EarlyCurve) -> FaultPanel {
         .filter_map(|p| Some((p.frames as f64, 100.0 * p.frame_accuracy?, 0.0)))
         .collect();
     let mut lines = vec![(
-        "stance model trained for K (last: whole, at the median stance)".to_owned(),
+        "stance model for K, then lift-off".to_owned(),
         stance,
     )];
     if !one_frame.is_empty() {
@@ -45,7 +45,7 @@ fn curve_panel(early: &EarlyCurve) -> FaultPanel {
     }
     if let Some(auto) = &early.auto {
         lines.push((
-            "auto (at its mean decision frame)".to_owned(),
+            "auto, at its mean decision".to_owned(),
             vec![(auto.mean_frames, 100.0 * auto.accuracy, 0.0)],
         ));
     }
