@@ -49,12 +49,15 @@ pub struct EarlyDecision {
     pub threshold: Option<f64>,
 }
 
+/// The classifiers of decision points in use, by their point (frames after touchdown), increasing.
+pub(crate) type PointSessions<'m> = Vec<(usize, Session<'m>)>;
+
 /// The classifiers `decide_at` uses on `model` (the point `K`, or every point for `auto`) and `auto`'s
 /// threshold; an error when the model was not trained for that moment.
 pub(crate) fn points_for(
     model: &TrainedModel,
     decide_at: Option<DecideAt>,
-) -> Result<(Vec<(usize, Session<'_>)>, Option<f64>)> {
+) -> Result<(PointSessions<'_>, Option<f64>)> {
     let Some(decide_at) = decide_at else {
         return Ok((Vec::new(), None));
     };

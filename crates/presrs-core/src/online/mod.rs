@@ -228,7 +228,7 @@ struct WholeStance<'m> {
     decide_at: Option<DecideAt>,
     /// The classifiers of the model's decision points that `decide_at` uses (frames after touchdown,
     /// increasing), and `auto`'s threshold.
-    points: Vec<(usize, Session<'m>)>,
+    points: early::PointSessions<'m>,
     threshold: Option<f64>,
     /// The next point to try in the stance under way (`auto`).
     next_point: usize,
