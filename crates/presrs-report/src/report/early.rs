@@ -36,10 +36,7 @@ fn curve_panel(early: &EarlyCurve) -> FaultPanel {
         .iter()
         .filter_map(|p| Some((p.frames as f64, 100.0 * p.frame_accuracy?, 0.0)))
         .collect();
-    let mut lines = vec![(
-        "stance model for K, then lift-off".to_owned(),
-        stance,
-    )];
+    let mut lines = vec![("stance model for K, then lift-off".to_owned(), stance)];
     if !one_frame.is_empty() {
         lines.push(("one-frame model at frame K".to_owned(), one_frame));
     }
