@@ -124,9 +124,18 @@ def test_a_whole_stance_decision_says_what_it_waited_for(walk, bag, decide_at, w
     case = Case(model, bags[bag], *extra)
     decisions = [e for e in case.reference if e["event"] == "classification"]
     assert [e["decided_at"] for e in decisions] == [waited_for]
-    peer = Peer(domain, reliable=True)
+    # The node first, then the peer. With the peer first, 8 runs of these three tests in 90 failed under
+    # load (load average 6-7; none in 30 at 2-3): 7 got no TerrainDecision (the 3 looked into got nothing
+    # at all on the peer's first two readers, decisions and stance events, while its later ones, JSON
+    # events and diagnostics, got everything), one lost its first JSON event. RustDDS seems to take a
+    # reader announced before its participant without an address (the participant's default locators are
+    # looked up when the reader is discovered, not again) and never to send to it. Started after the
+    # node, the peer's participant reaches the node before its readers do: none failed in 40 runs at the
+    # same load.
     node = node_factory(case.model, domain, "--input-qos", "reliable", *extra)
+    peer = Peer(domain, reliable=True)
     assert peer.wait_matched(30), "the node's topics were not discovered within 30 s"
+    time.sleep(1.0)  # the node's side of the match, as in run_parity
     publish_all(peer, case.payloads)
 
     def all_taken(p):
