@@ -83,7 +83,18 @@ impl OnlineProfile {
     /// detector. With [`BaselineMode::Auto`], the mode the automatic choice made on most of the
     /// segmentations is stored if it is the floor (presses on a preload): a calibrated detector has
     /// no warm-up to choose on, and judges the stream from its profile's mode.
+    ///
+    /// Recordings that are one contact each (trials cut to one foot contact,
+    /// [`BaselineMode::Contact`], chosen or found on most of them) give a profile for a stream of
+    /// steps instead: [`Self::learn_from_contacts`].
     pub fn learn_with(segmentations: &[Segmentation], segment: &ValidSegmentParams) -> Self {
+        let contacts = segmentations
+            .iter()
+            .filter(|seg| seg.mode == BaselineMode::Contact)
+            .count();
+        if 2 * contacts > segmentations.len() {
+            return Self::learn_from_contacts(segmentations, segment);
+        }
         let floors = segmentations
             .iter()
             .filter(|seg| seg.mode == BaselineMode::Floor)
@@ -113,6 +124,62 @@ impl OnlineProfile {
             calibration: Calibration::from_segmentations(segmentations),
             gait_table: BTreeMap::new(),
         }
+    }
+
+    /// A profile for a stream of steps learned from recordings that are one contact each: a stream
+    /// is not one contact, so its detector finds stances above the unloaded level
+    /// ([`BaselineMode::Drifting`], the other settings as `segment` gives them), calibrated on the
+    /// contacts: the unloaded level around them (0, or the lowest reading when it is negative), the
+    /// load range from their loaded frames (the median peak above that level), no noise (the
+    /// stream's quiet frames measure it); each recording's length is its stance's, which sets the
+    /// sample offset and the typical length.
+    pub fn learn_from_contacts(
+        segmentations: &[Segmentation],
+        segment: &ValidSegmentParams,
+    ) -> Self {
+        let streaming = SegmentParams {
+            baseline: BaselineMode::Drifting,
+            ..segment.params().clone()
+        };
+        // Only the mode changed, and every mode is valid with valid settings.
+        let segment = streaming.check().unwrap_or_else(|_| segment.clone());
+        let contacts = segmentations.iter().filter_map(|seg| {
+            let stance = seg.stances.first()?;
+            let unloaded = seg.baseline.iter().copied().fold(0.0, f64::min);
+            Some((stance.len, stance.peak_load - unloaded, unloaded))
+        });
+        let (mut lengths, mut ranges, mut levels) = (Vec::new(), Vec::new(), Vec::new());
+        for (len, range, level) in contacts {
+            lengths.push(len);
+            ranges.push(range);
+            levels.push(level);
+        }
+        let calibration = (!ranges.is_empty()).then(|| Calibration {
+            baseline: median_of(&mut levels),
+            noise: 0.0,
+            load_range: median_of(&mut ranges),
+        });
+        Self {
+            params: OnlineParams {
+                sample_offset: sample_offset_for(&lengths),
+                ..OnlineParams::default()
+            },
+            segment,
+            typical_stance_frames: typical_stance_frames(&lengths),
+            calibration,
+            gait_table: BTreeMap::new(),
+        }
+    }
+}
+
+/// The median of `values` (reordered; the mean of the two middle ones for an even count), 0 for none.
+fn median_of(values: &mut [f64]) -> f64 {
+    values.sort_unstable_by(f64::total_cmp);
+    let n = values.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => values[n / 2],
+        _ => values[n / 2 - 1] / 2.0 + values[n / 2] / 2.0,
     }
 }
 
@@ -333,6 +400,22 @@ impl WholeStance {
     }
 }
 
+/// What a one-frame or series model takes as a stream's frames, in words.
+fn expected_stream_frame(model: &TrainedModel) -> String {
+    let takes = format!(
+        "a grid that the model's crop {} turns into its {} image",
+        model.crop(),
+        model.image_grid()
+    );
+    match model.sample() {
+        SampleKind::Series { .. } => format!(
+            "{takes} (this model classifies series, channels x time, one 2-D array per sample: it \
+             was trained on series, not on a sensor's frames)"
+        ),
+        SampleKind::Frame | SampleKind::Stance { .. } => takes,
+    }
+}
+
 impl<'m> OnlineClassifier<'m> {
     pub fn new(
         model: &'m TrainedModel,
@@ -395,7 +478,11 @@ impl<'m> OnlineClassifier<'m> {
         match self.grid {
             None if self.whole.is_some() => {
                 if let Some(whole) = &mut self.whole
-                    && let Err(err) = whole.buffer.set_grid(grid)
+                    && let Err(err) = self
+                        .session
+                        .model()
+                        .check_sensor(grid)
+                        .and_then(|()| whole.buffer.set_grid(grid))
                 {
                     self.stats.rejected_frames += 1;
                     return Err(err);
@@ -408,11 +495,7 @@ impl<'m> OnlineClassifier<'m> {
                     self.stats.rejected_frames += 1;
                     return Err(CoreError::Shape {
                         what: "stream frame",
-                        expected: format!(
-                            "a grid that the model's crop {} turns into its {} image",
-                            model.crop(),
-                            model.image_grid()
-                        ),
+                        expected: expected_stream_frame(model),
                         got: grid.to_string(),
                     });
                 }
