@@ -9,7 +9,7 @@
 mod common;
 use std::path::{Path, PathBuf};
 
-use common::{presrs, stderr, stdout};
+use common::{presrs, stderr, stdout, train_one_contact_stance_model};
 
 fn jiku() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real/jiku-walk")
@@ -43,21 +43,7 @@ fn manifest(dir: &Path, subject: &str, per_label: Option<usize>) -> PathBuf {
 fn stance_model(dir: &Path) -> PathBuf {
     let manifest = manifest(dir, "s00", Some(4));
     let model = dir.join("stance.json");
-    let out = presrs(&[
-        "train",
-        "--manifest",
-        manifest.to_str().unwrap(),
-        "--out",
-        model.to_str().unwrap(),
-        "--sample",
-        "stance",
-        "--one-sample-per-file",
-        "--features",
-        "rocket",
-        "--classifier",
-        "ridge",
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    train_one_contact_stance_model(&manifest, &model);
     model
 }
 

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 
-use common::{presrs, stderr, stdout};
+use common::{presrs, stderr, stdout, train_one_contact_stance_model};
 use serde_json::Value;
 
 fn shared(path: &str) -> PathBuf {
@@ -67,21 +67,7 @@ fn one_contact_model() -> &'static (tempfile::TempDir, PathBuf) {
         let manifest = dir.path().join("manifest.csv");
         std::fs::write(&manifest, rows).unwrap();
         let model = dir.path().join("model.json");
-        let out = presrs(&[
-            "train",
-            "--manifest",
-            manifest.to_str().unwrap(),
-            "--out",
-            model.to_str().unwrap(),
-            "--sample",
-            "stance",
-            "--one-sample-per-file",
-            "--features",
-            "rocket",
-            "--classifier",
-            "ridge",
-        ]);
-        assert!(out.status.success(), "{}", stderr(&out));
+        train_one_contact_stance_model(&manifest, &model);
         (dir, model)
     })
 }
