@@ -111,6 +111,7 @@ class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecisi
     liftoff_stamp: Time
     gait: str
     latency_us: float64
+    gap_frames: uint32
 
 
 # ros/presrs_msgs/msg/StanceEvent.msg
@@ -128,3 +129,4 @@ class StanceEvent(IdlStruct, typename="presrs_msgs::msg::dds_::StanceEvent_"):
     sampled: bool
     touchdown_stamp: Time
     liftoff_stamp: Time
+    gap_frames: uint32

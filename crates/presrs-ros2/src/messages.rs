@@ -138,6 +138,8 @@ pub struct TerrainDecision {
     pub liftoff_stamp: Time,
     pub gait: String,
     pub latency_us: f64,
+    /// Frames missing inside the stance up to the sample frame (the event's `gap_frames`).
+    pub gap_frames: u32,
 }
 
 impl TerrainDecision {
@@ -172,6 +174,8 @@ pub struct StanceEvent {
     pub sampled: bool,
     pub touchdown_stamp: Time,
     pub liftoff_stamp: Time,
+    /// Liftoff only: frames missing inside the stance (the event's `gap_frames`).
+    pub gap_frames: u32,
 }
 
 impl StanceEvent {
@@ -230,6 +234,7 @@ pub fn decision_message(
         liftoff_stamp: liftoff.map_or(Time::ZERO, |w| stamp_of(stamps, w.decided_at_frame)),
         gait: decision.gait.clone().unwrap_or_default(),
         latency_us: decision.latency_us,
+        gap_frames: u32_of(decision.gap_frames),
     }
 }
 
@@ -258,6 +263,7 @@ pub fn stance_message(
             sampled: false,
             touchdown_stamp: stamp_of(stamps, td.touchdown_frame),
             liftoff_stamp: Time::ZERO,
+            gap_frames: 0,
         }),
         SessionEvent::Liftoff(lo) => Some(StanceEvent {
             header: header(lo.frame),
@@ -272,6 +278,7 @@ pub fn stance_message(
             sampled: lo.sampled,
             touchdown_stamp: stamp_of(stamps, lo.touchdown_frame),
             liftoff_stamp: stamp_of(stamps, lo.end_frame),
+            gap_frames: u32_of(lo.gap_frames),
         }),
         _ => None,
     }
@@ -315,6 +322,7 @@ mod tests {
             timestamp_us: Some(2_600_000),
             gait: Some("walk".to_owned()),
             whole_stance,
+            gap_frames: 0,
         }
     }
 
@@ -375,8 +383,10 @@ mod tests {
             partial: false,
             sampled: true,
             frame: 21,
+            gap_frames: 2,
         });
         let s = stance_message(&liftoff, &Tenths, "").unwrap();
+        assert_eq!(s.gap_frames, 2);
         assert_eq!(
             (s.event, s.end_frame, s.frame, s.peak_frame),
             (StanceEvent::LIFTOFF, 19, 21, 14)

@@ -59,6 +59,16 @@ pub struct Classification {
     /// What a whole-stance decision waited for (absent for one-frame and fused decisions).
     #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
     pub whole_stance: Option<WholeStance>,
+    /// Frames missing inside the stance up to the sample frame (a step in the input's frame times
+    /// well above the frame period: `session::FrameGaps`): the decision was made without them.
+    /// Absent from the line when 0 (none missing, or an input without frame times).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gap_frames: u64,
+}
+
+/// Whether a count is 0 (left out of the line).
+fn is_zero(count: &u64) -> bool {
+    *count == 0
 }
 
 /// What a whole-stance model's decision waited for.
@@ -99,6 +109,9 @@ pub struct Liftoff {
     pub sampled: bool,
     /// The frame at which the end was decided.
     pub frame: u64,
+    /// Frames missing inside the stance (as `Classification::gap_frames`); absent when 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gap_frames: u64,
 }
 
 /// A frame rejected, a classification that failed, or an input that cannot go on (`fatal`).
@@ -266,6 +279,8 @@ pub fn step_events(
                 partial: lo.stance.partial,
                 sampled: lo.sampled,
                 frame: lo.frame as u64,
+                // The session's `FrameGaps` fills it in.
+                gap_frames: 0,
             }),
         })
         .collect()
@@ -308,5 +323,7 @@ fn classification(
             cut: how.cut,
         }),
         label,
+        // The session's `FrameGaps` fills it in.
+        gap_frames: 0,
     }
 }
