@@ -108,7 +108,7 @@ impl SelectionCost {
     /// those before it, ends past the budget.
     pub fn over_budget_seconds(&self) -> Option<f64> {
         let budget = self.budget_seconds?;
-        (self.scoring_seconds > budget).then(|| self.scoring_seconds - budget)
+        (self.scoring_seconds > budget).then_some(self.scoring_seconds - budget)
     }
 
     /// What bounded the scoring, in words: `within the budget of 60 s`, `62.3 s over the budget of
