@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use presrs::core::online::{DecideAt, OnlineClassifier as CoreOnline, OnlineProfile};
 use presrs::io::model_file::ModelFile;
-use presrs::session::{EventTiming, SessionEvent, check_profile, step_events};
+use presrs::session::{EventTiming, FrameGaps, SessionEvent, check_profile, step_events};
 use pyo3::prelude::*;
 use self_cell::self_cell;
 
@@ -34,6 +34,9 @@ pub struct OnlineClassifier {
     online: Online,
     /// Frames pushed so far.
     frames: u64,
+    /// Frames missing between the pushed frames, from their times: a stance's events state them
+    /// (`gap_frames`), as `presrs stream` does.
+    gaps: FrameGaps,
 }
 
 impl std::fmt::Debug for OnlineClassifier {
@@ -75,7 +78,11 @@ impl OnlineClassifier {
             )
         })
         .py_err()?;
-        Ok(Self { online, frames: 0 })
+        Ok(Self {
+            online,
+            frames: 0,
+            gaps: FrameGaps::default(),
+        })
     }
 
     /// Feeds one frame `(rows, cols)`; returns the events it completed, as dicts. `timestamp_us`: the
@@ -96,11 +103,13 @@ impl OnlineClassifier {
         }
         let view = images.frame(0)?;
         let index = self.frames;
-        let values = self.online.with_dependent_mut(|running, online| {
+        let gaps = &mut self.gaps;
+        let mut values = self.online.with_dependent_mut(|running, online| {
             let started = Instant::now();
             let step = online
                 .push(&view)
                 .map_err(|err| data_error(format!("frame {index}: {err}")))?;
+            gaps.frame(index, timestamp_us);
             let latency_us = started.elapsed().as_secs_f64() * 1e6;
             let timing = EventTiming {
                 latency_us,
@@ -114,12 +123,15 @@ impl OnlineClassifier {
             ))
         })?;
         self.frames += 1;
+        for event in &mut values {
+            self.gaps.mark(event);
+        }
         to_dicts(py, &values)
     }
 
     /// Ends the stream: the events of a stance still open (a decision not yet made, its lift-off).
     fn finish<'py>(&mut self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
-        let values = self.online.with_dependent_mut(|running, online| {
+        let mut values = self.online.with_dependent_mut(|running, online| {
             let step = online.finish().py_err()?;
             Ok::<_, PyErr>(step_events(
                 &step,
@@ -128,6 +140,9 @@ impl OnlineClassifier {
                 EventTiming::default(),
             ))
         })?;
+        for event in &mut values {
+            self.gaps.mark(event);
+        }
         to_dicts(py, &values)
     }
 

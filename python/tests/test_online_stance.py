@@ -141,3 +141,31 @@ def test_decide_at_with_a_one_frame_model_is_refused_in_python_words(paper_model
     assert "decide_at=5" in message
     assert "whole-stance" in message
     assert "--decide-at" not in message
+
+
+def test_frames_missing_inside_a_stance_are_stated(stance_model):
+    """Frames lost in the middle of a step (their times jump by 5 periods): the lift-off decision
+    says so in `gap_frames`, as `presrs stream` does; without times, nothing is known of a gap."""
+    model = presrs.Model.load(stance_model)
+    recording = presrs.read(JIKU / MOVIES[0])
+    swing = [np.zeros(recording.shape)] * SWING
+    frames = swing + list(recording.frames) + swing
+    middle = SWING + len(recording.frames) // 2
+    period_us = 10_000
+
+    def run(with_times):
+        online = presrs.OnlineClassifier(model)
+        events = []
+        for i, frame in enumerate(frames):
+            # Four frames lost before `middle`: its time is five periods after the previous one.
+            time = (i + (4 if i >= middle else 0)) * period_us
+            events += online.push(frame, timestamp_us=time if with_times else None)
+        return events + online.finish()
+
+    events = run(with_times=True)
+    (decision,) = decisions(events)
+    assert decision["gap_frames"] == 4
+    liftoff = [e for e in events if e["event"] == "liftoff"]
+    assert liftoff[-1]["gap_frames"] == 4
+    (decision,) = decisions(run(with_times=False))
+    assert decision.get("gap_frames", 0) == 0

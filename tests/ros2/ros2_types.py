@@ -116,6 +116,7 @@ class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecisi
     early_point: int64
     early_frames: uint64
     early_threshold: float64
+    gap_frames: uint32
 
 
 # ros/presrs_msgs/msg/StanceEvent.msg
@@ -133,3 +134,4 @@ class StanceEvent(IdlStruct, typename="presrs_msgs::msg::dds_::StanceEvent_"):
     sampled: bool
     touchdown_stamp: Time
     liftoff_stamp: Time
+    gap_frames: uint32

@@ -53,6 +53,7 @@ def assert_same_decisions(peer, reference, payloads):
             stamp_us = (mine.header.stamp.sec * 10**9 + mine.header.stamp.nanosec) // 1000
             assert stamp_us == ref["timestamp_us"]
         assert mine.gait == (ref["gait"] or "")
+        assert mine.gap_frames == ref.get("gap_frames", 0)
         # What a whole-stance decision waited for, and that frame's stamp; nothing for one-frame ones.
         assert mine.decided_at == t.DECIDED_AT[ref.get("decided_at", "none")]
         assert mine.decided_at_frame == ref.get("decided_at_frame", 0)
@@ -98,7 +99,11 @@ def test_the_real_recording_gives_the_streams_decisions(fras, domain, node_facto
     # The JSON events on the String topic and on stdout are the stream's, latency aside.
     assert without_latency(peer.json_events()) == without_latency(fras.reference)
     assert without_latency(node.stdout[1:]) == without_latency(fras.reference)
-    assert "205 messages received, 205 frames classified" in stderr
+    assert "205 messages received, 205 frames processed" in stderr
+    n = sum(e["event"] == "classification" for e in fras.reference)
+    assert f"{n} decisions made" in stderr
+    # One node of its name and a publisher it can receive: nothing to warn of.
+    assert "another node named" not in stderr and "cannot receive" not in stderr, stderr
 
 
 def test_a_simulated_run_at_100_hz_on_sensor_data_qos(sim, domain, node_factory):

@@ -147,6 +147,8 @@ pub struct TerrainDecision {
     pub early_point: i64,
     pub early_frames: u64,
     pub early_threshold: f64,
+    /// Frames missing inside the stance up to the sample frame (the event's `gap_frames`).
+    pub gap_frames: u32,
 }
 
 impl TerrainDecision {
@@ -181,6 +183,8 @@ pub struct StanceEvent {
     pub sampled: bool,
     pub touchdown_stamp: Time,
     pub liftoff_stamp: Time,
+    /// Liftoff only: frames missing inside the stance (the event's `gap_frames`).
+    pub gap_frames: u32,
 }
 
 impl StanceEvent {
@@ -247,6 +251,7 @@ pub fn decision_message(
             .map_or(-1, |k| i64::try_from(k).unwrap_or(i64::MAX)),
         early_frames: early.map_or(0, |e| e.early_frames),
         early_threshold: early.and_then(|e| e.early_threshold).unwrap_or(0.0),
+        gap_frames: u32_of(decision.gap_frames),
     }
 }
 
@@ -275,6 +280,7 @@ pub fn stance_message(
             sampled: false,
             touchdown_stamp: stamp_of(stamps, td.touchdown_frame),
             liftoff_stamp: Time::ZERO,
+            gap_frames: 0,
         }),
         SessionEvent::Liftoff(lo) => Some(StanceEvent {
             header: header(lo.frame),
@@ -289,6 +295,7 @@ pub fn stance_message(
             sampled: lo.sampled,
             touchdown_stamp: stamp_of(stamps, lo.touchdown_frame),
             liftoff_stamp: stamp_of(stamps, lo.end_frame),
+            gap_frames: u32_of(lo.gap_frames),
         }),
         _ => None,
     }
@@ -333,6 +340,7 @@ mod tests {
             gait: Some("walk".to_owned()),
             whole_stance,
             early: None,
+            gap_frames: 0,
         }
     }
 
@@ -393,8 +401,10 @@ mod tests {
             partial: false,
             sampled: true,
             frame: 21,
+            gap_frames: 2,
         });
         let s = stance_message(&liftoff, &Tenths, "").unwrap();
+        assert_eq!(s.gap_frames, 2);
         assert_eq!(
             (s.event, s.end_frame, s.frame, s.peak_frame),
             (StanceEvent::LIFTOFF, 19, 21, 14)

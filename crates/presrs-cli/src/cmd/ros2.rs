@@ -141,13 +141,15 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let stop = graph.stop_handle();
     let signal_thread = signals.on_first(move || stop.stop());
     let log = |notice: &_| stderr_line!("presrs ros2: {}", notice_text(notice));
+    // What the node finds wrong with its input or the graph (its /diagnostics WARN and ERROR).
+    let warn = |text: &str| stderr_line!("presrs ros2: {text}");
     // A closed stdout does not stop the node: its outputs are the topics.
     let mut print = |line: &str| drop(writeln!(out, "{line}").and_then(|()| out.flush()));
-    let summary = run_node(graph, &file.model, &profile, &mut print, &log)?;
+    let summary = run_node(graph, &file.model, &profile, &mut print, &log, &warn)?;
     if let Some(signal) = signal_thread.close() {
         stderr_line!("presrs ros2: stopped by {signal}");
     }
-    let text = presrs_ros2::summary_text(&options.input, &summary);
+    let text = presrs_ros2::summary_text(&summary.input, &summary);
     stderr_line!("presrs ros2: {text}");
     anyhow::ensure!(
         !summary.session.fatal,

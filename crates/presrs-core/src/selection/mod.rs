@@ -244,6 +244,7 @@ pub fn select(
         features_seconds,
         scoring_seconds: started.elapsed().as_secs_f64(),
         final_fit_seconds: 0.0,
+        budget_seconds: choice.budget.map(|budget| budget.as_secs_f64()),
     });
     Ok(selection)
 }

@@ -65,6 +65,16 @@ pub struct Classification {
     /// `decide_at`).
     #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
     pub early: Option<EarlyDecisionEvent>,
+    /// Frames missing inside the stance up to the sample frame (a step in the input's frame times
+    /// well above the frame period: `session::FrameGaps`): the decision was made without them.
+    /// Absent from the line when 0 (none missing, or an input without frame times).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gap_frames: u64,
+}
+
+/// Whether a count is 0 (left out of the line).
+fn is_zero(count: &u64) -> bool {
+    *count == 0
 }
 
 /// Which classifier made a decision asked for before lift-off (`decide_at`), under which rule, and why
@@ -142,6 +152,9 @@ pub struct Liftoff {
     pub sampled: bool,
     /// The frame at which the end was decided.
     pub frame: u64,
+    /// Frames missing inside the stance (as `Classification::gap_frames`); absent when 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gap_frames: u64,
 }
 
 /// A frame rejected, a classification that failed, or an input that cannot go on (`fatal`).
@@ -309,6 +322,8 @@ pub fn step_events(
                 partial: lo.stance.partial,
                 sampled: lo.sampled,
                 frame: lo.frame as u64,
+                // The session's `FrameGaps` fills it in.
+                gap_frames: 0,
             }),
         })
         .collect()
@@ -365,5 +380,7 @@ fn classification(
             })
         }),
         label,
+        // The session's `FrameGaps` fills it in.
+        gap_frames: 0,
     }
 }
