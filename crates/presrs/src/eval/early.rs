@@ -52,6 +52,32 @@ pub struct EarlyAuto {
     pub decided_early: f64,
     /// The threshold of each fold's model, in the draws' order.
     pub thresholds: Vec<f64>,
+    /// What one threshold for every fold would have given, chosen in hindsight on the held-out
+    /// stances themselves: the thresholds no other beats in both accuracy and mean decision time,
+    /// earliest first. A bound on what any threshold rule could reach with these classifiers, not a
+    /// result: it tells whether the rule or the point classifiers hold `auto` back.
+    pub hindsight: Vec<HindsightThreshold>,
+}
+
+/// One threshold applied to every held-out stance (see [`EarlyAuto::hindsight`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HindsightThreshold {
+    /// `None`: no early decision (every stance decided whole at its lift-off).
+    pub threshold: Option<f64>,
+    pub accuracy: f64,
+    pub mean_over_median_stance: f64,
+    pub decided_early: f64,
+}
+
+impl EarlyAuto {
+    /// The most accurate hindsight threshold whose mean decision comes by `share` of the median
+    /// stance (`None` when none does).
+    pub fn hindsight_best_by(&self, share: f64) -> Option<&HindsightThreshold> {
+        self.hindsight
+            .iter()
+            .filter(|h| h.mean_over_median_stance <= share)
+            .max_by(|a, b| a.accuracy.total_cmp(&b.accuracy))
+    }
 }
 
 /// What [`evaluate_early`] measured.
@@ -336,6 +362,7 @@ fn summarise(
         decisions.iter().map(|(s, d)| f(s, d)).sum::<f64>() / n
     };
     let mean_frames = mean(&|_, d| d.frame as f64);
+    let hindsight = hindsight_frontier(tested, &frames, median);
     let auto = EarlyAuto {
         accuracy: mean(&|s, d| f64::from(u8::from(d.class == s.class))),
         mean_frames,
@@ -344,6 +371,7 @@ fn summarise(
         mean_over_median_stance: mean_frames / median.max(1) as f64,
         decided_early: mean(&|_, d| f64::from(u8::from(d.point.is_some()))),
         thresholds: thresholds.to_vec(),
+        hindsight,
     };
     EarlyEvaluation {
         whole_accuracy: share(&|s| s.whole.0 == s.class),
@@ -354,5 +382,113 @@ fn summarise(
         frame_period_ms: period_ms,
         tested: tested.len(),
         folds,
+    }
+}
+
+/// Every distinct confidence of the points' decisions tried as one threshold for all held-out
+/// stances (and no early decision at all); the thresholds not beaten in both accuracy and mean
+/// decision time, earliest first.
+fn hindsight_frontier(
+    tested: &[(HeldOutStance, usize, usize)],
+    frames: &[usize],
+    median: usize,
+) -> Vec<HindsightThreshold> {
+    let mut candidates: Vec<f64> = tested
+        .iter()
+        .flat_map(|(s, _, _)| s.points.iter().flatten().map(|&(_, confidence)| confidence))
+        .collect();
+    candidates.sort_by(f64::total_cmp);
+    candidates.dedup();
+    let n = tested.len().max(1) as f64;
+    let outcome = |threshold: Option<f64>| {
+        let (mut right, mut frames_sum, mut early) = (0usize, 0usize, 0usize);
+        for (stance, _, _) in tested {
+            let decision = stance.decide(frames, threshold.unwrap_or(f64::INFINITY));
+            right += usize::from(decision.class == stance.class);
+            frames_sum += decision.frame;
+            early += usize::from(decision.point.is_some());
+        }
+        HindsightThreshold {
+            threshold,
+            accuracy: right as f64 / n,
+            mean_over_median_stance: frames_sum as f64 / n / median.max(1) as f64,
+            decided_early: early as f64 / n,
+        }
+    };
+    let mut all: Vec<HindsightThreshold> = candidates
+        .into_iter()
+        .map(Some)
+        .chain([None])
+        .map(outcome)
+        .collect();
+    all.sort_by(|a, b| {
+        a.mean_over_median_stance
+            .total_cmp(&b.mean_over_median_stance)
+            .then(b.accuracy.total_cmp(&a.accuracy))
+    });
+    let mut frontier: Vec<HindsightThreshold> = Vec::new();
+    for candidate in all {
+        if frontier
+            .last()
+            .is_none_or(|best| candidate.accuracy > best.accuracy)
+        {
+            frontier.push(candidate);
+        }
+    }
+    frontier
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stance(class: usize, points: &[Option<(usize, f64)>], whole: usize) -> HeldOutStance {
+        HeldOutStance {
+            class,
+            stance_frames: 10,
+            points: points.to_vec(),
+            whole: (whole, 0.9),
+        }
+    }
+
+    #[test]
+    fn the_hindsight_frontier_keeps_only_thresholds_nothing_beats() {
+        // Points at frames 2 and 5 of 10-frame stances. A confident early point that is right, one
+        // that is wrong at a higher confidence, and a stance only the whole model gets right.
+        let tested: Vec<(HeldOutStance, usize, usize)> = [
+            stance(0, &[Some((0, 0.8)), Some((0, 0.9))], 0),
+            stance(1, &[Some((0, 0.95)), Some((1, 0.7))], 1),
+            stance(1, &[Some((1, 0.6)), Some((1, 0.99))], 0),
+        ]
+        .into_iter()
+        .enumerate()
+        .map(|(i, s)| (s, i, 0))
+        .collect();
+        let frontier = hindsight_frontier(&tested, &[2, 5], 10);
+        // The earliest (threshold 0.6: every stance at frame 2): the second stance is decided 0
+        // (wrong), the others right: 2 of 3 at a mean of 2 frames.
+        assert_eq!(frontier[0].threshold, Some(0.6));
+        assert!((frontier[0].accuracy - 2.0 / 3.0).abs() < 1e-12);
+        assert!((frontier[0].mean_over_median_stance - 0.2).abs() < 1e-12);
+        // Every threshold's outcome, recomputed by brute force, is matched or beaten by the frontier.
+        for threshold in [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99, 2.0] {
+            let decisions: Vec<_> = tested
+                .iter()
+                .map(|(s, _, _)| (s.class, s.decide(&[2, 5], threshold)))
+                .collect();
+            let accuracy = decisions.iter().filter(|(c, d)| d.class == *c).count() as f64 / 3.0;
+            let mean = decisions.iter().map(|(_, d)| d.frame as f64).sum::<f64>() / 3.0 / 10.0;
+            assert!(
+                frontier
+                    .iter()
+                    .any(|h| h.accuracy >= accuracy && h.mean_over_median_stance <= mean + 1e-12),
+                "threshold {threshold}: {accuracy} at {mean} beats the frontier {frontier:?}"
+            );
+        }
+        // Earliest first, each more accurate than the one before.
+        for pair in frontier.windows(2) {
+            assert!(pair[0].mean_over_median_stance <= pair[1].mean_over_median_stance);
+            assert!(pair[0].accuracy < pair[1].accuracy);
+        }
     }
 }
