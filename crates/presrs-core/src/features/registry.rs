@@ -50,6 +50,12 @@ impl FeatureKind {
     pub const ROCKET: Self = Self::preset::<RocketFamily>(0);
     /// MiniRocket on the channels in their own units (no scaling by their spread first).
     pub const ROCKET_UNSCALED: Self = Self::preset::<RocketFamily>(1);
+    /// MiniRocket on the signed logs of the channels' values.
+    pub const ROCKET_LOG: Self = Self::preset::<RocketFamily>(2);
+    /// MiniRocket on the channels in their own units, and the sample's duration as one more feature.
+    pub const ROCKET_DURATION: Self = Self::preset::<RocketFamily>(3);
+    /// MiniRocket on the signed logs, and the duration.
+    pub const ROCKET_LOG_DURATION: Self = Self::preset::<RocketFamily>(4);
     /// MultiRocket (Tan et al. 2022): MiniRocket's kernels on the series and its first differences,
     /// four pooling operators, the channels scaled by their spread.
     pub const MULTIROCKET: Self = Self::preset::<MultiRocketFamily>(0);

@@ -1,14 +1,17 @@
 //! MiniRocket as a feature family (`--features rocket`). A sample's image is read as a series: its rows
 //! are the channels and its columns time (a whole stance's summary, a taxel x time array).
 //!
-//! Two presets: `rocket` divides each channel by its spread (standard deviation) over the training
+//! Five presets: `rocket` divides each channel by its spread (standard deviation) over the training
 //! samples before the convolutions (a channel combination sums channels of different units, a load in
 //! the sensor's units and a centre of pressure in fractions of the grid, which would otherwise leave the
 //! combination to the channel of largest units); `rocket_unscaled` convolves the channels in their own
 //! units, as aeon's MiniRocket does (on `jiku-walk` the scaling cost about 2 points). Which one a data
-//! set needs is the automatic choice's to validate. The scales (all 1 unscaled) and the fitted
-//! MiniRocket model are learned at training ([`FeatureFamily::fit`]) and stored in the model file with
-//! the settings.
+//! set needs is the automatic choice's to validate. Fixed choices only (issue #44: none helped on every
+//! shared set): `rocket_log` convolves every value's `sign(x) ln(1 + |x|)`, `rocket_duration` adds the
+//! stance's duration after the features ([`super::duration`]), `rocket_log_duration` both (other
+//! combinations of the settings, in a model file only, are named `rocket`). The scales (all 1
+//! unscaled), the fitted MiniRocket model and the duration's scale are learned at training
+//! ([`FeatureFamily::fit`]) and stored in the model file with the settings.
 //!
 //! A series shorter than a kernel (9 values) is padded with zeros after its end to 9, at training and
 //! classification alike: a whole stance of a few frames is then that stance followed by no load, as
@@ -22,6 +25,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result, check_len};
 use crate::features::family::{FeatureFamily, FitImages};
 use crate::features::rocket::config::{RocketConfig, check_shape};
+use crate::features::rocket::duration::{DurationScale, frames_before_padding};
 use crate::features::rocket::kernels::KERNEL_LENGTH;
 use crate::features::rocket::model::RocketModel;
 use crate::features::rocket::transform::RocketScratch;
@@ -48,6 +52,14 @@ pub struct RocketParams {
     /// convolutions (model files written before this setting existed scaled: the default).
     #[serde(default = "scaled", skip_serializing_if = "is_scaled")]
     pub channel_scaling: bool,
+    /// Whether every value is replaced by `sign(x) ln(1 + |x|)` (after the channel scaling) before
+    /// the convolutions: a compression of the channels' units, which a channel combination sums.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub log_values: bool,
+    /// Whether the sample's duration (its frames before the zero padding) follows MiniRocket's
+    /// features as one more ([`super::duration`]); for whole stances, whose lengths vary.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub duration: bool,
     /// Learned at training.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fitted: Option<FittedRocket>,
@@ -65,6 +77,10 @@ pub(super) fn scaled() -> bool {
     true
 }
 
+fn is_false(flag: &bool) -> bool {
+    !*flag
+}
+
 /// (the default is not written, so that a scaled model's file reads as before)
 pub(super) fn is_scaled(channel_scaling: &bool) -> bool {
     *channel_scaling
@@ -78,6 +94,8 @@ impl Default for RocketParams {
             max_dilations_per_kernel: config.max_dilations_per_kernel,
             seed: config.seed,
             channel_scaling: true,
+            log_values: false,
+            duration: false,
             fitted: None,
         }
     }
@@ -101,6 +119,16 @@ pub struct FittedRocket {
     /// Each channel is divided by its scale before the convolutions.
     pub channel_scales: Vec<f64>,
     pub model: RocketModel,
+    /// The duration feature's scale, when the family adds it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duration: Option<DurationScale>,
+}
+
+impl FittedRocket {
+    /// Features: MiniRocket's, and the duration when there is one.
+    pub fn output_len(&self) -> usize {
+        self.model.output_len() + usize::from(self.duration.is_some())
+    }
 }
 
 /// Rocket features of series of one shape; owns its buffers.
@@ -110,6 +138,7 @@ pub struct RocketExtractor {
     fitted: Arc<FittedRocket>,
     scaled: Vec<f64>,
     scratch: RocketScratch,
+    log_values: bool,
 }
 
 /// The length series of `length` values are transformed at: `length`, or 9 (a kernel's taps) for
@@ -137,6 +166,13 @@ pub(super) fn scale_and_pad(
             *d = v / scale;
         }
         dst[length..].fill(0.0);
+    }
+}
+
+/// Every value replaced by `sign(x) ln(1 + |x|)` (numpy's `sign(x) * log1p(abs(x))`).
+pub(super) fn signed_log(values: &mut [f64]) {
+    for value in values {
+        *value = value.signum() * value.abs().ln_1p();
     }
 }
 
@@ -182,21 +218,37 @@ fn fitted_for(params: &RocketParams, grid: Grid) -> Result<&FittedRocket> {
 
 impl FeatureFamily for RocketFamily {
     const NAME: &'static str = "rocket";
-    const PRESETS: &'static [&'static str] = &["rocket", "rocket_unscaled"];
+    const PRESETS: &'static [&'static str] = &[
+        "rocket",
+        "rocket_unscaled",
+        "rocket_log",
+        "rocket_duration",
+        "rocket_log_duration",
+    ];
     const COSTLY: bool = true;
     const LEARNS: bool = true;
     type Config = RocketParams;
     type Extractor = RocketExtractor;
 
+    /// `rocket` scales the channels; the others convolve them in their own units, `rocket_log` and
+    /// `rocket_log_duration` their signed logs, and the `_duration` ones add the duration feature.
     fn preset(index: usize) -> RocketParams {
         RocketParams {
             channel_scaling: index == 0,
+            log_values: index == 2 || index == 4,
+            duration: index == 3 || index == 4,
             ..RocketParams::default()
         }
     }
 
     fn preset_of(params: &RocketParams) -> usize {
-        usize::from(!params.channel_scaling)
+        match (params.channel_scaling, params.log_values, params.duration) {
+            (true, ..) => 0,
+            (false, false, false) => 1,
+            (false, true, false) => 2,
+            (false, false, true) => 3,
+            (false, true, true) => 4,
+        }
     }
 
     fn check(params: &RocketParams) -> Result<()> {
@@ -230,6 +282,18 @@ impl FeatureFamily for RocketFamily {
                     reason: "an unscaled rocket model has every channel scale 1".into(),
                 });
             }
+            match &fitted.duration {
+                Some(scale) if params.duration => scale.check()?,
+                None if !params.duration => {}
+                _ => {
+                    return Err(CoreError::Param {
+                        name: "duration",
+                        reason: "a rocket model has a fitted duration scale exactly when it adds \
+                                 the duration feature"
+                            .into(),
+                    });
+                }
+            }
         }
         Ok(())
     }
@@ -253,11 +317,18 @@ impl FeatureFamily for RocketFamily {
         };
         let mut scaled = vec![0.0; images.len() * channels * padded];
         scale_and_pad(images.values, length, padded, &channel_scales, &mut scaled);
+        if params.log_values {
+            signed_log(&mut scaled);
+        }
         let model = RocketModel::fit(&params.config(), &scaled, channels, padded)?;
+        let duration = params
+            .duration
+            .then(|| DurationScale::fit(images, model.output_len()));
         Ok(RocketParams {
             fitted: Some(FittedRocket {
                 channel_scales,
                 model,
+                duration,
             }),
             ..params.clone()
         })
@@ -266,8 +337,8 @@ impl FeatureFamily for RocketFamily {
     fn output_len(params: &RocketParams, grid: Grid) -> Result<usize> {
         check_shape("rocket series", grid.rows, padded_length(grid.cols))?;
         match &params.fitted {
-            Some(_) => Ok(fitted_for(params, grid)?.model.output_len()),
-            None => Ok(params.config().output_len()),
+            Some(_) => Ok(fitted_for(params, grid)?.output_len()),
+            None => Ok(params.config().output_len() + usize::from(params.duration)),
         }
     }
 
@@ -275,11 +346,14 @@ impl FeatureFamily for RocketFamily {
         let preset = Self::PRESETS[Self::preset_of(params)];
         match &params.fitted {
             // (`rocket_d1_k0_q0`, or `rocket_unscaled_d1_k0_q0`: each starts with its preset's name)
-            Some(_) => Ok(with_preset(
-                fitted_for(params, grid)?.model.feature_names(),
-                Self::NAME,
-                preset,
-            )),
+            Some(_) => {
+                let fitted = fitted_for(params, grid)?;
+                let mut names = fitted.model.feature_names();
+                if fitted.duration.is_some() {
+                    names.push(format!("{}_frames", Self::NAME));
+                }
+                Ok(with_preset(names, Self::NAME, preset))
+            }
             None => {
                 let len = Self::output_len(params, grid)?;
                 Ok((0..len).map(|i| format!("{preset}_{i}")).collect())
@@ -293,6 +367,7 @@ impl FeatureFamily for RocketFamily {
             grid,
             scaled: vec![0.0; fitted.model.sample_len()],
             scratch: fitted.model.scratch(),
+            log_values: params.log_values,
             fitted: Arc::new(fitted.clone()),
         })
     }
@@ -302,12 +377,13 @@ impl FeatureFamily for RocketFamily {
     }
 
     fn len(extractor: &RocketExtractor) -> usize {
-        extractor.fitted.model.output_len()
+        extractor.fitted.output_len()
     }
 
     fn extract_into(extractor: &mut RocketExtractor, image: &[f64], out: &mut [f64]) -> Result<()> {
         check_len("rocket series", extractor.grid.len(), image.len())?;
         let fitted = &extractor.fitted;
+        check_len("rocket feature buffer", fitted.output_len(), out.len())?;
         scale_and_pad(
             image,
             extractor.grid.cols,
@@ -315,9 +391,17 @@ impl FeatureFamily for RocketFamily {
             &fitted.channel_scales,
             &mut extractor.scaled,
         );
+        if extractor.log_values {
+            signed_log(&mut extractor.scaled);
+        }
+        let (rocket, duration) = out.split_at_mut(fitted.model.output_len());
         fitted
             .model
-            .transform_into(&extractor.scaled, out, &mut extractor.scratch)
+            .transform_into(&extractor.scaled, rocket, &mut extractor.scratch)?;
+        if let (Some(scale), [slot]) = (&fitted.duration, duration) {
+            *slot = scale.feature(frames_before_padding(image, extractor.grid.cols));
+        }
+        Ok(())
     }
 }
 
@@ -527,6 +611,150 @@ mod tests {
             fitted.channel_scales[0] = 2.0;
         }
         assert!(RocketFamily::check(&damaged).is_err());
+    }
+
+    /// The signed log is numpy's `np.sign(x) * np.log1p(np.abs(x))` (values printed by numpy 2.3).
+    #[test]
+    fn the_signed_log_is_numpy_s() {
+        let mut values = [-2.5, -3.0, 0.0, 0.5, 100.0, -1e-9];
+        signed_log(&mut values);
+        let numpy = [
+            -1.252762968495368,
+            -1.3862943611198906,
+            0.0,
+            0.4054651081081644,
+            4.61512051684126,
+            -9.999999995e-10,
+        ];
+        for (got, want) in values.iter().zip(numpy) {
+            assert!(
+                (got - want).abs() <= 1e-15 * want.abs().max(1.0),
+                "{got} {want}"
+            );
+        }
+    }
+
+    /// Fits `preset` (with 840 features) on six series of 3 channels x 20 values.
+    fn fitted_preset(preset: &str, values: &[f64]) -> FeatureConfig {
+        let kind = crate::features::FeatureKind::parse(preset).unwrap();
+        let mut params = kind
+            .default_config()
+            .params::<RocketFamily>()
+            .unwrap()
+            .clone();
+        params.num_features = 840;
+        FeatureConfig::of::<RocketFamily>(params)
+            .fit(FitImages {
+                grid: Grid::new(3, 20),
+                values,
+            })
+            .unwrap()
+    }
+
+    /// `rocket_log` is the oracle's MiniRocket on every value's signed log (the channels unscaled),
+    /// fitted on the logs too; `rocket_log_duration` adds the duration after the same features.
+    #[test]
+    fn the_log_preset_convolves_the_signed_logs() {
+        let values = series(6, 3, 20, 0.0);
+        let fitted = fitted_preset("rocket_log", &values);
+        assert_eq!(fitted.name(), "rocket_log");
+        let params = fitted.params::<RocketFamily>().unwrap();
+        assert!(params.log_values && !params.channel_scaling && !params.duration);
+        let rocket = params.fitted.as_ref().unwrap();
+        // The biases come from the logs: the same fit as MiniRocket's on the logged series.
+        let logged: Vec<f64> = values
+            .iter()
+            .map(|&v| v.signum() * v.abs().ln_1p())
+            .collect();
+        let direct = RocketModel::fit(&params.config(), &logged, 3, 20).unwrap();
+        assert_eq!(rocket.model, direct);
+        let sample = series(1, 3, 20, 1.0);
+        let sample_log: Vec<f64> = sample
+            .iter()
+            .map(|&v| v.signum() * v.abs().ln_1p())
+            .collect();
+        let features = fitted
+            .extractor(Grid::new(3, 20))
+            .unwrap()
+            .extract(&sample)
+            .unwrap();
+        assert_eq!(features, oracle::transform(&rocket.model, &sample_log));
+        let json = serde_json::to_string(&fitted).unwrap();
+        assert!(json.contains(r#""log_values":true"#), "{json}");
+        assert_eq!(
+            serde_json::from_str::<FeatureConfig>(&json).unwrap(),
+            fitted
+        );
+        let both = fitted_preset("rocket_log_duration", &values);
+        let with_duration = both
+            .extractor(Grid::new(3, 20))
+            .unwrap()
+            .extract(&sample)
+            .unwrap();
+        assert_eq!(with_duration[..features.len()], features[..]);
+        assert_eq!(with_duration.len(), features.len() + 1);
+    }
+
+    /// `rocket_duration`: MiniRocket's features on the raw channels, then the sample's frames before
+    /// its zero padding, standardised over the training samples and weighted; named, stored, checked.
+    #[test]
+    fn the_duration_preset_adds_the_frames_before_the_padding() {
+        let (channels, length) = (3, 20);
+        let grid = Grid::new(channels, length);
+        let mut values = series(6, channels, length, 0.0);
+        // Training durations 20, 17, 14, 11, 8, 5 frames: zeros after them.
+        for (i, sample) in values.chunks_exact_mut(channels * length).enumerate() {
+            for row in sample.chunks_exact_mut(length) {
+                row[length - 3 * i..].fill(0.0);
+            }
+        }
+        let fitted = fitted_preset("rocket_duration", &values);
+        assert_eq!(fitted.name(), "rocket_duration");
+        let params = fitted.params::<RocketFamily>().unwrap();
+        let rocket = params.fitted.as_ref().unwrap();
+        let scale = rocket.duration.clone().unwrap();
+        let durations = [20.0, 17.0, 14.0, 11.0, 8.0, 5.0];
+        let mean = durations.iter().sum::<f64>() / 6.0;
+        let spread = (durations.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / 6.0).sqrt();
+        assert_eq!(scale.mean, mean);
+        assert!((scale.spread - spread).abs() < 1e-12);
+        let mut sample = series(1, channels, length, 1.0);
+        for row in sample.chunks_exact_mut(length) {
+            row[12..].fill(0.0);
+        }
+        let features = fitted.extractor(grid).unwrap().extract(&sample).unwrap();
+        let minirocket = oracle::transform(&rocket.model, &sample);
+        assert_eq!(features.len(), minirocket.len() + 1);
+        assert_eq!(features[..minirocket.len()], minirocket[..]);
+        let expected = (12.0 - mean) / spread * scale.weight;
+        assert!((features[minirocket.len()] - expected).abs() < 1e-12);
+        assert_eq!(
+            scale.weight,
+            crate::features::rocket::duration::DURATION_WEIGHT * (minirocket.len() as f64).sqrt()
+        );
+        let names = RocketFamily::feature_names(params, grid).unwrap();
+        assert_eq!(names.len(), features.len());
+        assert_eq!(
+            names.last().map(String::as_str),
+            Some("rocket_duration_frames")
+        );
+        assert_eq!(
+            RocketFamily::output_len(params, grid).unwrap(),
+            features.len()
+        );
+        let json = serde_json::to_string(&fitted).unwrap();
+        assert_eq!(
+            serde_json::from_str::<FeatureConfig>(&json).unwrap(),
+            fitted
+        );
+        // A duration scale without the setting (or the setting without one) is damaged.
+        let mut damaged = params.clone();
+        damaged.duration = false;
+        assert!(RocketFamily::check(&damaged).is_err_and(|e| e.to_string().contains("duration")));
+        // Model files written before these settings read as before (no duration, no logs).
+        let plain = fitted_preset("rocket_unscaled", &values);
+        let plain_json = serde_json::to_string(&plain).unwrap();
+        assert!(!plain_json.contains("duration") && !plain_json.contains("log_values"));
     }
 
     #[test]

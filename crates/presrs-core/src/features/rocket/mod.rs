@@ -15,7 +15,8 @@
 //! - [`transform`]: the fast transform of one sample into the proportions of positive values (PPV),
 //!   without allocating ([`RocketScratch`]), and of many samples in parallel;
 //! - [`family`]: MiniRocket as the feature family `rocket` (an image read as channels x time, its
-//!   channels scaled by their spread in the training samples);
+//!   channels scaled by their spread in the training samples, or in their own units, or their signed
+//!   logs), and [`duration`] the whole stance's duration as one more feature;
 //! - [`multi`]: MultiRocket (Tan et al. 2022), the kernels on the series and on its first
 //!   differences, each convolution pooled four ways (PPV, LSPV, MPV, MIPV);
 //!   [`multi_family`] the feature family `multirocket`;
@@ -32,6 +33,7 @@
 //! (`length - 8 * dilation` outputs).
 
 pub mod config;
+pub mod duration;
 pub mod family;
 pub mod fit;
 pub mod kernels;
