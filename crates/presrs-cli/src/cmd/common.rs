@@ -26,8 +26,10 @@ pub struct PipelineArgs {
     /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
     /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes), rocket
     /// (MiniRocket over a series: rows are channels, each scaled by its spread; with --sample stance or
-    /// series), rocket_unscaled (the channels in their own units), multirocket, multirocket_unscaled
-    /// (MultiRocket: the series and its first differences, four poolings); join
+    /// series), rocket_unscaled (the channels in their own units), rocket_log (a signed log of every
+    /// value first), rocket_duration and rocket_log_duration (a whole stance's duration as one more
+    /// feature), multirocket, multirocket_unscaled (MultiRocket: the series and its first differences,
+    /// four poolings); join
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
     /// by group or condition (--validate-by), among every family: the FFT ones first, then fft1d after
     /// sqrt and log1p, then glcm and fft2d_polar+glcm, as far as --budget allows).
