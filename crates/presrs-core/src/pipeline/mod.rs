@@ -16,12 +16,14 @@
 pub(crate) mod config;
 pub(crate) mod extract;
 pub(crate) mod model;
+pub(crate) mod novelty;
 pub(crate) mod session;
 pub(crate) mod train;
 
 pub use config::{CheckedTrainConfig, TrainConfig};
 pub use extract::{LabeledImage, extract_features, extract_features_many, extract_features_with};
 pub use model::{MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN, TrainedModel, TrainingSummary};
+pub use novelty::MAX_NOVELTY_DIMS;
 pub use session::{BATCH_BLOCK, Classification, Prediction, Session};
 pub use train::train;
 

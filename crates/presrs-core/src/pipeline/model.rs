@@ -8,6 +8,7 @@ use crate::crop::Crop;
 use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
 use crate::frame::Grid;
+use crate::novelty::NoveltyModel;
 use crate::pipeline::config::TrainConfig;
 use crate::preprocess::Preprocess;
 use crate::projection::pca::Pca;
@@ -62,6 +63,10 @@ pub(crate) struct ModelFields {
     /// What a sample is, when not one frame (absent from files of one-frame models).
     #[serde(default, skip_serializing_if = "SampleKind::is_frame")]
     pub(crate) sample: SampleKind,
+    /// The novelty score and its threshold (absent from files written before it, and from models
+    /// trained without it: every decision is then one of the classes, as before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) novelty: Option<NoveltyModel>,
 }
 
 pub(crate) const FORMAT_VERSION: u32 = 1;
@@ -146,6 +151,7 @@ impl TryFrom<ModelFields> for TrainedModel {
             )));
         }
         check_sample(&fields.sample, fields.image_grid)?;
+        check_novelty(&fields)?;
         Ok(Self { fields, extractor })
     }
 }
@@ -177,6 +183,26 @@ fn check_projection(fields: &ModelFields, n_features: usize) -> Result<()> {
         ))),
         None => Ok(()),
     }
+}
+
+/// The novelty score reads the classifier's vectors, of the model's classes.
+fn check_novelty(fields: &ModelFields) -> Result<()> {
+    let Some(novelty) = &fields.novelty else {
+        return Ok(());
+    };
+    let (dims, classes) = (fields.classifier.dims(), fields.class_names.len());
+    if novelty.dims() != dims || novelty.n_classes() != classes {
+        return Err(CoreError::Param {
+            name: "novelty",
+            reason: format!(
+                "the novelty score reads {} values of {} classes, but the classifier takes {dims} of \
+                 {classes}",
+                novelty.dims(),
+                novelty.n_classes()
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// A whole-stance model's images are its summary's channels over its length.
@@ -290,6 +316,24 @@ impl TrainedModel {
     /// the model was trained by [`crate::selection::train_auto`].
     pub fn selection(&self) -> Option<&Selection> {
         self.fields.selection.as_ref()
+    }
+
+    /// The novelty score, when the model has one.
+    pub fn novelty(&self) -> Option<&NoveltyModel> {
+        self.fields.novelty.as_ref()
+    }
+
+    /// This model without its novelty score: every decision one of the classes (`--novelty off`).
+    pub fn without_novelty(mut self) -> Self {
+        self.fields.novelty = None;
+        self
+    }
+
+    /// This model with `novelty` (checked against the classifier).
+    pub fn with_novelty_model(mut self, novelty: NoveltyModel) -> Result<Self> {
+        self.fields.novelty = Some(novelty);
+        check_novelty(&self.fields)?;
+        Ok(self)
     }
 
     /// This model with `selection` recorded.

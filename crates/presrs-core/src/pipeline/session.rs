@@ -8,6 +8,7 @@ use crate::classifier::ClassifierScratch;
 use crate::error::{CoreError, Result, check_len};
 use crate::features::Precision;
 use crate::frame::FrameView;
+use crate::novelty::{Novelty, NoveltyScratch};
 use crate::pipeline::extract::Preprocessor;
 use crate::pipeline::model::TrainedModel;
 use crate::projection::pca::{Pca, ProjectionScratch};
@@ -29,6 +30,11 @@ impl TrainedModel {
             reduced: vec![0.0; fields.pca.as_ref().map_or(0, Pca::n_components)],
             scratch: fields.classifier.scratch(),
             posteriors: vec![0.0; fields.class_names.len()],
+            novelty: fields
+                .novelty
+                .as_ref()
+                .map(|novelty| novelty.scratch())
+                .unwrap_or_default(),
         }
     }
 
@@ -58,6 +64,7 @@ pub struct Session<'m> {
     reduced: Vec<f64>,
     scratch: ClassifierScratch,
     posteriors: Vec<f64>,
+    novelty: NoveltyScratch,
 }
 
 /// The result of [`Session::classify`], borrowing the session's buffers.
@@ -69,6 +76,9 @@ pub struct Prediction<'s> {
     pub confidence: f64,
     /// Posterior of every class, in class-index order (equal priors).
     pub posteriors: &'s [f64],
+    /// How far the frame lies from every class, when the model scores novelty; `unknown` says it is
+    /// none of them (`class` is then the nearest one).
+    pub novelty: Option<Novelty>,
 }
 
 impl Prediction<'_> {
@@ -77,6 +87,7 @@ impl Prediction<'_> {
             class: self.class,
             confidence: self.confidence,
             posteriors: self.posteriors.to_vec(),
+            novelty: self.novelty,
         }
     }
 }
@@ -88,6 +99,9 @@ pub struct Classification {
     pub class: usize,
     pub confidence: f64,
     pub posteriors: Vec<f64>,
+    /// As [`Prediction::novelty`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub novelty: Option<Novelty>,
 }
 
 impl<'m> Session<'m> {
@@ -106,11 +120,13 @@ impl<'m> Session<'m> {
             &self.features
         };
         let class = classify_reduced(model, reduced, &mut self.scratch, &mut self.posteriors)?;
+        let novelty = novelty_of(model, reduced, &mut self.novelty)?;
         Ok(Prediction {
             class,
             label: &model.fields.class_names[class],
             confidence: self.posteriors[class],
             posteriors: &self.posteriors,
+            novelty,
         })
     }
 
@@ -182,6 +198,20 @@ fn classify_reduced(
         .fields
         .classifier
         .classify_into(reduced, scratch, posteriors)
+}
+
+/// The novelty of a reduced vector, when the model scores it.
+fn novelty_of(
+    model: &TrainedModel,
+    reduced: &[f64],
+    scratch: &mut NoveltyScratch,
+) -> Result<Option<Novelty>> {
+    model
+        .fields
+        .novelty
+        .as_ref()
+        .map(|novelty| novelty.score_into(reduced, scratch))
+        .transpose()
 }
 
 /// Buffers for classifying a block of frames together (one per rayon worker in
@@ -257,10 +287,12 @@ impl<'m> BatchSession<'m> {
                         &mut session.scratch,
                         &mut session.posteriors,
                     )?;
+                    let novelty = novelty_of(model, reduced, &mut session.novelty)?;
                     Ok(Classification {
                         class,
                         confidence: session.posteriors[class],
                         posteriors: session.posteriors.clone(),
+                        novelty,
                     })
                 }
             })

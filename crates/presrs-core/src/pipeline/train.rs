@@ -80,6 +80,7 @@ pub fn train(
         summary,
         selection: None,
         sample: SampleKind::Frame,
+        novelty: None,
     })
 }
 
