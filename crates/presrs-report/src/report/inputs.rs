@@ -76,6 +76,8 @@ pub struct ReportInputs<'a> {
     pub faults: Vec<FaultResult>,
     /// How the fault results were obtained (protocol, repeats), shown under the chart.
     pub fault_note: Option<String>,
+    /// `eval --leave-class-out`'s figures, per held-out class.
+    pub novelty: Option<super::novelty::NoveltyResult>,
 }
 
 impl<'a> ReportInputs<'a> {
@@ -96,6 +98,7 @@ impl<'a> ReportInputs<'a> {
             simulation: None,
             faults: Vec::new(),
             fault_note: None,
+            novelty: None,
         }
     }
 }

@@ -6,6 +6,7 @@
 mod evaluation;
 mod faults;
 mod inputs;
+mod novelty;
 mod page;
 mod samples;
 mod simulation;
@@ -18,6 +19,7 @@ use self::evaluation::{
     accuracy_section, confusion_section, reliability_section, validation_section,
 };
 use self::faults::fault_section;
+use self::novelty::novelty_section;
 use self::page::{Section, html_page};
 use self::samples::{
     Groups, data_section, images_section, load_section, pca_section, spectra_section,
@@ -27,6 +29,7 @@ use crate::error::Result;
 
 pub use self::faults::fault_panels;
 pub use self::inputs::{Evaluation, FaultResult, ReportInputs, ReportRecording, SimulationInputs};
+pub use self::novelty::{NoveltyResult, NoveltyRow};
 
 /// Writes `out_dir/index.html` and its figures; returns the page's path.
 pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf> {
@@ -44,6 +47,7 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
         sections.push(accuracy_section(&inputs.evaluations));
         sections.extend(reliability_section(&inputs.evaluations));
     }
+    sections.extend(inputs.novelty.as_ref().and_then(novelty_section));
     sections.extend(fault_section(&inputs.faults, inputs.fault_note.as_deref()));
     if let Some(sim) = &inputs.simulation {
         sections.push(table1_section(sim));

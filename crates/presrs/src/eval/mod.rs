@@ -3,6 +3,7 @@
 //! goes to a [`Progress`]; errors name the manifest.
 
 pub mod document;
+pub mod novelty;
 pub mod race;
 
 use std::collections::BTreeMap;
