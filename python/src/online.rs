@@ -51,13 +51,17 @@ impl OnlineClassifier {
     /// frames. `gait_table` adds terrain -> gait entries to the profile's. `decide_at`: a whole-stance
     /// model decides K frames after touchdown, on the stance so far, instead of at lift-off.
     #[new]
-    #[pyo3(signature = (model, *, gait_table = None, decide_at = None))]
+    #[pyo3(signature = (model, *, gait_table = None, decide_at = None, novelty = true))]
     fn new(
         model: &Bound<'_, Model>,
         gait_table: Option<std::collections::BTreeMap<String, String>>,
         decide_at: Option<usize>,
+        novelty: bool,
     ) -> PyResult<Self> {
-        let file = model.get().file().clone();
+        let mut file = model.get().file().clone();
+        if !novelty {
+            file.model = file.model.without_novelty();
+        }
         let mut profile = file.online.clone().unwrap_or_default();
         profile.gait_table.extend(gait_table.unwrap_or_default());
         if decide_at.is_some() {

@@ -111,6 +111,11 @@ class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecisi
     liftoff_stamp: Time
     gait: str
     latency_us: float64
+    has_novelty: bool
+    unknown: bool
+    nearest: str
+    novelty: float64
+    novelty_threshold: float64
 
 
 # ros/presrs_msgs/msg/StanceEvent.msg

@@ -138,6 +138,12 @@ pub struct TerrainDecision {
     pub liftoff_stamp: Time,
     pub gait: String,
     pub latency_us: f64,
+    /// Novelty (a self-contained block: `has_novelty` false and the rest zero without a score).
+    pub has_novelty: bool,
+    pub unknown: bool,
+    pub nearest: String,
+    pub novelty: f64,
+    pub novelty_threshold: f64,
 }
 
 impl TerrainDecision {
@@ -230,6 +236,18 @@ pub fn decision_message(
         liftoff_stamp: liftoff.map_or(Time::ZERO, |w| stamp_of(stamps, w.decided_at_frame)),
         gait: decision.gait.clone().unwrap_or_default(),
         latency_us: decision.latency_us,
+        has_novelty: decision.novelty.is_some(),
+        unknown: decision.novelty.as_ref().is_some_and(|n| n.unknown),
+        nearest: decision
+            .novelty
+            .as_ref()
+            .map(|n| n.nearest.clone())
+            .unwrap_or_default(),
+        novelty: decision.novelty.as_ref().map_or(0.0, |n| n.novelty),
+        novelty_threshold: decision
+            .novelty
+            .as_ref()
+            .map_or(0.0, |n| n.novelty_threshold),
     }
 }
 
@@ -315,7 +333,31 @@ mod tests {
             timestamp_us: Some(2_600_000),
             gait: Some("walk".to_owned()),
             whole_stance,
+            novelty: None,
         }
+    }
+
+    #[test]
+    fn a_decision_says_unknown_with_the_nearest_class_and_the_score() {
+        let plain = decision_message(&decision(None), &Tenths, "foot");
+        assert!(!plain.has_novelty && !plain.unknown && plain.nearest.is_empty());
+        let unknown = Classification {
+            label: "unknown".to_owned(),
+            novelty: Some(presrs::session::NoveltyVerdict {
+                unknown: true,
+                nearest: "sand".to_owned(),
+                novelty: 3.5,
+                novelty_threshold: 2.0,
+            }),
+            ..decision(None)
+        };
+        let d = decision_message(&unknown, &Tenths, "foot");
+        assert!(d.has_novelty && d.unknown);
+        assert_eq!((d.label.as_str(), d.nearest.as_str()), ("unknown", "sand"));
+        assert_eq!(
+            (d.novelty, d.novelty_threshold, d.class_index),
+            (3.5, 2.0, 1)
+        );
     }
 
     #[test]

@@ -259,6 +259,7 @@ fn a_whole_stance_model_learns_one_walker_and_classifies_the_other() {
             validation: presrs::core::split::ValidationSize::Fraction(0.35),
             seed: 1,
             method,
+            novelty: true,
         },
     )
     .unwrap();

@@ -5,8 +5,8 @@
 
 use presrs::core::online::DecisionKind;
 use presrs::session::{
-    Classification, DecisionPoint, End, ErrorEvent, Liftoff, Posteriors, SessionEvent, Touchdown,
-    WholeStance,
+    Classification, DecisionPoint, End, ErrorEvent, Liftoff, NoveltyVerdict, Posteriors,
+    SessionEvent, Touchdown, WholeStance,
 };
 
 fn decision(whole_stance: Option<WholeStance>) -> Classification {
@@ -29,6 +29,22 @@ fn decision(whole_stance: Option<WholeStance>) -> Classification {
         timestamp_us: None,
         gait: Some("G1".to_owned()),
         whole_stance,
+        novelty: None,
+    }
+}
+
+/// A decision of a model that scores novelty, its sample none of the classes.
+fn unknown_decision() -> Classification {
+    Classification {
+        label: "unknown".to_owned(),
+        gait: None,
+        novelty: Some(NoveltyVerdict {
+            unknown: true,
+            nearest: "sand".to_owned(),
+            novelty: 3.5,
+            novelty_threshold: 2.25,
+        }),
+        ..decision(None)
     }
 }
 
@@ -55,6 +71,10 @@ fn golden() -> Vec<(SessionEvent, &'static str)> {
                 cut: false,
             }))),
             r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"offset","decided_at_frame":32,"cut":false}"#,
+        ),
+        (
+            SessionEvent::Classification(unknown_decision()),
+            r#"{"event":"classification","kind":"single","stance":3,"label":"unknown","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":null,"unknown":true,"nearest":"sand","novelty":3.5,"novelty_threshold":2.25}"#,
         ),
         (
             SessionEvent::Liftoff(Liftoff {

@@ -31,6 +31,8 @@ pub struct Ros2Args {
     /// Model file from `presrs train` (read before the node joins the graph).
     #[arg(long)]
     pub model: PathBuf,
+    #[command(flatten)]
+    pub novelty: super::common::NoveltyArgs,
     /// The pressure topic (a relative name is in the namespace).
     #[arg(long, value_name = "TOPIC")]
     pub input: String,
@@ -111,7 +113,9 @@ fn domain_id_arg(text: &str) -> Result<u16, String> {
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = args.node_options(|key| std::env::var(key).ok())?;
     // The model and the profile before the node joins the graph: a bad one announces nothing.
-    let file = presrs_io::model_file::load_model(&args.model)?;
+    let file = args
+        .novelty
+        .apply(presrs_io::model_file::load_model(&args.model)?);
     let online = file.online.as_ref();
     let profile = resolve_profile(args.profile.as_deref(), None, online, &args.overrides())?;
     presrs::session::check_profile(&file.model, &profile)?;

@@ -75,6 +75,8 @@ pub struct TrainArgs {
     pub pipeline: PipelineArgs,
     #[command(flatten)]
     pub samples: SampleArgs,
+    #[command(flatten)]
+    pub novelty: super::common::NoveltyArgs,
 }
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
@@ -85,6 +87,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         validation: args.validation,
         seed: args.seed,
         method: args.pipeline.method(),
+        novelty: args.novelty.novelty,
     };
     let choice = if args.online_profile || args.gait_table.is_some() {
         ProfileChoice::Required

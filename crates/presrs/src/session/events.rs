@@ -2,6 +2,7 @@
 //! client"). Their JSON, through serde, is the protocol's line; a face that builds messages of its own
 //! (the ROS 2 node, the live view, Python) reads the fields, never the line.
 
+use presrs_core::novelty::UNKNOWN_LABEL;
 use presrs_core::online::{DecidedAt, Decision, DecisionKind, OnlineEvent, OnlineProfile, Step};
 use presrs_core::pipeline::TrainedModel;
 use serde::ser::SerializeMap;
@@ -59,6 +60,23 @@ pub struct Classification {
     /// What a whole-stance decision waited for (absent for one-frame and fused decisions).
     #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
     pub whole_stance: Option<WholeStance>,
+    /// The novelty score and its verdict, when the model scores novelty (absent otherwise, and with
+    /// `--novelty off`); when `unknown`, `label` is `unknown` and `nearest` names the nearest class.
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub novelty: Option<NoveltyVerdict>,
+}
+
+/// The novelty of a decision: how far its sample lies from every trained class.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoveltyVerdict {
+    /// The sample is none of the model's classes: the decision's `label` is `unknown`.
+    pub unknown: bool,
+    /// The nearest class (the classifier's label, whether `unknown` or not).
+    pub nearest: String,
+    /// The score: the distance to the nearest class in units of that class's own spread.
+    pub novelty: f64,
+    /// The score above which a sample is `unknown`.
+    pub novelty_threshold: f64,
 }
 
 /// What a whole-stance model's decision waited for.
@@ -279,7 +297,13 @@ fn classification(
     timing: EventTiming,
 ) -> Classification {
     let names = model.class_names();
-    let label = names.get(d.class).map_or("?", String::as_str).to_owned();
+    let nearest = names.get(d.class).map_or("?", String::as_str).to_owned();
+    let unknown = d.novelty.is_some_and(|n| n.unknown);
+    let label = if unknown {
+        UNKNOWN_LABEL.to_owned()
+    } else {
+        nearest.clone()
+    };
     let posteriors = names
         .iter()
         .zip(step.posteriors(d))
@@ -306,6 +330,12 @@ fn classification(
             },
             decided_at_frame: how.waited_for as u64,
             cut: how.cut,
+        }),
+        novelty: d.novelty.map(|n| NoveltyVerdict {
+            unknown: n.unknown,
+            nearest,
+            novelty: n.score,
+            novelty_threshold: n.threshold,
         }),
         label,
     }

@@ -19,8 +19,8 @@ mod run;
 mod summary;
 
 pub use events::{
-    Classification, DecisionPoint, End, ErrorEvent, EventTiming, Liftoff, Posteriors, SessionEvent,
-    Touchdown, WholeStance, step_events,
+    Classification, DecisionPoint, End, ErrorEvent, EventTiming, Liftoff, NoveltyVerdict,
+    Posteriors, SessionEvent, Touchdown, WholeStance, step_events,
 };
 pub use observer::{JsonLines, NoObserver, Observers, OwnedObservers, SessionObserver};
 pub use profile::{ProfileOverrides, check_profile, read_profile, resolve_profile};
