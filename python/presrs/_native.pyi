@@ -77,7 +77,7 @@ class Model:
         classifier: str = "auto",
         groups: Optional[_Labels] = None,
         conditions: Optional[_Labels] = None,
-        seed: int = 0,
+        seed: int = 1,
         dims: Optional[int] = None,
         per_class: Optional[int] = None,
         validation: float = 0.35,
@@ -96,7 +96,9 @@ class Model:
         ``presrs train --sample stance`` does, laid into ``stance_length`` frames, by default the
         longest's) or on series ``(n, channels, time)`` (``sample="series"``; ``series_axis="rows"``
         when time runs down the rows). A value that is not a finite number is an error naming its
-        image, row and column."""
+        image, row and column; a missing label (``None``, NaN, empty or blank text) one naming its
+        index. ``features``: ``"auto"`` or names of ``FEATURE_FAMILIES`` joined with ``+``;
+        ``classifier``: ``"auto"`` or a name of ``CLASSIFIERS``."""
     @staticmethod
     def load(path: _Path) -> Model: ...
     def save(self, path: _Path) -> None:
@@ -207,9 +209,24 @@ def evaluate(
     validate_by: str = "auto",
     budget: Optional[float] = 60.0,
     choose: str = "best",
-    sample: str = "frame",
+    sample: Literal["frame", "stance", "series", "auto"] = "frame",
+    stance_length: Optional[int] = None,
+    series_axis: Optional[Literal["cols", "rows"]] = None,
+    stance_frame: Union[Literal["mid", "peak", "all"], int, None] = None,
+    include_partial: bool = False,
+    one_sample_per_file: bool = False,
+    segment_params: Optional[dict[str, Any]] = None,
+    lenient: bool = False,
+    axes: Optional[str] = None,
+    topic: Optional[str] = None,
+    frame_period_s: Optional[float] = None,
+    keep_dead_sensels: bool = False,
     progress: Union[bool, Callable[[str, int, Optional[int]], Any], None] = None,
-) -> Evaluation: ...
+) -> Evaluation:
+    """``presrs eval`` on a manifest's path or on samples in memory. ``sample`` and the arguments
+    after it are its sample options in Python's words (``segment_params``: the stance detector's
+    settings, a dict of ``segment_params()``'s names); those after ``series_axis`` read a manifest's
+    files."""
 def simulate(
     *,
     terrains: Optional[Sequence[str]] = None,

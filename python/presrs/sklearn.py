@@ -21,10 +21,22 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._native import Model
+from ._native import Model, _check_labels
 from .errors import DataError
 
 __all__ = ["TerrainClassifier"]
+
+
+def _check_missing_labels(y):
+    """An error naming the first missing label of ``y`` (``None``, NaN, empty or blank text), as
+    :meth:`presrs.Model.train` refuses them; other checks of ``y`` are scikit-learn's."""
+    if y is None:
+        return
+    labels = np.asarray(y, dtype=object)
+    if labels.ndim == 2 and labels.shape[1] == 1:
+        labels = labels[:, 0]
+    if labels.ndim == 1:
+        _check_labels(labels, "y")
 
 
 class TerrainClassifier(ClassifierMixin, BaseEstimator):
@@ -35,7 +47,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
     command line's names (``"auto"`` chooses by validation), ``dims`` the principal components kept
     (not used by ridge, which has no PCA step),
     ``validation`` the share (or count) of each class that validates the hyper-parameters, ``seed`` the
-    random draw. ``image_shape`` says how to unflatten a 2-D ``X`` (one of its sizes may be ``-1``);
+    random draw (1 by default, as the command line's). ``image_shape`` says how to unflatten a 2-D ``X`` (one of its sizes may be ``-1``);
     ``validate_by`` how the automatic choice validates (``auto``, ``group``, ``condition``, ``split``;
     give ``groups`` to ``fit``); ``budget`` the seconds it may spend (``None``: no limit, the choice
     independent of the machine); ``choose`` how it picks (``best``, or ``one-se``: the earliest
@@ -51,7 +63,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         validation=0.35,
         crop="auto",
         full_search=False,
-        seed=0,
+        seed=1,
         image_shape=None,
         validate_by="auto",
         budget=60.0,
@@ -110,7 +122,8 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
 
     def fit(self, X, y, groups=None, conditions=None):
         """Trains on images ``X`` with labels ``y`` (and, optionally, one group and one condition per
-        image)."""
+        image). A missing label (``None``, NaN, empty or blank text) is an error naming its index."""
+        _check_missing_labels(y)
         if self.sample == "stance":
             movies = X
             y = np.asarray(y)
@@ -183,12 +196,34 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
                 return X
         if X is None:
             raise DataError("X: expected images (n, rows, cols), got None")
+        self._check_image_shape(X)
         if getattr(X, "ndim", None) == 2 and tuple(X.shape) == tuple(shape):
             X = np.asarray(X, dtype=np.float64)[None]
         X = validate_data(
             self, X, allow_nd=True, dtype=np.float64, reset=False, ensure_all_finite=False
         )
         return self._images(X)
+
+    def _check_image_shape(self, X):
+        """An error unless ``X``'s images have the training images' rows and columns (scikit-learn's
+        own check would count a 3-D ``X``'s rows as its features)."""
+        shape = self._image_shape
+        try:
+            given = np.asarray(X).shape
+        except ValueError:  # ragged: numpy's conversion names it below
+            return
+        (rows, cols) = shape
+        if len(given) == 3 and tuple(given[1:]) != tuple(shape):
+            raise DataError(
+                f"X: images of {given[1]} x {given[2]} (rows x cols), but the model was trained on "
+                f"images of {rows} x {cols}"
+            )
+        if len(given) == 2 and self.image_shape is None and tuple(given) != tuple(shape):
+            raise DataError(
+                f"X: one image of {given[0]} x {given[1]} (rows x cols), but the model was trained "
+                f"on images of {rows} x {cols} (give a batch (n, {rows}, {cols}), or image_shape= "
+                f"to read each row of a 2-D X as an image)"
+            )
 
     def predict_proba(self, X):
         """The posterior of every class, ``(n, n_classes)`` in ``classes_`` order."""

@@ -5,7 +5,7 @@
 use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use presrs::core::{FrameView, Grid};
 use pyo3::prelude::*;
-use pyo3::types::PyString;
+use pyo3::types::{PyBytes, PyString};
 
 use crate::errors::data_error;
 
@@ -167,7 +167,56 @@ fn float64_c_array<'py>(
 }
 
 /// Text labels from any sequence (a list, a numpy array, a pandas Series): each item as `str(item)`.
+/// A missing label (`None`, NaN, pandas' `NA`, empty or blank text) is refused, as the command line
+/// refuses a manifest row without one: the error names the first index and how many are missing.
 pub fn labels(obj: &Bound<'_, PyAny>, what: &str, expected: usize) -> PyResult<Vec<String>> {
+    let items = texts(obj, what, expected)?;
+    let missing: Vec<usize> = (items.iter().enumerate())
+        .filter(|(_, item)| item.is_missing())
+        .map(|(index, _)| index)
+        .collect();
+    if let Some(&first) = missing.first() {
+        return Err(data_error(format!(
+            "{what}[{first}] is {}: every sample needs a label ({} of {} labels missing: None, \
+             NaN, empty or blank{})",
+            items[first].shown,
+            missing.len(),
+            items.len(),
+            listed_indices(&missing)
+        )));
+    }
+    Ok(items.into_iter().map(|item| item.text).collect())
+}
+
+/// Text values that may be missing, one per sample (groups, conditions): each item as `str(item)`,
+/// and a missing one (`None`, NaN, pandas' `NA`, empty or blank text) as no value, as an empty
+/// manifest field is.
+pub fn optional_labels(
+    obj: &Bound<'_, PyAny>,
+    what: &str,
+    expected: usize,
+) -> PyResult<Vec<Option<String>>> {
+    Ok(texts(obj, what, expected)?
+        .into_iter()
+        .map(|item| (!item.is_missing()).then_some(item.text))
+        .collect())
+}
+
+/// An item of a sequence of labels: its text, and how an error shows it when it is missing.
+struct LabelItem {
+    text: String,
+    /// `None`, `NaN` or the text's `repr`, set when the item is missing; empty otherwise.
+    shown: String,
+}
+
+impl LabelItem {
+    fn is_missing(&self) -> bool {
+        !self.shown.is_empty()
+    }
+}
+
+/// Every item of `obj` as text, with the missing ones marked; `expected` items, one per sample.
+fn texts(obj: &Bound<'_, PyAny>, what: &str, expected: usize) -> PyResult<Vec<LabelItem>> {
     if obj.is_instance_of::<PyString>() {
         return Err(data_error(format!(
             "{what}: expected a sequence of labels, got one string"
@@ -175,14 +224,66 @@ pub fn labels(obj: &Bound<'_, PyAny>, what: &str, expected: usize) -> PyResult<V
     }
     let mut out = Vec::with_capacity(expected);
     for item in obj.try_iter()? {
-        let item = item?;
-        out.push(item.str()?.to_string());
+        out.push(label_item(&item?)?);
     }
     if out.len() != expected {
         return Err(data_error(format!(
-            "{what}: {} values for {expected} images; give one per image",
+            "{what}: {} values for {expected} samples; give one per sample",
             out.len()
         )));
     }
     Ok(out)
+}
+
+/// One label's text, marked missing when it is `None`, a NaN (Python's, numpy's, a `Decimal`'s),
+/// pandas' `NA` or `NaT`, or text that is empty or blank.
+fn label_item(item: &Bound<'_, PyAny>) -> PyResult<LabelItem> {
+    let missing = |shown: &str, text: String| LabelItem {
+        text,
+        shown: shown.to_owned(),
+    };
+    if item.is_none() {
+        return Ok(missing("None", String::new()));
+    }
+    // pandas' missing values, named by their types (pandas need not be installed).
+    let type_name = item.get_type().name()?.to_string();
+    if matches!(type_name.as_str(), "NAType" | "NaTType") {
+        return Ok(missing(&item.str()?.to_string(), String::new()));
+    }
+    // A NaN of any type is the one value unequal to itself (no conversion, so no numpy warning).
+    let is_text = item.is_instance_of::<PyString>() || item.is_instance_of::<PyBytes>();
+    let unequal = || item.ne(item).unwrap_or(false);
+    if !is_text && unequal() {
+        return Ok(missing("NaN", String::new()));
+    }
+    let text = item.str()?.to_string();
+    if text.trim().is_empty() {
+        let shown = item.repr()?.to_string();
+        return Ok(missing(&shown, text));
+    }
+    Ok(LabelItem {
+        text,
+        shown: String::new(),
+    })
+}
+
+/// `: indices 3, 7, 9` (the first few, `...` after them) when more than one index is missing.
+fn listed_indices(indices: &[usize]) -> String {
+    const SHOWN: usize = 5;
+    if indices.len() < 2 {
+        return String::new();
+    }
+    let mut listed: Vec<String> = indices.iter().take(SHOWN).map(usize::to_string).collect();
+    if indices.len() > SHOWN {
+        listed.push("...".to_owned());
+    }
+    format!("; at indices {}", listed.join(", "))
+}
+
+/// `presrs._native._check_labels(values, what)`: the text of every label, or the error of a missing
+/// one, for callers that keep the values themselves (the scikit-learn estimator's `y`).
+#[pyfunction]
+#[pyo3(name = "_check_labels")]
+pub fn check_labels(values: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<String>> {
+    labels(values, what, values.len()?)
 }

@@ -2,7 +2,7 @@
 //! group out), on a manifest or on numpy arrays.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use numpy::{PyArray1, PyArrayMethods};
 use presrs::core::sample::SampleChoice;
@@ -12,11 +12,12 @@ use presrs::eval::{CalibrationJson, EvalOptions, EvalOutcome, EvalSetup, Holdout
 use presrs::train::sample_race::WholeSample;
 use presrs::{Dataset, Face, Progress, Quiet, SampleKind, SampleOptions, Warnings};
 use pyo3::prelude::*;
-use pyo3::types::PyString;
+use pyo3::types::{PyDict, PyString};
 
 use crate::errors::{IntoPyResult, data_error, warn};
-use crate::model::{dataset_of, method, validation_size};
+use crate::model::{dataset_of, method, sample_choice, validation_size};
 use crate::progress::PyProgress;
+use crate::sample_options::{ManifestSampling, whole_sample};
 use crate::threads::detached;
 
 /// What an evaluation measured.
@@ -127,28 +128,42 @@ impl Evaluation {
     }
 }
 
-/// Evaluates a method on `data`: a manifest (a path) or images `(n, rows, cols)` with `labels`.
+/// Evaluates a method on `data`: a manifest (a path) or samples in memory with `labels`.
 ///
-/// With `per_class`, a model is trained on a random draw and tested on every other image (the paper's
-/// protocol), `repeats` times; without it (and without a protocol), on G2 when there is such a
-/// condition, else leaving one group out when every image has a group (as `presrs report`). `leave_one_out="group"` (or `"condition"`, or a manifest column) holds
-/// out each value in turn; `train_condition` trains on one condition only. The method options are
-/// `Model.train`'s. `sample="auto"` (a manifest only) races each stance's frame against its whole
-/// sample inside every fold, as `presrs eval --sample auto` does (`to_dict()["sample_races"]`).
+/// With `per_class`, a model is trained on a random draw and tested on every other sample (the
+/// paper's protocol), `repeats` times; without it (and without a protocol), on G2 when there is such a
+/// condition, else leaving one group out when every sample has a group (as `presrs report`).
+/// `leave_one_out="group"` (or `"condition"`, or a manifest column) holds out each value in turn;
+/// `train_condition` trains on one condition only. The method options are `Model.train`'s.
+///
+/// `sample`, as `presrs eval --sample`: `"frame"` (a frame of each stance), `"stance"` (each stance's
+/// movie, laid into `stance_length` frames), `"series"` (`series_axis="rows"` when time runs down the
+/// rows) or `"auto"` (a manifest only: each stance's frame raced against its whole sample inside every
+/// fold, `to_dict()["sample_races"]`). In memory, `data` is what `Model.train` takes for the kind.
+/// How a manifest's files are read and sampled, as the command line's options: `stance_frame`
+/// (`"mid"`, `"peak"`, `"all"` or frames after touchdown), `include_partial` (stances cut by the
+/// recording too), `one_sample_per_file` (each file one contact), `segment_params` (the stance
+/// detector's parameters, a dict of `presrs.segment_params()`'s names), `lenient`, `axes`, `topic`
+/// (as `presrs.read`), `frame_period_s` (of files that state none), `keep_dead_sensels` (use the
+/// recordings as read).
+///
 /// `progress=True` writes a line to `sys.stderr` every few seconds; a callable is called with
 /// `(task, done, total)` instead.
 #[pyfunction]
 #[pyo3(signature = (data, labels = None, *, groups = None, conditions = None, leave_one_out = None,
     train_condition = None, per_class = None, validation = 0.35, repeats = 10, seed = 1,
     features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false,
-    validate_by = "auto", budget = Some(60.0), choose = "best", sample = "frame", progress = None))]
+    validate_by = "auto", budget = Some(60.0), choose = "best", sample = "frame",
+    stance_length = None, series_axis = None, stance_frame = None, include_partial = false,
+    one_sample_per_file = false, segment_params = None, lenient = false, axes = None, topic = None,
+    frame_period_s = None, keep_dead_sensels = false, progress = None))]
 #[allow(clippy::too_many_arguments)]
-pub fn evaluate(
-    py: Python<'_>,
-    data: &Bound<'_, PyAny>,
-    labels: Option<&Bound<'_, PyAny>>,
-    groups: Option<&Bound<'_, PyAny>>,
-    conditions: Option<&Bound<'_, PyAny>>,
+pub fn evaluate<'py>(
+    py: Python<'py>,
+    data: &Bound<'py, PyAny>,
+    labels: Option<&Bound<'py, PyAny>>,
+    groups: Option<&Bound<'py, PyAny>>,
+    conditions: Option<&Bound<'py, PyAny>>,
     leave_one_out: Option<String>,
     train_condition: Option<String>,
     per_class: Option<usize>,
@@ -164,7 +179,18 @@ pub fn evaluate(
     budget: Option<f64>,
     choose: &str,
     sample: &str,
-    progress: Option<&Bound<'_, PyAny>>,
+    stance_length: Option<usize>,
+    series_axis: Option<&str>,
+    stance_frame: Option<Bound<'py, PyAny>>,
+    include_partial: bool,
+    one_sample_per_file: bool,
+    segment_params: Option<Bound<'py, PyDict>>,
+    lenient: bool,
+    axes: Option<String>,
+    topic: Option<String>,
+    frame_period_s: Option<f64>,
+    keep_dead_sensels: bool,
+    progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Evaluation> {
     let reporter = PyProgress::from_arg(progress)?;
     let progress: &dyn Progress = match &reporter {
@@ -203,21 +229,48 @@ pub fn evaluate(
         seed,
         method: method.clone(),
     };
-    match sample.parse::<SampleChoice>() {
-        Ok(SampleChoice::Kind(SampleKind::Frame)) => {}
-        Ok(SampleChoice::Auto) => {
-            let path = manifest_path(data, [labels, groups, conditions])?;
-            return evaluate_racing(py, &path, options_for, progress);
+    let choice = sample_choice(sample, stance_length, series_axis)?;
+    let reading = ManifestSampling {
+        stance_frame,
+        include_partial,
+        one_sample_per_file,
+        lenient,
+        axes,
+        topic,
+        frame_period_s,
+        keep_dead_sensels,
+        segment_params,
+    };
+    let source = Source::of(data, [labels, groups, conditions], &reading)?;
+    let kind = match (choice, &source) {
+        (SampleChoice::Kind(kind), _) => kind,
+        (SampleChoice::Auto, Source::Manifest(path)) => {
+            let frames = reading.options(SampleKind::Frame)?;
+            let whole = whole_sample(stance_length, series_axis);
+            return evaluate_racing(py, path, (&frames, whole), options_for, progress);
         }
-        Ok(SampleChoice::Kind(_)) | Err(_) => {
-            return Err(data_error(format!(
-                "sample={:?}: evaluate takes \"frame\" (each stance's frame) or \"auto\" (a \
-                 manifest's frames raced against its whole samples inside every fold)",
-                sample.trim()
-            )));
+        (SampleChoice::Auto, Source::Arrays) => {
+            return Err(data_error(
+                "sample=\"auto\" reads a manifest's files both as frames and as whole stances (or \
+                 series): pass a manifest's path",
+            ));
         }
-    }
-    let dataset = load(py, data, labels, groups, conditions, progress)?;
+    };
+    let dataset = match &source {
+        Source::Manifest(path) => {
+            let options = reading.options(kind)?;
+            detached(py, || Dataset::load(path, &options, progress))?.py_err()?
+        }
+        Source::Arrays => {
+            let Some(labels) = labels else {
+                return Err(data_error(
+                    "labels: samples in memory need one label each (or pass a manifest's path \
+                     instead)",
+                ));
+            };
+            dataset_of(data, labels, groups, conditions, kind)?
+        }
+    };
     let options = options_for(&dataset);
     for warning in &dataset.warnings {
         warn(py, warning)?;
@@ -240,15 +293,12 @@ pub fn evaluate(
 /// fold (`presrs::eval::race`).
 fn evaluate_racing(
     py: Python<'_>,
-    path: &std::path::Path,
+    path: &Path,
+    (frames, whole): (&SampleOptions, WholeSample),
     options_for: impl Fn(&Dataset) -> EvalOptions,
     progress: &dyn Progress,
 ) -> PyResult<Evaluation> {
-    let whole = WholeSample::default();
-    let readings = detached(py, || {
-        RaceReadings::load(path, &SampleOptions::default(), whole, progress)
-    })?
-    .py_err()?;
+    let readings = detached(py, || RaceReadings::load(path, frames, whole, progress))?.py_err()?;
     for warning in &readings.frames.warnings {
         warn(py, warning)?;
     }
@@ -268,53 +318,35 @@ fn evaluate_racing(
     })
 }
 
-/// The path of `data` when it is a manifest's (with none of `extra`: a manifest gives its own labels,
-/// groups and conditions); `sample="auto"` reads a manifest's files twice.
-fn manifest_path(
-    data: &Bound<'_, PyAny>,
-    extra: [Option<&Bound<'_, PyAny>>; 3],
-) -> PyResult<PathBuf> {
-    let is_path = data.is_instance_of::<PyString>() || data.hasattr("__fspath__")?;
-    if !is_path {
-        return Err(data_error(
-            "sample=\"auto\" reads a manifest's files both as frames and as whole stances (or \
-             series): pass a manifest's path",
-        ));
-    }
-    if extra.iter().any(Option::is_some) {
-        return Err(data_error(
-            "a manifest gives its own labels, groups and conditions: pass only its path",
-        ));
-    }
-    data.extract()
+/// Where an evaluation's samples come from: a manifest's files, or arrays in memory.
+enum Source {
+    Manifest(PathBuf),
+    Arrays,
 }
 
-/// A manifest's data set, or one of arrays in memory.
-fn load(
-    py: Python<'_>,
-    data: &Bound<'_, PyAny>,
-    labels: Option<&Bound<'_, PyAny>>,
-    groups: Option<&Bound<'_, PyAny>>,
-    conditions: Option<&Bound<'_, PyAny>>,
-    progress: &dyn Progress,
-) -> PyResult<Dataset> {
-    let is_path = data.is_instance_of::<PyString>() || data.hasattr("__fspath__")?;
-    if is_path {
-        if labels.is_some() || groups.is_some() || conditions.is_some() {
+impl Source {
+    /// A manifest when `data` is a path (with none of `extra`: a manifest gives its own labels, groups
+    /// and conditions), else arrays (with none of the arguments that read files).
+    fn of(
+        data: &Bound<'_, PyAny>,
+        extra: [Option<&Bound<'_, PyAny>>; 3],
+        reading: &ManifestSampling<'_>,
+    ) -> PyResult<Self> {
+        let is_path = data.is_instance_of::<PyString>() || data.hasattr("__fspath__")?;
+        if !is_path {
+            if let Some(name) = reading.first_given() {
+                return Err(data_error(format!(
+                    "{name}= applies to reading a manifest's files; samples in memory are taken as \
+                     given"
+                )));
+            }
+            return Ok(Self::Arrays);
+        }
+        if extra.iter().any(Option::is_some) {
             return Err(data_error(
                 "a manifest gives its own labels, groups and conditions: pass only its path",
             ));
         }
-        let path: PathBuf = data.extract()?;
-        return detached(py, || {
-            Dataset::load(&path, &SampleOptions::default(), progress)
-        })?
-        .py_err();
+        Ok(Self::Manifest(data.extract()?))
     }
-    let Some(labels) = labels else {
-        return Err(data_error(
-            "labels: images need one label each (or pass a manifest's path instead)",
-        ));
-    };
-    dataset_of(data, labels, groups, conditions, SampleKind::Frame)
 }

@@ -10,6 +10,7 @@ mod model;
 mod online;
 mod progress;
 mod recording;
+mod sample_options;
 mod simulate;
 mod threads;
 
@@ -40,6 +41,7 @@ fn _native(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(recording::segment_params, module)?)?;
     module.add_function(wrap_pyfunction!(recording::features, module)?)?;
     module.add_function(wrap_pyfunction!(evaluate::evaluate, module)?)?;
+    module.add_function(wrap_pyfunction!(arrays::check_labels, module)?)?;
     module.add_function(wrap_pyfunction!(simulate::simulate, module)?)?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use presrs::core::novelty::{Novelty, UNKNOWN_LABEL};
 use presrs::core::pipeline::{Classification, Session};
 use presrs::core::sample::SampleChoice;
 use presrs::core::split::ValidationSize;
-use presrs::core::{Frame, FrameView};
+use presrs::core::{Frame, FrameView, Grid};
 use presrs::io::model_file::{ModelFile, load_model, parse_model, save_model};
 use presrs::io::output_path::check_output_file;
 use presrs::train::{TrainOptions, train};
@@ -21,7 +21,7 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyBytes, PyTuple};
 use self_cell::self_cell;
 
-use crate::arrays::{Images, labels};
+use crate::arrays::{Images, labels, optional_labels};
 use crate::errors::{IntoPyResult, data_error, warn};
 use crate::threads::detached;
 use presrs::Warning;
@@ -145,13 +145,18 @@ impl Model {
                 Ok(Samples::Owned(frames, images.batch))
             }
             SampleKind::Stance { .. } => {
-                let one = x.getattr("ndim").and_then(|n| n.extract::<usize>()).ok() == Some(3);
+                let ndim = x.getattr("ndim").and_then(|n| n.extract::<usize>()).ok();
+                if x.is_none() {
+                    return Err(not_a_movie("x", "None"));
+                }
+                if let Some(ndim) = ndim
+                    && ndim < 3
+                {
+                    return Err(not_a_movie("x", &array_shape(x)?));
+                }
+                let one = ndim == Some(3);
                 let movies: Vec<Bound<'py, PyAny>> = if one {
                     vec![x.clone()]
-                } else if x.is_none() {
-                    return Err(data_error(
-                        "x: expected a movie (frames, rows, cols) or a list of movies, got None",
-                    ));
                 } else {
                     x.try_iter()?.collect::<PyResult<_>>()?
                 };
@@ -162,13 +167,7 @@ impl Model {
                     } else {
                         format!("x[{index}]")
                     };
-                    let movie = Images::new(movie, &what)?;
-                    if !movie.batch {
-                        return Err(data_error(format!(
-                            "{what}: the model classifies whole stances, so it takes a stance's \
-                             movie (frames, rows, cols), not one image"
-                        )));
-                    }
+                    let movie = stance_movie(movie, &what)?;
                     movie.require_finite(&what, "frame")?;
                     let (sample, warning) = model_sample(model, &movie.frames()?)
                         .map_err(|err| data_error(format!("{what}: {err}")))?;
@@ -199,12 +198,15 @@ impl Model {
 
 #[pymethods]
 impl Model {
-    /// Trains a model on images `(n, rows, cols)` with one label each (any values; kept as text).
+    /// Trains a model on images `(n, rows, cols)` with one label each (any values; kept as text). A
+    /// missing label (`None`, NaN, empty or blank text) is an error naming its index; a missing group
+    /// or condition is none.
     ///
-    /// `features` and `classifier` take the CLI's names (`auto`, `fft1d`, `fft2d`, `fft2d-polar`,
-    /// `glcm`, combinations with `+`; `auto`, `pwe`, `lda`, `svm`, `knn`, ...). `groups` and
+    /// `features` takes `auto` or the names of `presrs.FEATURE_FAMILIES` (several joined with `+`),
+    /// `classifier` `auto` or a name of `presrs.CLASSIFIERS`: the command line's names. `groups` and
     /// `conditions` (one per image) are kept with the samples: the automatic choice validates across
-    /// conditions. `validation` is a share of each class (0 < v < 1) or a count per class (>= 1).
+    /// conditions. `seed` draws the validation images (1 by default, as the command line's).
+    /// `validation` is a share of each class (0 < v < 1) or a count per class (>= 1).
     /// `validate_by` (`auto`, `group`, `condition`, `split`): how the automatic choice validates its
     /// candidates; `auto` leaves one group out when there are 3 or more groups, else one condition.
     /// `budget`: seconds the automatic choice may spend scoring candidates (the texture families,
@@ -216,7 +218,7 @@ impl Model {
     /// `series_axis="rows"` when time runs down the rows).
     #[staticmethod]
     #[pyo3(signature = (images, labels, *, features = "auto", classifier = "auto", groups = None,
-        conditions = None, seed = 0, dims = None, per_class = None, validation = 0.35, crop = "auto",
+        conditions = None, seed = 1, dims = None, per_class = None, validation = 0.35, crop = "auto",
         full_search = false, validate_by = "auto", budget = Some(60.0), choose = "best",
         sample = "frame", stance_length = None, series_axis = None, novelty = true))]
     #[allow(clippy::too_many_arguments)]
@@ -548,31 +550,51 @@ pub fn sample_kind(
     stance_length: Option<usize>,
     series_axis: Option<&str>,
 ) -> PyResult<SampleKind> {
-    if sample.trim() != "stance" && stance_length.is_some() {
+    sample_choice(sample, stance_length, series_axis)?
+        .kind()
+        .ok_or_else(|| {
+            data_error(
+                "sample=\"auto\" races one frame against the whole sample inside an evaluation \
+                 (presrs.evaluate); a model is trained on one kind: name it (\"frame\", \"stance\" \
+                 or \"series\")",
+            )
+        })
+}
+
+/// The sample kind, or `auto`, named by `sample=`, with `stance_length=` and `series_axis=` (each
+/// only with its kind, or with `auto`, whose whole sample they describe).
+pub fn sample_choice(
+    sample: &str,
+    stance_length: Option<usize>,
+    series_axis: Option<&str>,
+) -> PyResult<SampleChoice> {
+    let name = sample.trim();
+    if !matches!(name, "stance" | "auto") && stance_length.is_some() {
         return Err(data_error(format!(
             "stance_length= applies to sample=\"stance\", not sample={sample:?}"
         )));
     }
-    if sample.trim() != "series" && series_axis.is_some() {
+    if !matches!(name, "series" | "auto") && series_axis.is_some() {
         return Err(data_error(format!(
             "series_axis= applies to sample=\"series\", not sample={sample:?}"
         )));
     }
-    let choice = SampleChoice::parse(sample, stance_length, series_axis).map_err(|err| {
-        let argument = match sample.trim() {
+    let argument = |err: String| {
+        let argument = match name {
             "stance" => "stance_length",
             "series" => "series_axis",
             _ => "sample",
         };
         data_error(format!("{argument}: {err}"))
-    })?;
-    choice.kind().ok_or_else(|| {
-        data_error(
-            "sample=\"auto\" races one frame against the whole sample inside an evaluation \
-             (presrs.evaluate); a model is trained on one kind: name it (\"frame\", \"stance\" or \
-             \"series\")",
-        )
-    })
+    };
+    if name == "auto" {
+        // The whole sample's settings are checked as its kind checks them.
+        SampleChoice::parse("stance", stance_length, None)
+            .map_err(|err| data_error(format!("stance_length: {err}")))?;
+        SampleChoice::parse("series", None, series_axis)
+            .map_err(|err| data_error(format!("series_axis: {err}")))?;
+    }
+    SampleChoice::parse(sample, stance_length, series_axis).map_err(argument)
 }
 
 /// A data set of samples in memory with their labels and, when given, groups and conditions: images
@@ -584,19 +606,23 @@ pub fn dataset_of(
     conditions: Option<&Bound<'_, PyAny>>,
     kind: SampleKind,
 ) -> PyResult<Dataset> {
-    let frames = match kind {
+    let (frames, sensor) = match kind {
         SampleKind::Stance { .. } => stance_summaries(images, kind)?,
-        SampleKind::Frame | SampleKind::Series { .. } => image_samples(images, kind)?,
+        SampleKind::Frame | SampleKind::Series { .. } => (image_samples(images, kind)?, None),
     };
     let n = frames.len();
     let names = labels(label_values, "labels", n)?;
-    let groups = groups.map(|g| labels(g, "groups", n)).transpose()?;
-    let conditions = conditions.map(|c| labels(c, "conditions", n)).transpose()?;
+    let groups = groups
+        .map(|g| optional_labels(g, "groups", n))
+        .transpose()?;
+    let conditions = conditions
+        .map(|c| optional_labels(c, "conditions", n))
+        .transpose()?;
     let mut samples = Vec::with_capacity(n);
     for (index, (label, frame)) in names.into_iter().zip(frames).enumerate() {
         let mut sample = Sample::new(frame, label, PathBuf::from("images"), index);
-        sample.group = groups.as_ref().map(|g| g[index].clone());
-        sample.condition = conditions.as_ref().map(|c| c[index].clone());
+        sample.group = groups.as_ref().and_then(|g| g[index].clone());
+        sample.condition = conditions.as_ref().and_then(|c| c[index].clone());
         samples.push(sample);
     }
     let what = if kind.is_frame() {
@@ -604,7 +630,12 @@ pub fn dataset_of(
     } else {
         kind.name()
     };
-    Dataset::from_samples_of(format!("numpy {what}s ({n})"), samples, kind).py_err()
+    let mut dataset =
+        Dataset::from_samples_of(format!("numpy {what}s ({n})"), samples, kind).py_err()?;
+    if sensor.is_some() {
+        dataset.sensor = sensor;
+    }
+    Ok(dataset)
 }
 
 /// The images of a batch `(n, rows, cols)`, each checked for values that are not numbers, as samples of
@@ -623,23 +654,46 @@ fn image_samples(images: &Bound<'_, PyAny>, kind: SampleKind) -> PyResult<Vec<Fr
 }
 
 /// Each movie `(frames, rows, cols)` of `movies` (a sequence, or a 4-D array) as a whole-stance sample
-/// of `kind`, summarised over time (laid into one length later, with the rest of the data set).
-fn stance_summaries(movies: &Bound<'_, PyAny>, kind: SampleKind) -> PyResult<Vec<Frame>> {
+/// of `kind`, summarised over time (laid into one length later, with the rest of the data set), and
+/// the one sensor grid they share (a model of summaries takes one sensor: movies of another grid than
+/// the first are refused, naming both).
+fn stance_summaries(
+    movies: &Bound<'_, PyAny>,
+    kind: SampleKind,
+) -> PyResult<(Vec<Frame>, Option<Grid>)> {
     if movies.is_none() {
         return Err(data_error(
             "images: expected a sequence of movies (frames, rows, cols), got None",
         ));
     }
     let mut out = Vec::new();
+    let mut sensor: Option<Grid> = None;
     for (index, movie) in movies.try_iter()?.enumerate() {
         let what = format!("images[{index}]");
-        out.push(movie_summary(&movie?, &what, kind)?);
+        let (summary, grid) = movie_summary(&movie?, &what, kind)?;
+        match sensor {
+            Some(first) if first != grid => {
+                return Err(data_error(format!(
+                    "{what}: a movie of {grid} frames where images[0] has {first}: a stance model \
+                     is trained on one sensor; crop or resample the movies to one grid, or train a \
+                     model per sensor"
+                )));
+            }
+            Some(_) => {}
+            None => sensor = Some(grid),
+        }
+        out.push(summary);
     }
-    Ok(out)
+    Ok((out, sensor))
 }
 
-/// One stance's movie summarised (as the CLI's data sets are), `what` naming it in errors.
-fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, kind: SampleKind) -> PyResult<Frame> {
+/// One stance's movie summarised (as the CLI's data sets are), with its frames' grid; `what` names it
+/// in errors.
+fn movie_summary(
+    movie: &Bound<'_, PyAny>,
+    what: &str,
+    kind: SampleKind,
+) -> PyResult<(Frame, Grid)> {
     let frames = Images::new(movie, what)?;
     if !frames.batch {
         return Err(data_error(format!(
@@ -649,8 +703,59 @@ fn movie_summary(movie: &Bound<'_, PyAny>, what: &str, kind: SampleKind) -> PyRe
     }
     frames.require_finite(what, "frame")?;
     kind.sample_of(&frames.frames()?, None)
-        .map(|(summary, _)| summary)
+        .map(|(summary, _)| (summary, frames.grid()))
         .map_err(|err| data_error(format!("{what}: {err}")))
+}
+
+/// One stance's movie `(frames, rows, cols)` of a whole-stance model's input, or an error saying
+/// that the model takes whole stances and what `movie` is.
+fn stance_movie<'py>(movie: &Bound<'py, PyAny>, what: &str) -> PyResult<Images<'py>> {
+    let ndim = movie
+        .getattr("ndim")
+        .and_then(|n| n.extract::<usize>())
+        .ok();
+    if movie.is_none() {
+        return Err(not_a_movie(what, "None"));
+    }
+    if ndim.is_some_and(|ndim| ndim != 3) {
+        return Err(not_a_movie(what, &array_shape(movie)?));
+    }
+    let images = Images::new(movie, what)?;
+    if !images.batch {
+        let grid = images.grid();
+        return Err(not_a_movie(
+            what,
+            &format!("one image of {} x {} (rows x cols)", grid.rows, grid.cols),
+        ));
+    }
+    Ok(images)
+}
+
+/// What a numpy array is, for an error: `one image of 20 x 33 (rows x cols)`, `an array of shape
+/// (33,)`, `a number`.
+fn array_shape(array: &Bound<'_, PyAny>) -> PyResult<String> {
+    let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+    Ok(match shape[..] {
+        [] => "a number (an array of no dimension)".to_owned(),
+        [rows, cols] => format!("one image of {rows} x {cols} (rows x cols)"),
+        [length] => format!("an array of shape ({length},)"),
+        _ => format!(
+            "an array of shape ({})",
+            shape
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    })
+}
+
+/// The error of a whole-stance model given something other than a stance's movie.
+fn not_a_movie(what: &str, got: &str) -> PyErr {
+    data_error(format!(
+        "{what}: the model classifies whole stances: it takes a stance's movie (frames, rows, cols), \
+         or a list of movies; got {got}"
+    ))
 }
 
 /// Batches at least this long are classified in parallel.

@@ -178,12 +178,7 @@ pub fn read(
     axes: Option<&str>,
     topic: Option<String>,
 ) -> PyResult<Recording> {
-    let axes = axes
-        .map(|text| {
-            text.parse::<ArrayAxes>()
-                .map_err(|err| data_error(format!("axes={text:?}: {err}")))
-        })
-        .transpose()?;
+    let axes = array_axes(axes)?;
     let options = ReadOptions {
         lenient,
         axes,
@@ -194,6 +189,15 @@ pub fn read(
         warn(py, warning)?;
     }
     Ok(Recording::of(parsed.recording, Some(path), parsed.warnings))
+}
+
+/// `axes=`: what the axes of a 3-D `.npy` are (`None`: frames, rows, cols).
+pub fn array_axes(axes: Option<&str>) -> PyResult<Option<ArrayAxes>> {
+    axes.map(|text| {
+        text.parse::<ArrayAxes>()
+            .map_err(|err| data_error(format!("axes={text:?}: {err}")))
+    })
+    .transpose()
 }
 
 /// One stance phase (foot contact) of a recording; frames are 0-based.
@@ -243,8 +247,8 @@ pub fn segment(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Vec<Stance>> {
     let totals = total_load(recording)?;
-    let params = segment_params_from(params)?;
-    let sample = sample_frame(sample)?;
+    let params = segment_params_from(params, "segment")?;
+    let sample = sample_frame(sample, "sample")?;
     let segmentation = presrs::core::stance::segment(&totals, &params).py_err()?;
     segmentation
         .stances
@@ -300,8 +304,11 @@ fn total_load(obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
 }
 
 /// The detector's parameters: the defaults, with the keyword arguments given (unknown names and
-/// invalid values are errors naming them).
-fn segment_params_from(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<ValidSegmentParams> {
+/// invalid values are errors naming them, after `what`).
+pub fn segment_params_from(
+    kwargs: Option<&Bound<'_, PyDict>>,
+    what: &str,
+) -> PyResult<ValidSegmentParams> {
     let mut params = serde_json::to_value(SegmentParams::default())
         .map_err(|err| data_error(err.to_string()))?;
     if let Some(kwargs) = kwargs {
@@ -315,17 +322,19 @@ fn segment_params_from(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<ValidSegm
             if !fields.contains_key(&key) {
                 let known: Vec<&str> = fields.keys().map(String::as_str).collect();
                 return Err(data_error(format!(
-                    "segment: unknown parameter {key:?} (known: {})",
+                    "{what}: unknown parameter {key:?} (known: {})",
                     known.join(", ")
                 )));
             }
             fields.insert(key, crate::json::from_py(&value)?);
         }
     }
-    serde_json::from_value(params).map_err(|err| data_error(format!("segment: {err}")))
+    serde_json::from_value(params).map_err(|err| data_error(format!("{what}: {err}")))
 }
 
-fn sample_frame(sample: Option<&Bound<'_, PyAny>>) -> PyResult<SampleFrame> {
+/// Which frame of a stance is its sample: `"mid"` (also `None`), `"peak"`, `"all"` or `K` frames after
+/// touchdown; `what` names the argument in errors.
+pub fn sample_frame(sample: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<SampleFrame> {
     let Some(sample) = sample else {
         return Ok(SampleFrame::Mid);
     };
@@ -333,12 +342,12 @@ fn sample_frame(sample: Option<&Bound<'_, PyAny>>) -> PyResult<SampleFrame> {
         return Ok(SampleFrame::Offset(k));
     }
     let text: String = sample.str()?.to_string();
-    SampleFrame::from_str(&text).map_err(|err| data_error(format!("sample={text:?}: {err}")))
+    SampleFrame::from_str(&text).map_err(|err| data_error(format!("{what}={text:?}: {err}")))
 }
 
 /// The feature vector of one image `(rows, cols)` -> `(n_features,)`, or of a batch
 /// `(n, rows, cols)` -> `(n, n_features)`, as training computes it: crop, then the feature family
-/// (`fft1d`, `fft2d`, `fft2d-polar`, `glcm`, or several joined with `+`).
+/// (a name of `presrs.FEATURE_FAMILIES`, e.g. `fft1d`, or several joined with `+`).
 #[pyfunction]
 #[pyo3(signature = (images, family = "fft1d", crop = "auto"))]
 pub fn features<'py>(
@@ -368,9 +377,10 @@ pub fn features<'py>(
 fn feature_config(family: &str) -> PyResult<FeatureConfig> {
     match presrs::FeatureChoice::from_str(family) {
         Ok(presrs::FeatureChoice::Kinds(kinds)) => Ok(FeatureConfig::combined(&kinds)),
-        Ok(presrs::FeatureChoice::Auto) => Err(data_error(
-            "family=\"auto\": name a feature family (fft1d, fft2d, fft2d-polar, glcm)",
-        )),
+        Ok(presrs::FeatureChoice::Auto) => Err(data_error(format!(
+            "family=\"auto\": name a feature family ({})",
+            presrs::core::features::FeatureKind::names().join(", ")
+        ))),
         Err(err) => Err(data_error(format!("family={family:?}: {err}"))),
     }
 }

@@ -133,23 +133,30 @@ def test_a_bag_of_several_topics_names_the_argument():
 
 
 @pytest.mark.parametrize(
-    "load, hint",
+    "load, argument",
     [
         # one press from the first frame to the last: one contact, partial at both ends
-        (5 + 4 * np.sin(np.linspace(0, np.pi, 40)), "try one sample per file"),
+        (5 + 4 * np.sin(np.linspace(0, np.pi, 40)), "one_sample_per_file"),
         # a press already under way when the recording starts
-        (np.r_[np.linspace(10, 0, 15), np.zeros(25)], "try sampling partial stances too"),
+        (np.r_[np.linspace(10, 0, 15), np.zeros(25)], "include_partial"),
     ],
 )
-def test_a_manifest_without_samples_says_what_to_do_in_words(tmp_path, load, hint):
+def test_a_manifest_without_samples_names_the_argument_that_takes_them(tmp_path, load, argument):
     rows = ["path,label"]
-    for i in range(4):
-        np.save(tmp_path / f"press{i}.npy", np.ones((len(load), 8, 8)) * load[:, None, None])
+    for i in range(8):
+        scale = 1 + (i % 2)
+        np.save(tmp_path / f"press{i}.npy", np.ones((len(load), 8, 8)) * load[:, None, None] * scale)
         rows.append(f"press{i}.npy,{'ab'[i % 2]}")
     (tmp_path / "manifest.csv").write_text("\n".join(rows) + "\n")
     message = _raised(presrs.evaluate, tmp_path / "manifest.csv", repeats=1)
-    assert "4 of 4 files gave no sample" in message
-    assert f"{hint} (an option of the presrs command line)" in message
+    assert "8 of 8 files gave no sample" in message
+    assert f"try {argument}=" in message
+    # Issue #45: the argument named is presrs.evaluate's, and it takes the samples.
+    result = presrs.evaluate(
+        tmp_path / "manifest.csv", repeats=1, per_class=3, validation=1, features="fft1d",
+        classifier="lda", **{argument: True},
+    )
+    assert result.confusion.sum() > 0
 
 
 # Issue #35, Python: each message below names the argument and the image, in Python's words.

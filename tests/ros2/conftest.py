@@ -108,8 +108,10 @@ def sim(tmp_path_factory):
 def walk(tmp_path_factory):
     """A whole-stance model (MiniRocket and ridge on the stance's summary, with its online profile) of
     every third jiku-walk recording (one stance a file, 63 x 33; its length, the longest stance's, is
-    about 80 frames), and bags at 100 Hz of one recording (54 frames, decided at its end) and of two
-    one after the other (one stance of 128 frames, longer than the model's)."""
+    about 80 frames), and bags at 100 Hz of one recording (54 frames, decided at its lift-off) and of
+    two one after the other (one stance of 128 frames, longer than the model's), each with a swing of
+    12 unloaded frames before and after, as in a walk (the profile learned from one-contact trials
+    finds the steps of a stream; a stream that starts loaded starts with a partial stance)."""
     import numpy as np
 
     d = tmp_path_factory.mktemp("walk")
@@ -121,8 +123,10 @@ def walk(tmp_path_factory):
     run_cli("train", "--manifest", d / "manifest.csv", "--out", model, "--sample", "stance",
             "--one-sample-per-file", "--features", "rocket", "--classifier", "ridge", "--online-profile")
     bags = {}
+    swing = np.zeros((12, 63, 33), dtype=np.uint16)
     for name, movies in (("one", ["s00_t00.npy"]), ("two", ["s00_t00.npy", "s00_t01.npy"])):
-        np.save(d / f"{name}.npy", np.concatenate([np.load(src / m) for m in movies]))
+        steps = [np.load(src / m) for m in movies]
+        np.save(d / f"{name}.npy", np.concatenate([swing, *steps, swing]))
         run_cli("convert", d / f"{name}.npy", d / f"{name}.mcap", "--frame-period", "0.01")
         bags[name] = d / f"{name}.mcap"
     return model, bags

@@ -113,7 +113,7 @@ def test_a_simulated_run_at_100_hz_on_sensor_data_qos(sim, domain, node_factory)
 
 
 @pytest.mark.parametrize("bag, decide_at, waited_for", [
-    ("one", None, "liftoff"),  # at the stance's end: here the stream's, when the node stops
+    ("one", None, "liftoff"),  # at the stance's lift-off, in the swing after it
     ("two", None, "length"),  # the stance grew longer than the model's samples
     ("one", 12, "offset"),  # --decide-at 12
 ])
@@ -133,7 +133,6 @@ def test_a_whole_stance_decision_says_what_it_waited_for(walk, bag, decide_at, w
         return any(int(diagnostics_values(d)["frames_received"]) == len(case.payloads)
                    for d in p.got[p.diagnostics])
 
-    # A decision at lift-off comes when the stance ends: here when the input does (the node stops).
     assert peer.wait_for(all_taken, 20)
     code, stderr = node.stop(signal.SIGINT)
     assert code == 0, stderr

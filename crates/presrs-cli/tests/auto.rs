@@ -598,3 +598,64 @@ fn eval_without_a_protocol_holds_out_groups_or_says_what_to_give() {
         stdout(&drawn)
     );
 }
+
+/// `train` and `eval` end with the run's peak memory and that peak per sample (`memory` in `eval
+/// --json`), say where the automatic choice's time went (the scoring the budget bounds, training the
+/// winner after it; `cost` in each selection), and name each stage on stderr as it begins.
+#[test]
+fn train_and_eval_state_their_peak_memory_per_sample_and_their_stages() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = common::write_image_set(dir.path(), (16, 16), 3, 12, 3, 0.5, 2);
+    let manifest = manifest.to_str().unwrap();
+    let model = dir.path().join("m.json");
+    let train = presrs(&[
+        "train",
+        "--manifest",
+        manifest,
+        "--out",
+        model.to_str().unwrap(),
+        "--dims",
+        "5",
+    ]);
+    assert!(train.status.success(), "{}", stderr(&train));
+    let out = stdout(&train);
+    let last = out.lines().last().unwrap();
+    assert!(last.starts_with("peak memory "), "{out}");
+    assert!(last.ends_with("per sample over 36 samples"), "{last}");
+    let time = out.lines().find(|l| l.starts_with("time: ")).unwrap();
+    assert!(time.contains("scored on all 36 samples"), "{time}");
+    assert!(
+        time.contains("training the winner on all 36 samples"),
+        "{time}"
+    );
+    let err = stderr(&train);
+    for stage in [
+        "progress: scoring ",
+        "progress: features: fft1d",
+        "progress: training the winner, ",
+    ] {
+        assert!(err.contains(stage), "{stage}: {err}");
+    }
+    let eval = presrs(&[
+        "eval",
+        "--manifest",
+        manifest,
+        "--leave-one-out",
+        "group",
+        "--repeats",
+        "1",
+        "--dims",
+        "5",
+        "--json",
+    ]);
+    assert!(eval.status.success(), "{}", stderr(&eval));
+    let json: serde_json::Value = serde_json::from_slice(&eval.stdout).unwrap();
+    let memory = &json["memory"];
+    let peak = memory["peak_bytes"].as_u64().unwrap();
+    assert!(peak > 1 << 20, "{memory}");
+    assert_eq!(memory["samples"], 36, "{memory}");
+    assert_eq!(memory["bytes_per_sample"].as_u64().unwrap(), peak / 36);
+    let cost = &json["selections"][0]["cost"];
+    assert_eq!(cost["scored_on"], cost["samples"], "{cost}");
+    assert!(cost["final_fit_seconds"].as_f64().unwrap() > 0.0, "{cost}");
+}

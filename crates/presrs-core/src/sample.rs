@@ -9,7 +9,8 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
-use crate::frame::{Frame, FrameView};
+use crate::frame::{Frame, FrameView, Grid};
+use crate::stance::offline::{SampleFrame, ValidSegmentParams};
 use crate::stance::summary::{SummaryConfig, pad_to, summarise};
 
 /// What one sample of a movie is.
@@ -236,6 +237,69 @@ impl SampleKind {
             Self::Series { .. } => "series",
         }
     }
+
+    /// What samples of this kind are called in text, in the plural: `images`, `stances`, `series`.
+    pub fn nouns(&self) -> &'static str {
+        match self {
+            Self::Frame => "images",
+            Self::Stance { .. } => "stances",
+            Self::Series { .. } => "series",
+        }
+    }
+
+    /// A sample's `grid` in this kind's own terms: `63x33 image`, `12 channels x 83 frames` (a stance's
+    /// summary: channels over the frames of the stance), `8 channels x 100 time steps` (a series).
+    pub fn shape_text(&self, grid: crate::frame::Grid) -> String {
+        match self {
+            Self::Frame => format!("{grid} image"),
+            Self::Stance { .. } => format!("{} channels x {} frames", grid.rows, grid.cols),
+            Self::Series { .. } => format!("{} channels x {} time steps", grid.rows, grid.cols),
+        }
+    }
+}
+
+/// How a model's training samples were taken from their recordings, stored in the model: the faces
+/// that take samples from recordings (`presrs classify`) take them the same way unless told otherwise.
+/// Absent from models trained on samples made in memory and from files written before it was stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sampling {
+    /// The stance detector's settings (baseline mode, levels, lengths, gaps).
+    pub segment: ValidSegmentParams,
+    /// Every recording was one contact, its whole length the stance (`--one-sample-per-file`).
+    pub one_sample_per_file: bool,
+    /// Which frame of each stance was a frame sample.
+    pub stance_frame: SampleFrame,
+    /// Stances cut by the start or end of a recording were sampled too.
+    pub include_partial: bool,
+}
+
+/// Why a frame or series of `got` cannot be a sample of a model trained on `sensor` (the grid its
+/// training recordings' frames had, or its series'), as a frame model refuses a wrong image size;
+/// `None` when it fits (or the model does not say).
+pub fn sensor_mismatch(kind: &SampleKind, sensor: Option<Grid>, got: Grid) -> Option<CoreError> {
+    let sensor = sensor.filter(|&sensor| sensor != got)?;
+    let (what, expected) = match kind {
+        SampleKind::Frame => return None,
+        SampleKind::Stance { .. } => (
+            "stance frame",
+            format!("{sensor} frames, the sensor this whole-stance model was trained on"),
+        ),
+        SampleKind::Series { .. } => (
+            "series",
+            format!(
+                "{sensor} ({} channel{} x {} time steps), the series this model was trained on",
+                sensor.rows,
+                if sensor.rows == 1 { "" } else { "s" },
+                sensor.cols
+            ),
+        ),
+    };
+    Some(CoreError::Shape {
+        what,
+        expected,
+        got: got.to_string(),
+    })
 }
 
 /// One image and what is known about it.

@@ -76,6 +76,16 @@ pub enum Opt {
     Sample,
     /// When a whole-stance model decides online: K frames after touchdown.
     DecideAt,
+    /// Frames each whole-stance sample is laid into.
+    StanceLength,
+    /// The axis that is time in a series sample.
+    SeriesAxis,
+    /// Which frame of each stance a one-frame sample is.
+    StanceFrame,
+    /// The frame a one-frame model classifies online: K frames after touchdown.
+    SampleOffset,
+    /// The frame offsets whose posteriors a one-frame model fuses online.
+    Fuse,
 }
 
 /// What Python calls an option.
@@ -89,7 +99,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 26] = [
+    pub const ALL: [Opt; 31] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -116,6 +126,11 @@ impl Opt {
         Opt::TrainCondition,
         Opt::Sample,
         Opt::DecideAt,
+        Opt::StanceLength,
+        Opt::SeriesAxis,
+        Opt::StanceFrame,
+        Opt::SampleOffset,
+        Opt::Fuse,
     ];
 
     /// The command line's flag, e.g. `--per-class`.
@@ -147,6 +162,11 @@ impl Opt {
             Self::TrainCondition => "--train-condition",
             Self::Sample => "--sample",
             Self::DecideAt => "--decide-at",
+            Self::StanceLength => "--stance-length",
+            Self::SeriesAxis => "--series-axis",
+            Self::StanceFrame => "--stance-frame",
+            Self::SampleOffset => "--sample-offset",
+            Self::Fuse => "--fuse",
         }
     }
 
@@ -165,12 +185,8 @@ impl Opt {
             Self::Dims => Argument("dims"),
             Self::Classifier => Argument("classifier"),
             Self::Budget => Argument("budget"),
-            Self::IncludePartial => {
-                Words("sampling partial stances too (an option of the presrs command line)")
-            }
-            Self::OneSamplePerFile => {
-                Words("one sample per file (an option of the presrs command line)")
-            }
+            Self::IncludePartial => Argument("include_partial"),
+            Self::OneSamplePerFile => Argument("one_sample_per_file"),
             Self::Terrains => Argument("terrains"),
             Self::TerrainImage => Words("a terrain height-map image"),
             Self::Gaits => Argument("gaits"),
@@ -185,6 +201,11 @@ impl Opt {
             Self::TrainCondition => Argument("train_condition"),
             Self::Sample => Argument("sample"),
             Self::DecideAt => Argument("decide_at"),
+            Self::StanceLength => Argument("stance_length"),
+            Self::SeriesAxis => Argument("series_axis"),
+            Self::StanceFrame => Words("the stance frame (an option of the presrs command line)"),
+            Self::SampleOffset => Words("the sample offset (an option of the presrs command line)"),
+            Self::Fuse => Words("the fusion offsets (an option of the presrs command line)"),
         }
     }
 
@@ -526,8 +547,7 @@ mod tests {
         );
         assert_eq!(
             message.render(Face::Python),
-            "a.csv: leave_one_out=\"site\": no such column; try sampling partial stances too \
-             (an option of the presrs command line)"
+            "a.csv: leave_one_out=\"site\": no such column; try include_partial="
         );
         assert_eq!(
             message.options().collect::<Vec<_>>(),

@@ -95,16 +95,54 @@ pub fn load_model(path: &Path) -> Result<ModelFile, IoError> {
     parse_model(&bytes, &path.display().to_string())
 }
 
+/// How to get a model, said when a file is not one (words every face can show).
+const TRAIN_ONE: &str =
+    "train one with `presrs train` (or `presrs.Model.train` and `save` in Python)";
+
+/// What a file that is not JSON holds, when its first bytes say so: a recording (NumPy, PNG, MCAP,
+/// TekScan, a text matrix) or a data set's manifest given where a model was expected. `None` for
+/// anything else, which a damaged model file (cut short, overwritten) is.
+fn other_format(bytes: &[u8]) -> Option<&'static str> {
+    let magic = [
+        (crate::npy::NPY_MAGIC, "a NumPy array (.npy) file"),
+        (crate::png::PNG_MAGIC, "a PNG image"),
+        (crate::mcap::MCAP_MAGIC, "an MCAP file (a ROS 2 bag)"),
+    ];
+    if let Some((_, kind)) = magic.iter().find(|(magic, _)| bytes.starts_with(magic)) {
+        return Some(kind);
+    }
+    let text = crate::textutil::decode_text(&bytes[..bytes.len().min(64 * 1024)]);
+    if crate::tekscan::looks_like_tekscan(&text) {
+        return Some("a TekScan ASCII recording");
+    }
+    let first_line = text.lines().find(|line| !line.trim().is_empty())?;
+    let fields: Vec<&str> = first_line.split(',').map(str::trim).collect();
+    if fields.len() > 1 && fields.contains(&"path") {
+        return Some("a CSV manifest (a data set to train on)");
+    }
+    let numbers_only = text
+        .chars()
+        .all(|c| c.is_ascii_digit() || c.is_ascii_whitespace() || ".,;+-eE".contains(c));
+    (numbers_only && text.chars().any(|c| c.is_ascii_digit()))
+        .then_some("a text matrix (a recording)")
+}
+
 /// Parses model-file bytes; `file` names the source in errors.
 pub fn parse_model(bytes: &[u8], file: &str) -> Result<ModelFile, IoError> {
     let not_model = |why: String| {
         IoError::format(
             file,
-            format!("not a presrs model file ({why}); make one with `presrs train`"),
+            format!("a JSON file, not a presrs model file ({why}); {TRAIN_ONE}"),
         )
     };
-    let value: serde_json::Value = serde_json::from_slice(bytes)
-        .map_err(|err| IoError::parse(file, err.line(), format!("corrupted model file: {err}")))?;
+    let value: serde_json::Value =
+        serde_json::from_slice(bytes).map_err(|err| match other_format(bytes) {
+            Some(kind) => IoError::format(
+                file,
+                format!("{kind}, not a presrs model file; {TRAIN_ONE}"),
+            ),
+            None => IoError::parse(file, err.line(), format!("corrupted model file: {err}")),
+        })?;
     match value.get("format") {
         Some(serde_json::Value::String(format)) if format == MODEL_FORMAT => {}
         Some(format) => {
@@ -186,6 +224,41 @@ mod tests {
                 recordings: 2
             })
         );
+    }
+
+    #[test]
+    fn files_that_are_no_model_are_named_for_what_they_are() {
+        let mut npy = Vec::new();
+        crate::npy::write_npy_f64(&mut npy, &[2, 2], &[0.0; 4]).unwrap();
+        let mut png = crate::png::PNG_MAGIC.to_vec();
+        png.extend_from_slice(&[0; 16]);
+        let cases: [(&[u8], &str); 6] = [
+            (&npy, "a NumPy array (.npy) file"),
+            (&png, "a PNG image"),
+            (
+                b"SENSOR_TYPE 5051\nROWS 2\nCOLS 2\nASCII_DATA @@\nFrame 1\n1,2\n3,4\n",
+                "a TekScan ASCII recording",
+            ),
+            (b"path,label\nwalk.npy,grass\n", "a CSV manifest"),
+            (b"1 2 3\n4 5 6\n", "a text matrix (a recording)"),
+            (b"{\"params\": {}}", "a JSON file"),
+        ];
+        for (bytes, kind) in cases {
+            let err = parse_model(bytes, "walk.x").unwrap_err().to_string();
+            assert!(
+                err.starts_with(&format!("walk.x: {kind}"))
+                    && err.contains("not a presrs model file")
+                    && err.contains("presrs train"),
+                "{kind}: {err}"
+            );
+            assert!(!err.contains("corrupted"), "{kind}: {err}");
+        }
+        // A damaged model (cut short, or bytes of nothing known) is still corrupted.
+        let model = model_bytes();
+        for bytes in [&model[..model.len() / 3], b"\x00\x01garbage{" as &[u8], b""] {
+            let err = parse_model(bytes, "m.json").unwrap_err().to_string();
+            assert!(err.contains("corrupted model file"), "{err}");
+        }
     }
 
     #[test]

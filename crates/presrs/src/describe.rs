@@ -23,6 +23,9 @@ pub fn describe_model(file: &ModelFile) -> String {
         model.class_names().join(", ")
     ));
     line(pipeline_summary(model));
+    if let Some(sampling) = sampling_summary(model) {
+        line(sampling);
+    }
     if let Some(selection) = model.selection()
         && let Some(chosen) = selection.chosen()
     {
@@ -63,7 +66,8 @@ pub fn describe_model(file: &ModelFile) -> String {
     if trained > 0 {
         let _ = write!(
             origin,
-            " ({trained} training + {validated} validation images)"
+            " ({trained} training + {validated} validation {})",
+            model.sample().nouns()
         );
     }
     if let Some(seed) = provenance.seed {
@@ -73,13 +77,48 @@ pub fn describe_model(file: &ModelFile) -> String {
     text
 }
 
-/// The image path of `model` in one line: crop, image size, preprocessing, features, PCA or none (and
-/// the Parzen window's sigma).
+/// How the model's samples were taken, in one line, when it says: the sample kind and sensor, then
+/// how stances were found (what `presrs classify` does too unless told otherwise).
+pub fn sampling_summary(model: &TrainedModel) -> Option<String> {
+    let kind = model.sample();
+    let sensor = model.sensor().map(|grid| match kind {
+        presrs_core::sample::SampleKind::Series { .. } => {
+            format!(" of {} channels x {} time steps", grid.rows, grid.cols)
+        }
+        _ => format!(" of {grid} frames"),
+    });
+    let sampling = model.sampling();
+    if sensor.is_none() && sampling.is_none() {
+        return None;
+    }
+    let mut text = format!("samples: {}{}", kind.name(), sensor.unwrap_or_default());
+    if let Some(sampling) = sampling {
+        if sampling.one_sample_per_file {
+            text.push_str(", one per file (each recording one contact)");
+        } else {
+            let _ = write!(
+                text,
+                ", stances found from the {} baseline",
+                sampling.segment.params().baseline
+            );
+            if kind.is_frame() {
+                let _ = write!(text, ", frame {} of each", sampling.stance_frame);
+            }
+            if sampling.include_partial {
+                text.push_str(", partial stances included");
+            }
+        }
+    }
+    Some(text)
+}
+
+/// The image path of `model` in one line: crop, the sample's size in its kind's terms (`38x41 image`,
+/// `12 channels x 83 frames`), preprocessing, features, PCA or none (and the Parzen window's sigma).
 pub fn pipeline_summary(model: &TrainedModel) -> String {
     format!(
-        "crop {} -> {} image, preprocessing {}, {} features ({}), {}{}",
+        "crop {} -> {}, preprocessing {}, {} features ({}), {}{}",
         model.crop(),
-        model.image_grid(),
+        model.sample().shape_text(model.image_grid()),
         model.preprocess(),
         model.n_features(),
         model.features().name(),

@@ -4,7 +4,9 @@
 use std::path::Path;
 
 use presrs_core::dead_sensels::{DeadSensel, DeadSenselConfig, correctable, detect_dead_sensels};
-use presrs_core::stance::{BaselineMode, Segmentation, sample_frames, segment_recording};
+use presrs_core::stance::{
+    BaselineMode, SegmentParams, Segmentation, Stance, sample_frames, segment_recording,
+};
 use presrs_io::mcap::list_topics;
 use presrs_io::{IoError, read_recording_with};
 use serde::Serialize;
@@ -243,12 +245,23 @@ fn stance_notes(
         .count();
     let mode = segmentation.mode;
     if segmentation.stances.is_empty() {
+        let others: Vec<&str> = [
+            (BaselineMode::Floor, "floor (presses on a preload)"),
+            (
+                BaselineMode::Contact,
+                "contact (one contact from the first frame to the last)",
+            ),
+        ]
+        .into_iter()
+        .filter(|(other, _)| *other != mode)
+        .map(|(_, text)| text)
+        .collect();
         notes.push(format!(
             "the load varies ({lowest} .. {highest}) but no stance was found measuring from the {} \
-             (on level {:.1} above it): try --stance-baseline floor (presses on a preload) or \
-             contact (one contact from the first frame to the last), or a lower --stance-threshold",
+             (on level {:.1} above it): try --stance-baseline {}, or a lower --stance-threshold",
             mode_noun(mode),
-            segmentation.on_level
+            segmentation.on_level,
+            others.join(" or ")
         ));
     } else if sampled == 0 && mode == BaselineMode::Contact {
         notes.push(
@@ -271,6 +284,7 @@ fn stance_notes(
             .find(|stance| stance.len as f64 > LONG_STANCE_FRACTION * n as f64)
         && segmentation.stances.len() <= 2
         && n >= 4 * options.segment.params().min_stance_frames
+        && looks_like_a_preload(long, totals, segmentation, options)
     {
         notes.push(format!(
             "{} stance(s) only, one covering {} of {n} frames: if the foot never unloads (a standing \
@@ -280,6 +294,30 @@ fn stance_notes(
         ));
     }
     notes
+}
+
+/// Whether a long stance found from the drifting baseline looks like presses on a standing preload,
+/// which the local floor tells apart: the foot is never seen unloaded (the stance is cut by the
+/// recording), or the floor finds more than twice the stances. A clean single step (unloaded before
+/// and after one contact) is neither: the floor splits it at most into its heel and forefoot loads, and
+/// the floor is no advice for it.
+fn looks_like_a_preload(
+    long: &Stance,
+    totals: &[f64],
+    segmentation: &Segmentation,
+    options: &SampleOptions,
+) -> bool {
+    if long.partial {
+        return true;
+    }
+    let floor = SegmentParams {
+        baseline: BaselineMode::Floor,
+        ..options.segment.params().clone()
+    };
+    floor
+        .check()
+        .and_then(|params| presrs_core::stance::segment(totals, &params))
+        .is_ok_and(|floor| floor.stances.len() > 2 * segmentation.stances.len())
 }
 
 fn mode_noun(mode: BaselineMode) -> &'static str {

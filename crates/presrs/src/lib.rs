@@ -14,6 +14,7 @@ pub mod plot;
 pub mod progress;
 pub mod report;
 pub mod reproduce;
+pub mod resources;
 pub mod session;
 pub mod sim;
 pub mod train;

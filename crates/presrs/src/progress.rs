@@ -14,6 +14,9 @@ pub trait Progress: Sync {
     fn advance(&self, _steps: u64) {}
     /// The current task is over (its bar can go).
     fn finish(&self) {}
+    /// The current task has entered a new stage (the automatic choice: its features, its scoring,
+    /// training the winner): a display shows it as the task's message.
+    fn stage(&self, _stage: &str) {}
     /// Something the user should know that did not stop the work (a file without stance, a capped
     /// option). Workflows that return a result also keep their warnings in it.
     fn warn(&self, _warning: &Warning) {}
@@ -44,6 +47,8 @@ pub struct RecorderLog {
     pub steps: u64,
     pub warnings: Warnings,
     pub notes: Vec<String>,
+    /// Stages in the order they began.
+    pub stages: Vec<String>,
 }
 
 impl Recorder {
@@ -67,6 +72,10 @@ impl Progress for Recorder {
 
     fn advance(&self, steps: u64) {
         self.lock().steps += steps;
+    }
+
+    fn stage(&self, stage: &str) {
+        self.lock().stages.push(stage.to_owned());
     }
 
     fn warn(&self, warning: &Warning) {

@@ -177,7 +177,10 @@ fn stances_shorter_than_a_kernel_train_evaluate_and_classify() {
     let two = write_movie(dir.path(), "two.npy", &movie(2, "b", 3));
     let said = classify(&model, &two, &options).unwrap();
     assert!(
-        said.ends_with("two.npy: 2 frames but no complete stance phase; nothing classified"),
+        said.ends_with(
+            "two.npy: 2 frames but no complete stance phase; nothing classified (it is shorter \
+             than a stance of at least 3 frames)"
+        ),
         "{said}"
     );
     // In a data set, it gives no sample, and the warning says why.

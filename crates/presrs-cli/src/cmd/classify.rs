@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::classify::bag::ClassifyBag;
-use presrs::classify::{ClassifyOptions, classify_file};
+use presrs::classify::{ClassifyOptions, classify_file, nothing_classified};
 use presrs::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
 
@@ -18,7 +18,10 @@ use crate::printer::classify_document::{ClassifyJson, FileError};
 #[command(
     after_help = "A file that cannot be read or classified is reported on stderr and skipped; the other \
 files are still classified, and the exit code is then 1 (with --json, the document lists them under \
-`errors`).\n\nThe confidence is the posterior of the label (equal priors). Every classifier's posteriors are \
+`errors`); so is a run in which no file gave a sample (each file's warning says why).\n\nStances are \
+found and sampled as the model's training did (one sample per file, the stance baseline and settings, \
+the stance frame, partial stances: the model file's `sampling`) unless given here: any --stance-* \
+option replaces the model's stance settings.\n\nThe confidence is the posterior of the label (equal priors). Every classifier's posteriors are \
 calibrated when it is trained (a temperature fitted on held-out or leave-one-out scores), so that a confidence of 0.9 is \
 right about nine times in ten on data like the training data; `presrs eval` measures how well that holds \
 (mean confidence when right and when wrong, calibration error).\n\nExample:
@@ -81,11 +84,15 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         .max(5);
     // The header comes with the first row: a run whose files all fail prints only the errors.
     let mut header = !args.json;
+    let mut classified = 0;
     for path in &args.files {
+        // The model's own sampling for the settings left at their defaults (the bag segments as
+        // classify did).
         let options = ClassifyOptions {
             frame: args.frame,
             samples: args.samples.options()?,
-        };
+        }
+        .for_model(model);
         let classification = classify_file(model, &mut session, path, &options, &mut fills);
         let samples = match classification {
             Ok(classification) => {
@@ -109,6 +116,7 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 continue;
             }
         };
+        classified += samples.len();
         for sample in samples {
             if let Some(warning) = &sample.warning {
                 out.flush()?;
@@ -167,6 +175,9 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             "{failed} of {} file(s) could not be classified (each reported above)",
             args.files.len()
         );
+    }
+    if classified == 0 {
+        return Err(nothing_classified(args.files.len()).into());
     }
     Ok(())
 }

@@ -5,7 +5,10 @@ use std::path::Path;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use presrs::dataset::{DeadSenselFills, SampleChoice, SampleKind, SampleOptions, read_corrected};
+use presrs::dataset::{
+    DeadSenselFills, GivenSampleSettings, SampleChoice, SampleKind, SampleOptions,
+    check_sample_settings, read_corrected,
+};
 use presrs::method::{ClassifierChoice, CropChoice, FeatureChoice, Method, ValidateBy};
 use presrs::{Dataset, Progress};
 use presrs_core::Recording;
@@ -14,6 +17,7 @@ use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::{BaselineMode, SampleFrame, SegmentParams, ValidSegmentParams};
 use presrs_io::{ArrayAxes, ReadOptions};
 
+use super::usage::UsageError;
 use crate::printer::progress_lines::{ProgressLines, progress_interval};
 
 /// How the pipeline is built: crop, features, reduction, classifier.
@@ -127,16 +131,17 @@ pub struct SampleArgs {
     /// by validation inside the training data)
     #[arg(long, default_value = "frame", value_parser = sample_choice_parser())]
     pub sample: SampleChoice,
-    /// With --sample stance: frames each stance is laid into (default: the longest stance)
+    /// With --sample stance: frames each stance is laid into (default: the longest stance; at most 4
+    /// times it)
     #[arg(long)]
     pub stance_length: Option<usize>,
     /// With --sample series: the array's axis that is time, cols (rows are channels) or rows
     #[arg(long, value_parser = ["cols", "rows"])]
     pub series_axis: Option<String>,
-    /// Which frame of each stance phase is a sample: mid (the paper's mid-stance frame), peak, a frame
-    /// offset K after touchdown (0-based), or all.
-    #[arg(long, default_value = "mid", value_parser = parse_sample_frame)]
-    pub stance_frame: SampleFrame,
+    /// With --sample frame: which frame of each stance phase is a sample: mid (the paper's mid-stance
+    /// frame), peak, a frame offset K after touchdown (0-based), or all [default: mid].
+    #[arg(long, value_parser = parse_sample_frame)]
+    pub stance_frame: Option<SampleFrame>,
     /// Also use stances cut by the start or end of a recording.
     #[arg(long)]
     pub include_partial: bool,
@@ -257,6 +262,28 @@ impl SampleArgs {
         }
     }
 
+    /// Which frame of each stance is a one-frame sample (`--stance-frame`, mid when not given).
+    pub fn stance_frame(&self) -> SampleFrame {
+        self.stance_frame.unwrap_or_default()
+    }
+
+    /// Refuses, or warns of (on stderr), the sample options given that do nothing with the sample
+    /// kind chosen ([`check_sample_settings`] says which and why); a refusal is a usage error of
+    /// `subcommand`.
+    pub fn check_settings(&self, subcommand: &'static str) -> anyhow::Result<()> {
+        let given = GivenSampleSettings {
+            stance_length: self.stance_length,
+            stance_frame: self.stance_frame,
+            series_axis: self.series_axis.as_deref(),
+        };
+        let warnings = check_sample_settings(self.sample, &given)
+            .map_err(|err| UsageError::error(subcommand, err))?;
+        for warning in &warnings {
+            stderr_line!("warning: {warning}");
+        }
+        Ok(())
+    }
+
     /// `--sample` with `--stance-length` and `--series-axis` applied to the kind named.
     pub fn choice(&self) -> anyhow::Result<SampleChoice> {
         let time_in_rows = self.series_axis.as_deref() == Some("rows");
@@ -282,7 +309,7 @@ impl SampleArgs {
     pub fn options_of(&self, kind: SampleKind) -> anyhow::Result<SampleOptions> {
         Ok(SampleOptions {
             kind,
-            sample: self.stance_frame,
+            sample: self.stance_frame(),
             include_partial: self.include_partial,
             read: self.read_options(),
             dead_sensels: self.dead_sensels(),
@@ -406,6 +433,18 @@ impl Progress for TerminalProgress {
         self.lines.finish();
         if let Some(bar) = self.bar().take() {
             bar.finish_and_clear();
+        }
+    }
+
+    /// On a terminal the bar's message; otherwise a line at once (stages are few, and a log should
+    /// say where the time went).
+    fn stage(&self, stage: &str) {
+        if std::io::stderr().is_terminal() {
+            if let Some(bar) = self.bar().as_ref() {
+                bar.set_message(stage.to_owned());
+            }
+        } else {
+            stderr_line!("progress: {stage}");
         }
     }
 

@@ -7,6 +7,7 @@ use anyhow::Context;
 use presrs::eval::document::{CompareJson, EvalJson, PerturbedJson, perturbation_fault_results};
 use presrs::eval::novelty::{HeldOutClasses, LeaveClassOut};
 use presrs::eval::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
+use presrs::resources::MemoryUse;
 use presrs_core::evaluation::{ComparisonRow, EvalReport};
 use presrs_core::split::ValidationSize;
 
@@ -95,6 +96,7 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     for dir in [&args.report, &args.export_draws].into_iter().flatten() {
         presrs_io::output_path::check_output_dir(dir)?;
     }
+    args.samples.check_settings("eval")?;
     if let Some(held_out) = &args.leave_class_out {
         return run_leave_class_out(args, held_out, out);
     }
@@ -127,7 +129,8 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let perturbed = setup.perturbed(&args.perturb, &outcome.report, &progress)?;
     let faults = perturbation_fault_results(&perturbed, options.method.is_auto());
     write_report(args, (&dataset, &options), &outcome, &faults)?;
-    let eval = EvalJson::of(&outcome, &setup.never_trained);
+    let mut eval = EvalJson::of(&outcome, &setup.never_trained);
+    eval.memory = MemoryUse::now(dataset.samples.len());
     if args.json && perturbed.is_empty() {
         return write_json(out, &eval);
     }
@@ -141,9 +144,18 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             },
         );
     }
-    print_report(&outcome.report, out)?;
+    print_report(&outcome.report, Some(dataset.sample), out)?;
     print_perturbations(&perturbed, out)?;
-    print_choices(&outcome, &eval, out)
+    print_choices(&outcome, &eval, out)?;
+    print_memory(&eval, out)
+}
+
+/// The run's peak memory, last (measured once the run is over).
+fn print_memory(eval: &EvalJson<'_>, out: &mut dyn Write) -> anyhow::Result<()> {
+    if let Some(memory) = &eval.memory {
+        writeln!(out, "{}", memory.line())?;
+    }
+    Ok(())
 }
 
 /// `--leave-class-out` (the samples as named, frames with `--sample auto`): the table, or
@@ -209,12 +221,14 @@ fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         stderr_line!("warning: {warning}");
     }
     write_report(args, (&readings.frames, &options), &raced.outcome, &[])?;
-    let eval = EvalJson::of(&raced.outcome, &raced.never_trained);
+    let mut eval = EvalJson::of(&raced.outcome, &raced.never_trained);
+    eval.memory = MemoryUse::now(readings.frames.samples.len());
     if args.json {
         return write_json(out, &eval);
     }
-    print_report(&raced.outcome.report, out)?;
-    print_choices(&raced.outcome, &eval, out)
+    print_report(&raced.outcome.report, None, out)?;
+    print_choices(&raced.outcome, &eval, out)?;
+    print_memory(&eval, out)
 }
 
 fn eval_options(args: &EvalArgs, dataset: &presrs::Dataset) -> EvalOptions {
@@ -267,9 +281,18 @@ fn print_choices(
     )?)
 }
 
-/// The human-readable tables of an evaluation (`crate::printer::eval_tables::report_table`).
-pub fn print_report(report: &EvalReport, out: &mut dyn Write) -> anyhow::Result<()> {
-    Ok(write!(out, "{}", eval_tables::report_table(report))?)
+/// The human-readable tables of an evaluation (`crate::printer::eval_tables::report_table`) of
+/// `sample`s (`None`: raced).
+pub fn print_report(
+    report: &EvalReport,
+    sample: Option<presrs_core::sample::SampleKind>,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    Ok(write!(
+        out,
+        "{}",
+        eval_tables::report_table(report, sample)
+    )?)
 }
 
 /// `--leave-one-out`: any column but `label` (holding out a class leaves none of its samples to train on).

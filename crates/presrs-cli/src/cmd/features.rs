@@ -51,7 +51,7 @@ pub fn run(args: &FeaturesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         recording,
         &name,
         args.frame,
-        samples.stance_frame,
+        samples.stance_frame(),
         samples.include_partial,
     )?;
     let table = FrameFeatures::new(recording, &name, args.crop.crop, &args.features)?;

@@ -69,6 +69,7 @@ pub struct ReportArgs {
 pub fn run(args: &ReportArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let started = Instant::now();
     presrs_io::output_path::check_output_dir(&args.out)?;
+    args.samples.check_settings("report")?;
     let options = ReportOptions {
         model: args.model.clone(),
         train_condition: args.train_condition.clone(),

@@ -12,6 +12,7 @@ use presrs_ros2::{
 };
 use presrs_stream::StopSignals;
 
+use super::usage::UsageError;
 use crate::printer::stream_log::notice_text;
 
 /// Run as a ROS 2 node: pressure frames from a topic in, terrain decisions out (docs/ros2.md).
@@ -61,9 +62,15 @@ pub struct Ros2Args {
     /// ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST).
     #[arg(long)]
     pub localhost_only: bool,
-    /// Online profile JSON (detector settings, calibration, gait table) [default: the model file's].
+    /// Online profile JSON (detector settings, calibration, gait table) [default: learned from
+    /// --calibrate when given, else the model file's, else warm-up calibration on the first 128
+    /// frames].
     #[arg(long)]
     pub profile: Option<PathBuf>,
+    /// Learn the calibration and sample offset k from the recordings of this manifest (e.g. the
+    /// training manifest), as `presrs stream --calibrate`.
+    #[arg(long, value_name = "MANIFEST")]
+    pub calibrate: Option<PathBuf>,
     /// Recommended gait per terrain, TERRAIN=GAIT, comma separated (added to the profile's table).
     #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
           value_parser = |t: &str| crate::args::values::name_value(t, "TERRAIN=GAIT"))]
@@ -111,13 +118,24 @@ fn domain_id_arg(text: &str) -> Result<u16, String> {
 }
 
 pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let options = args.node_options(|key| std::env::var(key).ok())?;
+    // A bad name, QoS, depth or domain id (given, or in ROS_DOMAIN_ID, as clap treats an option's
+    // environment variable) is bad usage: exit code 2, as docs/ros2.md says.
+    let options = args
+        .node_options(|key| std::env::var(key).ok())
+        .map_err(|err| UsageError::error("ros2", err))?;
     // The model and the profile before the node joins the graph: a bad one announces nothing.
     let file = args
         .novelty
         .apply(presrs_io::model_file::load_model(&args.model)?);
+    presrs::session::check_overrides(&file.model, &args.overrides())
+        .map_err(|err| UsageError::error("ros2", err))?;
     let online = file.online.as_ref();
-    let profile = resolve_profile(args.profile.as_deref(), None, online, &args.overrides())?;
+    let profile = resolve_profile(
+        args.profile.as_deref(),
+        args.calibrate.as_deref(),
+        online,
+        &args.overrides(),
+    )?;
     presrs::session::check_profile(&file.model, &profile)?;
     let signals = StopSignals::register()?;
     let graph = NodeGraph::join(&options)?;

@@ -206,6 +206,8 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         .map(presrs_io::output_path::check_output_file)
         .transpose()?;
     let file = args.novelty.apply(load_model(&args.model)?);
+    presrs::session::check_overrides(&file.model, &args.overrides())
+        .map_err(|err| super::usage::UsageError::error("stream", err))?;
     let profile = resolve_profile(
         args.profile.as_deref(),
         args.calibrate.as_deref(),

@@ -81,6 +81,7 @@ pub struct TrainArgs {
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     presrs_io::output_path::check_output_file(&args.out)?;
+    args.samples.check_settings("train")?;
     let options = TrainOptions {
         condition: args.train_condition.clone(),
         per_class: args.per_class,
@@ -143,9 +144,10 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     save_model(&args.out, file)?;
     writeln!(
         out,
-        "trained {} on {} images ({} training + {} validation) of {} classes: {}",
+        "trained {} on {} {} ({} training + {} validation) of {} classes: {}",
         model.classifier().kind(),
         training.n_train() + training.n_validation(),
+        model.sample().nouns(),
         training.n_train(),
         training.n_validation(),
         model.class_names().len(),
@@ -156,5 +158,8 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         writeln!(out, "{}", profile_summary(profile))?;
     }
     writeln!(out, "model written to {}", args.out.display())?;
+    if let Some(memory) = presrs::resources::MemoryUse::now(trained.dataset.samples.len()) {
+        writeln!(out, "{}", memory.line())?;
+    }
     Ok(())
 }

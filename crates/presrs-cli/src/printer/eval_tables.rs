@@ -7,6 +7,7 @@ use presrs::eval::document::{chosen_counts, protocol_heading, sigmas};
 use presrs::eval::document::{comparison_conditions, perturbation_pairs};
 use presrs::eval::{EvalOutcome, InternalEstimate, PerturbationRow, calibration_line};
 use presrs_core::evaluation::{ComparisonRow, EvalReport, MeanStd};
+use presrs_core::sample::SampleKind;
 
 /// The comparison table: one row per feature x classifier combination, one column per tested
 /// condition, then overall accuracy and the training and classification times.
@@ -122,6 +123,9 @@ pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) 
             let _ = writeln!(out, "  {name}: {count}");
         }
     }
+    if let Some(line) = selection_costs_line(&outcome.selections) {
+        let _ = writeln!(out, "{line}");
+    }
     if let Some(internal) = internal {
         let _ = writeln!(
             out,
@@ -134,10 +138,39 @@ pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) 
     out
 }
 
+/// Where the automatic choices' time went, summed over the trained models: the scoring (what each
+/// model's budget bounds) and the winners' training on all their samples, which comes after it; with
+/// the subsample the candidates were scored on when there was one.
+pub fn selection_costs_line(selections: &[presrs_core::selection::Selection]) -> Option<String> {
+    let costs: Vec<_> = selections.iter().filter_map(|s| s.cost.as_ref()).collect();
+    let first = costs.first()?;
+    let sum = |field: fn(&presrs_core::selection::SelectionCost) -> f64| {
+        costs.iter().map(|&c| field(c)).sum::<f64>()
+    };
+    let scored = if first.subsampled() {
+        format!(
+            "candidates scored on stratified subsamples of {} samples (of {} in the first model)",
+            first.scored_on, first.samples
+        )
+    } else {
+        "candidates scored on all the training samples".to_owned()
+    };
+    Some(format!(
+        "time over {} models: {scored}; scoring {:.1} s (features {:.1} s; each model's budget bounds \
+         it), training the winners {:.1} s, not covered by the budget",
+        costs.len(),
+        sum(|c| c.scoring_seconds),
+        sum(|c| c.features_seconds),
+        sum(|c| c.final_fit_seconds)
+    ))
+}
+
 /// The human-readable tables of an evaluation: accuracy per tested condition and overall, the
 /// confusion matrix with recall and precision, the confidences, the Parzen sigmas, the counts and the
-/// classification time.
-pub fn report_table(report: &EvalReport) -> String {
+/// classification time. `sample` is the kind every model was trained on (`None`: raced, each fold's
+/// own): counts are of its samples, and only one-frame samples have their time set next to the
+/// paper's per-image figure (a whole stance's summary is another computation).
+pub fn report_table(report: &EvalReport, sample: Option<SampleKind>) -> String {
     let mut text = String::new();
     let out = &mut text;
     let percent = |m: &MeanStd| format!("{:6.2} % +- {:.2}", 100.0 * m.mean, 100.0 * m.std);
@@ -191,16 +224,26 @@ pub fn report_table(report: &EvalReport) -> String {
         );
     }
     let first = &report.repeats[0];
+    let nouns = sample.map_or("samples", |kind| kind.nouns());
     let _ = writeln!(
         out,
         "per repeat: {}; training {:.3} s",
-        first.counts_text(),
+        first.counts_text_of(nouns),
         first.train_seconds
     );
-    let _ = writeln!(
-        out,
-        "median classification time: {:.2} us per image (paper: 245 us on a 2.67 GHz Core 2 Duo)",
-        report.median_classify_ns as f64 / 1e3
-    );
+    let micros = report.median_classify_ns as f64 / 1e3;
+    let _ = match sample {
+        Some(SampleKind::Frame) => writeln!(
+            out,
+            "median classification time: {micros:.2} us per image (paper: 245 us on a 2.67 GHz \
+             Core 2 Duo)"
+        ),
+        Some(kind) => writeln!(
+            out,
+            "median classification time: {micros:.2} us per {}",
+            kind.name()
+        ),
+        None => writeln!(out, "median classification time: {micros:.2} us per sample"),
+    };
     text
 }

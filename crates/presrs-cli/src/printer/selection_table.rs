@@ -6,7 +6,7 @@ use presrs::method::paper_score;
 use presrs_core::TrainedModel;
 use presrs_core::selection::{CandidateScore, Selection};
 
-/// The table's lines, in order. `n_train` is the number of images the model was trained on (without
+/// The table's lines, in order. `n_train` is the number of samples the model was trained on (without
 /// the validation ones): what bounds its principal components.
 pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usize) -> Vec<String> {
     let mut lines = vec![format!("automatic choice ({}):", selection.method)];
@@ -54,7 +54,28 @@ pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usi
         percent(chosen),
         selection.method
     ));
+    lines.extend(cost_line(selection));
     lines
+}
+
+/// On how many samples the candidates were scored and where the time went: the scoring (what the
+/// budget bounds, the features included) and the winner's training on every sample, which comes after
+/// the budget (`None` for a model that did not record it).
+pub fn cost_line(selection: &Selection) -> Option<String> {
+    let cost = selection.cost.as_ref()?;
+    let scored = if cost.subsampled() {
+        format!(
+            "scored on a stratified subsample of {} of the {} samples",
+            cost.scored_on, cost.samples
+        )
+    } else {
+        format!("scored on all {} samples", cost.samples)
+    };
+    Some(format!(
+        "time: {scored} in {:.1} s (features {:.1} s; the budget bounds this); training the winner on \
+         all {} samples {:.1} s, not covered by the budget",
+        cost.scoring_seconds, cost.features_seconds, cost.samples, cost.final_fit_seconds
+    ))
 }
 
 /// `85.00 % +- 2.00`
@@ -79,13 +100,14 @@ pub fn components_note(
         return None;
     }
     let features = model.n_features();
+    let nouns = model.sample().nouns();
     let bound = if features <= n_train.saturating_sub(1) {
         format!("no more than its {features} features")
     } else {
-        format!("at most one fewer than its {n_train} training images")
+        format!("at most one fewer than its {n_train} training {nouns}")
     };
     Some(format!(
         "the model keeps {kept} of the {asked} principal components asked for: {bound} (the \
-         validation folds, trained on fewer images, may have kept fewer still)"
+         validation folds, trained on fewer {nouns}, may have kept fewer still)"
     ))
 }

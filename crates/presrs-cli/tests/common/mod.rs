@@ -20,6 +20,26 @@ pub fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
+/// Trains a whole-stance model (rocket + ridge) of the one-contact trials of `manifest` into `model`,
+/// asserting that training succeeded.
+pub fn train_one_contact_stance_model(manifest: &std::path::Path, model: &std::path::Path) {
+    let out = presrs(&[
+        "train",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+        "--sample",
+        "stance",
+        "--one-sample-per-file",
+        "--features",
+        "rocket",
+        "--classifier",
+        "ridge",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
 /// Writes a labelled image set of `rows x cols` NPY images under `dir` and returns its manifest: `n`
 /// images per class of `classes` textures (stripes of a class-specific frequency and orientation, with
 /// noise), in `groups` groups (`g0`, `g1`, ...) taken in turn; `group_shift` scales a per-group offset

@@ -37,15 +37,20 @@ impl RepeatResult {
     /// The image counts in words: `13 training + 7 validation images, 60 tested` for one model, and per
     /// fold (on average) with the total tested for several.
     pub fn counts_text(&self) -> String {
+        self.counts_text_of("images")
+    }
+
+    /// [`Self::counts_text`] with the samples called `nouns` (`stances`, `series`, `samples`).
+    pub fn counts_text_of(&self, nouns: &str) -> String {
         if self.folds <= 1 {
             return format!(
-                "{} training + {} validation images, {} tested",
+                "{} training + {} validation {nouns}, {} tested",
                 self.n_train, self.n_validation, self.n_test
             );
         }
         let per_fold = |n: usize| n as f64 / self.folds as f64;
         format!(
-            "{} folds, per fold (on average) {:.0} training + {:.0} validation images and {:.0} \
+            "{} folds, per fold (on average) {:.0} training + {:.0} validation {nouns} and {:.0} \
              tested; {} tested in all (summed over the folds: {} training + {} validation)",
             self.folds,
             per_fold(self.n_train),

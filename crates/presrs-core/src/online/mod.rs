@@ -34,8 +34,6 @@
 //! [`OnlineClassifier`] puts the segmenter and a [`Session`] together: one frame in, zero or more
 //! [`OnlineEvent`]s out, with all buffers allocated up front (no allocation per frame in steady state).
 
-use std::collections::BTreeMap;
-
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
@@ -44,7 +42,7 @@ use crate::novelty::Novelty;
 use crate::pipeline::{Session, TrainedModel};
 use crate::sample::SampleKind;
 use crate::stance::causal::MAX_SEG_EVENTS;
-use crate::stance::{BaselineMode, SegmentParams, Segmentation, ValidSegmentParams};
+use crate::stance::{BaselineMode, ValidSegmentParams};
 // The causal detector's types, which this module's API speaks in, nameable from here as before they
 // moved beside the offline segmentation.
 pub use crate::stance::causal::{
@@ -52,70 +50,11 @@ pub use crate::stance::causal::{
     MIN_QUIET_FRAMES, OnlineParams, OpenStance, PAPER_SAMPLE_OFFSET, RANGE_PRIOR_FRACTION,
     SegEvent, SegEvents, Touchdown, sample_offset_for, typical_stance_frames,
 };
+pub use profile::OnlineProfile;
 pub use stance_buffer::StanceBuffer;
 
+mod profile;
 mod stance_buffer;
-
-/// What a model needs to run online: the detector settings, its calibration and the terrain-to-gait
-/// table. Stored next to a model (in the model file or a JSON file of its own).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct OnlineProfile {
-    pub params: OnlineParams,
-    /// The stance detector's settings (baseline mode, levels, lengths, gaps) the model was trained
-    /// with: the online detector segments with them. Profiles written before they were stored load
-    /// with the defaults.
-    pub segment: ValidSegmentParams,
-    /// Median stance length of the data `params.sample_offset` was learned from, frames.
-    pub typical_stance_frames: Option<usize>,
-    pub calibration: Option<Calibration>,
-    /// Terrain label -> recommended gait name.
-    pub gait_table: BTreeMap<String, String>,
-}
-
-impl OnlineProfile {
-    /// A profile learned from offline segmentations (with the default settings) of training recordings:
-    /// calibration (medians) and `k` from the median length of their complete stances.
-    pub fn learn(segmentations: &[Segmentation]) -> Self {
-        Self::learn_with(segmentations, &ValidSegmentParams::default())
-    }
-
-    /// [`Self::learn`] from segmentations made with `segment`, which the profile keeps for the online
-    /// detector. With [`BaselineMode::Auto`], the mode the automatic choice made on most of the
-    /// segmentations is stored if it is the floor (presses on a preload): a calibrated detector has
-    /// no warm-up to choose on, and judges the stream from its profile's mode.
-    pub fn learn_with(segmentations: &[Segmentation], segment: &ValidSegmentParams) -> Self {
-        let floors = segmentations
-            .iter()
-            .filter(|seg| seg.mode == BaselineMode::Floor)
-            .count();
-        let mut segment = segment.clone();
-        if segment.params().baseline == BaselineMode::Auto && 2 * floors > segmentations.len() {
-            let floor = SegmentParams {
-                baseline: BaselineMode::Floor,
-                ..segment.params().clone()
-            };
-            if let Ok(valid) = floor.check() {
-                segment = valid;
-            }
-        }
-        let segment = &segment;
-        let lengths: Vec<usize> = segmentations
-            .iter()
-            .flat_map(|seg| seg.complete().map(|stance| stance.len))
-            .collect();
-        Self {
-            params: OnlineParams {
-                sample_offset: sample_offset_for(&lengths),
-                ..OnlineParams::default()
-            },
-            segment: segment.clone(),
-            typical_stance_frames: typical_stance_frames(&lengths),
-            calibration: Calibration::from_segmentations(segmentations),
-            gait_table: BTreeMap::new(),
-        }
-    }
-}
 
 /// Whether a decision is the single sample frame, the fusion of several, or a whole stance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -342,6 +281,22 @@ impl WholeStance {
     }
 }
 
+/// What a one-frame or series model takes as a stream's frames, in words.
+fn expected_stream_frame(model: &TrainedModel) -> String {
+    let takes = format!(
+        "a grid that the model's crop {} turns into its {} image",
+        model.crop(),
+        model.image_grid()
+    );
+    match model.sample() {
+        SampleKind::Series { .. } => format!(
+            "{takes} (this model classifies series, channels x time, one 2-D array per sample: it \
+             was trained on series, not on a sensor's frames)"
+        ),
+        SampleKind::Frame | SampleKind::Stance { .. } => takes,
+    }
+}
+
 impl<'m> OnlineClassifier<'m> {
     pub fn new(
         model: &'m TrainedModel,
@@ -405,7 +360,11 @@ impl<'m> OnlineClassifier<'m> {
         match self.grid {
             None if self.whole.is_some() => {
                 if let Some(whole) = &mut self.whole
-                    && let Err(err) = whole.buffer.set_grid(grid)
+                    && let Err(err) = self
+                        .session
+                        .model()
+                        .check_sensor(grid)
+                        .and_then(|()| whole.buffer.set_grid(grid))
                 {
                     self.stats.rejected_frames += 1;
                     return Err(err);
@@ -418,11 +377,7 @@ impl<'m> OnlineClassifier<'m> {
                     self.stats.rejected_frames += 1;
                     return Err(CoreError::Shape {
                         what: "stream frame",
-                        expected: format!(
-                            "a grid that the model's crop {} turns into its {} image",
-                            model.crop(),
-                            model.image_grid()
-                        ),
+                        expected: expected_stream_frame(model),
                         got: grid.to_string(),
                     });
                 }
@@ -859,69 +814,5 @@ impl<'m> OnlineClassifier<'m> {
             liftoff.sampled &= decided;
         }
         self.events.push(OnlineEvent::Liftoff(liftoff));
-    }
-}
-
-#[cfg(test)]
-mod profile_tests {
-    use super::*;
-
-    /// A profile written before the detector settings were stored loads with the defaults; one
-    /// with them keeps them.
-    #[test]
-    fn the_detector_settings_are_kept_and_default_when_absent() {
-        let old: OnlineProfile =
-            serde_json::from_str(r#"{"params": {"sample_offset": 7}, "gait_table": {}}"#).unwrap();
-        assert_eq!(old.params.sample_offset, 7);
-        assert_eq!(old.segment, ValidSegmentParams::default());
-        let segment = SegmentParams {
-            baseline: BaselineMode::Floor,
-            min_stance_frames: 5,
-            ..SegmentParams::default()
-        }
-        .check()
-        .unwrap();
-        let profile = OnlineProfile::learn_with(&[], &segment);
-        let json = serde_json::to_string(&profile).unwrap();
-        let back: OnlineProfile = serde_json::from_str(&json).unwrap();
-        assert_eq!(back.segment, segment);
-        assert!(json.contains(r#""baseline":"floor""#), "{json}");
-    }
-
-    /// A profile learned with the automatic choice from recordings segmented from the floor stores the
-    /// floor (a calibrated stream has no warm-up to choose on); from others it stays automatic.
-    #[test]
-    fn a_profile_trained_on_preload_data_stores_the_floor() {
-        let seg = |mode| Segmentation {
-            stances: Vec::new(),
-            baseline: vec![100.0; 10],
-            noise: 1.0,
-            load_range: 500.0,
-            on_level: 50.0,
-            off_level: 5.0,
-            mode,
-            mode_reason: None,
-        };
-        let auto = ValidSegmentParams::default();
-        let floor = [
-            seg(BaselineMode::Floor),
-            seg(BaselineMode::Floor),
-            seg(BaselineMode::Drifting),
-        ];
-        let profile = OnlineProfile::learn_with(&floor, &auto);
-        assert_eq!(profile.segment.params().baseline, BaselineMode::Floor);
-        assert_eq!(profile.segment.params().min_stance_frames, 3);
-        let walking = [seg(BaselineMode::Floor), seg(BaselineMode::Drifting)];
-        let profile = OnlineProfile::learn_with(&walking, &auto);
-        assert_eq!(profile.segment.params().baseline, BaselineMode::Auto);
-        // Asked for explicitly, the mode is kept.
-        let drifting = SegmentParams {
-            baseline: BaselineMode::Drifting,
-            ..SegmentParams::default()
-        }
-        .check()
-        .unwrap();
-        let profile = OnlineProfile::learn_with(&floor, &drifting);
-        assert_eq!(profile.segment.params().baseline, BaselineMode::Drifting);
     }
 }

@@ -12,7 +12,7 @@ use crate::novelty::NoveltyModel;
 use crate::pipeline::config::TrainConfig;
 use crate::preprocess::Preprocess;
 use crate::projection::pca::Pca;
-use crate::sample::SampleKind;
+use crate::sample::{SampleKind, Sampling, sensor_mismatch};
 use crate::selection::record::Selection;
 
 /// How much data a model was trained on.
@@ -63,6 +63,15 @@ pub(crate) struct ModelFields {
     /// What a sample is, when not one frame (absent from files of one-frame models).
     #[serde(default, skip_serializing_if = "SampleKind::is_frame")]
     pub(crate) sample: SampleKind,
+    /// The sensor of a stance or series model: the grid of its training recordings' frames, or of its
+    /// series (channels x time, as the model takes them). Absent from one-frame models (their crop
+    /// and image grid say it) and from older files, which take any grid as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) sensor: Option<Grid>,
+    /// How the training samples were taken from their recordings (absent from models trained on
+    /// samples made in memory, and from older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) sampling: Option<Sampling>,
     /// The novelty score and its threshold (absent from files written before it, and from models
     /// trained without it: every decision is then one of the classes, as before).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -250,6 +259,42 @@ impl TrainedModel {
         check_sample(&sample, self.fields.image_grid)?;
         self.fields.sample = sample;
         Ok(self)
+    }
+
+    /// The sensor a stance or series model was trained on (see [`Self::check_sensor`]); `None` for
+    /// one-frame models and files written before it was stored.
+    pub fn sensor(&self) -> Option<Grid> {
+        self.fields.sensor
+    }
+
+    /// This model, stating the sensor its samples came from (ignored for one-frame models, whose
+    /// crop and image grid already say what they take).
+    pub fn with_sensor(mut self, sensor: Option<Grid>) -> Self {
+        if !self.fields.sample.is_frame() {
+            self.fields.sensor = sensor;
+        }
+        self
+    }
+
+    /// An error unless `grid` is the sensor this model was trained on: the frames of a stance for a
+    /// whole-stance model, the series for a series model (as the model takes it: channels in rows).
+    /// Models that do not say (one-frame models, older files) take any grid here.
+    pub fn check_sensor(&self, grid: Grid) -> Result<()> {
+        match sensor_mismatch(&self.fields.sample, self.fields.sensor, grid) {
+            Some(err) => Err(err),
+            None => Ok(()),
+        }
+    }
+
+    /// How the training samples were taken from their recordings, when the model says.
+    pub fn sampling(&self) -> Option<&Sampling> {
+        self.fields.sampling.as_ref()
+    }
+
+    /// This model with `sampling` recorded.
+    pub fn with_sampling(mut self, sampling: Option<Sampling>) -> Self {
+        self.fields.sampling = sampling;
+        self
     }
 
     /// The preprocessing steps after the crop.

@@ -80,6 +80,8 @@ pub fn train(
         summary,
         selection: None,
         sample: SampleKind::Frame,
+        sensor: None,
+        sampling: None,
         novelty: None,
     })
 }

@@ -31,6 +31,7 @@
 mod folds;
 pub(crate) mod record;
 mod scoring;
+mod subsample;
 #[cfg(test)]
 mod tests;
 pub(crate) mod validate_by;
@@ -45,7 +46,8 @@ use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
 use crate::pipeline::train::train;
 
-pub use record::{CandidateScore, Selection, ValidationFallback};
+pub use record::{CandidateScore, Selection, SelectionCost, ValidationFallback};
+pub use subsample::SCORING_SAMPLES;
 pub use validate_by::ValidateBy;
 
 /// At most this many folds when validating by group or condition: more values are merged, whole, into
@@ -73,6 +75,33 @@ pub struct AutoChoice<'c> {
     /// every candidate has been scored (empty: the candidates' own only).
     pub refine_dims: &'c [usize],
     pub rule: ChoiceRule,
+    /// The most samples the candidates are scored on: with more, a stratified subsample of this many
+    /// (seeded; [`SelectionCost::scored_on`] says how many), and the winner is trained on every
+    /// sample. `None`: every sample.
+    pub scoring_samples: Option<usize>,
+    /// Told each stage as it begins, for a progress display.
+    pub on_stage: Option<StageObserver<'c>>,
+}
+
+/// Receives the automatic choice's stages as they begin, in words (`features: rocket`, `training the
+/// winner, rocket + ridge, on 8442 samples`): what a progress display shows. Called from worker
+/// threads too.
+#[derive(Clone, Copy)]
+pub struct StageObserver<'c>(pub &'c (dyn Fn(&str) + Sync));
+
+impl StageObserver<'_> {
+    /// Tells the observer, if there is one, that `stage` begins.
+    pub(crate) fn tell(observer: Option<Self>, stage: impl FnOnce() -> String) {
+        if let Some(Self(observer)) = observer {
+            observer(&stage());
+        }
+    }
+}
+
+impl std::fmt::Debug for StageObserver<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("StageObserver")
+    }
 }
 
 /// How the winner is picked from the candidates' fold accuracies.
@@ -129,6 +158,24 @@ impl<'c> AutoChoice<'c> {
             budget: None,
             refine_dims: &[],
             rule: ChoiceRule::Best,
+            scoring_samples: Some(SCORING_SAMPLES),
+            on_stage: None,
+        }
+    }
+
+    /// With the candidates scored on at most this many samples (`None`: every sample).
+    pub fn with_scoring_samples(self, scoring_samples: Option<usize>) -> Self {
+        Self {
+            scoring_samples,
+            ..self
+        }
+    }
+
+    /// With `observer` told each stage as it begins.
+    pub fn with_stages(self, observer: StageObserver<'c>) -> Self {
+        Self {
+            on_stage: Some(observer),
+            ..self
         }
     }
 
@@ -157,22 +204,67 @@ impl<'c> AutoChoice<'c> {
 }
 
 /// Scores the candidates on folds of `images` (training + validation images together), made as
-/// `choice.by` says from the images' `group` and `condition`, and picks the best. With a budget,
-/// feature groups that would end past it are not scored (see [`CandidateScore::skipped`]); without
-/// one, every candidate is scored and the result is deterministic in `seed`.
+/// `choice.by` says from the images' `group` and `condition`, and picks the best. With more images
+/// than [`AutoChoice::scoring_samples`], the folds are made of a stratified subsample of that many
+/// (deterministic in `seed`). With a budget, feature groups that would end past it are not scored
+/// (see [`CandidateScore::skipped`]); without one, every candidate is scored and the result is
+/// deterministic in `seed`. The selection's [`Selection::cost`] says on how many images it scored and
+/// how long that took.
 pub fn select(
     images: &[LabeledImage<'_>],
     choice: &AutoChoice<'_>,
     seed: u64,
 ) -> Result<Selection> {
+    let started = std::time::Instant::now();
+    let subsample = choice
+        .scoring_samples
+        .and_then(|at_most| subsample::stratified_subsample(images, at_most, seed));
+    let subset: Vec<LabeledImage<'_>> = subsample.iter().flatten().map(|&i| images[i]).collect();
+    let scored = if subsample.is_some() {
+        &subset[..]
+    } else {
+        images
+    };
+    StageObserver::tell(choice.on_stage, || {
+        let of = if scored.len() < images.len() {
+            format!(" (a stratified subsample of {})", images.len())
+        } else {
+            String::new()
+        };
+        format!(
+            "scoring {} candidates on {} samples{of}",
+            choice.candidates.len(),
+            scored.len()
+        )
+    });
+    let (mut selection, features_seconds) = select_on(scored, choice, seed, started)?;
+    selection.cost = Some(SelectionCost {
+        samples: images.len(),
+        scored_on: scored.len(),
+        features_seconds,
+        scoring_seconds: started.elapsed().as_secs_f64(),
+        final_fit_seconds: 0.0,
+    });
+    Ok(selection)
+}
+
+/// [`select`] on the images it scores on, from `started`; also gives the seconds spent computing
+/// features.
+fn select_on(
+    images: &[LabeledImage<'_>],
+    choice: &AutoChoice<'_>,
+    seed: u64,
+    started: std::time::Instant,
+) -> Result<(Selection, f64)> {
     let AutoChoice {
         candidates,
         by,
         budget,
         refine_dims,
         rule: _,
+        scoring_samples: _,
+        on_stage,
     } = *choice;
-    let started = std::time::Instant::now();
     if candidates.is_empty() {
         return Err(CoreError::Param {
             name: "candidates",
@@ -190,7 +282,7 @@ pub fn select(
     // candidate is dropped too.
     let mut race = scoring::Race::of(&folds);
     let budget = budget.map(|total| scoring::Budget { started, total });
-    let mut tables = scoring::Tables::default();
+    let mut tables = scoring::Tables::new(on_stage);
     let mut scores =
         scoring::score_candidates(images, &folds, candidates, budget, &mut race, &mut tables)?;
     let variants = dims_variants(&scores, refine_dims)?;
@@ -238,12 +330,14 @@ pub fn select(
             )
         }));
     }
-    Ok(Selection {
+    let selection = Selection {
         method,
         chosen,
         scores,
         fallback,
-    })
+        cost: None,
+    };
+    Ok((selection, tables.seconds()))
 }
 
 /// The best [`REFINED`] scored candidates (by mean accuracy, ties to the earlier) with each of `dims`
@@ -304,9 +398,21 @@ pub fn train_auto(
         .chain(validation_images)
         .copied()
         .collect();
-    let selection = select(&all, choice, seed)?;
+    let mut selection = select(&all, choice, seed)?;
     // (the winner may be a candidate refined with other dims: its configuration is in its score)
     let config = selection.scores[selection.chosen].config.clone().check()?;
+    StageObserver::tell(choice.on_stage, || {
+        format!(
+            "training the winner, {} + {}, on {} samples",
+            config.config().features.name(),
+            config.config().classifier.kind().as_str(),
+            all.len()
+        )
+    });
+    let fitting = std::time::Instant::now();
     let model = train(train_images, validation_images, &config)?;
+    if let Some(cost) = selection.cost.as_mut() {
+        cost.final_fit_seconds = fitting.elapsed().as_secs_f64();
+    }
     Ok(model.with_selection(selection))
 }

@@ -38,7 +38,8 @@ impl CandidateScore {
     }
 
     /// The candidate in words: its features (after an intensity transform, if any) + its classifier,
-    /// and its principal components (`fft1d (sqrt) + pwe, 51 dims`).
+    /// and its principal components (`fft1d (sqrt) + pwe, 51 dims`), or `all features` for a
+    /// classifier that takes every feature without a PCA step (`rocket + ridge, all features`).
     pub fn name(&self) -> String {
         let intensity = self.config.preprocess.intensity;
         let transform = if intensity.is_none() {
@@ -46,10 +47,12 @@ impl CandidateScore {
         } else {
             format!(" ({intensity})")
         };
-        format!(
-            "{}{transform} + {}, {} dims",
-            self.features, self.classifier, self.config.dims
-        )
+        let dims = if self.config.classifier.kind().takes_all_features() {
+            "all features".to_owned()
+        } else {
+            format!("{} dims", self.config.dims)
+        };
+        format!("{}{transform} + {}, {dims}", self.features, self.classifier)
     }
 }
 
@@ -65,6 +68,34 @@ pub struct Selection {
     /// held a class its training part lacks, so every candidate would have scored 0 on that class.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fallback: Option<ValidationFallback>,
+    /// On how many samples the candidates were scored and where the time went (absent in models
+    /// written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost: Option<SelectionCost>,
+}
+
+/// What an automatic choice scored its candidates on, and where its time went: the budget bounds the
+/// scoring (the candidates' features included); training the winner on every sample comes after it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SelectionCost {
+    /// The samples the winner is trained on (training + validation).
+    pub samples: usize,
+    /// The samples the candidates were scored on: all of them, or a stratified subsample of
+    /// [`crate::selection::AutoChoice::scoring_samples`] when there are more.
+    pub scored_on: usize,
+    /// Seconds spent computing the candidates' features (part of the scoring).
+    pub features_seconds: f64,
+    /// Seconds spent scoring the candidates, their features included: what the budget bounds.
+    pub scoring_seconds: f64,
+    /// Seconds spent training the winner on every sample, after the scoring and outside the budget.
+    pub final_fit_seconds: f64,
+}
+
+impl SelectionCost {
+    /// Whether the candidates were scored on a subsample.
+    pub fn subsampled(&self) -> bool {
+        self.scored_on < self.samples
+    }
 }
 
 /// A validation scheme passed over for another ([`Selection::fallback`]).

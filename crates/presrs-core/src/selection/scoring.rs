@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::folds::InnerFold;
-use super::{RACE_FOLDS, RACE_MIN_FOLDS, RACE_Z};
+use super::{RACE_FOLDS, RACE_MIN_FOLDS, RACE_Z, StageObserver};
 use crate::classifier::LabeledVectors;
 use crate::error::{CoreError, Result};
 use crate::metrics::MeanStd;
@@ -50,11 +50,28 @@ fn feature_groups(candidates: &[CheckedTrainConfig]) -> Vec<FeatureGroup> {
 /// The features of each feature group scored so far (or why they could not be computed), kept across
 /// the race's two phases and the refinement of the dims, which would otherwise compute them again.
 #[derive(Default)]
-pub(super) struct Tables {
+pub(super) struct Tables<'o> {
     entries: Vec<(TrainConfig, std::result::Result<FeatureTable, String>)>,
+    /// Told when a group's features begin.
+    observer: Option<StageObserver<'o>>,
+    /// Time spent computing features.
+    spent: Duration,
 }
 
-impl Tables {
+impl<'o> Tables<'o> {
+    pub(super) fn new(observer: Option<StageObserver<'o>>) -> Self {
+        Self {
+            entries: Vec::new(),
+            observer,
+            spent: Duration::ZERO,
+        }
+    }
+
+    /// Seconds spent computing features so far.
+    pub(super) fn seconds(&self) -> f64 {
+        self.spent.as_secs_f64()
+    }
+
     /// The features of `images` under `config`'s crop, preprocessing and features, computed once.
     fn get(
         &mut self,
@@ -66,7 +83,16 @@ impl Tables {
             .iter()
             .position(|(key, _)| same_features(key, config));
         let index = position.unwrap_or_else(|| {
+            StageObserver::tell(self.observer, || {
+                format!(
+                    "features: {} of {} samples",
+                    config.features.name(),
+                    images.len()
+                )
+            });
+            let started = Instant::now();
             let table = FeatureTable::of(images, config).map_err(|err| err.to_string());
+            self.spent += started.elapsed();
             self.entries.push((config.clone(), table));
             self.entries.len() - 1
         });
@@ -104,7 +130,7 @@ pub(super) fn score_candidates(
     candidates: &[CheckedTrainConfig],
     budget: Option<Budget>,
     race: &mut Option<Race>,
-    tables: &mut Tables,
+    tables: &mut Tables<'_>,
 ) -> Result<Vec<CandidateScore>> {
     let groups = feature_groups(candidates);
     let configs: Vec<&TrainConfig> = candidates.iter().map(|c| c.config()).collect();
@@ -252,7 +278,7 @@ fn score_folds(
     folds: &[InnerFold],
     configs: &[&TrainConfig],
     members: &[usize],
-    tables: &mut Tables,
+    tables: &mut Tables<'_>,
 ) -> Result<Vec<FoldResults>> {
     let member_configs: Vec<&TrainConfig> = members.iter().map(|&m| configs[m]).collect();
     let table = match tables.get(images, member_configs[0]) {

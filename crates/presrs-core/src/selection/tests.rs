@@ -714,3 +714,48 @@ fn ridge_is_not_refined_and_its_model_has_no_pca() {
     assert!(model.pca().is_none());
     assert_eq!(model.classifier_dims(), model.n_features());
 }
+
+/// Large training data are scored on a stratified, seeded subsample of the size asked for (the
+/// selection says so), every stage is told to the observer, and the winner is trained on every image.
+#[test]
+fn large_data_are_scored_on_a_stratified_subsample_and_the_winner_on_everything() {
+    let frames = four_class_frames(96, 5);
+    let images = grouped(&frames);
+    let lda = TrainConfig {
+        classifier: crate::classifier::ClassifierKind::LDA.default_config(),
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let candidates = std::slice::from_ref(&lda);
+    let stages = std::sync::Mutex::new(Vec::<String>::new());
+    let tell = |stage: &str| stages.lock().unwrap().push(stage.to_owned());
+    let choice = AutoChoice::new(candidates, ValidateBy::Group)
+        .with_scoring_samples(Some(48))
+        .with_stages(StageObserver(&tell));
+    let model = train_auto(&images[..64], &images[64..], &choice, 3).unwrap();
+    let cost = model.selection().unwrap().cost.clone().unwrap();
+    assert_eq!((cost.samples, cost.scored_on), (96, 48));
+    assert!(cost.subsampled());
+    assert!(cost.scoring_seconds >= cost.features_seconds && cost.features_seconds > 0.0);
+    assert!(cost.final_fit_seconds > 0.0);
+    // the winner learns from every image
+    let trained: usize = model.summary().train_per_class.iter().sum::<usize>()
+        + model.summary().validation_per_class.iter().sum::<usize>();
+    assert_eq!(trained, 96);
+    let stages = stages.lock().unwrap().clone();
+    assert_eq!(stages.len(), 3, "{stages:?}");
+    assert!(
+        stages[0].contains("on 48 samples (a stratified subsample of 96)"),
+        "{stages:?}"
+    );
+    assert!(stages[1].starts_with("features: fft1d"), "{stages:?}");
+    assert!(stages[2].contains("training the winner") && stages[2].contains("on 96 samples"));
+    // the same seed scores the same subsample; without a cap, every image
+    let again = select(&images, &choice, 3).unwrap();
+    let first = select(&images, &choice, 3).unwrap();
+    assert_eq!(again.scores, first.scores);
+    let whole = select(&images, &choice.with_scoring_samples(None), 3).unwrap();
+    assert_eq!(whole.cost.unwrap().scored_on, 96);
+}

@@ -15,7 +15,7 @@ mod baseline;
 pub mod causal;
 pub mod modes;
 pub mod offline;
-mod robust;
+pub(crate) mod robust;
 pub mod summary;
 
 pub use causal::{

@@ -53,6 +53,35 @@ pub struct ClassifyOptions {
     pub samples: SampleOptions,
 }
 
+impl ClassifyOptions {
+    /// These options with the sampling `model` was trained with in place of the settings left at
+    /// their defaults ([`SampleOptions::or_model`]): a model trained on one-contact trials takes a
+    /// trial whole, one trained with a stance baseline finds stances with it. [`classify_recording`]
+    /// applies it; a caller that segments the same files again (a bag) applies it too.
+    pub fn for_model(&self, model: &TrainedModel) -> Self {
+        match model.sampling() {
+            Some(sampling) => Self {
+                frame: self.frame,
+                samples: self.samples.or_model(sampling),
+            },
+            None => self.clone(),
+        }
+    }
+}
+
+/// The error of a classify run in which no file gave a sample: `files` files were read (each one's
+/// warning says why it gave none).
+pub fn nothing_classified(files: usize) -> Error {
+    Error::data(format!(
+        "nothing classified: {} gave no sample (the warnings above say why)",
+        if files == 1 {
+            "the file".to_owned()
+        } else {
+            format!("none of the {files} files")
+        }
+    ))
+}
+
 /// Reads `path` (its dead sensels filled as `options` say, noted in `fills`) and classifies its
 /// frames with `session` (a session of `model`).
 pub fn classify_file(
@@ -84,8 +113,22 @@ pub fn classify_recording(
     name: &str,
     options: &ClassifyOptions,
 ) -> Result<FileClassification> {
+    let options = &options.for_model(model);
     if let SampleKind::Stance { .. } = model.sample() {
         return classify_stances(model, session, recording, name, options);
+    }
+    if let SampleKind::Series { .. } = model.sample()
+        && recording.frame_count() > 1
+        && options.frame.is_none()
+    {
+        return Err(Error::invalid(format!(
+            "{name}: a movie of {} frames of {}, but the model classifies series (one 2-D array of \
+             channels x time per file: it was trained on series samples, {}); give one such array \
+             per file",
+            recording.frame_count(),
+            recording.grid(),
+            series_shape(model)
+        )));
     }
     let mut warnings = Warnings::new();
     let frames = match options.frame {
@@ -115,15 +158,13 @@ pub fn classify_recording(
                 .samples(options.samples.sample, options.samples.include_partial())
                 .context(name)?;
             if frames.is_empty() {
-                warnings.push(
-                    Message::from(format!(
-                        "{name}: {} frames but no complete stance phase; nothing classified (choose \
-                         a frame with ",
-                        recording.frame_count()
-                    ))
-                    .opt_is(Opt::Frame, "K")
-                    .text(")"),
-                );
+                warnings.push(no_stance_warning(
+                    name,
+                    recording,
+                    &segmentation,
+                    options,
+                    model.sample().is_frame(),
+                ));
             }
             frames.into_iter().map(|frame| (frame, None)).collect()
         }
@@ -154,10 +195,33 @@ fn classify_stances(
     options: &ClassifyOptions,
 ) -> Result<FileClassification> {
     let mut warnings = Warnings::new();
-    if options.frame.is_some() || recording.frame_count() == 1 {
+    if let Some(frame) = options.frame {
+        return Err(Error::invalid(
+            Message::from(format!(
+                "{name}: the model classifies whole stances, touchdown to lift-off (it was trained \
+                 on stance samples), and "
+            ))
+            .opt_is(Opt::Frame, frame)
+            .text(" picks one frame: leave ")
+            .opt(Opt::Frame)
+            .text(" out to classify each stance of the movie whole, or classify frames with a model trained on ")
+            .opt_text(Opt::Sample, "frame"),
+        ));
+    }
+    if recording.frame_count() == 1 {
+        return Err(Error::invalid(
+            Message::from(format!(
+                "{name}: the model classifies whole stances, touchdown to lift-off (it was trained \
+                 on stance samples), so it takes movies, not one frame: give it a movie, or \
+                 classify this frame with a model trained on "
+            ))
+            .opt_text(Opt::Sample, "frame"),
+        ));
+    }
+    if let Err(err) = model.check_sensor(recording.grid()) {
         return Err(Error::invalid(format!(
-            "{name}: the model classifies whole stances (it was trained on stance samples), so it \
-             takes movies, not one frame"
+            "{name}: {err}; crop or resample the recording to that grid, or train a model on its \
+             sensor"
         )));
     }
     let segmentation = segment_recording(recording, &options.samples.segment_params())
@@ -184,9 +248,12 @@ fn classify_stances(
         ));
     }
     if classified.is_empty() {
-        warnings.push(format!(
-            "{name}: {} frames but no complete stance phase; nothing classified",
-            recording.frame_count()
+        warnings.push(no_stance_warning(
+            name,
+            recording,
+            &segmentation,
+            options,
+            false,
         ));
     }
     Ok(FileClassification {
@@ -195,10 +262,57 @@ fn classify_stances(
     })
 }
 
+/// Why a movie gave nothing to classify, and what to try: one sample per file when it is one contact
+/// (loaded from its first frame to its last), partial stances, and a chosen frame for a one-frame
+/// model.
+fn no_stance_warning(
+    name: &str,
+    recording: &Recording,
+    segmentation: &presrs_core::stance::Segmentation,
+    options: &ClassifyOptions,
+    one_frame_model: bool,
+) -> Warning {
+    let message = Message::from(format!(
+        "{name}: {} frames but no complete stance phase; nothing classified (",
+        recording.frame_count()
+    ));
+    let one_contact = segmentation.mode == presrs_core::stance::BaselineMode::Contact;
+    let message = if one_contact && !options.samples.one_sample_per_file {
+        message
+            .text("it is one contact, loaded from its first frame to its last: try ")
+            .opt(Opt::OneSamplePerFile)
+    } else if one_contact {
+        message.text(format!(
+            "it is shorter than a stance of at least {} frames",
+            options.samples.segment_params().params().min_stance_frames
+        ))
+    } else if !options.samples.include_partial() {
+        message
+            .text("its stances, if any, are cut by its start or end: try ")
+            .opt(Opt::IncludePartial)
+    } else {
+        message.text("see `presrs inspect FILE`")
+    };
+    let message = match one_frame_model {
+        true => message
+            .text(", or choose a frame with ")
+            .opt_is(Opt::Frame, "K"),
+        false => message,
+    };
+    Warning::from(message.text(")"))
+}
+
+/// A series model's sample, in words: `12 channels x 100 time steps`.
+fn series_shape(model: &TrainedModel) -> String {
+    let grid = model.sensor().unwrap_or(model.image_grid());
+    format!("{} channels x {} time steps", grid.rows, grid.cols)
+}
+
 /// The sample `model` takes from a recording's `frames` ([`SampleKind::sample_of`]): one frame as it
 /// is, one 2-D array as a series, or a stance's movie (touchdown to lift-off) summarised as the model's
 /// training stances were and laid into its length (the one its features take); the warning says when
-/// the stance was longer and cut.
+/// the stance was longer and cut. Frames or a series of another sensor than the model's are an error
+/// ([`TrainedModel::check_sensor`]).
 pub fn model_sample(
     model: &TrainedModel,
     frames: &[FrameView<'_>],
@@ -207,7 +321,14 @@ pub fn model_sample(
         SampleKind::Stance { length, .. } => Some(length.unwrap_or(model.image_grid().cols)),
         SampleKind::Frame | SampleKind::Series { .. } => None,
     };
+    // A stance's frames come from the sensor the model was trained on (when it says which).
+    if let (SampleKind::Stance { .. }, Some(first)) = (model.sample(), frames.first()) {
+        model.check_sensor(first.grid())?;
+    }
     let (sample, cut) = model.sample().sample_of(frames, length)?;
+    if let SampleKind::Series { .. } = model.sample() {
+        model.check_sensor(sample.grid())?;
+    }
     let warning = length.filter(|_| cut).map(|length| {
         Warning::from(format!(
             "the stance has {} frames, more than the model's {length}: its first {length} were used",

@@ -12,7 +12,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-pub use presrs_core::sample::{SampleChoice, SampleKind};
+pub use presrs_core::sample::{SampleChoice, SampleKind, Sampling};
 use presrs_core::stance::summary::pad_to;
 use presrs_core::stance::{BaselineMode, Segmentation, Stance, segment_recording};
 use presrs_core::{FrameView, Grid, Recording};
@@ -27,7 +27,7 @@ mod options;
 mod read;
 
 use crate::progress::Progress;
-pub use options::SampleOptions;
+pub use options::{GivenSampleSettings, SampleOptions, check_sample_settings};
 use presrs_io::message::{Message, Opt, Warning, Warnings};
 pub(crate) use read::apply_frame_period_option;
 pub use read::{DeadSenselFills, MovieLoad, read_corrected, read_movie_loads};
@@ -44,6 +44,8 @@ pub struct LoadedSamples {
     pub dead_sensels: DeadSenselFills,
     /// Every movie read, by file and topic: what an online profile is learned from.
     pub movie_loads: Vec<MovieLoad>,
+    /// The one sensor of stance and series samples (see [`Dataset::sensor`]).
+    pub sensor: Option<Grid>,
 }
 
 /// A data set: a manifest and the samples its files give, stance sampling and dead-sensel correction
@@ -63,6 +65,13 @@ pub struct Dataset {
     /// The total load per frame of every movie read (none for samples made in memory), as read for
     /// the samples: the online profile is learned from them, not from a second reading.
     pub movie_loads: Vec<MovieLoad>,
+    /// The sensor of stance and series samples, which a model trained on them refuses any other
+    /// than: the grid of the recordings' frames whose stances were summarised, or the series' grid
+    /// (channels x time, as the samples hold them). `None` for frame samples.
+    pub sensor: Option<Grid>,
+    /// How the samples were taken from the manifest's recordings (`None` for samples made in
+    /// memory): a model trained on the set stores it.
+    pub sampling: Option<Sampling>,
 }
 
 impl Dataset {
@@ -102,6 +111,8 @@ impl Dataset {
             dead_sensels: loaded.dead_sensels,
             sample: options.kind,
             movie_loads: loaded.movie_loads,
+            sensor: loaded.sensor,
+            sampling: Some(options.sampling()),
         })
     }
 
@@ -150,6 +161,8 @@ impl Dataset {
             dead_sensels: DeadSenselFills::default(),
             sample: SampleKind::Frame,
             movie_loads: Vec::new(),
+            sensor: None,
+            sampling: None,
         })
     }
 
@@ -157,19 +170,25 @@ impl Dataset {
     /// from files: a whole stance's sample is its movie's summary
     /// ([`summarise`](presrs_core::stance::summary::summarise)), laid here into the kind's length (or
     /// the longest stance's), with the warning of [`pad_stance_samples`]; a series' sample is its
-    /// channels x time array.
+    /// channels x time array, whose grid is the set's [`Dataset::sensor`]. A stance's movies are
+    /// summarised before: their caller states their sensor.
     pub fn from_samples_of(
         name: impl Into<PathBuf>,
         mut samples: Vec<Sample>,
         kind: SampleKind,
     ) -> Result<Self> {
         let mut warnings = Warnings::new();
+        let name: PathBuf = name.into();
         if let SampleKind::Stance { length, .. } = kind {
-            warnings.extend(pad_stance_samples(&mut samples, length)?);
+            let shown = name.display().to_string();
+            warnings.extend(pad_stance_samples(&shown, &mut samples, length)?);
         }
         let mut dataset = Self::from_samples(name, samples)?;
         dataset.sample = kind;
         dataset.warnings = warnings;
+        if let SampleKind::Series { .. } = kind {
+            dataset.sensor = Some(dataset.grid());
+        }
         Ok(dataset)
     }
 
@@ -343,6 +362,7 @@ pub fn load_samples(
     }
     loaded.warnings.sort_by_text();
     let mut empty = EmptyFiles::default();
+    let mut sensor = OneSensor::default();
     for row in &manifest.rows {
         let Some(parsed) = read.by_key.get(&row_key(row)) else {
             continue;
@@ -353,6 +373,7 @@ pub fn load_samples(
                 .kind
                 .sample_of(&frames, None)
                 .map_err(|err| manifest.row_error(row, format!("`{}`: {err}", row.path_text)))?;
+            sensor.check(manifest, row, options.kind, recording.grid(), frame.grid())?;
             loaded.samples.push(Sample {
                 frame,
                 label: row.label.clone(),
@@ -367,14 +388,63 @@ pub fn load_samples(
         }
     }
     if let SampleKind::Stance { length, .. } = options.kind {
-        loaded
-            .warnings
-            .extend(pad_stance_samples(&mut loaded.samples, length)?);
+        loaded.warnings.extend(pad_stance_samples(
+            &manifest.source.display().to_string(),
+            &mut loaded.samples,
+            length,
+        )?);
     }
     loaded
         .warnings
         .extend(empty.summary(manifest.rows.len(), options));
+    loaded.sensor = sensor.first.map(|(grid, _)| grid);
     Ok(loaded)
+}
+
+/// The one sensor of a data set's stance or series samples: the first row's grid, which every other
+/// row must share (a model of a summary or a series takes one sensor; frame samples are checked by
+/// the model's crop instead).
+#[derive(Debug, Default)]
+struct OneSensor {
+    /// The grid, and the row that set it (its path and line).
+    first: Option<(Grid, (String, usize))>,
+}
+
+impl OneSensor {
+    /// Notes the sensor of a sample of `kind` from `row`: its `recording`'s frames for a stance, the
+    /// `sample`'s grid for a series. Another grid than the first row's is an error naming both files
+    /// and grids.
+    fn check(
+        &mut self,
+        manifest: &Manifest,
+        row: &ManifestRow,
+        kind: SampleKind,
+        recording: Grid,
+        sample: Grid,
+    ) -> std::result::Result<(), IoError> {
+        let (grid, what) = match kind {
+            SampleKind::Frame => return Ok(()),
+            SampleKind::Stance { .. } => (recording, "frames"),
+            SampleKind::Series { .. } => (sample, "series (channels x time)"),
+        };
+        match &self.first {
+            None => {
+                self.first = Some((grid, (row.path_text.clone(), row.line)));
+                Ok(())
+            }
+            Some((first, _)) if *first == grid => Ok(()),
+            Some((first, (path, line))) => Err(manifest.row_error(
+                row,
+                format!(
+                    "`{}` has {grid} {what} where `{path}` (line {line}) has {first}: a {} model \
+                     is trained on one sensor; crop or resample the recordings to one grid, or \
+                     train a model per sensor",
+                    row.path_text,
+                    kind.name()
+                ),
+            )),
+        }
+    }
 }
 
 /// What one manifest row gives, as the frames each sample is made of, with the 0-based frame it
@@ -642,9 +712,17 @@ fn row_series<'r>(
     }
 }
 
+/// How many times the longest stance a `stance length` may be: beyond it a sample is mostly the zeros
+/// after lift-off (features of padding), and a length typed with a few digits too many would take all
+/// the memory there is (12 channels x 100 000 000 frames is 9.6 GB a sample).
+pub const MAX_STANCE_LENGTH_PER_LONGEST: usize = 4;
+
 /// Lays every whole-stance sample into one length: `length`, or the longest stance's. The warning, when
-/// some were longer, says how many were cut to their first `length` frames.
+/// some were longer, says how many were cut to their first `length` frames. A `length` over
+/// [`MAX_STANCE_LENGTH_PER_LONGEST`] times the longest stance is refused before anything is
+/// allocated ([`check_stance_length`]); `name` (the manifest or the arrays) names the data in the error.
 pub fn pad_stance_samples(
+    name: &str,
     samples: &mut [Sample],
     length: Option<usize>,
 ) -> std::result::Result<Option<Warning>, IoError> {
@@ -653,11 +731,14 @@ pub fn pad_stance_samples(
         .map(|s| s.frame.grid().cols)
         .max()
         .unwrap_or(0);
+    if let Some(length) = length {
+        check_stance_length(name, length, longest)?;
+    }
     let length = length.unwrap_or(longest);
     let mut cut = 0;
     for sample in samples.iter_mut() {
         let (padded, was_cut) = pad_to(&sample.frame.view(), length)
-            .map_err(|err| IoError::format("stance samples", err.to_string()))?;
+            .map_err(|err| IoError::format(name, err.to_string()))?;
         sample.frame = padded;
         cut += usize::from(was_cut);
     }
@@ -668,6 +749,32 @@ pub fn pad_stance_samples(
             samples.len()
         )))
     }))
+}
+
+/// An error unless a stance length of `length` frames suits stances whose longest has `longest`
+/// frames: at most [`MAX_STANCE_LENGTH_PER_LONGEST`] times it. The error says the longest stance
+/// found and what to give (a stance length in the face's words: `--stance-length`, `stance_length=`).
+pub fn check_stance_length(
+    name: &str,
+    length: usize,
+    longest: usize,
+) -> std::result::Result<(), IoError> {
+    let most = longest.saturating_mul(MAX_STANCE_LENGTH_PER_LONGEST);
+    if longest == 0 || length <= most {
+        return Ok(());
+    }
+    Err(IoError::format(
+        name,
+        Message::new()
+            .opt_is(Opt::StanceLength, length)
+            .text(format!(
+                " is far longer than the longest stance found ({longest} frames): every stance would \
+                 be mostly zeros after lift-off; give at most {most} frames \
+                 ({MAX_STANCE_LENGTH_PER_LONGEST} x the longest), or leave "
+            ))
+            .opt(Opt::StanceLength)
+            .text(format!(" out to lay each stance into the longest's {longest} frames")),
+    ))
 }
 
 #[cfg(test)]

@@ -42,6 +42,10 @@ pub struct EvalJson<'r> {
     /// winner and why), in the draws' order.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub sample_races: Vec<FoldRaceJson>,
+    /// The run's peak resident memory and what it comes to per sample, where the caller measured it
+    /// (`presrs eval --json`: at the end of the run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory: Option<crate::resources::MemoryUse>,
 }
 
 /// The confusion matrix of every repeat: counts and rows scaled to 1.
@@ -117,6 +121,7 @@ impl<'r> EvalJson<'r> {
             internal_estimate: None,
             labels_never_trained: BTreeMap::new(),
             sample_races: Vec::new(),
+            memory: None,
         }
     }
 }

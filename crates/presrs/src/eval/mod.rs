@@ -398,7 +398,13 @@ impl<'d> EvalSetup<'d> {
         } else {
             Vec::new()
         };
-        let models = models(method, &config, &candidates);
+        let tell = |stage: &str| progress.stage(stage);
+        let models = match models(method, &config, &candidates) {
+            Models::Auto(choice) => {
+                Models::Auto(choice.with_stages(presrs_core::selection::StageObserver(&tell)))
+            }
+            fixed => fixed,
+        };
         let Evaluated {
             reports,
             selections,

@@ -23,6 +23,8 @@ pub use events::{
     Posteriors, SessionEvent, Touchdown, WholeStance, step_events,
 };
 pub use observer::{JsonLines, NoObserver, Observers, OwnedObservers, SessionObserver};
-pub use profile::{ProfileOverrides, check_profile, read_profile, resolve_profile};
+pub use profile::{
+    ProfileOverrides, check_overrides, check_profile, parse_profile, read_profile, resolve_profile,
+};
 pub use run::{ConnectionNotice, Input, MAX_ERROR_NOTICES, run_frames};
 pub use summary::ConnectionSummary;

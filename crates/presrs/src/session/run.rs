@@ -100,10 +100,16 @@ impl Connection<'_, '_> {
             Some(why) if frames_before == 0 => {
                 self.summary.rejected_frames += 1;
                 self.summary.fatal = true;
-                let message = format!(
-                    "input frame {index} rejected: {why}; the stream stops (its frames come from a \
-                     sensor this model was not trained on)"
-                );
+                let message = match self.model.sample() {
+                    SampleKind::Series { .. } => format!(
+                        "input frame {index} rejected: {why}; the stream stops (this model \
+                         classifies series, channels x time, not the frames of a sensor)"
+                    ),
+                    _ => format!(
+                        "input frame {index} rejected: {why}; the stream stops (its frames come \
+                         from a sensor this model was not trained on)"
+                    ),
+                };
                 self.error(&message, true);
                 return false;
             }
@@ -236,10 +242,23 @@ fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSu
 
 /// Why `grid` frames cannot be classified by `model` (its crop does not give the grid it was trained
 /// on), or `None` when they can. A whole-stance model classifies the stance's summary, whose channels
-/// any sensor's frames give (the online classifier checks that one stream keeps one size).
+/// any sensor's frames give: it takes the sensor it was trained on when it says which (older models
+/// take any; the online classifier checks that one stream keeps one size).
 fn unusable_for_model(model: &TrainedModel, grid: Grid) -> Option<String> {
     if matches!(model.sample(), SampleKind::Stance { .. }) {
-        return None;
+        return model.check_sensor(grid).err().map(|err| err.to_string());
+    }
+    if let SampleKind::Series { .. } = model.sample() {
+        let takes = model.sensor().unwrap_or(model.image_grid());
+        return (model.check_sensor(grid).is_err()
+            || model.crop().output_grid(grid).ok() != Some(model.image_grid()))
+        .then(|| {
+            format!(
+                "a {grid} frame, but this model classifies series of {} channels x {} time steps \
+                 (it was trained on series samples, one 2-D array each)",
+                takes.rows, takes.cols
+            )
+        });
     }
     let crop = model.crop();
     match crop.window(grid) {

@@ -15,7 +15,9 @@ use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::message::{Message, Opt, Warnings};
 use presrs_io::model_file::{DeadSenselProvenance, ModelFile, Provenance};
 
-use crate::dataset::{Dataset, MovieLoad, Sample, SampleOptions, read_movie_loads, sample_labels};
+use crate::dataset::{
+    Dataset, MovieLoad, Sample, SampleKind, SampleOptions, read_movie_loads, sample_labels,
+};
 use crate::error::{Context, Error, Result};
 use crate::method::Method;
 
@@ -106,6 +108,18 @@ impl Training {
 /// method, or the automatic choice validated inside the training data (across its conditions when it
 /// spans several).
 pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
+    train_with_progress(dataset, options, &crate::progress::Quiet)
+}
+
+/// [`train`], telling `progress` which stage of the automatic choice runs ([`Progress::stage`]:
+/// features, scoring, training the winner).
+///
+/// [`Progress::stage`]: crate::progress::Progress::stage
+pub fn train_with_progress(
+    dataset: &Dataset,
+    options: &TrainOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Training> {
     let name = dataset.path().display().to_string();
     dataset.require_labels("training needs a label for every sample")?;
     let pool: Vec<&Sample> = dataset.of_condition(options.condition.as_deref())?;
@@ -142,10 +156,14 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
         group: pool[i].group.as_deref(),
     });
     let model = if method.is_auto() {
+        let candidates = method.candidates_for(grid, false, &dataset.sample)?;
+        let tell = |stage: &str| progress.stage(stage);
         presrs_core::selection::train_auto(
             &train_images,
             &validation_images,
-            &method.auto_choice(&method.candidates_for(grid, false, &dataset.sample)?),
+            &method
+                .auto_choice(&candidates)
+                .with_stages(presrs_core::selection::StageObserver(&tell)),
             options.seed,
         )
     } else {
@@ -155,7 +173,12 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
             &method.train_config(grid)?,
         )
     }
-    .and_then(|model| model.with_sample(dataset.sample));
+    .and_then(|model| model.with_sample(dataset.sample))
+    .map(|model| {
+        model
+            .with_sensor(dataset.sensor)
+            .with_sampling(dataset.sampling.clone())
+    });
     let model = match model {
         Ok(model) => model,
         // A class with one sample cannot be fitted: when that is the cause, say it by name.
@@ -279,7 +302,10 @@ pub fn split_images<'s>(
 /// Whether `dataset` holds samples taken from movies (a stance's frame past the first): a model trained
 /// on it is meant for a stream, so `train` writes an online profile by default.
 pub fn trained_on_movies(dataset: &Dataset) -> bool {
-    dataset.samples.iter().any(|sample| sample.frame_index > 0)
+    // A stance sample starts at its touchdown: frame 0 of a trial cut to one contact.
+    let stances_of_movies =
+        matches!(dataset.sample, SampleKind::Stance { .. }) && !dataset.movie_loads.is_empty();
+    stances_of_movies || dataset.samples.iter().any(|sample| sample.frame_index > 0)
 }
 
 /// The online profile (detector settings, calibration and sample frame) learned by segmenting, offline

@@ -16,7 +16,9 @@ use crate::error::{Context, Error, Result};
 use crate::progress::Progress;
 use crate::sim::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
 use crate::train::sample_race::{SampleRace, WholeSample, train_racing_samples};
-use crate::train::{TrainOptions, Training, learn_online_profile, train, trained_on_movies};
+use crate::train::{
+    TrainOptions, Training, learn_online_profile, train_with_progress, trained_on_movies,
+};
 
 /// What `presrs train` is asked: the data set (a manifest, its files read and sampled as `samples`
 /// says, the sample kind chosen by `sample`), the training and the online profile.
@@ -80,7 +82,7 @@ pub fn train_model_file(
             let dataset = Dataset::load(request.manifest, &options, progress)?;
             data_read(&dataset, None);
             progress.start("training", None);
-            let training = train(&dataset, &request.train);
+            let training = train_with_progress(&dataset, &request.train, progress);
             progress.finish();
             (dataset, training?, None)
         }

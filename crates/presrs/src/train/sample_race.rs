@@ -12,12 +12,12 @@ use std::path::Path;
 
 use presrs_core::sample::SampleKind;
 use presrs_core::stance::summary::SummaryConfig;
-use presrs_io::message::{Message, Opt};
+use presrs_io::message::{Message, Opt, Warning};
 
 use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use crate::train::{TrainOptions, Training, train, trained_on_movies};
+use crate::train::{TrainOptions, Training, train_with_progress, trained_on_movies};
 use presrs_core::pipeline::TrainedModel;
 
 /// What the whole sample of `--sample auto` is when the data decide: the settings the whole kinds take.
@@ -226,7 +226,7 @@ pub fn train_racing_samples(
             &format!("training on the {} sample", dataset.sample.name()),
             None,
         );
-        let training = train(dataset, train_options);
+        let training = train_with_progress(dataset, train_options, progress);
         progress.finish();
         training
     };
@@ -238,6 +238,9 @@ pub fn train_racing_samples(
             contenders.push((dataset, training));
             None
         }
+        // The user's stance length, not the data, is at fault: the frame winning by default would
+        // hide it.
+        Err(err) if names_the_stance_length(&err) => return Err(err),
         Err(err) => Some(RaceEntry {
             kind: whole_kind,
             samples: 0,
@@ -245,6 +248,17 @@ pub fn train_racing_samples(
         }),
     };
     finish_race(contenders, unread)
+}
+
+/// Whether `err` is about the stance length given (one the data cannot take).
+fn names_the_stance_length(err: &Error) -> bool {
+    match err {
+        Error::Io(
+            presrs_io::IoError::Format { message, .. } | presrs_io::IoError::Parse { message, .. },
+        ) => message.options().any(|opt| opt == Opt::StanceLength),
+        Error::Context { source, .. } => names_the_stance_length(source),
+        _ => false,
+    }
 }
 
 /// The error of `--sample auto` with a fixed method (which gives no validation score to race on).
@@ -308,9 +322,85 @@ fn finish_race(
         .into_iter()
         .nth(chosen)
         .ok_or_else(|| Error::data("no sample kind could be trained"))?;
+    let mut training = training?;
+    training.warnings.extend(race.tie_warning());
     Ok(RacedTraining {
         dataset,
-        training: training?,
+        training,
         race,
     })
+}
+
+impl SampleRace {
+    /// On a tie, what the race measured and that the rule, not the data, kept the frame, with the
+    /// option that trains the other kind: the training data could not tell the kinds apart, and on
+    /// new data the other may be far better (as `eval` of each kind alone shows).
+    pub fn tie_warning(&self) -> Option<Warning> {
+        if !self.is_tie() {
+            return None;
+        }
+        let kept = self.chosen_kind();
+        let other = self
+            .entries
+            .iter()
+            .map(|entry| entry.kind)
+            .find(|kind| kind.name() != kept.name())?;
+        let measured: Vec<String> = self.entries.iter().map(entry_text).collect();
+        Some(Warning::from(
+            Message::from(format!(
+                "the sample race tied in validation ({}): the {} sample was kept by rule (a tie goes \
+                 to one frame), not because it is better; the training data cannot tell the kinds \
+                 apart, and on new data the {} may be far better: train it with ",
+                measured.join(", "),
+                kept.name(),
+                other.name()
+            ))
+            .opt_text(Opt::Sample, other.name())
+            .text(", and evaluate each kind alone to compare them"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use presrs_io::message::Face;
+
+    fn entry(kind: &str, accuracy: f64, method: &str) -> RaceEntry {
+        RaceEntry {
+            kind: kind.parse().unwrap(),
+            samples: 60,
+            outcome: Ok((accuracy, method.to_owned())),
+        }
+    }
+
+    #[test]
+    fn a_tie_is_a_warning_naming_the_option_that_trains_the_other_kind() {
+        let race = SampleRace::decide(vec![
+            entry("frame", 1.0, "fft1d + mle"),
+            entry("stance", 1.0, "rocket + pwe"),
+        ]);
+        assert_eq!(race.chosen_kind(), SampleKind::Frame);
+        let warning = race.tie_warning().unwrap();
+        let cli = warning.render(Face::Cli);
+        assert!(
+            cli.starts_with(
+                "the sample race tied in validation (frame 100.0 % (fft1d + mle), stance 100.0 % \
+                 (rocket + pwe)): the frame sample was kept by rule"
+            ) && cli.contains("train it with --sample stance"),
+            "{cli}"
+        );
+        assert!(
+            warning
+                .render(Face::Python)
+                .contains("train it with sample=\"stance\"")
+        );
+        let won = SampleRace::decide(vec![
+            entry("frame", 0.9, "fft1d + mle"),
+            entry("stance", 1.0, "rocket + pwe"),
+        ]);
+        assert!(won.tie_warning().is_none());
+    }
 }

@@ -51,8 +51,6 @@ pub struct Spectrum<'a> {
     eigenvalues: Vec<f64>,
     /// `Q` (gram, `n x n`) or `P = Z V` (cov, `n x p`).
     basis: Mat<f64>,
-    /// The squares of `basis`, element by element.
-    basis_squared: Mat<f64>,
     /// `V` (cov only).
     eigenvectors: Option<Mat<f64>>,
     /// `basisᵀ Y_c`, `r x k`.
@@ -88,9 +86,6 @@ impl<'a> Spectrum<'a> {
                 (basis, Some(eigenvectors))
             }
         };
-        let basis_squared = Mat::from_fn(basis.nrows(), basis.ncols(), |i, j| {
-            basis[(i, j)] * basis[(i, j)]
-        });
         let mut projected = Mat::zeros(basis.ncols(), centred_targets.ncols());
         matmul(
             &mut projected,
@@ -105,7 +100,6 @@ impl<'a> Spectrum<'a> {
             decomposition,
             eigenvalues,
             basis,
-            basis_squared,
             eigenvectors,
             projected,
             centred_targets,
@@ -139,26 +133,22 @@ impl<'a> Spectrum<'a> {
             1.0,
             Par::Seq,
         );
-        let weights = Mat::from_fn(self.eigenvalues.len(), 1, |j, _| {
-            1.0 / (self.eigenvalues[j] + alpha)
-        });
-        let mut diagonal = Mat::zeros(n, 1);
-        matmul(
-            &mut diagonal,
-            Accum::Replace,
-            &self.basis_squared,
-            &weights,
-            1.0,
-            Par::Seq,
-        );
+        // Σ_j D_j basis_ij², column by column (the basis is column-major): the squares are not
+        // kept, an `n x r` matrix as large as the basis itself.
+        let mut diagonal = vec![0.0; n];
+        for (j, &value) in self.eigenvalues.iter().enumerate() {
+            let weight = 1.0 / (value + alpha);
+            for (d, b) in diagonal.iter_mut().zip(self.basis.col(j).iter()) {
+                *d += b * b * weight;
+            }
+        }
         let nf = n as f64;
         Mat::from_fn(n, shrunk.ncols(), |i, t| match self.decomposition {
             // c_i / (Σ_j D_j Q_ij² - 1 / (α n))
-            Decomposition::Gram => smoothed[(i, t)] / (diagonal[(i, 0)] - 1.0 / (alpha * nf)),
+            Decomposition::Gram => smoothed[(i, t)] / (diagonal[i] - 1.0 / (alpha * nf)),
             // (y_i - ŷ_i) / (1 - H_ii)
             Decomposition::Covariance => {
-                (self.centred_targets[(i, t)] - smoothed[(i, t)])
-                    / (1.0 - diagonal[(i, 0)] - 1.0 / nf)
+                (self.centred_targets[(i, t)] - smoothed[(i, t)]) / (1.0 - diagonal[i] - 1.0 / nf)
             }
         })
     }
