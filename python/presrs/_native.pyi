@@ -114,7 +114,7 @@ class Model:
         ``"unknown"``; ``novelty=False`` names one of the classes for every sample."""
     def novelty(self, x: Any) -> Any:
         """The novelty score: a `float` for one sample, an array for a batch (the distance to the
-        nearest class in units of its own spread); above `novelty_threshold`, `predict` says
+        nearest training sample in the model's discriminant space); above `novelty_threshold`, `predict` says
         ``"unknown"``. An error for a model without a novelty score."""
     @property
     def novelty_threshold(self) -> Optional[float]:

@@ -370,7 +370,7 @@ impl Model {
     }
 
     /// The novelty score of one sample (a `float`) or of every sample of a batch (an array): the
-    /// distance to the nearest class in units of that class's own spread; above `novelty_threshold`,
+    /// distance to the nearest training sample in the model's discriminant space; above `novelty_threshold`,
     /// `predict` says `"unknown"`. An error for a model without a novelty score.
     fn novelty<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         if self.file().model.novelty().is_none() {

@@ -1,7 +1,7 @@
 //! The novelty threshold learned inside the training data, without any unknown class: every training
-//! vector's distance to its own class mean in a discriminant space fitted without it (its group held
-//! out, or its fold of a stratified split), so that the distances are those of vectors the space never
-//! saw, as a new recording's are.
+//! vector's distance to its nearest neighbour among the other folds' vectors, in a discriminant space
+//! fitted on those folds alone (its group held out, or its fold of a stratified split), so that the
+//! distances are those of vectors neither the space nor the neighbours saw, as a new recording's are.
 
 use std::collections::BTreeMap;
 
@@ -21,13 +21,14 @@ pub enum CalibrationFolds {
     Split,
 }
 
-/// The held-out distance of every vector that could be held out: (class, distance).
+/// The held-out nearest-neighbour distance of every vector that could be held out.
 pub(crate) struct HeldOut {
     pub folds: CalibrationFolds,
-    pub distances: Vec<(usize, f64)>,
+    pub distances: Vec<f64>,
 }
 
-/// Each vector's distance to its class mean in the discriminant space of the other folds.
+/// Each vector's distance to its nearest neighbour among the other folds' vectors, in their
+/// discriminant space.
 pub(crate) fn held_out_distances(
     vectors: &[f64],
     classes: &[usize],
@@ -50,13 +51,15 @@ pub(crate) fn held_out_distances(
         let Ok(space) = Discriminant::fit(&train, &train_classes, n_classes, dims) else {
             continue;
         };
+        let neighbours = space.project_rows(&train)?;
         let mut projected = vec![0.0; space.n_axes()];
         let mut to_classes = vec![0.0; n_classes];
-        for ((row, &class), &f) in vectors.chunks_exact(dims).zip(classes).zip(&fold_of) {
+        for (row, &f) in vectors.chunks_exact(dims).zip(&fold_of) {
             if f == fold {
                 space.distances_into(row, &mut projected, &mut to_classes)?;
-                if to_classes[class].is_finite() {
-                    distances.push((class, to_classes[class]));
+                let distance = super::nearest(&neighbours, &projected);
+                if distance.is_finite() {
+                    distances.push(distance);
                 }
             }
         }

@@ -125,6 +125,20 @@ impl Discriminant {
         self.dims
     }
 
+    /// The coordinates of every row of `vectors` (`n x dims`, row-major) in the space, `n x axes`.
+    pub fn project_rows(&self, vectors: &[f64]) -> Result<Vec<f64>> {
+        check_len("novelty vectors", 0, vectors.len() % self.dims.max(1))?;
+        let mut out = vec![0.0; vectors.len() / self.dims.max(1) * self.n_axes()];
+        let mut distances = vec![0.0; self.n_classes()];
+        for (row, projected) in vectors
+            .chunks_exact(self.dims.max(1))
+            .zip(out.chunks_exact_mut(self.n_axes().max(1)))
+        {
+            self.distances_into(row, projected, &mut distances)?;
+        }
+        Ok(out)
+    }
+
     fn project_raw(&self, x: &[f64]) -> Vec<f64> {
         self.axes
             .chunks_exact(self.dims)

@@ -3,13 +3,14 @@
 //!
 //! The score is read in the model's own feature space, the vectors its classifier sees (principal
 //! components): their discriminant space ([`Discriminant`], Fisher's directions with the pooled
-//! within-class covariance the identity), where each class's distance is divided by that class's own
-//! scale, the median distance of its training vectors held out from the space (so that a tight class and
-//! a loose one are judged alike). The score is the smallest of these ratios; a sample is `unknown` when
-//! it exceeds the threshold, the quantile of the same ratios over the held-out training vectors that
-//! leaves [`DEFAULT_REJECTION`] of them out. No unknown class is needed: the threshold is learned from
-//! known vectors that the space did not see (their group held out, as a new recording is), and
-//! `eval --leave-class-out` measures what it does with a class never seen (`docs/methods.md`).
+//! within-class covariance the identity), where the score is the distance to the nearest training
+//! vector (of any class). A class's training vectors need not lie around its mean (a terrain pressed at
+//! two angles makes two clusters), and a sample between two clusters, or beside a class's cloud, is far
+//! from every training vector while near a mean. A sample is `unknown` when the score exceeds the
+//! threshold, the quantile of the same distances over training vectors held out from the space and from
+//! the neighbours (their group held out, as a new recording is) that leaves [`DEFAULT_REJECTION`] of them
+//! out. No unknown class is needed, and `eval --leave-class-out` measures what it does with a class
+//! never seen (`docs/methods.md`).
 
 mod calibration;
 mod discriminant;
@@ -27,12 +28,12 @@ use crate::error::{CoreError, Result, check_len};
 pub const UNKNOWN_LABEL: &str = "unknown";
 
 /// The share of held-out known training vectors the threshold rejects.
-pub const DEFAULT_REJECTION: f64 = 0.03;
+pub const DEFAULT_REJECTION: f64 = 0.05;
 
 /// A novelty score and its verdict.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Novelty {
-    /// The distance to the nearest class in units of that class's own spread (larger: more novel).
+    /// The distance to the nearest training vector in the discriminant space (larger: more novel).
     pub score: f64,
     /// The score above which a sample is `unknown`.
     pub threshold: f64,
@@ -63,8 +64,8 @@ pub struct NoveltyModel {
 #[serde(deny_unknown_fields)]
 struct NoveltyFields {
     space: Discriminant,
-    /// Each class's median held-out distance.
-    class_scales: Vec<f64>,
+    /// The training vectors in the discriminant space, `n x axes` (row-major): the neighbours.
+    neighbours: Vec<f64>,
     threshold: f64,
     /// The share of held-out training vectors the threshold was set to reject.
     rejection: f64,
@@ -101,25 +102,21 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
                 space.class_means.len()
             )));
         }
-        if fields.class_scales.len() != space.n_classes() {
+        if fields.neighbours.is_empty() || fields.neighbours.len() % axes != 0 {
             return Err(bad(format!(
-                "{} class scales for {} classes",
-                fields.class_scales.len(),
-                space.n_classes()
+                "{} neighbour values are not whole vectors of {axes} coordinates",
+                fields.neighbours.len()
             )));
         }
         let finite = space
             .axes
             .iter()
             .chain(&space.offset)
+            .chain(&fields.neighbours)
             .all(|v| v.is_finite());
-        let positive = fields
-            .class_scales
-            .iter()
-            .all(|s| s.is_finite() && *s > 0.0);
-        if !finite || !positive || !(fields.threshold.is_finite() && fields.threshold > 0.0) {
+        if !finite || !(fields.threshold.is_finite() && fields.threshold > 0.0) {
             return Err(bad(
-                "the directions must be finite, the class scales and the threshold positive".into(),
+                "the directions and the neighbours must be finite, the threshold positive".into(),
             ));
         }
         if !(0.0..1.0).contains(&fields.rejection) {
@@ -141,9 +138,9 @@ pub struct NoveltyScratch {
 
 impl NoveltyModel {
     /// Fits the space on `vectors` (`n x dims`, row-major, the classifier's training and validation
-    /// vectors) of `classes`, and calibrates the scales and the threshold on held-out distances (folds
-    /// by `groups`, one per vector, when there are three groups or more; else stratified folds) so that
-    /// `rejection` of them are above it.
+    /// vectors) of `classes`, keeps the vectors' projections as the neighbours, and calibrates the
+    /// threshold on held-out nearest-neighbour distances (folds by `groups`, one per vector, when there
+    /// are three groups or more; else stratified folds) so that `rejection` of them are above it.
     pub fn fit(
         vectors: &[f64],
         classes: &[usize],
@@ -154,45 +151,23 @@ impl NoveltyModel {
     ) -> Result<Self> {
         check_len("novelty groups", classes.len(), groups.len())?;
         let space = Discriminant::fit(vectors, classes, n_classes, dims)?;
+        let neighbours = space.project_rows(vectors)?;
         let held_out = calibration::held_out_distances(vectors, classes, groups, n_classes, dims)?;
-        let mut per_class: Vec<Vec<f64>> = vec![Vec::new(); n_classes];
-        for &(class, distance) in &held_out.distances {
-            per_class[class].push(distance);
-        }
-        let mut pooled: Vec<f64> = held_out.distances.iter().map(|&(_, d)| d).collect();
-        pooled.sort_by(f64::total_cmp);
-        let fallback = calibration::quantile(&pooled, 0.5);
-        let class_scales: Vec<f64> = per_class
-            .iter_mut()
-            .map(|distances| {
-                distances.sort_by(f64::total_cmp);
-                let median = calibration::quantile(distances, 0.5);
-                if median.is_finite() && median > 0.0 {
-                    median
-                } else {
-                    fallback
-                }
-            })
-            .collect();
-        if !class_scales.iter().all(|s| s.is_finite() && *s > 0.0) {
+        let mut distances = held_out.distances;
+        distances.sort_by(f64::total_cmp);
+        let threshold = calibration::quantile(&distances, 1.0 - rejection);
+        if !(threshold.is_finite() && threshold > 0.0) {
             return Err(CoreError::NotEnoughData(
                 "no held-out distance to calibrate the novelty score on".into(),
             ));
         }
-        let mut ratios: Vec<f64> = held_out
-            .distances
-            .iter()
-            .map(|&(class, distance)| distance / class_scales[class])
-            .collect();
-        ratios.sort_by(f64::total_cmp);
-        let threshold = calibration::quantile(&ratios, 1.0 - rejection);
         Self::try_from(NoveltyFields {
             space,
-            class_scales,
+            neighbours,
             threshold,
             rejection,
             folds: held_out.folds,
-            calibration_vectors: ratios.len(),
+            calibration_vectors: distances.len(),
         })
     }
 
@@ -210,12 +185,7 @@ impl NoveltyModel {
         scratch.projected.resize(space.n_axes(), 0.0);
         scratch.distances.resize(space.n_classes(), 0.0);
         space.distances_into(x, &mut scratch.projected, &mut scratch.distances)?;
-        let score = scratch
-            .distances
-            .iter()
-            .zip(&self.fields.class_scales)
-            .map(|(distance, scale)| distance / scale)
-            .fold(f64::INFINITY, f64::min);
+        let score = nearest(&self.fields.neighbours, &scratch.projected);
         Ok(Novelty::of(score, self.fields.threshold))
     }
 
@@ -246,13 +216,13 @@ impl NoveltyModel {
 
     /// Number of classes.
     pub fn n_classes(&self) -> usize {
-        self.fields.class_scales.len()
+        self.fields.space.n_classes()
     }
 
     /// In words, for `describe` and reports.
     pub fn describe(&self) -> String {
         format!(
-            "distance in a {}-direction discriminant space over each class's spread; unknown above {:.3} \
+            "distance to the nearest training sample in a {}-direction discriminant space; unknown above {:.3} \
              ({:.0} % of {} held-out training samples, folds by {})",
             self.fields.space.n_axes(),
             self.fields.threshold,
@@ -264,6 +234,21 @@ impl NoveltyModel {
             }
         )
     }
+}
+
+/// The distance from `x` to the nearest of `points` (rows of `x.len()` values); infinite without points.
+pub(crate) fn nearest(points: &[f64], x: &[f64]) -> f64 {
+    points
+        .chunks_exact(x.len().max(1))
+        .map(|point| {
+            point
+                .iter()
+                .zip(x)
+                .map(|(p, v)| (p - v) * (p - v))
+                .sum::<f64>()
+        })
+        .fold(f64::INFINITY, f64::min)
+        .sqrt()
 }
 
 /// The area under the ROC curve of a score that should be larger for `positives` than for `negatives`:

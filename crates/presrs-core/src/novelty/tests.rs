@@ -178,9 +178,9 @@ fn a_model_round_trips_and_a_broken_one_is_refused() {
     let back: NoveltyModel = serde_json::from_value(json.clone()).unwrap();
     assert_eq!(back, model);
     let mut broken = json.clone();
-    broken["class_scales"] = serde_json::json!([1.0]);
+    broken["neighbours"] = serde_json::json!([1.0, 2.0, 3.0]);
     let err = serde_json::from_value::<NoveltyModel>(broken).unwrap_err();
-    assert!(err.to_string().contains("class scales"), "{err}");
+    assert!(err.to_string().contains("neighbour values"), "{err}");
     let mut negative = json;
     negative["threshold"] = serde_json::json!(-1.0);
     assert!(serde_json::from_value::<NoveltyModel>(negative).is_err());
