@@ -259,7 +259,9 @@ fn a_whole_stance_model_learns_one_walker_and_classifies_the_other() {
             validation: presrs::core::split::ValidationSize::Fraction(0.35),
             seed: 1,
             method,
-            novelty: true,
+            // Main's test, from before the novelty score: every stance decided as one of the speeds
+            // (with the score, a walker never seen gets some stances `unknown`, counted here as wrong).
+            novelty: false,
         },
     )
     .unwrap();
