@@ -17,7 +17,10 @@ over time:
 * `aeon MiniRocket on presrs's input (channels / spread) + StandardScaler + RidgeClassifierCV` (with
   `--channel-scaled`): each channel divided by its standard deviation over the samples MiniRocket is
   fitted on, as presrs's rocket family does before its convolutions; the same input and classifier as
-  presrs's rocket + ridge, so the two MiniRockets are compared alone.
+  presrs's rocket + ridge, so the two MiniRockets are compared alone;
+* `aeon MultiRocket + RidgeClassifierCV` and `... + StandardScaler + RidgeClassifierCV` (with
+  `--multirocket`): aeon's `MultiRocket(n_kernels=1250, random_state=0)` (9,408 features: presrs's
+  `multirocket`; aeon's default is 6,250 kernels, 49,728 features), the same two classifiers.
 
 Ridge has nothing to validate outside its own leave-one-out, so every peer trains on training +
 validation at once: the images presrs's models learn from. Accuracy per repeat is pooled over the
@@ -36,7 +39,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from aeon.transformations.collection.convolution_based import MiniRocket
+from aeon.transformations.collection.convolution_based import MiniRocket, MultiRocket
 from sklearn.decomposition import PCA
 from sklearn.linear_model import RidgeClassifierCV
 from sklearn.pipeline import make_pipeline
@@ -66,6 +69,18 @@ SCALED_PEER = (
     scaled_ridge,
 )
 PCA_PEER = ("aeon MiniRocket + PCA(51) + StandardScaler + RidgeClassifierCV", pca_ridge)
+MULTI_PEERS = [
+    ("aeon MultiRocket + RidgeClassifierCV", ridge),
+    ("aeon MultiRocket + StandardScaler + RidgeClassifierCV", scaled_ridge),
+]
+
+
+def minirocket(threads: int):
+    return MiniRocket(n_kernels=10_000, random_state=0, n_jobs=threads)
+
+
+def multirocket(threads: int):
+    return MultiRocket(n_kernels=1_250, random_state=0, n_jobs=threads)
 
 
 def load(export: Path) -> tuple[np.ndarray, dict]:
@@ -87,7 +102,9 @@ def channel_scaled(images: np.ndarray, fit_on: np.ndarray) -> np.ndarray:
     return images / spread[None, :, None]
 
 
-def evaluate(images: np.ndarray, document: dict, peers, threads: int, scale: bool = False) -> list[dict]:
+def evaluate(
+    images: np.ndarray, document: dict, peers, threads: int, scale: bool = False, transform=minirocket
+) -> list[dict]:
     labels = np.array(document["labels"])
     draws = document["draws"]
     repeats = sorted({d["repeat"] for d in draws})
@@ -102,11 +119,11 @@ def evaluate(images: np.ndarray, document: dict, peers, threads: int, scale: boo
             fit_on = np.concatenate([tr, va])
             x = channel_scaled(images, fit_on) if scale else images
             start = time.perf_counter()
-            rocket = MiniRocket(n_kernels=10_000, random_state=0, n_jobs=threads).fit(x[fit_on])
-            x_fit = rocket.transform(x[fit_on])
+            rocket = transform(threads).fit(x[fit_on])
+            x_fit = np.asarray(rocket.transform(x[fit_on]))
             fit_seconds = time.perf_counter() - start
             start = time.perf_counter()
-            x_test = rocket.transform(x[te])
+            x_test = np.asarray(rocket.transform(x[te]))
             test_seconds = time.perf_counter() - start
             transform_seconds += test_seconds
             for name, make in peers:
@@ -145,6 +162,7 @@ def main() -> int:
     parser.add_argument("--out", type=Path, help="write the rows as JSON here (default: stdout)")
     parser.add_argument("--pca", action="store_true", help="also the PCA(51) variant")
     parser.add_argument("--channel-scaled", action="store_true", help="also the peer on presrs's scaled channels")
+    parser.add_argument("--multirocket", action="store_true", help="also aeon's MultiRocket with both ridges")
     parser.add_argument("--threads", type=int, default=2, help="aeon's n_jobs (default 2)")
     args = parser.parse_args()
     images, document = load(args.export)
@@ -153,6 +171,8 @@ def main() -> int:
     if args.channel_scaled:
         scaled = evaluate(images, document, [SCALED_PEER], args.threads, scale=True)
         rows += scaled
+    if args.multirocket:
+        rows += evaluate(images, document, MULTI_PEERS, args.threads, transform=multirocket)
     text = json.dumps({"manifest": document.get("manifest"), "shape": list(images.shape[1:]), "peers": rows}, indent=1)
     if args.out:
         args.out.write_text(text + "\n")

@@ -11,7 +11,9 @@
 # Protocol: leave one group out, all training data (no --per-class; 35 % of it validates), 3 repeats,
 # seed 1. jiku-walk: `--sample stance --one-sample-per-file` (each movie one stance, summarised);
 # icub20: `--sample series` (60 taxels x 75 steps). For each set: presrs auto (its draws exported),
-# presrs rocket + ridge, then bench/real/rocket_peer.py (aeon; bench only) on the exported draws, and
+# presrs rocket + ridge, presrs's peer pairings (rocket_unscaled and multirocket_unscaled with
+# ridge_raw), then bench/real/rocket_peer.py (aeon's MiniRocket and MultiRocket; bench only) on the
+# exported draws, and
 # crates/presrs/examples/ridge_projection.rs (rocket + ridge with and without the PCA step, presrs's
 # own code).
 # Outputs under bench/real/results/whole/ (ignored by git); prints one markdown table.
@@ -74,10 +76,16 @@ for set in "${sets[@]}"; do
     echo "== $set: presrs rocket + ridge" >&2
     "$presrs" eval --manifest "$manifest" "${common[@]}" "${sample[@]}" --features rocket \
         --classifier ridge > "$out/rocket_ridge.json"
+    echo "== $set: presrs's peer pairings (channels and features as they are)" >&2
+    "$presrs" eval --manifest "$manifest" "${common[@]}" "${sample[@]}" --features rocket_unscaled \
+        --classifier ridge_raw > "$out/rocket_unscaled_ridge_raw.json"
+    "$presrs" eval --manifest "$manifest" "${common[@]}" "${sample[@]}" --features multirocket_unscaled \
+        --classifier ridge_raw > "$out/multirocket_unscaled_ridge_raw.json"
     echo "== $set: rocket + ridge with and without the PCA step" >&2
     "$projection" "$out/draws" > "$out/projection.txt"
     echo "== $set: aeon MiniRocket + RidgeClassifierCV" >&2
-    "$python" "$here/rocket_peer.py" --export "$out/draws" --pca --channel-scaled --out "$out/peer.json"
+    "$python" "$here/rocket_peer.py" --export "$out/draws" --pca --channel-scaled --multirocket \
+        --out "$out/peer.json"
 done
 
 python3 - "$results" "${sets[@]}" <<'EOF'
@@ -88,7 +96,12 @@ print("| set | method | accuracy (mean ± std over 3 repeats) |")
 print("| --- | --- | --- |")
 for name in sets:
     out = results / name
-    for label, file in [("presrs auto", "auto.json"), ("presrs rocket + ridge", "rocket_ridge.json")]:
+    for label, file in [
+        ("presrs auto", "auto.json"),
+        ("presrs rocket + ridge", "rocket_ridge.json"),
+        ("presrs rocket_unscaled + ridge_raw", "rocket_unscaled_ridge_raw.json"),
+        ("presrs multirocket_unscaled + ridge_raw", "multirocket_unscaled_ridge_raw.json"),
+    ]:
         d = json.loads((out / file).read_text())
         print(f"| {name} | {label} | {100 * d['overall_accuracy']:.1f} ± {100 * d['overall_accuracy_std']:.1f} % |")
     for line in (out / "projection.txt").read_text().splitlines():

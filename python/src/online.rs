@@ -3,9 +3,9 @@
 
 use std::time::Instant;
 
-use presrs::core::online::{OnlineClassifier as CoreOnline, OnlineProfile};
+use presrs::core::online::{DecideAt, OnlineClassifier as CoreOnline, OnlineProfile};
 use presrs::io::model_file::ModelFile;
-use presrs::session::{EventTiming, SessionEvent, check_profile, step_events};
+use presrs::session::{EventTiming, FrameGaps, SessionEvent, check_profile, step_events};
 use pyo3::prelude::*;
 use self_cell::self_cell;
 
@@ -34,6 +34,9 @@ pub struct OnlineClassifier {
     online: Online,
     /// Frames pushed so far.
     frames: u64,
+    /// Frames missing between the pushed frames, from their times: a stance's events state them
+    /// (`gap_frames`), as `presrs stream` does.
+    gaps: FrameGaps,
 }
 
 impl std::fmt::Debug for OnlineClassifier {
@@ -49,13 +52,15 @@ impl OnlineClassifier {
     /// A classifier for `model`, with the model file's online profile (calibration, stance detector
     /// settings, sample frame, gait table) when it has one, else warm-up calibration on the first
     /// frames. `gait_table` adds terrain -> gait entries to the profile's. `decide_at`: a whole-stance
-    /// model decides K frames after touchdown, on the stance so far, instead of at lift-off.
+    /// model decides K frames after touchdown, on the stance so far, or (`"auto"`) at its first
+    /// decision point confident enough, instead of at lift-off; only at a moment the model was trained
+    /// for (`presrs train --decide-at`), else a `ValueError` says how to train one.
     #[new]
     #[pyo3(signature = (model, *, gait_table = None, decide_at = None, novelty = true))]
     fn new(
         model: &Bound<'_, Model>,
         gait_table: Option<std::collections::BTreeMap<String, String>>,
-        decide_at: Option<usize>,
+        decide_at: Option<&Bound<'_, PyAny>>,
         novelty: bool,
     ) -> PyResult<Self> {
         let mut file = model.get().file().clone();
@@ -64,8 +69,8 @@ impl OnlineClassifier {
         }
         let mut profile = file.online.clone().unwrap_or_default();
         profile.gait_table.extend(gait_table.unwrap_or_default());
-        if decide_at.is_some() {
-            profile.params.decide_at = decide_at;
+        if let Some(decide_at) = decide_at {
+            profile.params.decide_at = Some(decide_at_of(decide_at)?);
         }
         check_profile(&file.model, &profile).py_err()?;
         let online = Online::try_new(Running { file, profile }, |running| {
@@ -77,7 +82,11 @@ impl OnlineClassifier {
             )
         })
         .py_err()?;
-        Ok(Self { online, frames: 0 })
+        Ok(Self {
+            online,
+            frames: 0,
+            gaps: FrameGaps::default(),
+        })
     }
 
     /// Feeds one frame `(rows, cols)`; returns the events it completed, as dicts. `timestamp_us`: the
@@ -98,11 +107,13 @@ impl OnlineClassifier {
         }
         let view = images.frame(0)?;
         let index = self.frames;
-        let values = self.online.with_dependent_mut(|running, online| {
+        let gaps = &mut self.gaps;
+        let mut values = self.online.with_dependent_mut(|running, online| {
             let started = Instant::now();
             let step = online
                 .push(&view)
                 .map_err(|err| data_error(format!("frame {index}: {err}")))?;
+            gaps.frame(index, timestamp_us);
             let latency_us = started.elapsed().as_secs_f64() * 1e6;
             let timing = EventTiming {
                 latency_us,
@@ -116,12 +127,15 @@ impl OnlineClassifier {
             ))
         })?;
         self.frames += 1;
+        for event in &mut values {
+            self.gaps.mark(event);
+        }
         to_dicts(py, &values)
     }
 
     /// Ends the stream: the events of a stance still open (a decision not yet made, its lift-off).
     fn finish<'py>(&mut self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
-        let values = self.online.with_dependent_mut(|running, online| {
+        let mut values = self.online.with_dependent_mut(|running, online| {
             let step = online.finish().py_err()?;
             Ok::<_, PyErr>(step_events(
                 &step,
@@ -130,6 +144,9 @@ impl OnlineClassifier {
                 EventTiming::default(),
             ))
         })?;
+        for event in &mut values {
+            self.gaps.mark(event);
+        }
         to_dicts(py, &values)
     }
 
@@ -161,4 +178,17 @@ fn to_dicts<'py>(py: Python<'py>, events: &[SessionEvent]) -> PyResult<Vec<Bound
         .iter()
         .map(|event| Ok(pythonize::pythonize(py, event)?))
         .collect()
+}
+
+/// `decide_at` from Python: a number of frames after touchdown, or `"auto"`.
+fn decide_at_of(value: &Bound<'_, PyAny>) -> PyResult<DecideAt> {
+    if let Ok(k) = value.extract::<usize>() {
+        return Ok(DecideAt::Frames(k));
+    }
+    match value.extract::<String>() {
+        Ok(text) if text.trim() == "auto" => Ok(DecideAt::AUTO),
+        _ => Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "decide_at: expected a number of frames after touchdown or \"auto\", got {value}"
+        ))),
+    }
 }

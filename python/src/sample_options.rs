@@ -73,6 +73,7 @@ impl ManifestSampling<'_> {
             dead_sensels: (!self.keep_dead_sensels).then(DeadSenselConfig::default),
             one_sample_per_file: self.one_sample_per_file,
             frame_period_s: self.frame_period_s,
+            decision_points: Vec::new(),
         })
     }
 }

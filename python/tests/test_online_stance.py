@@ -2,7 +2,8 @@
 movies, one contact each): each movie streamed as a step (a swing of unloaded frames before and after
 it, as in a walk: the profile learned from one-contact trials finds the steps of a stream) gives one
 decision, at the stance's lift-off and the same as `presrs classify`'s, or `decide_at` frames after
-touchdown; `decide_at` refused with a one-frame model, in Python's words."""
+touchdown (a point the model was trained for), or at its first confident point (`"auto"`); `decide_at`
+refused with a one-frame model, and at a moment the model was not trained for, in Python's words."""
 
 import json
 
@@ -26,6 +27,18 @@ pytestmark = pytest.mark.skipif(
 @pytest.fixture(scope="module")
 def stance_model(cli, tmp_path_factory):
     path = tmp_path_factory.mktemp("stance") / "stance.json"
+    cli(
+        "train", "--manifest", JIKU / "manifest.csv", "--out", path,
+        "--sample", "stance", "--one-sample-per-file", "--features", "rocket",
+        "--classifier", "lda", "--dims", "20", "--seed", "1", "--online-profile",
+        "--decide-at", "5,10,whole",
+    )
+    return path
+
+
+@pytest.fixture(scope="module")
+def whole_only_model(cli, tmp_path_factory):
+    path = tmp_path_factory.mktemp("whole") / "whole.json"
     cli(
         "train", "--manifest", JIKU / "manifest.csv", "--out", path,
         "--sample", "stance", "--one-sample-per-file", "--features", "rocket",
@@ -88,6 +101,37 @@ def test_decide_at_decides_as_frame_k_arrives(stance_model):
     assert decision["decided_at_frame"] == SWING + 10
     assert decision["frame"] == SWING + 10
     assert decision["frames_used"] == 11
+    assert (decision["early_rule"], decision["early_reason"]) == ("fixed", "fixed")
+    assert decision["early_point"] == 10
+
+
+def test_auto_decides_at_a_trained_point_or_the_liftoff(stance_model):
+    model = presrs.Model.load(stance_model)
+    recording, events = stream(model, MOVIES[0], decide_at="auto")
+    (decision,) = decisions(events)
+    assert decision["early_rule"] == "auto"
+    assert decision["early_threshold"] is not None
+    if decision["early_reason"] == "confident":
+        assert decision["early_point"] in (5, 10)
+        assert decision["frame"] == SWING + decision["early_point"]
+        assert decision["confidence"] >= decision["early_threshold"]
+    else:
+        assert decision["early_reason"] == "not_confident"
+        assert decision["decided_at"] == "liftoff"
+
+
+@pytest.mark.parametrize("decide_at", [7, "auto"])
+def test_a_moment_the_model_was_not_trained_for_is_refused_in_python_words(
+    stance_model, whole_only_model, decide_at
+):
+    for path in [whole_only_model] + ([stance_model] if decide_at == 7 else []):
+        with pytest.raises(ValueError) as info:
+            presrs.OnlineClassifier(presrs.Model.load(path), decide_at=decide_at)
+        message = str(info.value)
+        assert "not trained to decide at" in message
+        assert 'sample="stance"' in message
+        assert f"decide_at={decide_at!r}".replace("'", '"') in message
+        assert "--" not in message
 
 
 def test_decide_at_with_a_one_frame_model_is_refused_in_python_words(paper_model):
@@ -97,3 +141,31 @@ def test_decide_at_with_a_one_frame_model_is_refused_in_python_words(paper_model
     assert "decide_at=5" in message
     assert "whole-stance" in message
     assert "--decide-at" not in message
+
+
+def test_frames_missing_inside_a_stance_are_stated(stance_model):
+    """Frames lost in the middle of a step (their times jump by 5 periods): the lift-off decision
+    says so in `gap_frames`, as `presrs stream` does; without times, nothing is known of a gap."""
+    model = presrs.Model.load(stance_model)
+    recording = presrs.read(JIKU / MOVIES[0])
+    swing = [np.zeros(recording.shape)] * SWING
+    frames = swing + list(recording.frames) + swing
+    middle = SWING + len(recording.frames) // 2
+    period_us = 10_000
+
+    def run(with_times):
+        online = presrs.OnlineClassifier(model)
+        events = []
+        for i, frame in enumerate(frames):
+            # Four frames lost before `middle`: its time is five periods after the previous one.
+            time = (i + (4 if i >= middle else 0)) * period_us
+            events += online.push(frame, timestamp_us=time if with_times else None)
+        return events + online.finish()
+
+    events = run(with_times=True)
+    (decision,) = decisions(events)
+    assert decision["gap_frames"] == 4
+    liftoff = [e for e in events if e["event"] == "liftoff"]
+    assert liftoff[-1]["gap_frames"] == 4
+    (decision,) = decisions(run(with_times=False))
+    assert decision.get("gap_frames", 0) == 0

@@ -121,7 +121,8 @@ def walk(tmp_path_factory):
     (d / "manifest.csv").write_text("\n".join([rows[0]] + [f"{src}/{r}" for r in rows[1::3]]) + "\n")
     model = d / "walk.model.json"
     run_cli("train", "--manifest", d / "manifest.csv", "--out", model, "--sample", "stance",
-            "--one-sample-per-file", "--features", "rocket", "--classifier", "ridge", "--online-profile")
+            "--one-sample-per-file", "--features", "rocket", "--classifier", "ridge", "--online-profile",
+            "--decide-at", "12,whole")  # a point for the test of --decide-at 12
     bags = {}
     swing = np.zeros((12, 63, 33), dtype=np.uint16)
     for name, movies in (("one", ["s00_t00.npy"]), ("two", ["s00_t00.npy", "s00_t01.npy"])):

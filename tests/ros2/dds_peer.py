@@ -151,7 +151,8 @@ def image(rows, cols, values, stamp_ns=0, encoding="mono16", big_endian=False, f
         step=cols * array.itemsize, data=list(data))
 
 
-def _publish_in_child(domain, topic, payloads, period, reliable, ready_timeout, matched, go, published):
+def _publish_in_child(domain, topic, payloads, period, reliable, ready_timeout, matched, go, published,
+                      settle=0.5):
     import ros2_types as types
 
     dp = DomainParticipant(domain)
@@ -161,7 +162,7 @@ def _publish_in_child(domain, topic, payloads, period, reliable, ready_timeout, 
         if time.monotonic() > end:
             raise SystemExit(3)
         time.sleep(0.05)
-    time.sleep(0.5)
+    time.sleep(settle)
     matched.set()
     if not go.wait(ready_timeout):
         raise SystemExit(4)
@@ -183,16 +184,18 @@ def _publish_in_child(domain, topic, payloads, period, reliable, ready_timeout, 
 
 
 def publish_from_process(domain, payloads, period=0.0, reliable=True, topic="foot/pressure", timeout=60,
-                         when_matched=None, when_published=None):
+                         when_matched=None, when_published=None, settle=0.5):
     """Publishes `payloads` (CDR images) from a process of its own, as a camera driver would, and waits
     for it to end (bounded); `when_matched()` runs once it has found the node, before it publishes.
-    Returns its exit code (0: all published)."""
+    `settle`: seconds it waits after its writer matched the node's reader before it publishes (0: at
+    once, as a driver that waits for a subscriber does). Returns its exit code (0: all published)."""
     import multiprocessing
 
     ctx = multiprocessing.get_context("spawn")
     matched, go, published = ctx.Event(), ctx.Event(), ctx.Event()
     proc = ctx.Process(target=_publish_in_child,
-                       args=(domain, topic, list(payloads), period, reliable, 30, matched, go, published))
+                       args=(domain, topic, list(payloads), period, reliable, 30, matched, go, published,
+                             settle))
     proc.start()
     if matched.wait(40) and when_matched is not None:
         when_matched()

@@ -8,7 +8,7 @@ ros/presrs_msgs), not from presrs's code.
 from dataclasses import dataclass
 
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float32, float64, int32, sequence, uint8, uint16, uint32, uint64
+from cyclonedds.idl.types import float32, float64, int32, int64, sequence, uint8, uint16, uint32, uint64
 
 
 @dataclass
@@ -111,6 +111,12 @@ class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecisi
     liftoff_stamp: Time
     gait: str
     latency_us: float64
+    early_rule: str
+    early_reason: str
+    early_point: int64
+    early_frames: uint64
+    early_threshold: float64
+    gap_frames: uint32
     has_novelty: bool
     unknown: bool
     nearest: str
@@ -133,3 +139,4 @@ class StanceEvent(IdlStruct, typename="presrs_msgs::msg::dds_::StanceEvent_"):
     sampled: bool
     touchdown_stamp: Time
     liftoff_stamp: Time
+    gap_frames: uint32

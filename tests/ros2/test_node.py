@@ -53,6 +53,7 @@ def assert_same_decisions(peer, reference, payloads):
             stamp_us = (mine.header.stamp.sec * 10**9 + mine.header.stamp.nanosec) // 1000
             assert stamp_us == ref["timestamp_us"]
         assert mine.gait == (ref["gait"] or "")
+        assert mine.gap_frames == ref.get("gap_frames", 0)
         # What a whole-stance decision waited for, and that frame's stamp; nothing for one-frame ones.
         assert mine.decided_at == t.DECIDED_AT[ref.get("decided_at", "none")]
         assert mine.decided_at_frame == ref.get("decided_at_frame", 0)
@@ -98,7 +99,11 @@ def test_the_real_recording_gives_the_streams_decisions(fras, domain, node_facto
     # The JSON events on the String topic and on stdout are the stream's, latency aside.
     assert without_latency(peer.json_events()) == without_latency(fras.reference)
     assert without_latency(node.stdout[1:]) == without_latency(fras.reference)
-    assert "205 messages received, 205 frames classified" in stderr
+    assert "205 messages received, 205 frames processed" in stderr
+    n = sum(e["event"] == "classification" for e in fras.reference)
+    assert f"{n} decisions made" in stderr
+    # One node of its name and a publisher it can receive: nothing to warn of.
+    assert "another node named" not in stderr and "cannot receive" not in stderr, stderr
 
 
 def test_a_simulated_run_at_100_hz_on_sensor_data_qos(sim, domain, node_factory):
@@ -124,9 +129,18 @@ def test_a_whole_stance_decision_says_what_it_waited_for(walk, bag, decide_at, w
     case = Case(model, bags[bag], *extra)
     decisions = [e for e in case.reference if e["event"] == "classification"]
     assert [e["decided_at"] for e in decisions] == [waited_for]
-    peer = Peer(domain, reliable=True)
+    # The node first, then the peer. With the peer first, 8 runs of these three tests in 90 failed under
+    # load (load average 6-7; none in 30 at 2-3): 7 got no TerrainDecision (the 3 looked into got nothing
+    # at all on the peer's first two readers, decisions and stance events, while its later ones, JSON
+    # events and diagnostics, got everything), one lost its first JSON event. RustDDS seems to take a
+    # reader announced before its participant without an address (the participant's default locators are
+    # looked up when the reader is discovered, not again) and never to send to it. Started after the
+    # node, the peer's participant reaches the node before its readers do: none failed in 40 runs at the
+    # same load.
     node = node_factory(case.model, domain, "--input-qos", "reliable", *extra)
+    peer = Peer(domain, reliable=True)
     assert peer.wait_matched(30), "the node's topics were not discovered within 30 s"
+    time.sleep(1.0)  # the node's side of the match, as in run_parity
     publish_all(peer, case.payloads)
 
     def all_taken(p):

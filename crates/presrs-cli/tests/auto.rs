@@ -624,6 +624,7 @@ fn train_and_eval_state_their_peak_memory_per_sample_and_their_stages() {
     assert!(last.ends_with("per sample over 36 samples"), "{last}");
     let time = out.lines().find(|l| l.starts_with("time: ")).unwrap();
     assert!(time.contains("scored on all 36 samples"), "{time}");
+    assert!(time.contains("within the budget of 60 s"), "{time}");
     assert!(
         time.contains("training the winner on all 36 samples"),
         "{time}"
@@ -658,4 +659,5 @@ fn train_and_eval_state_their_peak_memory_per_sample_and_their_stages() {
     let cost = &json["selections"][0]["cost"];
     assert_eq!(cost["scored_on"], cost["samples"], "{cost}");
     assert!(cost["final_fit_seconds"].as_f64().unwrap() > 0.0, "{cost}");
+    assert_eq!(cost["budget_seconds"], 60.0, "{cost}");
 }

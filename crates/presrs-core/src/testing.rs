@@ -13,7 +13,7 @@ use crate::crop::Crop;
 use crate::error::Result;
 use crate::features::{FeatureConfig, RocketFamily, RocketParams};
 use crate::frame::{Frame, Grid};
-use crate::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
+use crate::pipeline::{LabeledImage, StanceImages, TrainConfig, TrainedModel, train, train_early};
 use crate::preprocess::Preprocess;
 use crate::sample::SampleKind;
 use crate::stance::summary::{SummaryConfig, pad_to, summarise};
@@ -135,4 +135,52 @@ pub fn stance_model_with(
         summary: SummaryConfig::default(),
         length: None,
     })
+}
+
+/// [`stance_model`] with classifiers for the decision points `points` (frames after touchdown), each
+/// trained on the training stances cut there, and `auto`'s threshold learned from their inner folds.
+pub fn stance_model_with_points(
+    frames: &[Frame],
+    stances: &[(usize, usize, usize)],
+    length: usize,
+    points: &[usize],
+) -> Result<TrainedModel> {
+    let model = stance_model(frames, stances, length)?;
+    let cut = |k: usize| {
+        stances
+            .iter()
+            .map(|&(start, len, _)| stance_sample(&frames[start..start + len.min(k + 1)], k + 1))
+            .collect::<Result<Vec<_>>>()
+    };
+    let whole: Vec<Frame> = stances
+        .iter()
+        .map(|&(start, len, _)| stance_sample(&frames[start..start + len], length))
+        .collect::<Result<_>>()?;
+    let cuts: Vec<(usize, Vec<Frame>)> = points
+        .iter()
+        .map(|&k| Ok((k, cut(k)?)))
+        .collect::<Result<_>>()?;
+
+    let train_set = StanceImages {
+        whole: labeled(&whole, stances),
+        cuts: cuts
+            .iter()
+            .map(|(k, set)| (*k, labeled(set, stances)))
+            .collect(),
+        stance_frames: stances.iter().map(|s| s.1).collect(),
+    };
+    let validation = StanceImages {
+        cuts: points.iter().map(|&k| (k, Vec::new())).collect(),
+        ..StanceImages::default()
+    };
+    let early = train_early(&model, &train_set, &validation, None, 1)?;
+    model.with_early(early)
+}
+
+/// `set`'s frames labelled with the classes of `stances`, in order.
+fn labeled<'a>(set: &'a [Frame], stances: &[(usize, usize, usize)]) -> Vec<LabeledImage<'a>> {
+    set.iter()
+        .zip(stances)
+        .map(|(frame, stance)| LabeledImage::new(frame.view(), SYNTHETIC_CLASSES[stance.2]))
+        .collect()
 }

@@ -12,12 +12,12 @@ use std::alloc::System;
 use presrs_core::Frame;
 use presrs_core::classifier::ClassifierKind;
 use presrs_core::features::FeatureKind;
-use presrs_core::online::{Calibration, OnlineClassifier, OnlineParams};
+use presrs_core::online::{Calibration, DecideAt, OnlineClassifier, OnlineParams};
 use presrs_core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
 use presrs_core::preprocess::Preprocess;
 use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_core::testing::{
-    SYNTHETIC_CLASSES, stance_model, stance_stream, synthetic_frame, synthetic_stream,
+    SYNTHETIC_CLASSES, stance_model_with_points, stance_stream, synthetic_frame, synthetic_stream,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -177,14 +177,15 @@ fn steady_state_classification_does_not_allocate() {
 }
 
 /// A whole-stance model online: its first frame sizes the stance buffer; every later frame (kept,
-/// touchdowns, decisions at lift-off, at `decide_at` and at the cut, lift-offs) allocates nothing.
+/// touchdowns, decisions at lift-off, at `decide_at` (a point, `auto`) and at the cut, lift-offs)
+/// allocates nothing.
 fn whole_stance_models_do_not_allocate_per_frame() {
     let lens: Vec<usize> = (0..24).map(|i| 10 + (i * 7) % 6).collect();
     let (train_frames, stances) = stance_stream(&lens, 3);
-    let model = stance_model(&train_frames, &stances, 12).unwrap();
+    let model = stance_model_with_points(&train_frames, &stances, 12, &[4]).unwrap();
     let test_lens: Vec<usize> = (0..10).map(|i| 9 + (i * 5) % 8).collect();
     let (live, _) = stance_stream(&test_lens, 4);
-    for decide_at in [None, Some(4)] {
+    for decide_at in [None, Some(DecideAt::Frames(4)), Some(DecideAt::AUTO)] {
         let online = OnlineParams {
             decide_at,
             ..OnlineParams::default()

@@ -7,12 +7,14 @@
 
 use presrs_core::Frame;
 use presrs_core::online::{
-    Calibration, DecidedAt, Decision, DecisionKind, OnlineClassifier, OnlineEvent, OnlineParams,
+    Calibration, DecideAt, DecidedAt, Decision, DecisionKind, EarlyReason, OnlineClassifier,
+    OnlineEvent, OnlineParams,
 };
 use presrs_core::pipeline::TrainedModel;
 use presrs_core::stance::{Stance, ValidSegmentParams, segment};
 use presrs_core::testing::{
-    SYNTHETIC_CLASSES, bench_fixture, stance_model, stance_sample, stance_stream,
+    SYNTHETIC_CLASSES, bench_fixture, stance_model, stance_model_with_points, stance_sample,
+    stance_stream,
 };
 
 const LENGTH: usize = 16;
@@ -26,9 +28,18 @@ fn calibration(frames: &[Frame]) -> Calibration {
 /// A model of `LENGTH` frames trained on one stream, and another stream to judge (stances of 10 to
 /// 15 frames, and with `long` some of 19 to 22).
 fn setup(long: bool) -> (TrainedModel, Vec<Frame>) {
+    setup_with_points(long, &[])
+}
+
+/// [`setup`] with classifiers for the decision points `points`.
+fn setup_with_points(long: bool, points: &[usize]) -> (TrainedModel, Vec<Frame>) {
     let lens: Vec<usize> = (0..24).map(|i| 10 + (i * 7) % 6).collect();
     let (frames, stances) = stance_stream(&lens, 3);
-    let model = stance_model(&frames, &stances, LENGTH).unwrap();
+    let model = if points.is_empty() {
+        stance_model(&frames, &stances, LENGTH).unwrap()
+    } else {
+        stance_model_with_points(&frames, &stances, LENGTH, points).unwrap()
+    };
     let test_lens: Vec<usize> = (0..12)
         .map(|i| {
             if long && i % 3 == 1 {
@@ -48,7 +59,7 @@ struct Run {
     liftoffs: Vec<(Stance, bool, usize)>,
 }
 
-fn run(model: &TrainedModel, frames: &[Frame], decide_at: Option<usize>) -> Run {
+fn run(model: &TrainedModel, frames: &[Frame], decide_at: Option<DecideAt>) -> Run {
     let online = OnlineParams {
         decide_at,
         ..OnlineParams::default()
@@ -90,7 +101,8 @@ fn offline(
     first: usize,
     count: usize,
 ) -> (usize, Vec<f64>) {
-    let sample = stance_sample(&frames[first..first + count], LENGTH).unwrap();
+    // In the model's own length: the whole stance's, or a decision point's K + 1 frames.
+    let sample = stance_sample(&frames[first..first + count], model.image_grid().cols).unwrap();
     let mut session = model.session();
     let prediction = session.classify(&sample.view()).unwrap();
     (prediction.class, prediction.posteriors.to_vec())
@@ -153,9 +165,10 @@ fn each_stance_is_decided_at_its_liftoff_as_offline() {
 
 #[test]
 fn decide_at_k_decides_on_the_stance_so_far() {
-    let (model, frames) = setup(false);
     let k = 7;
-    let run = run(&model, &frames, Some(k));
+    let (model, frames) = setup_with_points(false, &[4, k]);
+    let point = model.early().unwrap().point(k).unwrap();
+    let run = run(&model, &frames, Some(DecideAt::Frames(k)));
     assert_eq!(run.decisions.len(), 12);
     for ((decision, posteriors, at), (stance, sampled, liftoff_at)) in
         run.decisions.iter().zip(&run.liftoffs)
@@ -172,17 +185,101 @@ fn decide_at_k_decides_on_the_stance_so_far() {
         );
         assert_eq!(decision.frames_used, k + 1);
         assert!(!how.cut);
-        let (class, expected) = offline(&model, &frames, stance.start, k + 1);
+        let early = how.early.unwrap();
+        assert_eq!((early.reason, early.point), (EarlyReason::Fixed, Some(k)));
+        // By the classifier trained on stances cut at K, not the whole-stance one.
+        let (class, expected) = offline(point, &frames, stance.start, k + 1);
         assert_eq!(decision.class, class);
         assert_eq!(posteriors, &expected);
     }
-    // K past a stance's end: it is decided at its lift-off, on the whole stance.
+    // K past a stance's end (and the model's length: the whole-stance classifier): it is decided at
+    // its lift-off, on the whole stance.
     let late = run_late(&model, &frames);
     assert!(late.iter().all(|&d| d == DecidedAt::Liftoff), "{late:?}");
 }
 
+/// `auto` decides at the first point whose confidence passes the model's threshold, by that point's
+/// classifier (as offline), else at the lift-off by the whole-stance one; each decision says why.
+#[test]
+fn auto_decides_at_the_first_confident_point() {
+    let points = [3, 6, 9];
+    let (model, frames) = setup_with_points(false, &points);
+    let early = model.early().unwrap();
+    let threshold = early.auto.unwrap().threshold;
+    let run = run(&model, &frames, Some(DecideAt::AUTO));
+    assert_eq!(run.decisions.len(), 12);
+    for ((decision, posteriors, _), (stance, sampled, _)) in run.decisions.iter().zip(&run.liftoffs)
+    {
+        assert!(sampled);
+        let how = decision.stance.unwrap();
+        let reason = how.early.unwrap();
+        // The first point offline whose confidence passes the threshold.
+        let first = points.iter().find(|&&k| {
+            k < stance.len && {
+                let (class, p) = offline(early.point(k).unwrap(), &frames, stance.start, k + 1);
+                p[class] >= threshold
+            }
+        });
+        match first {
+            Some(&k) => {
+                assert_eq!(how.decided_at, DecidedAt::Offset(k));
+                assert_eq!(
+                    (reason.reason, reason.point),
+                    (EarlyReason::Confident, Some(k))
+                );
+                assert_eq!(reason.threshold, Some(threshold));
+                let (class, expected) =
+                    offline(early.point(k).unwrap(), &frames, stance.start, k + 1);
+                assert_eq!((decision.class, posteriors), (class, &expected));
+                assert!(decision.confidence >= threshold);
+            }
+            None => {
+                assert_eq!(how.decided_at, DecidedAt::Liftoff);
+                assert_eq!(reason.reason, EarlyReason::NotConfident);
+                assert_eq!(reason.point, None);
+            }
+        }
+    }
+}
+
+/// A model decides only at the moments it was trained for: a point it lacks, or `auto` without
+/// points, is refused with how to train one; its whole length is always accepted.
+#[test]
+fn a_moment_the_model_was_not_trained_for_is_refused() {
+    let (whole_only, _) = setup(false);
+    let (with_points, _) = setup_with_points(false, &[4]);
+    let params = ValidSegmentParams::default();
+    let at = |decide_at| OnlineParams {
+        decide_at: Some(decide_at),
+        ..OnlineParams::default()
+    };
+    for (model, decide_at) in [
+        (&whole_only, DecideAt::Frames(4)),
+        (&whole_only, DecideAt::AUTO),
+        (&with_points, DecideAt::Frames(5)),
+    ] {
+        let err = OnlineClassifier::new(model, &params, &at(decide_at), None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("not trained to decide at") && err.contains("--decide-at"),
+            "{decide_at}: {err}"
+        );
+    }
+    for (model, decide_at) in [
+        (&whole_only, DecideAt::Frames(LENGTH - 1)),
+        (&with_points, DecideAt::Frames(4)),
+        (&with_points, DecideAt::AUTO),
+    ] {
+        assert!(
+            OnlineClassifier::new(model, &params, &at(decide_at), None).is_ok(),
+            "{decide_at}"
+        );
+    }
+}
+
 fn run_late(model: &TrainedModel, frames: &[Frame]) -> Vec<DecidedAt> {
-    run(model, frames, Some(40))
+    run(model, frames, Some(DecideAt::Frames(40)))
         .decisions
         .iter()
         .map(|(d, _, _)| d.stance.unwrap().decided_at)
@@ -225,7 +322,7 @@ fn settings_that_do_not_fit_the_model_are_refused() {
     let (frame_model, _) = bench_fixture(3, 0).unwrap();
     let params = ValidSegmentParams::default();
     let decide = OnlineParams {
-        decide_at: Some(5),
+        decide_at: Some(DecideAt::Frames(5)),
         ..OnlineParams::default()
     };
     let err = OnlineClassifier::new(&frame_model, &params, &decide, None)

@@ -7,7 +7,7 @@
 
 use presrs_core::classifier::{
     ClassifierFamily, ClassifierKind, ClassifierModel, FitData, LabeledVectors, RidgeConfig,
-    RidgeFamily, RidgeModel,
+    RidgeFamily, RidgeModel, RidgeRawFamily,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -481,3 +481,109 @@ fn the_pipeline_without_a_pca_equals_standard_scaler_and_ridge_classifier_cv() {
 
 /// `rfft` of 128 points keeps 65 bins.
 const FFT_FEATURES: usize = 65;
+
+/// `ridge_raw` is scikit-learn's `RidgeClassifierCV` on the features as they are (centred for the
+/// intercept, not scaled): `fixtures/ridge/make_raw_fixture.py`, features of very different scales. The
+/// same chosen alpha and leave-one-out curve, coefficients on the raw features within 1e-8, the same
+/// decisions and predictions; `ridge` (standardising) on the same data is another model.
+#[test]
+fn ridge_raw_matches_scikit_learn_without_a_scaler() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/ridge/ridge_raw_sklearn.json"
+    );
+    let fixture: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let config = RidgeConfig {
+        alphas: floats(&fixture["alphas"]),
+    };
+    for case in fixture["cases"].as_array().unwrap() {
+        let name = case["name"].as_str().unwrap();
+        let (dims, n_classes) = (
+            case["dims"].as_u64().unwrap() as usize,
+            case["n_classes"].as_u64().unwrap() as usize,
+        );
+        let x = floats(&case["x_train"]);
+        let classes = indices(&case["y_train"]);
+        let data = FitData {
+            train: LabeledVectors {
+                vectors: &x,
+                classes: &classes,
+            },
+            validation: LabeledVectors {
+                vectors: &[],
+                classes: &[],
+            },
+            n_classes,
+            dims,
+            calibrate: true,
+        };
+        let model = RidgeRawFamily::fit(&config, data).unwrap();
+        assert_eq!(model.alpha(), case["alpha"].as_f64().unwrap(), "{name}");
+        assert!(model.scales().iter().all(|&s| s == 1.0), "{name}");
+        let curve: Vec<f64> = model.loo_errors().iter().map(|&(_, e)| e).collect();
+        assert!(
+            max_difference(&curve, &floats(&case["loo_errors"])) < 1e-9,
+            "{name}: {curve:?}"
+        );
+        let coef: Vec<Vec<f64>> = case["coef"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(floats)
+            .collect();
+        let intercept = floats(&case["intercept"]);
+        for class in 0..n_classes {
+            let (row, sign) = if n_classes == 2 {
+                (0, if class == 0 { -1.0 } else { 1.0 })
+            } else {
+                (class, 1.0)
+            };
+            let expected: Vec<f64> = coef[row].iter().map(|c| sign * c).collect();
+            let ours = model.coefficients(class).unwrap();
+            let scale = expected.iter().fold(1.0f64, |m, c| m.max(c.abs()));
+            assert!(
+                max_difference(ours, &expected) < 1e-8 * scale,
+                "{name} class {class}"
+            );
+            // (the intercept of the centred model, `b - w . mean`)
+            let offset: f64 = ours.iter().zip(model.means()).map(|(w, m)| w * m).sum();
+            let b = model.intercepts()[class] - offset;
+            assert!(
+                (b - sign * intercept[row]).abs() < 1e-7 * (1.0 + intercept[row].abs()),
+                "{name}: intercept {b} vs {}",
+                sign * intercept[row]
+            );
+        }
+        let x_test = floats(&case["x_test"]);
+        let decisions = floats(&case["decision_function"]);
+        let predictions = indices(&case["predict"]);
+        let mut scratch = model.scratch();
+        let mut scores = vec![0.0; n_classes];
+        let columns = if n_classes == 2 { 1 } else { n_classes };
+        for (i, row) in x_test.chunks_exact(dims).enumerate() {
+            model
+                .decisions_into(row, &mut scratch, &mut scores)
+                .unwrap();
+            let expected = &decisions[i * columns..(i + 1) * columns];
+            let ours = if n_classes == 2 {
+                &scores[1..]
+            } else {
+                &scores[..]
+            };
+            assert!(max_difference(ours, expected) < 1e-7, "{name} vector {i}");
+            let predicted = (0..n_classes)
+                .max_by(|&a, &b| scores[a].total_cmp(&scores[b]).then(b.cmp(&a)))
+                .unwrap();
+            assert_eq!(predicted, predictions[i], "{name} vector {i}");
+        }
+        let standardised = RidgeFamily::fit(&config, data).unwrap();
+        assert_ne!(
+            standardised.coefficients(0),
+            model.coefficients(0),
+            "{name}"
+        );
+    }
+    assert_eq!(ClassifierKind::RIDGE_RAW.as_str(), "ridge_raw");
+    assert!(ClassifierKind::RIDGE_RAW.takes_all_features());
+    assert!(!ClassifierKind::RIDGE_RAW.joins_auto());
+}

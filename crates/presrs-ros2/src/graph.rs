@@ -15,6 +15,7 @@ use crate::messages::{DiagnosticArray, StanceEvent, StringMsg, TerrainDecision};
 use crate::names::resolve_topic;
 use crate::options::{NodeOptions, output_qos, ros_type};
 use crate::raw::{RawAdapter, RawCdr};
+use crate::watch::GraphWatch;
 
 /// The poll token of the input reader.
 pub(crate) const INPUT: Token = Token(1);
@@ -43,6 +44,10 @@ pub struct NodeGraph {
     pub(crate) poll: Poll,
     pub(crate) stop: NodeStop,
     pub(crate) options: NodeOptions,
+    /// The input topic, resolved against the namespace (`/robot/left/pressure`).
+    pub(crate) input_topic: String,
+    /// What discovery shows about the input's publishers and the node's name.
+    pub(crate) watch: GraphWatch,
 }
 
 impl std::fmt::Debug for NodeGraph {
@@ -93,6 +98,15 @@ impl NodeGraph {
             .new_node(node_name, ros2_client::NodeOptions::new())
             .map_err(|e| Ros2Error::dds("create the node", e))?;
         let reader = input_reader(&context, &node, options)?;
+        let input_topic = resolve_topic(node.namespace(), &options.input);
+        let (package, type_name) = ros_type(options.input_type);
+        let watch = GraphWatch::new(
+            context.domain_participant(),
+            node.fully_qualified_name(),
+            input_topic.clone(),
+            MessageTypeName::new(package, type_name).dds_msg_type(),
+            reader.qos().clone(),
+        )?;
         let outputs = Outputs {
             decisions: publisher(
                 &mut node,
@@ -130,6 +144,8 @@ impl NodeGraph {
                 waker: Arc::new(waker),
             },
             options: options.clone(),
+            input_topic,
+            watch,
         })
     }
 
@@ -141,6 +157,11 @@ impl NodeGraph {
     /// The node's fully qualified name (`/namespace/name`).
     pub fn fully_qualified_name(&self) -> String {
         self.node.fully_qualified_name()
+    }
+
+    /// The input topic, resolved against the node's namespace.
+    pub fn input_topic(&self) -> &str {
+        &self.input_topic
     }
 }
 

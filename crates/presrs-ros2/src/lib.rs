@@ -21,6 +21,7 @@ pub mod node;
 pub mod options;
 pub mod raw;
 pub mod report;
+pub mod watch;
 
 pub use diagnostics::NodeCounters;
 pub use error::{Result, Ros2Error};

@@ -138,6 +138,17 @@ pub struct TerrainDecision {
     pub liftoff_stamp: Time,
     pub gait: String,
     pub latency_us: f64,
+    /// Early decisions (`--decide-at K` or `auto`): the rule, `fixed` or `auto` (empty without
+    /// `--decide-at`); why then (`fixed`, `confident`, `not_confident`, `ended_first`); the decision
+    /// point whose classifier decided (-1: the whole-stance classifier); the frames after touchdown
+    /// at which it decided; `auto`'s threshold (0 otherwise).
+    pub early_rule: String,
+    pub early_reason: String,
+    pub early_point: i64,
+    pub early_frames: u64,
+    pub early_threshold: f64,
+    /// Frames missing inside the stance up to the sample frame (the event's `gap_frames`).
+    pub gap_frames: u32,
     /// Novelty (a self-contained block: `has_novelty` false and the rest zero without a score).
     pub has_novelty: bool,
     pub unknown: bool,
@@ -178,6 +189,8 @@ pub struct StanceEvent {
     pub sampled: bool,
     pub touchdown_stamp: Time,
     pub liftoff_stamp: Time,
+    /// Liftoff only: frames missing inside the stance (the event's `gap_frames`).
+    pub gap_frames: u32,
 }
 
 impl StanceEvent {
@@ -207,6 +220,7 @@ pub fn decision_message(
     frame_id: &str,
 ) -> TerrainDecision {
     let whole = decision.whole_stance;
+    let early = decision.early;
     let decided_at_frame = whole.map_or(0, |w| w.decided_at_frame);
     // A decision taken at lift-off waited for the lift-off frame; any other came before it.
     let liftoff = whole.filter(|w| w.decided_at == DecisionPoint::Liftoff);
@@ -236,6 +250,14 @@ pub fn decision_message(
         liftoff_stamp: liftoff.map_or(Time::ZERO, |w| stamp_of(stamps, w.decided_at_frame)),
         gait: decision.gait.clone().unwrap_or_default(),
         latency_us: decision.latency_us,
+        early_rule: early.map_or(String::new(), |e| e.early_rule.name().to_owned()),
+        early_reason: early.map_or(String::new(), |e| e.early_reason.name().to_owned()),
+        early_point: early
+            .and_then(|e| e.early_point)
+            .map_or(-1, |k| i64::try_from(k).unwrap_or(i64::MAX)),
+        early_frames: early.map_or(0, |e| e.early_frames),
+        early_threshold: early.and_then(|e| e.early_threshold).unwrap_or(0.0),
+        gap_frames: u32_of(decision.gap_frames),
         has_novelty: decision.novelty.is_some(),
         unknown: decision.novelty.as_ref().is_some_and(|n| n.unknown),
         nearest: decision
@@ -276,6 +298,7 @@ pub fn stance_message(
             sampled: false,
             touchdown_stamp: stamp_of(stamps, td.touchdown_frame),
             liftoff_stamp: Time::ZERO,
+            gap_frames: 0,
         }),
         SessionEvent::Liftoff(lo) => Some(StanceEvent {
             header: header(lo.frame),
@@ -290,6 +313,7 @@ pub fn stance_message(
             sampled: lo.sampled,
             touchdown_stamp: stamp_of(stamps, lo.touchdown_frame),
             liftoff_stamp: stamp_of(stamps, lo.end_frame),
+            gap_frames: u32_of(lo.gap_frames),
         }),
         _ => None,
     }
@@ -333,6 +357,8 @@ mod tests {
             timestamp_us: Some(2_600_000),
             gait: Some("walk".to_owned()),
             whole_stance,
+            early: None,
+            gap_frames: 0,
             novelty: None,
         }
     }
@@ -417,8 +443,10 @@ mod tests {
             partial: false,
             sampled: true,
             frame: 21,
+            gap_frames: 2,
         });
         let s = stance_message(&liftoff, &Tenths, "").unwrap();
+        assert_eq!(s.gap_frames, 2);
         assert_eq!(
             (s.event, s.end_frame, s.frame, s.peak_frame),
             (StanceEvent::LIFTOFF, 19, 21, 14)

@@ -17,11 +17,14 @@ use ros2_client::dds::rustdds::GUID;
 use ros2_client::dds::rustdds::mio1::Events;
 use ros2_client::dds::rustdds::no_key::DeserializedCacheChange;
 
-use crate::diagnostics::{DiagnosticsReport, NodeCounters};
+use crate::diagnostics::{DiagnosticsReport, Finding, NodeCounters, REJECTED_WINDOW};
 use crate::error::Result;
 use crate::graph::{NodeGraph, Outputs};
-use crate::messages::{FrameStamps, StringMsg, Time, decision_message, stance_message, time_of};
+use crate::messages::{
+    DiagnosticStatus, FrameStamps, StringMsg, Time, decision_message, stance_message, time_of,
+};
 use crate::raw::RawCdr;
+use crate::watch::GraphWatch;
 
 /// The node waits for frames at most this long before it looks at its stop flag again.
 const IDLE_POLL: Duration = Duration::from_millis(100);
@@ -37,6 +40,8 @@ pub struct NodeSummary {
     pub session: ConnectionSummary,
     /// The node's own counters (the input as it came, dropped frames, publish failures).
     pub counters: NodeCounters,
+    /// The input topic, resolved against the node's namespace.
+    pub input: String,
 }
 
 /// The stamps of the accepted frames, by their index in the session.
@@ -68,6 +73,13 @@ struct LoopState {
     counters: NodeCounters,
     at_last_report: NodeCounters,
     last_report: Instant,
+    /// The counters at the last reports, oldest first (the rejected share's window).
+    at_reports: VecDeque<NodeCounters>,
+    /// When the last message was taken.
+    last_taken: Option<Instant>,
+    /// The findings said on stderr, by key, at the level said (each is said when it comes or
+    /// grows, not at every report).
+    said: HashMap<String, u8>,
     stamps: StampBook,
     /// The last sequence number of each input publisher.
     sequences: HashMap<GUID, i64>,
@@ -86,6 +98,7 @@ impl LoopState {
         values: &mut Vec<f64>,
     ) -> Input {
         let arrival = Instant::now();
+        self.last_taken = Some(arrival);
         let sequence = i64::from(sample.sequence_number);
         match self.sequences.insert(sample.writer_guid, sequence) {
             Some(last) if sequence > last + 1 => {
@@ -95,8 +108,9 @@ impl LoopState {
             None => {
                 self.counters.publishers += 1;
                 // A writer numbers its samples from 1: those before the first one taken were
-                // published before it matched the node, or lost before the node took one; DDS
-                // (RustDDS: no SAMPLE_LOST status) cannot tell which, so they are not `dropped`.
+                // published before it matched the node, before the node had discovered it, or
+                // lost before the node took one; DDS (RustDDS: no SAMPLE_LOST status) cannot tell
+                // which, so they are not `dropped`.
                 self.counters.before_first += u64::try_from(sequence - 1).unwrap_or(0);
             }
         }
@@ -130,30 +144,80 @@ impl LoopState {
             counters: NodeCounters::default(),
             at_last_report: NodeCounters::default(),
             last_report: Instant::now(),
+            at_reports: VecDeque::new(),
+            last_taken: None,
+            said: HashMap::new(),
             stamps: StampBook::default(),
             sequences: HashMap::new(),
             first_grid: None,
         }
     }
 
-    /// Publishes `/diagnostics` for node `names.0` reading `names.1`: the counters and what changed
-    /// since the last report.
-    fn report(&mut self, outputs: &Outputs, names: (&str, &str), ended: bool) {
-        let message = DiagnosticsReport {
+    /// Publishes `/diagnostics` for node `names.0` reading `names.1`: the counters, what changed
+    /// since the last report, and what `graph` shows; the findings not said yet go to `warn`.
+    fn report(
+        &mut self,
+        outputs: &Outputs,
+        names: (&str, &str),
+        graph: &[Finding],
+        ended: bool,
+        warn: &dyn Fn(&str),
+    ) {
+        let whole_run = NodeCounters::default();
+        let report = DiagnosticsReport {
             node: names.0,
             input: names.1,
             now: &self.counters,
             before: &self.at_last_report,
+            // The final report judges the whole run's rejected share.
+            window_start: if ended {
+                &whole_run
+            } else {
+                self.at_reports.front().unwrap_or(&whole_run)
+            },
             period: self.last_report.elapsed(),
+            silence: self.last_taken.map(|t| t.elapsed()),
+            graph,
             stamp: time_of(wall_clock()),
             ended,
-        }
-        .message();
+        };
+        let findings = report.findings();
+        let message = report.message();
+        self.say(&findings, warn);
         if outputs.diagnostics.publish(message).is_err() {
             self.counters.publish_failures += 1;
         }
         self.at_last_report = self.counters.clone();
+        if self.at_reports.len() == REJECTED_WINDOW {
+            self.at_reports.pop_front();
+        }
+        self.at_reports.push_back(self.counters.clone());
         self.last_report = Instant::now();
+    }
+
+    /// Says on stderr each finding that is new or worse than when it was last said; the session's
+    /// own errors and the counts stderr's summary gives are not repeated.
+    fn say(&mut self, findings: &[Finding], warn: &dyn Fn(&str)) {
+        let quiet = ["error", "dropped", "publish"];
+        let mut now = HashMap::new();
+        for finding in findings.iter().filter(|f| !quiet.contains(&f.key.as_str())) {
+            if self
+                .said
+                .get(&finding.key)
+                .is_none_or(|&l| l < finding.level)
+            {
+                let level = if finding.level == DiagnosticStatus::ERROR {
+                    "error"
+                } else {
+                    "warning"
+                };
+                warn(&format!("{level}: {}", finding.text));
+            }
+            let said = self.said.get(&finding.key).copied().unwrap_or(0);
+            now.insert(finding.key.clone(), said.max(finding.level));
+        }
+        // A finding gone and back is said again.
+        self.said = now;
     }
 }
 
@@ -166,14 +230,16 @@ fn wall_clock() -> Stamp {
 
 /// Runs the node until its stop handle is called (a signal), or its input cannot go on (a fatal
 /// error, as in `presrs stream`): every JSON event also goes to `on_line`, the session's notices to
-/// `notify`. Publishes the final diagnostics, then waits `linger` for subscribers to take the last
-/// messages.
+/// `notify`, what the node finds wrong with its input or the graph (`/diagnostics` WARN and ERROR
+/// findings: docs/ros2.md) to `warn`, once each as it comes. Publishes the final diagnostics, then
+/// waits `linger` for subscribers to take the last messages.
 pub fn run_node(
     graph: NodeGraph,
     model: &TrainedModel,
     profile: &OnlineProfile,
     on_line: &mut dyn FnMut(&str),
     notify: &dyn Fn(&ConnectionNotice),
+    warn: &dyn Fn(&str),
 ) -> Result<NodeSummary> {
     let NodeGraph {
         _context,
@@ -183,11 +249,15 @@ pub fn run_node(
         mut poll,
         stop,
         options,
+        input_topic,
+        watch,
     } = graph;
     let name = node.fully_qualified_name();
     let state = RefCell::new(LoopState::new());
-    let report = |state: &mut LoopState, ended: bool| {
-        state.report(&outputs, (&name, &options.input), ended);
+    let watch = RefCell::new(watch);
+    let report = |state: &mut LoopState, watch: &mut GraphWatch, ended: bool| {
+        let graph = watch.findings();
+        state.report(&outputs, (&name, &input_topic), &graph, ended, warn);
     };
     let mut events = Events::with_capacity(16);
     let next = |values: &mut Vec<f64>, _present: &mut Vec<bool>| loop {
@@ -197,13 +267,13 @@ pub fn run_node(
         {
             let mut s = state.borrow_mut();
             if s.last_report.elapsed() >= options.diagnostics_period {
-                report(&mut s, false);
+                report(&mut s, &mut watch.borrow_mut(), false);
             }
         }
         match reader.try_take_one() {
             Ok(Some(sample)) => {
                 let mut s = state.borrow_mut();
-                return s.take(sample, options.input_type, &options.input, values);
+                return s.take(sample, options.input_type, &input_topic, values);
             }
             Ok(None) => {
                 let due = options
@@ -216,10 +286,7 @@ pub fn run_node(
             Err(err) => {
                 let mut s = state.borrow_mut();
                 s.counters.undecodable += 1;
-                return Input::Skipped(format!(
-                    "{}: cannot read a message: {err:?}",
-                    options.input
-                ));
+                return Input::Skipped(format!("{input_topic}: cannot read a message: {err:?}"));
             }
         }
     };
@@ -231,11 +298,12 @@ pub fn run_node(
     };
     let session = run_frames(model, profile, next, &mut publisher, notify)?;
     let mut s = state.into_inner();
-    report(&mut s, true);
+    report(&mut s, &mut watch.borrow_mut(), true);
     std::thread::sleep(options.linger);
     Ok(NodeSummary {
         session,
         counters: s.counters,
+        input: input_topic,
     })
 }
 

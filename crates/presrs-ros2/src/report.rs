@@ -12,19 +12,22 @@ pub fn joined_event(graph: &NodeGraph) -> Value {
         "event": "joined",
         "node": graph.fully_qualified_name(),
         "domain_id": options.domain_id,
-        "input": options.input,
+        "input": graph.input_topic(),
         "localhost_only": options.localhost_only,
     })
 }
 
 /// The final summary line: the session's counts (as `presrs stream` gives them) and the node's own.
+/// Frames processed (every frame the stance detector took) and decisions made are counted apart: a
+/// stance is decided once, on one frame or a few.
 pub fn summary_text(input: &str, summary: &NodeSummary) -> String {
     let (s, c) = (&summary.session, &summary.counters);
     format!(
-        "{input}: {} messages received, {} frames classified, {} stances, {} decisions ({} fused), \
-         {} rejected frames, {} errors, {} frames dropped before the node took them, {} publish \
-         failures, {} frames sent before the first one taken from their publisher (before it \
-         matched, or lost)",
+        "{input}: {} messages received, {} frames processed, {} stances, {} decisions made ({} \
+         fused), {} rejected frames, {} errors, {} frames dropped before the node took them, {} \
+         publish failures, {} frames sent before the first one taken from their publisher (before \
+         it matched the node, before the node had discovered it, or lost before the first one \
+         taken)",
         c.received,
         s.stats.frames,
         s.stats.stances,

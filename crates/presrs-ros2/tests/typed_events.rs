@@ -110,6 +110,10 @@ fn every_decision_message_holds_the_values_of_its_event_line() {
             msg.decided_at, 0,
             "a one-frame model's decision waited for nothing"
         );
+        assert_eq!(
+            u64::from(msg.gap_frames),
+            line["gap_frames"].as_u64().unwrap_or(0)
+        );
     }
     assert!(decisions >= 6, "{decisions} decisions in 8 stances");
 }
@@ -143,6 +147,10 @@ fn every_stance_message_holds_the_values_of_its_event_line() {
             assert_eq!(msg.peak_load, line["peak_load"].as_f64().unwrap());
             assert_eq!(msg.sampled, line["sampled"].as_bool().unwrap());
             assert_eq!(msg.liftoff_stamp, stamp(&line, "end_frame"));
+            assert_eq!(
+                u64::from(msg.gap_frames),
+                line["gap_frames"].as_u64().unwrap_or(0)
+            );
         } else {
             touchdowns += 1;
             assert_eq!(line["event"], "touchdown");

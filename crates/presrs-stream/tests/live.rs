@@ -342,7 +342,7 @@ fn get_fails(addr: SocketAddr) -> bool {
 #[test]
 fn a_whole_stance_models_decisions_show_what_they_waited_for() {
     use presrs::core::classifier::ClassifierKind;
-    use presrs::core::online::{OnlineParams, OnlineProfile};
+    use presrs::core::online::{DecideAt, OnlineParams, OnlineProfile};
     use presrs::core::sample::SampleKind;
     use presrs::core::stance::summary::SummaryConfig;
     use presrs_stream::live::{ReplayOptions, replay_recording};
@@ -354,18 +354,24 @@ fn a_whole_stance_models_decisions_show_what_they_waited_for() {
             summary: SummaryConfig::default(),
             length: None,
         },
+        // A model decides only where it was trained to: frame 12 after touchdown too.
+        decision_points: vec![12],
         ..presrs::SampleOptions::default()
     };
     let manifest = data.join("jiku-walk/manifest.csv");
     let dataset = presrs::Dataset::load(&manifest, &options, &presrs::Quiet).unwrap();
     let model = common::small_rocket_model(&dataset, ClassifierKind::LDA, 20, options.kind);
+    let model = common::with_points(model, &dataset);
     let path = data.join("jiku-walk").join(&dataset.samples[0].source);
     let (read, _) =
         presrs::dataset::read_corrected(&path, &options.read, options.dead_sensels.as_ref())
             .unwrap();
     let recording = read.recording;
     let last = recording.frame_count() - 1;
-    for (decide_at, said, frame) in [(None, "liftoff", last), (Some(12), "offset", 12)] {
+    for (decide_at, said, frame) in [
+        (None, "liftoff", last),
+        (Some(DecideAt::Frames(12)), "offset", 12),
+    ] {
         let profile = OnlineProfile {
             params: OnlineParams {
                 decide_at,

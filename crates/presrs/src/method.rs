@@ -42,6 +42,21 @@ pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
     &[FeatureKind::FFT2D_POLAR, FeatureKind::GLCM],
 ];
 
+/// The random-convolution families whole stances and series add to an automatic choice, in order of
+/// preference (ties go to the earlier; a time budget cuts from the end), each with whether it is paired
+/// with every classifier (or with the ridge classifiers only): MiniRocket before MultiRocket (on the
+/// shared sets MultiRocket scored lower, and its features cost about twice MiniRocket's: on `icub20`
+/// under the default budget it took the time the scaled MiniRocket needed; Tan et al. 2022 report it
+/// ahead on the UCR/UEA archives, so it is validated when the budget allows), and for each the channels
+/// in their own units before the channels scaled by their spread (aeon's input; on `jiku-walk` the
+/// scaling cost 2-5 points, sensors whose channels differ in units may need it, so both are validated).
+pub const WHOLE_SAMPLE_FEATURES: [(FeatureKind, bool); 4] = [
+    (FeatureKind::ROCKET_UNSCALED, true),
+    (FeatureKind::ROCKET, true),
+    (FeatureKind::MULTIROCKET_UNSCALED, false),
+    (FeatureKind::MULTIROCKET, false),
+];
+
 /// A crop, or `auto`: decided from the image size.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum CropChoice {
@@ -173,10 +188,12 @@ impl Method {
         self.candidates_for(grid, all, &SampleKind::Frame)
     }
 
-    /// [`candidates`](Self::candidates) for samples of `sample`: whole stances and series add
-    /// MiniRocket (`rocket`), with the ridge classifier it is paired with beside the others, first: it
-    /// is the family made for series, and an automatic choice breaks ties by order (validation inside
-    /// one walker's or session's samples often scores every candidate alike).
+    /// [`candidates`](Self::candidates) for samples of `sample`: whole stances and series add the
+    /// random-convolution families ([`WHOLE_SAMPLE_FEATURES`]), first: they are the families made for
+    /// series, and an automatic choice breaks ties by order (validation inside one walker's or
+    /// session's samples often scores every candidate alike). Each is paired with the ridge
+    /// classifiers first (`ridge_raw`, then `ridge`: the pairing the papers use), then, for MiniRocket,
+    /// with the others (MultiRocket with the ridges only, unless `all`, to bound the search's cost).
     pub fn candidates_for(
         &self,
         grid: Grid,
@@ -196,11 +213,18 @@ impl Method {
         };
         let mut out = Vec::new();
         if !sample.is_frame() && (all || self.features == FeatureChoice::Auto) {
-            let rocket = FeatureKind::ROCKET.default_config();
-            let ridge =
-                (all || self.classifier == ClassifierChoice::Auto).then_some(ClassifierKind::RIDGE);
-            for &classifier in classifiers.iter().chain(&ridge) {
-                out.push(self.config(grid, rocket.clone(), classifier.default_config())?);
+            let auto_classifier = all || self.classifier == ClassifierChoice::Auto;
+            for (kind, every_classifier) in WHOLE_SAMPLE_FEATURES {
+                let features = kind.default_config();
+                let ridges = [ClassifierKind::RIDGE_RAW, ClassifierKind::RIDGE];
+                let paired: Vec<ClassifierKind> = match (auto_classifier, all || every_classifier) {
+                    (false, _) => classifiers.clone(),
+                    (true, false) => ridges.to_vec(),
+                    (true, true) => ridges.iter().chain(&classifiers).copied().collect(),
+                };
+                for classifier in paired {
+                    out.push(self.config(grid, features.clone(), classifier.default_config())?);
+                }
             }
         }
         let given = self.preprocess.intensity;
@@ -510,31 +534,55 @@ mod tests {
         };
         let auto = Method::default();
         let frame = auto.candidates(grid, false).unwrap();
-        assert!(
-            frame
-                .iter()
-                .all(|c| c.config().features.kind() != Some(FeatureKind::ROCKET))
-        );
+        let learned = |c: &&CheckedTrainConfig| c.config().features.learns();
+        assert!(frame.iter().filter(learned).count() == 0);
         let whole = auto.candidates_for(grid, false, &stance).unwrap();
-        let rocket: Vec<ClassifierKind> = whole
-            .iter()
-            .filter(|c| c.config().features.kind() == Some(FeatureKind::ROCKET))
-            .map(|c| c.config().classifier.kind())
-            .collect();
-        let mut expected = ClassifierKind::auto_candidates();
-        expected.push(ClassifierKind::RIDGE);
-        assert_eq!(rocket, expected);
-        assert_eq!(whole.len(), frame.len() + expected.len());
-        // Costly: after every cheap family.
-        let first_rocket = whole
-            .iter()
-            .position(|c| c.config().features.kind() == Some(FeatureKind::ROCKET))
-            .unwrap();
-        assert!(
-            whole[..first_rocket]
+        let paired = |kind: FeatureKind| -> Vec<ClassifierKind> {
+            whole
                 .iter()
-                .all(|c| !c.config().features.learns())
-        );
+                .filter(|c| c.config().features.kind() == Some(kind))
+                .map(|c| c.config().classifier.kind())
+                .collect()
+        };
+        let ridges = vec![ClassifierKind::RIDGE_RAW, ClassifierKind::RIDGE];
+        let mut every = ridges.clone();
+        every.extend(ClassifierKind::auto_candidates());
+        // MiniRocket (scaled or not) with the ridges first, then every classifier; MultiRocket with
+        // the ridges only.
+        for kind in [FeatureKind::ROCKET, FeatureKind::ROCKET_UNSCALED] {
+            assert_eq!(paired(kind), every, "{}", kind.as_str());
+        }
+        for kind in [FeatureKind::MULTIROCKET, FeatureKind::MULTIROCKET_UNSCALED] {
+            assert_eq!(paired(kind), ridges, "{}", kind.as_str());
+        }
+        let added = 2 * every.len() + 2 * ridges.len();
+        assert_eq!(whole.len(), frame.len() + added);
+        // First, in the order of preference: MiniRocket on the channels as they are, with ridge on
+        // the features as they are (aeon's peer).
+        let first = whole[0].config();
+        assert_eq!(first.features.kind(), Some(FeatureKind::ROCKET_UNSCALED));
+        assert_eq!(first.classifier.kind(), ClassifierKind::RIDGE_RAW);
+        // Both MiniRockets before either MultiRocket (a budget cuts the costlier family first).
+        let family_of = |c: &CheckedTrainConfig| c.config().features.kind();
+        let last_minirocket = whole[..added]
+            .iter()
+            .rposition(|c| family_of(c) == Some(FeatureKind::ROCKET))
+            .unwrap();
+        assert!(whole[..=last_minirocket].iter().all(|c| {
+            [FeatureKind::ROCKET, FeatureKind::ROCKET_UNSCALED].contains(&family_of(c).unwrap())
+        }));
+        assert_eq!(last_minirocket + 1, 2 * every.len());
+        assert!(whole[..added].iter().all(|c| c.config().features.learns()));
+        assert!(whole[added..].iter().filter(learned).count() == 0);
+        // A fixed classifier pairs with every family; `all` pairs every classifier with every family.
+        let svm = Method {
+            classifier: ClassifierChoice::Kind(ClassifierKind::SVM),
+            ..Method::default()
+        };
+        let with_svm = svm.candidates_for(grid, false, &stance).unwrap();
+        assert_eq!(with_svm.iter().filter(learned).count(), 4);
+        let compare = auto.candidates_for(grid, true, &stance).unwrap();
+        assert_eq!(compare.iter().filter(learned).count(), 4 * every.len());
         // A fixed method stays fixed; a series adds rocket too.
         let fixed = Method {
             features: FeatureChoice::Kinds(vec![FeatureKind::FFT1D]),

@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use presrs::core::classifier::ClassifierKind;
+use presrs::core::online::DecideAt;
 use presrs::core::pipeline::{TrainConfig, train};
 use presrs::core::sample::SampleKind;
 use presrs::core::stance::ValidSegmentParams;
@@ -41,17 +42,20 @@ fn write_movies(dir: &Path, config: &SimConfig) -> PathBuf {
 
 /// A whole-stance model (168 MiniRocket features, linear discriminant) of the movies, with the online
 /// profile learned from them and the terrain-to-gait table `table`, saved as a model file.
-fn stance_model(manifest: &Path, table: &BTreeMap<String, String>) -> PathBuf {
+/// With classifiers for the decision points `points` (frames after touchdown).
+fn stance_model(manifest: &Path, table: &BTreeMap<String, String>, points: &[usize]) -> PathBuf {
     let options = SampleOptions {
         kind: SampleKind::Stance {
             summary: SummaryConfig::default(),
             length: None,
         },
+        decision_points: points.to_vec(),
         ..SampleOptions::default()
     };
     let dataset = Dataset::load(manifest, &options, &Quiet).unwrap();
     assert!(dataset.samples.len() >= 40, "{}", dataset.samples.len());
     let model = common::small_rocket_model(&dataset, ClassifierKind::LDA, 10, dataset.sample);
+    let model = common::with_points(model, &dataset);
     let mut profile = presrs::train::manifest_online_profile(
         manifest,
         &SampleOptions::default(),
@@ -61,12 +65,12 @@ fn stance_model(manifest: &Path, table: &BTreeMap<String, String>) -> PathBuf {
     profile.gait_table = table.clone();
     let mut file = ModelFile::new(model, Provenance::default());
     file.online = Some(profile);
-    let path = manifest.with_file_name("stance-model.json");
+    let path = manifest.with_file_name(format!("stance-model{points:?}.json"));
     save_model(&path, &file).unwrap();
     path
 }
 
-fn track_options(model: &Path, decide_at: Option<usize>) -> TrackOptions {
+fn track_options(model: &Path, decide_at: Option<DecideAt>) -> TrackOptions {
     TrackOptions {
         seed: 2,
         repeats: 1,
@@ -89,8 +93,8 @@ fn a_whole_stance_model_decides_on_the_track_and_the_gait_follows_its_table() {
         .into_iter()
         .map(|(t, g)| (t.to_owned(), g.to_owned()))
         .collect();
-    let model = stance_model(&manifest, &table);
-    for decide_at in [None, Some(4)] {
+    let model = stance_model(&manifest, &table, &[4]);
+    for decide_at in [None, Some(DecideAt::Frames(4))] {
         let outcome = compare_on_track(
             &config,
             "wood:2,grass:2",
@@ -153,9 +157,46 @@ fn decide_at_with_a_one_frame_model_is_refused() {
     let model = train(&images, &[], &config_paper).unwrap();
     let path = dir.path().join("frame-model.json");
     save_model(&path, &ModelFile::new(model, Provenance::default())).unwrap();
-    let err = compare_on_track(&config, "wood:1", &track_options(&path, Some(3)), &Quiet)
-        .unwrap_err()
-        .to_string();
+    let err = compare_on_track(
+        &config,
+        "wood:1",
+        &track_options(&path, Some(DecideAt::Frames(3))),
+        &Quiet,
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("--decide-at 3"), "{err}");
     assert!(err.contains("whole-stance models"), "{err}");
+}
+
+/// A whole-stance model decides only at the moments it was trained for: the gait loop refuses a
+/// `decide_at` (or `auto`) it has no classifier for, saying how to train one.
+#[test]
+fn decide_at_a_moment_the_model_was_not_trained_for_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = SimConfig::default();
+    let manifest = write_movies(dir.path(), &config);
+    let table: BTreeMap<String, String> = [("wood", "G1"), ("grass", "G3")]
+        .into_iter()
+        .map(|(t, g)| (t.to_owned(), g.to_owned()))
+        .collect();
+    let model = stance_model(&manifest, &table, &[]);
+    for (decide_at, said) in [
+        (DecideAt::Frames(4), "--decide-at 4"),
+        (DecideAt::AUTO, "--decide-at auto"),
+    ] {
+        let err = compare_on_track(
+            &config,
+            "wood:1",
+            &track_options(&model, Some(decide_at)),
+            &Quiet,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("not trained to decide at"), "{err}");
+        assert!(
+            err.contains(said) && err.contains("--sample stance"),
+            "{err}"
+        );
+    }
 }

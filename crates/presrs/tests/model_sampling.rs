@@ -87,6 +87,7 @@ fn train_one_contact(manifest: &Path) -> presrs::train::profile::TrainedFile {
             },
         },
         command: None,
+        decide_at: presrs::train::early::DecisionPoints::Whole,
     };
     train_model_file(&request, &Quiet, &mut |_, _| {}).unwrap()
 }

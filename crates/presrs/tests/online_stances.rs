@@ -13,7 +13,8 @@ use presrs::classify::{Classified, ClassifyOptions, classify_recording};
 use presrs::core::Recording;
 use presrs::core::classifier::ClassifierKind;
 use presrs::core::online::{
-    DecidedAt, Decision, DecisionKind, OnlineClassifier, OnlineEvent, OnlineParams, OnlineProfile,
+    DecideAt, DecidedAt, Decision, DecisionKind, OnlineClassifier, OnlineEvent, OnlineParams,
+    OnlineProfile,
 };
 use presrs::core::pipeline::{Session, TrainedModel};
 use presrs::core::sample::SampleKind;
@@ -70,7 +71,7 @@ fn setup_with(classifier: ClassifierKind) -> (TrainedModel, Vec<(PathBuf, Record
 fn stream(
     model: &TrainedModel,
     recording: &Recording,
-    decide_at: Option<usize>,
+    decide_at: Option<DecideAt>,
 ) -> Vec<(Decision, Vec<f64>, serde_json::Value)> {
     let profile = OnlineProfile {
         params: OnlineParams {
@@ -189,17 +190,25 @@ fn a_ridge_model_without_a_pca_decides_online_as_offline() {
 
 #[test]
 fn decide_at_k_is_the_offline_classification_of_the_stance_cut_at_k() {
-    let (model, movies) = setup();
-    let SampleKind::Stance { summary, length } = model.sample() else {
+    let k = 12;
+    let (_, movies) = setup();
+    let options = SampleOptions {
+        decision_points: vec![k],
+        ..options()
+    };
+    let dataset = Dataset::load(&shared("real/jiku-walk/manifest.csv"), &options, &Quiet).unwrap();
+    let whole = common::small_rocket_model(&dataset, ClassifierKind::LDA, 20, options.kind);
+    let model = common::with_points(whole, &dataset);
+    let SampleKind::Stance { summary, .. } = model.sample() else {
         panic!("a whole-stance model");
     };
-    let length = length.unwrap();
-    let k = 12;
-    let mut session = model.session();
+    // The classifier trained on the stances cut at K decides there, on samples of K + 1 frames.
+    let length = k + 1;
+    let mut session = model.early().unwrap().point(k).unwrap().session();
     for (path, recording) in movies.iter().step_by(7) {
         let name = path.display().to_string();
         assert!(recording.frame_count() > k + 1, "{name}");
-        let online = stream(&model, recording, Some(k));
+        let online = stream(&model, recording, Some(DecideAt::Frames(k)));
         let [(decision, posteriors, line)] = online.as_slice() else {
             panic!("{name}: one decision, got {online:?}");
         };
@@ -213,6 +222,14 @@ fn decide_at_k_is_the_offline_classification_of_the_stance_cut_at_k() {
         assert_eq!(decision.frames_used, k + 1);
         assert_eq!(line["decided_at"], "offset");
         assert_eq!(line["decided_at_frame"], k);
+        assert_eq!(
+            (
+                &line["early_rule"],
+                &line["early_reason"],
+                &line["early_point"]
+            ),
+            (&"fixed".into(), &"fixed".into(), &k.into())
+        );
         let frames: Vec<_> = (0..=k).map(|i| recording.frame(i).unwrap()).collect();
         let cut = summarise(&frames, &summary).unwrap();
         let (padded, _) = pad_to(&cut.view(), length).unwrap();

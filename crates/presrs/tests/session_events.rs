@@ -3,10 +3,10 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use presrs::core::online::DecisionKind;
+use presrs::core::online::{DecisionKind, EarlyReason};
 use presrs::session::{
-    Classification, DecisionPoint, End, ErrorEvent, Liftoff, NoveltyVerdict, Posteriors,
-    SessionEvent, Touchdown, WholeStance,
+    Classification, DecisionPoint, EarlyDecisionEvent, EarlyRule, End, ErrorEvent, Liftoff,
+    NoveltyVerdict, Posteriors, SessionEvent, Touchdown, WholeStance,
 };
 
 fn decision(whole_stance: Option<WholeStance>) -> Classification {
@@ -29,6 +29,8 @@ fn decision(whole_stance: Option<WholeStance>) -> Classification {
         timestamp_us: None,
         gait: Some("G1".to_owned()),
         whole_stance,
+        early: None,
+        gap_frames: 0,
         novelty: None,
     }
 }
@@ -73,6 +75,40 @@ fn golden() -> Vec<(SessionEvent, &'static str)> {
             r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"offset","decided_at_frame":32,"cut":false}"#,
         ),
         (
+            SessionEvent::Classification(Classification {
+                early: Some(EarlyDecisionEvent {
+                    early_rule: EarlyRule::Auto,
+                    early_reason: EarlyReason::Confident,
+                    early_point: Some(12),
+                    early_frames: 12,
+                    early_threshold: Some(0.875),
+                }),
+                ..decision(Some(WholeStance {
+                    decided_at: DecisionPoint::Offset,
+                    decided_at_frame: 32,
+                    cut: false,
+                }))
+            }),
+            r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"offset","decided_at_frame":32,"cut":false,"early_rule":"auto","early_reason":"confident","early_point":12,"early_frames":12,"early_threshold":0.875}"#,
+        ),
+        (
+            SessionEvent::Classification(Classification {
+                early: Some(EarlyDecisionEvent {
+                    early_rule: EarlyRule::Fixed,
+                    early_reason: EarlyReason::EndedFirst,
+                    early_point: None,
+                    early_frames: 9,
+                    early_threshold: None,
+                }),
+                ..decision(Some(WholeStance {
+                    decided_at: DecisionPoint::Liftoff,
+                    decided_at_frame: 29,
+                    cut: false,
+                }))
+            }),
+            r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"liftoff","decided_at_frame":29,"cut":false,"early_rule":"fixed","early_reason":"ended_first","early_point":null,"early_frames":9,"early_threshold":null}"#,
+        ),
+        (
             SessionEvent::Classification(unknown_decision()),
             r#"{"event":"classification","kind":"single","stance":3,"label":"unknown","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":null,"unknown":true,"nearest":"sand","novelty":3.5,"novelty_threshold":2.25}"#,
         ),
@@ -87,8 +123,32 @@ fn golden() -> Vec<(SessionEvent, &'static str)> {
                 partial: false,
                 sampled: true,
                 frame: 36,
+                gap_frames: 0,
             }),
             r#"{"event":"liftoff","stance":3,"touchdown_frame":20,"end_frame":34,"len":14,"peak_frame":27,"peak_load":1234.5,"partial":false,"sampled":true,"frame":36}"#,
+        ),
+        // Frames missing inside the stance (a gap in the input's frame times): said, never hidden.
+        (
+            SessionEvent::Classification(Classification {
+                gap_frames: 4,
+                ..decision(None)
+            }),
+            r#"{"event":"classification","kind":"single","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","gap_frames":4}"#,
+        ),
+        (
+            SessionEvent::Liftoff(Liftoff {
+                stance: 3,
+                touchdown_frame: 20,
+                end_frame: 30,
+                len: 10,
+                peak_frame: 27,
+                peak_load: 1234.5,
+                partial: false,
+                sampled: true,
+                frame: 32,
+                gap_frames: 4,
+            }),
+            r#"{"event":"liftoff","stance":3,"touchdown_frame":20,"end_frame":30,"len":10,"peak_frame":27,"peak_load":1234.5,"partial":false,"sampled":true,"frame":32,"gap_frames":4}"#,
         ),
         (
             SessionEvent::error("input frame 5 rejected: 2 values are not finite", false),
@@ -170,4 +230,99 @@ fn every_key_of_every_event_is_documented_in_the_protocol() {
             );
         }
     }
+}
+
+/// The events of a session over a synthetic walk (8 stances of 14 frames, 20 frames between them,
+/// frame `i` stamped `10 i` ms), with the frames `missing` (original indices) never sent.
+fn events_without(missing: std::ops::Range<usize>) -> Vec<SessionEvent> {
+    use presrs::core::online::{Calibration, OnlineProfile};
+    use presrs::core::testing::{bench_fixture, synthetic_stream};
+    use presrs::session::{Input, SessionObserver, run_frames};
+    use rand::SeedableRng;
+
+    #[derive(Default)]
+    struct Kept(Vec<SessionEvent>);
+    impl SessionObserver for Kept {
+        fn event(&mut self, event: &SessionEvent) -> bool {
+            self.0.push(event.clone());
+            true
+        }
+    }
+
+    let (model, _) = bench_fixture(3, 0).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+    let frames = synthetic_stream(8, &mut rng);
+    let load_range = frames
+        .iter()
+        .map(|f| f.values().iter().sum::<f64>())
+        .fold(0.0, f64::max);
+    let profile = OnlineProfile {
+        calibration: Some(Calibration {
+            baseline: 0.0,
+            noise: 1.0,
+            load_range,
+        }),
+        ..OnlineProfile::default()
+    };
+    let mut sent = frames
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !missing.contains(i));
+    let next = |values: &mut Vec<f64>, _: &mut Vec<bool>| match sent.next() {
+        Some((i, frame)) => {
+            values.clear();
+            values.extend_from_slice(frame.values());
+            Input::Frame {
+                grid: frame.grid(),
+                has_mask: false,
+                timestamp_us: Some(i as u64 * 10_000),
+                arrival: std::time::Instant::now(),
+            }
+        }
+        None => Input::End,
+    };
+    let mut kept = Kept::default();
+    run_frames(&model, &profile, next, &mut kept, &|_| {}).unwrap();
+    kept.0
+}
+
+#[test]
+fn a_stance_with_frames_missing_is_decided_with_the_gap_stated() {
+    // Stance 3 (frames 122-135 as sent) loses 3 frames right after its touchdown, as when its
+    // publisher restarts during the step.
+    let whole = events_without(0..0);
+    let touchdown = whole
+        .iter()
+        .find_map(|e| match e {
+            SessionEvent::Touchdown(td) if td.touchdown_frame >= 120 => Some(td.touchdown_frame),
+            _ => None,
+        })
+        .unwrap();
+    let first_missing = touchdown as usize + 2;
+    let events = events_without(first_missing..first_missing + 3);
+    let (mut decided, mut ended) = (0, 0);
+    for event in &events {
+        match event {
+            SessionEvent::Classification(d) => {
+                let holed = d.touchdown_frame == touchdown && d.sample_frame >= touchdown + 2;
+                assert_eq!(d.gap_frames, if holed { 3 } else { 0 }, "{d:?}");
+                decided += u64::from(holed);
+                let line: serde_json::Value = serde_json::from_str(&event.to_line()).unwrap();
+                assert_eq!(line.get("gap_frames").is_some(), holed);
+            }
+            SessionEvent::Liftoff(lo) => {
+                let holed = lo.touchdown_frame == touchdown;
+                assert_eq!(lo.gap_frames, if holed { 3 } else { 0 }, "{lo:?}");
+                ended += u64::from(holed);
+            }
+            _ => {}
+        }
+    }
+    assert_eq!((decided, ended), (1, 1), "{events:?}");
+    // Without a gap nothing says one.
+    assert!(whole.iter().all(|e| match e {
+        SessionEvent::Classification(d) => d.gap_frames == 0,
+        SessionEvent::Liftoff(lo) => lo.gap_frames == 0,
+        _ => true,
+    }));
 }

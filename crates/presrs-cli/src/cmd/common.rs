@@ -25,7 +25,9 @@ use crate::printer::progress_lines::{ProgressLines, progress_interval};
 pub struct PipelineArgs {
     /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
     /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes), rocket
-    /// (MiniRocket over a series: rows are channels; with --sample stance or series); join
+    /// (MiniRocket over a series: rows are channels, each scaled by its spread; with --sample stance or
+    /// series), rocket_unscaled (the channels in their own units), multirocket, multirocket_unscaled
+    /// (MultiRocket: the series and its first differences, four poolings); join
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
     /// by group or condition (--validate-by), among every family: the FFT ones first, then fft1d after
     /// sqrt and log1p, then glcm and fft2d_polar+glcm, as far as --budget allows).
@@ -34,7 +36,8 @@ pub struct PipelineArgs {
     pub features: FeatureChoice,
     /// Classifier: pwe (Parzen window, the paper's), mle (Gaussian, shrunk full covariance per class),
     /// lda (shared covariance), svm (one-vs-one, linear or RBF, C and gamma chosen on validation), knn,
-    /// ridge (one-vs-rest, for rocket; it takes every feature, standardised, with no PCA step); or auto (the default: chosen by validation inside the training
+    /// ridge (one-vs-rest, for the rocket families; it takes every feature, standardised, with no PCA
+    /// step), ridge_raw (the same on centred, unscaled features); or auto (the default: chosen by validation inside the training
     /// data among the first five).
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
@@ -316,6 +319,7 @@ impl SampleArgs {
             segment: self.stance.segment_params()?,
             one_sample_per_file: self.stance.one_sample_per_file,
             frame_period_s: self.stance.frame_period,
+            decision_points: Vec::new(),
         })
     }
 

@@ -79,12 +79,19 @@ pub struct EvalArgs {
     /// evaluated on the same images with the same draws (bench/real/ does).
     #[arg(long, value_name = "DIR")]
     pub export_draws: Option<PathBuf>,
+    /// With --sample stance: evaluate early decisions at these frames after touchdown
+    /// (`8,16,32,whole`, or `auto`: 10-50 % of the median stance), each fold training a classifier
+    /// per point and `auto`'s threshold, beside the one-frame model at the same offsets: accuracy
+    /// against decision time, and `auto`'s accuracy and mean decision time.
+    #[arg(long, value_name = "K,...,whole|auto",
+          value_parser = |t: &str| t.parse::<presrs::train::early::DecisionPoints>())]
+    pub decide_at: Option<presrs::train::early::DecisionPoints>,
     /// Hold classes out of training in turn, on the evaluation's draws, and measure the novelty score
     /// (`unknown`): a count (6: spread over the sorted labels) or names (a,b). Prints, per held-out
     /// class, the AUROC of the score (held-out against known test samples), the share of held-out
     /// samples decided as a known class with confidence >= 0.9, and the share of known test samples
     /// decided unknown (`leave_class_out` with --json; a section of --report).
-    #[arg(long, value_name = "N|CLASSES", conflicts_with_all = ["compare", "perturb", "export_draws"], value_parser = |t: &str| t.parse::<HeldOutClasses>())]
+    #[arg(long, value_name = "N|CLASSES", conflicts_with_all = ["compare", "perturb", "export_draws", "decide_at"], value_parser = |t: &str| t.parse::<HeldOutClasses>())]
     pub leave_class_out: Option<HeldOutClasses>,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
@@ -99,6 +106,9 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     args.samples.check_settings("eval")?;
     if let Some(held_out) = &args.leave_class_out {
         return run_leave_class_out(args, held_out, out);
+    }
+    if let Some(points) = &args.decide_at {
+        return run_early(args, points, out);
     }
     if args.samples.choice()?.is_auto() {
         return run_racing(args, out);
@@ -156,6 +166,55 @@ fn print_memory(eval: &EvalJson<'_>, out: &mut dyn Write) -> anyhow::Result<()> 
         writeln!(out, "{}", memory.line())?;
     }
     Ok(())
+}
+
+/// `--decide-at`: early decisions on the protocol's draws (`presrs::eval::early`).
+fn run_early(
+    args: &EvalArgs,
+    points: &presrs::train::early::DecisionPoints,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    let progress = TerminalProgress::default();
+    let options = args.samples.options()?;
+    let dataset = presrs::train::profile::load_with_points(
+        &args.manifest,
+        options.clone(),
+        points,
+        &progress,
+    )?;
+    print_load_warnings(&dataset);
+    let eval_options = eval_options(args, &dataset);
+    let setup = EvalSetup::new(&dataset, &eval_options)?;
+    for warning in &setup.warnings {
+        stderr_line!("warning: {warning}");
+    }
+    let frames =
+        presrs::eval::early::FrameReadings::load(&args.manifest, &options, &dataset, &progress)?;
+    let early = presrs::eval::early::evaluate_early(&setup, Some(&frames), &progress)?;
+    if let Some(dir) = &args.report {
+        let note = format!(
+            "{}, {} fold(s)",
+            eval_options.holdout.describe(),
+            early.folds
+        );
+        let line = std::env::args().collect::<Vec<_>>().join(" ");
+        let path = presrs::report::write_early_report(
+            &dataset,
+            early.curve(note),
+            &options,
+            Some(&line),
+            dir,
+        )?;
+        stderr_line!("report written to {}", path.display());
+    }
+    if args.json {
+        return write_json(out, &early);
+    }
+    Ok(write!(
+        out,
+        "{}",
+        crate::printer::early_table::early_table(&early)
+    )?)
 }
 
 /// `--leave-class-out` (the samples as named, frames with `--sample auto`): the table, or

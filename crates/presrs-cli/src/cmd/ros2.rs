@@ -1,6 +1,7 @@
 //! `presrs ros2`: the ROS 2 node ([`presrs_ros2`]): its command line, the call, and what goes to stdout
 //! (the `joined` line, the JSON events) and stderr (notices, the summary).
 
+use presrs_core::online::DecideAt;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -75,10 +76,10 @@ pub struct Ros2Args {
     #[arg(long, value_delimiter = ',', value_name = "TERRAIN=GAIT",
           value_parser = |t: &str| crate::args::values::name_value(t, "TERRAIN=GAIT"))]
     pub gait: Vec<(String, String)>,
-    /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at
-    /// lift-off], as `presrs stream --decide-at`.
-    #[arg(long, value_name = "K")]
-    pub decide_at: Option<usize>,
+    /// A whole-stance model decides K frames after touchdown, on the stance so far, or at its first
+    /// confident decision point (`auto`) [default: at lift-off], as `presrs stream --decide-at`.
+    #[arg(long, value_name = "K|auto")]
+    pub decide_at: Option<DecideAt>,
 }
 
 impl Ros2Args {
@@ -144,13 +145,15 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let stop = graph.stop_handle();
     let signal_thread = signals.on_first(move || stop.stop());
     let log = |notice: &_| stderr_line!("presrs ros2: {}", notice_text(notice));
+    // What the node finds wrong with its input or the graph (its /diagnostics WARN and ERROR).
+    let warn = |text: &str| stderr_line!("presrs ros2: {text}");
     // A closed stdout does not stop the node: its outputs are the topics.
     let mut print = |line: &str| drop(writeln!(out, "{line}").and_then(|()| out.flush()));
-    let summary = run_node(graph, &file.model, &profile, &mut print, &log)?;
+    let summary = run_node(graph, &file.model, &profile, &mut print, &log, &warn)?;
     if let Some(signal) = signal_thread.close() {
         stderr_line!("presrs ros2: stopped by {signal}");
     }
-    let text = presrs_ros2::summary_text(&options.input, &summary);
+    let text = presrs_ros2::summary_text(&summary.input, &summary);
     stderr_line!("presrs ros2: {text}");
     anyhow::ensure!(
         !summary.session.fatal,

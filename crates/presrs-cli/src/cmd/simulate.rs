@@ -4,6 +4,7 @@
 //!
 //! With `--track SPEC` it writes no data set but runs the terrain-to-gait comparison ([`presrs::sim::gait`], [`run_track_comparison`]).
 
+use presrs_core::online::DecideAt;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -86,9 +87,10 @@ pub struct SimulateArgs {
     /// variant such as G3@0.62 [default: the second gait of the configuration, G2].
     #[arg(long, requires = "adaptive")]
     pub start_gait: Option<String>,
-    /// With a whole-stance --adaptive model: decide K frames after touchdown instead of at lift-off.
-    #[arg(long, value_name = "K", requires = "adaptive")]
-    pub decide_at: Option<usize>,
+    /// With a whole-stance --adaptive model: decide K frames after touchdown, or at its first
+    /// confident decision point (`auto`), instead of at lift-off (a moment the model was trained for).
+    #[arg(long, value_name = "K|auto", requires = "adaptive")]
+    pub decide_at: Option<DecideAt>,
     /// Runs per policy, at least 1 (seeds --seed, --seed + 1, ...); every policy runs on the same seeds.
     #[arg(long, default_value_t = 3, requires = "track", value_parser = super::usage::positive_count)]
     pub repeats: usize,

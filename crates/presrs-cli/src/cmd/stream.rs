@@ -14,6 +14,7 @@
 //! `end` line), the server stops (each connection gets its `end` line, then a `stopped` line on stdout);
 //! a second signal ends the process at once.
 
+use presrs_core::online::DecideAt;
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -82,9 +83,11 @@ pub struct StreamArgs {
     /// Classify the K-th frame after touchdown (overrides the profile).
     #[arg(long)]
     pub sample_offset: Option<usize>,
-    /// A whole-stance model decides K frames after touchdown, on the stance so far [default: at lift-off].
-    #[arg(long, value_name = "K")]
-    pub decide_at: Option<usize>,
+    /// A whole-stance model decides K frames after touchdown, on the stance so far, or at its first
+    /// decision point confident enough (`auto`) [default: at lift-off]. Only a moment the model was
+    /// trained for (`presrs train --decide-at`), or its whole length.
+    #[arg(long, value_name = "K|auto")]
+    pub decide_at: Option<DecideAt>,
     /// Also fuse the posteriors of these frame offsets after touchdown, comma separated (e.g. 4,5,6,7,8).
     #[arg(long, value_delimiter = ',')]
     pub fuse: Vec<usize>,

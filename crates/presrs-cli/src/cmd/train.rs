@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::train::TrainOptions;
+use presrs::train::early::DecisionPoints;
 use presrs::train::profile::{
     GaitTableSim, ProfileChoice, ProfileRequest, TrainRequest, train_model_file,
 };
@@ -71,6 +72,14 @@ pub struct TrainArgs {
     #[arg(long, value_name = "none|FROM:TO:STEP", default_value = presrs::sim::gait::GaitSweep::DEFAULT_TEXT,
           value_parser = presrs::sim::gait::parse_gait_sweep)]
     pub gait_sweep: presrs::sim::gait::GaitSweep,
+    /// With --sample stance: also train classifiers for decisions before lift-off, at these frames after
+    /// touchdown (each on the training stances cut there, with the whole stance's method, or its own
+    /// automatic choice when the method is automatic), and the confidence threshold of `stream
+    /// --decide-at auto`: `8,16,32,whole`, or `auto` (points at 10-50 % of the median training
+    /// stance). `whole`: the lift-off only.
+    #[arg(long, value_name = "K,...,whole|auto", default_value = "whole",
+          value_parser = |t: &str| t.parse::<DecisionPoints>())]
+    pub decide_at: DecisionPoints,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -108,6 +117,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         samples: args.samples.options_or_frames()?,
         whole: args.samples.whole_sample(),
         train: options,
+        decide_at: args.decide_at.clone(),
         profile: ProfileRequest {
             choice,
             gait_table: args.gait_table.as_deref(),

@@ -155,9 +155,23 @@ pub fn selection_costs_line(selections: &[presrs_core::selection::Selection]) ->
     } else {
         "candidates scored on all the training samples".to_owned()
     };
+    let over: Vec<f64> = costs
+        .iter()
+        .filter_map(|c| c.over_budget_seconds())
+        .collect();
+    let bound = match (first.budget_seconds, over.len()) {
+        (None, _) => "no time budget".to_owned(),
+        (Some(budget), 0) => format!("each model's within its budget of {budget:.0} s"),
+        (Some(budget), n) => format!(
+            "{n} of {} models' scoring ended past the budget of {budget:.0} s, by {:.1} s at most: \
+             the first candidates are scored whatever the budget",
+            costs.len(),
+            over.iter().copied().fold(0.0, f64::max)
+        ),
+    };
     Some(format!(
-        "time over {} models: {scored}; scoring {:.1} s (features {:.1} s; each model's budget bounds \
-         it), training the winners {:.1} s, not covered by the budget",
+        "time over {} models: {scored}; scoring {:.1} s (features {:.1} s; {bound}), training the \
+         winners {:.1} s, not covered by the budget",
         costs.len(),
         sum(|c| c.scoring_seconds),
         sum(|c| c.features_seconds),

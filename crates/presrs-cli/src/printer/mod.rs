@@ -3,6 +3,7 @@
 //! decides anything: the workflows are `presrs`'s.
 
 pub mod classify_document;
+pub mod early_table;
 pub mod eval_tables;
 pub mod feature_csv;
 pub mod inspect_table;

@@ -72,9 +72,13 @@ pub fn cost_line(selection: &Selection) -> Option<String> {
         format!("scored on all {} samples", cost.samples)
     };
     Some(format!(
-        "time: {scored} in {:.1} s (features {:.1} s; the budget bounds this); training the winner on \
-         all {} samples {:.1} s, not covered by the budget",
-        cost.scoring_seconds, cost.features_seconds, cost.samples, cost.final_fit_seconds
+        "time: {scored} in {:.1} s (features {:.1} s; {}); training the winner on all {} samples \
+         {:.1} s, not covered by the budget",
+        cost.scoring_seconds,
+        cost.features_seconds,
+        cost.budget_text(),
+        cost.samples,
+        cost.final_fit_seconds
     ))
 }
 

@@ -10,18 +10,19 @@ use super::family::ClassifierFamily;
 use super::gaussian::{LdaFamily, MleFamily};
 use super::knn::KnnFamily;
 use super::parzen::PweFamily;
-use super::ridge::RidgeFamily;
+use super::ridge::{RidgeFamily, RidgeRawFamily};
 use super::svm::SvmFamily;
 use crate::error::{CoreError, Result};
 
 /// The built-in families, in the order the automatic choice tries them. One line per family.
-const BUILT_IN: [ClassifierKind; 6] = [
+const BUILT_IN: [ClassifierKind; 7] = [
     ClassifierKind::PWE,
     ClassifierKind::MLE,
     ClassifierKind::LDA,
     ClassifierKind::SVM,
     ClassifierKind::KNN,
     ClassifierKind::RIDGE,
+    ClassifierKind::RIDGE_RAW,
 ];
 
 /// Families registered at run time, after the built-in ones.
@@ -45,6 +46,8 @@ impl ClassifierKind {
     pub const KNN: Self = Self::of::<KnnFamily>();
     /// One-vs-rest ridge regression on standardised features, alpha chosen by exact leave-one-out.
     pub const RIDGE: Self = Self::of::<RidgeFamily>();
+    /// The same on centred features in their own units (scikit-learn's `RidgeClassifierCV` alone).
+    pub const RIDGE_RAW: Self = Self::of::<RidgeRawFamily>();
 
     /// The handle of family `F` (registered or not: see [`register`]).
     pub const fn of<F: ClassifierFamily>() -> Self {

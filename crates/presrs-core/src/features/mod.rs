@@ -23,6 +23,9 @@ pub use fft1d::{Fft1dConfig, Fft1dExtractor, Fft1dFamily};
 pub use fft2d::{Fft2dConfig, Fft2dExtractor, Fft2dFamily, Fft2dForm};
 pub use glcm::{GLCM_ATTRIBUTE_NAMES, GlcmConfig, GlcmExtractor, GlcmFamily};
 pub use rocket::family::{FittedRocket, RocketExtractor, RocketFamily, RocketParams};
+pub use rocket::multi_family::{
+    FittedMultiRocket, MultiRocketExtractor, MultiRocketFamily, MultiRocketParams,
+};
 
 #[cfg(test)]
 mod tests {

@@ -13,14 +13,16 @@ use crate::features::fft1d::Fft1dFamily;
 use crate::features::fft2d::Fft2dFamily;
 use crate::features::glcm::GlcmFamily;
 use crate::features::rocket::family::RocketFamily;
+use crate::features::rocket::multi_family::MultiRocketFamily;
 
 /// The built-in families, in the order users see them. One line per family (every preset of it is a
 /// name).
-const BUILT_IN: [&dyn DynFamily; 4] = [
+const BUILT_IN: [&dyn DynFamily; 5] = [
     Erased::<Fft1dFamily>::FAMILY,
     Erased::<Fft2dFamily>::FAMILY,
     Erased::<GlcmFamily>::FAMILY,
     Erased::<RocketFamily>::FAMILY,
+    Erased::<MultiRocketFamily>::FAMILY,
 ];
 
 /// Families registered at run time, after the built-in ones.
@@ -46,6 +48,13 @@ impl FeatureKind {
     /// MiniRocket's random convolutions of a series (an image's rows as channels over time), learned
     /// from the training samples.
     pub const ROCKET: Self = Self::preset::<RocketFamily>(0);
+    /// MiniRocket on the channels in their own units (no scaling by their spread first).
+    pub const ROCKET_UNSCALED: Self = Self::preset::<RocketFamily>(1);
+    /// MultiRocket (Tan et al. 2022): MiniRocket's kernels on the series and its first differences,
+    /// four pooling operators, the channels scaled by their spread.
+    pub const MULTIROCKET: Self = Self::preset::<MultiRocketFamily>(0);
+    /// MultiRocket on the channels in their own units.
+    pub const MULTIROCKET_UNSCALED: Self = Self::preset::<MultiRocketFamily>(1);
 
     /// Preset `index` of family `F` (registered or not: see [`register`]); a bad index fails to compile
     /// where it is a constant.

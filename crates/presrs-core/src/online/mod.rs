@@ -22,7 +22,13 @@
 //!   classification of the same stance (`classify`), to the bit when the detector finds the same
 //!   touchdown and lift-off;
 //! - or, with [`OnlineParams::decide_at`] `= K`, at frame `touchdown + K`, on the stance so far (its
-//!   `K + 1` frames, zero-padded as offline padding does; if the lift-off comes first, at the lift-off);
+//!   `K + 1` frames, zero-padded as offline padding does; if the lift-off comes first, at the lift-off)
+//!   by the classifier the model holds for that point ([`crate::pipeline::EarlyDecisions`]: trained
+//!   on stances cut there), or by the whole-stance one when `K` reaches the model's length;
+//! - or, with `auto`, at the first of the model's decision points whose confidence passes the
+//!   threshold learned at training (else at the lift-off, whole). A moment the model was not trained
+//!   for is refused ([`TrainedModel::trained_for`]); each decision says why it was made then
+//!   ([`EarlyDecision`]);
 //! - a stance found longer than the model's length before its lift-off is decided then, on its first
 //!   `length` frames (`cut`), as offline cuts it; their `area` channel counts contact against the
 //!   highest sensel of those frames, where offline it is the whole stance's.
@@ -46,15 +52,19 @@ use crate::stance::{BaselineMode, ValidSegmentParams};
 // The causal detector's types, which this module's API speaks in, nameable from here as before they
 // moved beside the offline segmentation.
 pub use crate::stance::causal::{
-    Calibration, CausalSegmenter, Levels, Liftoff, MAX_FUSION_FRAMES, MAX_OFFSET_FRAMES,
-    MIN_QUIET_FRAMES, OnlineParams, OpenStance, PAPER_SAMPLE_OFFSET, RANGE_PRIOR_FRACTION,
-    SegEvent, SegEvents, Touchdown, sample_offset_for, typical_stance_frames,
+    AutoWord, Calibration, CausalSegmenter, DecideAt, Levels, Liftoff, MAX_FUSION_FRAMES,
+    MAX_OFFSET_FRAMES, MIN_QUIET_FRAMES, OnlineParams, OpenStance, PAPER_SAMPLE_OFFSET,
+    RANGE_PRIOR_FRACTION, SegEvent, SegEvents, Touchdown, sample_offset_for, typical_stance_frames,
 };
 pub use profile::OnlineProfile;
 pub use stance_buffer::StanceBuffer;
 
+mod auto_step;
+mod early;
 mod profile;
 mod stance_buffer;
+
+pub use early::{EarlyDecision, EarlyReason};
 
 /// Whether a decision is the single sample frame, the fusion of several, or a whole stance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -90,7 +100,7 @@ pub enum DecidedAt {
 }
 
 /// How a whole-stance model's decision was made.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StanceDecision {
     pub decided_at: DecidedAt,
     /// The frame the decision waited for: the lift-off frame, touchdown + K, or the frame at which the
@@ -98,6 +108,8 @@ pub struct StanceDecision {
     pub waited_for: usize,
     /// The stance is longer than the model's length: its first `length` frames were used.
     pub cut: bool,
+    /// With [`OnlineParams::decide_at`]: which classifier decided and why then.
+    pub early: Option<EarlyDecision>,
 }
 
 /// A classification of a stance. The posteriors are in [`Step::posteriors`].
@@ -216,14 +228,20 @@ pub struct OnlineClassifier<'m> {
     errors: Vec<CoreError>,
     stats: OnlineStats,
     /// A whole-stance model's state (`None` for a one-frame model).
-    whole: Option<WholeStance>,
+    whole: Option<WholeStance<'m>>,
 }
 
 /// What a whole-stance model keeps online: the stance's frames, when to decide, the stance under way.
 #[derive(Debug)]
-struct WholeStance {
+struct WholeStance<'m> {
     buffer: StanceBuffer,
-    decide_at: Option<usize>,
+    decide_at: Option<DecideAt>,
+    /// The classifiers of the model's decision points that `decide_at` uses (frames after touchdown,
+    /// increasing), and `auto`'s threshold.
+    points: early::PointSessions<'m>,
+    threshold: Option<f64>,
+    /// The next point to try in the stance under way (`auto`).
+    next_point: usize,
     /// Partial stances are decided too: in the one-contact mode the stream is one partial stance.
     decide_partial: bool,
     /// The stance under way and not yet decided: its id and touchdown frame.
@@ -232,12 +250,12 @@ struct WholeStance {
     report_only: bool,
 }
 
-impl WholeStance {
+impl<'m> WholeStance<'m> {
     /// The whole-stance state for `model` (`None` for a one-frame model), with `online`'s settings
     /// checked against the kind of model: fusion is for one-frame models, `decide_at` for whole
-    /// stances.
+    /// stances, and only for a moment the model was trained for ([`TrainedModel::trained_for`]).
     fn for_model(
-        model: &TrainedModel,
+        model: &'m TrainedModel,
         params: &ValidSegmentParams,
         online: &OnlineParams,
     ) -> Result<Option<Self>> {
@@ -271,9 +289,13 @@ impl WholeStance {
                 got: format!("crop {} giving {} images", model.crop(), model.image_grid()),
             });
         }
+        let (points, threshold) = early::points_for(model, online.decide_at)?;
         Ok(Some(Self {
             buffer,
             decide_at: online.decide_at,
+            points,
+            threshold,
+            next_point: 0,
             decide_partial: params.params().baseline == BaselineMode::Contact,
             open: None,
             report_only: false,
@@ -579,7 +601,9 @@ impl<'m> OnlineClassifier<'m> {
             class,
             confidence,
             stance: None,
-            novelty,
+            novelty: self
+                .fusion_novelty
+                .map(|(sum, threshold)| Novelty::of(sum / count, threshold)),
             slot,
         };
         self.stats.decisions += 1;
@@ -674,6 +698,7 @@ impl<'m> OnlineClassifier<'m> {
                         && (!touchdown.partial || whole.decide_partial)
                     {
                         whole.open = Some((touchdown.stance_id, touchdown.touchdown_frame));
+                        whole.next_point = 0;
                     }
                 }
                 SegEvent::Liftoff(liftoff) => {
@@ -706,6 +731,7 @@ impl<'m> OnlineClassifier<'m> {
             decided_at: DecidedAt::Liftoff,
             waited_for: liftoff.frame,
             cut: liftoff.stance.len > whole.buffer.length(),
+            early: whole.late_reason(),
         };
         self.decide_whole(
             liftoff.stance_id,
@@ -717,7 +743,9 @@ impl<'m> OnlineClassifier<'m> {
     }
 
     /// The stance under way is decided before its lift-off at frame `touchdown + K` (with
-    /// [`OnlineParams::decide_at`]) or once it is known to be longer than the model's length.
+    /// [`OnlineParams::decide_at`] `= K`, by the classifier of that point, or the whole-stance one
+    /// when `K` reaches the model's length), at the first decision point whose confidence passes the
+    /// threshold (`auto`), or once it is known to be longer than the model's length.
     fn decide_before_liftoff(&mut self, t: usize) {
         let Some(whole) = &self.whole else {
             return;
@@ -726,15 +754,25 @@ impl<'m> OnlineClassifier<'m> {
             return;
         };
         let length = whole.buffer.length();
-        if let Some(k) = whole.decide_at
+        if let Some(DecideAt::Frames(k)) = whole.decide_at
             && t >= start + k
         {
+            let point = whole.points.iter().position(|(frames, _)| *frames == k);
             let how = StanceDecision {
                 decided_at: DecidedAt::Offset(k),
                 waited_for: start + k,
                 cut: k + 1 > length,
+                early: Some(EarlyDecision {
+                    rule: DecideAt::Frames(k),
+                    reason: EarlyReason::Fixed,
+                    point: point.map(|_| k),
+                    threshold: None,
+                }),
             };
-            self.decide_whole(stance_id, start, k + 1, how, t);
+            self.decide_whole_with(stance_id, start, k + 1, how, t, point);
+            return;
+        }
+        if self.try_confident_point(stance_id, start, t) {
             return;
         }
         let longer = self
@@ -742,17 +780,19 @@ impl<'m> OnlineClassifier<'m> {
             .open_stance()
             .is_some_and(|open| open.stance_id == stance_id && open.known_len > length);
         if longer {
+            let early = self.whole.as_ref().and_then(WholeStance::late_reason);
             let how = StanceDecision {
                 decided_at: DecidedAt::Length(length),
                 waited_for: t,
                 cut: true,
+                early,
             };
             self.decide_whole(stance_id, start, length, how, t);
         }
     }
 
     /// Classifies the summary of `frames` frames from `start` (at most the model's length) at frame
-    /// `t`: a [`DecisionKind::Stance`] decision, or a failure.
+    /// `t` with the whole-stance classifier: a [`DecisionKind::Stance`] decision, or a failure.
     fn decide_whole(
         &mut self,
         stance_id: u64,
@@ -761,17 +801,56 @@ impl<'m> OnlineClassifier<'m> {
         how: StanceDecision,
         t: usize,
     ) {
+        self.decide_whole_with(stance_id, start, frames, how, t, None);
+    }
+
+    /// [`Self::decide_whole`] with the classifier of decision point `point` (an index into the
+    /// points in use), or the whole-stance one (`None`).
+    fn decide_whole_with(
+        &mut self,
+        stance_id: u64,
+        start: usize,
+        frames: usize,
+        how: StanceDecision,
+        t: usize,
+        point: Option<usize>,
+    ) {
         let Some(whole) = self.whole.as_mut() else {
             return;
         };
         whole.open = None;
         let frames = frames.min(whole.buffer.length());
-        let outcome = whole.buffer.sample(start, frames).and_then(|view| {
-            self.session.classify(&view).map(|prediction| {
-                self.posteriors.extend_from_slice(prediction.posteriors);
-                (prediction.class, prediction.confidence, prediction.novelty)
-            })
-        });
+        // A decision point's classifier takes samples of its own length, K + 1 frames.
+        let length = match point.and_then(|index| whole.points.get(index)) {
+            Some((k, _)) => k + 1,
+            None => whole.buffer.length(),
+        };
+        let session = match point.and_then(|index| whole.points.get_mut(index)) {
+            Some((_, session)) => session,
+            None => &mut self.session,
+        };
+        let outcome = whole
+            .buffer
+            .sample_in(start, frames, length)
+            .and_then(|view| {
+                session.classify(&view).map(|prediction| {
+                    self.posteriors.extend_from_slice(prediction.posteriors);
+                    (prediction.class, prediction.confidence, prediction.novelty)
+                })
+            });
+        self.push_whole_decision(stance_id, start, frames, how, t, outcome);
+    }
+
+    /// The event of a whole-stance classification (or its failure).
+    fn push_whole_decision(
+        &mut self,
+        stance_id: u64,
+        start: usize,
+        frames: usize,
+        how: StanceDecision,
+        t: usize,
+        outcome: Result<Verdict>,
+    ) {
         let (class, confidence, novelty) = match outcome {
             Ok(result) => result,
             Err(err) => {

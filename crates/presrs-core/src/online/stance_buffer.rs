@@ -101,7 +101,19 @@ impl StanceBuffer {
     /// offline summary of those frames laid into the length gives it. An error if a frame is not held
     /// (it was never kept, or a later one took its slot).
     pub fn sample(&mut self, start: usize, frames: usize) -> Result<FrameView<'_>> {
-        let frames = frames.min(self.length);
+        self.sample_in(start, frames, self.length)
+    }
+
+    /// [`Self::sample`] laid into `length` frames (at most the buffer's): a decision point's sample,
+    /// of its own length.
+    pub fn sample_in(
+        &mut self,
+        start: usize,
+        frames: usize,
+        length: usize,
+    ) -> Result<FrameView<'_>> {
+        let length = length.min(self.length);
+        let frames = frames.min(length);
         let channels = self.column.len();
         let size = self.grid.map_or(0, |grid| grid.len());
         let mut peak = 0.0_f64;
@@ -117,17 +129,18 @@ impl StanceBuffer {
             peak = peak.max(self.peaks[slot]);
         }
         let contact_level = self.config.contact_fraction * peak;
-        self.sample.fill(0.0);
+        let sample = &mut self.sample[..channels * length];
+        sample.fill(0.0);
         for (i, t) in (start..start + frames).enumerate() {
             let slot = t % self.length;
             let column = &self.columns[slot * channels..(slot + 1) * channels];
             for (channel, &value) in column.iter().enumerate() {
-                self.sample[channel * self.length + i] = value;
+                sample[channel * length + i] = value;
             }
             let loads = &self.loads[slot * size..(slot + 1) * size];
-            self.sample[AREA_CHANNEL * self.length + i] = contact_area(loads, contact_level);
+            sample[AREA_CHANNEL * length + i] = contact_area(loads, contact_level);
         }
-        FrameView::new(self.sample_grid(), &self.sample, None)
+        FrameView::new(Grid::new(channels, length), sample, None)
     }
 }
 
@@ -176,6 +189,12 @@ mod tests {
                 assert_eq!(online.values(), padded.values(), "t {t}, {frames} frames");
             }
         }
+        // A decision point's sample, of its own length.
+        let views: Vec<_> = all[24..=28].iter().map(Frame::view).collect();
+        let (short, _) = pad_to(&summarise(&views, &config).unwrap().view(), 5).unwrap();
+        let online = buffer.sample_in(24, 5, 5).unwrap();
+        assert_eq!(online.values(), short.values());
+        assert_eq!(online.grid(), short.grid());
         let err = buffer.sample(20, 3).unwrap_err().to_string();
         assert!(err.contains("frame 20"), "{err}");
         assert!(StanceBuffer::new(config, 0).is_err());

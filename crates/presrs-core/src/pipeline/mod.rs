@@ -14,6 +14,7 @@
 //! training and afterwards, must have the same grid once cropped.
 
 pub(crate) mod config;
+pub(crate) mod early;
 pub(crate) mod extract;
 pub(crate) mod model;
 pub(crate) mod novelty;
@@ -21,8 +22,16 @@ pub(crate) mod session;
 pub(crate) mod train;
 
 pub use config::{CheckedTrainConfig, TrainConfig};
+pub use early::{
+    AUTO_BOUND_Z, AUTO_TOLERANCE, ChoosePoint, HeldOutStance, OfflineDecision, StanceImages,
+    classify_held_out, classify_stances, held_out_stances, learn_threshold, train_early,
+    train_like, wilson_lower_bound,
+};
 pub use extract::{LabeledImage, extract_features, extract_features_many, extract_features_with};
-pub use model::{MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN, TrainedModel, TrainingSummary};
+pub use model::{
+    AutoThreshold, DecisionPoint, EarlyDecisions, MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN,
+    TrainedModel, TrainingSummary,
+};
 pub use novelty::MAX_NOVELTY_DIMS;
 pub use session::{BATCH_BLOCK, Classification, Prediction, Session};
 pub use train::train;

@@ -72,6 +72,10 @@ pub(crate) struct ModelFields {
     /// samples made in memory, and from older files).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) sampling: Option<Sampling>,
+    /// A whole-stance model's classifiers for decision points before lift-off (absent from files
+    /// written before them, and from models trained for the whole stance only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) early: Option<Box<EarlyDecisions>>,
     /// The novelty score and its threshold (absent from files written before it, and from models
     /// trained without it: every decision is then one of the classes, as before).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -79,6 +83,111 @@ pub(crate) struct ModelFields {
 }
 
 pub(crate) const FORMAT_VERSION: u32 = 1;
+
+// The early decisions a model stores (trained by `crate::pipeline::early`), here beside the model they
+// hold and are held by.
+
+/// One decision point: `frames` after touchdown, with the model trained on stances cut there (samples of
+/// `frames + 1` frames).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DecisionPoint {
+    /// `K`: the stance's first `K + 1` frames.
+    pub frames: usize,
+    pub model: TrainedModel,
+}
+
+/// The threshold `auto` decides with, and what validation measured with it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AutoThreshold {
+    /// A point decides when its confidence is at least this (above 1: never, lift-off decides).
+    pub threshold: f64,
+    /// Validation accuracy of the whole-stance classifier, and of `auto` with this threshold.
+    pub whole_accuracy: f64,
+    pub auto_accuracy: f64,
+    /// Mean frame after touchdown at which `auto` decided in validation, and as a share of each
+    /// stance's length (a lift-off decision counts as the whole length).
+    pub mean_decision_frame: f64,
+    pub mean_decision_share: f64,
+    /// Held-out stances the threshold was learned on.
+    pub validation_stances: usize,
+}
+
+/// A whole-stance model's classifiers for decision points before lift-off.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EarlyDecisions {
+    /// In increasing `frames`, each before the model's length.
+    pub points: Vec<DecisionPoint>,
+    /// What `auto` decides with (absent: `auto` is refused).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub auto: Option<AutoThreshold>,
+}
+
+impl EarlyDecisions {
+    /// The points' frames after touchdown, increasing.
+    pub fn frames(&self) -> Vec<usize> {
+        self.points.iter().map(|point| point.frames).collect()
+    }
+
+    /// The model of point `frames`.
+    pub fn point(&self, frames: usize) -> Option<&TrainedModel> {
+        self.points
+            .iter()
+            .find(|point| point.frames == frames)
+            .map(|point| &point.model)
+    }
+
+    /// Checks the points against their whole-stance `model`: increasing, before its length, stance
+    /// models of its sample and classes, with no points of their own; a threshold that is a number.
+    pub(crate) fn check(&self, model: &TrainedModel) -> Result<()> {
+        let bad = |reason: String| CoreError::Param {
+            name: "early decisions",
+            reason,
+        };
+        let length = model.image_grid().cols;
+        let mut last = None;
+        for point in &self.points {
+            if last.is_some_and(|last| point.frames <= last) || point.frames + 1 >= length {
+                return Err(bad(format!(
+                    "decision points must increase and come before the model's length ({length} \
+                     frames); got {:?}",
+                    self.frames()
+                )));
+            }
+            last = Some(point.frames);
+            let sub = &point.model;
+            let own = match model.sample() {
+                SampleKind::Stance { summary, .. } => SampleKind::Stance {
+                    summary,
+                    length: Some(point.frames + 1),
+                },
+                other => other,
+            };
+            if sub.sample() != own
+                || sub.class_names() != model.class_names()
+                || sub.image_grid() != Grid::new(model.image_grid().rows, point.frames + 1)
+                || sub.early().is_some()
+            {
+                return Err(bad(format!(
+                    "the model of point {} does not take the whole-stance model's samples and \
+                     classes",
+                    point.frames
+                )));
+            }
+        }
+        if let Some(auto) = &self.auto
+            && (!auto.threshold.is_finite() || auto.threshold < 0.0)
+        {
+            return Err(bad(format!(
+                "threshold {} is not a confidence",
+                auto.threshold
+            )));
+        }
+        Ok(())
+    }
+}
 
 /// The largest image a model takes once cropped, in sensels (`image_grid` rows x cols): the streaming
 /// readers' limit, far above any pressure sensor (the paper's array has 44 x 44). Training on larger
@@ -161,7 +270,11 @@ impl TryFrom<ModelFields> for TrainedModel {
         }
         check_sample(&fields.sample, fields.image_grid)?;
         check_novelty(&fields)?;
-        Ok(Self { fields, extractor })
+        let model = Self { fields, extractor };
+        if let Some(early) = &model.fields.early {
+            early.check(&model)?;
+        }
+        Ok(model)
     }
 }
 
@@ -361,6 +474,66 @@ impl TrainedModel {
     /// the model was trained by [`crate::selection::train_auto`].
     pub fn selection(&self) -> Option<&Selection> {
         self.fields.selection.as_ref()
+    }
+
+    /// The classifiers for decision points before lift-off, when trained for them.
+    pub fn early(&self) -> Option<&EarlyDecisions> {
+        self.fields.early.as_deref()
+    }
+
+    /// This whole-stance model with classifiers for decision points before lift-off (checked against
+    /// it: see [`EarlyDecisions`]).
+    pub fn with_early(mut self, early: EarlyDecisions) -> Result<Self> {
+        if !matches!(self.fields.sample, SampleKind::Stance { .. }) {
+            return Err(CoreError::Param {
+                name: "early decisions",
+                reason: "decision points before lift-off are for whole-stance models".into(),
+            });
+        }
+        early.check(&self)?;
+        self.fields.early = Some(Box::new(early));
+        Ok(self)
+    }
+
+    /// Whether this model was trained to decide at `decide_at` (see
+    /// [`crate::online::DecideAt`]): `K` frames after touchdown is one of its decision points, or (a
+    /// whole-stance model) at least its length less one (its whole sample); `auto` needs decision
+    /// points and their threshold. `Err` says what it was trained for, in words.
+    pub fn trained_for(
+        &self,
+        decide_at: crate::online::DecideAt,
+    ) -> std::result::Result<(), String> {
+        use crate::online::DecideAt;
+        let SampleKind::Stance { .. } = self.fields.sample else {
+            return Err("one frame of each stance, chosen by the sample offset".into());
+        };
+        let length = self.fields.image_grid.cols;
+        let points = self.early().map(EarlyDecisions::frames).unwrap_or_default();
+        let fits = match decide_at {
+            DecideAt::Frames(k) => k + 1 >= length || points.contains(&k),
+            DecideAt::Auto(_) => self
+                .early()
+                .is_some_and(|e| e.auto.is_some() && !e.points.is_empty()),
+        };
+        if fits {
+            return Ok(());
+        }
+        let list: Vec<String> = points.iter().map(ToString::to_string).collect();
+        let auto = self
+            .early()
+            .is_some_and(|e| e.auto.is_some() && !e.points.is_empty());
+        let whole = format!(
+            "the whole stance (at lift-off, or {} frames after touchdown and later)",
+            length - 1
+        );
+        Err(match (list.is_empty(), auto) {
+            (true, _) => format!("{whole} only"),
+            (false, false) => format!("{} frames after touchdown and {whole}", list.join(", ")),
+            (false, true) => format!(
+                "{} frames after touchdown (and auto among them) and {whole}",
+                list.join(", ")
+            ),
+        })
     }
 
     /// The novelty score, when the model has one.

@@ -82,6 +82,7 @@ pub fn train(
         sample: SampleKind::Frame,
         sensor: None,
         sampling: None,
+        early: None,
         novelty: None,
     })
 }

@@ -14,7 +14,7 @@ type Key = for<'x> fn(&LabeledImage<'x>) -> Option<&'x str>;
 
 /// One fold: the candidate is trained on `train` (its hyper-parameters validated on `validation`) and
 /// scored on `test` (indices into the images).
-pub(super) struct InnerFold {
+pub(crate) struct InnerFold {
     pub name: String,
     pub train: Vec<usize>,
     pub validation: Vec<usize>,
@@ -22,7 +22,7 @@ pub(super) struct InnerFold {
 }
 
 /// The folds an automatic choice scores its candidates on, and how they were made.
-pub(super) struct Folds {
+pub(crate) struct Folds {
     pub folds: Vec<InnerFold>,
     /// The validation in words.
     pub method: String,
@@ -35,7 +35,7 @@ pub(super) struct Folds {
 /// part lacks is not used: `auto` goes on to the next it would choose (condition, then splits), a
 /// scheme asked for falls back to stratified splits, and [`Folds::fallback`] says so. Deterministic
 /// in `seed`.
-pub(super) fn make_folds(images: &[LabeledImage<'_>], by: ValidateBy, seed: u64) -> Result<Folds> {
+pub(crate) fn make_folds(images: &[LabeledImage<'_>], by: ValidateBy, seed: u64) -> Result<Folds> {
     let groups = distinct(images, |i| i.group);
     let conditions = distinct(images, |i| i.condition);
     let wanted = by.resolve(groups.len(), conditions.len());

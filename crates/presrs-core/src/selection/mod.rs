@@ -28,7 +28,7 @@
 //! are not scored on the others ([`CandidateScore::dropped_early`]; never chosen), and the rest finish,
 //! the most promising groups first, so that a budget cuts the least promising.
 
-mod folds;
+pub(crate) mod folds;
 pub(crate) mod record;
 mod scoring;
 mod subsample;
@@ -244,6 +244,7 @@ pub fn select(
         features_seconds,
         scoring_seconds: started.elapsed().as_secs_f64(),
         final_fit_seconds: 0.0,
+        budget_seconds: choice.budget.map(|budget| budget.as_secs_f64()),
     });
     Ok(selection)
 }

@@ -75,7 +75,8 @@ pub struct Selection {
 }
 
 /// What an automatic choice scored its candidates on, and where its time went: the budget bounds the
-/// scoring (the candidates' features included); training the winner on every sample comes after it.
+/// scoring (the candidates' features included; [`SelectionCost::over_budget_seconds`] says when it
+/// ended past it anyway); training the winner on every sample comes after it.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SelectionCost {
     /// The samples the winner is trained on (training + validation).
@@ -89,12 +90,39 @@ pub struct SelectionCost {
     pub scoring_seconds: f64,
     /// Seconds spent training the winner on every sample, after the scoring and outside the budget.
     pub final_fit_seconds: f64,
+    /// The time budget of the scoring, in seconds (`None`: no budget, or a model written before it
+    /// was recorded).
+    #[serde(default)]
+    pub budget_seconds: Option<f64>,
 }
 
 impl SelectionCost {
     /// Whether the candidates were scored on a subsample.
     pub fn subsampled(&self) -> bool {
         self.scored_on < self.samples
+    }
+
+    /// The seconds the scoring took beyond its budget, when it did: the first feature group of each
+    /// phase is scored whatever the budget (so that there is a choice), and a group's turn is judged
+    /// from the slowest candidate scored before it, so a slow first group, or a group slower than
+    /// those before it, ends past the budget.
+    pub fn over_budget_seconds(&self) -> Option<f64> {
+        let budget = self.budget_seconds?;
+        (self.scoring_seconds > budget).then_some(self.scoring_seconds - budget)
+    }
+
+    /// What bounded the scoring, in words: `within the budget of 60 s`, `62.3 s over the budget of
+    /// 60 s (the first candidates are scored whatever the budget)`, or `no time budget`.
+    pub fn budget_text(&self) -> String {
+        match (self.budget_seconds, self.over_budget_seconds()) {
+            (None, _) => "no time budget".to_owned(),
+            (Some(budget), None) => format!("within the budget of {budget:.0} s"),
+            (Some(budget), Some(over)) => format!(
+                "{over:.1} s over the budget of {budget:.0} s: the first candidates are scored \
+                 whatever the budget, and each later group's time is foreseen from the slowest \
+                 candidate before it"
+            ),
+        }
     }
 }
 
@@ -113,5 +141,48 @@ pub struct ValidationFallback {
 impl Selection {
     pub fn chosen(&self) -> Option<&CandidateScore> {
         self.scores.get(self.chosen)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cost(scoring_seconds: f64, budget_seconds: Option<f64>) -> SelectionCost {
+        SelectionCost {
+            scoring_seconds,
+            budget_seconds,
+            ..SelectionCost::default()
+        }
+    }
+
+    #[test]
+    fn a_scoring_past_its_budget_says_by_how_much_and_why() {
+        assert_eq!(cost(12.0, None).budget_text(), "no time budget");
+        assert_eq!(cost(12.0, Some(60.0)).over_budget_seconds(), None);
+        assert_eq!(
+            cost(12.0, Some(60.0)).budget_text(),
+            "within the budget of 60 s"
+        );
+        let over = cost(92.5, Some(60.0));
+        assert_eq!(over.over_budget_seconds(), Some(32.5));
+        let text = over.budget_text();
+        assert!(
+            text.starts_with("32.5 s over the budget of 60 s: "),
+            "{text}"
+        );
+        assert!(
+            text.contains("the first candidates are scored whatever the budget"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn a_cost_recorded_before_the_budget_was_reads_as_without_one() {
+        let old = r#"{"samples": 10, "scored_on": 10, "features_seconds": 1.0,
+            "scoring_seconds": 2.0, "final_fit_seconds": 0.5}"#;
+        let cost: SelectionCost = serde_json::from_str(old).unwrap();
+        assert_eq!(cost.budget_seconds, None);
+        assert_eq!(cost.budget_text(), "no time budget");
     }
 }

@@ -49,6 +49,46 @@ pub struct SimulationInputs<'a> {
     pub traces: &'a [HopTrace],
 }
 
+/// Early decisions (`eval --decide-at`): accuracy against the decision point after touchdown.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EarlyCurve {
+    /// The decision points, in increasing frames.
+    pub points: Vec<EarlyCurvePoint>,
+    /// The whole-stance classifier at lift-off, on the same held-out stances.
+    pub whole_accuracy: f64,
+    /// `auto` (the first point whose confidence passes the learned threshold), when evaluated.
+    pub auto: Option<EarlyAutoResult>,
+    /// Median length of the held-out stances, frames.
+    pub median_stance_frames: usize,
+    /// The recordings' frame period, when they state one (times are then given in ms too).
+    pub frame_period_ms: Option<f64>,
+    /// Held-out stances.
+    pub tested: usize,
+    /// How the stances were held out (e.g. `leave one group out, 2 folds`).
+    pub note: String,
+}
+
+/// One decision point of [`EarlyCurve`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct EarlyCurvePoint {
+    /// `K`: frames after touchdown.
+    pub frames: usize,
+    /// The stance model's classifier for `K`.
+    pub accuracy: f64,
+    /// The one-frame model on frame `K` of the same stances, when measured.
+    pub frame_accuracy: Option<f64>,
+}
+
+/// `auto`'s result in [`EarlyCurve`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct EarlyAutoResult {
+    pub accuracy: f64,
+    /// Mean decision time after touchdown, frames (a lift-off decision counts the stance's length).
+    pub mean_frames: f64,
+    /// Share of the stances decided before their lift-off.
+    pub decided_early: f64,
+}
+
 /// Everything a report can show; all optional except the samples.
 #[derive(Clone, Debug)]
 pub struct ReportInputs<'a> {
@@ -76,6 +116,8 @@ pub struct ReportInputs<'a> {
     pub faults: Vec<FaultResult>,
     /// How the fault results were obtained (protocol, repeats), shown under the chart.
     pub fault_note: Option<String>,
+    /// Early decisions against decision time (`eval --decide-at`); `None` for none.
+    pub early: Option<EarlyCurve>,
     /// `eval --leave-class-out`'s figures, per held-out class.
     pub novelty: Option<super::novelty::NoveltyResult>,
 }
@@ -98,6 +140,7 @@ impl<'a> ReportInputs<'a> {
             simulation: None,
             faults: Vec::new(),
             fault_note: None,
+            early: None,
             novelty: None,
         }
     }

@@ -3,6 +3,7 @@
 //!
 //! One file per group of sections; [`write_report`] lists them in page order.
 
+mod early;
 mod evaluation;
 mod faults;
 mod inputs;
@@ -15,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
+use self::early::early_section;
 use self::evaluation::{
     accuracy_section, confusion_section, reliability_section, validation_section,
 };
@@ -28,7 +30,10 @@ use self::simulation::{hopper_section, table1_section};
 use crate::error::Result;
 
 pub use self::faults::fault_panels;
-pub use self::inputs::{Evaluation, FaultResult, ReportInputs, ReportRecording, SimulationInputs};
+pub use self::inputs::{
+    EarlyAutoResult, EarlyCurve, EarlyCurvePoint, Evaluation, FaultResult, ReportInputs,
+    ReportRecording, SimulationInputs,
+};
 pub use self::novelty::{NoveltyResult, NoveltyRow};
 
 /// Writes `out_dir/index.html` and its figures; returns the page's path.
@@ -47,6 +52,7 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
         sections.push(accuracy_section(&inputs.evaluations));
         sections.extend(reliability_section(&inputs.evaluations));
     }
+    sections.extend(early_section(inputs.early.as_ref()));
     sections.extend(inputs.novelty.as_ref().and_then(novelty_section));
     sections.extend(fault_section(&inputs.faults, inputs.fault_note.as_deref()));
     if let Some(sim) = &inputs.simulation {

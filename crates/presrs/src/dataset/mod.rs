@@ -46,6 +46,22 @@ pub struct LoadedSamples {
     pub movie_loads: Vec<MovieLoad>,
     /// The one sensor of stance and series samples (see [`Dataset::sensor`]).
     pub sensor: Option<Grid>,
+    /// Whole-stance samples: each stance's length, and the stance cut at each decision point asked.
+    pub stances: StanceCuts,
+}
+
+/// What whole-stance samples need for early decisions, in the samples' order: each stance's length, and
+/// each stance cut at every decision point of [`SampleOptions::decision_points`] (its first `K + 1`
+/// frames summarised, laid into `K + 1` frames: a stance that ends first is padded with zeros). Empty
+/// for other kinds.
+#[derive(Clone, Debug, Default)]
+pub struct StanceCuts {
+    /// Each sample's stance length, frames.
+    pub stance_frames: Vec<usize>,
+    /// Each sample's frame period, seconds, when its recording states one.
+    pub frame_periods: Vec<Option<f64>>,
+    /// Per decision point (frames after touchdown, increasing), each sample's stance cut there.
+    pub points: Vec<(usize, Vec<presrs_core::Frame>)>,
 }
 
 /// A data set: a manifest and the samples its files give, stance sampling and dead-sensel correction
@@ -65,6 +81,8 @@ pub struct Dataset {
     /// The total load per frame of every movie read (none for samples made in memory), as read for
     /// the samples: the online profile is learned from them, not from a second reading.
     pub movie_loads: Vec<MovieLoad>,
+    /// Whole-stance samples: each stance's length and its cuts at the decision points asked.
+    pub stances: StanceCuts,
     /// The sensor of stance and series samples, which a model trained on them refuses any other
     /// than: the grid of the recordings' frames whose stances were summarised, or the series' grid
     /// (channels x time, as the samples hold them). `None` for frame samples.
@@ -111,6 +129,7 @@ impl Dataset {
             dead_sensels: loaded.dead_sensels,
             sample: options.kind,
             movie_loads: loaded.movie_loads,
+            stances: loaded.stances,
             sensor: loaded.sensor,
             sampling: Some(options.sampling()),
         })
@@ -161,6 +180,7 @@ impl Dataset {
             dead_sensels: DeadSenselFills::default(),
             sample: SampleKind::Frame,
             movie_loads: Vec::new(),
+            stances: StanceCuts::default(),
             sensor: None,
             sampling: None,
         })
@@ -374,6 +394,15 @@ pub fn load_samples(
                 .sample_of(&frames, None)
                 .map_err(|err| manifest.row_error(row, format!("`{}`: {err}", row.path_text)))?;
             sensor.check(manifest, row, options.kind, recording.grid(), frame.grid())?;
+            if let SampleKind::Stance { .. } = options.kind {
+                loaded
+                    .stances
+                    .frame_periods
+                    .push(recording.frame_period_s());
+                cut_stance(&mut loaded.stances, &frames, options).map_err(|err| {
+                    manifest.row_error(row, format!("`{}`: {err}", row.path_text))
+                })?;
+            }
             loaded.samples.push(Sample {
                 frame,
                 label: row.label.clone(),
@@ -393,12 +422,40 @@ pub fn load_samples(
             &mut loaded.samples,
             length,
         )?);
+        // A point's samples are its own length, K + 1 frames: no padding after the frames it sees.
+        for (k, cuts) in &mut loaded.stances.points {
+            for cut in cuts.iter_mut() {
+                *cut = pad_to(&cut.view(), *k + 1)
+                    .map_err(|err| IoError::format("stance samples", err.to_string()))?
+                    .0;
+            }
+        }
     }
     loaded
         .warnings
         .extend(empty.summary(manifest.rows.len(), options));
     loaded.sensor = sensor.first.map(|(grid, _)| grid);
     Ok(loaded)
+}
+
+/// Records a whole stance's length and its summaries cut at the decision points of `options`.
+fn cut_stance(
+    cuts: &mut StanceCuts,
+    frames: &[FrameView<'_>],
+    options: &SampleOptions,
+) -> presrs_core::error::Result<()> {
+    cuts.stance_frames.push(frames.len());
+    if cuts.points.is_empty() {
+        let mut points = options.decision_points.clone();
+        points.sort_unstable();
+        points.dedup();
+        cuts.points = points.into_iter().map(|k| (k, Vec::new())).collect();
+    }
+    for (k, samples) in &mut cuts.points {
+        let used = frames.len().min(*k + 1);
+        samples.push(options.kind.sample_of(&frames[..used], None)?.0);
+    }
+    Ok(())
 }
 
 /// The one sensor of a data set's stance or series samples: the first row's grid, which every other

@@ -29,6 +29,9 @@ pub struct SampleOptions {
     /// Frame period, in seconds, of recordings whose format states none (a manifest's
     /// `frame_period_s` column overrides it per row).
     pub frame_period_s: Option<f64>,
+    /// Whole-stance samples are also made of each stance cut at these decision points (frames after
+    /// touchdown: the first `K + 1` frames), for models that decide early ([`super::StanceCuts`]).
+    pub decision_points: Vec<usize>,
 }
 
 impl Default for SampleOptions {
@@ -42,6 +45,7 @@ impl Default for SampleOptions {
             dead_sensels: Some(DeadSenselConfig::default()),
             one_sample_per_file: false,
             frame_period_s: None,
+            decision_points: Vec::new(),
         }
     }
 }

@@ -3,6 +3,7 @@
 //! goes to a [`Progress`]; errors name the manifest.
 
 pub mod document;
+pub mod early;
 pub mod novelty;
 pub mod race;
 

@@ -24,9 +24,9 @@ use presrs_sim::trace::{HopTrace, trace_hops};
 use presrs_sim::{SimConfig, SimulatedDataset, VelocityTable};
 
 pub use presrs_report::{
-    Evaluation, FaultResult, Figure, Format, MovieOptions, PressureFigure, PressureGrid,
-    PressureScale, ReportError, ReportInputs, ReportRecording, SimulationInputs, render_rgb,
-    render_svg, save_figure, write_movie,
+    EarlyCurve, Evaluation, FaultResult, Figure, Format, MovieOptions, PressureFigure,
+    PressureGrid, PressureScale, ReportError, ReportInputs, ReportRecording, SimulationInputs,
+    render_rgb, render_svg, save_figure, write_movie,
 };
 
 use crate::dataset::{Dataset, Sample, SampleOptions};
@@ -336,8 +336,28 @@ pub fn write_eval_report(
         model,
         evaluations,
         sample_options,
-        (faults, fault_note),
+        (faults, fault_note, None),
         &race_notes(outcome, command_line),
+        out_dir,
+    )
+}
+
+/// `presrs eval --decide-at --report DIR`: the report of the data set read as whole stances, with the
+/// early decisions' curve (`early`, from [`crate::eval::early::EarlyEvaluation::curve`]).
+pub fn write_early_report(
+    dataset: &Dataset,
+    early: EarlyCurve,
+    sample_options: &SampleOptions,
+    command_line: Option<&str>,
+    out_dir: &Path,
+) -> Result<PathBuf> {
+    write_manifest_report(
+        dataset,
+        None,
+        Vec::new(),
+        sample_options,
+        (&[], String::new(), Some(early)),
+        &[provenance(command_line)],
         out_dir,
     )
 }
@@ -433,7 +453,7 @@ fn write_manifest_report(
     model: Option<(&TrainedModel, String)>,
     evaluations: Vec<Evaluation<'_>>,
     sample_options: &SampleOptions,
-    (faults, fault_note): (&[FaultResult], String),
+    (faults, fault_note, early): (&[FaultResult], String, Option<EarlyCurve>),
     notes: &[String],
     out_dir: &Path,
 ) -> Result<PathBuf> {
@@ -491,6 +511,7 @@ fn write_manifest_report(
     });
     inputs.faults = faults.to_vec();
     inputs.fault_note = Some(fault_note);
+    inputs.early = early;
     write_report(&inputs, out_dir)
 }
 
@@ -591,7 +612,7 @@ pub fn report_dataset(
         model.as_ref().map(|(m, note)| (m, note.clone())),
         evaluations,
         &options.samples,
-        (&faults.0, faults.1),
+        (&faults.0, faults.1, None),
         &[provenance(options.command_line.as_deref())],
         out_dir,
     )?;
@@ -652,7 +673,7 @@ pub fn report_racing_samples(
         model,
         evaluations,
         &options.samples,
-        (&[], String::new()),
+        (&[], String::new(), None),
         &race_notes(&outcome, options.command_line.as_deref()),
         out_dir,
     )?;

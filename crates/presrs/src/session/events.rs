@@ -3,7 +3,9 @@
 //! (the ROS 2 node, the live view, Python) reads the fields, never the line.
 
 use presrs_core::novelty::UNKNOWN_LABEL;
-use presrs_core::online::{DecidedAt, Decision, DecisionKind, OnlineEvent, OnlineProfile, Step};
+use presrs_core::online::{
+    DecidedAt, Decision, DecisionKind, EarlyReason, OnlineEvent, OnlineProfile, Step,
+};
 use presrs_core::pipeline::TrainedModel;
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -60,10 +62,61 @@ pub struct Classification {
     /// What a whole-stance decision waited for (absent for one-frame and fused decisions).
     #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
     pub whole_stance: Option<WholeStance>,
+    /// Why a decision asked for before lift-off (`decide_at`) was made when it was (absent without
+    /// `decide_at`).
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub early: Option<EarlyDecisionEvent>,
+    /// Frames missing inside the stance up to the sample frame (a step in the input's frame times
+    /// well above the frame period: `session::FrameGaps`): the decision was made without them.
+    /// Absent from the line when 0 (none missing, or an input without frame times).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gap_frames: u64,
     /// The novelty score and its verdict, when the model scores novelty (absent otherwise, and with
     /// `--novelty off`); when `unknown`, `label` is `unknown` and `nearest` names the nearest class.
     #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
     pub novelty: Option<NoveltyVerdict>,
+}
+
+/// Whether a count is 0 (left out of the line).
+fn is_zero(count: &u64) -> bool {
+    *count == 0
+}
+
+/// Which classifier made a decision asked for before lift-off (`decide_at`), under which rule, and why
+/// at that frame: its fields are prefixed `early_` in the JSON line.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EarlyDecisionEvent {
+    /// `fixed` (`decide_at = K`) or `auto` (the first confident decision point).
+    pub early_rule: EarlyRule,
+    /// `fixed` (frame touchdown + K arrived), `confident` (the point's confidence passed the
+    /// threshold), `not_confident` (`auto`: no point did before the lift-off or the model's length),
+    /// `ended_first` (the stance ended or reached the model's length before the point).
+    pub early_reason: EarlyReason,
+    /// The decision point (frames after touchdown) whose classifier decided; `null`: the whole-stance
+    /// classifier.
+    pub early_point: Option<u64>,
+    /// Frames after touchdown at which the decision was made (`decided_at_frame - touchdown_frame`).
+    pub early_frames: u64,
+    /// `auto`'s confidence threshold, learned at training.
+    pub early_threshold: Option<f64>,
+}
+
+/// The rule of an early decision.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EarlyRule {
+    Fixed,
+    Auto,
+}
+
+impl EarlyRule {
+    /// Its name in the stream protocol and the ROS 2 message.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fixed => "fixed",
+            Self::Auto => "auto",
+        }
+    }
 }
 
 /// The novelty of a decision: how far its sample lies from every trained class.
@@ -117,6 +170,9 @@ pub struct Liftoff {
     pub sampled: bool,
     /// The frame at which the end was decided.
     pub frame: u64,
+    /// Frames missing inside the stance (as `Classification::gap_frames`); absent when 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gap_frames: u64,
 }
 
 /// A frame rejected, a classification that failed, or an input that cannot go on (`fatal`).
@@ -284,6 +340,8 @@ pub fn step_events(
                 partial: lo.stance.partial,
                 sampled: lo.sampled,
                 frame: lo.frame as u64,
+                // The session's `FrameGaps` fills it in.
+                gap_frames: 0,
             }),
         })
         .collect()
@@ -331,6 +389,20 @@ fn classification(
             decided_at_frame: how.waited_for as u64,
             cut: how.cut,
         }),
+        early: d.stance.and_then(|how| {
+            let early = how.early?;
+            Some(EarlyDecisionEvent {
+                early_rule: if early.rule.is_auto() {
+                    EarlyRule::Auto
+                } else {
+                    EarlyRule::Fixed
+                },
+                early_reason: early.reason,
+                early_point: early.point.map(|k| k as u64),
+                early_frames: how.waited_for.saturating_sub(d.touchdown_frame) as u64,
+                early_threshold: early.threshold,
+            })
+        }),
         novelty: d.novelty.map(|n| NoveltyVerdict {
             unknown: n.unknown,
             nearest,
@@ -338,5 +410,7 @@ fn classification(
             novelty_threshold: n.threshold,
         }),
         label,
+        // The session's `FrameGaps` fills it in.
+        gap_frames: 0,
     }
 }

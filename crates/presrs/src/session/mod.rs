@@ -10,18 +10,22 @@
 //!
 //! Without a calibration (in the [`OnlineProfile`](presrs_core::online::OnlineProfile)) the detector
 //! calibrates on the first frames (the warm-up); stances in them are not classified, and a
-//! [`ConnectionNotice`] says so when the warm-up ends. Nothing here reads files or sockets, or prints.
+//! [`ConnectionNotice`] says so when the warm-up ends. Frames missing from the input (a step in the
+//! frames' times well above the frame period, [`FrameGaps`]) are stated on the decisions and lift-offs
+//! of their stances (`gap_frames`). Nothing here reads files or sockets, or prints.
 
 mod events;
+mod gaps;
 mod observer;
 mod profile;
 mod run;
 mod summary;
 
 pub use events::{
-    Classification, DecisionPoint, End, ErrorEvent, EventTiming, Liftoff, NoveltyVerdict,
-    Posteriors, SessionEvent, Touchdown, WholeStance, step_events,
+    Classification, DecisionPoint, EarlyDecisionEvent, EarlyRule, End, ErrorEvent, EventTiming,
+    Liftoff, NoveltyVerdict, Posteriors, SessionEvent, Touchdown, WholeStance, step_events,
 };
+pub use gaps::FrameGaps;
 pub use observer::{JsonLines, NoObserver, Observers, OwnedObservers, SessionObserver};
 pub use profile::{
     ProfileOverrides, check_overrides, check_profile, parse_profile, read_profile, resolve_profile,

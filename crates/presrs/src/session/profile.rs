@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use presrs_core::online::OnlineProfile;
+use presrs_core::online::{DecideAt, OnlineProfile};
 use presrs_core::pipeline::TrainedModel;
 use presrs_core::sample::SampleKind;
 use presrs_io::message::{Message, Opt};
@@ -20,8 +20,9 @@ pub struct ProfileOverrides {
     pub fuse: Vec<usize>,
     /// Terrain -> recommended gait, added to the profile's table.
     pub gait: Vec<(String, String)>,
-    /// A whole-stance model decides K frames after touchdown instead of at lift-off.
-    pub decide_at: Option<usize>,
+    /// A whole-stance model decides K frames after touchdown, or at its first confident decision
+    /// point (`auto`), instead of at lift-off.
+    pub decide_at: Option<DecideAt>,
 }
 
 /// The profile to run with: the JSON file `profile_file`, else one learned from the recordings of the
@@ -63,7 +64,8 @@ pub fn resolve_profile(
 }
 
 /// Whether `profile` suits `model` online: `decide_at` is for whole-stance models (a one-frame model
-/// decides on its sample frame), fusion for one-frame models. The error names the option.
+/// decides on its sample frame), and only for a moment the model was trained for
+/// ([`TrainedModel::trained_for`]); fusion is for one-frame models. The error names the option.
 pub fn check_profile(model: &TrainedModel, profile: &OnlineProfile) -> Result<()> {
     let whole = matches!(model.sample(), SampleKind::Stance { .. });
     if let (false, Some(k)) = (whole, profile.params.decide_at) {
@@ -74,12 +76,34 @@ pub fn check_profile(model: &TrainedModel, profile: &OnlineProfile) -> Result<()
             ),
         ));
     }
+    if let (true, Some(decide_at)) = (whole, profile.params.decide_at)
+        && let Err(trained) = model.trained_for(decide_at)
+    {
+        return Err(Error::invalid(
+            Message::from(format!(
+                "this model was not trained to decide at {decide_at} (it was trained for \
+                 {trained}), and a model decides only at the moments it was trained for: train one \
+                 for it with `presrs train`, "
+            ))
+            .opt_text(Opt::Sample, "stance")
+            .text(" and ")
+            .then(decide_at_option(decide_at)),
+        ));
+    }
     if whole && !profile.params.fusion_offsets.is_empty() {
         return Err(Error::invalid(fusion_with_a_whole_stance_model(
             &profile.params.fusion_offsets,
         )));
     }
     Ok(())
+}
+
+/// `decide_at` as the option that asks for it: `--decide-at 12`, `decide_at="auto"` in Python.
+fn decide_at_option(decide_at: DecideAt) -> Message {
+    match decide_at {
+        DecideAt::Frames(k) => Message::new().opt_is(Opt::DecideAt, k),
+        DecideAt::Auto(_) => Message::new().opt_text(Opt::DecideAt, "auto"),
+    }
 }
 
 /// Why fusion does not apply to a whole-stance model: the profile's `fusion_offsets` (which `--fuse`

@@ -11,6 +11,7 @@ use presrs_core::sample::SampleKind;
 use presrs_core::{FrameView, Grid};
 
 use super::events::{EventTiming, SessionEvent, step_events};
+use super::gaps::FrameGaps;
 use super::observer::SessionObserver;
 use super::summary::ConnectionSummary;
 use crate::error::Result;
@@ -60,12 +61,22 @@ struct Connection<'a, 'm> {
     notify: &'a dyn Fn(&ConnectionNotice),
     /// Errors reported so far (the first few are noticed).
     reported: u64,
+    /// Frames missing between the accepted ones, from their times.
+    gaps: FrameGaps,
 }
 
 impl Connection<'_, '_> {
     fn emit(&mut self, event: &SessionEvent) {
         if !self.observer.event(event) {
             self.summary.dropped_events += 1;
+        }
+    }
+
+    /// Emits the events of a step, each decision and lift-off with the frames missing in its stance.
+    fn emit_step(&mut self, mut events: Vec<SessionEvent>) {
+        for event in &mut events {
+            self.gaps.mark(event);
+            self.emit(event);
         }
     }
 
@@ -119,6 +130,8 @@ impl Connection<'_, '_> {
             {
                 Ok(step) => {
                     let latency_us = arrival.elapsed().as_secs_f64() * 1e6;
+                    // Before the step's events: a decision on this frame counts a gap just before it.
+                    self.gaps.frame(frames_before, timestamp_us);
                     // A frame taken but not classified is an `error` event (step_events) and one of
                     // the connection's errors.
                     let failed = step
@@ -132,7 +145,7 @@ impl Connection<'_, '_> {
                     };
                     let events = step_events(&step, self.model, self.profile, timing);
                     self.summary.errors += failed as u64;
-                    events.iter().for_each(|event| self.emit(event));
+                    self.emit_step(events);
                     Ok(())
                 }
                 Err(err) => Err(err.to_string()),
@@ -147,6 +160,7 @@ impl Connection<'_, '_> {
             }
             // Taken (frame `frames_before` of the stream), then not classified.
             Err(err) => {
+                self.gaps.frame(frames_before, timestamp_us);
                 format!("input frame {index} (frame {frames_before}): classification failed: {err}")
             }
         };
@@ -181,6 +195,7 @@ pub fn run_frames(
         observer,
         notify,
         reported: 0,
+        gaps: FrameGaps::default(),
     };
     let (mut values, mut present) = (Vec::new(), Vec::new());
     // Frames as they came (rejected ones included), for the messages; event frame indices count only
@@ -227,7 +242,7 @@ pub fn run_frames(
 fn finish(mut conn: Connection<'_, '_>, warming_up: bool) -> Result<ConnectionSummary> {
     let step = conn.classifier.finish()?;
     let events = step_events(&step, conn.model, conn.profile, EventTiming::default());
-    events.iter().for_each(|event| conn.emit(event));
+    conn.emit_step(events);
     conn.summary.stats = conn.classifier.stats();
     let frames = conn.summary.stats.frames;
     if warming_up && frames > 0 {

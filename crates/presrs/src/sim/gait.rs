@@ -358,9 +358,10 @@ pub struct TrackOptions {
     pub fixed_gaits: Vec<String>,
     /// The adaptive run's gait at the start line (default: the second configured gait).
     pub start_gait: Option<String>,
-    /// A whole-stance model decides K frames after touchdown instead of at lift-off (an error with a
-    /// one-frame model, as in `stream`).
-    pub decide_at: Option<usize>,
+    /// A whole-stance model decides K frames after touchdown, or at its first confident decision point
+    /// (`auto`), instead of at lift-off (an error with a one-frame model, and for a moment the model
+    /// was not trained for, as in `stream`).
+    pub decide_at: Option<presrs_core::online::DecideAt>,
     /// Whether a model that scores novelty may decide `unknown` (false: `--novelty off`).
     pub novelty: bool,
 }

@@ -1,6 +1,7 @@
 //! Training from a data set: the draw (condition, per class, validation share, seed), a fixed method or
 //! the automatic choice, the model file with its provenance, and the online profile.
 
+pub mod early;
 pub mod profile;
 pub mod sample_race;
 
@@ -191,6 +192,22 @@ pub fn train_with_progress(
             None => return Err(err).with_context(|| format!("{name}: training failed")),
         },
     };
+    let pool_indices: Vec<usize> = (0..dataset.samples.len())
+        .filter(|&i| {
+            options
+                .condition
+                .as_deref()
+                .is_none_or(|condition| dataset.samples[i].condition.as_deref() == Some(condition))
+        })
+        .collect();
+    let model = early::with_early_decisions(
+        model,
+        (dataset, method),
+        &pool_indices,
+        &split,
+        &labels,
+        options.seed,
+    )?;
     let mut warnings = Warnings::new();
     let model = if options.novelty {
         with_novelty(model, &train_images, &validation_images, &mut warnings)

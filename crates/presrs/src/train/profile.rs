@@ -15,6 +15,7 @@ use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Context, Error, Result};
 use crate::progress::Progress;
 use crate::sim::gait::{GaitSweep, MeasuredGaitTable, measure_gait_table};
+use crate::train::early::DecisionPoints;
 use crate::train::sample_race::{SampleRace, WholeSample, train_racing_samples};
 use crate::train::{
     TrainOptions, Training, learn_online_profile, train_with_progress, trained_on_movies,
@@ -32,6 +33,8 @@ pub struct TrainRequest<'a> {
     /// The whole sample `auto` races.
     pub whole: WholeSample,
     pub train: TrainOptions,
+    /// The decision points before lift-off a whole-stance model is trained for.
+    pub decide_at: DecisionPoints,
     pub profile: ProfileRequest<'a>,
     /// The command line stored in the model's provenance.
     pub command: Option<String>,
@@ -62,6 +65,18 @@ pub fn train_model_file(
     progress: &dyn Progress,
     data_read: &mut dyn FnMut(&Dataset, Option<&SampleRace>),
 ) -> Result<TrainedFile> {
+    let whole_stance = matches!(
+        request.sample,
+        SampleChoice::Kind(presrs_core::sample::SampleKind::Stance { .. })
+    );
+    if request.decide_at != DecisionPoints::Whole && !whole_stance {
+        return Err(Error::invalid(
+            presrs_io::message::Message::new()
+                .opt(presrs_io::message::Opt::DecideAt)
+                .text(" trains decision points before lift-off for a whole-stance model: use ")
+                .opt_is(presrs_io::message::Opt::Sample, "stance"),
+        ));
+    }
     let (dataset, training, race) = match request.sample {
         SampleChoice::Auto => {
             let raced = train_racing_samples(
@@ -79,7 +94,8 @@ pub fn train_model_file(
                 kind,
                 ..request.samples.clone()
             };
-            let dataset = Dataset::load(request.manifest, &options, progress)?;
+            let dataset =
+                load_with_points(request.manifest, options, &request.decide_at, progress)?;
             data_read(&dataset, None);
             progress.start("training", None);
             let training = train_with_progress(&dataset, &request.train, progress);
@@ -108,6 +124,27 @@ pub fn train_model_file(
         race,
         profile,
     })
+}
+
+/// The data set of `manifest` read with `options`, its stances also cut at the decision points
+/// `points` (`auto`'s resolved from the stances' lengths, read first).
+pub fn load_with_points(
+    manifest: &Path,
+    mut options: SampleOptions,
+    points: &DecisionPoints,
+    progress: &dyn Progress,
+) -> Result<Dataset> {
+    let stance_frames = match points {
+        DecisionPoints::Whole => return Dataset::load(manifest, &options, progress),
+        DecisionPoints::Frames(_) => Vec::new(),
+        DecisionPoints::Auto => {
+            Dataset::load(manifest, &options, progress)?
+                .stances
+                .stance_frames
+        }
+    };
+    options.decision_points = points.resolve(&stance_frames);
+    Dataset::load(manifest, &options, progress)
 }
 
 /// Whether a model file gets an online profile.

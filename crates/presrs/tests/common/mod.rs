@@ -4,7 +4,9 @@ use presrs::Dataset;
 use presrs::core::classifier::ClassifierKind;
 use presrs::core::crop::Crop;
 use presrs::core::features::{FeatureConfig, RocketFamily, RocketParams};
-use presrs::core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
+use presrs::core::pipeline::{
+    DecisionPoint, EarlyDecisions, LabeledImage, TrainConfig, TrainedModel, train, train_like,
+};
 use presrs::core::preprocess::Preprocess;
 use presrs::core::sample::SampleKind;
 
@@ -41,5 +43,31 @@ pub fn small_rocket_model(
     train(&images, &[], &config)
         .unwrap()
         .with_sample(sample)
+        .unwrap()
+}
+
+/// `model` (trained on `dataset`'s samples) with a classifier for each decision point the data set was
+/// read with ([`presrs::SampleOptions::decision_points`]), each trained by `model`'s method on the
+/// stances cut there; no `auto` threshold.
+#[allow(dead_code)]
+pub fn with_points(model: TrainedModel, dataset: &Dataset) -> TrainedModel {
+    let points = dataset
+        .stances
+        .points
+        .iter()
+        .map(|(frames, cuts)| {
+            let images: Vec<LabeledImage<'_>> = cuts
+                .iter()
+                .zip(&dataset.samples)
+                .map(|(cut, s)| LabeledImage::new(cut.view(), s.label.as_deref().unwrap()))
+                .collect();
+            DecisionPoint {
+                frames: *frames,
+                model: train_like(&model, &images, &[]).unwrap(),
+            }
+        })
+        .collect();
+    model
+        .with_early(EarlyDecisions { points, auto: None })
         .unwrap()
 }

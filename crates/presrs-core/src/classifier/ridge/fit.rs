@@ -4,15 +4,17 @@
 use faer::{Mat, MatRef, Par};
 
 use super::loo::Spectrum;
-use super::{RidgeConfig, RidgeModel};
+use super::{RidgeConfig, RidgeModel, Scaling};
 use crate::classifier::calibration::fit_temperature;
 use crate::classifier::common::{LabeledVectors, accuracy_of_scores, check_vectors};
 use crate::classifier::family::FitData;
 use crate::error::{CoreError, Result};
 
 impl RidgeModel {
-    /// Trains on the training and validation vectors together (see the module documentation).
-    pub(super) fn fit(config: &RidgeConfig, data: FitData<'_>) -> Result<Self> {
+    /// Trains on the training and validation vectors together (see the module documentation); with
+    /// `scaling` [`Scaling::Centred`] the features are only centred (each scale 1), as scikit-learn's
+    /// `RidgeClassifierCV` alone.
+    pub(super) fn fit(config: &RidgeConfig, data: FitData<'_>, scaling: Scaling) -> Result<Self> {
         config.check()?;
         let (dims, n_classes) = (data.dims, data.n_classes);
         check_vectors(&data.train, "ridge training vectors", dims, n_classes)?;
@@ -28,7 +30,10 @@ impl RidgeModel {
             .flat_map(|s| s.classes.iter().copied())
             .collect();
         require_every_class(&classes, n_classes)?;
-        let (means, scales) = standardisation(&sets, dims);
+        let (means, mut scales) = standardisation(&sets, dims);
+        if scaling == Scaling::Centred {
+            scales.fill(1.0);
+        }
         let standardised = standardise(&sets, &means, &scales);
         let z = MatRef::from_row_major_slice(&standardised, classes.len(), dims);
         let targets = targets(&classes, n_classes);

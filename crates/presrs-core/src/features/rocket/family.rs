@@ -1,11 +1,14 @@
 //! MiniRocket as a feature family (`--features rocket`). A sample's image is read as a series: its rows
 //! are the channels and its columns time (a whole stance's summary, a taxel x time array).
 //!
-//! Before the convolutions each channel is divided by its spread (standard deviation) over the training
-//! samples: a channel combination sums channels of different units (a load in the sensor's units, a
-//! centre of pressure in fractions of the grid), which would otherwise leave the combination to the
-//! channel of largest units. The scales and the fitted MiniRocket model are learned at training
-//! ([`FeatureFamily::fit`]) and stored in the model file with the settings.
+//! Two presets: `rocket` divides each channel by its spread (standard deviation) over the training
+//! samples before the convolutions (a channel combination sums channels of different units, a load in
+//! the sensor's units and a centre of pressure in fractions of the grid, which would otherwise leave the
+//! combination to the channel of largest units); `rocket_unscaled` convolves the channels in their own
+//! units, as aeon's MiniRocket does (on `jiku-walk` the scaling cost about 2 points). Which one a data
+//! set needs is the automatic choice's to validate. The scales (all 1 unscaled) and the fitted
+//! MiniRocket model are learned at training ([`FeatureFamily::fit`]) and stored in the model file with
+//! the settings.
 //!
 //! A series shorter than a kernel (9 values) is padded with zeros after its end to 9, at training and
 //! classification alike: a whole stance of a few frames is then that stance followed by no load, as
@@ -41,6 +44,10 @@ pub struct RocketParams {
     /// The seed of every random choice.
     #[serde(default)]
     pub seed: u64,
+    /// Whether each channel is divided by its spread over the training samples before the
+    /// convolutions (model files written before this setting existed scaled: the default).
+    #[serde(default = "scaled", skip_serializing_if = "is_scaled")]
+    pub channel_scaling: bool,
     /// Learned at training.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fitted: Option<FittedRocket>,
@@ -54,6 +61,15 @@ fn default_dilations() -> usize {
     RocketConfig::default().max_dilations_per_kernel
 }
 
+pub(super) fn scaled() -> bool {
+    true
+}
+
+/// (the default is not written, so that a scaled model's file reads as before)
+pub(super) fn is_scaled(channel_scaling: &bool) -> bool {
+    *channel_scaling
+}
+
 impl Default for RocketParams {
     fn default() -> Self {
         let config = RocketConfig::default();
@@ -61,6 +77,7 @@ impl Default for RocketParams {
             num_features: config.num_features,
             max_dilations_per_kernel: config.max_dilations_per_kernel,
             seed: config.seed,
+            channel_scaling: true,
             fitted: None,
         }
     }
@@ -102,9 +119,15 @@ pub fn padded_length(length: usize) -> usize {
 }
 
 /// `values` (series of `channels x length`, one after the other) each divided by its channel's scale
-/// and padded with zeros to [`padded_length`], into `out` (`channels x padded_length` per series).
-fn scale_and_pad(values: &[f64], length: usize, scales: &[f64], out: &mut [f64]) {
-    let padded = padded_length(length);
+/// and padded with zeros to `padded` values (at least `length`), into `out` (`channels x padded` per
+/// series).
+pub(super) fn scale_and_pad(
+    values: &[f64],
+    length: usize,
+    padded: usize,
+    scales: &[f64],
+    out: &mut [f64],
+) {
     let rows = values.chunks_exact(length.max(1));
     for ((row, dst), scale) in rows
         .zip(out.chunks_exact_mut(padded))
@@ -115,6 +138,17 @@ fn scale_and_pad(values: &[f64], length: usize, scales: &[f64], out: &mut [f64])
         }
         dst[length..].fill(0.0);
     }
+}
+
+/// `names` (each starting with the family's `name`) starting with `preset` instead.
+pub(super) fn with_preset(names: Vec<String>, name: &str, preset: &str) -> Vec<String> {
+    if name == preset {
+        return names;
+    }
+    names
+        .into_iter()
+        .map(|n| format!("{preset}{}", n.strip_prefix(name).unwrap_or(&n)))
+        .collect()
 }
 
 /// The fitted part, checked against the series' shape `grid` (channels x time).
@@ -148,14 +182,21 @@ fn fitted_for(params: &RocketParams, grid: Grid) -> Result<&FittedRocket> {
 
 impl FeatureFamily for RocketFamily {
     const NAME: &'static str = "rocket";
-    const PRESETS: &'static [&'static str] = &["rocket"];
+    const PRESETS: &'static [&'static str] = &["rocket", "rocket_unscaled"];
     const COSTLY: bool = true;
     const LEARNS: bool = true;
     type Config = RocketParams;
     type Extractor = RocketExtractor;
 
-    fn preset(_index: usize) -> RocketParams {
-        RocketParams::default()
+    fn preset(index: usize) -> RocketParams {
+        RocketParams {
+            channel_scaling: index == 0,
+            ..RocketParams::default()
+        }
+    }
+
+    fn preset_of(params: &RocketParams) -> usize {
+        usize::from(!params.channel_scaling)
     }
 
     fn check(params: &RocketParams) -> Result<()> {
@@ -183,6 +224,12 @@ impl FeatureFamily for RocketFamily {
                     reason: "every channel scale must be positive and finite".into(),
                 });
             }
+            if !params.channel_scaling && fitted.channel_scales.iter().any(|&s| s != 1.0) {
+                return Err(CoreError::Param {
+                    name: "channel_scales",
+                    reason: "an unscaled rocket model has every channel scale 1".into(),
+                });
+            }
         }
         Ok(())
     }
@@ -199,9 +246,13 @@ impl FeatureFamily for RocketFamily {
                 "rocket: no training series to fit on".into(),
             ));
         }
-        let channel_scales = channel_spreads(images);
+        let channel_scales = if params.channel_scaling {
+            channel_spreads(images)
+        } else {
+            vec![1.0; channels]
+        };
         let mut scaled = vec![0.0; images.len() * channels * padded];
-        scale_and_pad(images.values, length, &channel_scales, &mut scaled);
+        scale_and_pad(images.values, length, padded, &channel_scales, &mut scaled);
         let model = RocketModel::fit(&params.config(), &scaled, channels, padded)?;
         Ok(RocketParams {
             fitted: Some(FittedRocket {
@@ -221,11 +272,17 @@ impl FeatureFamily for RocketFamily {
     }
 
     fn feature_names(params: &RocketParams, grid: Grid) -> Result<Vec<String>> {
+        let preset = Self::PRESETS[Self::preset_of(params)];
         match &params.fitted {
-            Some(_) => Ok(fitted_for(params, grid)?.model.feature_names()),
+            // (`rocket_d1_k0_q0`, or `rocket_unscaled_d1_k0_q0`: each starts with its preset's name)
+            Some(_) => Ok(with_preset(
+                fitted_for(params, grid)?.model.feature_names(),
+                Self::NAME,
+                preset,
+            )),
             None => {
                 let len = Self::output_len(params, grid)?;
-                Ok((0..len).map(|i| format!("rocket_{i}")).collect())
+                Ok((0..len).map(|i| format!("{preset}_{i}")).collect())
             }
         }
     }
@@ -254,6 +311,7 @@ impl FeatureFamily for RocketFamily {
         scale_and_pad(
             image,
             extractor.grid.cols,
+            padded_length(extractor.grid.cols),
             &fitted.channel_scales,
             &mut extractor.scaled,
         );
@@ -265,7 +323,7 @@ impl FeatureFamily for RocketFamily {
 
 /// Each channel's standard deviation over every value of every training series (1 for a constant
 /// channel, which then stays as it is).
-fn channel_spreads(images: FitImages<'_>) -> Vec<f64> {
+pub(super) fn channel_spreads(images: FitImages<'_>) -> Vec<f64> {
     let Grid {
         rows: channels,
         cols: length,
@@ -408,6 +466,67 @@ mod tests {
                 })
                 .is_err()
         );
+    }
+
+    /// `rocket_unscaled` convolves the channels as they are: its scales are 1, its features the
+    /// oracle's on the raw series (not the scaled preset's), and its name survives the model file.
+    #[test]
+    fn the_unscaled_preset_convolves_the_raw_channels() {
+        let (channels, length) = (3, 20);
+        let grid = Grid::new(channels, length);
+        let values = series(6, channels, length, 0.0);
+        let images = FitImages {
+            grid,
+            values: &values,
+        };
+        let kind = crate::features::FeatureKind::parse("rocket_unscaled").unwrap();
+        let mut params = kind
+            .default_config()
+            .params::<RocketFamily>()
+            .unwrap()
+            .clone();
+        assert!(!params.channel_scaling);
+        params.num_features = 840;
+        let unscaled = FeatureConfig::of::<RocketFamily>(params.clone())
+            .fit(images)
+            .unwrap();
+        let scaled = FeatureConfig::of::<RocketFamily>(RocketParams {
+            channel_scaling: true,
+            ..params
+        })
+        .fit(images)
+        .unwrap();
+        let rocket = unscaled
+            .params::<RocketFamily>()
+            .unwrap()
+            .fitted
+            .clone()
+            .unwrap();
+        assert_eq!(rocket.channel_scales, vec![1.0; channels]);
+        let sample = series(1, channels, length, 1.0);
+        let features = unscaled.extractor(grid).unwrap().extract(&sample).unwrap();
+        assert_eq!(features, oracle::transform(&rocket.model, &sample));
+        let other = scaled.extractor(grid).unwrap().extract(&sample).unwrap();
+        assert_ne!(features, other, "the channels' units differ by 1e4");
+        assert_eq!(unscaled.name(), "rocket_unscaled");
+        assert_eq!(scaled.name(), "rocket");
+        let json = serde_json::to_string(&unscaled).unwrap();
+        assert!(json.contains(r#""channel_scaling":false"#), "{json}");
+        assert!(
+            !serde_json::to_string(&scaled)
+                .unwrap()
+                .contains("channel_scaling")
+        );
+        assert_eq!(
+            serde_json::from_str::<FeatureConfig>(&json).unwrap(),
+            unscaled
+        );
+        // An unscaled model with a scale other than 1 is damaged.
+        let mut damaged = unscaled.params::<RocketFamily>().unwrap().clone();
+        if let Some(fitted) = damaged.fitted.as_mut() {
+            fitted.channel_scales[0] = 2.0;
+        }
+        assert!(RocketFamily::check(&damaged).is_err());
     }
 
     #[test]

@@ -16,6 +16,9 @@
 //!   without allocating ([`RocketScratch`]), and of many samples in parallel;
 //! - [`family`]: MiniRocket as the feature family `rocket` (an image read as channels x time, its
 //!   channels scaled by their spread in the training samples);
+//! - [`multi`]: MultiRocket (Tan et al. 2022), the kernels on the series and on its first
+//!   differences, each convolution pooled four ways (PPV, LSPV, MPV, MIPV);
+//!   [`multi_family`] the feature family `multirocket`;
 //! - [`oracle`]: the same features by the definition, slowly (each output a dilated convolution summed
 //!   tap by tap), which the fast paths are tested against.
 //!
@@ -33,10 +36,13 @@ pub mod family;
 pub mod fit;
 pub mod kernels;
 pub mod model;
+pub mod multi;
+pub mod multi_family;
 pub mod oracle;
 pub mod plan;
 pub mod transform;
 
 pub use config::RocketConfig;
 pub use model::RocketModel;
+pub use multi::{MultiRocketConfig, MultiRocketModel, MultiRocketScratch};
 pub use transform::RocketScratch;

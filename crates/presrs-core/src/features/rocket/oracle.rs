@@ -6,6 +6,7 @@
 
 use super::kernels::{KERNEL_LENGTH, kernel_weights};
 use super::model::{Combination, RocketModel};
+use super::multi::{MultiRocketModel, POOLS};
 use super::plan::{quantile_level, quantile_of_sorted};
 
 /// The convolution output of `combination` at position `t` of `sample` (`channels x length`).
@@ -66,4 +67,60 @@ pub fn biases(model: &RocketModel, samples: &[f64]) -> Vec<f64> {
         }
     }
     biases
+}
+
+/// MultiRocket's features of one sample by the definition: each representation (the series, then its
+/// first differences computed here) convolved output by output, and each bias's four pooled values
+/// computed from the list of outputs above and below it (see [`super::multi`]).
+pub fn multi_transform(model: &MultiRocketModel, sample: &[f64]) -> Vec<f64> {
+    let (channels, length) = (model.channels(), model.length());
+    let differences: Vec<f64> = (0..channels)
+        .flat_map(|c| {
+            let row = &sample[c * length..(c + 1) * length];
+            (1..length).map(move |t| row[t] - row[t - 1])
+        })
+        .collect();
+    let mut features = Vec::with_capacity(model.output_len());
+    for (rocket, series) in [
+        (model.series(), sample),
+        (model.differences(), &differences[..]),
+    ] {
+        let mut blocks = vec![vec![0.0; rocket.output_len()]; POOLS];
+        for combination in rocket.combinations() {
+            let outputs: Vec<f64> = combination
+                .outputs
+                .clone()
+                .map(|t| convolution_at(&combination, series, rocket.length(), t))
+                .collect();
+            for feature in combination.features.clone() {
+                let pooled = pooled_by_definition(&outputs, rocket.biases()[feature]);
+                for (block, value) in blocks.iter_mut().zip(pooled) {
+                    block[feature] = value;
+                }
+            }
+        }
+        features.extend(blocks.into_iter().flatten());
+    }
+    features
+}
+
+/// PPV, LSPV, MPV, MIPV of `outputs` against `bias`: the positions above it and below it listed,
+/// then each operator from its list.
+fn pooled_by_definition(outputs: &[f64], bias: f64) -> [f64; POOLS] {
+    let above: Vec<usize> = (0..outputs.len()).filter(|&t| outputs[t] > bias).collect();
+    let below: Vec<usize> = (0..outputs.len()).filter(|&t| outputs[t] < bias).collect();
+    // The stretches between consecutive outputs below the bias, the first and last outputs as bounds.
+    let bounds: Vec<usize> = std::iter::once(0)
+        .chain(below.iter().copied())
+        .chain(std::iter::once(outputs.len() - 1))
+        .collect();
+    let longest = bounds.windows(2).map(|w| w[1].saturating_sub(w[0])).max();
+    let n = above.len() as f64;
+    let ppv = n / outputs.len() as f64;
+    if above.is_empty() {
+        return [ppv, longest.unwrap_or(0) as f64, 0.0, -1.0];
+    }
+    let mpv = above.iter().map(|&t| outputs[t] + bias).sum::<f64>() / n;
+    let mipv = above.iter().sum::<usize>() as f64 / n;
+    [ppv, longest.unwrap_or(0) as f64, mpv, mipv]
 }

@@ -184,6 +184,27 @@ impl RocketModel {
     ) -> Result<()> {
         check_len("rocket sample", self.sample_len(), sample.len())?;
         check_len("rocket feature buffer", self.output_len(), out.len())?;
+        self.for_each_convolution(sample, scratch, |combination, conv, counts| {
+            let counted = conv.len();
+            let features = combination.features.clone();
+            let counts = &mut counts[..features.len()];
+            count_greater(conv, &self.biases[features.clone()], counts);
+            for (dst, &count) in out[features].iter_mut().zip(counts.iter()) {
+                *dst = count as f64 / counted as f64;
+            }
+        })
+    }
+
+    /// Walks every kernel and dilation of the model over `sample` (checked: its length and finite
+    /// values), calling `pool` with the combination, its counted convolution outputs (each output of
+    /// [`Combination::outputs`], in order) and a buffer of at least as many counts as it has features.
+    pub(super) fn for_each_convolution(
+        &self,
+        sample: &[f64],
+        scratch: &mut RocketScratch,
+        mut pool: impl FnMut(&Combination<'_>, &[f64], &mut [u64]),
+    ) -> Result<()> {
+        check_len("rocket sample", self.sample_len(), sample.len())?;
         check_finite(sample, self.channels, self.length, "rocket sample")?;
         self.prepare(scratch);
         for (channel, series) in sample.chunks_exact(self.length).enumerate() {
@@ -199,16 +220,7 @@ impl RocketModel {
             }
             scratch.convolve(&combination, combination.outputs.clone());
             let counted = combination.outputs.len();
-            let features = combination.features;
-            let counts = &mut scratch.counts[..features.len()];
-            count_greater(
-                &scratch.conv[..counted],
-                &self.biases[features.clone()],
-                counts,
-            );
-            for (dst, &count) in out[features].iter_mut().zip(counts.iter()) {
-                *dst = count as f64 / counted as f64;
-            }
+            pool(&combination, &scratch.conv[..counted], &mut scratch.counts);
         }
         Ok(())
     }

@@ -79,6 +79,7 @@ pub(crate) use events::MAX_SEG_EVENTS;
 pub use events::{Liftoff, SegEvent, SegEvents, Touchdown};
 pub use floor::MIN_REST_FRAMES;
 pub use settings::{
-    Calibration, MAX_FUSION_FRAMES, MAX_OFFSET_FRAMES, MIN_QUIET_FRAMES, OnlineParams,
-    PAPER_SAMPLE_OFFSET, RANGE_PRIOR_FRACTION, sample_offset_for, typical_stance_frames,
+    AutoWord, Calibration, DecideAt, MAX_FUSION_FRAMES, MAX_OFFSET_FRAMES, MIN_QUIET_FRAMES,
+    OnlineParams, PAPER_SAMPLE_OFFSET, RANGE_PRIOR_FRACTION, sample_offset_for,
+    typical_stance_frames,
 };

@@ -90,6 +90,58 @@ pub fn typical_stance_frames(stance_lengths: &[usize]) -> Option<usize> {
     lengths.get(lengths.len().saturating_sub(1) / 2).copied()
 }
 
+/// When a whole-stance model decides before lift-off: `K` frames after touchdown, or at the first of its
+/// decision points whose calibrated confidence passes its learned threshold (`auto`). Written as a
+/// number or `"auto"`; read from either, or from the text `K`/`auto` ([`std::str::FromStr`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum DecideAt {
+    /// `K` frames after touchdown, on the stance so far (its `K + 1` frames).
+    Frames(usize),
+    /// At the first decision point whose confidence passes the model's threshold (else at lift-off).
+    Auto(AutoWord),
+}
+
+/// The word `auto` of [`DecideAt::Auto`] in JSON.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AutoWord {
+    Auto,
+}
+
+impl DecideAt {
+    /// `auto`.
+    pub const AUTO: Self = Self::Auto(AutoWord::Auto);
+
+    /// Whether this is `auto`.
+    pub fn is_auto(self) -> bool {
+        self == Self::AUTO
+    }
+}
+
+impl std::fmt::Display for DecideAt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Frames(k) => write!(f, "{k}"),
+            Self::Auto(_) => f.write_str("auto"),
+        }
+    }
+}
+
+impl std::str::FromStr for DecideAt {
+    type Err = String;
+
+    /// `auto`, or `K` frames after touchdown.
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        match text.trim() {
+            "auto" => Ok(Self::AUTO),
+            other => other.parse().map(Self::Frames).map_err(|_| {
+                format!("expected auto or a number of frames after touchdown, got {other:?}")
+            }),
+        }
+    }
+}
+
 /// Settings of the online detector and classifier beyond the offline [`SegmentParams`](crate::stance::SegmentParams).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -104,10 +156,13 @@ pub struct OnlineParams {
     pub warmup_frames: usize,
     /// For a whole-stance model (trained on stance samples): decide `K` frames after touchdown, on the
     /// stance so far (frames touchdown to touchdown + K, zero-padded as offline), instead of at
-    /// lift-off (`None`, the default). At most [`MAX_OFFSET_FRAMES`]. A one-frame model has no use for
-    /// it (it decides on frame [`Self::sample_offset`]): the online classifier refuses it there.
+    /// lift-off (`None`, the default); or [`DecideAt::Auto`], at the first decision point whose
+    /// confidence passes the threshold learned at training. At most [`MAX_OFFSET_FRAMES`]. A model
+    /// decides only at points it was trained for (its decision points, or its whole length); a
+    /// one-frame model has no use for it (it decides on frame [`Self::sample_offset`]): the online
+    /// classifier refuses both.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub decide_at: Option<usize>,
+    pub decide_at: Option<DecideAt>,
 }
 
 impl Default for OnlineParams {
@@ -132,7 +187,7 @@ impl OnlineParams {
                 ),
             });
         }
-        if let Some(k) = self.decide_at
+        if let Some(DecideAt::Frames(k)) = self.decide_at
             && k > MAX_OFFSET_FRAMES
         {
             return Err(CoreError::Param {
@@ -191,10 +246,20 @@ mod tests {
         assert_eq!(old.decide_at, None);
         assert!(!serde_json::to_string(&old).unwrap().contains("decide_at"));
         let k: OnlineParams = serde_json::from_str(r#"{"decide_at": 9}"#).unwrap();
-        assert_eq!(k.decide_at, Some(9));
+        assert_eq!(k.decide_at, Some(DecideAt::Frames(9)));
+        let auto: OnlineParams = serde_json::from_str(r#"{"decide_at": "auto"}"#).unwrap();
+        assert_eq!(auto.decide_at, Some(DecideAt::AUTO));
+        assert!(
+            serde_json::to_string(&auto)
+                .unwrap()
+                .contains(r#""decide_at":"auto""#)
+        );
+        assert_eq!("auto".parse::<DecideAt>(), Ok(DecideAt::AUTO));
+        assert_eq!(" 12".parse::<DecideAt>(), Ok(DecideAt::Frames(12)));
+        assert!("soon".parse::<DecideAt>().is_err());
         assert!(k.check().is_ok());
         let far = OnlineParams {
-            decide_at: Some(MAX_OFFSET_FRAMES + 1),
+            decide_at: Some(DecideAt::Frames(MAX_OFFSET_FRAMES + 1)),
             ..OnlineParams::default()
         };
         assert!(far.check().unwrap_err().to_string().contains("decide_at"));

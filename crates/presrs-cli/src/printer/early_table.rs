@@ -1,0 +1,67 @@
+//! The table of `eval --decide-at`: accuracy against decision time (frames and ms after touchdown) of
+//! the classifiers trained for each decision point, the one-frame model at the same offsets beside
+//! them, and `auto`'s accuracy and mean decision time.
+
+use std::fmt::Write;
+
+use presrs::eval::early::EarlyEvaluation;
+
+/// The early decisions' table and `auto`'s line, as `eval --decide-at` prints them.
+pub fn early_table(early: &EarlyEvaluation) -> String {
+    let ms = |value: Option<f64>| value.map_or_else(|| "-".to_owned(), |ms| format!("{ms:.0}"));
+    let median = format!(
+        "{} frames{}",
+        early.median_stance_frames,
+        early
+            .median_stance_ms
+            .map_or_else(String::new, |ms| format!(", {ms:.0} ms"))
+    );
+    let mut out = format!(
+        "early decisions ({} held-out stances, {} folds; median stance {median}):\n",
+        early.tested, early.folds
+    );
+    let _ = writeln!(
+        out,
+        "{:>8} {:>8} {:>10} {:>16} {:>16}",
+        "frames", "ms", "of median", "stance model %", "one frame %"
+    );
+    for point in &early.points {
+        let frame = point.frame_accuracy.map_or_else(
+            || "-".to_owned(),
+            |a| format!("{:.1} (n={})", 100.0 * a, point.frame_tested),
+        );
+        let _ = writeln!(
+            out,
+            "{:>8} {:>8} {:>9.0}% {:>16.1} {:>16}",
+            point.frames,
+            ms(point.ms),
+            100.0 * point.share_of_median_stance,
+            100.0 * point.accuracy,
+            frame
+        );
+    }
+    let _ = writeln!(
+        out,
+        "{:>8} {:>8} {:>10} {:>16.1} {:>16}",
+        "lift-off",
+        "-",
+        "100%",
+        100.0 * early.whole_accuracy,
+        "-"
+    );
+    let auto = &early.auto;
+    let _ = writeln!(
+        out,
+        "auto: {:.1} % (whole stance {:.1} %), mean decision {:.1} frames ({} ms) after touchdown: \
+         {:.0} % of the median stance, {:.0} % of each stance on average; {:.0} % decided before \
+         lift-off",
+        100.0 * auto.accuracy,
+        100.0 * early.whole_accuracy,
+        auto.mean_frames,
+        ms(auto.mean_ms),
+        100.0 * auto.mean_over_median_stance,
+        100.0 * auto.mean_share_of_stance,
+        100.0 * auto.decided_early
+    );
+    out
+}

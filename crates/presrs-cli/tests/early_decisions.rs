@@ -1,0 +1,192 @@
+//! Early decisions on the command line, with whole-stance models trained on the shared `jiku-walk`
+//! movies (one contact each): `train --decide-at` stores the decision points, and a `--decide-at` the
+//! model was not trained for is refused by `stream`, `ros2` and `simulate` before any frame or graph,
+//! with how to train one; `eval --decide-at` prints the curve and `auto`'s line.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{presrs, stderr, stdout};
+
+fn shared(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(path)
+}
+
+/// A small whole-stance model of every `jiku-walk` movie, with `extra` options.
+fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    let out = dir.join(name);
+    let manifest = shared("real/jiku-walk/manifest.csv");
+    let mut args = vec![
+        "train",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--sample",
+        "stance",
+        "--one-sample-per-file",
+        "--features",
+        "rocket",
+        "--classifier",
+        "lda",
+        "--dims",
+        "20",
+    ];
+    args.extend_from_slice(extra);
+    let output = presrs(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    out
+}
+
+/// The refusal of `decide_at` by `command` with `model`: an error naming the option and how to train
+/// for it, and nothing on stdout.
+fn assert_refused(args: &[&str], decide_at: &str) {
+    let output = presrs(args);
+    assert!(!output.status.success(), "{args:?} ran");
+    let err = stderr(&output);
+    assert!(
+        err.contains(&format!("not trained to decide at {decide_at}")),
+        "{args:?}: {err}"
+    );
+    assert!(
+        err.contains("presrs train") && err.contains(&format!("--decide-at {decide_at}")),
+        "{args:?}: {err}"
+    );
+    assert!(
+        err.contains("--sample stance"),
+        "{args:?}: how to train: {err}"
+    );
+    assert!(stdout(&output).is_empty(), "{args:?}: {}", stdout(&output));
+}
+
+#[test]
+fn a_moment_the_model_was_not_trained_for_is_refused_by_every_command_line_face() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = train(dir.path(), "whole.json", &[]);
+    let points = train(dir.path(), "points.json", &["--decide-at", "8,16,whole"]);
+    let stored: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&points).unwrap()).unwrap();
+    let frames: Vec<u64> = stored["model"]["early"]["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["frames"].as_u64().unwrap())
+        .collect();
+    assert_eq!(frames, [8, 16]);
+    assert!(stored["model"]["early"]["auto"]["threshold"].is_number());
+    for (model, decide_at) in [(&whole, "8"), (&whole, "auto"), (&points, "12")] {
+        let model = model.to_str().unwrap();
+        assert_refused(
+            &["stream", "--model", model, "--decide-at", decide_at],
+            decide_at,
+        );
+        assert_refused(
+            &[
+                "ros2",
+                "--model",
+                model,
+                "--input",
+                "/foot/pressure",
+                "--decide-at",
+                decide_at,
+            ],
+            decide_at,
+        );
+        assert_refused(
+            &[
+                "simulate",
+                "--track",
+                "wood:1",
+                "--adaptive",
+                model,
+                "--decide-at",
+                decide_at,
+            ],
+            decide_at,
+        );
+    }
+    // What the model was trained for starts (stdin closed at once: the stream reads, finds no frame,
+    // and ends with its summary line).
+    for decide_at in ["8", "auto"] {
+        let output = presrs(&[
+            "stream",
+            "--model",
+            points.to_str().unwrap(),
+            "--decide-at",
+            decide_at,
+        ]);
+        let err = stderr(&output);
+        assert!(!err.contains("not trained"), "{decide_at}: {err}");
+        assert!(err.contains("0 frames, 0 stances"), "{decide_at}: {err}");
+    }
+}
+
+/// `eval --decide-at` on a few `jiku-walk` subjects' movies, leave one subject out: the table of the
+/// points (the one-frame model beside each) and `auto`'s line on stdout, and with `--report` the HTML
+/// report's section of accuracy against decision time, its figure beside the page.
+#[test]
+fn eval_decide_at_prints_the_curve_and_reports_it() {
+    let dir = tempfile::tempdir().unwrap();
+    // Thirty movies of each subject keep the run short.
+    let source = std::fs::read_to_string(shared("real/jiku-walk/manifest.csv")).unwrap();
+    let mut rows = vec![source.lines().next().unwrap().to_owned()];
+    for subject in ["s00", "s01"] {
+        rows.extend(
+            source
+                .lines()
+                .filter(|line| line.starts_with(subject))
+                .take(30)
+                .map(|line| {
+                    let path = shared("real/jiku-walk").join(line.split(',').next().unwrap());
+                    let rest = line.split_once(',').unwrap().1;
+                    format!("{},{rest}", path.display())
+                }),
+        );
+    }
+    let manifest = dir.path().join("manifest.csv");
+    std::fs::write(&manifest, rows.join("\n") + "\n").unwrap();
+    let report = dir.path().join("report");
+    let output = presrs(&[
+        "eval",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--sample",
+        "stance",
+        "--one-sample-per-file",
+        "--leave-one-out",
+        "group",
+        "--repeats",
+        "1",
+        "--features",
+        "rocket",
+        "--classifier",
+        "lda",
+        "--dims",
+        "10",
+        "--decide-at",
+        "8,16",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = stdout(&output);
+    assert!(
+        table.contains("early decisions (60 held-out stances, 2 folds"),
+        "{table}"
+    );
+    assert!(table.contains("one frame %") && table.contains("lift-off"));
+    assert!(table.contains("auto: "), "{table}");
+    let page = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(
+        page.contains("Early decisions: accuracy against decision time"),
+        "no early section"
+    );
+    assert!(page.contains("8.0 frames") && page.contains("16.0 frames"));
+    assert!(page.contains("auto: mean"));
+    assert!(report.join("early_decisions.png").is_file());
+}

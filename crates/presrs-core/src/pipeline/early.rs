@@ -1,0 +1,525 @@
+//! Early decisions (anytime classification) of a whole-stance model: one classifier per decision point
+//! before lift-off, each trained on the training stances cut at its point (the same method as the
+//! whole-stance classifier: crop, features, projection and classifier family), and the confidence
+//! threshold with which `auto` decides at the first point that passes it (the idea of TEASER,
+//! Schäfer and Leser 2020, and of ECTS: decide when the prediction is safe, not at a fixed frame).
+//!
+//! A point `K` is the stance's first `K + 1` frames (frames touchdown to touchdown + K), summarised as
+//! the online [`StanceBuffer`](crate::online::StanceBuffer) summarises them, as a sample of its own
+//! length, `K + 1` frames (not zero-padded to the whole stance's: the features see only the frames
+//! there are). A stance that lifts off before frame `K` is decided at its lift-off, whole, by the
+//! whole-stance classifier, online and here alike.
+//!
+//! **The threshold** is learned from out-of-sample confidences: the training and validation stances are
+//! split into the automatic choice's inner folds (by group, condition or stratified splits), each fold's
+//! classifiers are trained on the rest, and each held-out stance is classified at every point and
+//! whole. The rule: the lowest threshold (among the confidences seen, and "never") at which the
+//! early decisions are safe *with a margin for the few stances validation has*: over the stances
+//! `auto` decides before their lift-off, the Wilson lower bound (z = [`AUTO_BOUND_Z`]) of its
+//! accuracy is at most [`AUTO_TOLERANCE`] below the whole-stance classifier's accuracy on the same
+//! stances. A point estimate alone let one subject's 60 stances, where early points look as good as
+//! the whole stance, set a threshold that was too bold on another subject.
+
+use crate::error::{CoreError, Result};
+use crate::pipeline::extract::LabeledImage;
+use crate::pipeline::model::{AutoThreshold, DecisionPoint, EarlyDecisions, TrainedModel};
+use crate::pipeline::train::train;
+use crate::selection::ValidateBy;
+use crate::selection::folds::make_folds;
+
+/// How far below the whole-stance classifier's validation accuracy the lower bound of `auto`'s early
+/// decisions' accuracy may fall (two points: the loss the early decision may cost).
+pub const AUTO_TOLERANCE: f64 = 0.02;
+
+/// The z of the lower bound on the early decisions' validation accuracy (one-sided, about 84 %).
+pub const AUTO_BOUND_Z: f64 = 1.0;
+
+/// Stances as images for early decisions: each whole (laid into the model's length), each cut at every
+/// point `K` (laid into `K + 1` frames), and each stance's length; all in the same order.
+#[derive(Clone, Debug, Default)]
+pub struct StanceImages<'a> {
+    pub whole: Vec<LabeledImage<'a>>,
+    /// Per point (its frames after touchdown), the stances cut there.
+    pub cuts: Vec<(usize, Vec<LabeledImage<'a>>)>,
+    /// Each stance's length, frames.
+    pub stance_frames: Vec<usize>,
+}
+
+impl<'a> StanceImages<'a> {
+    /// The stances at `indices`, in that order.
+    pub fn select(&self, indices: &[usize]) -> Self {
+        let pick = |images: &[LabeledImage<'a>]| indices.iter().map(|&i| images[i]).collect();
+        Self {
+            whole: pick(&self.whole),
+            cuts: self
+                .cuts
+                .iter()
+                .map(|(frames, images)| (*frames, pick(images)))
+                .collect(),
+            stance_frames: indices.iter().map(|&i| self.stance_frames[i]).collect(),
+        }
+    }
+
+    /// These stances followed by `other`'s (the same points).
+    pub fn joined(&self, other: &Self) -> Self {
+        let mut all = self.clone();
+        all.whole.extend_from_slice(&other.whole);
+        for ((_, mine), (_, theirs)) in all.cuts.iter_mut().zip(&other.cuts) {
+            mine.extend_from_slice(theirs);
+        }
+        all.stance_frames.extend_from_slice(&other.stance_frames);
+        all
+    }
+
+    fn check(&self) -> Result<()> {
+        let n = self.whole.len();
+        if self.stance_frames.len() != n || self.cuts.iter().any(|(_, cut)| cut.len() != n) {
+            return Err(CoreError::Param {
+                name: "stance images",
+                reason: "every point needs each stance cut there, and each stance its length"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// One stance classified at every point and whole, by models that did not train on it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeldOutStance {
+    pub class: usize,
+    pub stance_frames: usize,
+    /// Per point: class and confidence (`None`: the stance lifts off before the point).
+    pub points: Vec<Option<(usize, f64)>>,
+    pub whole: (usize, f64),
+}
+
+/// What `auto` (or a fixed point) decided for one stance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OfflineDecision {
+    pub class: usize,
+    pub confidence: f64,
+    /// Frames after touchdown (the stance's length when decided at lift-off).
+    pub frame: usize,
+    /// The point that decided (`None`: the whole-stance classifier at lift-off).
+    pub point: Option<usize>,
+}
+
+impl HeldOutStance {
+    /// `auto`'s decision with `threshold` over points `frames`: the first point whose confidence is at
+    /// least the threshold, else the whole stance at its lift-off.
+    pub fn decide(&self, frames: &[usize], threshold: f64) -> OfflineDecision {
+        for (index, (&k, outcome)) in frames.iter().zip(&self.points).enumerate() {
+            if let Some((class, confidence)) = *outcome
+                && confidence >= threshold
+            {
+                return OfflineDecision {
+                    class,
+                    confidence,
+                    frame: k,
+                    point: Some(index),
+                };
+            }
+        }
+        OfflineDecision {
+            class: self.whole.0,
+            confidence: self.whole.1,
+            frame: self.stance_frames,
+            point: None,
+        }
+    }
+}
+
+/// Trains a decision point's classifier on the stances cut there (training, validation): how a
+/// whole-stance model from the automatic choice has a method chosen for each point (the method that
+/// suits the whole stance need not suit its first frames).
+pub type ChoosePoint<'f> =
+    &'f dyn Fn(&[LabeledImage<'_>], &[LabeledImage<'_>]) -> Result<TrainedModel>;
+
+/// Trains the early decisions of `whole` (a whole-stance model trained on `train.whole` with
+/// `validation.whole` validating): each point's model on the stances cut there, by `choose` when
+/// given (a method chosen per point) or else with the whole model's method, and `auto`'s threshold
+/// from the inner folds of all those stances, each point retrained there with its own method (see the
+/// module docs).
+pub fn train_early(
+    whole: &TrainedModel,
+    train_set: &StanceImages<'_>,
+    validation: &StanceImages<'_>,
+    choose: Option<ChoosePoint<'_>>,
+    seed: u64,
+) -> Result<EarlyDecisions> {
+    train_set.check()?;
+    validation.check()?;
+    let length = whole.image_grid().cols;
+    let mut points = Vec::new();
+    for ((frames, cut), (_, cut_validation)) in train_set.cuts.iter().zip(&validation.cuts) {
+        if frames + 1 >= length {
+            continue;
+        }
+        let model = match choose {
+            Some(choose) => choose(cut, cut_validation)?.with_sample(whole.sample())?,
+            None => train_like(whole, cut, cut_validation)?,
+        };
+        points.push(DecisionPoint {
+            frames: *frames,
+            model,
+        });
+    }
+    let all = train_set.joined(validation);
+    let held_out = held_out_stances(whole, &all, &points, seed)?;
+    let kept: Vec<usize> = points.iter().map(|p| p.frames).collect();
+    let auto = learn_threshold(&held_out, &kept);
+    let early = EarlyDecisions {
+        points,
+        auto: Some(auto),
+    };
+    early.check(whole)?;
+    Ok(early)
+}
+
+/// A model trained with `like`'s method (its configuration) and sample kind.
+pub fn train_like(
+    like: &TrainedModel,
+    train_images: &[LabeledImage<'_>],
+    validation: &[LabeledImage<'_>],
+) -> Result<TrainedModel> {
+    let config = like.summary().config.clone().check()?;
+    train(train_images, validation, &config)?.with_sample(like.sample())
+}
+
+/// Every stance of `all` held out once (the inner folds of the automatic choice) and classified at
+/// `points` and whole by models of their methods (`whole`'s, and each point's own) trained on the
+/// fold's others.
+pub fn held_out_stances(
+    whole: &TrainedModel,
+    all: &StanceImages<'_>,
+    points: &[DecisionPoint],
+    seed: u64,
+) -> Result<Vec<HeldOutStance>> {
+    let folds = make_folds(&all.whole, ValidateBy::Auto, seed)?;
+    let mut held_out = Vec::new();
+    for fold in &folds.folds {
+        let train_part = all.select(&fold.train);
+        let validation_part = all.select(&fold.validation);
+        let test = all.select(&fold.test);
+        held_out.extend(classify_held_out(
+            whole,
+            &train_part,
+            &validation_part,
+            &test,
+            points,
+        )?);
+    }
+    Ok(held_out)
+}
+
+/// `test`'s stances classified at every point of `points` and whole, by models of `like`'s method
+/// (whole) and each point's (its own model's) trained on `train_part` (validated on `validation`).
+pub fn classify_held_out(
+    like: &TrainedModel,
+    train_part: &StanceImages<'_>,
+    validation: &StanceImages<'_>,
+    test: &StanceImages<'_>,
+    points: &[DecisionPoint],
+) -> Result<Vec<HeldOutStance>> {
+    let whole_model = train_like(like, &train_part.whole, &validation.whole)?;
+    let class_names = whole_model.class_names().to_vec();
+    let outcomes =
+        |model: &TrainedModel, images: &[LabeledImage<'_>]| -> Result<Vec<(usize, f64)>> {
+            let views: Vec<_> = images.iter().map(|image| image.frame).collect();
+            model
+                .classify_batch(&views)
+                .into_iter()
+                .map(|result| result.map(|c| (c.class, c.confidence)))
+                .collect()
+        };
+    let whole = outcomes(&whole_model, &test.whole)?;
+    let mut per_point = Vec::new();
+    for point in points {
+        let k = point.frames;
+        let model = train_like(&point.model, &cut_at(train_part, k), &cut_at(validation, k))?;
+        per_point.push(outcomes(&model, &cut_at(test, k))?);
+    }
+    test.whole
+        .iter()
+        .enumerate()
+        .map(|(i, image)| {
+            let class = class_names
+                .iter()
+                .position(|name| name == image.label)
+                .ok_or_else(|| CoreError::Param {
+                    name: "label",
+                    reason: format!("held-out class {:?} was not trained on", image.label),
+                })?;
+            let stance_frames = test.stance_frames[i];
+            Ok(HeldOutStance {
+                class,
+                stance_frames,
+                points: points
+                    .iter()
+                    .zip(&per_point)
+                    .map(|(point, outcome)| (point.frames < stance_frames).then(|| outcome[i]))
+                    .collect(),
+                whole: whole[i],
+            })
+        })
+        .collect()
+}
+
+/// `test`'s stances classified by `model` (whole) and its decision points (each stance cut at every
+/// point its own images hold), for an evaluation of early decisions on stances it did not train on.
+pub fn classify_stances(
+    model: &TrainedModel,
+    test: &StanceImages<'_>,
+) -> Result<Vec<HeldOutStance>> {
+    test.check()?;
+    let early = model.early().ok_or_else(|| CoreError::Param {
+        name: "early decisions",
+        reason: "the model has no decision points".into(),
+    })?;
+    let outcomes =
+        |model: &TrainedModel, images: &[LabeledImage<'_>]| -> Result<Vec<(usize, f64)>> {
+            let views: Vec<_> = images.iter().map(|image| image.frame).collect();
+            model
+                .classify_batch(&views)
+                .into_iter()
+                .map(|result| result.map(|c| (c.class, c.confidence)))
+                .collect()
+        };
+    let whole = outcomes(model, &test.whole)?;
+    let mut per_point = Vec::new();
+    for point in &early.points {
+        let images = test
+            .cuts
+            .iter()
+            .find(|(frames, _)| *frames == point.frames)
+            .map(|(_, images)| images.as_slice())
+            .ok_or_else(|| CoreError::Param {
+                name: "stance images",
+                reason: format!("no stances cut at point {}", point.frames),
+            })?;
+        per_point.push(outcomes(&point.model, images)?);
+    }
+    test.whole
+        .iter()
+        .enumerate()
+        .map(|(i, image)| {
+            let class = model
+                .class_names()
+                .iter()
+                .position(|name| name == image.label)
+                .unwrap_or(usize::MAX);
+            let stance_frames = test.stance_frames[i];
+            Ok(HeldOutStance {
+                class,
+                stance_frames,
+                points: early
+                    .points
+                    .iter()
+                    .zip(&per_point)
+                    .map(|(point, outcome)| (point.frames < stance_frames).then(|| outcome[i]))
+                    .collect(),
+                whole: whole[i],
+            })
+        })
+        .collect()
+}
+
+/// The stances of `set` cut at point `k` (none when it holds no such cut).
+fn cut_at<'a>(set: &StanceImages<'a>, k: usize) -> Vec<LabeledImage<'a>> {
+    set.cuts
+        .iter()
+        .find(|(frames, _)| *frames == k)
+        .map(|(_, images)| images.clone())
+        .unwrap_or_default()
+}
+
+/// The rule of the module docs over `held_out` stances: the lowest threshold whose early decisions'
+/// accuracy, at its lower bound, is within [`AUTO_TOLERANCE`] of the whole-stance classifier's on
+/// the same stances.
+pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThreshold {
+    let never = 1.0 + f64::EPSILON.sqrt();
+    let whole_accuracy = accuracy(held_out, |stance| stance.whole.0);
+    let mut candidates: Vec<f64> = held_out
+        .iter()
+        .flat_map(|stance| stance.points.iter().flatten().map(|&(_, c)| c))
+        .collect();
+    candidates.push(never);
+    candidates.sort_by(f64::total_cmp);
+    candidates.dedup();
+    let threshold = candidates
+        .iter()
+        .copied()
+        .find(|&t| early_decisions_are_safe(held_out, frames, t))
+        .unwrap_or(never);
+    let decisions: Vec<OfflineDecision> = held_out
+        .iter()
+        .map(|stance| stance.decide(frames, threshold))
+        .collect();
+    let n = held_out.len().max(1) as f64;
+    AutoThreshold {
+        threshold,
+        whole_accuracy,
+        auto_accuracy: accuracy(held_out, |stance| stance.decide(frames, threshold).class),
+        mean_decision_frame: decisions.iter().map(|d| d.frame as f64).sum::<f64>() / n,
+        mean_decision_share: decisions
+            .iter()
+            .zip(held_out)
+            .map(|(d, s)| d.frame as f64 / s.stance_frames.max(1) as f64)
+            .sum::<f64>()
+            / n,
+        validation_stances: held_out.len(),
+    }
+}
+
+/// Whether `auto` with `threshold` is safe on `held_out`: no stance decided early, or the lower bound
+/// of the early decisions' accuracy within [`AUTO_TOLERANCE`] of the whole stance's on them.
+fn early_decisions_are_safe(held_out: &[HeldOutStance], frames: &[usize], threshold: f64) -> bool {
+    let (mut early, mut right, mut whole_right) = (0usize, 0usize, 0usize);
+    for stance in held_out {
+        let decision = stance.decide(frames, threshold);
+        if decision.point.is_some() {
+            early += 1;
+            right += usize::from(decision.class == stance.class);
+            whole_right += usize::from(stance.whole.0 == stance.class);
+        }
+    }
+    if early == 0 {
+        return true;
+    }
+    let whole = whole_right as f64 / early as f64;
+    wilson_lower_bound(right, early, AUTO_BOUND_Z) >= whole - AUTO_TOLERANCE - 1e-12
+}
+
+/// The Wilson score interval's lower bound of a proportion `right / n` at `z` (0 when `n` is 0).
+pub fn wilson_lower_bound(right: usize, n: usize, z: f64) -> f64 {
+    if n == 0 {
+        return 0.0;
+    }
+    let n = n as f64;
+    let p = right as f64 / n;
+    let z2 = z * z;
+    let centre = p + z2 / (2.0 * n);
+    let spread = z * (p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt();
+    ((centre - spread) / (1.0 + z2 / n)).max(0.0)
+}
+
+/// The share of `stances` whose class `decided` gives right (0 without stances).
+fn accuracy(stances: &[HeldOutStance], decided: impl Fn(&HeldOutStance) -> usize) -> f64 {
+    if stances.is_empty() {
+        return 0.0;
+    }
+    let right = stances.iter().filter(|s| decided(s) == s.class).count();
+    right as f64 / stances.len() as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stance(class: usize, points: &[(usize, f64)], whole: (usize, f64)) -> HeldOutStance {
+        HeldOutStance {
+            class,
+            stance_frames: 20,
+            points: points.iter().copied().map(Some).collect(),
+            whole,
+        }
+    }
+
+    /// `auto` decides at the first confident point; the threshold is the lowest whose early decisions
+    /// are safe at their lower bound, so a confident wrong early answer raises it, and so do too few
+    /// right ones to trust.
+    #[test]
+    fn the_threshold_is_the_lowest_whose_early_decisions_are_safe_at_their_lower_bound() {
+        let frames = [4, 8];
+        // Sixty stances right early at 0.9 and above; one wrong at 0.7.
+        let mut stances = vec![stance(0, &[(1, 0.7), (0, 0.95)], (0, 0.99))];
+        for i in 0..60 {
+            let class = i % 2;
+            stances.push(stance(class, &[(class, 0.9), (class, 0.97)], (class, 0.99)));
+        }
+        let auto = learn_threshold(&stances, &frames);
+        // 0.7 decides the first stance wrong at frame 4; 0.9 does not.
+        assert_eq!(auto.threshold, 0.9);
+        assert_eq!((auto.whole_accuracy, auto.auto_accuracy), (1.0, 1.0));
+        assert_eq!(auto.mean_decision_frame, (8.0 + 60.0 * 4.0) / 61.0);
+        let late = stances[0].decide(&frames, 0.99);
+        assert_eq!((late.point, late.frame), (None, 20));
+        // Three stances right early are too few to be sure of two points: auto waits.
+        let few = learn_threshold(&stances[1..4], &frames);
+        assert!(few.threshold > 1.0, "{}", few.threshold);
+        // A stance that lifts off before a point has no outcome there.
+        let short = HeldOutStance {
+            points: vec![Some((0, 0.99)), None],
+            ..stances[0].clone()
+        };
+        assert_eq!(short.decide(&frames, 0.999).point, None);
+    }
+
+    #[test]
+    fn the_wilson_bound_is_below_the_share_and_tightens_with_more_stances() {
+        assert_eq!(wilson_lower_bound(0, 0, 1.0), 0.0);
+        let (few, many) = (
+            wilson_lower_bound(10, 10, 1.0),
+            wilson_lower_bound(100, 100, 1.0),
+        );
+        assert!(few < many && many < 1.0, "{few} {many}");
+        assert!((wilson_lower_bound(100, 100, 1.0) - 100.0 / 101.0).abs() < 1e-12);
+        assert!(wilson_lower_bound(50, 100, 1.0) < 0.5);
+    }
+
+    /// A model with points writes them and reads them back (deciding alike); a file whose point is
+    /// not before the model's length, or whose points do not increase, is refused; a file without
+    /// points (written before them) loads as whole-stance only.
+    #[test]
+    fn decision_points_round_trip_and_are_checked_on_loading() {
+        use crate::online::DecideAt;
+        use crate::testing::{stance_model_with_points, stance_stream};
+        let lens: Vec<usize> = (0..16).map(|i| 10 + (i * 7) % 6).collect();
+        let (frames, stances) = stance_stream(&lens, 3);
+        let model = stance_model_with_points(&frames, &stances, 16, &[3, 6]).unwrap();
+        let json = serde_json::to_value(&model).unwrap();
+        let back: TrainedModel = serde_json::from_value(json.clone()).unwrap();
+        assert_eq!(back.early().unwrap().frames(), vec![3, 6]);
+        assert_eq!(serde_json::to_value(&back).unwrap(), json);
+        assert!(back.early().unwrap().auto.is_some());
+        for (bad, what) in [
+            (serde_json::json!(15), "length"),
+            (serde_json::json!(2), "increase"),
+        ] {
+            let mut broken = json.clone();
+            broken["early"]["points"][1]["frames"] = bad;
+            let err = serde_json::from_value::<TrainedModel>(broken).unwrap_err();
+            assert!(err.to_string().contains(what), "{err}");
+        }
+        let mut old = json;
+        old.as_object_mut().unwrap().remove("early");
+        let old: TrainedModel = serde_json::from_value(old).unwrap();
+        assert!(old.early().is_none());
+        assert!(old.trained_for(DecideAt::Frames(3)).is_err());
+        assert!(old.trained_for(DecideAt::AUTO).is_err());
+        assert!(
+            old.trained_for(DecideAt::Frames(15)).is_ok(),
+            "its whole length"
+        );
+        assert!(model.trained_for(DecideAt::Frames(6)).is_ok());
+        let err = model.trained_for(DecideAt::Frames(5)).unwrap_err();
+        assert!(
+            err.contains("3, 6 frames") && err.contains("auto among them"),
+            "{err}"
+        );
+    }
+
+    /// When no point can be trusted, `auto` never decides early.
+    #[test]
+    fn without_a_safe_point_auto_waits_for_the_lift_off() {
+        let stances = vec![
+            stance(0, &[(1, 1.0)], (0, 0.9)),
+            stance(1, &[(0, 1.0)], (1, 0.9)),
+        ];
+        let auto = learn_threshold(&stances, &[5]);
+        assert!(auto.threshold > 1.0);
+        assert_eq!(auto.auto_accuracy, 1.0);
+        assert_eq!(auto.mean_decision_share, 1.0);
+    }
+}

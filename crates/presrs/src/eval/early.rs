@@ -1,0 +1,358 @@
+//! `eval --decide-at`: early decisions evaluated on the protocol's draws. In each fold a whole-stance
+//! model is trained on the fold's training stances (the method asked for, or the automatic choice),
+//! with a classifier for each decision point (on the training stances cut there) and `auto`'s
+//! threshold (from inner folds of the training stances only); the held-out stances are then decided at
+//! each point (a stance that lifts off before the point: at its lift-off, whole) and by `auto`. Beside
+//! each point, the one-frame model at the same offset: the automatic choice trained on the frame
+//! `K` after touchdown of the same training stances, tested on the same held-out stances' frame `K`.
+
+use presrs_core::evaluation::Evaluation;
+use presrs_core::pipeline::{
+    HeldOutStance, LabeledImage, StanceImages, TrainedModel, classify_stances, train_early,
+};
+use serde::Serialize;
+
+use crate::dataset::{Dataset, SampleOptions};
+use crate::error::{Context, Error, Result};
+use crate::eval::EvalSetup;
+use crate::method::Method;
+use crate::progress::Progress;
+use crate::train::early::stance_images;
+
+/// Accuracy at one decision point, frames after touchdown.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EarlyPoint {
+    /// `K`: the stance's first `K + 1` frames.
+    pub frames: usize,
+    /// `K` times the frame period, when the recordings state one.
+    pub ms: Option<f64>,
+    /// `K` over the median stance length of the tested stances.
+    pub share_of_median_stance: f64,
+    /// The whole-stance model's classifier trained for `K`, over every held-out stance (one that lifts
+    /// off before frame `K` is decided at its lift-off, whole).
+    pub accuracy: f64,
+    /// The one-frame model (the automatic choice) on frame `K` after touchdown, over the held-out
+    /// stances that have that frame; `None` when not measured.
+    pub frame_accuracy: Option<f64>,
+    /// Held-out stances with a frame `K` (the one-frame model's test set).
+    pub frame_tested: usize,
+}
+
+/// `auto`: the first point whose confidence passes the threshold learned in the fold.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EarlyAuto {
+    pub accuracy: f64,
+    /// Mean decision time after touchdown: frames, ms (with a frame period), share of each stance,
+    /// and over the median stance length (a lift-off decision counts as the stance's length).
+    pub mean_frames: f64,
+    pub mean_ms: Option<f64>,
+    pub mean_share_of_stance: f64,
+    pub mean_over_median_stance: f64,
+    /// Share of the held-out stances decided before their lift-off.
+    pub decided_early: f64,
+    /// The threshold of each fold's model, in the draws' order.
+    pub thresholds: Vec<f64>,
+}
+
+/// What [`evaluate_early`] measured.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EarlyEvaluation {
+    /// The whole-stance classifier at lift-off, on the same held-out stances.
+    pub whole_accuracy: f64,
+    pub points: Vec<EarlyPoint>,
+    pub auto: EarlyAuto,
+    /// Median length of the held-out stances, frames (and ms).
+    pub median_stance_frames: usize,
+    pub median_stance_ms: Option<f64>,
+    /// The frame period the times are in, ms.
+    pub frame_period_ms: Option<f64>,
+    pub tested: usize,
+    pub folds: usize,
+}
+
+impl EarlyEvaluation {
+    /// The curve as the HTML report shows it; `note` says how the stances were held out.
+    pub fn curve(&self, note: String) -> presrs_report::EarlyCurve {
+        presrs_report::EarlyCurve {
+            points: self
+                .points
+                .iter()
+                .map(|point| presrs_report::EarlyCurvePoint {
+                    frames: point.frames,
+                    accuracy: point.accuracy,
+                    frame_accuracy: point.frame_accuracy,
+                })
+                .collect(),
+            whole_accuracy: self.whole_accuracy,
+            auto: Some(presrs_report::EarlyAutoResult {
+                accuracy: self.auto.accuracy,
+                mean_frames: self.auto.mean_frames,
+                decided_early: self.auto.decided_early,
+            }),
+            median_stance_frames: self.median_stance_frames,
+            frame_period_ms: self.frame_period_ms,
+            tested: self.tested,
+            note,
+        }
+    }
+}
+
+/// The data set read as frames `K` after touchdown, for the one-frame model beside each point.
+#[derive(Debug)]
+pub struct FrameReadings {
+    pub by_point: Vec<(usize, Dataset)>,
+}
+
+impl FrameReadings {
+    /// `manifest` read with `options` as the frame `K` after touchdown of each stance, for every
+    /// decision point `K` of `whole` (the stance reading).
+    pub fn load(
+        manifest: &std::path::Path,
+        options: &SampleOptions,
+        whole: &Dataset,
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        let mut by_point = Vec::new();
+        for (k, _) in &whole.stances.points {
+            let options = SampleOptions {
+                kind: presrs_core::sample::SampleKind::Frame,
+                sample: presrs_core::stance::SampleFrame::Offset(*k),
+                decision_points: Vec::new(),
+                ..options.clone()
+            };
+            by_point.push((*k, Dataset::load(manifest, &options, progress)?));
+        }
+        Ok(Self { by_point })
+    }
+}
+
+/// Evaluates early decisions on `setup`'s draws (its data set read as whole stances, cut at its
+/// decision points), with `frames`' one-frame models beside each point (see the module docs).
+pub fn evaluate_early(
+    setup: &EvalSetup<'_>,
+    frames: Option<&FrameReadings>,
+    progress: &dyn Progress,
+) -> Result<EarlyEvaluation> {
+    let dataset = setup.dataset();
+    let name = dataset.path().display().to_string();
+    if dataset.stances.points.is_empty() {
+        return Err(Error::invalid(
+            "eval --decide-at needs whole-stance samples (--sample stance) cut at decision points",
+        ));
+    }
+    let method = &setup.options.method;
+    let samples = setup.samples();
+    let labels: Vec<&str> = samples.iter().map(|s| s.label).collect();
+    let all: Vec<usize> = (0..samples.len()).collect();
+    let evaluation = Evaluation {
+        samples,
+        protocol: setup.protocol(),
+        repeats: setup.options.repeats,
+        seed: setup.options.seed,
+        progress: &|| {},
+    };
+    let draws = evaluation.draws().with_context(|| name.clone())?;
+    progress.start("early decisions, fold by fold", Some(draws.len() as u64));
+    // Each held-out stance's outcomes, its data-set index and its fold.
+    let mut tested: Vec<(HeldOutStance, usize, usize)> = Vec::new();
+    let mut thresholds = Vec::new();
+    let mut frame_right = vec![(0usize, 0usize); dataset.stances.points.len()];
+    for (fold, draw) in draws.iter().enumerate() {
+        let part = |indices: &[usize]| stance_images(dataset, &all, indices, &labels);
+        let (train_set, validation, test) =
+            (part(&draw.train), part(&draw.validation), part(&draw.test));
+        let whole = train_whole(method, dataset, &train_set, &validation, draw.seed)
+            .with_context(|| format!("{name}: training a fold"))?;
+        let chooser = crate::train::early::point_chooser(method, &dataset.sample, draw.seed);
+        let choose = chooser
+            .as_ref()
+            .map(|f| f as presrs_core::pipeline::ChoosePoint<'_>);
+        let early = train_early(&whole, &train_set, &validation, choose, draw.seed)
+            .with_context(|| format!("{name}: training a fold's decision points"))?;
+        thresholds.push(early.auto.map_or(f64::INFINITY, |auto| auto.threshold));
+        let model = whole.with_early(early)?;
+        let outcomes = classify_stances(&model, &test)?;
+        tested.extend(
+            outcomes
+                .into_iter()
+                .zip(&draw.test)
+                .map(|(outcome, &i)| (outcome, i, fold)),
+        );
+        if let Some(frames) = frames {
+            for (slot, (k, reading)) in frames.by_point.iter().enumerate() {
+                let (right, count) = frame_model_at(dataset, reading, *k, draw, &labels)?;
+                frame_right[slot].0 += right;
+                frame_right[slot].1 += count;
+            }
+        }
+        progress.advance(1);
+    }
+    progress.finish();
+    Ok(summarise(
+        dataset,
+        &tested,
+        &thresholds,
+        frames.map(|_| frame_right.as_slice()),
+        draws.len(),
+    ))
+}
+
+/// A fold's whole-stance model: the automatic choice, or the fixed method.
+fn train_whole(
+    method: &Method,
+    dataset: &Dataset,
+    train_set: &StanceImages<'_>,
+    validation: &StanceImages<'_>,
+    seed: u64,
+) -> Result<TrainedModel> {
+    let grid = train_set
+        .whole
+        .first()
+        .map(|image| image.frame.grid())
+        .ok_or_else(|| Error::invalid("a fold with no training stance"))?;
+    let model = if method.is_auto() {
+        presrs_core::selection::train_auto(
+            &train_set.whole,
+            &validation.whole,
+            &method.auto_choice(&method.candidates_for(grid, false, &dataset.sample)?),
+            seed,
+        )
+    } else {
+        presrs_core::pipeline::train(
+            &train_set.whole,
+            &validation.whole,
+            &method.train_config(grid)?,
+        )
+    };
+    Ok(model.and_then(|model| model.with_sample(dataset.sample))?)
+}
+
+/// The one-frame model (the automatic choice) trained on frame `K` of the draw's training stances
+/// and tested on that frame of its held-out ones: (right, tested).
+fn frame_model_at(
+    stances: &Dataset,
+    reading: &Dataset,
+    k: usize,
+    draw: &presrs_core::evaluation::Draw,
+    labels: &[&str],
+) -> Result<(usize, usize)> {
+    // A stance's frame sample: the same manifest line, `K` frames after its touchdown.
+    let find = |i: usize| {
+        let stance = &stances.samples[i];
+        reading
+            .samples
+            .iter()
+            .position(|s| s.line == stance.line && s.frame_index == stance.frame_index + k)
+    };
+    let images = |indices: &[usize]| -> Vec<LabeledImage<'_>> {
+        indices
+            .iter()
+            .filter_map(|&i| {
+                let sample = &reading.samples[find(i)?];
+                Some(LabeledImage {
+                    frame: sample.frame.view(),
+                    label: labels[i],
+                    condition: sample.condition.as_deref(),
+                    group: sample.group.as_deref(),
+                })
+            })
+            .collect()
+    };
+    let (train_images, validation, test) = (
+        images(&draw.train),
+        images(&draw.validation),
+        images(&draw.test),
+    );
+    let Some(first) = train_images.first() else {
+        return Ok((0, test.len()));
+    };
+    let method = Method::default();
+    let candidates = method.candidates_for(first.frame.grid(), false, &reading.sample)?;
+    let model = presrs_core::selection::train_auto(
+        &train_images,
+        &validation,
+        &method.auto_choice(&candidates),
+        draw.seed,
+    )?;
+    let views: Vec<_> = test.iter().map(|image| image.frame).collect();
+    let right = model
+        .classify_batch(&views)
+        .iter()
+        .zip(&test)
+        .filter(|(result, image)| {
+            result
+                .as_ref()
+                .is_ok_and(|c| model.class_names()[c.class] == image.label)
+        })
+        .count();
+    Ok((right, test.len()))
+}
+
+/// The curve, `auto` and the times from every held-out stance's outcomes (with its data-set index).
+fn summarise(
+    dataset: &Dataset,
+    tested: &[(HeldOutStance, usize, usize)],
+    thresholds: &[f64],
+    frame_right: Option<&[(usize, usize)]>,
+    folds: usize,
+) -> EarlyEvaluation {
+    let n = tested.len().max(1) as f64;
+    let share = |hit: &dyn Fn(&HeldOutStance) -> bool| {
+        tested.iter().filter(|(s, _, _)| hit(s)).count() as f64 / n
+    };
+    let period_ms = tested
+        .iter()
+        .find_map(|&(_, i, _)| dataset.stances.frame_periods.get(i).copied().flatten())
+        .map(|s| s * 1e3);
+    let mut lens: Vec<usize> = tested.iter().map(|(s, _, _)| s.stance_frames).collect();
+    lens.sort_unstable();
+    let median = lens
+        .get(lens.len().saturating_sub(1) / 2)
+        .copied()
+        .unwrap_or(0);
+    let frames: Vec<usize> = dataset.stances.points.iter().map(|(k, _)| *k).collect();
+    let points = frames
+        .iter()
+        .enumerate()
+        .map(|(p, &k)| EarlyPoint {
+            frames: k,
+            ms: period_ms.map(|ms| ms * k as f64),
+            share_of_median_stance: k as f64 / median.max(1) as f64,
+            accuracy: share(&|s| s.points[p].map_or(s.whole.0, |(class, _)| class) == s.class),
+            frame_accuracy: frame_right
+                .map(|counts| counts[p].0 as f64 / counts[p].1.max(1) as f64),
+            frame_tested: frame_right.map_or(0, |counts| counts[p].1),
+        })
+        .collect();
+    // Each stance decided with its fold's threshold.
+    let decisions: Vec<_> = tested
+        .iter()
+        .map(|(stance, _, fold)| {
+            let threshold = thresholds.get(*fold).copied().unwrap_or(f64::INFINITY);
+            (stance, stance.decide(&frames, threshold))
+        })
+        .collect();
+    let mean = |f: &dyn Fn(&HeldOutStance, &presrs_core::pipeline::OfflineDecision) -> f64| {
+        decisions.iter().map(|(s, d)| f(s, d)).sum::<f64>() / n
+    };
+    let mean_frames = mean(&|_, d| d.frame as f64);
+    let auto = EarlyAuto {
+        accuracy: mean(&|s, d| f64::from(u8::from(d.class == s.class))),
+        mean_frames,
+        mean_ms: period_ms.map(|ms| ms * mean_frames),
+        mean_share_of_stance: mean(&|s, d| d.frame as f64 / s.stance_frames.max(1) as f64),
+        mean_over_median_stance: mean_frames / median.max(1) as f64,
+        decided_early: mean(&|_, d| f64::from(u8::from(d.point.is_some()))),
+        thresholds: thresholds.to_vec(),
+    };
+    EarlyEvaluation {
+        whole_accuracy: share(&|s| s.whole.0 == s.class),
+        points,
+        auto,
+        median_stance_frames: median,
+        median_stance_ms: period_ms.map(|ms| ms * median as f64),
+        frame_period_ms: period_ms,
+        tested: tested.len(),
+        folds,
+    }
+}

@@ -1,0 +1,207 @@
+//! Early decisions at training: which decision points a whole-stance model is trained for
+//! (`train --decide-at 8,16,32,whole` or `auto`), the data set's stances cut there as images, and the
+//! points' classifiers and `auto`'s threshold added to the model ([`presrs_core::pipeline::train_early`]).
+
+use presrs_core::TrainedModel;
+use presrs_core::error::CoreError;
+use presrs_core::pipeline::{LabeledImage, StanceImages, train_early};
+use presrs_core::sample::SampleKind;
+use presrs_core::split::Split;
+
+use crate::dataset::Dataset;
+use crate::error::{Context, Error, Result};
+use crate::method::Method;
+
+/// Shares of the median training stance at which `--decide-at auto` puts its decision points: early
+/// enough that deciding at one of them decides within the first half of a typical stance.
+pub const AUTO_POINT_SHARES: [f64; 5] = [0.1, 0.2, 0.3, 0.4, 0.5];
+
+/// The decision points a model is trained for, as asked.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum DecisionPoints {
+    /// The whole stance only (lift-off).
+    #[default]
+    Whole,
+    /// These frames after touchdown (and the whole stance).
+    Frames(Vec<usize>),
+    /// Points at [`AUTO_POINT_SHARES`] of the median training stance (and the whole stance).
+    Auto,
+}
+
+impl std::str::FromStr for DecisionPoints {
+    type Err = String;
+
+    /// `auto`, or frames after touchdown separated by commas, where `whole` (the whole stance, always
+    /// trained) may stand among them: `8,16,32,whole`.
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        if text.trim() == "auto" {
+            return Ok(Self::Auto);
+        }
+        let mut frames = Vec::new();
+        for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            if part == "whole" {
+                continue;
+            }
+            frames.push(part.parse::<usize>().map_err(|_| {
+                format!(
+                    "expected auto, or frames after touchdown and `whole` separated by commas \
+                     (8,16,32,whole), got {part:?}"
+                )
+            })?);
+        }
+        frames.sort_unstable();
+        frames.dedup();
+        Ok(if frames.is_empty() {
+            Self::Whole
+        } else {
+            Self::Frames(frames)
+        })
+    }
+}
+
+impl DecisionPoints {
+    /// The frames after touchdown, `auto`'s from the training stances' lengths `stance_frames`.
+    pub fn resolve(&self, stance_frames: &[usize]) -> Vec<usize> {
+        match self {
+            Self::Whole => Vec::new(),
+            Self::Frames(frames) => frames.clone(),
+            Self::Auto => {
+                let median = presrs_core::online::typical_stance_frames(stance_frames).unwrap_or(0);
+                let mut frames: Vec<usize> = AUTO_POINT_SHARES
+                    .iter()
+                    .map(|share| ((share * median as f64).round() as usize).max(2))
+                    .collect();
+                frames.dedup();
+                frames
+            }
+        }
+    }
+}
+
+/// The stances `part` (indices into `pool`, itself indices into `dataset`'s samples; `labels` by pool
+/// index) as images: whole, cut at each point, and their lengths.
+pub fn stance_images<'d>(
+    dataset: &'d Dataset,
+    pool: &[usize],
+    part: &[usize],
+    labels: &[&'d str],
+) -> StanceImages<'d> {
+    let image = |frame: &'d presrs_core::Frame, j: usize| {
+        let sample = &dataset.samples[pool[j]];
+        LabeledImage {
+            frame: frame.view(),
+            label: labels[j],
+            condition: sample.condition.as_deref(),
+            group: sample.group.as_deref(),
+        }
+    };
+    StanceImages {
+        whole: part
+            .iter()
+            .map(|&j| image(&dataset.samples[pool[j]].frame, j))
+            .collect(),
+        cuts: dataset
+            .stances
+            .points
+            .iter()
+            .map(|(k, cuts)| (*k, part.iter().map(|&j| image(&cuts[pool[j]], j)).collect()))
+            .collect(),
+        stance_frames: part
+            .iter()
+            .map(|&j| dataset.stances.stance_frames[pool[j]])
+            .collect(),
+    }
+}
+
+/// A decision point's classifier chosen as a whole-stance model of `method` is when `method` leaves
+/// a choice (features or classifier `auto`): the automatic choice among its candidates for the stances
+/// cut at the point, validated on the cut validation stances. `None` for a fixed method (the points
+/// take the whole-stance model's).
+pub fn point_chooser<'m>(
+    method: &'m Method,
+    sample: &'m SampleKind,
+    seed: u64,
+) -> Option<
+    impl Fn(&[LabeledImage<'_>], &[LabeledImage<'_>]) -> presrs_core::error::Result<TrainedModel> + 'm,
+> {
+    method.is_auto().then_some(
+        move |train: &[LabeledImage<'_>], validation: &[LabeledImage<'_>]| {
+            let grid = train
+                .first()
+                .map(|image| image.frame.grid())
+                .ok_or_else(|| CoreError::Param {
+                    name: "decision point",
+                    reason: "no training stance reaches the point".into(),
+                })?;
+            let candidates =
+                method
+                    .candidates_for(grid, false, sample)
+                    .map_err(|err| CoreError::Param {
+                        name: "decision point",
+                        reason: err.to_string(),
+                    })?;
+            presrs_core::selection::train_auto(
+                train,
+                validation,
+                &method.auto_choice(&candidates),
+                seed,
+            )
+        },
+    )
+}
+
+/// `model` with the early decisions of the data set's decision points, trained on the draw `split` of
+/// the samples at `pool` (indices into the data set; `labels` by pool index), each point's method
+/// chosen as the model's was (`method`, [`point_chooser`]). Unchanged when the data set holds no cuts.
+pub fn with_early_decisions(
+    model: TrainedModel,
+    (dataset, method): (&Dataset, &Method),
+    pool: &[usize],
+    split: &Split,
+    labels: &[&str],
+    seed: u64,
+) -> Result<TrainedModel> {
+    if dataset.stances.points.is_empty() {
+        return Ok(model);
+    }
+    if dataset.stances.stance_frames.len() != dataset.samples.len() {
+        return Err(Error::invalid(
+            "decision points before lift-off need whole-stance samples read from movies",
+        ));
+    }
+    let train_set = stance_images(dataset, pool, &split.train, labels);
+    let validation = stance_images(dataset, pool, &split.validation, labels);
+    let chooser = point_chooser(method, &dataset.sample, seed);
+    let choose = chooser
+        .as_ref()
+        .map(|f| f as presrs_core::pipeline::ChoosePoint<'_>);
+    let early = train_early(&model, &train_set, &validation, choose, seed).with_context(|| {
+        format!(
+            "{}: cannot train the decision points",
+            dataset.path().display()
+        )
+    })?;
+    model
+        .with_early(early)
+        .with_context(|| format!("{}: decision points", dataset.path().display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decision_points_are_frames_and_whole_or_auto() {
+        assert_eq!(
+            "16, 8,whole,32".parse::<DecisionPoints>(),
+            Ok(DecisionPoints::Frames(vec![8, 16, 32]))
+        );
+        assert_eq!("whole".parse::<DecisionPoints>(), Ok(DecisionPoints::Whole));
+        assert_eq!("auto".parse::<DecisionPoints>(), Ok(DecisionPoints::Auto));
+        assert!("8,soon".parse::<DecisionPoints>().is_err());
+        assert_eq!(
+            DecisionPoints::Auto.resolve(&[40, 60, 61]),
+            vec![6, 12, 18, 24, 30]
+        );
+    }
+}
