@@ -122,6 +122,7 @@ class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecisi
     nearest: str
     novelty: float64
     novelty_threshold: float64
+    credibility: float64
 
 
 # ros/presrs_msgs/msg/StanceEvent.msg

@@ -155,6 +155,7 @@ pub struct TerrainDecision {
     pub nearest: String,
     pub novelty: f64,
     pub novelty_threshold: f64,
+    pub credibility: f64,
 }
 
 impl TerrainDecision {
@@ -270,6 +271,10 @@ pub fn decision_message(
             .novelty
             .as_ref()
             .map_or(0.0, |n| n.novelty_threshold),
+        credibility: decision
+            .novelty
+            .as_ref()
+            .map_or(0.0, |n| n.credibility.unwrap_or(1.0)),
     }
 }
 
@@ -374,6 +379,7 @@ mod tests {
                 nearest: "sand".to_owned(),
                 novelty: 3.5,
                 novelty_threshold: 2.0,
+                credibility: Some(0.25),
             }),
             ..decision(None)
         };
@@ -381,8 +387,8 @@ mod tests {
         assert!(d.has_novelty && d.unknown);
         assert_eq!((d.label.as_str(), d.nearest.as_str()), ("unknown", "sand"));
         assert_eq!(
-            (d.novelty, d.novelty_threshold, d.class_index),
-            (3.5, 2.0, 1)
+            (d.novelty, d.novelty_threshold, d.credibility, d.class_index),
+            (3.5, 2.0, 0.25, 1)
         );
     }
 

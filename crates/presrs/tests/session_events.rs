@@ -39,12 +39,15 @@ fn decision(whole_stance: Option<WholeStance>) -> Classification {
 fn unknown_decision() -> Classification {
     Classification {
         label: "unknown".to_owned(),
+        // The posterior 0.75 capped by the credibility.
+        confidence: 0.0625,
         gait: None,
         novelty: Some(NoveltyVerdict {
             unknown: true,
             nearest: "sand".to_owned(),
             novelty: 3.5,
             novelty_threshold: 2.25,
+            credibility: Some(0.0625),
         }),
         ..decision(None)
     }
@@ -110,7 +113,7 @@ fn golden() -> Vec<(SessionEvent, &'static str)> {
         ),
         (
             SessionEvent::Classification(unknown_decision()),
-            r#"{"event":"classification","kind":"single","stance":3,"label":"unknown","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":null,"unknown":true,"nearest":"sand","novelty":3.5,"novelty_threshold":2.25}"#,
+            r#"{"event":"classification","kind":"single","stance":3,"label":"unknown","class":1,"confidence":0.0625,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":null,"unknown":true,"nearest":"sand","novelty":3.5,"novelty_threshold":2.25,"credibility":0.0625}"#,
         ),
         (
             SessionEvent::Liftoff(Liftoff {

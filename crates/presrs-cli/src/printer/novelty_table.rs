@@ -53,6 +53,13 @@ pub fn leave_class_out_table(result: &LeaveClassOut) -> String {
         percent(result.mean_confident_known_without),
         percent(result.mean_known_rejected)
     );
+    let _ = writeln!(
+        text,
+        "\nknown test samples decided as a known class at >= 0.9: {} (without the novelty score: {}); \
+         with the score, the confidence is the posterior capped by the sample's credibility",
+        percent(result.mean_known_confident),
+        percent(result.mean_known_confident_without)
+    );
     if result.models_without_novelty > 0 {
         let _ = writeln!(
             text,

@@ -11,6 +11,12 @@
 //! the neighbours (their group held out, as a new recording is) that leaves [`DEFAULT_REJECTION`] of them
 //! out. No unknown class is needed, and `eval --leave-class-out` measures what it does with a class
 //! never seen (`docs/methods.md`).
+//!
+//! The same held-out distances give each score its credibility, its conformal p-value: the share of
+//! held-out known vectors at least as far. A decision's reported confidence is its posterior capped by
+//! it ([`Novelty::capped`]): a classifier is sure of the class it names among those it knows, and says
+//! nothing of whether the sample is one of them; a sample farther than 90 % of known ones is never
+//! reported at 0.9.
 
 mod calibration;
 mod discriminant;
@@ -39,16 +45,26 @@ pub struct Novelty {
     pub threshold: f64,
     /// `score > threshold`: the sample is none of the trained classes.
     pub unknown: bool,
+    /// The share of held-out known training vectors scoring at least `score` (its conformal p-value,
+    /// `(k + 1) / (n + 1)`); absent for models stored before the held-out scores were kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub credibility: Option<f64>,
 }
 
 impl Novelty {
-    /// The verdict on `score` against `threshold`.
+    /// The verdict on `score` against `threshold` (without a credibility).
     pub fn of(score: f64, threshold: f64) -> Self {
         Self {
             score,
             threshold,
             unknown: score > threshold,
+            credibility: None,
         }
+    }
+
+    /// A classifier's `posterior` for its class, capped by the credibility: the confidence reported.
+    pub fn capped(&self, posterior: f64) -> f64 {
+        self.credibility.map_or(posterior, |c| posterior.min(c))
     }
 }
 
@@ -72,6 +88,10 @@ struct NoveltyFields {
     folds: CalibrationFolds,
     /// How many held-out distances set the scales and the threshold.
     calibration_vectors: usize,
+    /// Those distances, sorted: a score's credibility is read against them (absent from files written
+    /// before they were kept: no credibility then).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    calibration: Vec<f64>,
 }
 
 impl From<NoveltyModel> for NoveltyFields {
@@ -117,6 +137,12 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
         if !finite || !(fields.threshold.is_finite() && fields.threshold > 0.0) {
             return Err(bad(
                 "the directions and the neighbours must be finite, the threshold positive".into(),
+            ));
+        }
+        let sorted = fields.calibration.windows(2).all(|w| w[0] <= w[1]);
+        if !(sorted && fields.calibration.iter().all(|v| v.is_finite())) {
+            return Err(bad(
+                "the held-out calibration distances must be finite and sorted".into(),
             ));
         }
         if !(0.0..1.0).contains(&fields.rejection) {
@@ -168,6 +194,7 @@ impl NoveltyModel {
             rejection,
             folds: held_out.folds,
             calibration_vectors: distances.len(),
+            calibration: distances,
         })
     }
 
@@ -186,7 +213,27 @@ impl NoveltyModel {
         scratch.distances.resize(space.n_classes(), 0.0);
         space.distances_into(x, &mut scratch.projected, &mut scratch.distances)?;
         let score = nearest(&self.fields.neighbours, &scratch.projected);
-        Ok(Novelty::of(score, self.fields.threshold))
+        Ok(self.verdict(score))
+    }
+
+    /// The verdict on `score` (a distance as [`score_into`](Self::score_into) gives, or a mean of
+    /// them), with its credibility.
+    pub fn verdict(&self, score: f64) -> Novelty {
+        Novelty {
+            credibility: self.credibility(score),
+            ..Novelty::of(score, self.fields.threshold)
+        }
+    }
+
+    /// The conformal p-value of `score`: `(k + 1) / (n + 1)` where `k` of the `n` held-out known
+    /// distances are at least `score`; `None` without them (an older file).
+    pub fn credibility(&self, score: f64) -> Option<f64> {
+        let calibration = &self.fields.calibration;
+        if calibration.is_empty() || score.is_nan() {
+            return None;
+        }
+        let at_least = calibration.len() - calibration.partition_point(|&d| d < score);
+        Some((at_least + 1) as f64 / (calibration.len() + 1) as f64)
     }
 
     /// [`score_into`](Self::score_into) with buffers of its own.

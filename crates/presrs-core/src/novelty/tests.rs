@@ -188,6 +188,44 @@ fn a_model_round_trips_and_a_broken_one_is_refused() {
 }
 
 #[test]
+fn the_credibility_is_the_share_of_held_out_distances_at_least_as_far_and_caps_the_confidence() {
+    let (dims, n_classes) = (6, 4);
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 50, dims, 4.0, 6);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
+    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
+    let calibration = &model.fields.calibration;
+    let n = calibration.len() as f64;
+    assert_eq!(calibration.len(), model.fields.calibration_vectors);
+    // Nearer than every held-out distance: (n + 1) / (n + 1); beyond them all: 1 / (n + 1).
+    assert_eq!(model.credibility(0.0), Some(1.0));
+    assert_eq!(model.credibility(f64::INFINITY), Some(1.0 / (n + 1.0)));
+    let median = calibration[calibration.len() / 2];
+    let at_least = calibration.iter().filter(|&&d| d >= median).count() as f64;
+    assert_eq!(
+        model.credibility(median),
+        Some((at_least + 1.0) / (n + 1.0))
+    );
+    // At the threshold, about the rejected share of held-out distances lies beyond.
+    let at_threshold = model.credibility(model.threshold()).unwrap();
+    assert!((0.03..=0.08).contains(&at_threshold), "{at_threshold}");
+    // The verdict carries it and caps a posterior by it, never raising one.
+    let far = model.verdict(2.0 * model.threshold());
+    let credibility = far.credibility.unwrap();
+    assert!(far.unknown && credibility < 0.05);
+    assert_eq!(far.capped(0.99), credibility);
+    assert_eq!(model.verdict(0.0).capped(0.7), 0.7);
+    assert_eq!(Novelty::of(1.0, 2.0).capped(0.99), 0.99);
+    // A file written before the held-out distances were kept loads, without a credibility.
+    let mut older = serde_json::to_value(&model).unwrap();
+    older.as_object_mut().unwrap().remove("calibration");
+    let older: NoveltyModel = serde_json::from_value(older).unwrap();
+    assert_eq!(older.verdict(1.0).credibility, None);
+    let mut unsorted = serde_json::to_value(&model).unwrap();
+    unsorted["calibration"] = serde_json::json!([2.0, 1.0]);
+    assert!(serde_json::from_value::<NoveltyModel>(unsorted).is_err());
+}
+
+#[test]
 fn one_class_cannot_fit_a_space() {
     let vectors = vec![0.0, 1.0, 2.0, 3.0];
     assert!(Discriminant::fit(&vectors, &[0, 0], 1, 2).is_err());

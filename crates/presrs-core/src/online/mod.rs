@@ -601,9 +601,7 @@ impl<'m> OnlineClassifier<'m> {
             class,
             confidence,
             stance: None,
-            novelty: self
-                .fusion_novelty
-                .map(|(sum, threshold)| Novelty::of(sum / count, threshold)),
+            novelty,
             slot,
         };
         self.stats.decisions += 1;
@@ -657,6 +655,13 @@ impl<'m> OnlineClassifier<'m> {
                 .fold((0, f64::NEG_INFINITY), |best, (class, p)| {
                     if p > best.1 { (class, p) } else { best }
                 });
+        // The mean of the fused frames' scores, with its credibility; the confidence capped by it.
+        let scorer = self.session.model().novelty();
+        let novelty = self.fusion_novelty.map(|(sum, threshold)| match scorer {
+            Some(scorer) => scorer.verdict(sum / count),
+            None => Novelty::of(sum / count, threshold),
+        });
+        let confidence = novelty.map_or(confidence, |n| n.capped(confidence));
         self.events.push(OnlineEvent::Decision(Decision {
             stance_id,
             kind: DecisionKind::Fused,
@@ -667,9 +672,7 @@ impl<'m> OnlineClassifier<'m> {
             class,
             confidence,
             stance: None,
-            novelty: self
-                .fusion_novelty
-                .map(|(sum, threshold)| Novelty::of(sum / count, threshold)),
+            novelty,
             slot,
         }));
         self.stats.fused_decisions += 1;

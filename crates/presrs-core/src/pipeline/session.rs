@@ -72,7 +72,8 @@ pub struct Session<'m> {
 pub struct Prediction<'s> {
     pub class: usize,
     pub label: &'s str,
-    /// The posterior of `class`.
+    /// The posterior of `class`, capped by the sample's credibility when the model scores novelty
+    /// ([`Novelty::capped`]; `posteriors` are the classifier's own).
     pub confidence: f64,
     /// Posterior of every class, in class-index order (equal priors).
     pub posteriors: &'s [f64],
@@ -124,7 +125,7 @@ impl<'m> Session<'m> {
         Ok(Prediction {
             class,
             label: &model.fields.class_names[class],
-            confidence: self.posteriors[class],
+            confidence: reported_confidence(self.posteriors[class], novelty),
             posteriors: &self.posteriors,
             novelty,
         })
@@ -198,6 +199,12 @@ fn classify_reduced(
         .fields
         .classifier
         .classify_into(reduced, scratch, posteriors)
+}
+
+/// The confidence a decision reports: the class's posterior, capped by the sample's credibility when
+/// the model scores novelty (`crate::novelty`).
+pub(crate) fn reported_confidence(posterior: f64, novelty: Option<Novelty>) -> f64 {
+    novelty.map_or(posterior, |n| n.capped(posterior))
 }
 
 /// The novelty of a reduced vector, when the model scores it.
@@ -290,7 +297,7 @@ impl<'m> BatchSession<'m> {
                     let novelty = novelty_of(model, reduced, &mut session.novelty)?;
                     Ok(Classification {
                         class,
-                        confidence: session.posteriors[class],
+                        confidence: reported_confidence(session.posteriors[class], novelty),
                         posteriors: session.posteriors.clone(),
                         novelty,
                     })

@@ -83,6 +83,9 @@ impl ClassifyBag {
                 fields.insert("nearest".into(), json!(novelty.nearest));
                 fields.insert("novelty".into(), json!(novelty.novelty));
                 fields.insert("novelty_threshold".into(), json!(novelty.novelty_threshold));
+                if let Some(credibility) = novelty.credibility {
+                    fields.insert("credibility".into(), json!(credibility));
+                }
             }
             events
                 .entry(result.frame)

@@ -359,6 +359,7 @@ fn classified_of(
             nearest: prediction.label.to_owned(),
             novelty: n.score,
             novelty_threshold: n.threshold,
+            credibility: n.credibility,
         }),
         confidence: prediction.confidence,
         posteriors: model

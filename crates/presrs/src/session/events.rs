@@ -130,6 +130,10 @@ pub struct NoveltyVerdict {
     pub novelty: f64,
     /// The score above which a sample is `unknown`.
     pub novelty_threshold: f64,
+    /// The share of held-out known training samples scoring at least `novelty` (a conformal
+    /// p-value), by which `confidence` is capped; absent for models that keep no held-out scores.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub credibility: Option<f64>,
 }
 
 /// What a whole-stance model's decision waited for.
@@ -408,6 +412,7 @@ fn classification(
             nearest,
             novelty: n.score,
             novelty_threshold: n.threshold,
+            credibility: n.credibility,
         }),
         label,
         // The session's `FrameGaps` fills it in.
