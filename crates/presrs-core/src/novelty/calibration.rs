@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 
 use crate::error::Result;
-use crate::novelty::discriminant::Discriminant;
+use crate::novelty::discriminant::{Discriminant, nearest};
 
 /// Folds: at most this many; more groups are merged, whole, into this many.
 const MAX_FOLDS: usize = 5;
@@ -57,7 +57,7 @@ pub(crate) fn held_out_distances(
         for (row, &f) in vectors.chunks_exact(dims).zip(&fold_of) {
             if f == fold {
                 space.distances_into(row, &mut projected, &mut to_classes)?;
-                let distance = super::nearest(&neighbours, &projected);
+                let distance = nearest(&neighbours, &projected);
                 if distance.is_finite() {
                     distances.push(distance);
                 }

@@ -268,3 +268,18 @@ fn leading_eigenvectors(matrix: &Mat<f64>, count: usize) -> Result<Vec<Vec<f64>>
         .map(|k| (0..d).map(|i| vectors[(i, k)]).collect())
         .collect())
 }
+
+/// The distance from `x` to the nearest of `points` (rows of `x.len()` values); infinite without points.
+pub(crate) fn nearest(points: &[f64], x: &[f64]) -> f64 {
+    points
+        .chunks_exact(x.len().max(1))
+        .map(|point| {
+            point
+                .iter()
+                .zip(x)
+                .map(|(p, v)| (p - v) * (p - v))
+                .sum::<f64>()
+        })
+        .fold(f64::INFINITY, f64::min)
+        .sqrt()
+}

@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 
 pub use calibration::CalibrationFolds;
 pub use discriminant::Discriminant;
+use discriminant::nearest;
 
 use crate::error::{CoreError, Result, check_len};
 
@@ -281,21 +282,6 @@ impl NoveltyModel {
             }
         )
     }
-}
-
-/// The distance from `x` to the nearest of `points` (rows of `x.len()` values); infinite without points.
-pub(crate) fn nearest(points: &[f64], x: &[f64]) -> f64 {
-    points
-        .chunks_exact(x.len().max(1))
-        .map(|point| {
-            point
-                .iter()
-                .zip(x)
-                .map(|(p, v)| (p - v) * (p - v))
-                .sum::<f64>()
-        })
-        .fold(f64::INFINITY, f64::min)
-        .sqrt()
 }
 
 /// The area under the ROC curve of a score that should be larger for `positives` than for `negatives`:

@@ -31,10 +31,9 @@ use crate::error::Result;
 
 pub use self::faults::fault_panels;
 pub use self::inputs::{
-    EarlyAutoResult, EarlyCurve, EarlyCurvePoint, Evaluation, FaultResult, ReportInputs,
-    ReportRecording, SimulationInputs,
+    EarlyAutoResult, EarlyCurve, EarlyCurvePoint, Evaluation, FaultResult, NoveltyResult,
+    NoveltyRow, ReportInputs, ReportRecording, SimulationInputs,
 };
-pub use self::novelty::{NoveltyResult, NoveltyRow};
 
 /// Writes `out_dir/index.html` and its figures; returns the page's path.
 pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf> {
