@@ -135,7 +135,7 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
             .chain(&space.offset)
             .chain(&fields.neighbours)
             .all(|v| v.is_finite());
-        if !finite || !(fields.threshold.is_finite() && fields.threshold > 0.0) {
+        if !(finite && fields.threshold.is_finite() && fields.threshold > 0.0) {
             return Err(bad(
                 "the directions and the neighbours must be finite, the threshold positive".into(),
             ));
