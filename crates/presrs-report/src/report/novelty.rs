@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use super::inputs::NoveltyResult;
+use super::inputs::{NoveltyResult, NoveltyRow};
 use super::page::{Section, esc};
 
 /// The table of `result`, one row per held-out class and a row of means.
