@@ -374,13 +374,13 @@ mod tests {
         assert!(!plain.has_novelty && !plain.unknown && plain.nearest.is_empty());
         let unknown = Classification {
             label: "unknown".to_owned(),
-            novelty: Some(presrs::session::NoveltyVerdict {
+            novelty: Some(Box::new(presrs::session::NoveltyVerdict {
                 unknown: true,
                 nearest: "sand".to_owned(),
                 novelty: 3.5,
                 novelty_threshold: 2.0,
                 credibility: Some(0.25),
-            }),
+            })),
             ..decision(None)
         };
         let d = decision_message(&unknown, &Tenths, "foot");

@@ -42,13 +42,13 @@ fn unknown_decision() -> Classification {
         // The posterior 0.75 capped by the credibility.
         confidence: 0.0625,
         gait: None,
-        novelty: Some(NoveltyVerdict {
+        novelty: Some(Box::new(NoveltyVerdict {
             unknown: true,
             nearest: "sand".to_owned(),
             novelty: 3.5,
             novelty_threshold: 2.25,
             credibility: Some(0.0625),
-        }),
+        })),
         ..decision(None)
     }
 }

@@ -74,7 +74,8 @@ pub struct Classification {
     /// The novelty score and its verdict, when the model scores novelty (absent otherwise, and with
     /// `--novelty off`); when `unknown`, `label` is `unknown` and `nearest` names the nearest class.
     #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
-    pub novelty: Option<NoveltyVerdict>,
+    /// Boxed: the event stays small without a score (clippy's large_enum_variant).
+    pub novelty: Option<Box<NoveltyVerdict>>,
 }
 
 /// Whether a count is 0 (left out of the line).
@@ -407,12 +408,14 @@ fn classification(
                 early_threshold: early.threshold,
             })
         }),
-        novelty: d.novelty.map(|n| NoveltyVerdict {
-            unknown: n.unknown,
-            nearest,
-            novelty: n.score,
-            novelty_threshold: n.threshold,
-            credibility: n.credibility,
+        novelty: d.novelty.map(|n| {
+            Box::new(NoveltyVerdict {
+                unknown: n.unknown,
+                nearest,
+                novelty: n.score,
+                novelty_threshold: n.threshold,
+                credibility: n.credibility,
+            })
         }),
         label,
         // The session's `FrameGaps` fills it in.
