@@ -138,11 +138,7 @@ fn cholesky_lower(a: &[f64], d: usize) -> Option<Vec<f64>> {
 mod linalg_tests;
 
 /// Shrinks the covariance of centred `x` and factors it; returns (L, log det Σ, shrinkage weight).
-pub(crate) fn shrunk_factor(
-    x: &[f64],
-    d: usize,
-    shrinkage: Shrinkage,
-) -> Result<(Vec<f64>, f64, f64)> {
+fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>, f64, f64)> {
     let (lw, mut cov) = ledoit_wolf(x, d)?;
     let weight = match shrinkage {
         Shrinkage::LedoitWolf => lw,

@@ -83,7 +83,6 @@ pub fn train(
         sensor: None,
         sampling: None,
         early: None,
-        novelty: None,
     })
 }
 

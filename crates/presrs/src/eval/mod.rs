@@ -4,7 +4,6 @@
 
 pub mod document;
 pub mod early;
-pub mod novelty;
 pub mod race;
 
 use std::collections::BTreeMap;
