@@ -238,21 +238,12 @@ pub fn classify_held_out(
 ) -> Result<Vec<HeldOutStance>> {
     let whole_model = train_like(like, &train_part.whole, &validation.whole)?;
     let class_names = whole_model.class_names().to_vec();
-    let outcomes =
-        |model: &TrainedModel, images: &[LabeledImage<'_>]| -> Result<Vec<(usize, f64)>> {
-            let views: Vec<_> = images.iter().map(|image| image.frame).collect();
-            model
-                .classify_batch(&views)
-                .into_iter()
-                .map(|result| result.map(|c| (c.class, c.confidence)))
-                .collect()
-        };
-    let whole = outcomes(&whole_model, &test.whole)?;
+    let whole = batch_outcomes(&whole_model, &test.whole)?;
     let mut per_point = Vec::new();
     for point in points {
         let k = point.frames;
         let model = train_like(&point.model, &cut_at(train_part, k), &cut_at(validation, k))?;
-        per_point.push(outcomes(&model, &cut_at(test, k))?);
+        per_point.push(batch_outcomes(&model, &cut_at(test, k))?);
     }
     test.whole
         .iter()
@@ -269,11 +260,7 @@ pub fn classify_held_out(
             Ok(HeldOutStance {
                 class,
                 stance_frames,
-                points: points
-                    .iter()
-                    .zip(&per_point)
-                    .map(|(point, outcome)| (point.frames < stance_frames).then(|| outcome[i]))
-                    .collect(),
+                points: stance_points(points, &per_point, i, stance_frames),
                 whole: whole[i],
             })
         })
@@ -291,16 +278,7 @@ pub fn classify_stances(
         name: "early decisions",
         reason: "the model has no decision points".into(),
     })?;
-    let outcomes =
-        |model: &TrainedModel, images: &[LabeledImage<'_>]| -> Result<Vec<(usize, f64)>> {
-            let views: Vec<_> = images.iter().map(|image| image.frame).collect();
-            model
-                .classify_batch(&views)
-                .into_iter()
-                .map(|result| result.map(|c| (c.class, c.confidence)))
-                .collect()
-        };
-    let whole = outcomes(model, &test.whole)?;
+    let whole = batch_outcomes(model, &test.whole)?;
     let mut per_point = Vec::new();
     for point in &early.points {
         let images = test
@@ -312,7 +290,7 @@ pub fn classify_stances(
                 name: "stance images",
                 reason: format!("no stances cut at point {}", point.frames),
             })?;
-        per_point.push(outcomes(&point.model, images)?);
+        per_point.push(batch_outcomes(&point.model, images)?);
     }
     test.whole
         .iter()
@@ -327,15 +305,34 @@ pub fn classify_stances(
             Ok(HeldOutStance {
                 class,
                 stance_frames,
-                points: early
-                    .points
-                    .iter()
-                    .zip(&per_point)
-                    .map(|(point, outcome)| (point.frames < stance_frames).then(|| outcome[i]))
-                    .collect(),
+                points: stance_points(&early.points, &per_point, i, stance_frames),
                 whole: whole[i],
             })
         })
+        .collect()
+}
+
+/// Each image's class and confidence by `model`, in order.
+fn batch_outcomes(model: &TrainedModel, images: &[LabeledImage<'_>]) -> Result<Vec<(usize, f64)>> {
+    let views: Vec<_> = images.iter().map(|image| image.frame).collect();
+    model
+        .classify_batch(&views)
+        .into_iter()
+        .map(|result| result.map(|c| (c.class, c.confidence)))
+        .collect()
+}
+
+/// Stance `i`'s outcome at every point (`None` where it lifts off before the point).
+fn stance_points(
+    points: &[DecisionPoint],
+    per_point: &[Vec<(usize, f64)>],
+    i: usize,
+    stance_frames: usize,
+) -> Vec<Option<(usize, f64)>> {
+    points
+        .iter()
+        .zip(per_point)
+        .map(|(point, outcome)| (point.frames < stance_frames).then(|| outcome[i]))
         .collect()
 }
 
@@ -355,13 +352,8 @@ fn cut_at<'a>(set: &StanceImages<'a>, k: usize) -> Vec<LabeledImage<'a>> {
 pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThreshold {
     let never = 1.0 + f64::EPSILON.sqrt();
     let whole_accuracy = accuracy(held_out, |stance| stance.whole.0);
-    let mut candidates: Vec<f64> = held_out
-        .iter()
-        .flat_map(|stance| stance.points.iter().flatten().map(|&(_, c)| c))
-        .collect();
+    let mut candidates = point_confidences(held_out);
     candidates.push(never);
-    candidates.sort_by(f64::total_cmp);
-    candidates.dedup();
     let mean_frame = |threshold: f64| {
         let n = held_out.len().max(1) as f64;
         let frames_sum: usize = held_out
@@ -434,8 +426,20 @@ pub fn wilson_lower_bound(right: usize, n: usize, z: f64) -> f64 {
     ((centre - spread) / (1.0 + z2 / n)).max(0.0)
 }
 
+/// Every distinct confidence of the points' outcomes of `stances`, ascending: the thresholds that
+/// decide differently.
+pub fn point_confidences(stances: &[HeldOutStance]) -> Vec<f64> {
+    let mut confidences: Vec<f64> = stances
+        .iter()
+        .flat_map(|stance| stance.points.iter().flatten().map(|&(_, c)| c))
+        .collect();
+    confidences.sort_by(f64::total_cmp);
+    confidences.dedup();
+    confidences
+}
+
 /// The median of the stances' lengths, frames (the lower middle one; 0 without stances).
-fn median_length(stances: &[HeldOutStance]) -> usize {
+pub fn median_length(stances: &[HeldOutStance]) -> usize {
     let mut lengths: Vec<usize> = stances.iter().map(|s| s.stance_frames).collect();
     lengths.sort_unstable();
     lengths

@@ -24,7 +24,7 @@ pub use config::{CheckedTrainConfig, TrainConfig};
 pub use early::{
     AUTO_BOUND_Z, AUTO_EARLINESS, AUTO_TOLERANCE, ChoosePoint, HeldOutStance, OfflineDecision,
     StanceImages, classify_held_out, classify_stances, held_out_stances, learn_threshold,
-    train_early, train_like, wilson_lower_bound,
+    median_length, point_confidences, train_early, train_like, wilson_lower_bound,
 };
 pub use extract::{LabeledImage, extract_features, extract_features_many, extract_features_with};
 pub use model::{

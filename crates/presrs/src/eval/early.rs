@@ -330,12 +330,8 @@ fn summarise(
         .iter()
         .find_map(|&(_, i, _)| dataset.stances.frame_periods.get(i).copied().flatten())
         .map(|s| s * 1e3);
-    let mut lens: Vec<usize> = tested.iter().map(|(s, _, _)| s.stance_frames).collect();
-    lens.sort_unstable();
-    let median = lens
-        .get(lens.len().saturating_sub(1) / 2)
-        .copied()
-        .unwrap_or(0);
+    let stances: Vec<HeldOutStance> = tested.iter().map(|(s, _, _)| s.clone()).collect();
+    let median = presrs_core::pipeline::median_length(&stances);
     let frames: Vec<usize> = dataset.stances.points.iter().map(|(k, _)| *k).collect();
     let points = frames
         .iter()
@@ -362,7 +358,7 @@ fn summarise(
         decisions.iter().map(|(s, d)| f(s, d)).sum::<f64>() / n
     };
     let mean_frames = mean(&|_, d| d.frame as f64);
-    let hindsight = hindsight_frontier(tested, &frames, median);
+    let hindsight = hindsight_frontier(&stances, &frames, median);
     let auto = EarlyAuto {
         accuracy: mean(&|s, d| f64::from(u8::from(d.class == s.class))),
         mean_frames,
@@ -389,20 +385,15 @@ fn summarise(
 /// stances (and no early decision at all); the thresholds not beaten in both accuracy and mean
 /// decision time, earliest first.
 fn hindsight_frontier(
-    tested: &[(HeldOutStance, usize, usize)],
+    stances: &[HeldOutStance],
     frames: &[usize],
     median: usize,
 ) -> Vec<HindsightThreshold> {
-    let mut candidates: Vec<f64> = tested
-        .iter()
-        .flat_map(|(s, _, _)| s.points.iter().flatten().map(|&(_, confidence)| confidence))
-        .collect();
-    candidates.sort_by(f64::total_cmp);
-    candidates.dedup();
-    let n = tested.len().max(1) as f64;
+    let candidates = presrs_core::pipeline::point_confidences(stances);
+    let n = stances.len().max(1) as f64;
     let outcome = |threshold: Option<f64>| {
         let (mut right, mut frames_sum, mut early) = (0usize, 0usize, 0usize);
-        for (stance, _, _) in tested {
+        for stance in stances {
             let decision = stance.decide(frames, threshold.unwrap_or(f64::INFINITY));
             right += usize::from(decision.class == stance.class);
             frames_sum += decision.frame;
@@ -464,7 +455,8 @@ mod tests {
         .enumerate()
         .map(|(i, s)| (s, i, 0))
         .collect();
-        let frontier = hindsight_frontier(&tested, &[2, 5], 10);
+        let stances: Vec<HeldOutStance> = tested.iter().map(|(s, _, _)| s.clone()).collect();
+        let frontier = hindsight_frontier(&stances, &[2, 5], 10);
         // The earliest (threshold 0.6: every stance at frame 2): the second stance is decided 0
         // (wrong), the others right: 2 of 3 at a mean of 2 frames.
         assert_eq!(frontier[0].threshold, Some(0.6));
