@@ -89,6 +89,7 @@ class Model:
         sample: Literal["frame", "stance", "series"] = "frame",
         stance_length: Optional[int] = None,
         series_axis: Optional[Literal["cols", "rows"]] = None,
+        novelty: bool = True,
     ) -> Model:
         """Trains on images ``(n, rows, cols)`` (``sample="frame"``), on stances' movies (a sequence of
         ``(frames, rows, cols)`` arrays of any length, ``sample="stance"``: each summarised over time as
@@ -105,11 +106,19 @@ class Model:
     def to_json(self) -> str: ...
     @staticmethod
     def from_json(data: Union[str, bytes]) -> Model: ...
-    def predict(self, x: Any) -> Any:
+    def predict(self, x: Any, *, novelty: bool = True) -> Any:
         """A `str` for one sample; an array of labels for a batch. A sample is what the model was
         trained on (`sample`): an image (rows, cols), batch (n, rows, cols); a stance's movie
         (frames, rows, cols), batch a list of movies; a series (channels, time), batch
-        (n, channels, time)."""
+        (n, channels, time). With a model that scores novelty, a sample far from every class is
+        ``"unknown"``; ``novelty=False`` names one of the classes for every sample."""
+    def novelty(self, x: Any) -> Any:
+        """The novelty score: a `float` for one sample, an array for a batch (the distance to the
+        nearest training sample in the model's discriminant space); above `novelty_threshold`, `predict` says
+        ``"unknown"``. An error for a model without a novelty score."""
+    @property
+    def novelty_threshold(self) -> Optional[float]:
+        """The score above which a sample is ``"unknown"``; `None` without a novelty score."""
     def predict_index(self, x: Any) -> Any:
         """The index in `classes_` of the label: an `int` for one sample, an integer array for a
         batch (`predict` without making the labels)."""
@@ -158,6 +167,7 @@ class OnlineClassifier:
         *,
         gait_table: Optional[dict[str, str]] = None,
         decide_at: Optional[int] = None,
+        novelty: bool = True,
     ) -> None: ...
     def push(self, frame: _Images, *, timestamp_us: Optional[int] = None) -> list[dict[str, Any]]: ...
     def finish(self) -> list[dict[str, Any]]: ...

@@ -7,6 +7,7 @@ use std::sync::Mutex;
 
 use numpy::{PyArray1, PyArrayMethods};
 use presrs::classify::model_sample;
+use presrs::core::novelty::{Novelty, UNKNOWN_LABEL};
 use presrs::core::pipeline::{Classification, Session};
 use presrs::core::sample::SampleChoice;
 use presrs::core::split::ValidationSize;
@@ -219,7 +220,7 @@ impl Model {
     #[pyo3(signature = (images, labels, *, features = "auto", classifier = "auto", groups = None,
         conditions = None, seed = 1, dims = None, per_class = None, validation = 0.35, crop = "auto",
         full_search = false, validate_by = "auto", budget = Some(60.0), choose = "best",
-        sample = "frame", stance_length = None, series_axis = None))]
+        sample = "frame", stance_length = None, series_axis = None, novelty = true))]
     #[allow(clippy::too_many_arguments)]
     fn train(
         py: Python<'_>,
@@ -241,6 +242,7 @@ impl Model {
         sample: &str,
         stance_length: Option<usize>,
         series_axis: Option<&str>,
+        novelty: bool,
     ) -> PyResult<Self> {
         let kind = sample_kind(sample, stance_length, series_axis)?;
         let method = method(
@@ -263,6 +265,7 @@ impl Model {
             validation: validation_size(validation)?,
             seed,
             method,
+            novelty,
         };
         let training = detached(py, || train(&dataset, &options))?.py_err()?;
         for warning in &training.warnings {
@@ -320,17 +323,81 @@ impl Model {
     /// `classes_` values). A sample is what the model was trained on: an image `(rows, cols)` (a batch
     /// `(n, rows, cols)`), a stance's movie `(frames, rows, cols)` (a batch: a list of movies), or a
     /// series `(channels, time)` (a batch `(n, channels, time)`).
-    fn predict<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    ///
+    /// With a model that scores novelty, a sample far from every class is `"unknown"` (the nearest
+    /// class is `predict_index`'s); `novelty=False` names one of the classes for every sample, as
+    /// before.
+    #[pyo3(signature = (x, *, novelty = true))]
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        novelty: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let unknown = |n: Option<Novelty>| novelty && n.is_some_and(|n| n.unknown);
         let samples = self.samples_of(py, x)?;
         if !samples.batch() {
             let label = self
-                .classify_one(&samples.view(0)?, |p| p.label.to_owned())
+                .classify_one(&samples.view(0)?, |p| {
+                    if unknown(p.novelty) {
+                        UNKNOWN_LABEL.to_owned()
+                    } else {
+                        p.label.to_owned()
+                    }
+                })
                 .map_err(|err| samples.explain(err))?;
             return Ok(label.into_pyobject(py)?.into_any());
         }
-        let classes = self.batch_classes(py, &samples)?;
-        let indices = PyArray1::from_vec(py, classes);
+        let classified = self
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?;
+        if classified.iter().any(|c| unknown(c.novelty)) {
+            let names = self.file().model.class_names();
+            let labels: Vec<&str> = classified
+                .iter()
+                .map(|c| {
+                    if unknown(c.novelty) {
+                        UNKNOWN_LABEL
+                    } else {
+                        names[c.class].as_str()
+                    }
+                })
+                .collect();
+            return py.import("numpy")?.getattr("array")?.call1((labels,));
+        }
+        let indices = PyArray1::from_vec(py, classified.into_iter().map(|c| c.class).collect());
         self.classes_array(py)?.call_method1("take", (indices,))
+    }
+
+    /// The novelty score of one sample (a `float`) or of every sample of a batch (an array): the
+    /// distance to the nearest training sample in the model's discriminant space; above `novelty_threshold`,
+    /// `predict` says `"unknown"`. An error for a model without a novelty score.
+    fn novelty<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        if self.file().model.novelty().is_none() {
+            return Err(data_error(
+                "this model has no novelty score (trained before it existed, or with novelty=False): \
+                 train it again to have one",
+            ));
+        }
+        let samples = self.samples_of(py, x)?;
+        let score = |n: Option<Novelty>| n.map_or(f64::NAN, |n| n.score);
+        if !samples.batch() {
+            let value = self
+                .classify_one(&samples.view(0)?, |p| score(p.novelty))
+                .map_err(|err| samples.explain(err))?;
+            return Ok(value.into_pyobject(py)?.into_any());
+        }
+        let classified = self
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?;
+        let scores: Vec<f64> = classified.iter().map(|c| score(c.novelty)).collect();
+        Ok(PyArray1::from_vec(py, scores).into_any())
+    }
+
+    /// The novelty score above which `predict` says `"unknown"`; `None` for a model without one.
+    #[getter]
+    fn novelty_threshold(&self) -> Option<f64> {
+        self.file().model.novelty().map(|n| n.threshold())
     }
 
     /// The index in `classes_` of the label of one sample (an `int`), or of every sample of a batch

@@ -56,13 +56,17 @@ impl OnlineClassifier {
     /// decision point confident enough, instead of at lift-off; only at a moment the model was trained
     /// for (`presrs train --decide-at`), else a `ValueError` says how to train one.
     #[new]
-    #[pyo3(signature = (model, *, gait_table = None, decide_at = None))]
+    #[pyo3(signature = (model, *, gait_table = None, decide_at = None, novelty = true))]
     fn new(
         model: &Bound<'_, Model>,
         gait_table: Option<std::collections::BTreeMap<String, String>>,
         decide_at: Option<&Bound<'_, PyAny>>,
+        novelty: bool,
     ) -> PyResult<Self> {
-        let file = model.get().file().clone();
+        let mut file = model.get().file().clone();
+        if !novelty {
+            file.model = file.model.without_novelty();
+        }
         let mut profile = file.online.clone().unwrap_or_default();
         profile.gait_table.extend(gait_table.unwrap_or_default());
         if let Some(decide_at) = decide_at {

@@ -117,6 +117,12 @@ class TerrainDecision(IdlStruct, typename="presrs_msgs::msg::dds_::TerrainDecisi
     early_frames: uint64
     early_threshold: float64
     gap_frames: uint32
+    has_novelty: bool
+    unknown: bool
+    nearest: str
+    novelty: float64
+    novelty_threshold: float64
+    credibility: float64
 
 
 # ros/presrs_msgs/msg/StanceEvent.msg

@@ -277,8 +277,8 @@ fn the_live_page_draws_the_image_and_its_label_follows_the_terrain() {
         "{shown}"
     );
     assert!(
-        dom.contains("<div id=\"terrain\" data-label=\"wood\">wood</div>"),
-        "terrain element"
+        dom.contains("<div id=\"terrain\" data-label=\"wood\" data-unknown=\"false\">wood</div>"),
+        "terrain element (a known terrain: the model scores novelty and wood is near its training)"
     );
 
     // A screenshot of the page as it is now, for people.

@@ -92,13 +92,19 @@ fn a_trained_model_carries_its_gait_table_and_runs_a_track_against_the_fixed_gai
     for run in adaptive["runs"].as_array().unwrap() {
         assert_eq!(run["finished"], true);
         let hops = run["hops"].as_array().unwrap();
-        // It starts in G1 and, once it has classified a stance, follows the table.
+        // It starts in G1 and, once it has classified a stance, follows the table; a stance the
+        // novelty score puts far from every trained terrain is `unknown`, which the table does not
+        // name, so the next hop keeps the gait it has.
         assert_eq!(hops[0]["gait"], "G1");
         assert!(run["switches"].as_u64().unwrap() >= 1, "{run}");
         assert!(run["decided"].as_u64().unwrap() as usize >= hops.len() / 2);
         for pair in hops.windows(2) {
             if let Some(believed) = pair[0]["believed"].as_str() {
-                let want = if believed == "clay" { "G2@0.50" } else { "G3" };
+                let want = match believed {
+                    "clay" => "G2@0.50",
+                    "unknown" => pair[0]["gait"].as_str().unwrap(),
+                    _ => "G3",
+                };
                 assert_eq!(pair[1]["gait"], want, "{pair:?}");
             }
         }

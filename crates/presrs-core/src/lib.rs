@@ -9,6 +9,7 @@ pub mod features;
 pub mod frame;
 mod kernels;
 pub mod metrics;
+pub mod novelty;
 pub mod online;
 pub mod perturb;
 pub mod pipeline;

@@ -149,6 +149,13 @@ pub struct TerrainDecision {
     pub early_threshold: f64,
     /// Frames missing inside the stance up to the sample frame (the event's `gap_frames`).
     pub gap_frames: u32,
+    /// Novelty (a self-contained block: `has_novelty` false and the rest zero without a score).
+    pub has_novelty: bool,
+    pub unknown: bool,
+    pub nearest: String,
+    pub novelty: f64,
+    pub novelty_threshold: f64,
+    pub credibility: f64,
 }
 
 impl TerrainDecision {
@@ -252,6 +259,22 @@ pub fn decision_message(
         early_frames: early.map_or(0, |e| e.early_frames),
         early_threshold: early.and_then(|e| e.early_threshold).unwrap_or(0.0),
         gap_frames: u32_of(decision.gap_frames),
+        has_novelty: decision.novelty.is_some(),
+        unknown: decision.novelty.as_ref().is_some_and(|n| n.unknown),
+        nearest: decision
+            .novelty
+            .as_ref()
+            .map(|n| n.nearest.clone())
+            .unwrap_or_default(),
+        novelty: decision.novelty.as_ref().map_or(0.0, |n| n.novelty),
+        novelty_threshold: decision
+            .novelty
+            .as_ref()
+            .map_or(0.0, |n| n.novelty_threshold),
+        credibility: decision
+            .novelty
+            .as_ref()
+            .map_or(0.0, |n| n.credibility.unwrap_or(1.0)),
     }
 }
 
@@ -341,7 +364,32 @@ mod tests {
             whole_stance,
             early: None,
             gap_frames: 0,
+            novelty: None,
         }
+    }
+
+    #[test]
+    fn a_decision_says_unknown_with_the_nearest_class_and_the_score() {
+        let plain = decision_message(&decision(None), &Tenths, "foot");
+        assert!(!plain.has_novelty && !plain.unknown && plain.nearest.is_empty());
+        let unknown = Classification {
+            label: "unknown".to_owned(),
+            novelty: Some(Box::new(presrs::session::NoveltyVerdict {
+                unknown: true,
+                nearest: "sand".to_owned(),
+                novelty: 3.5,
+                novelty_threshold: 2.0,
+                credibility: Some(0.25),
+            })),
+            ..decision(None)
+        };
+        let d = decision_message(&unknown, &Tenths, "foot");
+        assert!(d.has_novelty && d.unknown);
+        assert_eq!((d.label.as_str(), d.nearest.as_str()), ("unknown", "sand"));
+        assert_eq!(
+            (d.novelty, d.novelty_threshold, d.credibility, d.class_index),
+            (3.5, 2.0, 0.25, 1)
+        );
     }
 
     #[test]

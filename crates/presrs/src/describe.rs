@@ -40,6 +40,10 @@ pub fn describe_model(file: &ModelFile) -> String {
             selection.scores.len()
         ));
     }
+    line(match model.novelty() {
+        Some(novelty) => format!("novelty: {}", novelty.describe()),
+        None => "novelty: none (every decision is one of the classes)".to_owned(),
+    });
     match &file.online {
         Some(profile) => line(format!(
             "online profile: sample frame k = {}, {}",

@@ -80,6 +80,7 @@ fn track_options(model: &Path, decide_at: Option<DecideAt>) -> TrackOptions {
         fixed_gaits: vec!["G2".into()],
         start_gait: Some("G2".into()),
         decide_at,
+        novelty: true,
     }
 }
 

@@ -259,6 +259,11 @@ fn a_whole_stance_model_learns_one_walker_and_classifies_the_other() {
             validation: presrs::core::split::ValidationSize::Fraction(0.35),
             seed: 1,
             method,
+            // Novelty off: this test measures how a whole-stance model carries to a walker it never
+            // saw, every stance decided as one of the speeds. A walker never seen is the kind of shift
+            // the novelty score is there to flag (with it, 50 of the 60 stances were `unknown`, which
+            // this accuracy would count as wrong); the score is tested in novelty's own tests.
+            novelty: false,
         },
     )
     .unwrap();

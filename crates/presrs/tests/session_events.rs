@@ -6,7 +6,7 @@
 use presrs::core::online::{DecisionKind, EarlyReason};
 use presrs::session::{
     Classification, DecisionPoint, EarlyDecisionEvent, EarlyRule, End, ErrorEvent, Liftoff,
-    Posteriors, SessionEvent, Touchdown, WholeStance,
+    NoveltyVerdict, Posteriors, SessionEvent, Touchdown, WholeStance,
 };
 
 fn decision(whole_stance: Option<WholeStance>) -> Classification {
@@ -31,6 +31,25 @@ fn decision(whole_stance: Option<WholeStance>) -> Classification {
         whole_stance,
         early: None,
         gap_frames: 0,
+        novelty: None,
+    }
+}
+
+/// A decision of a model that scores novelty, its sample none of the classes.
+fn unknown_decision() -> Classification {
+    Classification {
+        label: "unknown".to_owned(),
+        // The posterior 0.75 capped by the credibility.
+        confidence: 0.0625,
+        gait: None,
+        novelty: Some(Box::new(NoveltyVerdict {
+            unknown: true,
+            nearest: "sand".to_owned(),
+            novelty: 3.5,
+            novelty_threshold: 2.25,
+            credibility: Some(0.0625),
+        })),
+        ..decision(None)
     }
 }
 
@@ -91,6 +110,10 @@ fn golden() -> Vec<(SessionEvent, &'static str)> {
                 }))
             }),
             r#"{"event":"classification","kind":"stance","stance":3,"label":"sand","class":1,"confidence":0.75,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":"G1","decided_at":"liftoff","decided_at_frame":29,"cut":false,"early_rule":"fixed","early_reason":"ended_first","early_point":null,"early_frames":9,"early_threshold":null}"#,
+        ),
+        (
+            SessionEvent::Classification(unknown_decision()),
+            r#"{"event":"classification","kind":"single","stance":3,"label":"unknown","class":1,"confidence":0.0625,"posteriors":{"grass":0.25,"sand":0.75},"sample_frame":26,"frame":27,"frames_used":1,"touchdown_frame":20,"latency_us":12.5,"timestamp_us":null,"gait":null,"unknown":true,"nearest":"sand","novelty":3.5,"novelty_threshold":2.25,"credibility":0.0625}"#,
         ),
         (
             SessionEvent::Liftoff(Liftoff {

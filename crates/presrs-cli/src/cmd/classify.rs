@@ -8,7 +8,9 @@ use presrs::classify::{ClassifyOptions, classify_file, nothing_classified};
 use presrs::dataset::DeadSenselFills;
 use presrs_io::model_file::load_model;
 
-use super::common::{SampleArgs, note_dead_sensels, write_json};
+use presrs_core::novelty::UNKNOWN_LABEL;
+
+use super::common::{NoveltyArgs, SampleArgs, note_dead_sensels, write_json};
 use crate::printer::classify_document::{ClassifyJson, FileError};
 
 /// Classify frames of recording files: one line per sample (file, frame, label, confidence).
@@ -48,6 +50,8 @@ pub struct ClassifyArgs {
     pub mcap: Option<PathBuf>,
     #[command(flatten)]
     pub samples: SampleArgs,
+    #[command(flatten)]
+    pub novelty: NoveltyArgs,
 }
 
 pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
@@ -55,8 +59,9 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         .as_deref()
         .map(presrs_io::output_path::check_output_file)
         .transpose()?;
-    let model_file = load_model(&args.model)?;
+    let model_file = args.novelty.apply(load_model(&args.model)?);
     let model = &model_file.model;
+    let scores_novelty = model.novelty().is_some();
     let mut session = model.session();
     let mut results = Vec::new();
     let mut errors = Vec::new();
@@ -120,18 +125,32 @@ pub fn run(args: &ClassifyArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             if args.json {
                 results.push(sample);
             } else {
+                let label_width = if scores_novelty {
+                    label_width.max(UNKNOWN_LABEL.len())
+                } else {
+                    label_width
+                };
                 if std::mem::take(&mut header) {
-                    writeln!(
+                    write!(
                         out,
                         "{:<file_width$} {:>6}  {:<label_width$} {:>10}",
                         "file", "frame", "label", "confidence"
                     )?;
+                    writeln!(out, "{}", if scores_novelty { "  novelty" } else { "" })?;
                 }
-                writeln!(
+                write!(
                     out,
                     "{:<file_width$} {:>6}  {:<label_width$} {:>10.4}",
                     sample.file, sample.frame, sample.label, sample.confidence
                 )?;
+                // With a novelty score: the score, and for an unknown sample its nearest class.
+                match &sample.novelty {
+                    Some(n) if n.unknown => {
+                        writeln!(out, "  {:>7.2}  (nearest {})", n.novelty, n.nearest)?;
+                    }
+                    Some(n) => writeln!(out, "  {:>7.2}", n.novelty)?,
+                    None => writeln!(out)?,
+                }
             }
         }
     }

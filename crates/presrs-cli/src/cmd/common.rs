@@ -504,3 +504,34 @@ fn parse_sample_frame(text: &str) -> Result<SampleFrame, String> {
 fn parse_baseline_mode(text: &str) -> Result<BaselineMode, String> {
     text.parse::<BaselineMode>().map_err(|err| err.to_string())
 }
+
+/// `--novelty on|off`: whether a model that scores novelty may decide `unknown`.
+#[derive(Clone, Copy, Debug, clap::Args)]
+pub struct NoveltyArgs {
+    /// on (the default): a sample far from every trained class is decided `unknown`, the nearest class
+    /// beside it (models trained before novelty scores existed have none and never do); off: every
+    /// decision is one of the model's classes, as before.
+    #[arg(long, value_name = "on|off", default_value = "on", value_parser = parse_on_off)]
+    pub novelty: bool,
+}
+
+impl NoveltyArgs {
+    /// `file` with its novelty score dropped when off.
+    pub fn apply(
+        self,
+        mut file: presrs_io::model_file::ModelFile,
+    ) -> presrs_io::model_file::ModelFile {
+        if !self.novelty {
+            file.model = file.model.without_novelty();
+        }
+        file
+    }
+}
+
+fn parse_on_off(text: &str) -> Result<bool, String> {
+    match text {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        other => Err(format!("{other:?}: give on or off")),
+    }
+}

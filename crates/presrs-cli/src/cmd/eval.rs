@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use presrs::eval::document::{CompareJson, EvalJson, PerturbedJson, perturbation_fault_results};
+use presrs::eval::novelty::{HeldOutClasses, LeaveClassOut};
 use presrs::eval::{EvalOptions, EvalOutcome, EvalSetup, Holdout, PerturbationRow};
 use presrs::resources::MemoryUse;
 use presrs_core::evaluation::{ComparisonRow, EvalReport};
@@ -85,6 +86,13 @@ pub struct EvalArgs {
     #[arg(long, value_name = "K,...,whole|auto",
           value_parser = |t: &str| t.parse::<presrs::train::early::DecisionPoints>())]
     pub decide_at: Option<presrs::train::early::DecisionPoints>,
+    /// Hold classes out of training in turn, on the evaluation's draws, and measure the novelty score
+    /// (`unknown`): a count (6: spread over the sorted labels) or names (a,b). Prints, per held-out
+    /// class, the AUROC of the score (held-out against known test samples), the share of held-out
+    /// samples decided as a known class with confidence >= 0.9, and the share of known test samples
+    /// decided unknown (`leave_class_out` with --json; a section of --report).
+    #[arg(long, value_name = "N|CLASSES", conflicts_with_all = ["compare", "perturb", "export_draws", "decide_at"], value_parser = |t: &str| t.parse::<HeldOutClasses>())]
+    pub leave_class_out: Option<HeldOutClasses>,
     #[command(flatten)]
     pub pipeline: PipelineArgs,
     #[command(flatten)]
@@ -96,6 +104,9 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         presrs_io::output_path::check_output_dir(dir)?;
     }
     args.samples.check_settings("eval")?;
+    if let Some(held_out) = &args.leave_class_out {
+        return run_leave_class_out(args, held_out, out);
+    }
     if let Some(points) = &args.decide_at {
         return run_early(args, points, out);
     }
@@ -203,6 +214,50 @@ fn run_early(
         out,
         "{}",
         crate::printer::early_table::early_table(&early)
+    )?)
+}
+
+/// `--leave-class-out` (the samples as named, frames with `--sample auto`): the table, or
+/// `{"leave_class_out": ...}` with --json; the report with --report.
+fn run_leave_class_out(
+    args: &EvalArgs,
+    held_out: &HeldOutClasses,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    let progress = TerminalProgress::default();
+    let dataset = presrs::Dataset::load(
+        &args.manifest,
+        &args.samples.options_or_frames()?,
+        &progress,
+    )?;
+    print_load_warnings(&dataset);
+    let options = eval_options(args, &dataset);
+    let setup = EvalSetup::new(&dataset, &options)?;
+    for warning in &setup.warnings {
+        stderr_line!("warning: {warning}");
+    }
+    let result = presrs::eval::novelty::leave_class_out(&setup, held_out, &progress)?;
+    print_leave_class_out(args, &dataset, &result, out)
+}
+
+fn print_leave_class_out(
+    args: &EvalArgs,
+    dataset: &presrs::Dataset,
+    result: &LeaveClassOut,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    if let Some(dir) = &args.report {
+        let line = std::env::args().collect::<Vec<_>>().join(" ");
+        let path = presrs::report::write_leave_class_out_report(dataset, result, Some(&line), dir)?;
+        stderr_line!("report written to {}", path.display());
+    }
+    if args.json {
+        return write_json(out, &serde_json::json!({ "leave_class_out": result }));
+    }
+    Ok(write!(
+        out,
+        "{}",
+        crate::printer::novelty_table::leave_class_out_table(result)
     )?)
 }
 

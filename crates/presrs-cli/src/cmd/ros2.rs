@@ -33,6 +33,8 @@ pub struct Ros2Args {
     /// Model file from `presrs train` (read before the node joins the graph).
     #[arg(long)]
     pub model: PathBuf,
+    #[command(flatten)]
+    pub novelty: super::common::NoveltyArgs,
     /// The pressure topic (a relative name is in the namespace).
     #[arg(long, value_name = "TOPIC")]
     pub input: String,
@@ -123,7 +125,9 @@ pub fn run(args: &Ros2Args, out: &mut dyn Write) -> anyhow::Result<()> {
         .node_options(|key| std::env::var(key).ok())
         .map_err(|err| UsageError::error("ros2", err))?;
     // The model and the profile before the node joins the graph: a bad one announces nothing.
-    let file = presrs_io::model_file::load_model(&args.model)?;
+    let file = args
+        .novelty
+        .apply(presrs_io::model_file::load_model(&args.model)?);
     presrs::session::check_overrides(&file.model, &args.overrides())
         .map_err(|err| UsageError::error("ros2", err))?;
     let online = file.online.as_ref();

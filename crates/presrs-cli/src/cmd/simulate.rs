@@ -18,6 +18,8 @@ use crate::args::values::TerrainImage;
 /// Simulate the one-legged hopper with PreSRS on the paper's terrains and gaits.
 #[derive(Debug, clap::Args)]
 pub struct SimulateArgs {
+    #[command(flatten)]
+    pub novelty: super::common::NoveltyArgs,
     /// Output folder; receives manifest.csv, one TekScan ASCII movie per trial (recordings/), the ground
     /// truth (truth/), table1.csv, config.json and, last, stamp.json (what it was made from and a
     /// fingerprint of every file: `presrs reproduce --out R` reuses R/dataset when it matches).
@@ -174,6 +176,7 @@ pub fn run_track_comparison(
         fixed_gaits: args.fixed_gait.clone(),
         start_gait: args.start_gait.clone(),
         decide_at: args.decide_at,
+        novelty: args.novelty.novelty,
     };
     let outcome = compare_on_track(config, spec, &options, &TerminalProgress::default())?;
     for note in &outcome.notes {

@@ -62,6 +62,8 @@ pub struct StreamArgs {
     /// Model file from `presrs train`.
     #[arg(long)]
     pub model: PathBuf,
+    #[command(flatten)]
+    pub novelty: super::common::NoveltyArgs,
     /// Listen for binary-protocol clients on this loopback address (e.g. 127.0.0.1:7700; port 0 picks
     /// one, printed as the first JSON line) instead of reading stdin. A connection's errors end at most
     /// that connection; the server keeps serving.
@@ -206,7 +208,7 @@ pub fn run(args: &StreamArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         .as_deref()
         .map(presrs_io::output_path::check_output_file)
         .transpose()?;
-    let file = load_model(&args.model)?;
+    let file = args.novelty.apply(load_model(&args.model)?);
     presrs::session::check_overrides(&file.model, &args.overrides())
         .map_err(|err| super::usage::UsageError::error("stream", err))?;
     let profile = resolve_profile(

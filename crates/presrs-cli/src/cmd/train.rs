@@ -84,6 +84,8 @@ pub struct TrainArgs {
     pub pipeline: PipelineArgs,
     #[command(flatten)]
     pub samples: SampleArgs,
+    #[command(flatten)]
+    pub novelty: super::common::NoveltyArgs,
 }
 
 pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
@@ -95,6 +97,7 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         validation: args.validation,
         seed: args.seed,
         method: args.pipeline.method(),
+        novelty: args.novelty.novelty,
     };
     let choice = if args.online_profile || args.gait_table.is_some() {
         ProfileChoice::Required

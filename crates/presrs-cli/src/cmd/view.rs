@@ -35,6 +35,8 @@ pub struct ViewArgs {
     /// Classify the frames online with this model (its online profile, else warm-up calibration).
     #[arg(long)]
     pub model: Option<PathBuf>,
+    #[command(flatten)]
+    pub novelty: super::common::NoveltyArgs,
     /// Online profile JSON (overrides the model file's).
     #[arg(long, requires = "model")]
     pub profile: Option<PathBuf>,
@@ -59,7 +61,12 @@ pub struct ViewArgs {
 
 pub fn run(args: &ViewArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let recording = presrs_io::read_recording(&args.file)?;
-    let model = args.model.as_deref().map(load_model).transpose()?;
+    let model = args
+        .model
+        .as_deref()
+        .map(load_model)
+        .transpose()?
+        .map(|file| args.novelty.apply(file));
     let profile = model
         .as_ref()
         .map(|file| {

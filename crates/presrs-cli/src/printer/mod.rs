@@ -7,6 +7,7 @@ pub mod early_table;
 pub mod eval_tables;
 pub mod feature_csv;
 pub mod inspect_table;
+pub mod novelty_table;
 pub mod profile_summary;
 pub mod progress_lines;
 pub mod reproduce_tables;

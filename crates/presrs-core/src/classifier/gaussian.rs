@@ -138,7 +138,11 @@ fn cholesky_lower(a: &[f64], d: usize) -> Option<Vec<f64>> {
 mod linalg_tests;
 
 /// Shrinks the covariance of centred `x` and factors it; returns (L, log det Σ, shrinkage weight).
-fn shrunk_factor(x: &[f64], d: usize, shrinkage: Shrinkage) -> Result<(Vec<f64>, f64, f64)> {
+pub(crate) fn shrunk_factor(
+    x: &[f64],
+    d: usize,
+    shrinkage: Shrinkage,
+) -> Result<(Vec<f64>, f64, f64)> {
     let (lw, mut cov) = ledoit_wolf(x, d)?;
     let weight = match shrinkage {
         Shrinkage::LedoitWolf => lw,

@@ -51,7 +51,7 @@ impl OnlineClassifier<'_> {
                         if p.confidence >= threshold {
                             posteriors.extend_from_slice(p.posteriors);
                         }
-                        (p.class, p.confidence)
+                        (p.class, p.confidence, p.novelty)
                     })
                 });
             let how = StanceDecision {
@@ -66,7 +66,7 @@ impl OnlineClassifier<'_> {
                 }),
             };
             match outcome {
-                Ok((_, confidence)) if confidence < threshold => {}
+                Ok((_, confidence, _)) if confidence < threshold => {}
                 Ok(decided) => {
                     whole.open = None;
                     self.push_whole_decision(stance_id, start, k + 1, how, t, Ok(decided));

@@ -44,6 +44,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
 use crate::frame::{FrameView, Grid};
+use crate::novelty::Novelty;
 use crate::pipeline::{Session, TrainedModel};
 use crate::sample::SampleKind;
 use crate::stance::causal::MAX_SEG_EVENTS;
@@ -128,6 +129,9 @@ pub struct Decision {
     pub confidence: f64,
     /// For a whole-stance decision ([`DecisionKind::Stance`]): what it waited for.
     pub stance: Option<StanceDecision>,
+    /// How far the sample lies from every class, when the model scores novelty (for a fused decision:
+    /// the mean score of the frames fused); `unknown` says it is none of them.
+    pub novelty: Option<Novelty>,
     /// Index of this decision's posteriors in the step's posterior buffer.
     slot: usize,
 }
@@ -193,6 +197,9 @@ pub struct OnlineStats {
     pub rejected_frames: u64,
 }
 
+/// What classifying one sample gives: its class, confidence and novelty.
+type Verdict = (usize, f64, Option<Novelty>);
+
 /// Causal segmentation + classification of a frame stream with one model (see the module docs).
 #[derive(Debug)]
 pub struct OnlineClassifier<'m> {
@@ -205,10 +212,12 @@ pub struct OnlineClassifier<'m> {
     held_valid: bool,
     fusion_sum: Vec<f64>,
     fusion_frames: usize,
+    /// The sum of the fused frames' novelty scores and the threshold, when the model scores novelty.
+    fusion_novelty: Option<(f64, f64)>,
     fusion_last: usize,
     /// The current frame's classification, once made in this push (the sample frame is usually also a
     /// fusion frame: it is classified once, not twice); `Err` holds the index of its error in `errors`.
-    current: Option<std::result::Result<(usize, f64), usize>>,
+    current: Option<std::result::Result<Verdict, usize>>,
     current_posteriors: Vec<f64>,
     /// The last stance that got its single decision (for [`Liftoff::sampled`]).
     decided_stance: Option<u64>,
@@ -330,6 +339,7 @@ impl<'m> OnlineClassifier<'m> {
             held_valid: false,
             fusion_sum: vec![0.0; n_classes],
             fusion_frames: 0,
+            fusion_novelty: None,
             fusion_last: 0,
             current: None,
             current_posteriors: vec![0.0; n_classes],
@@ -456,10 +466,7 @@ impl<'m> OnlineClassifier<'m> {
 
     /// Classifies the current frame once per push; later requests reuse the result (or the failure:
     /// the index of its error).
-    fn classify_current(
-        &mut self,
-        frame: &FrameView<'_>,
-    ) -> std::result::Result<(usize, f64), usize> {
+    fn classify_current(&mut self, frame: &FrameView<'_>) -> std::result::Result<Verdict, usize> {
         if let Some(result) = self.current {
             return result;
         }
@@ -467,7 +474,7 @@ impl<'m> OnlineClassifier<'m> {
             Ok(prediction) => {
                 self.current_posteriors
                     .copy_from_slice(prediction.posteriors);
-                Ok((prediction.class, prediction.confidence))
+                Ok((prediction.class, prediction.confidence, prediction.novelty))
             }
             Err(err) => Err(self.keep_error(err)),
         };
@@ -480,7 +487,7 @@ impl<'m> OnlineClassifier<'m> {
         &mut self,
         stance_id: u64,
         sample_frame: usize,
-    ) -> std::result::Result<(usize, f64), usize> {
+    ) -> std::result::Result<Verdict, usize> {
         if !self.held_valid {
             return Err(self.keep_error(CoreError::NotEnoughData(format!(
                 "stance {stance_id}: no copy of its sample frame {sample_frame} was kept"
@@ -492,7 +499,7 @@ impl<'m> OnlineClassifier<'m> {
         let outcome = FrameView::new(grid, &self.held, mask).and_then(|view| {
             self.session.classify(&view).map(|prediction| {
                 self.posteriors.extend_from_slice(prediction.posteriors);
-                (prediction.class, prediction.confidence)
+                (prediction.class, prediction.confidence, prediction.novelty)
             })
         });
         outcome.map_err(|err| self.keep_error(err))
@@ -531,6 +538,7 @@ impl<'m> OnlineClassifier<'m> {
         self.stats.stances += 1;
         self.fusion_sum.fill(0.0);
         self.fusion_frames = 0;
+        self.fusion_novelty = None;
         self.events.push(OnlineEvent::Touchdown(touchdown));
     }
 
@@ -569,7 +577,7 @@ impl<'m> OnlineClassifier<'m> {
             }
             outcome
         };
-        let (class, confidence) = match outcome {
+        let (class, confidence, novelty) = match outcome {
             Ok(result) => result,
             Err(slot) => {
                 self.events.push(OnlineEvent::Failed(Failure {
@@ -593,6 +601,7 @@ impl<'m> OnlineClassifier<'m> {
             class,
             confidence,
             stance: None,
+            novelty,
             slot,
         };
         self.stats.decisions += 1;
@@ -605,7 +614,11 @@ impl<'m> OnlineClassifier<'m> {
     fn fuse(&mut self, stance_id: u64, frame: Option<&FrameView<'_>>, t: usize) {
         if let Some(frame) = frame {
             match self.classify_current(frame) {
-                Ok(_) => {
+                Ok((_, _, novelty)) => {
+                    if let Some(novelty) = novelty {
+                        let (sum, _) = self.fusion_novelty.get_or_insert((0.0, novelty.threshold));
+                        *sum += novelty.score;
+                    }
                     for (sum, p) in self.fusion_sum.iter_mut().zip(&self.current_posteriors) {
                         *sum += p;
                     }
@@ -642,6 +655,13 @@ impl<'m> OnlineClassifier<'m> {
                 .fold((0, f64::NEG_INFINITY), |best, (class, p)| {
                     if p > best.1 { (class, p) } else { best }
                 });
+        // The mean of the fused frames' scores, with its credibility; the confidence capped by it.
+        let scorer = self.session.model().novelty();
+        let novelty = self.fusion_novelty.map(|(sum, threshold)| match scorer {
+            Some(scorer) => scorer.verdict(sum / count),
+            None => Novelty::of(sum / count, threshold),
+        });
+        let confidence = novelty.map_or(confidence, |n| n.capped(confidence));
         self.events.push(OnlineEvent::Decision(Decision {
             stance_id,
             kind: DecisionKind::Fused,
@@ -652,11 +672,13 @@ impl<'m> OnlineClassifier<'m> {
             class,
             confidence,
             stance: None,
+            novelty,
             slot,
         }));
         self.stats.fused_decisions += 1;
         self.fusion_sum.fill(0.0);
         self.fusion_frames = 0;
+        self.fusion_novelty = None;
     }
 
     /// A whole-stance model's step: the frame is kept (unless the stance under way already has the
@@ -816,7 +838,7 @@ impl<'m> OnlineClassifier<'m> {
             .and_then(|view| {
                 session.classify(&view).map(|prediction| {
                     self.posteriors.extend_from_slice(prediction.posteriors);
-                    (prediction.class, prediction.confidence)
+                    (prediction.class, prediction.confidence, prediction.novelty)
                 })
             });
         self.push_whole_decision(stance_id, start, frames, how, t, outcome);
@@ -830,9 +852,9 @@ impl<'m> OnlineClassifier<'m> {
         frames: usize,
         how: StanceDecision,
         t: usize,
-        outcome: Result<(usize, f64)>,
+        outcome: Result<Verdict>,
     ) {
-        let (class, confidence) = match outcome {
+        let (class, confidence, novelty) = match outcome {
             Ok(result) => result,
             Err(err) => {
                 let slot = self.keep_error(err);
@@ -859,6 +881,7 @@ impl<'m> OnlineClassifier<'m> {
             class,
             confidence,
             stance: Some(how),
+            novelty,
             slot,
         }));
     }

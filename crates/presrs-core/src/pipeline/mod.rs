@@ -17,6 +17,7 @@ pub(crate) mod config;
 pub(crate) mod early;
 pub(crate) mod extract;
 pub(crate) mod model;
+pub(crate) mod novelty;
 pub(crate) mod session;
 pub(crate) mod train;
 
@@ -31,6 +32,7 @@ pub use model::{
     AutoThreshold, DecisionPoint, EarlyDecisions, MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN,
     TrainedModel, TrainingSummary,
 };
+pub use novelty::MAX_NOVELTY_DIMS;
 pub use session::{BATCH_BLOCK, Classification, Prediction, Session};
 pub use train::train;
 

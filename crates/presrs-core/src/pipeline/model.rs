@@ -8,6 +8,7 @@ use crate::crop::Crop;
 use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
 use crate::frame::Grid;
+use crate::novelty::NoveltyModel;
 use crate::pipeline::config::TrainConfig;
 use crate::preprocess::Preprocess;
 use crate::projection::pca::Pca;
@@ -75,6 +76,10 @@ pub(crate) struct ModelFields {
     /// written before them, and from models trained for the whole stance only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) early: Option<Box<EarlyDecisions>>,
+    /// The novelty score and its threshold (absent from files written before it, and from models
+    /// trained without it: every decision is then one of the classes, as before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) novelty: Option<NoveltyModel>,
 }
 
 pub(crate) const FORMAT_VERSION: u32 = 1;
@@ -264,6 +269,7 @@ impl TryFrom<ModelFields> for TrainedModel {
             )));
         }
         check_sample(&fields.sample, fields.image_grid)?;
+        check_novelty(&fields)?;
         let model = Self { fields, extractor };
         if let Some(early) = &model.fields.early {
             early.check(&model)?;
@@ -299,6 +305,26 @@ fn check_projection(fields: &ModelFields, n_features: usize) -> Result<()> {
         ))),
         None => Ok(()),
     }
+}
+
+/// The novelty score reads the classifier's vectors, of the model's classes.
+fn check_novelty(fields: &ModelFields) -> Result<()> {
+    let Some(novelty) = &fields.novelty else {
+        return Ok(());
+    };
+    let (dims, classes) = (fields.classifier.dims(), fields.class_names.len());
+    if novelty.dims() != dims || novelty.n_classes() != classes {
+        return Err(CoreError::Param {
+            name: "novelty",
+            reason: format!(
+                "the novelty score reads {} values of {} classes, but the classifier takes {dims} of \
+                 {classes}",
+                novelty.dims(),
+                novelty.n_classes()
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// A whole-stance model's images are its summary's channels over its length.
@@ -508,6 +534,24 @@ impl TrainedModel {
                 list.join(", ")
             ),
         })
+    }
+
+    /// The novelty score, when the model has one.
+    pub fn novelty(&self) -> Option<&NoveltyModel> {
+        self.fields.novelty.as_ref()
+    }
+
+    /// This model without its novelty score: every decision one of the classes (`--novelty off`).
+    pub fn without_novelty(mut self) -> Self {
+        self.fields.novelty = None;
+        self
+    }
+
+    /// This model with `novelty` (checked against the classifier).
+    pub fn with_novelty_model(mut self, novelty: NoveltyModel) -> Result<Self> {
+        self.fields.novelty = Some(novelty);
+        check_novelty(&self.fields)?;
+        Ok(self)
     }
 
     /// This model with `selection` recorded.

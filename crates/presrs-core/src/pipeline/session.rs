@@ -8,6 +8,7 @@ use crate::classifier::ClassifierScratch;
 use crate::error::{CoreError, Result, check_len};
 use crate::features::Precision;
 use crate::frame::FrameView;
+use crate::novelty::{Novelty, NoveltyScratch};
 use crate::pipeline::extract::Preprocessor;
 use crate::pipeline::model::TrainedModel;
 use crate::projection::pca::{Pca, ProjectionScratch};
@@ -29,6 +30,11 @@ impl TrainedModel {
             reduced: vec![0.0; fields.pca.as_ref().map_or(0, Pca::n_components)],
             scratch: fields.classifier.scratch(),
             posteriors: vec![0.0; fields.class_names.len()],
+            novelty: fields
+                .novelty
+                .as_ref()
+                .map(|novelty| novelty.scratch())
+                .unwrap_or_default(),
         }
     }
 
@@ -58,6 +64,7 @@ pub struct Session<'m> {
     reduced: Vec<f64>,
     scratch: ClassifierScratch,
     posteriors: Vec<f64>,
+    novelty: NoveltyScratch,
 }
 
 /// The result of [`Session::classify`], borrowing the session's buffers.
@@ -65,10 +72,14 @@ pub struct Session<'m> {
 pub struct Prediction<'s> {
     pub class: usize,
     pub label: &'s str,
-    /// The posterior of `class`.
+    /// The posterior of `class`, capped by the sample's credibility when the model scores novelty
+    /// ([`Novelty::capped`]; `posteriors` are the classifier's own).
     pub confidence: f64,
     /// Posterior of every class, in class-index order (equal priors).
     pub posteriors: &'s [f64],
+    /// How far the frame lies from every class, when the model scores novelty; `unknown` says it is
+    /// none of them (`class` is then the nearest one).
+    pub novelty: Option<Novelty>,
 }
 
 impl Prediction<'_> {
@@ -77,6 +88,7 @@ impl Prediction<'_> {
             class: self.class,
             confidence: self.confidence,
             posteriors: self.posteriors.to_vec(),
+            novelty: self.novelty,
         }
     }
 }
@@ -88,6 +100,9 @@ pub struct Classification {
     pub class: usize,
     pub confidence: f64,
     pub posteriors: Vec<f64>,
+    /// As [`Prediction::novelty`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub novelty: Option<Novelty>,
 }
 
 impl<'m> Session<'m> {
@@ -106,11 +121,13 @@ impl<'m> Session<'m> {
             &self.features
         };
         let class = classify_reduced(model, reduced, &mut self.scratch, &mut self.posteriors)?;
+        let novelty = novelty_of(model, reduced, &mut self.novelty)?;
         Ok(Prediction {
             class,
             label: &model.fields.class_names[class],
-            confidence: self.posteriors[class],
+            confidence: reported_confidence(self.posteriors[class], novelty),
             posteriors: &self.posteriors,
+            novelty,
         })
     }
 
@@ -182,6 +199,26 @@ fn classify_reduced(
         .fields
         .classifier
         .classify_into(reduced, scratch, posteriors)
+}
+
+/// The confidence a decision reports: the class's posterior, capped by the sample's credibility when
+/// the model scores novelty (`crate::novelty`).
+pub(crate) fn reported_confidence(posterior: f64, novelty: Option<Novelty>) -> f64 {
+    novelty.map_or(posterior, |n| n.capped(posterior))
+}
+
+/// The novelty of a reduced vector, when the model scores it.
+fn novelty_of(
+    model: &TrainedModel,
+    reduced: &[f64],
+    scratch: &mut NoveltyScratch,
+) -> Result<Option<Novelty>> {
+    model
+        .fields
+        .novelty
+        .as_ref()
+        .map(|novelty| novelty.score_into(reduced, scratch))
+        .transpose()
 }
 
 /// Buffers for classifying a block of frames together (one per rayon worker in
@@ -257,10 +294,12 @@ impl<'m> BatchSession<'m> {
                         &mut session.scratch,
                         &mut session.posteriors,
                     )?;
+                    let novelty = novelty_of(model, reduced, &mut session.novelty)?;
                     Ok(Classification {
                         class,
-                        confidence: session.posteriors[class],
+                        confidence: reported_confidence(session.posteriors[class], novelty),
                         posteriors: session.posteriors.clone(),
+                        novelty,
                     })
                 }
             })

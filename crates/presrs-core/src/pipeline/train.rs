@@ -83,6 +83,7 @@ pub fn train(
         sensor: None,
         sampling: None,
         early: None,
+        novelty: None,
     })
 }
 

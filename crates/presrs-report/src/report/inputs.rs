@@ -118,6 +118,8 @@ pub struct ReportInputs<'a> {
     pub fault_note: Option<String>,
     /// Early decisions against decision time (`eval --decide-at`); `None` for none.
     pub early: Option<EarlyCurve>,
+    /// `eval --leave-class-out`'s figures, per held-out class.
+    pub novelty: Option<NoveltyResult>,
 }
 
 impl<'a> ReportInputs<'a> {
@@ -139,6 +141,31 @@ impl<'a> ReportInputs<'a> {
             faults: Vec::new(),
             fault_note: None,
             early: None,
+            novelty: None,
         }
     }
+}
+
+/// One held-out class's figures (`presrs::eval::novelty::HeldOutClass`, as the report needs them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoveltyRow {
+    pub class: String,
+    pub novel_samples: usize,
+    pub known_samples: usize,
+    pub auroc: Option<f64>,
+    pub auroc_posterior: Option<f64>,
+    /// Shares of held-out samples decided as a known class with confidence >= 0.9, with and without the
+    /// novelty score.
+    pub confident_known: f64,
+    pub confident_known_without: f64,
+    /// Share of known test samples decided `unknown`.
+    pub known_rejected: f64,
+}
+
+/// The leave-class-out results a report shows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoveltyResult {
+    /// How they were obtained (protocol, threshold), shown above the table.
+    pub note: String,
+    pub rows: Vec<NoveltyRow>,
 }

@@ -7,6 +7,7 @@ mod early;
 mod evaluation;
 mod faults;
 mod inputs;
+mod novelty;
 mod page;
 mod samples;
 mod simulation;
@@ -20,6 +21,7 @@ use self::evaluation::{
     accuracy_section, confusion_section, reliability_section, validation_section,
 };
 use self::faults::fault_section;
+use self::novelty::novelty_section;
 use self::page::{Section, html_page};
 use self::samples::{
     Groups, data_section, images_section, load_section, pca_section, spectra_section,
@@ -29,8 +31,8 @@ use crate::error::Result;
 
 pub use self::faults::fault_panels;
 pub use self::inputs::{
-    EarlyAutoResult, EarlyCurve, EarlyCurvePoint, Evaluation, FaultResult, ReportInputs,
-    ReportRecording, SimulationInputs,
+    EarlyAutoResult, EarlyCurve, EarlyCurvePoint, Evaluation, FaultResult, NoveltyResult,
+    NoveltyRow, ReportInputs, ReportRecording, SimulationInputs,
 };
 
 /// Writes `out_dir/index.html` and its figures; returns the page's path.
@@ -50,6 +52,7 @@ pub fn write_report(inputs: &ReportInputs<'_>, out_dir: &Path) -> Result<PathBuf
         sections.extend(reliability_section(&inputs.evaluations));
     }
     sections.extend(early_section(inputs.early.as_ref()));
+    sections.extend(inputs.novelty.as_ref().and_then(novelty_section));
     sections.extend(fault_section(&inputs.faults, inputs.fault_note.as_deref()));
     if let Some(sim) = &inputs.simulation {
         sections.push(table1_section(sim));

@@ -74,10 +74,19 @@ impl ClassifyBag {
                 .iter()
                 .position(|s| (s.start..s.start + s.len).contains(&result.frame));
             let gait = gait_table.and_then(|table| table.get(&result.label));
-            let line = json!({"event": "classification", "kind": "offline", "file": file,
+            let mut line = json!({"event": "classification", "kind": "offline", "file": file,
                 "stance": stance, "frame": result.frame, "sample_frame": result.frame,
                 "label": result.label, "confidence": result.confidence,
                 "posteriors": result.posteriors, "gait": gait});
+            if let (Some(novelty), Some(fields)) = (&result.novelty, line.as_object_mut()) {
+                fields.insert("unknown".into(), json!(novelty.unknown));
+                fields.insert("nearest".into(), json!(novelty.nearest));
+                fields.insert("novelty".into(), json!(novelty.novelty));
+                fields.insert("novelty_threshold".into(), json!(novelty.novelty_threshold));
+                if let Some(credibility) = novelty.credibility {
+                    fields.insert("credibility".into(), json!(credibility));
+                }
+            }
             events
                 .entry(result.frame)
                 .or_default()

@@ -6,6 +6,7 @@ pub mod bag;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use presrs_core::novelty::UNKNOWN_LABEL;
 use presrs_core::pipeline::{Prediction, Session, TrainedModel};
 use presrs_core::sample::SampleKind;
 use presrs_core::stance::{ValidSegmentParams, segment_recording};
@@ -14,6 +15,7 @@ use serde::Serialize;
 
 use crate::dataset::{DeadSenselFills, SampleOptions, read_corrected};
 use crate::error::{Context, Error, Result};
+use crate::session::NoveltyVerdict;
 use presrs_io::message::{Message, Opt, Warning, Warnings};
 
 /// One classified frame.
@@ -28,6 +30,10 @@ pub struct Classified {
     /// Why this label may mean little: the frame lies outside every stance phase, or carries no load.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<Warning>,
+    /// The novelty verdict, with a model that scores novelty: when `unknown`, `label` is `unknown`
+    /// and `nearest` names the nearest class (whose posterior `confidence` is).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub novelty: Option<NoveltyVerdict>,
 }
 
 /// What was classified in one file, and what the user should know about the file.
@@ -339,10 +345,22 @@ fn classified_of(
     prediction: &Prediction<'_>,
     warning: Option<Warning>,
 ) -> Classified {
+    let unknown = prediction.novelty.is_some_and(|n| n.unknown);
     Classified {
         file: name.to_owned(),
         frame,
-        label: prediction.label.to_owned(),
+        label: if unknown {
+            UNKNOWN_LABEL.to_owned()
+        } else {
+            prediction.label.to_owned()
+        },
+        novelty: prediction.novelty.map(|n| NoveltyVerdict {
+            unknown: n.unknown,
+            nearest: prediction.label.to_owned(),
+            novelty: n.score,
+            novelty_threshold: n.threshold,
+            credibility: n.credibility,
+        }),
         confidence: prediction.confidence,
         posteriors: model
             .class_names()

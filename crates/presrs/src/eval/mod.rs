@@ -4,6 +4,7 @@
 
 pub mod document;
 pub mod early;
+pub mod novelty;
 pub mod race;
 
 use std::collections::BTreeMap;

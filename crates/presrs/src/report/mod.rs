@@ -362,6 +362,33 @@ pub fn write_early_report(
     )
 }
 
+/// `eval --leave-class-out --report DIR`: the data set and the leave-class-out table.
+pub fn write_leave_class_out_report(
+    dataset: &Dataset,
+    result: &crate::eval::novelty::LeaveClassOut,
+    command_line: Option<&str>,
+    out_dir: &Path,
+) -> Result<PathBuf> {
+    let samples = &dataset.samples;
+    let mut inputs = ReportInputs::new(
+        format!(
+            "presrs report: {} (leave one class out)",
+            dataset.path().display()
+        ),
+        samples,
+    );
+    inputs.notes = vec![format!(
+        "{} images from {}.",
+        samples.len(),
+        dataset.path().display()
+    )];
+    inputs
+        .notes
+        .extend(command_line.map(|line| format!("Command: {line}")));
+    inputs.novelty = Some(result.report_rows());
+    write_report(&inputs, out_dir)
+}
+
 /// The notes after the samples' line: with `--sample auto`, the sample race of every fold; then the
 /// provenance.
 fn race_notes(outcome: &EvalOutcome, command_line: Option<&str>) -> Vec<String> {

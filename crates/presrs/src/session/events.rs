@@ -2,6 +2,7 @@
 //! client"). Their JSON, through serde, is the protocol's line; a face that builds messages of its own
 //! (the ROS 2 node, the live view, Python) reads the fields, never the line.
 
+use presrs_core::novelty::UNKNOWN_LABEL;
 use presrs_core::online::{
     DecidedAt, Decision, DecisionKind, EarlyReason, OnlineEvent, OnlineProfile, Step,
 };
@@ -70,6 +71,11 @@ pub struct Classification {
     /// Absent from the line when 0 (none missing, or an input without frame times).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub gap_frames: u64,
+    /// The novelty score and its verdict, when the model scores novelty (absent otherwise, and with
+    /// `--novelty off`); when `unknown`, `label` is `unknown` and `nearest` names the nearest class.
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    /// Boxed: the event stays small without a score (clippy's large_enum_variant).
+    pub novelty: Option<Box<NoveltyVerdict>>,
 }
 
 /// Whether a count is 0 (left out of the line).
@@ -112,6 +118,23 @@ impl EarlyRule {
             Self::Auto => "auto",
         }
     }
+}
+
+/// The novelty of a decision: how far its sample lies from every trained class.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoveltyVerdict {
+    /// The sample is none of the model's classes: the decision's `label` is `unknown`.
+    pub unknown: bool,
+    /// The nearest class (the classifier's label, whether `unknown` or not).
+    pub nearest: String,
+    /// The score: the distance to the nearest training sample in the model's discriminant space.
+    pub novelty: f64,
+    /// The score above which a sample is `unknown`.
+    pub novelty_threshold: f64,
+    /// The share of held-out known training samples scoring at least `novelty` (a conformal
+    /// p-value), by which `confidence` is capped; absent for models that keep no held-out scores.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub credibility: Option<f64>,
 }
 
 /// What a whole-stance model's decision waited for.
@@ -337,7 +360,13 @@ fn classification(
     timing: EventTiming,
 ) -> Classification {
     let names = model.class_names();
-    let label = names.get(d.class).map_or("?", String::as_str).to_owned();
+    let nearest = names.get(d.class).map_or("?", String::as_str).to_owned();
+    let unknown = d.novelty.is_some_and(|n| n.unknown);
+    let label = if unknown {
+        UNKNOWN_LABEL.to_owned()
+    } else {
+        nearest.clone()
+    };
     let posteriors = names
         .iter()
         .zip(step.posteriors(d))
@@ -377,6 +406,15 @@ fn classification(
                 early_point: early.point.map(|k| k as u64),
                 early_frames: how.waited_for.saturating_sub(d.touchdown_frame) as u64,
                 early_threshold: early.threshold,
+            })
+        }),
+        novelty: d.novelty.map(|n| {
+            Box::new(NoveltyVerdict {
+                unknown: n.unknown,
+                nearest,
+                novelty: n.score,
+                novelty_threshold: n.threshold,
+                credibility: n.credibility,
             })
         }),
         label,

@@ -23,7 +23,7 @@ mod summary;
 
 pub use events::{
     Classification, DecisionPoint, EarlyDecisionEvent, EarlyRule, End, ErrorEvent, EventTiming,
-    Liftoff, Posteriors, SessionEvent, Touchdown, WholeStance, step_events,
+    Liftoff, NoveltyVerdict, Posteriors, SessionEvent, Touchdown, WholeStance, step_events,
 };
 pub use gaps::FrameGaps;
 pub use observer::{JsonLines, NoObserver, Observers, OwnedObservers, SessionObserver};

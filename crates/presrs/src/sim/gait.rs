@@ -10,6 +10,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use presrs_core::novelty::UNKNOWN_LABEL;
 use presrs_core::online::{OnlineClassifier, OnlineEvent, OnlineProfile};
 use presrs_core::{FrameView, Grid};
 use presrs_io::model_file::load_model;
@@ -309,6 +310,16 @@ impl AdaptivePolicy<'_, '_> {
             let frame = FrameView::new(grid, values, None).map_err(|e| e.to_string())?;
             let events = self.classifier.push(&frame).map_err(|e| e.to_string())?;
             for event in events.events {
+                // A terrain never seen: keep the current gait, unless the table names a cautious one
+                // for `unknown`; it breaks any streak.
+                if let OnlineEvent::Decision(decision) = event
+                    && decision.novelty.is_some_and(|novelty| novelty.unknown)
+                {
+                    self.streak = None;
+                    step.terrain = Some(UNKNOWN_LABEL.to_owned());
+                    step.gait = self.table.get(UNKNOWN_LABEL).cloned();
+                    continue;
+                }
                 if let OnlineEvent::Decision(decision) = event
                     && let Some(label) = self.class_names.get(decision.class)
                 {
@@ -351,6 +362,8 @@ pub struct TrackOptions {
     /// (`auto`), instead of at lift-off (an error with a one-frame model, and for a moment the model
     /// was not trained for, as in `stream`).
     pub decide_at: Option<presrs_core::online::DecideAt>,
+    /// Whether a model that scores novelty may decide `unknown` (false: `--novelty off`).
+    pub novelty: bool,
 }
 
 /// What [`compare_on_track`] found.
@@ -381,8 +394,11 @@ pub fn compare_on_track(
     let (mut gait_table_map, mut source, mut measured): (BTreeMap<String, String>, _, _) =
         (BTreeMap::new(), None, None);
     if let Some(path) = &options.adaptive {
-        let file = load_model(path)
+        let mut file = load_model(path)
             .with_context(|| format!("cannot read the model {}", path.display()))?;
+        if !options.novelty {
+            file.model = file.model.without_novelty();
+        }
         let model = &file.model;
         let class_names = model.class_names().to_vec();
         let mut profile = file.online.clone().unwrap_or_else(|| {

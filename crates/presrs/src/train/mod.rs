@@ -34,6 +34,9 @@ pub struct TrainOptions {
     /// Seed of the random draw and of the automatic choice's folds.
     pub seed: u64,
     pub method: Method,
+    /// Fit the novelty score, so that a sample far from every class is decided `unknown` (false:
+    /// `--novelty off`, every decision one of the classes).
+    pub novelty: bool,
 }
 
 impl Default for TrainOptions {
@@ -44,6 +47,7 @@ impl Default for TrainOptions {
             validation: ValidationSize::Fraction(0.35),
             seed: 1,
             method: Method::default(),
+            novelty: true,
         }
     }
 }
@@ -205,6 +209,11 @@ pub fn train_with_progress(
         options.seed,
     )?;
     let mut warnings = Warnings::new();
+    let model = if options.novelty {
+        with_novelty(model, &train_images, &validation_images, &mut warnings)
+    } else {
+        model
+    };
     if let Some(per_class) = options.per_class
         && !split.capped.is_empty()
     {
@@ -243,6 +252,33 @@ pub fn train_with_progress(
         validation_counts: count(&split.validation),
         warnings,
     })
+}
+
+/// `model` with its novelty score fitted on its training and validation images; without one, and a
+/// warning saying why, when it cannot be fitted.
+fn with_novelty(
+    model: TrainedModel,
+    train_images: &[LabeledImage<'_>],
+    validation_images: &[LabeledImage<'_>],
+    warnings: &mut Warnings,
+) -> TrainedModel {
+    let all: Vec<LabeledImage<'_>> = train_images
+        .iter()
+        .chain(validation_images)
+        .copied()
+        .collect();
+    match model
+        .clone()
+        .with_novelty(&all, presrs_core::novelty::DEFAULT_REJECTION)
+    {
+        Ok(scored) => scored,
+        Err(err) => {
+            warnings.push(Message::from(format!(
+                "no novelty score (the model will never decide unknown): {err}"
+            )));
+            model
+        }
+    }
 }
 
 /// The one warning line for a per-class count that some classes cannot give: `short` lists (held-out

@@ -130,7 +130,9 @@ function onLine(line) {
     }
     case "classification":
       showDecision(e);
-      log(`${e.kind} decision: stance ${e.stance} is ${e.label} (confidence ${e.confidence.toFixed(2)})` +
+      log(`${e.kind} decision: stance ${e.stance} is ${e.label}` +
+          (e.unknown ? ` (nearest ${e.nearest}, confidence ${e.confidence.toFixed(2)}, novelty ${e.novelty.toFixed(2)})`
+                     : ` (confidence ${e.confidence.toFixed(2)})`) +
           (e.decided_at ? `, at ${e.decided_at} (frame ${e.decided_at_frame}${e.cut ? ", cut" : ""})` : "") +
           (e.gait ? `, gait ${e.gait}` : ""), "classification");
       break;
@@ -153,6 +155,15 @@ function showDecision(e) {
   document.getElementById("confidence").textContent = e.confidence.toFixed(3);
   document.getElementById("confidence-bar").value = e.confidence;
   document.getElementById("gait").textContent = e.gait || "—";
+  // A model that scores novelty: the score, its threshold, and for an unknown terrain the nearest class.
+  const novelty = document.getElementById("novelty");
+  novelty.hidden = e.novelty === undefined;
+  terrain.dataset.unknown = e.unknown ? "true" : "false";
+  if (e.novelty !== undefined) {
+    document.getElementById("novelty-score").textContent = e.novelty.toFixed(2);
+    document.getElementById("novelty-threshold").textContent = e.novelty_threshold.toFixed(2);
+    document.getElementById("nearest").textContent = e.unknown ? `; nearest: ${e.nearest}` : "";
+  }
   const post = document.getElementById("posteriors");
   post.replaceChildren(...Object.entries(e.posteriors || {}).map(([name, p]) => {
     const row = document.createElement("div"), label = document.createElement("span"), m = document.createElement("meter");

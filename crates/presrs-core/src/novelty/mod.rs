@@ -1,0 +1,317 @@
+//! Novelty: how far a sample lies from every class the model was trained on, and whether it is too far
+//! to be one of them (`unknown`).
+//!
+//! The score is read in the model's own feature space, the vectors its classifier sees (principal
+//! components): their discriminant space ([`Discriminant`], Fisher's directions with the pooled
+//! within-class covariance the identity), where the score is the distance to the nearest training
+//! vector (of any class). A class's training vectors need not lie around its mean (a terrain pressed at
+//! two angles makes two clusters), and a sample between two clusters, or beside a class's cloud, is far
+//! from every training vector while near a mean. A sample is `unknown` when the score exceeds the
+//! threshold, the quantile of the same distances over training vectors held out from the space and from
+//! the neighbours (their group held out, as a new recording is) that leaves [`DEFAULT_REJECTION`] of them
+//! out. No unknown class is needed, and `eval --leave-class-out` measures what it does with a class
+//! never seen (`docs/methods.md`).
+//!
+//! The same held-out distances give each score its credibility, its conformal p-value: the share of
+//! held-out known vectors at least as far. A decision's reported confidence is its posterior capped by
+//! it ([`Novelty::capped`]): a classifier is sure of the class it names among those it knows, and says
+//! nothing of whether the sample is one of them; a sample farther than 90 % of known ones is never
+//! reported at 0.9.
+
+mod calibration;
+mod discriminant;
+#[cfg(test)]
+mod tests;
+
+use serde::{Deserialize, Serialize};
+
+pub use calibration::CalibrationFolds;
+pub use discriminant::Discriminant;
+use discriminant::nearest;
+
+use crate::error::{CoreError, Result, check_len};
+
+/// The label of a decision whose sample is none of the model's classes.
+pub const UNKNOWN_LABEL: &str = "unknown";
+
+/// The share of held-out known training vectors the threshold rejects.
+pub const DEFAULT_REJECTION: f64 = 0.05;
+
+/// A novelty score and its verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Novelty {
+    /// The distance to the nearest training vector in the discriminant space (larger: more novel).
+    pub score: f64,
+    /// The score above which a sample is `unknown`.
+    pub threshold: f64,
+    /// `score > threshold`: the sample is none of the trained classes.
+    pub unknown: bool,
+    /// The share of held-out known training vectors scoring at least `score` (its conformal p-value,
+    /// `(k + 1) / (n + 1)`); absent for models stored before the held-out scores were kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub credibility: Option<f64>,
+}
+
+impl Novelty {
+    /// The verdict on `score` against `threshold` (without a credibility).
+    pub fn of(score: f64, threshold: f64) -> Self {
+        Self {
+            score,
+            threshold,
+            unknown: score > threshold,
+            credibility: None,
+        }
+    }
+
+    /// A classifier's `posterior` for its class, capped by the credibility: the confidence reported.
+    pub fn capped(&self, posterior: f64) -> f64 {
+        self.credibility.map_or(posterior, |c| posterior.min(c))
+    }
+}
+
+/// What a model stores to score novelty (see the module documentation). Loading checks that the parts
+/// fit together.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "NoveltyFields", into = "NoveltyFields")]
+pub struct NoveltyModel {
+    fields: NoveltyFields,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoveltyFields {
+    space: Discriminant,
+    /// The training vectors in the discriminant space, `n x axes` (row-major): the neighbours.
+    neighbours: Vec<f64>,
+    threshold: f64,
+    /// The share of held-out training vectors the threshold was set to reject.
+    rejection: f64,
+    folds: CalibrationFolds,
+    /// How many held-out distances set the scales and the threshold.
+    calibration_vectors: usize,
+    /// Those distances, sorted: a score's credibility is read against them (absent from files written
+    /// before they were kept: no credibility then).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    calibration: Vec<f64>,
+}
+
+impl From<NoveltyModel> for NoveltyFields {
+    fn from(model: NoveltyModel) -> Self {
+        model.fields
+    }
+}
+
+impl TryFrom<NoveltyFields> for NoveltyModel {
+    type Error = CoreError;
+
+    fn try_from(fields: NoveltyFields) -> Result<Self> {
+        let bad = |reason: String| CoreError::Param {
+            name: "novelty",
+            reason,
+        };
+        let space = &fields.space;
+        let axes = space.n_axes();
+        if space.dims == 0
+            || axes == 0
+            || space.axes.len() != axes * space.dims
+            || space.class_means.len() % axes != 0
+        {
+            return Err(bad(format!(
+                "a discriminant space of {} directions of {} values with {} class-mean values does not fit",
+                axes,
+                space.dims,
+                space.class_means.len()
+            )));
+        }
+        if fields.neighbours.is_empty() || fields.neighbours.len() % axes != 0 {
+            return Err(bad(format!(
+                "{} neighbour values are not whole vectors of {axes} coordinates",
+                fields.neighbours.len()
+            )));
+        }
+        let finite = space
+            .axes
+            .iter()
+            .chain(&space.offset)
+            .chain(&fields.neighbours)
+            .all(|v| v.is_finite());
+        if !(finite && fields.threshold.is_finite() && fields.threshold > 0.0) {
+            return Err(bad(
+                "the directions and the neighbours must be finite, the threshold positive".into(),
+            ));
+        }
+        let sorted = fields.calibration.windows(2).all(|w| w[0] <= w[1]);
+        if !(sorted && fields.calibration.iter().all(|v| v.is_finite())) {
+            return Err(bad(
+                "the held-out calibration distances must be finite and sorted".into(),
+            ));
+        }
+        if !(0.0..1.0).contains(&fields.rejection) {
+            return Err(bad(format!(
+                "rejection {} is outside [0, 1)",
+                fields.rejection
+            )));
+        }
+        Ok(Self { fields })
+    }
+}
+
+/// Reusable buffers of [`NoveltyModel::score_into`].
+#[derive(Clone, Debug, Default)]
+pub struct NoveltyScratch {
+    projected: Vec<f64>,
+    distances: Vec<f64>,
+}
+
+impl NoveltyModel {
+    /// Fits the space on `vectors` (`n x dims`, row-major, the classifier's training and validation
+    /// vectors) of `classes`, keeps the vectors' projections as the neighbours, and calibrates the
+    /// threshold on held-out nearest-neighbour distances (folds by `groups`, one per vector, when there
+    /// are three groups or more; else stratified folds) so that `rejection` of them are above it.
+    pub fn fit(
+        vectors: &[f64],
+        classes: &[usize],
+        groups: &[Option<&str>],
+        n_classes: usize,
+        dims: usize,
+        rejection: f64,
+    ) -> Result<Self> {
+        check_len("novelty groups", classes.len(), groups.len())?;
+        let space = Discriminant::fit(vectors, classes, n_classes, dims)?;
+        let neighbours = space.project_rows(vectors)?;
+        let held_out = calibration::held_out_distances(vectors, classes, groups, n_classes, dims)?;
+        let mut distances = held_out.distances;
+        distances.sort_by(f64::total_cmp);
+        let threshold = calibration::quantile(&distances, 1.0 - rejection);
+        if !(threshold.is_finite() && threshold > 0.0) {
+            return Err(CoreError::NotEnoughData(
+                "no held-out distance to calibrate the novelty score on".into(),
+            ));
+        }
+        Self::try_from(NoveltyFields {
+            space,
+            neighbours,
+            threshold,
+            rejection,
+            folds: held_out.folds,
+            calibration_vectors: distances.len(),
+            calibration: distances,
+        })
+    }
+
+    /// Buffers sized for this model.
+    pub fn scratch(&self) -> NoveltyScratch {
+        NoveltyScratch {
+            projected: vec![0.0; self.fields.space.n_axes()],
+            distances: vec![0.0; self.fields.space.n_classes()],
+        }
+    }
+
+    /// The novelty of `x` (a vector the classifier sees). Does not allocate once `scratch` is sized.
+    pub fn score_into(&self, x: &[f64], scratch: &mut NoveltyScratch) -> Result<Novelty> {
+        let space = &self.fields.space;
+        scratch.projected.resize(space.n_axes(), 0.0);
+        scratch.distances.resize(space.n_classes(), 0.0);
+        space.distances_into(x, &mut scratch.projected, &mut scratch.distances)?;
+        let score = nearest(&self.fields.neighbours, &scratch.projected);
+        Ok(self.verdict(score))
+    }
+
+    /// The verdict on `score` (a distance as [`score_into`](Self::score_into) gives, or a mean of
+    /// them), with its credibility.
+    pub fn verdict(&self, score: f64) -> Novelty {
+        Novelty {
+            credibility: self.credibility(score),
+            ..Novelty::of(score, self.fields.threshold)
+        }
+    }
+
+    /// The conformal p-value of `score`: `(k + 1) / (n + 1)` where `k` of the `n` held-out known
+    /// distances are at least `score`; `None` without them (an older file).
+    pub fn credibility(&self, score: f64) -> Option<f64> {
+        let calibration = &self.fields.calibration;
+        if calibration.is_empty() || score.is_nan() {
+            return None;
+        }
+        let at_least = calibration.len() - calibration.partition_point(|&d| d < score);
+        Some((at_least + 1) as f64 / (calibration.len() + 1) as f64)
+    }
+
+    /// [`score_into`](Self::score_into) with buffers of its own.
+    pub fn score(&self, x: &[f64]) -> Result<Novelty> {
+        self.score_into(x, &mut self.scratch())
+    }
+
+    /// The score above which a sample is `unknown`.
+    pub fn threshold(&self) -> f64 {
+        self.fields.threshold
+    }
+
+    /// The share of held-out training vectors the threshold was set to reject.
+    pub fn rejection(&self) -> f64 {
+        self.fields.rejection
+    }
+
+    /// How the held-out distances were obtained.
+    pub fn folds(&self) -> CalibrationFolds {
+        self.fields.folds
+    }
+
+    /// Length of the vectors scored.
+    pub fn dims(&self) -> usize {
+        self.fields.space.dims()
+    }
+
+    /// Number of classes.
+    pub fn n_classes(&self) -> usize {
+        self.fields.space.n_classes()
+    }
+
+    /// In words, for `describe` and reports.
+    pub fn describe(&self) -> String {
+        format!(
+            "distance to the nearest training sample in a {}-direction discriminant space; unknown above {:.3} \
+             ({:.0} % of {} held-out training samples, folds by {})",
+            self.fields.space.n_axes(),
+            self.fields.threshold,
+            100.0 * self.fields.rejection,
+            self.fields.calibration_vectors,
+            match self.fields.folds {
+                CalibrationFolds::Group => "group",
+                CalibrationFolds::Split => "stratified split",
+            }
+        )
+    }
+}
+
+/// The area under the ROC curve of a score that should be larger for `positives` than for `negatives`:
+/// the chance that a random positive scores above a random negative, ties counting one half (the
+/// Mann-Whitney statistic over the pair count). `None` when either side is empty or a score is NaN.
+pub fn auroc(positives: &[f64], negatives: &[f64]) -> Option<f64> {
+    if positives.is_empty()
+        || negatives.is_empty()
+        || positives.iter().chain(negatives).any(|v| v.is_nan())
+    {
+        return None;
+    }
+    let mut all: Vec<(f64, bool)> = positives
+        .iter()
+        .map(|&v| (v, true))
+        .chain(negatives.iter().map(|&v| (v, false)))
+        .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // Mid-ranks over ties, then the positives' rank sum.
+    let mut rank_sum = 0.0;
+    let mut start = 0;
+    while start < all.len() {
+        let mut end = start + 1;
+        while end < all.len() && all[end].0 == all[start].0 {
+            end += 1;
+        }
+        let mid_rank = (start + end + 1) as f64 / 2.0;
+        rank_sum += mid_rank * all[start..end].iter().filter(|(_, p)| *p).count() as f64;
+        start = end;
+    }
+    let (p, n) = (positives.len() as f64, negatives.len() as f64);
+    Some((rank_sum - p * (p + 1.0) / 2.0) / (p * n))
+}

@@ -1,0 +1,262 @@
+//! The discriminant space against Mahalanobis distances computed by definition, and the novelty verdict on
+//! Gaussian classes with one left out of training.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::*;
+use crate::classifier::gaussian::ledoit_wolf;
+
+/// `per_class` vectors of each of `n_classes` Gaussian classes in `dims` dimensions: class `k`'s mean
+/// `spacing * k` along axis `k % dims`, unit noise with a correlated pair of axes; groups `g0..g4` in turn.
+fn gaussian_classes(
+    n_classes: usize,
+    per_class: usize,
+    dims: usize,
+    spacing: f64,
+    seed: u64,
+) -> (Vec<f64>, Vec<usize>, Vec<String>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut vectors, mut classes, mut groups) = (Vec::new(), Vec::new(), Vec::new());
+    for class in 0..n_classes {
+        for i in 0..per_class {
+            let mut row: Vec<f64> = (0..dims).map(|_| rng.random::<f64>() * 2.0 - 1.0).collect();
+            row[1] += 0.8 * row[0];
+            row[class % dims] += spacing * (1 + class / dims) as f64;
+            vectors.extend(row);
+            classes.push(class);
+            groups.push(format!("g{}", i % 5));
+        }
+    }
+    (vectors, classes, groups)
+}
+
+/// Solves `a x = b` (`a` symmetric positive definite) by Gaussian elimination.
+fn solve(mut a: Vec<f64>, mut b: Vec<f64>, d: usize) -> Vec<f64> {
+    for k in 0..d {
+        for i in k + 1..d {
+            let factor = a[i * d + k] / a[k * d + k];
+            for j in k..d {
+                a[i * d + j] -= factor * a[k * d + j];
+            }
+            b[i] -= factor * b[k];
+        }
+    }
+    let mut x = vec![0.0; d];
+    for i in (0..d).rev() {
+        let sum: f64 = (i + 1..d).map(|j| a[i * d + j] * x[j]).sum();
+        x[i] = (b[i] - sum) / a[i * d + i];
+    }
+    x
+}
+
+#[test]
+fn class_means_are_apart_by_their_mahalanobis_distance() {
+    let (dims, n_classes) = (6, 4);
+    let (vectors, classes, _) = gaussian_classes(n_classes, 30, dims, 3.0, 1);
+    let space = Discriminant::fit(&vectors, &classes, n_classes, dims).unwrap();
+    assert_eq!(space.n_axes(), n_classes - 1);
+    // The oracle: the shrunk pooled within-class covariance by definition, and (μa - μb)ᵀ Σ⁻¹ (μa - μb).
+    let mean = |k: usize| -> Vec<f64> {
+        let rows: Vec<&[f64]> = vectors
+            .chunks_exact(dims)
+            .zip(&classes)
+            .filter(|(_, c)| **c == k)
+            .map(|(r, _)| r)
+            .collect();
+        (0..dims)
+            .map(|j| rows.iter().map(|r| r[j]).sum::<f64>() / rows.len() as f64)
+            .collect()
+    };
+    let means: Vec<Vec<f64>> = (0..n_classes).map(mean).collect();
+    let residuals: Vec<f64> = vectors
+        .chunks_exact(dims)
+        .zip(&classes)
+        .flat_map(|(r, &c)| {
+            r.iter()
+                .zip(&means[c])
+                .map(|(x, m)| x - m)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let (weight, emp) = ledoit_wolf(&residuals, dims).unwrap();
+    let mu = (0..dims).map(|i| emp[i * dims + i]).sum::<f64>() / dims as f64;
+    let cov: Vec<f64> = (0..dims * dims)
+        .map(|ij| {
+            (1.0 - weight) * emp[ij]
+                + if ij / dims == ij % dims {
+                    weight * mu
+                } else {
+                    0.0
+                }
+        })
+        .collect();
+    let mut projected = vec![0.0; space.n_axes()];
+    let mut distances = vec![0.0; n_classes];
+    for a in 0..n_classes {
+        space
+            .distances_into(&means[a], &mut projected, &mut distances)
+            .unwrap();
+        for b in 0..n_classes {
+            let diff: Vec<f64> = means[a].iter().zip(&means[b]).map(|(x, y)| x - y).collect();
+            let solved = solve(cov.clone(), diff.clone(), dims);
+            let oracle = diff
+                .iter()
+                .zip(&solved)
+                .map(|(x, y)| x * y)
+                .sum::<f64>()
+                .sqrt();
+            assert!(
+                (distances[b] - oracle).abs() <= 1e-9 * (1.0 + oracle),
+                "classes {a} and {b}: {} against {oracle}",
+                distances[b]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_class_never_seen_is_unknown_and_known_ones_are_kept() {
+    let (dims, n_classes) = (8, 6);
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 60, dims, 4.0, 2);
+    // Train on classes 0..5 (60 each), hold class 5 out; test on fresh draws of every class.
+    let known = classes.iter().position(|&c| c == n_classes - 1).unwrap();
+    let groups: Vec<Option<&str>> = groups[..known].iter().map(|g| Some(g.as_str())).collect();
+    let model = NoveltyModel::fit(
+        &vectors[..known * dims],
+        &classes[..known],
+        &groups,
+        n_classes - 1,
+        dims,
+        DEFAULT_REJECTION,
+    )
+    .unwrap();
+    assert_eq!(model.folds(), CalibrationFolds::Group);
+    let (test, test_classes, _) = gaussian_classes(n_classes, 200, dims, 4.0, 3);
+    let mut scratch = model.scratch();
+    let (mut known_rejected, mut known_count, mut novel_rejected, mut novel_count) = (0, 0, 0, 0);
+    for (row, &class) in test.chunks_exact(dims).zip(&test_classes) {
+        let novelty = model.score_into(row, &mut scratch).unwrap();
+        assert_eq!(novelty, model.score(row).unwrap());
+        if class == n_classes - 1 {
+            novel_count += 1;
+            novel_rejected += usize::from(novelty.unknown);
+        } else {
+            known_count += 1;
+            known_rejected += usize::from(novelty.unknown);
+        }
+    }
+    let known_rate = known_rejected as f64 / known_count as f64;
+    let novel_rate = novel_rejected as f64 / novel_count as f64;
+    assert!(known_rate < 0.08, "known rejected {known_rate}");
+    assert!(novel_rate > 0.9, "novel rejected {novel_rate}");
+}
+
+#[test]
+fn without_groups_the_folds_are_stratified_and_the_threshold_is_the_asked_quantile() {
+    let (dims, n_classes) = (5, 3);
+    let (vectors, classes, _) = gaussian_classes(n_classes, 40, dims, 3.0, 4);
+    let groups = vec![None; classes.len()];
+    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.1).unwrap();
+    assert_eq!(model.folds(), CalibrationFolds::Split);
+    let strict = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.01).unwrap();
+    assert!(strict.threshold() > model.threshold());
+    // The training vectors themselves are inside the space they fitted: about 1 - 0.1 of them kept.
+    let rejected = vectors
+        .chunks_exact(dims)
+        .filter(|row| model.score(row).unwrap().unknown)
+        .count();
+    assert!(rejected <= classes.len() / 10, "{rejected} rejected");
+}
+
+#[test]
+fn a_model_round_trips_and_a_broken_one_is_refused() {
+    let (vectors, classes, _) = gaussian_classes(3, 20, 4, 3.0, 5);
+    let groups = vec![None; classes.len()];
+    let model = NoveltyModel::fit(&vectors, &classes, &groups, 3, 4, 0.05).unwrap();
+    let json = serde_json::to_value(&model).unwrap();
+    let back: NoveltyModel = serde_json::from_value(json.clone()).unwrap();
+    assert_eq!(back, model);
+    let mut broken = json.clone();
+    broken["neighbours"] = serde_json::json!([1.0, 2.0, 3.0]);
+    let err = serde_json::from_value::<NoveltyModel>(broken).unwrap_err();
+    assert!(err.to_string().contains("neighbour values"), "{err}");
+    let mut negative = json;
+    negative["threshold"] = serde_json::json!(-1.0);
+    assert!(serde_json::from_value::<NoveltyModel>(negative).is_err());
+    assert!(model.score(&[0.0; 3]).is_err());
+}
+
+#[test]
+fn the_credibility_is_the_share_of_held_out_distances_at_least_as_far_and_caps_the_confidence() {
+    let (dims, n_classes) = (6, 4);
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 50, dims, 4.0, 6);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
+    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
+    let calibration = &model.fields.calibration;
+    let n = calibration.len() as f64;
+    assert_eq!(calibration.len(), model.fields.calibration_vectors);
+    // Nearer than every held-out distance: (n + 1) / (n + 1); beyond them all: 1 / (n + 1).
+    assert_eq!(model.credibility(0.0), Some(1.0));
+    assert_eq!(model.credibility(f64::INFINITY), Some(1.0 / (n + 1.0)));
+    let median = calibration[calibration.len() / 2];
+    let at_least = calibration.iter().filter(|&&d| d >= median).count() as f64;
+    assert_eq!(
+        model.credibility(median),
+        Some((at_least + 1.0) / (n + 1.0))
+    );
+    // At the threshold, about the rejected share of held-out distances lies beyond.
+    let at_threshold = model.credibility(model.threshold()).unwrap();
+    assert!((0.03..=0.08).contains(&at_threshold), "{at_threshold}");
+    // The verdict carries it and caps a posterior by it, never raising one.
+    let far = model.verdict(2.0 * model.threshold());
+    let credibility = far.credibility.unwrap();
+    assert!(far.unknown && credibility < 0.05);
+    assert_eq!(far.capped(0.99), credibility);
+    assert_eq!(model.verdict(0.0).capped(0.7), 0.7);
+    assert_eq!(Novelty::of(1.0, 2.0).capped(0.99), 0.99);
+    // A file written before the held-out distances were kept loads, without a credibility.
+    let mut older = serde_json::to_value(&model).unwrap();
+    older.as_object_mut().unwrap().remove("calibration");
+    let older: NoveltyModel = serde_json::from_value(older).unwrap();
+    assert_eq!(older.verdict(1.0).credibility, None);
+    let mut unsorted = serde_json::to_value(&model).unwrap();
+    unsorted["calibration"] = serde_json::json!([2.0, 1.0]);
+    assert!(serde_json::from_value::<NoveltyModel>(unsorted).is_err());
+}
+
+#[test]
+fn one_class_cannot_fit_a_space() {
+    let vectors = vec![0.0, 1.0, 2.0, 3.0];
+    assert!(Discriminant::fit(&vectors, &[0, 0], 1, 2).is_err());
+}
+
+#[test]
+fn auroc_is_the_share_of_pairs_ordered_right() {
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    // Rounded scores, so that ties happen.
+    let mut draw = |shift: f64, n: usize| -> Vec<f64> {
+        (0..n)
+            .map(|_| ((rng.random::<f64>() + shift) * 10.0).round() / 10.0)
+            .collect()
+    };
+    let (positives, negatives) = (draw(0.3, 37), draw(0.0, 51));
+    let mut pairs = 0.0;
+    for p in &positives {
+        for n in &negatives {
+            pairs += if p > n {
+                1.0
+            } else if p == n {
+                0.5
+            } else {
+                0.0
+            };
+        }
+    }
+    let oracle = pairs / (positives.len() * negatives.len()) as f64;
+    let fast = auroc(&positives, &negatives).unwrap();
+    assert!((fast - oracle).abs() < 1e-12, "{fast} against {oracle}");
+    assert_eq!(auroc(&[1.0], &[0.0]), Some(1.0));
+    assert_eq!(auroc(&[], &[0.0]), None);
+    assert_eq!(auroc(&[f64::NAN], &[0.0]), None);
+}
