@@ -15,19 +15,25 @@ import numpy as np
 import presrs
 
 
-def training_images(seed):
-    """Mid-stance images of the hopper on the four built-in terrains, gait G2, with their terrains."""
-    images, labels = [], []
-    for trial in presrs.simulate(gaits=["G2"], hops=20, seed=seed):
-        frames, stances = presrs.stance_images(trial.recording)
-        images.append(frames)
-        labels += [trial.terrain] * len(stances)
-    return np.concatenate(images), labels
+def training_images(seeds=(1, 2, 3)):
+    """Mid-stance images of the hopper on the four built-in terrains, gait G2, with their terrains and
+    the trial (recording) each came from: the novelty threshold is learned by holding out whole
+    recordings, so that a new recording of a known terrain is not called unknown."""
+    images, labels, groups = [], [], []
+    for seed in seeds:
+        for trial in presrs.simulate(gaits=["G2"], hops=10, seed=seed):
+            frames, stances = presrs.stance_images(trial.recording)
+            images.append(frames)
+            labels += [trial.terrain] * len(stances)
+            groups += [f"{trial.terrain}, seed {seed}"] * len(stances)
+    return np.concatenate(images), labels, groups
 
 
 def main():
-    images, labels = training_images(seed=1)
-    model = presrs.Model.train(images, labels, features="fft1d", classifier="pwe", seed=1)
+    images, labels, groups = training_images()
+    model = presrs.Model.train(
+        images, labels, groups=groups, features="fft1d", classifier="pwe", seed=1
+    )
     print(f"trained on {len(images)} images:")
     print(model.describe())
     if len(sys.argv) > 2:
@@ -45,8 +51,9 @@ def main():
     if not stances:
         print("no complete stance phase found: nothing to classify")
         return
+    # "unknown" for a stance unlike every trained terrain; the confidence is the one decisions report.
     labels = model.predict(frames)
-    confidences = model.predict_proba(frames).max(axis=1)
+    confidences = model.confidence(frames)
     for stance, label, confidence in zip(stances, labels, confidences):
         print(
             f"stance at frame {stance.start:4d} ({stance.length} frames): {label} "

@@ -116,6 +116,10 @@ class Model:
         """The novelty score: a `float` for one sample, an array for a batch (the distance to the
         nearest training sample in the model's discriminant space); above `novelty_threshold`, `predict` says
         ``"unknown"``. An error for a model without a novelty score."""
+    def confidence(self, x: Any) -> Any:
+        """The confidence a decision reports: a `float` for one sample, an array for a batch (the
+        posterior of the class `predict_index` names, capped by the sample's credibility when the model
+        scores novelty). `predict_proba` gives the classifier's own posteriors."""
     @property
     def novelty_threshold(self) -> Optional[float]:
         """The score above which a sample is ``"unknown"``; `None` without a novelty score."""

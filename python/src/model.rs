@@ -394,6 +394,30 @@ impl Model {
         Ok(PyArray1::from_vec(py, scores).into_any())
     }
 
+    /// The confidence a decision reports, of one sample (a `float`) or of every sample of a batch (an
+    /// array): the posterior of the class `predict_index` names, capped by the sample's credibility
+    /// when the model scores novelty (the share of held-out known training samples at least as far
+    /// from the training data), so that a sample unlike the known ones is never reported as sure.
+    /// `predict_proba` gives the classifier's own posteriors.
+    fn confidence<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let samples = self.samples_of(py, x)?;
+        if !samples.batch() {
+            let value = self
+                .classify_one(&samples.view(0)?, |p| p.confidence)
+                .map_err(|err| samples.explain(err))?;
+            return Ok(value.into_pyobject(py)?.into_any());
+        }
+        let classified = self
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?;
+        let values: Vec<f64> = classified.iter().map(|c| c.confidence).collect();
+        Ok(PyArray1::from_vec(py, values).into_any())
+    }
+
     /// The novelty score above which `predict` says `"unknown"`; `None` for a model without one.
     #[getter]
     fn novelty_threshold(&self) -> Option<f64> {

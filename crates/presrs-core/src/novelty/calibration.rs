@@ -1,23 +1,31 @@
 //! The novelty threshold learned inside the training data, without any unknown class: every training
 //! vector's distance to its nearest neighbour among the other folds' vectors, in a discriminant space
-//! fitted on those folds alone (its group held out, or its fold of a stratified split), so that the
-//! distances are those of vectors neither the space nor the neighbours saw, as a new recording's are.
+//! fitted on those folds alone (its group held out), so that the distances are those of vectors neither
+//! the space nor the neighbours saw, as a new recording's are. Stratified splits of one recording are
+//! refused: their held-out vectors have neighbours from their own recording, and the threshold came
+//! out so tight that every stance of a new recording of a known terrain was unknown.
 
 use std::collections::BTreeMap;
 
-use crate::error::Result;
+use crate::error::{CoreError, Result};
 use crate::novelty::discriminant::{Discriminant, nearest};
 
 /// Folds: at most this many; more groups are merged, whole, into this many.
 const MAX_FOLDS: usize = 5;
 
+/// The fewest groups (recordings) the threshold is calibrated on: with fewer, a held-out vector's
+/// neighbours would come from its own recording, and the threshold would reject a new recording.
+pub const MIN_GROUPS: usize = 3;
+
 /// How the held-out distances were obtained.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CalibrationFolds {
-    /// Leaving out one group (the manifest's `group`) at a time (more than five merged into five).
+    /// Leaving out one group (the manifest's `group`, else the recording) at a time (more than five
+    /// merged into five).
     Group,
-    /// Stratified folds of each class's vectors (fewer than three groups).
+    /// Stratified folds of each class's vectors: models of an earlier version only, whose threshold
+    /// was too tight for a new recording; none is calibrated so now.
     Split,
 }
 
@@ -28,7 +36,9 @@ pub(crate) struct HeldOut {
 }
 
 /// Each vector's distance to its nearest neighbour among the other folds' vectors, in their
-/// discriminant space.
+/// discriminant space. A vector whose class no other fold holds is skipped: its distance is that of a
+/// class never seen, not of a new recording of a known one. An error, saying what to give, when the
+/// vectors come from fewer than [`MIN_GROUPS`] groups or no class is in two of them.
 pub(crate) fn held_out_distances(
     vectors: &[f64],
     classes: &[usize],
@@ -36,7 +46,7 @@ pub(crate) fn held_out_distances(
     n_classes: usize,
     dims: usize,
 ) -> Result<HeldOut> {
-    let (folds, fold_of) = assign_folds(classes, groups);
+    let fold_of = assign_folds(groups)?;
     let n_folds = fold_of.iter().copied().max().map_or(0, |last| last + 1);
     let mut distances = Vec::with_capacity(classes.len());
     for fold in 0..n_folds {
@@ -51,11 +61,15 @@ pub(crate) fn held_out_distances(
         let Ok(space) = Discriminant::fit(&train, &train_classes, n_classes, dims) else {
             continue;
         };
+        let mut seen = vec![false; n_classes];
+        for &class in &train_classes {
+            seen[class] = true;
+        }
         let neighbours = space.project_rows(&train)?;
         let mut projected = vec![0.0; space.n_axes()];
         let mut to_classes = vec![0.0; n_classes];
-        for (row, &f) in vectors.chunks_exact(dims).zip(&fold_of) {
-            if f == fold {
+        for ((row, &class), &f) in vectors.chunks_exact(dims).zip(classes).zip(&fold_of) {
+            if f == fold && seen[class] {
                 space.distances_into(row, &mut projected, &mut to_classes)?;
                 let distance = nearest(&neighbours, &projected);
                 if distance.is_finite() {
@@ -64,38 +78,44 @@ pub(crate) fn held_out_distances(
             }
         }
     }
-    Ok(HeldOut { folds, distances })
+    if distances.is_empty() {
+        return Err(CoreError::NotEnoughData(
+            "no class is recorded in two groups (recordings): the novelty threshold is learned from how \
+             far a new recording of a known terrain lies from the others, so each class needs samples \
+             from at least two groups"
+                .into(),
+        ));
+    }
+    Ok(HeldOut {
+        folds: CalibrationFolds::Group,
+        distances,
+    })
 }
 
-/// The fold of every vector: by group when every vector has one and there are three groups or more
-/// (more than [`MAX_FOLDS`] merged, whole, in sorted order), else each class's vectors dealt into
-/// [`MAX_FOLDS`] folds in turn.
-fn assign_folds(classes: &[usize], groups: &[Option<&str>]) -> (CalibrationFolds, Vec<usize>) {
-    let named: Option<Vec<&str>> = groups.iter().copied().collect();
-    if let Some(named) = named {
-        let distinct: BTreeMap<&str, usize> = named.iter().map(|&g| (g, 0)).collect();
-        if distinct.len() >= 3 && named.len() == classes.len() {
-            let index: BTreeMap<&str, usize> = distinct
-                .keys()
-                .enumerate()
-                .map(|(i, &g)| (g, i % MAX_FOLDS))
-                .collect();
-            return (
-                CalibrationFolds::Group,
-                named.iter().map(|g| index[g]).collect(),
-            );
-        }
+/// The fold of every vector by its group, more than [`MAX_FOLDS`] groups merged, whole, in sorted
+/// order; an error when a vector has no group or there are fewer than [`MIN_GROUPS`].
+fn assign_folds(groups: &[Option<&str>]) -> Result<Vec<usize>> {
+    let distinct: BTreeMap<&str, usize> = groups.iter().flatten().map(|&g| (g, 0)).collect();
+    let missing = groups.iter().filter(|g| g.is_none()).count();
+    if missing > 0 || distinct.len() < MIN_GROUPS {
+        let have = if missing > 0 {
+            format!("{missing} of {} samples have no group", groups.len())
+        } else {
+            format!("the samples come from {} group(s)", distinct.len())
+        };
+        return Err(CoreError::NotEnoughData(format!(
+            "the novelty threshold is learned by holding out whole groups (recordings, trials or \
+             subjects) of the training samples, and {have}: give every sample its group, from at least \
+             {MIN_GROUPS} groups (with fewer, the held-out samples' neighbours come from their own \
+             recording and the threshold would call a new recording of a known terrain unknown)"
+        )));
     }
-    let mut seen: BTreeMap<usize, usize> = BTreeMap::new();
-    let folds = classes
-        .iter()
-        .map(|&class| {
-            let count = seen.entry(class).or_insert(0);
-            *count += 1;
-            (*count - 1) % MAX_FOLDS
-        })
+    let index: BTreeMap<&str, usize> = distinct
+        .keys()
+        .enumerate()
+        .map(|(i, &g)| (g, i % MAX_FOLDS))
         .collect();
-    (CalibrationFolds::Split, folds)
+    Ok(groups.iter().flatten().map(|g| index[g]).collect())
 }
 
 /// The `q` quantile (0..=1) of `sorted` values, linearly interpolated (numpy's default); NaN if empty.

@@ -25,7 +25,7 @@ mod tests;
 
 use serde::{Deserialize, Serialize};
 
-pub use calibration::CalibrationFolds;
+pub use calibration::{CalibrationFolds, MIN_GROUPS};
 pub use discriminant::Discriminant;
 use discriminant::nearest;
 
@@ -166,8 +166,9 @@ pub struct NoveltyScratch {
 impl NoveltyModel {
     /// Fits the space on `vectors` (`n x dims`, row-major, the classifier's training and validation
     /// vectors) of `classes`, keeps the vectors' projections as the neighbours, and calibrates the
-    /// threshold on held-out nearest-neighbour distances (folds by `groups`, one per vector, when there
-    /// are three groups or more; else stratified folds) so that `rejection` of them are above it.
+    /// threshold on held-out nearest-neighbour distances (folds by `groups`, one per vector: at least
+    /// [`MIN_GROUPS`] of them, and classes found in two or more) so that `rejection` of them are above
+    /// it. An error saying what is missing otherwise.
     pub fn fit(
         vectors: &[f64],
         classes: &[usize],

@@ -153,14 +153,32 @@ fn a_class_never_seen_is_unknown_and_known_ones_are_kept() {
 }
 
 #[test]
-fn without_groups_the_folds_are_stratified_and_the_threshold_is_the_asked_quantile() {
+fn without_three_groups_the_score_is_refused_saying_why_and_the_threshold_is_the_asked_quantile() {
     let (dims, n_classes) = (5, 3);
-    let (vectors, classes, _) = gaussian_classes(n_classes, 40, dims, 3.0, 4);
-    let groups = vec![None; classes.len()];
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 40, dims, 3.0, 4);
+    let none = vec![None; classes.len()];
+    let err = NoveltyModel::fit(&vectors, &classes, &none, n_classes, dims, 0.1).unwrap_err();
+    assert!(
+        err.to_string().contains("120 of 120 samples have no group"),
+        "{err}"
+    );
+    let two: Vec<Option<&str>> = (0..classes.len())
+        .map(|i| Some(["a", "b"][i % 2]))
+        .collect();
+    let err = NoveltyModel::fit(&vectors, &classes, &two, n_classes, dims, 0.1).unwrap_err();
+    assert!(err.to_string().contains("come from 2 group(s)"), "{err}");
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
     let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.1).unwrap();
-    assert_eq!(model.folds(), CalibrationFolds::Split);
+    assert_eq!(model.folds(), CalibrationFolds::Group);
     let strict = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.01).unwrap();
     assert!(strict.threshold() > model.threshold());
+    // The threshold is the 0.9 quantile of the held-out distances it keeps.
+    let calibration = &model.fields.calibration;
+    let above = calibration
+        .iter()
+        .filter(|&&d| d > model.threshold())
+        .count();
+    assert!(above <= calibration.len() / 10 + 1, "{above} above");
     // The training vectors themselves are inside the space they fitted: about 1 - 0.1 of them kept.
     let rejected = vectors
         .chunks_exact(dims)
@@ -170,9 +188,32 @@ fn without_groups_the_folds_are_stratified_and_the_threshold_is_the_asked_quanti
 }
 
 #[test]
+fn a_class_recorded_in_one_group_does_not_calibrate_and_one_group_per_class_is_refused() {
+    let (dims, n_classes) = (5, 3);
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 40, dims, 3.0, 7);
+    // Class 2 in group "solo" alone: its held-out vectors would measure a class never seen.
+    let mixed: Vec<Option<&str>> = classes
+        .iter()
+        .zip(&groups)
+        .map(|(&c, g)| Some(if c == 2 { "solo" } else { g.as_str() }))
+        .collect();
+    let model = NoveltyModel::fit(&vectors, &classes, &mixed, n_classes, dims, 0.05).unwrap();
+    assert_eq!(model.fields.calibration_vectors, 80);
+    // Every class in a group of its own: nothing to calibrate on, and the error says so.
+    let names = ["c0", "c1", "c2"];
+    let own: Vec<Option<&str>> = classes.iter().map(|&c| Some(names[c])).collect();
+    let err = NoveltyModel::fit(&vectors, &classes, &own, n_classes, dims, 0.05).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("no class is recorded in two groups"),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_model_round_trips_and_a_broken_one_is_refused() {
-    let (vectors, classes, _) = gaussian_classes(3, 20, 4, 3.0, 5);
-    let groups = vec![None; classes.len()];
+    let (vectors, classes, groups) = gaussian_classes(3, 20, 4, 3.0, 5);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
     let model = NoveltyModel::fit(&vectors, &classes, &groups, 3, 4, 0.05).unwrap();
     let json = serde_json::to_value(&model).unwrap();
     let back: NoveltyModel = serde_json::from_value(json.clone()).unwrap();

@@ -15,21 +15,32 @@ pub const MAX_NOVELTY_DIMS: usize = 512;
 
 impl TrainedModel {
     /// This model with a novelty score fitted on `images` (its training and validation images, with their
-    /// groups: the threshold is calibrated by leaving groups out when there are three or more), set to
+    /// groups: the threshold is calibrated by leaving groups out, and needs three or more), set to
     /// reject `rejection` of held-out known vectors. The model is returned unchanged, without a score,
     /// when its classifier takes more than [`MAX_NOVELTY_DIMS`] values.
     pub fn with_novelty(self, images: &[LabeledImage<'_>], rejection: f64) -> Result<Self> {
+        let groups: Vec<Option<&str>> = images.iter().map(|image| image.group).collect();
+        self.with_novelty_by(images, &groups, rejection)
+    }
+
+    /// [`with_novelty`](Self::with_novelty) calibrated by leaving out `groups` (one per image; e.g. the
+    /// recording an image came from when the images name no group).
+    pub fn with_novelty_by(
+        self,
+        images: &[LabeledImage<'_>],
+        groups: &[Option<&str>],
+        rejection: f64,
+    ) -> Result<Self> {
         let dims = self.classifier_dims();
         if dims > MAX_NOVELTY_DIMS {
             return Ok(self.without_novelty());
         }
         let classes = class_indices(self.class_names(), images)?;
         let vectors = self.reduced_vectors(images)?;
-        let groups: Vec<Option<&str>> = images.iter().map(|image| image.group).collect();
         let novelty = NoveltyModel::fit(
             &vectors,
             &classes,
-            &groups,
+            groups,
             self.class_names().len(),
             dims,
             rejection,
@@ -66,9 +77,15 @@ mod tests {
     fn model_without_the_fourth() -> (TrainedModel, Vec<(Frame, &'static str)>) {
         let set = labeled_set(30, 1);
         let known: Vec<&(Frame, &str)> = set.iter().filter(|(_, l)| *l != set[3].1).collect();
+        // Five recordings, each holding every class.
+        let groups = ["r0", "r1", "r2", "r3", "r4"];
         let images: Vec<LabeledImage<'_>> = known
             .iter()
-            .map(|(frame, label)| LabeledImage::new(frame.view(), label))
+            .enumerate()
+            .map(|(i, (frame, label))| LabeledImage {
+                group: Some(groups[i % 5]),
+                ..LabeledImage::new(frame.view(), label)
+            })
             .collect();
         let (train_images, validation_images) = images.split_at(60);
         let config = TrainConfig::default().check().unwrap();

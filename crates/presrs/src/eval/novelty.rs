@@ -16,9 +16,11 @@ use presrs_core::novelty::{DEFAULT_REJECTION, auroc};
 use presrs_core::pipeline::{LabeledImage, TrainedModel, train};
 use serde::Serialize;
 
+use crate::dataset::Sample;
 use crate::error::{Context, Error, Result};
 use crate::eval::EvalSetup;
 use crate::progress::Progress;
+use crate::train::calibration_groups;
 
 /// A decision counts as confident at this confidence or more.
 pub const CONFIDENT: f64 = 0.9;
@@ -221,15 +223,25 @@ pub fn leave_class_out(
     for class in &classes {
         let mut decided = Vec::new();
         for draw in &draws {
-            let pick = |set: &[usize]| -> Vec<LabeledImage<'_>> {
+            let kept = |set: &[usize]| -> Vec<usize> {
                 set.iter()
-                    .map(|&i| samples[i])
-                    .filter(|s| s.label != class.as_str())
+                    .copied()
+                    .filter(|&i| samples[i].label != class.as_str())
                     .collect()
             };
-            let (train_images, validation_images) = (pick(&draw.train), pick(&draw.validation));
+            let (train_kept, validation_kept) = (kept(&draw.train), kept(&draw.validation));
+            let pick = |set: &[usize]| -> Vec<LabeledImage<'_>> {
+                set.iter().map(|&i| samples[i]).collect()
+            };
+            let (train_images, validation_images) = (pick(&train_kept), pick(&validation_kept));
+            let recordings: Vec<&Sample> = train_kept
+                .iter()
+                .chain(&validation_kept)
+                .map(|&i| &setup.dataset().samples[i])
+                .collect();
             let model = train_without(
                 (&train_images, &validation_images),
+                &recordings,
                 (method, &config, &candidates),
                 draw.seed,
             )
@@ -249,6 +261,7 @@ pub fn leave_class_out(
 /// The method trained on the images of a draw without the held-out class, with its novelty score.
 fn train_without(
     (train_images, validation_images): (&[LabeledImage<'_>], &[LabeledImage<'_>]),
+    recordings: &[&Sample],
     (method, config, candidates): (
         &crate::method::Method,
         &CheckedTrainConfig,
@@ -271,7 +284,9 @@ fn train_without(
         .chain(validation_images)
         .copied()
         .collect();
-    Ok(model.with_novelty(&all, DEFAULT_REJECTION)?)
+    let groups = calibration_groups(recordings);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_ref())).collect();
+    Ok(model.with_novelty_by(&all, &groups, DEFAULT_REJECTION)?)
 }
 
 /// Decides every test image, noting whether it is of the held-out class.

@@ -210,7 +210,18 @@ pub fn train_with_progress(
     )?;
     let mut warnings = Warnings::new();
     let model = if options.novelty {
-        with_novelty(model, &train_images, &validation_images, &mut warnings)
+        let recordings: Vec<&Sample> = split
+            .train
+            .iter()
+            .chain(&split.validation)
+            .map(|&i| pool[i])
+            .collect();
+        with_novelty(
+            model,
+            (&train_images, &validation_images),
+            &recordings,
+            &mut warnings,
+        )
     } else {
         model
     };
@@ -254,12 +265,13 @@ pub fn train_with_progress(
     })
 }
 
-/// `model` with its novelty score fitted on its training and validation images; without one, and a
+/// `model` with its novelty score fitted on its training and validation images (`samples`, in the
+/// same order), calibrated by leaving out their groups ([`calibration_groups`]); without one, and a
 /// warning saying why, when it cannot be fitted.
 fn with_novelty(
     model: TrainedModel,
-    train_images: &[LabeledImage<'_>],
-    validation_images: &[LabeledImage<'_>],
+    (train_images, validation_images): (&[LabeledImage<'_>], &[LabeledImage<'_>]),
+    samples: &[&Sample],
     warnings: &mut Warnings,
 ) -> TrainedModel {
     let all: Vec<LabeledImage<'_>> = train_images
@@ -267,9 +279,11 @@ fn with_novelty(
         .chain(validation_images)
         .copied()
         .collect();
+    let groups = calibration_groups(samples);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_ref())).collect();
     match model
         .clone()
-        .with_novelty(&all, presrs_core::novelty::DEFAULT_REJECTION)
+        .with_novelty_by(&all, &groups, presrs_core::novelty::DEFAULT_REJECTION)
     {
         Ok(scored) => scored,
         Err(err) => {
@@ -279,6 +293,20 @@ fn with_novelty(
             model
         }
     }
+}
+
+/// The groups the novelty threshold is calibrated by leaving out, one per sample: its `group` when
+/// every sample has one, else the recording (file) it came from, since a new recording is what the
+/// threshold must accept.
+pub(crate) fn calibration_groups<'a>(samples: &[&'a Sample]) -> Vec<std::borrow::Cow<'a, str>> {
+    let named = samples.iter().all(|s| s.group.is_some());
+    samples
+        .iter()
+        .map(|s| match (&s.group, named) {
+            (Some(group), true) => std::borrow::Cow::Borrowed(group.as_str()),
+            _ => s.source.to_string_lossy(),
+        })
+        .collect()
 }
 
 /// The one warning line for a per-class count that some classes cannot give: `short` lists (held-out
