@@ -104,10 +104,10 @@ fn assign_folds(groups: &[Option<&str>]) -> Result<Vec<usize>> {
             format!("the samples come from {} group(s)", distinct.len())
         };
         return Err(CoreError::NotEnoughData(format!(
-            "the novelty threshold is learned by holding out whole groups (recordings, trials or \
-             subjects) of the training samples, and {have}: give every sample its group, from at least \
-             {MIN_GROUPS} groups (with fewer, the held-out samples' neighbours come from their own \
-             recording and the threshold would call a new recording of a known terrain unknown)"
+            "the novelty threshold is learned by holding out whole groups of the training samples, and \
+             {have}: give every sample its group (the trial, recording or subject it came from), from \
+             at least {MIN_GROUPS} groups (with fewer, a held-out sample's neighbours would come from its \
+             own recording, and the threshold would call a new recording of a known terrain unknown)"
         )));
     }
     let index: BTreeMap<&str, usize> = distinct

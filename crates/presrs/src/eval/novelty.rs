@@ -285,7 +285,7 @@ fn train_without(
         .copied()
         .collect();
     let groups = calibration_groups(recordings);
-    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_ref())).collect();
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| g.as_deref()).collect();
     Ok(model.with_novelty_by(&all, &groups, DEFAULT_REJECTION)?)
 }
 

@@ -5,6 +5,7 @@ pub mod early;
 pub mod profile;
 pub mod sample_race;
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -280,7 +281,7 @@ fn with_novelty(
         .copied()
         .collect();
     let groups = calibration_groups(samples);
-    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_ref())).collect();
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| g.as_deref()).collect();
     match model
         .clone()
         .with_novelty_by(&all, &groups, presrs_core::novelty::DEFAULT_REJECTION)
@@ -296,16 +297,19 @@ fn with_novelty(
 }
 
 /// The groups the novelty threshold is calibrated by leaving out, one per sample: its `group` when
-/// every sample has one, else the recording (file) it came from, since a new recording is what the
-/// threshold must accept.
-pub(crate) fn calibration_groups<'a>(samples: &[&'a Sample]) -> Vec<std::borrow::Cow<'a, str>> {
-    let named = samples.iter().all(|s| s.group.is_some());
+/// every sample has one, else the recording (file) it came from when they come from several (a new
+/// recording is what the threshold must accept), else none (samples given in memory).
+pub(crate) fn calibration_groups<'a>(samples: &[&'a Sample]) -> Vec<Option<Cow<'a, str>>> {
+    if samples.iter().all(|s| s.group.is_some()) {
+        return samples
+            .iter()
+            .map(|s| s.group.as_deref().map(Cow::Borrowed))
+            .collect();
+    }
+    let one_source = samples.windows(2).all(|w| w[0].source == w[1].source);
     samples
         .iter()
-        .map(|s| match (&s.group, named) {
-            (Some(group), true) => std::borrow::Cow::Borrowed(group.as_str()),
-            _ => s.source.to_string_lossy(),
-        })
+        .map(|s| (!one_source).then(|| s.source.to_string_lossy()))
         .collect()
 }
 
