@@ -19,7 +19,7 @@ confidence the posterior capped by it; AUROC per held-out class over the draws p
 the check that the tables are the model's. Scores that need more than 5 neighbours of a class are
 approximate (the LOF-like minimum over neighbours looks at each class's 5 nearest only).
 
-    python3 bench/real/novelty_variants.py TABLE.jsonl [--markdown | --scales]
+    python3 bench/real/novelty_variants.py TABLE.jsonl [--markdown | --scales | --posterior]
 
 Figures: bench/real/RESULTS.md, "Class-conditional, LOF-like and k-neighbour scores".
 """
@@ -192,6 +192,25 @@ if __name__ == '__main__':
                 out[(m['class'], t['novel'])].append(m['scale'].get(c, m['glob']) / m['glob'])
         for (c, novel), v in sorted(out.items()):
             print(f"{c} {'novel' if novel else 'known'} {statistics.median(v):.3f}")
+        sys.exit(0)
+    if '--posterior' in sys.argv:
+        # AUROC only: the held-out rows have no posterior, so no threshold can be set on these.
+        res = defaultdict(lambda: defaultdict(lambda: ([], [])))
+        for m in models:
+            held = sorted(nn(h)[0] for h in m['held'])
+            for t in m['test']:
+                k = len(held) - bisect.bisect_left(held, nn(t)[0])
+                cred, post = (k + 1) / (len(held) + 1), t['post']
+                for name, v in [('1 - max posterior', 1 - post),
+                                ('1 - min(posterior, credibility): the confidence reported today', 1 - min(post, cred)),
+                                ('1 - posterior x credibility', 1 - post * cred)]:
+                    res[m['class']][name][0 if t['novel'] else 1].append(v)
+        classes = sorted(res)
+        print('| score | ' + ' | '.join(classes) + ' | **mean AUROC** |')
+        print('| --- ' * (len(classes) + 2) + '|')
+        for name in res[classes[0]]:
+            a = [auroc(*res[c][name]) for c in classes]
+            print(f'| {name} | ' + ' | '.join(f'{x:.3f}' for x in a) + f' | **{sum(a) / len(a):.3f}** |')
         sys.exit(0)
     markdown = '--markdown' in sys.argv
     first = True
