@@ -32,7 +32,8 @@ def load(path):
     for line in open(path):
         r = json.loads(line)
         if r['kind'] == 'model':
-            cur = {'class': r['class'], 'seed': r['seed'], 'nc': r['n_classes'], 'held': [], 'test': []}
+            cur = {'class': r['class'], 'seed': r['seed'], 'nc': r['n_classes'], 'held': [], 'test': [],
+                   'held_post': r.get('held_post')}
             models.append(cur)
         elif r['kind'] == 'held':
             if r['nb'][r['class']]:
@@ -179,6 +180,56 @@ def evaluate(models, f):
         rows.append((c, auroc(P['pos'], P['neg']), P['nconf'] / P['nn'], P['krej'] / P['kn']))
     return rows
 
+def calibrated(models):
+    """1 - posterior x credibility as a score with a threshold of its own: the 0.95 quantile of the
+    held-out training vectors' scores, each with its posterior from a model trained without its fold
+    (the hook's `held_post`) and its credibility against the other held-out distances. The confidence is
+    the posterior capped by the combined score's own credibility. Beside it, today's distance threshold
+    and cap on the same samples."""
+    # per (class, method): novel, novel known at >= 0.9, novel unknown, known, known unknown, known at >= 0.9
+    per = defaultdict(lambda: [0, 0, 0, 0, 0, 0])
+    for m in models:
+        held = sorted(nn(h)[0] for h in m['held'])
+        n = len(held)
+        combined = []
+        for h in m['held']:
+            post = m['held_post'][h['index']]
+            if post is None:
+                continue
+            k = n - bisect.bisect_left(held, nn(h)[0])
+            combined.append(1 - post * (k / n))
+        combined.sort()
+        thr, thr_today = quantile(combined, 0.95), quantile(held, 0.95)
+        for t in m['test']:
+            k = n - bisect.bisect_left(held, nn(t)[0])
+            cred = (k + 1) / (n + 1)
+            c = 1 - t['post'] * cred
+            k2 = len(combined) - bisect.bisect_left(combined, c)
+            for method, unknown, confidence in [
+                    ('today: distance threshold, min(posterior, credibility)', nn(t)[0] > thr_today, min(t['post'], cred)),
+                    ('1 - posterior x credibility, its own threshold and credibility', c > thr,
+                     min(t['post'], (k2 + 1) / (len(combined) + 1)))]:
+                P = per[(m['class'], method)]
+                confident = (not unknown) and confidence >= 0.9
+                if t['novel']:
+                    P[0] += 1; P[1] += confident; P[2] += unknown
+                else:
+                    P[3] += 1; P[4] += unknown; P[5] += confident
+    classes = sorted({c for c, _ in per})
+    methods = list(dict.fromkeys(mm for _, mm in per))
+    print('| decision | held-out decided known at >= 0.9 | held-out decided unknown, per class | (mean) | '
+          'known rejected | known decided at >= 0.9 |')
+    print('| --- | --- | --- | --- | --- | --- |')
+    for method in methods:
+        rows = [per[(c, method)] for c in classes]
+        mean = lambda f: sum(f(P) for P in rows) / len(rows)
+        print(f'| {method} | {mean(lambda P: 100 * P[1] / P[0]):.1f} % | '
+              + ', '.join(f'{c} {100 * P[2] / P[0]:.0f} %' for c, P in zip(classes, rows))
+              + f' | {mean(lambda P: 100 * P[2] / P[0]):.1f} % | {mean(lambda P: 100 * P[4] / P[3]):.1f} % | '
+              f'{mean(lambda P: 100 * P[5] / P[3]):.1f} % |')
+    print()
+
+
 if __name__ == '__main__':
     models = load(sys.argv[1])
     for m in models: prep(m)
@@ -206,6 +257,8 @@ if __name__ == '__main__':
                                 ('1 - posterior x credibility', 1 - post * cred)]:
                     res[m['class']][name][0 if t['novel'] else 1].append(v)
         classes = sorted(res)
+        if all(m['held_post'] for m in models):
+            calibrated(models)
         print('| score | ' + ' | '.join(classes) + ' | **mean AUROC** |')
         print('| --- ' * (len(classes) + 2) + '|')
         for name in res[classes[0]]:
