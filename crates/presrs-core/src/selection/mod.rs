@@ -44,7 +44,7 @@ use crate::error::{CoreError, Result};
 use crate::pipeline::config::CheckedTrainConfig;
 use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
-use crate::pipeline::train::train;
+use crate::pipeline::train::train_searching;
 
 pub use record::{CandidateScore, Selection, SelectionCost, ValidationFallback};
 pub use subsample::SCORING_SAMPLES;
@@ -245,6 +245,7 @@ pub fn select(
         scoring_seconds: started.elapsed().as_secs_f64(),
         final_fit_seconds: 0.0,
         budget_seconds: choice.budget.map(|budget| budget.as_secs_f64()),
+        searched_on: None,
     });
     Ok(selection)
 }
@@ -402,18 +403,37 @@ pub fn train_auto(
     let mut selection = select(&all, choice, seed)?;
     // (the winner may be a candidate refined with other dims: its configuration is in its score)
     let config = selection.scores[selection.chosen].config.clone().check()?;
+    // On large data the winner's hyper-parameters are searched on the subsample the candidates were
+    // scored on (the same draw), and only the choice is fitted on every sample.
+    let subsample = choice
+        .scoring_samples
+        .and_then(|at_most| subsample::stratified_subsample(&all, at_most, seed));
+    let searches_on_subsample = subsample.is_some() && config.config().classifier.pins();
     StageObserver::tell(choice.on_stage, || {
+        let search = match &subsample {
+            Some(rows) if searches_on_subsample => format!(
+                " (its hyper-parameters searched on the stratified subsample of {})",
+                rows.len()
+            ),
+            _ => String::new(),
+        };
         format!(
-            "training the winner, {} + {}, on {} samples",
+            "training the winner, {} + {}, on {} samples{search}",
             config.config().features.name(),
             config.config().classifier.kind().as_str(),
             all.len()
         )
     });
     let fitting = std::time::Instant::now();
-    let model = train(train_images, validation_images, &config)?;
+    let (model, searched) = train_searching(
+        train_images,
+        validation_images,
+        &config,
+        subsample.as_deref(),
+    )?;
     if let Some(cost) = selection.cost.as_mut() {
         cost.final_fit_seconds = fitting.elapsed().as_secs_f64();
+        cost.searched_on = searched.then(|| subsample.as_ref().map_or(0, Vec::len));
     }
     Ok(model.with_selection(selection))
 }

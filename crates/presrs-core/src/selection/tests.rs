@@ -3,6 +3,7 @@ use std::collections::BTreeMap;
 
 use crate::frame::{Frame, Grid};
 use crate::pipeline::TrainConfig;
+use crate::pipeline::train::train;
 
 /// `count` synthetic frames of four classes (frame `i` of class `i % 4`), seeded.
 fn four_class_frames(count: usize, seed: u64) -> Vec<Frame> {
