@@ -303,7 +303,8 @@ impl SvmModel {
 
 impl SvmModel {
     /// The one kernel and `C` of `config` (checked: one of each, and a fixed `temperature`) fitted on
-    /// training + validation vectors, their scale read from those: no search, no calibration.
+    /// training + validation vectors, their scale read from the training vectors (as the search reads
+    /// it): no search, no calibration.
     fn fit_pinned(
         train: LabeledVectors<'_>,
         validation: LabeledVectors<'_>,
@@ -317,7 +318,8 @@ impl SvmModel {
             vectors: &vectors,
             classes: &classes,
         };
-        let grid = search_grid(config, gamma_scale(&vectors, dims));
+        // (the scale of the training vectors, as the search reads it)
+        let grid = search_grid(config, gamma_scale(train.vectors, dims));
         let (kernel, c) = (grid[0].0, grid[0].1[0]);
         let mut model = Self::fit_fixed(all, n_classes, dims, kernel, c, config.tol)?;
         model.temperature = temperature;
@@ -515,6 +517,53 @@ mod tests {
                     classified
                 );
             }
+        }
+    }
+
+    /// The oracle of pinning: the configuration a searched model pins, fitted on the same vectors,
+    /// gives that model (its kernel, C, machines and temperature) without searching, for either
+    /// kernel the search may choose.
+    #[test]
+    fn a_pinned_fit_on_the_same_data_is_the_searched_model() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let dims = 3;
+        let n = 120;
+        let classes: Vec<usize> = (0..n).map(|i| i % 3).collect();
+        let vectors: Vec<f64> = (0..n * dims)
+            .map(|k| rng.random_range(-1.0..1.0) + classes[k / dims] as f64 * 0.8)
+            .collect();
+        let (train, validation) = (
+            LabeledVectors {
+                vectors: &vectors[..80 * dims],
+                classes: &classes[..80],
+            },
+            LabeledVectors {
+                vectors: &vectors[80 * dims..],
+                classes: &classes[80..],
+            },
+        );
+        for kernels in [
+            vec![KernelKind::Linear],
+            vec![KernelKind::Rbf],
+            SvmConfig::default().kernels,
+        ] {
+            let config = SvmConfig {
+                kernels,
+                ..SvmConfig::default()
+            };
+            let searched = SvmModel::fit(train, validation, 3, dims, &config).unwrap();
+            let pinned = searched.pinned(&config);
+            pinned.check().unwrap();
+            assert_eq!(pinned.temperature, Some(searched.temperature()));
+            let refit = SvmModel::fit(train, validation, 3, dims, &pinned).unwrap();
+            assert!(refit.candidates().is_empty());
+            assert_eq!(
+                SvmModel {
+                    candidates: Vec::new(),
+                    ..searched
+                },
+                refit
+            );
         }
     }
 
