@@ -377,8 +377,11 @@ fn dims_variants(scores: &[CandidateScore], dims: &[usize]) -> Result<Vec<Checke
     Ok(variants)
 }
 
-/// [`select`] on training + validation images, then [`train`] of the winner on them; the model records
-/// the selection.
+/// [`select`] on training + validation images, then [`train`](crate::pipeline::train) of the winner
+/// on them; the model records the selection. When the candidates were scored on a subsample, a winner
+/// whose classifier pins its hyper-parameters ([`ClassifierConfig::pins`](crate::classifier::ClassifierConfig::pins))
+/// has them searched on that subsample's vectors and only the choice fitted on every image
+/// ([`SelectionCost::searched_on`]); on smaller data the model is `train`'s.
 pub fn train_auto(
     train_images: &[LabeledImage<'_>],
     validation_images: &[LabeledImage<'_>],
