@@ -360,7 +360,7 @@ fn train_folds(
         progress();
         (model, start.elapsed().as_secs_f64())
     };
-    if folds.iter().any(|fold| large_fold(fold)) {
+    if folds.iter().any(large_fold) {
         folds.iter().enumerate().map(train_one).collect()
     } else {
         folds.par_iter().enumerate().map(train_one).collect()

@@ -96,7 +96,7 @@ fn fit_path_on_gram(
         .collect();
     // The pairs in parallel (each solved alone: the same solutions whatever the thread count); a
     // pair's kernel matrix is dropped once its path is solved.
-    let solved: Vec<(PairProblem, Vec<(Vec<f64>, f64)>)> = class_pairs
+    let solved: Vec<(PairProblem, PairPath)> = class_pairs
         .par_iter()
         .map(|&(ci, cj)| {
             let pair = PairProblem::of(&data, gram, ci, cj);
@@ -149,6 +149,9 @@ fn fit_path_on_gram(
         })
         .collect()
 }
+
+/// One pair's solutions `(alpha, rho)`, one per `C` of a path (in the order of the `C` given).
+type PairPath = Vec<(Vec<f64>, f64)>;
 
 /// The binary problem of classes `ci` (+1) and `cj` (-1): their vectors' indices in `data`, labels and
 /// kernel matrix (from `gram`, the kernel matrix of all of `data`).
