@@ -175,7 +175,7 @@ fn thin_svd(centred: &Mat<f64>) -> Result<(Diag<f64>, Mat<f64>)> {
 }
 
 /// Above this many samples a PCA that keeps few components is fitted by a randomised range finder
-/// ([`randomised_svd`]) instead of the exact thin SVD: the exact one costs `O(n p min(n, p))` in one
+/// (Halko, Martinsson and Tropp 2011) instead of the exact thin SVD: the exact one costs `O(n p min(n, p))` in one
 /// sequential decomposition (and two `n x min(n, p)`-sized factors), the range finder `O(n p l)` in
 /// parallel matrix products for `l` a little above the components kept. At most this many samples (every
 /// training set an automatic choice scores its candidates on, `selection::SCORING_SAMPLES`) keep the
