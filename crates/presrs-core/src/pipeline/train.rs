@@ -25,7 +25,7 @@ pub fn train(
 /// pins them ([`ClassifierConfig::pins`](crate::classifier::ClassifierConfig::pins)): the classifier
 /// is fitted (with its search and calibration) on those images' vectors, and the configuration it
 /// chose, pinned, is fitted on every vector. The features and the PCA are every image's either way.
-/// Also says whether the search was run on `search` (`false`: the family pins nothing, or no `search`
+/// Also says whether the search was run on `search` (`false`: the family pins nothing, the search failed on `search`, or no `search`
 /// was given, and the classifier was trained as [`train`] trains it).
 pub(crate) fn train_searching(
     train: &[LabeledImage<'_>],
@@ -70,13 +70,17 @@ pub(crate) fn train_searching(
     let pinned = match search.filter(|_| config.classifier.pins()) {
         Some(rows) => {
             let (sub_train, sub_validation) = split_rows(rows, train_data, validation_data, dims);
+            // (a subsample the search cannot be run on, e.g. missing a class in its training
+            // part, leaves the search to every vector, as without one)
             let searched = config.classifier.fit(
                 sub_train.view(),
                 sub_validation.view(),
                 class_names.len(),
                 dims,
-            )?;
-            config.classifier.pinned(&searched)
+            );
+            searched
+                .ok()
+                .and_then(|searched| config.classifier.pinned(&searched))
         }
         None => None,
     };
