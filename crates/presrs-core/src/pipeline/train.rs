@@ -25,8 +25,9 @@ pub fn train(
 /// pins them ([`ClassifierConfig::pins`](crate::classifier::ClassifierConfig::pins)): the classifier
 /// is fitted (with its search and calibration) on those images' vectors, and the configuration it
 /// chose, pinned, is fitted on every vector. The features and the PCA are every image's either way.
-/// Also says whether the search was run on `search` (`false`: the family pins nothing, the search failed on `search`, or no `search`
-/// was given, and the classifier was trained as [`train`] trains it).
+/// Also says whether the search was run on `search` (`false`: the family pins nothing, the search
+/// failed on `search`, or no `search` was given, and the classifier was trained as [`train`] trains
+/// it).
 pub(crate) fn train_searching(
     train: &[LabeledImage<'_>],
     validation: &[LabeledImage<'_>],
