@@ -169,9 +169,17 @@ pub fn selection_costs_line(selections: &[presrs_core::selection::Selection]) ->
             over.iter().copied().fold(0.0, f64::max)
         ),
     };
+    let pinned = costs.iter().filter(|c| c.searched_on.is_some()).count();
+    let searched = if pinned > 0 {
+        format!(
+            " ({pinned} of them with the hyper-parameters chosen on the subsample, then fitted on all)"
+        )
+    } else {
+        String::new()
+    };
     Some(format!(
         "time over {} models: {scored}; scoring {:.1} s (features {:.1} s; {bound}), training the \
-         winners {:.1} s, not covered by the budget",
+         winners{searched} {:.1} s, not covered by the budget",
         costs.len(),
         sum(|c| c.scoring_seconds),
         sum(|c| c.features_seconds),

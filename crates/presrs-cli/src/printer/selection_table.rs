@@ -71,8 +71,12 @@ pub fn cost_line(selection: &Selection) -> Option<String> {
     } else {
         format!("scored on all {} samples", cost.samples)
     };
+    let searched = match cost.searched_on {
+        Some(on) => format!(" (its hyper-parameters chosen on the subsample of {on})"),
+        None => String::new(),
+    };
     Some(format!(
-        "time: {scored} in {:.1} s (features {:.1} s; {}); training the winner on all {} samples \
+        "time: {scored} in {:.1} s (features {:.1} s; {}); training the winner on all {} samples{searched} \
          {:.1} s, not covered by the budget",
         cost.scoring_seconds,
         cost.features_seconds,

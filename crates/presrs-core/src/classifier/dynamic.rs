@@ -99,6 +99,20 @@ impl ClassifierConfig {
         };
         self.0.fit(data).map(ClassifierModel)
     }
+
+    /// Whether the family can pin the hyper-parameters a model chose
+    /// ([`ClassifierFamily::PINS`](crate::classifier::ClassifierFamily::PINS)).
+    pub fn pins(&self) -> bool {
+        self.0.pins()
+    }
+
+    /// This configuration with the hyper-parameters (and calibration) `model`, fitted with it,
+    /// chose, fixed: fitting it searches nothing
+    /// ([`ClassifierFamily::pinned`](crate::classifier::ClassifierFamily::pinned)). `None` when the
+    /// family has nothing to pin or `model` is of another family.
+    pub fn pinned(&self, model: &ClassifierModel) -> Option<Self> {
+        self.0.pinned(&*model.0).map(Self)
+    }
 }
 
 impl Clone for ClassifierConfig {

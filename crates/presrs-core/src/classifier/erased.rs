@@ -27,6 +27,9 @@ pub(crate) trait DynConfig: Debug + Send + Sync {
     fn check(&self) -> Result<()>;
     fn needs_validation(&self) -> bool;
     fn fit(&self, data: FitData<'_>) -> Result<Box<dyn DynModel>>;
+    fn pins(&self) -> bool;
+    /// `None` too when `model` belongs to another family.
+    fn pinned(&self, model: &dyn DynModel) -> Option<Box<dyn DynConfig>>;
     fn clone_box(&self) -> Box<dyn DynConfig>;
     fn as_any(&self) -> &dyn Any;
     fn fields(&self) -> &dyn erased_serde::Serialize;
@@ -131,6 +134,16 @@ impl<F: ClassifierFamily> DynConfig for ConfigOf<F> {
 
     fn fit(&self, data: FitData<'_>) -> Result<Box<dyn DynModel>> {
         Ok(Box::new(ModelOf::<F>(F::fit(&self.0, data)?)))
+    }
+
+    fn pins(&self) -> bool {
+        F::PINS
+    }
+
+    fn pinned(&self, model: &dyn DynModel) -> Option<Box<dyn DynConfig>> {
+        let model = model.as_any().downcast_ref::<ModelOf<F>>()?;
+        let pinned = F::pinned(&self.0, &model.0)?;
+        Some(Box::new(ConfigOf::<F>(pinned)))
     }
 
     fn clone_box(&self) -> Box<dyn DynConfig> {

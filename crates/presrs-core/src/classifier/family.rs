@@ -62,6 +62,19 @@ pub trait ClassifierFamily: Send + Sync + 'static {
     /// Trains on `data` with checked hyper-parameters.
     fn fit(config: &Self::Config, data: FitData<'_>) -> Result<Self::Model>;
 
+    /// Whether [`pinned`](Self::pinned) gives a configuration: the family searches hyper-parameters
+    /// (or calibrates) at a cost that grows faster than its final fit, so that on large data the
+    /// search is run on a subsample and the choice fitted on every vector.
+    const PINS: bool = false;
+
+    /// `config` with the hyper-parameters (and calibration) `model`, fitted with it, chose, fixed:
+    /// fitting it searches nothing. `None`: the family has nothing to pin (its fit is refitted with
+    /// `config` on all the data).
+    fn pinned(config: &Self::Config, model: &Self::Model) -> Option<Self::Config> {
+        let _ = (config, model);
+        None
+    }
+
     /// Length of the vectors `model` classifies.
     fn dims(model: &Self::Model) -> usize;
 

@@ -348,22 +348,32 @@ fn train_folds(
     repeat_seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Vec<(Result<FoldModel>, f64)> {
-    folds
-        .par_iter()
-        .enumerate()
-        .map(|(k, fold)| {
-            let start = Instant::now();
-            let model = trainer(&FoldSets {
-                seed: repeat_seed,
-                fold: k,
-                held_out: fold.held_out(samples),
-                train: &fold.train,
-                validation: &fold.validation,
-            });
-            progress();
-            (model, start.elapsed().as_secs_f64())
-        })
-        .collect()
+    let train_one = |(k, fold): (usize, &Fold)| {
+        let start = Instant::now();
+        let model = trainer(&FoldSets {
+            seed: repeat_seed,
+            fold: k,
+            held_out: fold.held_out(samples),
+            train: &fold.train,
+            validation: &fold.validation,
+        });
+        progress();
+        (model, start.elapsed().as_secs_f64())
+    };
+    if folds.iter().any(large_fold) {
+        folds.iter().enumerate().map(train_one).collect()
+    } else {
+        folds.par_iter().enumerate().map(train_one).collect()
+    }
+}
+
+/// Whether a fold's training data (training + validation) are large: more than an automatic choice
+/// scores its candidates on ([`SCORING_SAMPLES`](crate::selection::SCORING_SAMPLES)). Such folds are
+/// trained one after the other (each training's own stages, features, products and classifiers, run
+/// in parallel): in parallel, two or more trainings of the full features were alive at once, which
+/// multiplied the peak memory, and each automatic choice's time budget was spent on half the cores.
+fn large_fold(fold: &Fold) -> bool {
+    fold.train.len() + fold.validation.len() > crate::selection::SCORING_SAMPLES
 }
 
 /// Classifies the images `test` (indices into `samples`), each passed through `perturb` first if given,

@@ -17,6 +17,23 @@ pub fn train(
     validation: &[LabeledImage<'_>],
     config: &CheckedTrainConfig,
 ) -> Result<TrainedModel> {
+    train_searching(train, validation, config, None).map(|(model, _)| model)
+}
+
+/// [`train`], with the classifier's hyper-parameters searched on the images `search` only (indices
+/// into the training images followed by the validation images, each keeping its role) when its family
+/// pins them ([`ClassifierConfig::pins`](crate::classifier::ClassifierConfig::pins)): the classifier
+/// is fitted (with its search and calibration) on those images' vectors, and the configuration it
+/// chose, pinned, is fitted on every vector. The features and the PCA are every image's either way.
+/// Also says whether the search was run on `search` (`false`: the family pins nothing, the search
+/// failed on `search`, or no `search` was given, and the classifier was trained as [`train`] trains
+/// it).
+pub(crate) fn train_searching(
+    train: &[LabeledImage<'_>],
+    validation: &[LabeledImage<'_>],
+    config: &CheckedTrainConfig,
+    search: Option<&[usize]>,
+) -> Result<(TrainedModel, bool)> {
     let config = config.config();
     let first = train
         .first()
@@ -43,15 +60,35 @@ pub fn train(
         None => (None, train_features, validation_features),
     };
     let dims = pca.as_ref().map_or(n_features, Pca::n_components);
-    let classifier = config.classifier.fit(
-        LabeledVectors {
-            vectors: &train_vectors,
-            classes: &train_classes,
-        },
-        LabeledVectors {
-            vectors: &validation_vectors,
-            classes: &validation_classes,
-        },
+    let train_data = LabeledVectors {
+        vectors: &train_vectors,
+        classes: &train_classes,
+    };
+    let validation_data = LabeledVectors {
+        vectors: &validation_vectors,
+        classes: &validation_classes,
+    };
+    let pinned = match search.filter(|_| config.classifier.pins()) {
+        Some(rows) => {
+            let (sub_train, sub_validation) = split_rows(rows, train_data, validation_data, dims);
+            // (a subsample the search cannot be run on, e.g. missing a class in its training
+            // part, leaves the search to every vector, as without one)
+            let searched = config.classifier.fit(
+                sub_train.view(),
+                sub_validation.view(),
+                class_names.len(),
+                dims,
+            );
+            searched
+                .ok()
+                .and_then(|searched| config.classifier.pinned(&searched))
+        }
+        None => None,
+    };
+    let searched_on_subset = pinned.is_some();
+    let classifier = pinned.as_ref().unwrap_or(&config.classifier).fit(
+        train_data,
+        validation_data,
         class_names.len(),
         dims,
     )?;
@@ -68,7 +105,7 @@ pub fn train(
         train_per_class: count(&train_classes),
         validation_per_class: count(&validation_classes),
     };
-    TrainedModel::try_from(ModelFields {
+    let model = TrainedModel::try_from(ModelFields {
         format_version: FORMAT_VERSION,
         crop: config.crop,
         preprocess: config.preprocess,
@@ -84,7 +121,56 @@ pub fn train(
         sampling: None,
         early: None,
         novelty: None,
-    })
+    })?;
+    Ok((model, searched_on_subset))
+}
+
+/// Rows of labelled vectors, owned.
+struct OwnedVectors {
+    vectors: Vec<f64>,
+    classes: Vec<usize>,
+}
+
+impl OwnedVectors {
+    fn view(&self) -> LabeledVectors<'_> {
+        LabeledVectors {
+            vectors: &self.vectors,
+            classes: &self.classes,
+        }
+    }
+}
+
+/// The training and validation rows of `rows` (indices into `train` followed by `validation`, in
+/// order), each in its own role.
+fn split_rows(
+    rows: &[usize],
+    train: LabeledVectors<'_>,
+    validation: LabeledVectors<'_>,
+    dims: usize,
+) -> (OwnedVectors, OwnedVectors) {
+    let n_train = train.classes.len();
+    let pick = |set: LabeledVectors<'_>, indices: &mut dyn Iterator<Item = usize>| {
+        let mut out = OwnedVectors {
+            vectors: Vec::new(),
+            classes: Vec::new(),
+        };
+        for i in indices {
+            out.vectors
+                .extend_from_slice(&set.vectors[i * dims..(i + 1) * dims]);
+            out.classes.push(set.classes[i]);
+        }
+        out
+    };
+    let sub_train = pick(train, &mut rows.iter().copied().filter(|&i| i < n_train));
+    let sub_validation = pick(
+        validation,
+        &mut rows
+            .iter()
+            .copied()
+            .filter(|&i| i >= n_train && i - n_train < validation.classes.len())
+            .map(|i| i - n_train),
+    );
+    (sub_train, sub_validation)
 }
 
 /// The classes of a training set: its distinct labels, sorted; at least two.

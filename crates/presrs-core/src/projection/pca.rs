@@ -174,10 +174,150 @@ fn thin_svd(centred: &Mat<f64>) -> Result<(Diag<f64>, Mat<f64>)> {
     Ok((singular, right))
 }
 
+/// Above this many samples a PCA that keeps few components is fitted by a randomised range finder
+/// (Halko, Martinsson and Tropp 2011) instead of the exact thin SVD: the exact one costs `O(n p min(n, p))` in one
+/// sequential decomposition (and two `n x min(n, p)`-sized factors), the range finder `O(n p l)` in
+/// parallel matrix products for `l` a little above the components kept. At most this many samples (every
+/// training set an automatic choice scores its candidates on, `selection::SCORING_SAMPLES`) keep the
+/// exact SVD and the models they always gave.
+pub const EXACT_SVD_MAX_SAMPLES: usize = 4000;
+
+/// Power iterations of the range finder: each multiplies the gap between the kept components and
+/// the rest by itself once more (Halko, Martinsson and Tropp 2011, section 4.5).
+const POWER_ITERATIONS: usize = 4;
+
+/// The seed of the range finder's Gaussian test matrix (a fixed one: the fit is deterministic).
+const RANGE_SEED: u64 = 0x5CA1_E5EE_D000_0001;
+
+/// Whether [`Pca::fit_above`] takes the randomised range finder: more than `exact_max_samples`
+/// samples, and a range of `sketch_width` well below both sides of the matrix.
+fn uses_range_finder(
+    n_samples: usize,
+    n_features: usize,
+    n_components: usize,
+    exact_max_samples: usize,
+) -> bool {
+    n_samples > exact_max_samples
+        && 2 * sketch_width(n_samples, n_features, n_components) <= n_samples.min(n_features)
+}
+
+/// The width `l` of the range finder's sketch for `k` components: `2k + 10`, at most the rank.
+fn sketch_width(n_samples: usize, n_features: usize, k: usize) -> usize {
+    (2 * k + 10).min(n_samples.min(n_features))
+}
+
+/// The leading `k` singular values and right singular vectors (one per column) of the centred
+/// `samples` (`n x p` row-major, centred on `mean` without a centred copy), by the randomised range
+/// finder with power iterations (Halko, Martinsson and Tropp 2011, algorithms 4.4 and 5.1): `Q`, an
+/// orthonormal basis of `Xc Ω` for a seeded Gaussian `Ω` (`p x l`), refined by `q` passes of
+/// `Q ← orth(Xc orth(Xcᵀ Q))`; then the exact SVD of the small `Qᵀ Xc` (`l x p`). With `l = 2k + 10`
+/// and four passes the leading components agree with the exact SVD's to rounding wherever the
+/// spectrum falls at all past the `k`-th (tested against it). The products are faer's, split over the
+/// cores by their outputs (the result does not depend on the thread count); the orthonormalisations
+/// and the small SVD are sequential.
+fn randomised_svd(samples: &[f64], mean: &[f64], k: usize) -> Result<(Diag<f64>, Mat<f64>)> {
+    use faer::linalg::matmul::matmul;
+    use faer::{Accum, MatRef};
+    use rand::{Rng, SeedableRng};
+
+    let n_features = mean.len();
+    let n_samples = samples.len() / n_features;
+    let l = sketch_width(n_samples, n_features, k);
+    let x = MatRef::from_row_major_slice(samples, n_samples, n_features);
+    let mean_row = MatRef::from_row_major_slice(mean, 1, n_features);
+    let par = Par::rayon(0);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(RANGE_SEED);
+    // Standard normal values (Box-Muller; the cosine branch only).
+    let omega = Mat::from_fn(n_features, l, |_, _| {
+        let u: f64 = 1.0 - rng.random::<f64>();
+        let v: f64 = rng.random::<f64>();
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    });
+    // Xc B = X B - 1 (meanᵀ B) and Xcᵀ Q = Xᵀ Q - mean (1ᵀ Q): the centring, without a centred copy.
+    let times = |right: &Mat<f64>| -> Mat<f64> {
+        let mut out = Mat::zeros(n_samples, right.ncols());
+        matmul(&mut out, Accum::Replace, x, right, 1.0, par);
+        let mut shift = Mat::zeros(1, right.ncols());
+        matmul(&mut shift, Accum::Replace, mean_row, right, 1.0, Par::Seq);
+        for j in 0..right.ncols() {
+            let s = shift[(0, j)];
+            out.col_mut(j).iter_mut().for_each(|v| *v -= s);
+        }
+        out
+    };
+    let transposed_times = |left: &Mat<f64>| -> Mat<f64> {
+        let mut out = Mat::zeros(n_features, left.ncols());
+        matmul(&mut out, Accum::Replace, x.transpose(), left, 1.0, par);
+        for j in 0..left.ncols() {
+            let s: f64 = left.col(j).iter().sum();
+            out.col_mut(j)
+                .iter_mut()
+                .zip(mean)
+                .for_each(|(v, m)| *v -= m * s);
+        }
+        out
+    };
+    let mut q = times(&omega);
+    orthonormalise(&mut q);
+    for _ in 0..POWER_ITERATIONS {
+        let mut z = transposed_times(&q);
+        orthonormalise(&mut z);
+        q = times(&z);
+        orthonormalise(&mut q);
+    }
+    // Qᵀ Xc = (Xcᵀ Q)ᵀ, `l x p`: its right singular vectors are Xc's leading ones.
+    let small = transposed_times(&q).transpose().to_owned();
+    thin_svd(&small)
+}
+
+/// Orthonormalises the columns of `m` in place (classical Gram-Schmidt, twice: "twice is enough",
+/// Giraud et al. 2005); a column that depends on the earlier ones (to rounding) becomes zero.
+fn orthonormalise(m: &mut Mat<f64>) {
+    for j in 0..m.ncols() {
+        let original: f64 = m.col(j).iter().map(|v| v * v).sum::<f64>().sqrt();
+        for _ in 0..2 {
+            for i in 0..j {
+                let dot: f64 = m
+                    .col(i)
+                    .iter()
+                    .zip(m.col(j).iter())
+                    .map(|(a, b)| a * b)
+                    .sum();
+                let (done, rest) = m.as_mut().split_at_col_mut(j);
+                rest.col_mut(0)
+                    .iter_mut()
+                    .zip(done.col(i).iter())
+                    .for_each(|(v, u)| *v -= dot * u);
+            }
+        }
+        let norm: f64 = m.col(j).iter().map(|v| v * v).sum::<f64>().sqrt();
+        let scale = if norm > 1e-10 * original && norm > 0.0 {
+            1.0 / norm
+        } else {
+            0.0
+        };
+        m.col_mut(j).iter_mut().for_each(|v| *v *= scale);
+    }
+}
+
 impl Pca {
     /// Fits on `samples` (`n_samples x n_features`, row-major), keeping
     /// `min(max_components, n_samples - 1, n_features)` components.
+    /// Above [`EXACT_SVD_MAX_SAMPLES`] samples, a fit that keeps few components takes the randomised
+    /// range finder (see there).
     pub fn fit(samples: &[f64], n_features: usize, max_components: usize) -> Result<Self> {
+        Self::fit_above(samples, n_features, max_components, EXACT_SVD_MAX_SAMPLES)
+    }
+
+    /// [`fit`](Self::fit), with the randomised range finder taken above `exact_max_samples` samples
+    /// (when it keeps few components): an automatic choice that scores its candidates on a subsample
+    /// of large data fits its folds' PCAs so (`0`), small data never.
+    pub fn fit_above(
+        samples: &[f64],
+        n_features: usize,
+        max_components: usize,
+        exact_max_samples: usize,
+    ) -> Result<Self> {
         let n_samples = check_fit_input(samples, n_features, max_components)?;
         let mut mean = vec![0.0; n_features];
         for row in samples.chunks_exact(n_features) {
@@ -188,16 +328,21 @@ impl Pca {
         for acc in &mut mean {
             *acc /= n_samples as f64;
         }
-        let centred = Mat::from_fn(n_samples, n_features, |i, j| {
-            samples[i * n_features + j] - mean[j]
-        });
         let total_variance = samples
             .chunks_exact(n_features)
             .flat_map(|row| row.iter().zip(&mean).map(|(x, m)| (x - m) * (x - m)))
             .sum::<f64>()
             / (n_samples - 1) as f64;
-        let (singular, right) = thin_svd(&centred)?;
         let n_components = max_components.min(n_samples - 1).min(n_features);
+        let (singular, right) =
+            if uses_range_finder(n_samples, n_features, n_components, exact_max_samples) {
+                randomised_svd(samples, &mean, n_components)?
+            } else {
+                let centred = Mat::from_fn(n_samples, n_features, |i, j| {
+                    samples[i * n_features + j] - mean[j]
+                });
+                thin_svd(&centred)?
+            };
         let singular = singular.column_vector();
         let mut basis = Vec::with_capacity(n_components * n_features);
         let mut explained_variance = Vec::with_capacity(n_components);
@@ -384,6 +529,111 @@ pub(crate) fn matrix_vector(matrix: &[f64], cols: usize, x: &[f64], out: &mut [f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `n x p` rows of a falling spectrum (singular values `10 · 0.8^r` over 60 random directions),
+    /// a little noise and an offset far from zero in every feature.
+    fn falling_spectrum(n: usize, p: usize, seed: u64) -> Vec<f64> {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut uniform = |scale: f64| scale * (rng.random::<f64>() - 0.5);
+        let rank = 60.min(p);
+        let scores: Vec<f64> = (0..n * rank).map(|_| uniform(1.0)).collect();
+        let axes: Vec<f64> = (0..rank * p).map(|_| uniform(1.0)).collect();
+        let offsets: Vec<f64> = (0..p).map(|_| 5.0 + uniform(2.0)).collect();
+        let mut x = vec![0.0; n * p];
+        for i in 0..n {
+            for r in 0..rank {
+                let weight = 10.0 * 0.8f64.powi(r as i32) * scores[i * rank + r];
+                for j in 0..p {
+                    x[i * p + j] += weight * axes[r * p + j];
+                }
+            }
+            for j in 0..p {
+                x[i * p + j] += offsets[j] + uniform(1e-3);
+            }
+        }
+        x
+    }
+
+    /// The oracle: the range finder's leading singular values and axes are the exact SVD's.
+    #[test]
+    fn the_range_finder_agrees_with_the_exact_svd() {
+        let (n, p, k) = (500, 300, 12);
+        let samples = falling_spectrum(n, p, 11);
+        let mut mean = vec![0.0; p];
+        for row in samples.chunks_exact(p) {
+            mean.iter_mut()
+                .zip(row)
+                .for_each(|(m, v)| *m += v / n as f64);
+        }
+        let centred = Mat::from_fn(n, p, |i, j| samples[i * p + j] - mean[j]);
+        let (exact_values, exact_axes) = thin_svd(&centred).unwrap();
+        let (values, axes) = randomised_svd(&samples, &mean, k).unwrap();
+        for c in 0..k {
+            let (exact, found) = (exact_values.column_vector()[c], values.column_vector()[c]);
+            assert!(
+                (exact - found).abs() <= 1e-9 * exact,
+                "{c}: {exact} {found}"
+            );
+            let dot: f64 = (0..p).map(|j| exact_axes[(j, c)] * axes[(j, c)]).sum();
+            assert!((dot.abs() - 1.0).abs() < 1e-9, "axis {c}: {dot}");
+        }
+    }
+
+    /// Above `EXACT_SVD_MAX_SAMPLES` the fit takes the range finder (when it keeps few components)
+    /// and gives the exact fit's PCA to rounding; at or below it, the exact SVD as always.
+    #[test]
+    fn large_fits_take_the_range_finder_and_agree_with_the_exact_one() {
+        assert!(!uses_range_finder(
+            EXACT_SVD_MAX_SAMPLES,
+            10_000,
+            102,
+            EXACT_SVD_MAX_SAMPLES
+        ));
+        assert!(uses_range_finder(
+            EXACT_SVD_MAX_SAMPLES + 1,
+            10_000,
+            102,
+            EXACT_SVD_MAX_SAMPLES
+        ));
+        assert!(uses_range_finder(1000, 10_000, 102, 0));
+        assert!(!uses_range_finder(
+            EXACT_SVD_MAX_SAMPLES + 1,
+            400,
+            102,
+            EXACT_SVD_MAX_SAMPLES
+        ));
+        let (n, p, k) = (EXACT_SVD_MAX_SAMPLES + 1, 120, 6);
+        assert!(uses_range_finder(n, p, k, EXACT_SVD_MAX_SAMPLES));
+        let samples = falling_spectrum(n, p, 12);
+        let fast = Pca::fit(&samples, p, k).unwrap();
+        let mut mean = vec![0.0; p];
+        for row in samples.chunks_exact(p) {
+            mean.iter_mut()
+                .zip(row)
+                .for_each(|(m, v)| *m += v / n as f64);
+        }
+        let centred = Mat::from_fn(n, p, |i, j| samples[i * p + j] - mean[j]);
+        let (values, axes) = thin_svd(&centred).unwrap();
+        assert_eq!(fast.n_components(), k);
+        for c in 0..k {
+            let s = values.column_vector()[c];
+            let variance = s * s / (n - 1) as f64;
+            let found = fast.explained_variance()[c];
+            assert!((variance - found).abs() <= 1e-9 * variance, "{c}");
+            // the same sign rule: the largest loading positive
+            let dot: f64 = (0..p).map(|j| axes[(j, c)] * fast.component(c)[j]).sum();
+            assert!((dot.abs() - 1.0).abs() < 1e-9, "axis {c}: {dot}");
+            let pivot = (0..p)
+                .max_by(|&a, &b| {
+                    fast.component(c)[a]
+                        .abs()
+                        .total_cmp(&fast.component(c)[b].abs())
+                })
+                .unwrap();
+            assert!(fast.component(c)[pivot] > 0.0);
+        }
+    }
 
     #[test]
     fn rejects_bad_input() {

@@ -44,7 +44,7 @@ use crate::error::{CoreError, Result};
 use crate::pipeline::config::CheckedTrainConfig;
 use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
-use crate::pipeline::train::train;
+use crate::pipeline::train::train_searching;
 
 pub use record::{CandidateScore, Selection, SelectionCost, ValidationFallback};
 pub use subsample::SCORING_SAMPLES;
@@ -237,7 +237,8 @@ pub fn select(
             scored.len()
         )
     });
-    let (mut selection, features_seconds) = select_on(scored, choice, seed, started)?;
+    let subsampled = scored.len() < images.len();
+    let (mut selection, features_seconds) = select_on(scored, choice, seed, started, subsampled)?;
     selection.cost = Some(SelectionCost {
         samples: images.len(),
         scored_on: scored.len(),
@@ -245,17 +246,20 @@ pub fn select(
         scoring_seconds: started.elapsed().as_secs_f64(),
         final_fit_seconds: 0.0,
         budget_seconds: choice.budget.map(|budget| budget.as_secs_f64()),
+        searched_on: None,
     });
     Ok(selection)
 }
 
 /// [`select`] on the images it scores on, from `started`; also gives the seconds spent computing
-/// features.
+/// features. On a `subsampled` set of large data the folds' PCAs take the randomised range finder
+/// (`Pca::fit_above`); small data keep the exact SVD.
 fn select_on(
     images: &[LabeledImage<'_>],
     choice: &AutoChoice<'_>,
     seed: u64,
     started: std::time::Instant,
+    subsampled: bool,
 ) -> Result<(Selection, f64)> {
     let AutoChoice {
         candidates,
@@ -284,6 +288,9 @@ fn select_on(
     let mut race = scoring::Race::of(&folds);
     let budget = budget.map(|total| scoring::Budget { started, total });
     let mut tables = scoring::Tables::new(on_stage);
+    if subsampled {
+        tables = tables.with_fast_pca();
+    }
     let mut scores =
         scoring::score_candidates(images, &folds, candidates, budget, &mut race, &mut tables)?;
     let variants = dims_variants(&scores, refine_dims)?;
@@ -370,8 +377,11 @@ fn dims_variants(scores: &[CandidateScore], dims: &[usize]) -> Result<Vec<Checke
     Ok(variants)
 }
 
-/// [`select`] on training + validation images, then [`train`] of the winner on them; the model records
-/// the selection.
+/// [`select`] on training + validation images, then [`train`](crate::pipeline::train) of the winner
+/// on them; the model records the selection. When the candidates were scored on a subsample, a winner
+/// whose classifier pins its hyper-parameters ([`ClassifierConfig::pins`](crate::classifier::ClassifierConfig::pins))
+/// has them searched on that subsample's vectors and only the choice fitted on every image
+/// ([`SelectionCost::searched_on`]); on smaller data the model is `train`'s.
 pub fn train_auto(
     train_images: &[LabeledImage<'_>],
     validation_images: &[LabeledImage<'_>],
@@ -402,18 +412,37 @@ pub fn train_auto(
     let mut selection = select(&all, choice, seed)?;
     // (the winner may be a candidate refined with other dims: its configuration is in its score)
     let config = selection.scores[selection.chosen].config.clone().check()?;
+    // On large data the winner's hyper-parameters are searched on the subsample the candidates were
+    // scored on (the same draw), and only the choice is fitted on every sample.
+    let subsample = choice
+        .scoring_samples
+        .and_then(|at_most| subsample::stratified_subsample(&all, at_most, seed));
+    let searches_on_subsample = subsample.is_some() && config.config().classifier.pins();
     StageObserver::tell(choice.on_stage, || {
+        let search = match &subsample {
+            Some(rows) if searches_on_subsample => format!(
+                " (its hyper-parameters searched on the stratified subsample of {})",
+                rows.len()
+            ),
+            _ => String::new(),
+        };
         format!(
-            "training the winner, {} + {}, on {} samples",
+            "training the winner, {} + {}, on {} samples{search}",
             config.config().features.name(),
             config.config().classifier.kind().as_str(),
             all.len()
         )
     });
     let fitting = std::time::Instant::now();
-    let model = train(train_images, validation_images, &config)?;
+    let (model, searched) = train_searching(
+        train_images,
+        validation_images,
+        &config,
+        subsample.as_deref(),
+    )?;
     if let Some(cost) = selection.cost.as_mut() {
         cost.final_fit_seconds = fitting.elapsed().as_secs_f64();
+        cost.searched_on = searched.then(|| subsample.as_ref().map_or(0, Vec::len));
     }
     Ok(model.with_selection(selection))
 }

@@ -94,6 +94,13 @@ pub struct SelectionCost {
     /// was recorded).
     #[serde(default)]
     pub budget_seconds: Option<f64>,
+    /// On how many samples the winner's hyper-parameters (its classifier's search and calibration)
+    /// were chosen, when not on all of them: on large data, the subsample the candidates were scored
+    /// on, and only the chosen ones fitted on every sample (`None`: searched on every sample, as on
+    /// data no larger than the subsample, or for a classifier with nothing to search apart from its
+    /// fit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub searched_on: Option<usize>,
 }
 
 impl SelectionCost {

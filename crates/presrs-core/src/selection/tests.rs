@@ -3,6 +3,7 @@ use std::collections::BTreeMap;
 
 use crate::frame::{Frame, Grid};
 use crate::pipeline::TrainConfig;
+use crate::pipeline::train::train;
 
 /// `count` synthetic frames of four classes (frame `i` of class `i % 4`), seeded.
 fn four_class_frames(count: usize, seed: u64) -> Vec<Frame> {
@@ -758,4 +759,46 @@ fn large_data_are_scored_on_a_stratified_subsample_and_the_winner_on_everything(
     assert_eq!(again.scores, first.scores);
     let whole = select(&images, &choice.with_scoring_samples(None), 3).unwrap();
     assert_eq!(whole.cost.unwrap().scored_on, 96);
+}
+
+/// On large data an SVM winner's kernel and C are searched (and its posteriors calibrated) on the
+/// scoring subsample, and only that choice is fitted on every image (the fit on every image searches
+/// nothing: its model lists no candidates); the selection says on how many samples it was searched.
+/// On data no larger than the subsample, nothing changes: the model is `train`'s, searched on every
+/// image. (That a pinned fit on the same data is the searched model: `svm::fit`'s tests.)
+#[test]
+fn an_svm_winner_is_searched_on_the_subsample_and_small_data_train_as_before() {
+    use crate::classifier::svm::SvmFamily;
+    let frames = four_class_frames(96, 5);
+    let images = grouped(&frames);
+    let svm = TrainConfig {
+        classifier: crate::classifier::ClassifierKind::SVM.default_config(),
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let candidates = std::slice::from_ref(&svm);
+    let (train_images, validation_images) = (&images[..64], &images[64..]);
+    let large = AutoChoice::new(candidates, ValidateBy::Group).with_scoring_samples(Some(48));
+    let model = train_auto(train_images, validation_images, &large, 3).unwrap();
+    let cost = model.selection().unwrap().cost.clone().unwrap();
+    assert_eq!(cost.searched_on, Some(48));
+    let pinned = model.classifier().get::<SvmFamily>().unwrap();
+    assert!(pinned.candidates().is_empty());
+    let trained: usize = model.summary().train_per_class.iter().sum::<usize>()
+        + model.summary().validation_per_class.iter().sum::<usize>();
+    assert_eq!(trained, 96);
+    // Small data: no subsample, no pinning, the model `train` gives.
+    let small = AutoChoice::new(candidates, ValidateBy::Group);
+    let model = train_auto(train_images, validation_images, &small, 3).unwrap();
+    assert_eq!(
+        model.selection().unwrap().cost.clone().unwrap().searched_on,
+        None
+    );
+    let plain = train(train_images, validation_images, &svm).unwrap();
+    assert_eq!(model.classifier(), plain.classifier());
+    assert_eq!(model.pca(), plain.pca());
+    let searched = model.classifier().get::<SvmFamily>().unwrap();
+    assert!(!searched.candidates().is_empty());
 }

@@ -1,22 +1,31 @@
 //! Fitting: the one-vs-one machines for one kernel along a path of `C` (warm-started, see [`Smo`]),
 //! and the hyper-parameter search over kernels and `C` scored on validation vectors.
 
+use rayon::prelude::*;
+
 use super::smo::Smo;
 use super::{Kernel, KernelKind, PairMachine, SvmCandidate, SvmConfig, SvmModel};
 use crate::classifier::calibration::{cross_validated_scores, fit_temperature};
 use crate::classifier::common::{LabeledVectors, check_vectors, merged, require_per_class};
 use crate::error::Result;
 
-/// The kernel matrix (`n x n`, symmetric) of the row-major vectors (`n x dims`).
+/// The kernel matrix (`n x n`, symmetric) of the row-major vectors (`n x dims`): each row's lower
+/// triangle in parallel (every value computed alone, so the matrix does not depend on the thread
+/// count), then mirrored.
 fn gram_of(vectors: &[f64], dims: usize, kernel: Kernel) -> Vec<f64> {
     let rows: Vec<&[f64]> = vectors.chunks_exact(dims).collect();
     let n = rows.len();
     let mut gram = vec![0.0; n * n];
+    gram.par_chunks_mut(n.max(1))
+        .enumerate()
+        .for_each(|(a, out)| {
+            for (b, value) in out.iter_mut().enumerate().take(a + 1) {
+                *value = kernel.eval(rows[a], rows[b]);
+            }
+        });
     for a in 0..n {
-        for b in 0..=a {
-            let value = kernel.eval(rows[a], rows[b]);
-            gram[a * n + b] = value;
-            gram[b * n + a] = value;
+        for b in 0..a {
+            gram[b * n + a] = gram[a * n + b];
         }
     }
     gram
@@ -28,14 +37,14 @@ fn gram_of(vectors: &[f64], dims: usize, kernel: Kernel) -> Vec<f64> {
 fn cross_kernel_of(queries: &[f64], train: &[f64], dims: usize, kernel: Kernel) -> Vec<f64> {
     let n_train = train.len() / dims;
     let mut cross = vec![0.0; queries.len() / dims * n_train];
-    for (x, row) in queries
-        .chunks_exact(dims)
-        .zip(cross.chunks_exact_mut(n_train.max(1)))
-    {
-        for (value, t) in row.iter_mut().zip(train.chunks_exact(dims)) {
-            *value = kernel.eval(t, x);
-        }
-    }
+    queries
+        .par_chunks_exact(dims)
+        .zip(cross.par_chunks_exact_mut(n_train.max(1)))
+        .for_each(|(x, row)| {
+            for (value, t) in row.iter_mut().zip(train.chunks_exact(dims)) {
+                *value = kernel.eval(t, x);
+            }
+        });
     cross
 }
 
@@ -82,19 +91,38 @@ fn fit_path_on_gram(
 ) -> Vec<Fitted> {
     let mut increasing: Vec<usize> = (0..cs.len()).collect();
     increasing.sort_by(|&a, &b| cs[a].total_cmp(&cs[b]));
-    // per C: per pair, (alpha, rho)
-    let mut solutions: Vec<Vec<(Vec<f64>, f64)>> = vec![Vec::new(); cs.len()];
-    let mut pairs = Vec::new();
-    for ci in 0..n_classes {
-        for cj in ci + 1..n_classes {
+    let class_pairs: Vec<(usize, usize)> = (0..n_classes)
+        .flat_map(|ci| (ci + 1..n_classes).map(move |cj| (ci, cj)))
+        .collect();
+    // The pairs in parallel (each solved alone: the same solutions whatever the thread count); a
+    // pair's kernel matrix is dropped once its path is solved.
+    let solved: Vec<(PairProblem, PairPath)> = class_pairs
+        .par_iter()
+        .map(|&(ci, cj)| {
             let pair = PairProblem::of(&data, gram, ci, cj);
             let mut smo = Smo::new(pair.members.len());
+            let mut path = vec![(Vec::new(), 0.0); cs.len()];
             for &index in &increasing {
                 let (rho, _) = smo.solve(&pair.k, &pair.y, cs[index], tol);
-                solutions[index].push((smo.alpha.clone(), rho));
+                path[index] = (smo.alpha.clone(), rho);
             }
-            pairs.push(pair);
+            (
+                PairProblem {
+                    k: Vec::new(),
+                    ..pair
+                },
+                path,
+            )
+        })
+        .collect();
+    // per C: per pair, (alpha, rho)
+    let mut solutions: Vec<Vec<(Vec<f64>, f64)>> = vec![Vec::new(); cs.len()];
+    let mut pairs = Vec::with_capacity(solved.len());
+    for (pair, path) in solved {
+        for (index, solution) in path.into_iter().enumerate() {
+            solutions[index].push(solution);
         }
+        pairs.push(pair);
     }
     let rows: Vec<&[f64]> = data.vectors.chunks_exact(dims).collect();
     cs.iter()
@@ -121,6 +149,9 @@ fn fit_path_on_gram(
         })
         .collect()
 }
+
+/// One pair's solutions `(alpha, rho)`, one per `C` of a path (in the order of the `C` given).
+type PairPath = Vec<(Vec<f64>, f64)>;
 
 /// The binary problem of classes `ci` (+1) and `cj` (-1): their vectors' indices in `data`, labels and
 /// kernel matrix (from `gram`, the kernel matrix of all of `data`).
@@ -226,6 +257,9 @@ impl SvmModel {
         check_vectors(&train, "svm training vectors", dims, n_classes)?;
         check_vectors(&validation, "svm validation vectors", dims, n_classes)?;
         require_per_class(&train, n_classes, 1)?;
+        if let Some(temperature) = config.temperature {
+            return Self::fit_pinned(train, validation, n_classes, dims, config, temperature);
+        }
         let grid = search_grid(config, gamma_scale(train.vectors, dims));
         let choice = Choice::search(
             &train,
@@ -268,6 +302,78 @@ impl SvmModel {
         model.candidates = choice.candidates;
         Ok(model)
     }
+}
+
+impl SvmModel {
+    /// The one kernel and `C` of `config` (checked: one of each, and a fixed `temperature`) fitted on
+    /// training + validation vectors, their scale read from the training vectors (as the search reads
+    /// it): no search, no calibration.
+    fn fit_pinned(
+        train: LabeledVectors<'_>,
+        validation: LabeledVectors<'_>,
+        n_classes: usize,
+        dims: usize,
+        config: &SvmConfig,
+        temperature: f64,
+    ) -> Result<Self> {
+        let (vectors, classes) = merged(&train, &validation);
+        let all = LabeledVectors {
+            vectors: &vectors,
+            classes: &classes,
+        };
+        // (the scale of the training vectors, as the search reads it)
+        let grid = search_grid(config, gamma_scale(train.vectors, dims));
+        let (kernel, c) = (grid[0].0, grid[0].1[0]);
+        let mut model = Self::fit_fixed(all, n_classes, dims, kernel, c, config.tol)?;
+        model.temperature = temperature;
+        Ok(model)
+    }
+
+    /// `config` (the one this model was fitted with) narrowed to the kernel, `C` and gamma factor
+    /// the model's search chose, with its temperature: fitting that on other data of the same kind
+    /// (more of it) searches nothing and keeps this model's calibration. The linear kernel's `C` and
+    /// the RBF's gamma stay relative to the data's scale (see the module documentation).
+    pub(crate) fn pinned(&self, config: &SvmConfig) -> SvmConfig {
+        // The candidates are in the order of the grid, each kernel's C in `c_grid` order; without
+        // candidates (no validation vectors) the first of the grid was taken.
+        let entries = grid_entries(config);
+        let chosen = self
+            .candidates
+            .iter()
+            .position(|candidate| candidate.kernel == self.kernel && candidate.c == self.c)
+            .unwrap_or(0);
+        let (kind, factor, c) = entries.get(chosen).copied().unwrap_or(entries[0]);
+        SvmConfig {
+            kernels: vec![kind],
+            c_grid: vec![c],
+            gamma_factors: factor.map_or_else(|| config.gamma_factors.clone(), |f| vec![f]),
+            tol: config.tol,
+            temperature: Some(self.temperature),
+        }
+    }
+}
+
+/// The candidates of `config`'s search in the order it tries them: kernel, RBF gamma factor, `C`.
+fn grid_entries(config: &SvmConfig) -> Vec<(KernelKind, Option<f64>, f64)> {
+    let mut entries = Vec::new();
+    for kind in &config.kernels {
+        match kind {
+            KernelKind::Linear => {
+                entries.extend(config.c_grid.iter().map(|&c| (KernelKind::Linear, None, c)))
+            }
+            KernelKind::Rbf => {
+                for &factor in &config.gamma_factors {
+                    entries.extend(
+                        config
+                            .c_grid
+                            .iter()
+                            .map(|&c| (KernelKind::Rbf, Some(factor), c)),
+                    );
+                }
+            }
+        }
+    }
+    entries
 }
 
 /// The kernels searched, each with its path of `C`, in the order of `config`: the linear kernel's
@@ -414,6 +520,53 @@ mod tests {
                     classified
                 );
             }
+        }
+    }
+
+    /// The oracle of pinning: the configuration a searched model pins, fitted on the same vectors,
+    /// gives that model (its kernel, C, machines and temperature) without searching, for either
+    /// kernel the search may choose.
+    #[test]
+    fn a_pinned_fit_on_the_same_data_is_the_searched_model() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let dims = 3;
+        let n = 120;
+        let classes: Vec<usize> = (0..n).map(|i| i % 3).collect();
+        let vectors: Vec<f64> = (0..n * dims)
+            .map(|k| rng.random_range(-1.0..1.0) + classes[k / dims] as f64 * 0.8)
+            .collect();
+        let (train, validation) = (
+            LabeledVectors {
+                vectors: &vectors[..80 * dims],
+                classes: &classes[..80],
+            },
+            LabeledVectors {
+                vectors: &vectors[80 * dims..],
+                classes: &classes[80..],
+            },
+        );
+        for kernels in [
+            vec![KernelKind::Linear],
+            vec![KernelKind::Rbf],
+            SvmConfig::default().kernels,
+        ] {
+            let config = SvmConfig {
+                kernels,
+                ..SvmConfig::default()
+            };
+            let searched = SvmModel::fit(train, validation, 3, dims, &config).unwrap();
+            let pinned = searched.pinned(&config);
+            pinned.check().unwrap();
+            assert_eq!(pinned.temperature, Some(searched.temperature()));
+            let refit = SvmModel::fit(train, validation, 3, dims, &pinned).unwrap();
+            assert!(refit.candidates().is_empty());
+            assert_eq!(
+                SvmModel {
+                    candidates: Vec::new(),
+                    ..searched
+                },
+                refit
+            );
         }
     }
 

@@ -80,6 +80,12 @@ pub struct SvmConfig {
     /// KKT tolerance of the solver (libsvm's `eps`).
     #[serde(default = "default_tol")]
     pub tol: f64,
+    /// A posterior temperature fixed beforehand: with one kernel and one `C` (and gamma), nothing is
+    /// searched and nothing calibrated, and the machines are fitted on every vector. What
+    /// [`ClassifierFamily::pinned`] gives, to train a choice made on a subsample on all the data;
+    /// `None` (the default): the search and the calibration of the module documentation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature: Option<f64>,
 }
 
 fn default_kernels() -> Vec<KernelKind> {
@@ -102,6 +108,7 @@ impl Default for SvmConfig {
             c_grid: default_c_grid(),
             gamma_factors: default_gamma_factors(),
             tol: default_tol(),
+            temperature: None,
         }
     }
 }
@@ -128,6 +135,19 @@ impl SvmConfig {
         }
         if !positive(&self.tol) {
             return bad("the tolerance must be positive");
+        }
+        if let Some(temperature) = self.temperature {
+            if !positive(&temperature) {
+                return bad("a fixed temperature must be positive and finite");
+            }
+            let gammas = if self.kernels == [KernelKind::Rbf] {
+                self.gamma_factors.len()
+            } else {
+                1
+            };
+            if self.kernels.len() != 1 || self.c_grid.len() != 1 || gammas != 1 {
+                return bad("a fixed temperature needs one kernel, one C and one gamma factor");
+            }
         }
         Ok(())
     }
@@ -474,6 +494,12 @@ impl ClassifierFamily for SvmFamily {
             config,
             data.calibrate,
         )
+    }
+
+    const PINS: bool = true;
+
+    fn pinned(config: &SvmConfig, model: &SvmModel) -> Option<SvmConfig> {
+        Some(model.pinned(config))
     }
 
     fn dims(model: &SvmModel) -> usize {
