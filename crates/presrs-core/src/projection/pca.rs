@@ -189,15 +189,10 @@ const POWER_ITERATIONS: usize = 4;
 /// The seed of the range finder's Gaussian test matrix (a fixed one: the fit is deterministic).
 const RANGE_SEED: u64 = 0x5CA1_E5EE_D000_0001;
 
-/// Whether [`Pca::fit_above`] takes the randomised range finder: more than `exact_max_samples`
+/// Whether [`Pca::fit`] takes the randomised range finder: more than [`EXACT_SVD_MAX_SAMPLES`]
 /// samples, and a range of `sketch_width` well below both sides of the matrix.
-fn uses_range_finder(
-    n_samples: usize,
-    n_features: usize,
-    n_components: usize,
-    exact_max_samples: usize,
-) -> bool {
-    n_samples > exact_max_samples
+fn uses_range_finder(n_samples: usize, n_features: usize, n_components: usize) -> bool {
+    n_samples > EXACT_SVD_MAX_SAMPLES
         && 2 * sketch_width(n_samples, n_features, n_components) <= n_samples.min(n_features)
 }
 
@@ -303,21 +298,7 @@ fn orthonormalise(m: &mut Mat<f64>) {
 impl Pca {
     /// Fits on `samples` (`n_samples x n_features`, row-major), keeping
     /// `min(max_components, n_samples - 1, n_features)` components.
-    /// Above [`EXACT_SVD_MAX_SAMPLES`] samples, a fit that keeps few components takes the randomised
-    /// range finder (see there).
     pub fn fit(samples: &[f64], n_features: usize, max_components: usize) -> Result<Self> {
-        Self::fit_above(samples, n_features, max_components, EXACT_SVD_MAX_SAMPLES)
-    }
-
-    /// [`fit`](Self::fit), with the randomised range finder taken above `exact_max_samples` samples
-    /// (when it keeps few components): an automatic choice that scores its candidates on a subsample
-    /// of large data fits its folds' PCAs so (`0`), small data never.
-    pub fn fit_above(
-        samples: &[f64],
-        n_features: usize,
-        max_components: usize,
-        exact_max_samples: usize,
-    ) -> Result<Self> {
         let n_samples = check_fit_input(samples, n_features, max_components)?;
         let mut mean = vec![0.0; n_features];
         for row in samples.chunks_exact(n_features) {
@@ -334,15 +315,14 @@ impl Pca {
             .sum::<f64>()
             / (n_samples - 1) as f64;
         let n_components = max_components.min(n_samples - 1).min(n_features);
-        let (singular, right) =
-            if uses_range_finder(n_samples, n_features, n_components, exact_max_samples) {
-                randomised_svd(samples, &mean, n_components)?
-            } else {
-                let centred = Mat::from_fn(n_samples, n_features, |i, j| {
-                    samples[i * n_features + j] - mean[j]
-                });
-                thin_svd(&centred)?
-            };
+        let (singular, right) = if uses_range_finder(n_samples, n_features, n_components) {
+            randomised_svd(samples, &mean, n_components)?
+        } else {
+            let centred = Mat::from_fn(n_samples, n_features, |i, j| {
+                samples[i * n_features + j] - mean[j]
+            });
+            thin_svd(&centred)?
+        };
         let singular = singular.column_vector();
         let mut basis = Vec::with_capacity(n_components * n_features);
         let mut explained_variance = Vec::with_capacity(n_components);
@@ -584,27 +564,11 @@ mod tests {
     /// and gives the exact fit's PCA to rounding; at or below it, the exact SVD as always.
     #[test]
     fn large_fits_take_the_range_finder_and_agree_with_the_exact_one() {
-        assert!(!uses_range_finder(
-            EXACT_SVD_MAX_SAMPLES,
-            10_000,
-            102,
-            EXACT_SVD_MAX_SAMPLES
-        ));
-        assert!(uses_range_finder(
-            EXACT_SVD_MAX_SAMPLES + 1,
-            10_000,
-            102,
-            EXACT_SVD_MAX_SAMPLES
-        ));
-        assert!(uses_range_finder(1000, 10_000, 102, 0));
-        assert!(!uses_range_finder(
-            EXACT_SVD_MAX_SAMPLES + 1,
-            400,
-            102,
-            EXACT_SVD_MAX_SAMPLES
-        ));
+        assert!(!uses_range_finder(EXACT_SVD_MAX_SAMPLES, 10_000, 102));
+        assert!(uses_range_finder(EXACT_SVD_MAX_SAMPLES + 1, 10_000, 102));
+        assert!(!uses_range_finder(EXACT_SVD_MAX_SAMPLES + 1, 400, 102));
         let (n, p, k) = (EXACT_SVD_MAX_SAMPLES + 1, 120, 6);
-        assert!(uses_range_finder(n, p, k, EXACT_SVD_MAX_SAMPLES));
+        assert!(uses_range_finder(n, p, k));
         let samples = falling_spectrum(n, p, 12);
         let fast = Pca::fit(&samples, p, k).unwrap();
         let mut mean = vec![0.0; p];

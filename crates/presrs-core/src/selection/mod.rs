@@ -237,8 +237,7 @@ pub fn select(
             scored.len()
         )
     });
-    let subsampled = scored.len() < images.len();
-    let (mut selection, features_seconds) = select_on(scored, choice, seed, started, subsampled)?;
+    let (mut selection, features_seconds) = select_on(scored, choice, seed, started)?;
     selection.cost = Some(SelectionCost {
         samples: images.len(),
         scored_on: scored.len(),
@@ -252,14 +251,12 @@ pub fn select(
 }
 
 /// [`select`] on the images it scores on, from `started`; also gives the seconds spent computing
-/// features. On a `subsampled` set of large data the folds' PCAs take the randomised range finder
-/// (`Pca::fit_above`); small data keep the exact SVD.
+/// features.
 fn select_on(
     images: &[LabeledImage<'_>],
     choice: &AutoChoice<'_>,
     seed: u64,
     started: std::time::Instant,
-    subsampled: bool,
 ) -> Result<(Selection, f64)> {
     let AutoChoice {
         candidates,
@@ -288,9 +285,6 @@ fn select_on(
     let mut race = scoring::Race::of(&folds);
     let budget = budget.map(|total| scoring::Budget { started, total });
     let mut tables = scoring::Tables::new(on_stage);
-    if subsampled {
-        tables = tables.with_fast_pca();
-    }
     let mut scores =
         scoring::score_candidates(images, &folds, candidates, budget, &mut race, &mut tables)?;
     let variants = dims_variants(&scores, refine_dims)?;

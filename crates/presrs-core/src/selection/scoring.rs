@@ -56,11 +56,6 @@ pub(super) struct Tables<'o> {
     observer: Option<StageObserver<'o>>,
     /// Time spent computing features.
     spent: Duration,
-    /// The folds' PCAs take the randomised range finder above this many samples
-    /// ([`Pca::fit_above`]): 0 when the candidates are scored on a subsample of large data, else
-    /// [`EXACT_SVD_MAX_SAMPLES`](crate::projection::pca::EXACT_SVD_MAX_SAMPLES) (small data keep
-    /// the exact SVD, and their choices).
-    pca_exact_max: usize,
 }
 
 impl<'o> Tables<'o> {
@@ -69,16 +64,6 @@ impl<'o> Tables<'o> {
             entries: Vec::new(),
             observer,
             spent: Duration::ZERO,
-            pca_exact_max: crate::projection::pca::EXACT_SVD_MAX_SAMPLES,
-        }
-    }
-
-    /// With the folds' PCAs fitted by the randomised range finder whenever it keeps few components:
-    /// for a subsample of large data.
-    pub(super) fn with_fast_pca(self) -> Self {
-        Self {
-            pca_exact_max: 0,
-            ..self
         }
     }
 
@@ -296,14 +281,13 @@ fn score_folds(
     tables: &mut Tables<'_>,
 ) -> Result<Vec<FoldResults>> {
     let member_configs: Vec<&TrainConfig> = members.iter().map(|&m| configs[m]).collect();
-    let pca_exact_max = tables.pca_exact_max;
     let table = match tables.get(images, member_configs[0]) {
         Ok(table) => table,
         Err(reason) => return Ok(vec![vec![Err(reason.clone()); folds.len()]; members.len()]),
     };
     let per_fold = folds
         .par_iter()
-        .map(|fold| score_fold(images, fold, table, &member_configs, pca_exact_max))
+        .map(|fold| score_fold(images, fold, table, &member_configs))
         .collect::<Result<Vec<_>>>()?;
     Ok((0..members.len())
         .map(|m| per_fold.iter().map(|fold| fold[m].clone()).collect())
@@ -428,7 +412,6 @@ fn score_fold(
     fold: &InnerFold,
     table: &FeatureTable,
     configs: &[&TrainConfig],
-    pca_exact_max: usize,
 ) -> Result<Vec<std::result::Result<f64, String>>> {
     let pick = |indices: &[usize]| indices.iter().map(|&i| images[i]).collect::<Vec<_>>();
     let train_images = pick(&fold.train);
@@ -454,18 +437,17 @@ fn score_fold(
             .collect();
         // (without a PCA the fold's rows are used as they are, not copied: ~10,000 features a row)
         let projected = match dims {
-            Some(dims) => Pca::fit_above(&train_rows, table.n_features, dims, pca_exact_max)
-                .and_then(|pca| {
-                    let train = project_rows(&pca, &train_rows)?;
-                    let validation = project_rows(&pca, &validation_rows)?;
-                    let test = project_test(&pca, table, &fold.test)?;
-                    Ok((
-                        pca.n_components(),
-                        Cow::Owned(train),
-                        Cow::Owned(validation),
-                        test,
-                    ))
-                }),
+            Some(dims) => Pca::fit(&train_rows, table.n_features, dims).and_then(|pca| {
+                let train = project_rows(&pca, &train_rows)?;
+                let validation = project_rows(&pca, &validation_rows)?;
+                let test = project_test(&pca, table, &fold.test)?;
+                Ok((
+                    pca.n_components(),
+                    Cow::Owned(train),
+                    Cow::Owned(validation),
+                    test,
+                ))
+            }),
             None => Ok((
                 table.n_features,
                 Cow::Borrowed(train_rows.as_slice()),
