@@ -126,6 +126,27 @@ impl Model {
             .collect())
     }
 
+    /// `take` of one sample's classification (a `float`) or of every sample's of a batch (an array).
+    fn per_sample<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        take: impl Fn(&Classification) -> f64,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let samples = self.samples_of(py, x)?;
+        if !samples.batch() {
+            let value = self
+                .classify_one(&samples.view(0)?, |p| take(&p.to_classification()))
+                .map_err(|err| samples.explain(err))?;
+            return Ok(value.into_pyobject(py)?.into_any());
+        }
+        let classified = self
+            .classify_many(py, &samples.views()?)
+            .map_err(|err| samples.explain(err))?;
+        let values: Vec<f64> = classified.iter().map(take).collect();
+        Ok(PyArray1::from_vec(py, values).into_any())
+    }
+
     /// The samples of `x` as this model takes them: images as they are; a stance's movie summarised
     /// and laid into the model's length (a warning when it was cut); a series transposed when its time
     /// runs down the rows.
@@ -379,19 +400,7 @@ impl Model {
                  train it again to have one",
             ));
         }
-        let samples = self.samples_of(py, x)?;
-        let score = |n: Option<Novelty>| n.map_or(f64::NAN, |n| n.score);
-        if !samples.batch() {
-            let value = self
-                .classify_one(&samples.view(0)?, |p| score(p.novelty))
-                .map_err(|err| samples.explain(err))?;
-            return Ok(value.into_pyobject(py)?.into_any());
-        }
-        let classified = self
-            .classify_many(py, &samples.views()?)
-            .map_err(|err| samples.explain(err))?;
-        let scores: Vec<f64> = classified.iter().map(|c| score(c.novelty)).collect();
-        Ok(PyArray1::from_vec(py, scores).into_any())
+        self.per_sample(py, x, |c| c.novelty.map_or(f64::NAN, |n| n.score))
     }
 
     /// The confidence a decision reports, of one sample (a `float`) or of every sample of a batch (an
@@ -404,18 +413,7 @@ impl Model {
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let samples = self.samples_of(py, x)?;
-        if !samples.batch() {
-            let value = self
-                .classify_one(&samples.view(0)?, |p| p.confidence)
-                .map_err(|err| samples.explain(err))?;
-            return Ok(value.into_pyobject(py)?.into_any());
-        }
-        let classified = self
-            .classify_many(py, &samples.views()?)
-            .map_err(|err| samples.explain(err))?;
-        let values: Vec<f64> = classified.iter().map(|c| c.confidence).collect();
-        Ok(PyArray1::from_vec(py, values).into_any())
+        self.per_sample(py, x, |c| c.confidence)
     }
 
     /// The novelty score above which `predict` says `"unknown"`; `None` for a model without one.

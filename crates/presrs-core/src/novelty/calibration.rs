@@ -5,7 +5,7 @@
 //! refused: their held-out vectors have neighbours from their own recording, and the threshold came
 //! out so tight that every stance of a new recording of a known terrain was unknown.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use crate::error::{CoreError, Result};
 use crate::novelty::discriminant::{Discriminant, nearest};
@@ -95,7 +95,7 @@ pub(crate) fn held_out_distances(
 /// The fold of every vector by its group, more than [`MAX_FOLDS`] groups merged, whole, in sorted
 /// order; an error when a vector has no group or there are fewer than [`MIN_GROUPS`].
 fn assign_folds(groups: &[Option<&str>]) -> Result<Vec<usize>> {
-    let distinct: BTreeMap<&str, usize> = groups.iter().flatten().map(|&g| (g, 0)).collect();
+    let distinct: BTreeSet<&str> = groups.iter().flatten().copied().collect();
     let missing = groups.iter().filter(|g| g.is_none()).count();
     if missing > 0 || distinct.len() < MIN_GROUPS {
         let have = if missing > 0 {
@@ -111,7 +111,7 @@ fn assign_folds(groups: &[Option<&str>]) -> Result<Vec<usize>> {
         )));
     }
     let index: BTreeMap<&str, usize> = distinct
-        .keys()
+        .iter()
         .enumerate()
         .map(|(i, &g)| (g, i % MAX_FOLDS))
         .collect();

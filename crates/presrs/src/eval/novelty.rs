@@ -20,7 +20,7 @@ use crate::dataset::Sample;
 use crate::error::{Context, Error, Result};
 use crate::eval::EvalSetup;
 use crate::progress::Progress;
-use crate::train::calibration_groups;
+use crate::train::with_novelty_by_recordings;
 
 /// A decision counts as confident at this confidence or more.
 pub const CONFIDENT: f64 = 0.9;
@@ -284,9 +284,7 @@ fn train_without(
         .chain(validation_images)
         .copied()
         .collect();
-    let groups = calibration_groups(recordings);
-    let groups: Vec<Option<&str>> = groups.iter().map(|g| g.as_deref()).collect();
-    Ok(model.with_novelty_by(&all, &groups, DEFAULT_REJECTION)?)
+    Ok(with_novelty_by_recordings(model, &all, recordings)?)
 }
 
 /// Decides every test image, noting whether it is of the held-out class.

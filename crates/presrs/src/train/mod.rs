@@ -280,12 +280,7 @@ fn with_novelty(
         .chain(validation_images)
         .copied()
         .collect();
-    let groups = calibration_groups(samples);
-    let groups: Vec<Option<&str>> = groups.iter().map(|g| g.as_deref()).collect();
-    match model
-        .clone()
-        .with_novelty_by(&all, &groups, presrs_core::novelty::DEFAULT_REJECTION)
-    {
+    match with_novelty_by_recordings(model.clone(), &all, samples) {
         Ok(scored) => scored,
         Err(err) => {
             warnings.push(Message::from(format!(
@@ -296,10 +291,22 @@ fn with_novelty(
     }
 }
 
+/// `model` with its novelty score fitted on `images` (from `samples`, in the same order), calibrated
+/// by leaving out their [`calibration_groups`].
+pub(crate) fn with_novelty_by_recordings(
+    model: TrainedModel,
+    images: &[LabeledImage<'_>],
+    samples: &[&Sample],
+) -> presrs_core::error::Result<TrainedModel> {
+    let groups = calibration_groups(samples);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| g.as_deref()).collect();
+    model.with_novelty_by(images, &groups, presrs_core::novelty::DEFAULT_REJECTION)
+}
+
 /// The groups the novelty threshold is calibrated by leaving out, one per sample: its `group` when
 /// every sample has one, else the recording (file) it came from when they come from several (a new
 /// recording is what the threshold must accept), else none (samples given in memory).
-pub(crate) fn calibration_groups<'a>(samples: &[&'a Sample]) -> Vec<Option<Cow<'a, str>>> {
+fn calibration_groups<'a>(samples: &[&'a Sample]) -> Vec<Option<Cow<'a, str>>> {
     if samples.iter().all(|s| s.group.is_some()) {
         return samples
             .iter()
