@@ -86,6 +86,7 @@ fn matches_scikit_learns_ridge_classifier_cv() {
     let fixture = fixture();
     let config = RidgeConfig {
         alphas: floats(&fixture["alphas"]),
+        pinned: None,
     };
     let mut largest = Vec::new();
     for case in fixture["cases"].as_array().unwrap() {
@@ -362,7 +363,19 @@ fn bad_training_data_is_an_error() {
     nan[7] = f64::NAN;
     assert!(fit(&config, &nan, &y, 3, true).is_err());
     // Bad hyper-parameters.
-    assert!(fit(&RidgeConfig { alphas: vec![] }, &x, &y, 3, true).is_err());
+    assert!(
+        fit(
+            &RidgeConfig {
+                alphas: vec![],
+                pinned: None
+            },
+            &x,
+            &y,
+            3,
+            true
+        )
+        .is_err()
+    );
     // Constant features are kept with scale 1 and get no weight.
     let constant: Vec<f64> = x
         .chunks_exact(4)
@@ -388,6 +401,72 @@ fn the_model_does_not_depend_on_the_thread_count() {
     let one = fit_with(1);
     for threads in [2, 3] {
         assert_eq!(fit_with(threads), one, "{threads} threads");
+    }
+}
+
+/// A pinned fit (one `α` and the temperature fixed, solved by Cholesky) against the leave-one-out fit
+/// that chose them, on the same vectors: the same model to rounding, with more vectors than features
+/// (the covariance system) and fewer (the Gram system), within one block and across several (rows or
+/// columns past `direct.rs`'s 512), two and three classes, both scalings; and invariant to the thread
+/// count.
+#[test]
+fn a_pinned_fit_is_the_leave_one_out_fit_at_its_alpha() {
+    let cases = [
+        (40, 3, 12, 11),
+        (6, 3, 50, 12),
+        (30, 2, 70, 13),
+        (200, 3, 40, 14),
+        (4, 3, 1100, 15),
+    ];
+    for (per_class, n_classes, dims, seed) in cases {
+        let (x, y) = draw(per_class, n_classes, dims, seed);
+        let data = FitData {
+            train: LabeledVectors {
+                vectors: &x,
+                classes: &y,
+            },
+            validation: LabeledVectors {
+                vectors: &[],
+                classes: &[],
+            },
+            n_classes,
+            dims,
+            calibrate: true,
+        };
+        let families: [fn(&RidgeConfig, FitData<'_>) -> presrs_core::error::Result<RidgeModel>; 2] =
+            [RidgeFamily::fit, RidgeRawFamily::fit];
+        let pins: [fn(&RidgeConfig, &RidgeModel) -> Option<RidgeConfig>; 2] =
+            [RidgeFamily::pinned, RidgeRawFamily::pinned];
+        for (fit_family, pin) in families.into_iter().zip(pins) {
+            let searched = fit_family(&RidgeConfig::default(), data).unwrap();
+            let pinned = pin(&RidgeConfig::default(), &searched).unwrap();
+            pinned.check().unwrap();
+            let direct = fit_family(&pinned, data).unwrap();
+            assert_eq!(direct.alpha(), searched.alpha());
+            assert_eq!(direct.temperature(), searched.temperature());
+            assert_eq!(direct.loo_errors(), searched.loo_errors());
+            assert_eq!(direct.means(), searched.means());
+            let scale = (0..n_classes)
+                .flat_map(|c| searched.coefficients(c).unwrap().to_vec())
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            for c in 0..n_classes {
+                let gap = max_difference(
+                    direct.coefficients(c).unwrap(),
+                    searched.coefficients(c).unwrap(),
+                );
+                assert!(
+                    gap <= 1e-8 * scale.max(1.0),
+                    "{dims} dims, class {c}: {gap}"
+                );
+            }
+            assert!(max_difference(direct.intercepts(), searched.intercepts()) < 1e-9);
+            let threaded = rayon::ThreadPoolBuilder::new()
+                .num_threads(3)
+                .build()
+                .unwrap()
+                .install(|| fit_family(&pinned, data).unwrap());
+            assert_eq!(threaded, direct);
+        }
     }
 }
 
@@ -495,6 +574,7 @@ fn ridge_raw_matches_scikit_learn_without_a_scaler() {
     let fixture: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let config = RidgeConfig {
         alphas: floats(&fixture["alphas"]),
+        pinned: None,
     };
     for case in fixture["cases"].as_array().unwrap() {
         let name = case["name"].as_str().unwrap();

@@ -32,5 +32,5 @@ pub use parzen::{
     LabeledVectors, ParzenConfig, ParzenModel, ParzenScratch, PweFamily, SigmaChoice, SigmaPoint,
     SigmaSearch,
 };
-pub use ridge::{RidgeConfig, RidgeFamily, RidgeModel, RidgeRawFamily, RidgeScratch};
+pub use ridge::{RidgeConfig, RidgeFamily, RidgeModel, RidgePin, RidgeRawFamily, RidgeScratch};
 pub use svm::{Kernel, KernelKind, SvmCandidate, SvmConfig, SvmFamily, SvmModel, SvmScratch};

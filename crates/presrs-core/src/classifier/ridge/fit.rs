@@ -3,10 +3,11 @@
 
 use faer::{Mat, MatRef, Par};
 
-use super::loo::Spectrum;
+use super::direct::{self, Rows, Standardisation};
+use super::loo::{Spectrum, centre_columns};
 use super::{RidgeConfig, RidgeModel, Scaling};
 use crate::classifier::calibration::fit_temperature;
-use crate::classifier::common::{LabeledVectors, accuracy_of_scores, check_vectors};
+use crate::classifier::common::{accuracy_of_scores, check_vectors};
 use crate::classifier::family::FitData;
 use crate::error::{CoreError, Result};
 
@@ -15,7 +16,6 @@ impl RidgeModel {
     /// `scaling` [`Scaling::Centred`] the features are only centred (each scale 1), as scikit-learn's
     /// `RidgeClassifierCV` alone.
     pub(super) fn fit(config: &RidgeConfig, data: FitData<'_>, scaling: Scaling) -> Result<Self> {
-        config.check()?;
         let (dims, n_classes) = (data.dims, data.n_classes);
         check_vectors(&data.train, "ridge training vectors", dims, n_classes)?;
         check_vectors(
@@ -24,19 +24,57 @@ impl RidgeModel {
             dims,
             n_classes,
         )?;
-        let sets = [data.train, data.validation];
-        let classes: Vec<usize> = sets
+        let rows = Rows {
+            parts: vec![data.train.vectors, data.validation.vectors],
+            dims,
+        };
+        let classes: Vec<usize> = [data.train, data.validation]
             .iter()
             .flat_map(|s| s.classes.iter().copied())
             .collect();
-        require_every_class(&classes, n_classes)?;
-        let (means, mut scales) = standardisation(&sets, dims);
+        Self::fit_rows(config, &rows, &classes, n_classes, data.calibrate, scaling)
+    }
+
+    /// [`fit`](Self::fit) on checked rows of any precision (`classes` one per row).
+    pub(super) fn fit_rows<T: Copy + Into<f64> + Sync>(
+        config: &RidgeConfig,
+        rows: &Rows<'_, T>,
+        classes: &[usize],
+        n_classes: usize,
+        calibrate: bool,
+        scaling: Scaling,
+    ) -> Result<Self> {
+        config.check()?;
+        let dims = rows.dims;
+        require_every_class(classes, n_classes)?;
+        let (means, mut scales) = standardisation(rows);
         if scaling == Scaling::Centred {
             scales.fill(1.0);
         }
-        let standardised = standardise(&sets, &means, &scales);
+        let targets = targets(classes, n_classes);
+        if let Some(pin) = &config.pinned {
+            let (target_means, centred) = centre_columns(targets.as_ref());
+            let standardisation = Standardisation {
+                means: &means,
+                scales: &scales,
+            };
+            let columns = direct::solve(rows, &standardisation, centred.as_ref(), pin.alpha)?;
+            let (coefficients, intercepts) = class_rows(columns.as_ref(), &target_means, n_classes);
+            return Ok(Self {
+                dims,
+                n_classes,
+                alpha: pin.alpha,
+                means,
+                scales,
+                coefficients,
+                intercepts,
+                temperature: pin.temperature,
+                loo_errors: pin.loo_errors.clone(),
+                loo_accuracy: pin.loo_accuracy,
+            });
+        }
+        let standardised = standardise(rows, &means, &scales);
         let z = MatRef::from_row_major_slice(&standardised, classes.len(), dims);
-        let targets = targets(&classes, n_classes);
         // The Gram product and its eigendecomposition are most of the time; faer spreads them over the
         // cores.
         let spectrum = Spectrum::new(z, targets.as_ref(), Par::rayon(0))?;
@@ -46,24 +84,14 @@ impl RidgeModel {
             targets[(i, t)] - choice.residuals[(i, t)]
         });
         let scores = class_scores(held_out.as_ref(), n_classes);
-        let temperature = if data.calibrate {
-            fit_temperature(&scores, &classes, n_classes)?
+        let temperature = if calibrate {
+            fit_temperature(&scores, classes, n_classes)?
         } else {
             1.0
         };
         let columns = spectrum.coefficients(choice.alpha);
-        let mut coefficients = Vec::with_capacity(n_classes * dims);
-        let mut intercepts = Vec::with_capacity(n_classes);
-        for class in 0..n_classes {
-            // Two classes share one column: the first class's decision is its negation.
-            let (column, sign) = if columns.ncols() == 1 {
-                (0, if class == 0 { -1.0 } else { 1.0 })
-            } else {
-                (class, 1.0)
-            };
-            coefficients.extend((0..dims).map(|j| sign * columns[(j, column)]));
-            intercepts.push(sign * spectrum.target_means()[column]);
-        }
+        let (coefficients, intercepts) =
+            class_rows(columns.as_ref(), spectrum.target_means(), n_classes);
         Ok(Self {
             dims,
             n_classes,
@@ -74,9 +102,32 @@ impl RidgeModel {
             intercepts,
             temperature,
             loo_errors: choice.curve,
-            loo_accuracy: accuracy_of_scores(&scores, &classes, n_classes),
+            loo_accuracy: accuracy_of_scores(&scores, classes, n_classes),
         })
     }
+}
+
+/// Each class's coefficients (`n_classes x p`, row-major) and intercept from the target columns'
+/// coefficients (`p x k`) and means: two classes share one column, the first class's decision its
+/// negation.
+fn class_rows(
+    columns: MatRef<'_, f64>,
+    target_means: &[f64],
+    n_classes: usize,
+) -> (Vec<f64>, Vec<f64>) {
+    let dims = columns.nrows();
+    let mut coefficients = Vec::with_capacity(n_classes * dims);
+    let mut intercepts = Vec::with_capacity(n_classes);
+    for class in 0..n_classes {
+        let (column, sign) = if columns.ncols() == 1 {
+            (0, if class == 0 { -1.0 } else { 1.0 })
+        } else {
+            (class, 1.0)
+        };
+        coefficients.extend((0..dims).map(|j| sign * columns[(j, column)]));
+        intercepts.push(sign * target_means[column]);
+    }
+    (coefficients, intercepts)
 }
 
 /// Errors unless there are two classes or more and every one has a vector.
@@ -96,21 +147,22 @@ fn require_every_class(classes: &[usize], n_classes: usize) -> Result<()> {
     Ok(())
 }
 
-/// The mean and scale of every feature over the vectors of `sets`: the population standard deviation,
-/// or 1 where the variance is within rounding of zero (scikit-learn's `StandardScaler`:
-/// `var <= n ε var + (n ε mean)²`).
-fn standardisation(sets: &[LabeledVectors<'_>], dims: usize) -> (Vec<f64>, Vec<f64>) {
-    let rows = || sets.iter().flat_map(|s| s.vectors.chunks_exact(dims));
-    let n = sets.iter().map(|s| s.classes.len()).sum::<usize>() as f64;
+/// The mean and scale of every feature over `rows`: the population standard deviation, or 1 where the
+/// variance is within rounding of zero (scikit-learn's `StandardScaler`: `var <= n ε var + (n ε
+/// mean)²`).
+fn standardisation<T: Copy + Into<f64>>(rows: &Rows<'_, T>) -> (Vec<f64>, Vec<f64>) {
+    let dims = rows.dims;
+    let n = rows.len() as f64;
     let mut means = vec![0.0; dims];
-    for row in rows() {
-        means.iter_mut().zip(row).for_each(|(m, v)| *m += v);
+    for row in rows.iter() {
+        means.iter_mut().zip(row).for_each(|(m, &v)| *m += v.into());
     }
     means.iter_mut().for_each(|m| *m /= n);
     let mut variances = vec![0.0; dims];
-    for row in rows() {
-        for ((var, v), m) in variances.iter_mut().zip(row).zip(&means) {
-            *var += (v - m) * (v - m);
+    for row in rows.iter() {
+        for ((var, &v), m) in variances.iter_mut().zip(row).zip(&means) {
+            let d = v.into() - m;
+            *var += d * d;
         }
     }
     let scales = variances
@@ -125,16 +177,15 @@ fn standardisation(sets: &[LabeledVectors<'_>], dims: usize) -> (Vec<f64>, Vec<f
     (means, scales)
 }
 
-/// The vectors of `sets`, standardised, row-major.
-fn standardise(sets: &[LabeledVectors<'_>], means: &[f64], scales: &[f64]) -> Vec<f64> {
-    let dims = means.len();
-    let mut out = Vec::with_capacity(sets.iter().map(|s| s.vectors.len()).sum());
-    for row in sets.iter().flat_map(|s| s.vectors.chunks_exact(dims)) {
+/// `rows`, standardised, row-major.
+fn standardise<T: Copy + Into<f64>>(rows: &Rows<'_, T>, means: &[f64], scales: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(rows.len() * rows.dims);
+    for row in rows.iter() {
         out.extend(
             row.iter()
                 .zip(means)
                 .zip(scales)
-                .map(|((v, m), s)| (v - m) / s),
+                .map(|((&v, m), s)| (v.into() - m) / s),
         );
     }
     out

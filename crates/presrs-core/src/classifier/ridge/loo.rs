@@ -194,7 +194,7 @@ impl<'a> Spectrum<'a> {
 }
 
 /// The column means of `m` and `m` less them.
-fn centre_columns(m: MatRef<'_, f64>) -> (Vec<f64>, Mat<f64>) {
+pub(super) fn centre_columns(m: MatRef<'_, f64>) -> (Vec<f64>, Mat<f64>) {
     let n = m.nrows().max(1) as f64;
     let means: Vec<f64> = (0..m.ncols())
         .map(|t| (0..m.nrows()).map(|i| m[(i, t)]).sum::<f64>() / n)

@@ -32,6 +32,7 @@ use crate::classifier::family::{ClassifierFamily, FitData};
 use crate::error::{CoreError, Result, check_len};
 use crate::kernels::matrix_vector;
 
+mod direct;
 mod fit;
 mod loo;
 
@@ -44,6 +45,25 @@ pub struct RidgeConfig {
     /// the MiniRocket paper use).
     #[serde(default = "default_alphas")]
     pub alphas: Vec<f64>,
+    /// `α` and the temperature fixed, as chosen on a subsample ([`RidgePin`]): the fit on every vector
+    /// searches nothing (`alphas` is not read) and solves one system.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pinned: Option<RidgePin>,
+}
+
+/// What ridge's leave-one-out chose on a subsample of large data (the automatic choice's scoring
+/// subsample), fixed for the fit on every vector ([`ClassifierFamily::pinned`]): the leave-one-out needs
+/// an eigendecomposition of `O(min(n, p)³)` on one core, one `α` only a Cholesky solve (`direct.rs`).
+/// `α` is the prior's scale (the noise variance over the coefficients' prior variance), which does not
+/// depend on how many vectors there are, so the subsample's choice carries to the whole.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RidgePin {
+    pub alpha: f64,
+    pub temperature: f64,
+    /// The subsample's leave-one-out curve and accuracy at `alpha`, kept in the model as measured.
+    pub loo_errors: Vec<(f64, f64)>,
+    pub loo_accuracy: f64,
 }
 
 /// `logspace(-3, 3, 10)`.
@@ -65,6 +85,7 @@ impl Default for RidgeConfig {
     fn default() -> Self {
         Self {
             alphas: default_alphas(),
+            pinned: None,
         }
     }
 }
@@ -82,6 +103,20 @@ impl RidgeConfig {
                 name: "ridge alphas",
                 reason: format!("every alpha must be positive and finite, got {alpha}"),
             });
+        }
+        if let Some(pin) = &self.pinned {
+            let usable = is_usable_temperature(pin.alpha)
+                && is_usable_temperature(pin.temperature)
+                && (0.0..=1.0).contains(&pin.loo_accuracy);
+            if !usable {
+                return Err(CoreError::Param {
+                    name: "ridge pinned",
+                    reason: format!(
+                        "alpha and temperature must be positive and finite and loo_accuracy in \
+                         [0, 1], got {pin:?}"
+                    ),
+                });
+            }
         }
         Ok(())
     }
@@ -291,6 +326,19 @@ impl RidgeModel {
         self.loo_accuracy
     }
 
+    /// `config` with this model's `α` and temperature pinned ([`RidgePin`]).
+    pub fn pinned(&self, config: &RidgeConfig) -> RidgeConfig {
+        RidgeConfig {
+            alphas: config.alphas.clone(),
+            pinned: Some(RidgePin {
+                alpha: self.alpha,
+                temperature: self.temperature,
+                loo_errors: self.loo_errors.clone(),
+                loo_accuracy: self.loo_accuracy,
+            }),
+        }
+    }
+
     pub fn scratch(&self) -> RidgeScratch {
         RidgeScratch {
             standardised: vec![0.0; self.dims],
@@ -361,6 +409,12 @@ impl ClassifierFamily for RidgeFamily {
         RidgeModel::fit(config, data, Scaling::Standardised)
     }
 
+    const PINS: bool = true;
+
+    fn pinned(config: &RidgeConfig, model: &RidgeModel) -> Option<RidgeConfig> {
+        Some(model.pinned(config))
+    }
+
     fn dims(model: &RidgeModel) -> usize {
         model.dims()
     }
@@ -412,6 +466,12 @@ impl ClassifierFamily for RidgeRawFamily {
 
     fn fit(config: &RidgeConfig, data: FitData<'_>) -> Result<RidgeModel> {
         RidgeModel::fit(config, data, Scaling::Centred)
+    }
+
+    const PINS: bool = true;
+
+    fn pinned(config: &RidgeConfig, model: &RidgeModel) -> Option<RidgeConfig> {
+        Some(model.pinned(config))
     }
 
     fn dims(model: &RidgeModel) -> usize {
