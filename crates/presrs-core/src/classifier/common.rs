@@ -3,16 +3,26 @@
 
 use crate::error::{CoreError, Result};
 
-/// Reduced vectors with their class indices, `n x dims` row-major.
-#[derive(Clone, Copy, Debug)]
-pub struct LabeledVectors<'a> {
-    pub vectors: &'a [f64],
+/// Reduced vectors with their class indices, `n x dims` row-major; in double precision, or in single
+/// (`LabeledVectors<'_, f32>`) for a family that reads it
+/// ([`ClassifierFamily::READS_SINGLE`](super::ClassifierFamily::READS_SINGLE)).
+#[derive(Debug)]
+pub struct LabeledVectors<'a, T = f64> {
+    pub vectors: &'a [T],
     pub classes: &'a [usize],
 }
 
+impl<T> Clone for LabeledVectors<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for LabeledVectors<'_, T> {}
+
 /// Checks shapes, class indices and finiteness of `data`.
-pub(crate) fn check_vectors(
-    data: &LabeledVectors<'_>,
+pub(crate) fn check_vectors<T: Copy + Into<f64>>(
+    data: &LabeledVectors<'_, T>,
     what: &'static str,
     dims: usize,
     n_classes: usize,
@@ -36,7 +46,7 @@ pub(crate) fn check_vectors(
             reason: format!("class index {class} but only {n_classes} classes"),
         });
     }
-    if data.vectors.iter().any(|v| !v.is_finite()) {
+    if data.vectors.iter().any(|&v| !v.into().is_finite()) {
         return Err(CoreError::Param {
             name: what,
             reason: "contains NaN or infinite values".into(),

@@ -100,6 +100,31 @@ impl ClassifierConfig {
         self.0.fit(data).map(ClassifierModel)
     }
 
+    /// Whether the family trains on vectors in single precision
+    /// ([`ClassifierFamily::READS_SINGLE`](crate::classifier::ClassifierFamily::READS_SINGLE)).
+    pub fn reads_single(&self) -> bool {
+        self.0.reads_single()
+    }
+
+    /// [`fit`](Self::fit) on vectors in single precision (an error unless
+    /// [`reads_single`](Self::reads_single)).
+    pub fn fit_single(
+        &self,
+        train: LabeledVectors<'_, f32>,
+        validation: LabeledVectors<'_, f32>,
+        n_classes: usize,
+        dims: usize,
+    ) -> Result<ClassifierModel> {
+        let data = FitData {
+            train,
+            validation,
+            n_classes,
+            dims,
+            calibrate: true,
+        };
+        self.0.fit_single(data).map(ClassifierModel)
+    }
+
     /// Whether the family can pin the hyper-parameters a model chose
     /// ([`ClassifierFamily::PINS`](crate::classifier::ClassifierFamily::PINS)).
     pub fn pins(&self) -> bool {

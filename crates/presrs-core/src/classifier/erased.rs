@@ -27,6 +27,8 @@ pub(crate) trait DynConfig: Debug + Send + Sync {
     fn check(&self) -> Result<()>;
     fn needs_validation(&self) -> bool;
     fn fit(&self, data: FitData<'_>) -> Result<Box<dyn DynModel>>;
+    fn reads_single(&self) -> bool;
+    fn fit_single(&self, data: FitData<'_, f32>) -> Result<Box<dyn DynModel>>;
     fn pins(&self) -> bool;
     /// `None` too when `model` belongs to another family.
     fn pinned(&self, model: &dyn DynModel) -> Option<Box<dyn DynConfig>>;
@@ -134,6 +136,14 @@ impl<F: ClassifierFamily> DynConfig for ConfigOf<F> {
 
     fn fit(&self, data: FitData<'_>) -> Result<Box<dyn DynModel>> {
         Ok(Box::new(ModelOf::<F>(F::fit(&self.0, data)?)))
+    }
+
+    fn reads_single(&self) -> bool {
+        F::READS_SINGLE
+    }
+
+    fn fit_single(&self, data: FitData<'_, f32>) -> Result<Box<dyn DynModel>> {
+        Ok(Box::new(ModelOf::<F>(F::fit_single(&self.0, data)?)))
     }
 
     fn pins(&self) -> bool {

@@ -17,13 +17,14 @@ use serde::de::DeserializeOwned;
 use super::common::LabeledVectors;
 use crate::error::Result;
 
-/// The data a classifier is fitted on: reduced vectors of training and validation images.
-#[derive(Clone, Copy, Debug)]
-pub struct FitData<'a> {
-    pub train: LabeledVectors<'a>,
+/// The data a classifier is fitted on: reduced vectors of training and validation images (in single
+/// precision, `FitData<'_, f32>`, for [`ClassifierFamily::fit_single`]).
+#[derive(Debug)]
+pub struct FitData<'a, T = f64> {
+    pub train: LabeledVectors<'a, T>,
     /// For model selection (σ, C, k, the posterior temperature); may be empty unless
     /// [`ClassifierFamily::needs_validation`] says otherwise.
-    pub validation: LabeledVectors<'a>,
+    pub validation: LabeledVectors<'a, T>,
     pub n_classes: usize,
     /// Length of every vector.
     pub dims: usize,
@@ -31,6 +32,14 @@ pub struct FitData<'a> {
     /// choice counting right answers), and a family may skip its calibration.
     pub calibrate: bool,
 }
+
+impl<T> Clone for FitData<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for FitData<'_, T> {}
 
 /// A classifier family: its name, hyper-parameters, training and classification.
 pub trait ClassifierFamily: Send + Sync + 'static {
@@ -61,6 +70,21 @@ pub trait ClassifierFamily: Send + Sync + 'static {
 
     /// Trains on `data` with checked hyper-parameters.
     fn fit(config: &Self::Config, data: FitData<'_>) -> Result<Self::Model>;
+
+    /// Whether [`fit_single`](Self::fit_single) trains on vectors in single precision: a family that
+    /// takes every feature (thousands per vector) and reads them block by block, so that the pipeline
+    /// keeps its feature table at half the memory.
+    const READS_SINGLE: bool = false;
+
+    /// [`fit`](Self::fit) on vectors in single precision; only called when
+    /// [`READS_SINGLE`](Self::READS_SINGLE).
+    fn fit_single(config: &Self::Config, data: FitData<'_, f32>) -> Result<Self::Model> {
+        let _ = (config, data);
+        Err(crate::error::CoreError::Param {
+            name: "classifier",
+            reason: format!("{} does not read single-precision vectors", Self::NAME),
+        })
+    }
 
     /// Whether [`pinned`](Self::pinned) gives a configuration: the family searches hyper-parameters
     /// (or calibrates) at a cost that grows faster than its final fit, so that on large data the

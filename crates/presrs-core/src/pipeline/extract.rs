@@ -132,22 +132,22 @@ impl FeatureTable {
 }
 
 /// Features of many images (`n x n_features`, row-major), in parallel.
-pub(crate) fn features_of(
+pub(crate) fn features_of<T: FeatureValue>(
     images: &[LabeledImage<'_>],
     preprocessor: &Preprocessor,
     precision: Precision,
-) -> Result<Vec<f64>> {
+) -> Result<Vec<T>> {
     let n_features = preprocessor.extractor.output_len();
-    let mut features = vec![0.0; images.len() * n_features];
+    let mut features = vec![T::ZERO; images.len() * n_features];
     features
         .par_chunks_mut(n_features)
         .zip(images.par_iter())
         .enumerate()
         .try_for_each_init(
-            || preprocessor.clone(),
-            |preprocessor, (index, (out, image))| {
+            || (preprocessor.clone(), vec![0.0; n_features]),
+            |(preprocessor, row), (index, (out, image))| {
                 preprocessor
-                    .features_into(&image.frame, out, precision)
+                    .features_into(&image.frame, row, precision)
                     .map_err(|err| match err {
                         CoreError::Shape {
                             what,
@@ -159,10 +159,36 @@ pub(crate) fn features_of(
                             got: format!("{got} (image {index}, label {:?})", image.label),
                         },
                         other => other,
-                    })
+                    })?;
+                out.iter_mut()
+                    .zip(row.iter())
+                    .for_each(|(o, &v)| *o = T::from_f64(v));
+                Ok(())
             },
         )?;
     Ok(features)
+}
+
+/// A feature table's element: `f64`, or `f32` for a classifier that reads single precision (a value
+/// rounded to the nearest `f32`).
+pub(crate) trait FeatureValue: Copy + Send + Sync {
+    const ZERO: Self;
+    fn from_f64(value: f64) -> Self;
+}
+
+impl FeatureValue for f64 {
+    const ZERO: Self = 0.0;
+    fn from_f64(value: f64) -> Self {
+        value
+    }
+}
+
+impl FeatureValue for f32 {
+    const ZERO: Self = 0.0;
+    #[allow(clippy::cast_possible_truncation)]
+    fn from_f64(value: f64) -> Self {
+        value as f32
+    }
 }
 
 /// Crop + preprocessing for one image grid, with its buffers: a frame made ready for the features.

@@ -1,7 +1,7 @@
 //! Training: the classes of a training set, its features, the PCA (unless the classifier takes every
 //! feature) and the classifier, into a model.
 
-use crate::classifier::LabeledVectors;
+use crate::classifier::{ClassifierConfig, ClassifierModel, LabeledVectors};
 use crate::error::{CoreError, Result};
 use crate::features::Precision;
 use crate::pipeline::config::CheckedTrainConfig;
@@ -46,52 +46,54 @@ pub(crate) fn train_searching(
     let preprocessor = preprocessor_for(&fitted, first.frame.grid())?;
     let image_grid = preprocessor.image_grid();
     let n_features = preprocessor.extractor.output_len();
-    let train_features = features_of(train, &preprocessor, Precision::Exact)?;
-    let validation_features = features_of(validation, &preprocessor, Precision::Exact)?;
-
-    let (pca, train_vectors, validation_vectors) = match config.pca_dims() {
-        Some(dims) => {
-            let pca = Pca::fit(&train_features, n_features, dims)?;
-            let train_vectors = project_rows(&pca, &train_features)?;
-            let validation_vectors = project_rows(&pca, &validation_features)?;
-            (Some(pca), train_vectors, validation_vectors)
-        }
-        // The classifier takes every feature (and standardises them itself).
-        None => (None, train_features, validation_features),
+    // A classifier that takes every feature and reads them in single precision gets them so: the
+    // feature table (`n x` thousands) is the largest thing training holds.
+    let single = config.pca_dims().is_none() && config.classifier.reads_single();
+    let (pca, classifier, searched_on_subset) = if single {
+        let train_features = features_of::<f32>(train, &preprocessor, Precision::Exact)?;
+        let validation_features = features_of::<f32>(validation, &preprocessor, Precision::Exact)?;
+        let sets = Sets {
+            train: LabeledVectors {
+                vectors: &train_features,
+                classes: &train_classes,
+            },
+            validation: LabeledVectors {
+                vectors: &validation_features,
+                classes: &validation_classes,
+            },
+            n_classes: class_names.len(),
+            dims: n_features,
+        };
+        let (classifier, searched) = fit_searching(&config.classifier, sets, search)?;
+        (None, classifier, searched)
+    } else {
+        let train_features = features_of::<f64>(train, &preprocessor, Precision::Exact)?;
+        let validation_features = features_of::<f64>(validation, &preprocessor, Precision::Exact)?;
+        let (pca, train_vectors, validation_vectors) = match config.pca_dims() {
+            Some(dims) => {
+                let pca = Pca::fit(&train_features, n_features, dims)?;
+                let train_vectors = project_rows(&pca, &train_features)?;
+                let validation_vectors = project_rows(&pca, &validation_features)?;
+                (Some(pca), train_vectors, validation_vectors)
+            }
+            // The classifier takes every feature (and standardises them itself).
+            None => (None, train_features, validation_features),
+        };
+        let sets = Sets {
+            train: LabeledVectors {
+                vectors: &train_vectors,
+                classes: &train_classes,
+            },
+            validation: LabeledVectors {
+                vectors: &validation_vectors,
+                classes: &validation_classes,
+            },
+            n_classes: class_names.len(),
+            dims: pca.as_ref().map_or(n_features, Pca::n_components),
+        };
+        let (classifier, searched) = fit_searching(&config.classifier, sets, search)?;
+        (pca, classifier, searched)
     };
-    let dims = pca.as_ref().map_or(n_features, Pca::n_components);
-    let train_data = LabeledVectors {
-        vectors: &train_vectors,
-        classes: &train_classes,
-    };
-    let validation_data = LabeledVectors {
-        vectors: &validation_vectors,
-        classes: &validation_classes,
-    };
-    let pinned = match search.filter(|_| config.classifier.pins()) {
-        Some(rows) => {
-            let (sub_train, sub_validation) = split_rows(rows, train_data, validation_data, dims);
-            // (a subsample the search cannot be run on, e.g. missing a class in its training
-            // part, leaves the search to every vector, as without one)
-            let searched = config.classifier.fit(
-                sub_train.view(),
-                sub_validation.view(),
-                class_names.len(),
-                dims,
-            );
-            searched
-                .ok()
-                .and_then(|searched| config.classifier.pinned(&searched))
-        }
-        None => None,
-    };
-    let searched_on_subset = pinned.is_some();
-    let classifier = pinned.as_ref().unwrap_or(&config.classifier).fit(
-        train_data,
-        validation_data,
-        class_names.len(),
-        dims,
-    )?;
 
     let count = |classes: &[usize]| {
         let mut counts = vec![0; class_names.len()];
@@ -125,14 +127,81 @@ pub(crate) fn train_searching(
     Ok((model, searched_on_subset))
 }
 
+/// A training set's vectors in one precision, with their shape.
+struct Sets<'a, T> {
+    train: LabeledVectors<'a, T>,
+    validation: LabeledVectors<'a, T>,
+    n_classes: usize,
+    dims: usize,
+}
+
+/// The precisions a classifier is fitted in: double for every family, single for those that read it.
+trait Element: Copy + Send + Sync {
+    fn fit(
+        classifier: &ClassifierConfig,
+        sets: &Sets<'_, Self>,
+        train: LabeledVectors<'_, Self>,
+        validation: LabeledVectors<'_, Self>,
+    ) -> Result<ClassifierModel>;
+}
+
+impl Element for f64 {
+    fn fit(
+        classifier: &ClassifierConfig,
+        sets: &Sets<'_, f64>,
+        train: LabeledVectors<'_, f64>,
+        validation: LabeledVectors<'_, f64>,
+    ) -> Result<ClassifierModel> {
+        classifier.fit(train, validation, sets.n_classes, sets.dims)
+    }
+}
+
+impl Element for f32 {
+    fn fit(
+        classifier: &ClassifierConfig,
+        sets: &Sets<'_, f32>,
+        train: LabeledVectors<'_, f32>,
+        validation: LabeledVectors<'_, f32>,
+    ) -> Result<ClassifierModel> {
+        classifier.fit_single(train, validation, sets.n_classes, sets.dims)
+    }
+}
+
+/// `classifier` fitted on `sets`, its hyper-parameters searched on the rows `search` first when its
+/// family pins them (see [`train_searching`]); also whether they were.
+fn fit_searching<T: Element>(
+    classifier: &ClassifierConfig,
+    sets: Sets<'_, T>,
+    search: Option<&[usize]>,
+) -> Result<(ClassifierModel, bool)> {
+    let pinned = match search.filter(|_| classifier.pins()) {
+        Some(rows) => {
+            let (sub_train, sub_validation) = split_rows(rows, &sets);
+            // (a subsample the search cannot be run on, e.g. missing a class in its training
+            // part, leaves the search to every vector, as without one)
+            T::fit(classifier, &sets, sub_train.view(), sub_validation.view())
+                .ok()
+                .and_then(|searched| classifier.pinned(&searched))
+        }
+        None => None,
+    };
+    let model = T::fit(
+        pinned.as_ref().unwrap_or(classifier),
+        &sets,
+        sets.train,
+        sets.validation,
+    )?;
+    Ok((model, pinned.is_some()))
+}
+
 /// Rows of labelled vectors, owned.
-struct OwnedVectors {
-    vectors: Vec<f64>,
+struct OwnedVectors<T> {
+    vectors: Vec<T>,
     classes: Vec<usize>,
 }
 
-impl OwnedVectors {
-    fn view(&self) -> LabeledVectors<'_> {
+impl<T> OwnedVectors<T> {
+    fn view(&self) -> LabeledVectors<'_, T> {
         LabeledVectors {
             vectors: &self.vectors,
             classes: &self.classes,
@@ -140,16 +209,11 @@ impl OwnedVectors {
     }
 }
 
-/// The training and validation rows of `rows` (indices into `train` followed by `validation`, in
-/// order), each in its own role.
-fn split_rows(
-    rows: &[usize],
-    train: LabeledVectors<'_>,
-    validation: LabeledVectors<'_>,
-    dims: usize,
-) -> (OwnedVectors, OwnedVectors) {
-    let n_train = train.classes.len();
-    let pick = |set: LabeledVectors<'_>, indices: &mut dyn Iterator<Item = usize>| {
+/// The training and validation rows of `rows` (indices into the training vectors followed by the
+/// validation vectors, in order), each in its own role.
+fn split_rows<T: Copy>(rows: &[usize], sets: &Sets<'_, T>) -> (OwnedVectors<T>, OwnedVectors<T>) {
+    let (n_train, dims) = (sets.train.classes.len(), sets.dims);
+    let pick = |set: LabeledVectors<'_, T>, indices: &mut dyn Iterator<Item = usize>| {
         let mut out = OwnedVectors {
             vectors: Vec::new(),
             classes: Vec::new(),
@@ -161,13 +225,16 @@ fn split_rows(
         }
         out
     };
-    let sub_train = pick(train, &mut rows.iter().copied().filter(|&i| i < n_train));
+    let sub_train = pick(
+        sets.train,
+        &mut rows.iter().copied().filter(|&i| i < n_train),
+    );
     let sub_validation = pick(
-        validation,
+        sets.validation,
         &mut rows
             .iter()
             .copied()
-            .filter(|&i| i >= n_train && i - n_train < validation.classes.len())
+            .filter(|&i| i >= n_train && i - n_train < sets.validation.classes.len())
             .map(|i| i - n_train),
     );
     (sub_train, sub_validation)

@@ -15,7 +15,11 @@ impl RidgeModel {
     /// Trains on the training and validation vectors together (see the module documentation); with
     /// `scaling` [`Scaling::Centred`] the features are only centred (each scale 1), as scikit-learn's
     /// `RidgeClassifierCV` alone.
-    pub(super) fn fit(config: &RidgeConfig, data: FitData<'_>, scaling: Scaling) -> Result<Self> {
+    pub(super) fn fit<T: Copy + Into<f64> + Sync>(
+        config: &RidgeConfig,
+        data: FitData<'_, T>,
+        scaling: Scaling,
+    ) -> Result<Self> {
         let (dims, n_classes) = (data.dims, data.n_classes);
         check_vectors(&data.train, "ridge training vectors", dims, n_classes)?;
         check_vectors(
@@ -35,8 +39,8 @@ impl RidgeModel {
         Self::fit_rows(config, &rows, &classes, n_classes, data.calibrate, scaling)
     }
 
-    /// [`fit`](Self::fit) on checked rows of any precision (`classes` one per row).
-    pub(super) fn fit_rows<T: Copy + Into<f64> + Sync>(
+    /// [`fit`](Self::fit) on checked rows (`classes` one per row).
+    fn fit_rows<T: Copy + Into<f64> + Sync>(
         config: &RidgeConfig,
         rows: &Rows<'_, T>,
         classes: &[usize],

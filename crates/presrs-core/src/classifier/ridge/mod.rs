@@ -409,6 +409,12 @@ impl ClassifierFamily for RidgeFamily {
         RidgeModel::fit(config, data, Scaling::Standardised)
     }
 
+    const READS_SINGLE: bool = true;
+
+    fn fit_single(config: &RidgeConfig, data: FitData<'_, f32>) -> Result<RidgeModel> {
+        RidgeModel::fit(config, data, Scaling::Standardised)
+    }
+
     const PINS: bool = true;
 
     fn pinned(config: &RidgeConfig, model: &RidgeModel) -> Option<RidgeConfig> {
@@ -465,6 +471,12 @@ impl ClassifierFamily for RidgeRawFamily {
     }
 
     fn fit(config: &RidgeConfig, data: FitData<'_>) -> Result<RidgeModel> {
+        RidgeModel::fit(config, data, Scaling::Centred)
+    }
+
+    const READS_SINGLE: bool = true;
+
+    fn fit_single(config: &RidgeConfig, data: FitData<'_, f32>) -> Result<RidgeModel> {
         RidgeModel::fit(config, data, Scaling::Centred)
     }
 
