@@ -802,3 +802,38 @@ fn an_svm_winner_is_searched_on_the_subsample_and_small_data_train_as_before() {
     let searched = model.classifier().get::<SvmFamily>().unwrap();
     assert!(!searched.candidates().is_empty());
 }
+
+/// On large data a ridge winner's alpha and temperature are chosen by leave-one-out on the scoring
+/// subsample and the fit on every image solves at that alpha (features in single precision); it is
+/// the model a ridge with that alpha pinned gives. Small data train as before.
+#[test]
+fn a_ridge_winner_is_pinned_on_the_subsample_and_small_data_train_as_before() {
+    use crate::classifier::{ClassifierKind, RidgeFamily};
+    let frames = four_class_frames(96, 5);
+    let images = grouped(&frames);
+    let ridge = TrainConfig {
+        classifier: ClassifierKind::RIDGE.default_config(),
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let candidates = std::slice::from_ref(&ridge);
+    let (train_images, validation_images) = (&images[..64], &images[64..]);
+    let large = AutoChoice::new(candidates, ValidateBy::Group).with_scoring_samples(Some(48));
+    let model = train_auto(train_images, validation_images, &large, 3).unwrap();
+    assert_eq!(
+        model.selection().unwrap().cost.clone().unwrap().searched_on,
+        Some(48)
+    );
+    let fitted = model.classifier().get::<RidgeFamily>().unwrap();
+    let plain = train(train_images, validation_images, &ridge).unwrap();
+    let searched_on_all = plain.classifier().get::<RidgeFamily>().unwrap();
+    // Fitted on every image (the same standardisation), its leave-one-out curve the subsample's.
+    assert_eq!(fitted.means(), searched_on_all.means());
+    assert_ne!(fitted.loo_errors(), searched_on_all.loo_errors());
+    // Small data: the model `train` gives.
+    let small = AutoChoice::new(candidates, ValidateBy::Group);
+    let model = train_auto(train_images, validation_images, &small, 3).unwrap();
+    assert_eq!(model.classifier(), plain.classifier());
+}
