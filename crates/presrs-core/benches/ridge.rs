@@ -1,6 +1,7 @@
 //! The ridge classifier at MiniRocket's size (issue #33): fitting on 1,000 vectors of 10,000 features
 //! (4 classes; the Gram matrix, its eigendecomposition and the leave-one-out over the 10 default
-//! alphas), and classifying one 10,000-feature vector.
+//! alphas), the same at the chosen alpha pinned (one Cholesky solve over blocks, the fit on every sample
+//! when the automatic choice searched alpha on its subsample), and classifying one 10,000-feature vector.
 //!
 //! `cargo bench -p presrs-core --bench ridge -- --warm-up-time 1 --measurement-time 20`
 
@@ -69,6 +70,18 @@ fn ridge(c: &mut Criterion) {
     let Ok(model) = RidgeFamily::fit(&config, data) else {
         panic!("the ridge benchmark problem failed to fit");
     };
+    let Some(pinned) = RidgeFamily::pinned(&config, &model) else {
+        panic!("ridge pins its alpha");
+    };
+    c.bench_function("ridge_fit_pinned_1000x10000", |b| {
+        b.iter(|| {
+            black_box(
+                RidgeFamily::fit(&pinned, black_box(data))
+                    .map(|m| m.alpha())
+                    .ok(),
+            )
+        })
+    });
     let mut scratch = model.scratch();
     let mut posteriors = vec![0.0; CLASSES];
     let mut next = 0;
