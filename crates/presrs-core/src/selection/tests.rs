@@ -832,6 +832,13 @@ fn a_ridge_winner_is_pinned_on_the_subsample_and_small_data_train_as_before() {
     // Fitted on every image (the same standardisation), its leave-one-out curve the subsample's.
     assert_eq!(fitted.means(), searched_on_all.means());
     assert_ne!(fitted.loo_errors(), searched_on_all.loo_errors());
+    assert_eq!(fitted.loo_samples(), Some(48));
+    assert_eq!(searched_on_all.loo_samples(), Some(96));
+    assert!(
+        model.classifier().describe().contains("over 48 vectors"),
+        "{}",
+        model.classifier().describe()
+    );
     // Small data: the model `train` gives.
     let small = AutoChoice::new(candidates, ValidateBy::Group);
     let model = train_auto(train_images, validation_images, &small, 3).unwrap();

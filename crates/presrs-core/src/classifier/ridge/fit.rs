@@ -75,6 +75,7 @@ impl RidgeModel {
                 temperature: pin.temperature,
                 loo_errors: pin.loo_errors.clone(),
                 loo_accuracy: pin.loo_accuracy,
+                loo_samples: Some(pin.loo_samples),
             });
         }
         let standardised = standardise(rows, &means, &scales);
@@ -107,6 +108,7 @@ impl RidgeModel {
             temperature,
             loo_errors: choice.curve,
             loo_accuracy: accuracy_of_scores(&scores, classes, n_classes),
+            loo_samples: Some(classes.len()),
         })
     }
 }

@@ -64,6 +64,8 @@ pub struct RidgePin {
     /// The subsample's leave-one-out curve and accuracy at `alpha`, kept in the model as measured.
     pub loo_errors: Vec<(f64, f64)>,
     pub loo_accuracy: f64,
+    /// How many vectors that leave-one-out ran on.
+    pub loo_samples: usize,
 }
 
 /// `logspace(-3, 3, 10)`.
@@ -153,6 +155,10 @@ pub struct RidgeModel {
     loo_errors: Vec<(f64, f64)>,
     /// The share of training vectors whose leave-one-out decision at the chosen `α` was right.
     loo_accuracy: f64,
+    /// How many vectors the leave-one-out curve and accuracy are of: every training vector, or for a
+    /// model whose `α` was pinned ([`RidgePin`]) the subsample's (`None` in files written before it
+    /// was recorded).
+    loo_samples: Option<usize>,
 }
 
 /// The serialised form of [`RidgeModel`], checked on load (see there).
@@ -170,6 +176,8 @@ struct RidgeFields {
     temperature: f64,
     loo_errors: Vec<(f64, f64)>,
     loo_accuracy: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    loo_samples: Option<usize>,
 }
 
 impl From<RidgeModel> for RidgeFields {
@@ -185,6 +193,7 @@ impl From<RidgeModel> for RidgeFields {
             temperature: model.temperature,
             loo_errors: model.loo_errors,
             loo_accuracy: model.loo_accuracy,
+            loo_samples: model.loo_samples,
         }
     }
 }
@@ -205,6 +214,7 @@ impl TryFrom<RidgeFields> for RidgeModel {
             temperature: fields.temperature,
             loo_errors: fields.loo_errors,
             loo_accuracy: fields.loo_accuracy,
+            loo_samples: fields.loo_samples,
         })
     }
 }
@@ -326,6 +336,12 @@ impl RidgeModel {
         self.loo_accuracy
     }
 
+    /// How many vectors the leave-one-out figures are of: every training vector, or when `α` was chosen
+    /// on a subsample, its vectors (`None` for a model file written before it was recorded).
+    pub fn loo_samples(&self) -> Option<usize> {
+        self.loo_samples
+    }
+
     /// `config` with this model's `α` and temperature pinned ([`RidgePin`]).
     pub fn pinned(&self, config: &RidgeConfig) -> RidgeConfig {
         RidgeConfig {
@@ -335,6 +351,7 @@ impl RidgeModel {
                 temperature: self.temperature,
                 loo_errors: self.loo_errors.clone(),
                 loo_accuracy: self.loo_accuracy,
+                loo_samples: self.loo_samples.unwrap_or(0),
             }),
         }
     }
@@ -430,8 +447,11 @@ impl ClassifierFamily for RidgeFamily {
     }
 
     fn describe(model: &RidgeModel) -> String {
+        let over = model
+            .loo_samples()
+            .map_or_else(String::new, |n| format!(" over {n} vectors"));
         format!(
-            "alpha {:.3e} (leave-one-out accuracy {:.3}), temperature {:.3e}",
+            "alpha {:.3e} (leave-one-out accuracy {:.3}{over}), temperature {:.3e}",
             model.alpha(),
             model.loo_accuracy(),
             model.temperature()
