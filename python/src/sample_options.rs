@@ -74,6 +74,7 @@ impl ManifestSampling<'_> {
             one_sample_per_file: self.one_sample_per_file,
             frame_period_s: self.frame_period_s,
             decision_points: Vec::new(),
+            skip_short_stances: false,
         })
     }
 }

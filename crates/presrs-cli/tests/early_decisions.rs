@@ -169,7 +169,8 @@ fn eval_decide_at_prints_the_curve_and_reports_it() {
         "--dims",
         "10",
         "--decide-at",
-        "8,16",
+        // 55: past some stances' lift-off (s00_t00 is 54 frames long).
+        "8,16,55",
         "--report",
         report.to_str().unwrap(),
     ]);
@@ -181,6 +182,21 @@ fn eval_decide_at_prints_the_curve_and_reports_it() {
     );
     assert!(table.contains("one frame %") && table.contains("lift-off"));
     assert!(table.contains("auto: "), "{table}");
+    assert!(
+        table.contains("decided before lift-off") && table.contains("by mid-stance"),
+        "{table}"
+    );
+    // The one-frame model at 55 is tested on the stances that reach frame 55 only.
+    let late = table
+        .lines()
+        .find(|line| line.trim_start().starts_with("55 "))
+        .unwrap_or_else(|| panic!("no row for 55: {table}"));
+    let tested: usize = late
+        .split("(n=")
+        .nth(1)
+        .and_then(|rest| rest.trim_end_matches(')').parse().ok())
+        .unwrap_or_else(|| panic!("{late}"));
+    assert!(tested > 0 && tested < 60, "{late}");
     let page = std::fs::read_to_string(report.join("index.html")).unwrap();
     assert!(
         page.contains("Early decisions: accuracy against decision time"),

@@ -322,6 +322,7 @@ impl SampleArgs {
             one_sample_per_file: self.stance.one_sample_per_file,
             frame_period_s: self.stance.frame_period,
             decision_points: Vec::new(),
+            skip_short_stances: false,
         })
     }
 

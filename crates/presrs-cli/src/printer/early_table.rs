@@ -54,14 +54,15 @@ pub fn early_table(early: &EarlyEvaluation) -> String {
         out,
         "auto: {:.1} % (whole stance {:.1} %), mean decision {:.1} frames ({} ms) after touchdown: \
          {:.0} % of the median stance, {:.0} % of each stance on average; {:.0} % decided before \
-         lift-off",
+         lift-off, {:.0} % by mid-stance (half their own length)",
         100.0 * auto.accuracy,
         100.0 * early.whole_accuracy,
         auto.mean_frames,
         ms(auto.mean_ms),
         100.0 * auto.mean_over_median_stance,
         100.0 * auto.mean_share_of_stance,
-        100.0 * auto.decided_early
+        100.0 * auto.decided_early,
+        100.0 * auto.decided_by_mid_stance
     );
     if let Some(best) = auto.hindsight_best_by(0.5) {
         let threshold = best
@@ -71,10 +72,12 @@ pub fn early_table(early: &EarlyEvaluation) -> String {
             out,
             "in hindsight (one threshold chosen on these held-out stances: a bound, not a result): \
              deciding by half the median stance on average, at best {:.1} % (threshold {threshold}, \
-             mean decision at {:.0} % of the median stance, {:.0} % decided before lift-off)",
+             mean decision at {:.0} % of the median stance, {:.0} % decided before lift-off, {:.0} % \
+             by mid-stance)",
             100.0 * best.accuracy,
             100.0 * best.mean_over_median_stance,
-            100.0 * best.decided_early
+            100.0 * best.decided_early,
+            100.0 * best.decided_by_mid_stance
         );
     }
     out

@@ -100,11 +100,13 @@ pub(super) fn early_section<'a>(early: Option<&EarlyCurve>) -> Option<Section<'a
         format!(
             " <code>auto</code> decided at its first point whose confidence passed the threshold \
              learned on validation: {} right, at a mean {} after touchdown ({:.0} % of the median \
-             stance; {:.0} % of the stances decided before their lift-off).",
+             stance; {:.0} % of the stances decided before their lift-off, {:.0} % by their \
+             mid-stance).",
             percent(Some(auto.accuracy)),
             esc(&after_touchdown(auto.mean_frames, early.frame_period_ms)),
             100.0 * auto.mean_frames / early.median_stance_frames.max(1) as f64,
             100.0 * auto.decided_early,
+            100.0 * auto.decided_by_mid_stance,
         )
     });
     Some(Section {
@@ -160,6 +162,7 @@ mod tests {
                 accuracy: 0.93,
                 mean_frames: 15.0,
                 decided_early: 0.7,
+                decided_by_mid_stance: 0.5,
             }),
             median_stance_frames: 60,
             frame_period_ms: Some(10.0),
@@ -184,6 +187,13 @@ mod tests {
         assert!(table.contains("lift-off") && table.contains("95.0 %"));
         assert!(table.contains("auto: mean 15.0 frames (150 ms)") && table.contains("25 %"));
         assert!(section.intro.contains("93.0 % right") && section.intro.contains("70 %"));
+        assert!(
+            section
+                .intro
+                .contains("70 % of the stances decided before their lift-off, 50 % by"),
+            "{}",
+            section.intro
+        );
         let panel = curve_panel(&early);
         assert_eq!(panel.lines.len(), 3);
         assert_eq!(panel.lines[0].1.last(), Some(&(60.0, 95.0, 0.0)));

@@ -87,6 +87,8 @@ pub struct EarlyAutoResult {
     pub mean_frames: f64,
     /// Share of the stances decided before their lift-off.
     pub decided_early: f64,
+    /// Share of the stances decided by their mid-stance (at most half their own length).
+    pub decided_by_mid_stance: f64,
 }
 
 /// Everything a report can show; all optional except the samples.

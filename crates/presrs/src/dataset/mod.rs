@@ -688,6 +688,17 @@ fn row_frames(
         return Ok(vec![0]);
     }
     let segmentation = row_segmentation(manifest, row, recording, options)?;
+    if let (true, presrs_core::stance::SampleFrame::Offset(k)) =
+        (options.skip_short_stances, options.sample)
+    {
+        // Only the stances that reach frame K; a file none of whose stances does is no empty file.
+        return Ok(segmentation
+            .stances
+            .iter()
+            .filter(|stance| (options.include_partial() || !stance.partial) && k < stance.len)
+            .map(|stance| stance.start + k)
+            .collect());
+    }
     let frames = segmentation
         .samples(options.sample, options.include_partial())
         .map_err(|err| manifest.row_error(row, format!("`{}`: {err}", row.path_text)))?;
@@ -903,6 +914,37 @@ mod tests {
         assert_eq!(second.column("frame"), Some("7"));
         assert_eq!(second.column("load"), None);
         assert_eq!(second.frame_index, 7);
+    }
+
+    /// A frame sample at an offset past a stance is refused, unless asked to leave such stances out
+    /// (the one-frame model beside a late decision point), which leaves them out without a warning.
+    #[test]
+    fn an_offset_past_a_stance_is_refused_or_left_out_on_request() {
+        let dir = tempfile::tempdir().unwrap();
+        movie_manifest(dir.path());
+        let path = dir.path().join("contacts.csv");
+        std::fs::write(&path, "path,label\nwalk.npy,wood\nwalk.npy,sand\n").unwrap();
+        let manifest = presrs_io::manifest::read_manifest(&path).unwrap();
+        let at = |k: usize, skip: bool| SampleOptions {
+            sample: presrs_core::stance::SampleFrame::Offset(k),
+            one_sample_per_file: true,
+            skip_short_stances: skip,
+            ..SampleOptions::default()
+        };
+        for skip in [false, true] {
+            let loaded = load_samples(&manifest, &at(3, skip)).unwrap();
+            let frames: Vec<usize> = loaded.samples.iter().map(|s| s.frame_index).collect();
+            assert_eq!(frames, vec![3, 3], "skip {skip}");
+        }
+        let err = load_samples(&manifest, &at(40, false)).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("frame offset 40 is past the stance"),
+            "{err}"
+        );
+        let left_out = load_samples(&manifest, &at(40, true)).unwrap();
+        assert!(left_out.samples.is_empty());
+        assert!(left_out.warnings.is_empty(), "{:?}", left_out.warnings);
     }
 
     #[test]

@@ -32,6 +32,10 @@ pub struct SampleOptions {
     /// Whole-stance samples are also made of each stance cut at these decision points (frames after
     /// touchdown: the first `K + 1` frames), for models that decide early ([`super::StanceCuts`]).
     pub decision_points: Vec<usize>,
+    /// Frame samples at an offset `K` ([`SampleFrame::Offset`]) leave out the stances that lift off
+    /// before frame `K` instead of refusing them: the one-frame model beside a decision point late
+    /// in the stance (`eval --decide-at`), tested on the stances that reach it.
+    pub skip_short_stances: bool,
 }
 
 impl Default for SampleOptions {
@@ -46,6 +50,7 @@ impl Default for SampleOptions {
             one_sample_per_file: false,
             frame_period_s: None,
             decision_points: Vec::new(),
+            skip_short_stances: false,
         }
     }
 }

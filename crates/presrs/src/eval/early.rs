@@ -48,8 +48,11 @@ pub struct EarlyAuto {
     pub mean_ms: Option<f64>,
     pub mean_share_of_stance: f64,
     pub mean_over_median_stance: f64,
-    /// Share of the held-out stances decided before their lift-off.
+    /// Share of the held-out stances decided before their lift-off (at any point, late ones too).
     pub decided_early: f64,
+    /// Share of the held-out stances decided by their mid-stance: at a point at most half their own
+    /// length after touchdown.
+    pub decided_by_mid_stance: f64,
     /// The threshold of each fold's model, in the draws' order.
     pub thresholds: Vec<f64>,
     /// What one threshold for every fold would have given, chosen in hindsight on the held-out
@@ -67,6 +70,7 @@ pub struct HindsightThreshold {
     pub accuracy: f64,
     pub mean_over_median_stance: f64,
     pub decided_early: f64,
+    pub decided_by_mid_stance: f64,
 }
 
 impl EarlyAuto {
@@ -114,6 +118,7 @@ impl EarlyEvaluation {
                 accuracy: self.auto.accuracy,
                 mean_frames: self.auto.mean_frames,
                 decided_early: self.auto.decided_early,
+                decided_by_mid_stance: self.auto.decided_by_mid_stance,
             }),
             median_stance_frames: self.median_stance_frames,
             frame_period_ms: self.frame_period_ms,
@@ -144,6 +149,7 @@ impl FrameReadings {
                 kind: presrs_core::sample::SampleKind::Frame,
                 sample: presrs_core::stance::SampleFrame::Offset(*k),
                 decision_points: Vec::new(),
+                skip_short_stances: true,
                 ..options.clone()
             };
             by_point.push((*k, Dataset::load(manifest, &options, progress)?));
@@ -366,6 +372,7 @@ fn summarise(
         mean_share_of_stance: mean(&|s, d| d.frame as f64 / s.stance_frames.max(1) as f64),
         mean_over_median_stance: mean_frames / median.max(1) as f64,
         decided_early: mean(&|_, d| f64::from(u8::from(d.point.is_some()))),
+        decided_by_mid_stance: mean(&|s, d| f64::from(u8::from(by_mid_stance(s, d)))),
         thresholds: thresholds.to_vec(),
         hindsight,
     };
@@ -381,6 +388,15 @@ fn summarise(
     }
 }
 
+/// Whether `decision` came by `stance`'s mid-stance: at a point at most half its length after
+/// touchdown (a decision at lift-off never does).
+fn by_mid_stance(
+    stance: &HeldOutStance,
+    decision: &presrs_core::pipeline::OfflineDecision,
+) -> bool {
+    decision.point.is_some() && 2 * decision.frame <= stance.stance_frames
+}
+
 /// Every distinct confidence of the points' decisions tried as one threshold for all held-out
 /// stances (and no early decision at all); the thresholds not beaten in both accuracy and mean
 /// decision time, earliest first.
@@ -392,18 +408,20 @@ fn hindsight_frontier(
     let candidates = presrs_core::pipeline::point_confidences(stances);
     let n = stances.len().max(1) as f64;
     let outcome = |threshold: Option<f64>| {
-        let (mut right, mut frames_sum, mut early) = (0usize, 0usize, 0usize);
+        let (mut right, mut frames_sum, mut early, mut by_mid) = (0usize, 0usize, 0usize, 0usize);
         for stance in stances {
             let decision = stance.decide(frames, threshold.unwrap_or(f64::INFINITY));
             right += usize::from(decision.class == stance.class);
             frames_sum += decision.frame;
             early += usize::from(decision.point.is_some());
+            by_mid += usize::from(by_mid_stance(stance, &decision));
         }
         HindsightThreshold {
             threshold,
             accuracy: right as f64 / n,
             mean_over_median_stance: frames_sum as f64 / n / median.max(1) as f64,
             decided_early: early as f64 / n,
+            decided_by_mid_stance: by_mid as f64 / n,
         }
     };
     let mut all: Vec<HindsightThreshold> = candidates
@@ -477,6 +495,13 @@ mod tests {
                 "threshold {threshold}: {accuracy} at {mean} beats the frontier {frontier:?}"
             );
         }
+        // By mid-stance: a decision at most half the stance's own length after touchdown (frame 5 of
+        // 10 is, a point past it or the lift-off is not).
+        assert_eq!(frontier[0].decided_by_mid_stance, 1.0);
+        let late = stance(0, &[Some((0, 0.5)), Some((0, 0.9))], 0);
+        assert!(by_mid_stance(&late, &late.decide(&[2, 5], 0.8)));
+        assert!(!by_mid_stance(&late, &late.decide(&[2, 6], 0.8)));
+        assert!(!by_mid_stance(&late, &late.decide(&[2, 5], 0.95)));
         // Earliest first, each more accurate than the one before.
         for pair in frontier.windows(2) {
             assert!(pair[0].mean_over_median_stance <= pair[1].mean_over_median_stance);

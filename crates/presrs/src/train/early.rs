@@ -13,7 +13,9 @@ use crate::error::{Context, Error, Result};
 use crate::method::Method;
 
 /// Shares of the median training stance at which `--decide-at auto` puts its decision points: early
-/// enough that deciding at one of them decides within the first half of a typical stance.
+/// enough that deciding at one of them decides within the first half of a typical stance. (Points
+/// over the whole stance, as TEASER and ECTS place theirs, were measured and changed nothing on
+/// jiku-walk: `bench/real/RESULTS.md`, "Early decisions, fourth run".)
 pub const AUTO_POINT_SHARES: [f64; 5] = [0.1, 0.2, 0.3, 0.4, 0.5];
 
 /// The decision points a model is trained for, as asked.
@@ -203,5 +205,11 @@ mod tests {
             DecisionPoints::Auto.resolve(&[40, 60, 61]),
             vec![6, 12, 18, 24, 30]
         );
+        // Short stances: every point at least 2 frames, each once.
+        assert_eq!(
+            DecisionPoints::Auto.resolve(&[14, 14, 15]),
+            vec![2, 3, 4, 6, 7]
+        );
+        assert_eq!(DecisionPoints::Auto.resolve(&[5, 5]), vec![2, 3]);
     }
 }
