@@ -14,7 +14,7 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
-use faer::linalg::cholesky::llt::solve::solve_in_place;
+use faer::linalg::cholesky::llt::solve::{solve_in_place, solve_in_place_scratch};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{BlockStructure, matmul as triangular_matmul};
 use faer::reborrow::{Reborrow, ReborrowMut};
@@ -213,13 +213,7 @@ fn factor_and_solve(mut system: MatMut<'_, f64>, rhs: MatMut<'_, f64>, alpha: f6
              check the features for extreme values, or give larger alphas"
         ),
     })?;
-    solve_in_place(
-        system.rb(),
-        rhs,
-        par,
-        MemStack::new(&mut MemBuffer::new(
-            faer::linalg::cholesky::llt::solve::solve_in_place_scratch::<f64>(r, 1, par),
-        )),
-    );
+    let mut solve_workspace = MemBuffer::new(solve_in_place_scratch::<f64>(r, rhs.ncols(), par));
+    solve_in_place(system.rb(), rhs, par, MemStack::new(&mut solve_workspace));
     Ok(())
 }
