@@ -47,11 +47,16 @@ fn feature_groups(candidates: &[CheckedTrainConfig]) -> Vec<FeatureGroup> {
     groups
 }
 
-/// The features of each feature group scored so far (or why they could not be computed), kept across
-/// the race's two phases and the refinement of the dims, which would otherwise compute them again.
+/// The features of the feature group scored last (and why any group's could not be computed). One
+/// group's table at a time: every group's, kept across the race's two phases and the refinement of the
+/// dims, were the scoring's largest memory (four random-convolution groups of 4,000 samples x 10,000
+/// `f64`, 1.3 GB), while computing a group's features again costs a few per cent of scoring it
+/// (`bench/scale/README.md`). The values do not change: the features are deterministic.
 #[derive(Default)]
 pub(super) struct Tables<'o> {
     entries: Vec<(TrainConfig, std::result::Result<FeatureTable, String>)>,
+    /// Every group whose features were computed, to say when they are computed again.
+    computed: Vec<TrainConfig>,
     /// Told when a group's features begin.
     observer: Option<StageObserver<'o>>,
     /// Time spent computing features.
@@ -62,6 +67,7 @@ impl<'o> Tables<'o> {
     pub(super) fn new(observer: Option<StageObserver<'o>>) -> Self {
         Self {
             entries: Vec::new(),
+            computed: Vec::new(),
             observer,
             spent: Duration::ZERO,
         }
@@ -72,7 +78,8 @@ impl<'o> Tables<'o> {
         self.spent.as_secs_f64()
     }
 
-    /// The features of `images` under `config`'s crop, preprocessing and features, computed once.
+    /// The features of `images` under `config`'s crop, preprocessing and features: the table kept, or
+    /// computed (freeing the table of the group before).
     fn get(
         &mut self,
         images: &[LabeledImage<'_>],
@@ -83,13 +90,19 @@ impl<'o> Tables<'o> {
             .iter()
             .position(|(key, _)| same_features(key, config));
         let index = position.unwrap_or_else(|| {
+            self.entries.retain(|(_, table)| table.is_err());
+            let again = self.computed.iter().any(|seen| same_features(seen, config));
             StageObserver::tell(self.observer, || {
                 format!(
-                    "features: {} of {} samples",
+                    "features: {} of {} samples{}",
                     config.features.name(),
-                    images.len()
+                    images.len(),
+                    if again { " (again)" } else { "" }
                 )
             });
+            if !again {
+                self.computed.push(config.clone());
+            }
             let started = Instant::now();
             let table = FeatureTable::of(images, config).map_err(|err| err.to_string());
             self.spent += started.elapsed();

@@ -844,3 +844,48 @@ fn a_ridge_winner_is_pinned_on_the_subsample_and_small_data_train_as_before() {
     let model = train_auto(train_images, validation_images, &small, 3).unwrap();
     assert_eq!(model.classifier(), plain.classifier());
 }
+
+/// One feature group's table is kept at a time: a group scored again (the race's second phase) has its
+/// features computed again, said so in the stage, with the scores of a choice that kept them (the
+/// features are deterministic: `cached_scores_equal_training_each_candidate_on_each_fold`).
+#[test]
+fn a_group_scored_again_computes_its_features_again_and_says_so() {
+    use crate::classifier::ClassifierKind;
+    use crate::features::{FeatureConfig, FeatureKind};
+    let frames = four_class_frames(64, 13);
+    let images = grouped(&frames);
+    let with = |features: FeatureKind| {
+        TrainConfig {
+            features: FeatureConfig::combined(&[features]),
+            classifier: ClassifierKind::LDA.default_config(),
+            dims: 8,
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap()
+    };
+    let candidates = [with(FeatureKind::FFT1D), with(FeatureKind::FFT2D)];
+    let stages = std::sync::Mutex::new(Vec::<String>::new());
+    let tell = |stage: &str| stages.lock().unwrap().push(stage.to_owned());
+    let choice = AutoChoice::new(&candidates, ValidateBy::Group).with_stages(StageObserver(&tell));
+    let selection = select(&images, &choice, 1).unwrap();
+    let features: Vec<String> = stages
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|stage| stage.starts_with("features: "))
+        .cloned()
+        .collect();
+    assert!(
+        features[0].starts_with("features: fft1d") && !features[0].contains("again"),
+        "{features:?}"
+    );
+    assert!(
+        features.iter().any(|stage| stage.ends_with("(again)")),
+        "{features:?}"
+    );
+    let first = features.iter().filter(|stage| !stage.ends_with("(again)"));
+    assert_eq!(first.count(), 2, "{features:?}");
+    let quiet = select(&images, &AutoChoice::new(&candidates, ValidateBy::Group), 1).unwrap();
+    assert_eq!(selection.scores, quiet.scores);
+}
