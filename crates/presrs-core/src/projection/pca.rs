@@ -299,28 +299,74 @@ impl Pca {
     /// Fits on `samples` (`n_samples x n_features`, row-major), keeping
     /// `min(max_components, n_samples - 1, n_features)` components.
     pub fn fit(samples: &[f64], n_features: usize, max_components: usize) -> Result<Self> {
-        let n_samples = check_fit_input(samples, n_features, max_components)?;
+        check_fit_input(samples, n_features, max_components)?;
+        let rows: Vec<&[f64]> = samples.chunks_exact(n_features).collect();
+        Self::fit_checked_rows(&rows, Some(samples), n_features, max_components)
+    }
+
+    /// [`fit`](Self::fit) on rows held elsewhere (e.g. some rows of a larger feature table), without a
+    /// copy of them: the same PCA as `fit` on the rows laid end to end.
+    pub fn fit_rows(rows: &[&[f64]], n_features: usize, max_components: usize) -> Result<Self> {
+        if let Some(row) = rows.iter().find(|row| row.len() != n_features) {
+            return Err(CoreError::Shape {
+                what: "pca training row",
+                expected: format!("{n_features} values"),
+                got: row.len().to_string(),
+            });
+        }
+        // (the checks of `fit` on the first two rows' shape; the values are checked below)
+        check_fit_input(
+            &vec![0.0; n_features * rows.len().min(2)],
+            n_features,
+            max_components,
+        )?;
+        if rows
+            .iter()
+            .any(|row| row.iter().any(|value| !value.is_finite()))
+        {
+            return Err(CoreError::Param {
+                name: "pca training matrix",
+                reason: "contains NaN or infinite values".into(),
+            });
+        }
+        Self::fit_checked_rows(rows, None, n_features, max_components)
+    }
+
+    /// [`fit`](Self::fit) on checked rows (at least two, each `n_features` finite values); `contiguous`
+    /// the same rows laid end to end when the caller has them so (the range finder reads them so).
+    fn fit_checked_rows(
+        rows: &[&[f64]],
+        contiguous: Option<&[f64]>,
+        n_features: usize,
+        max_components: usize,
+    ) -> Result<Self> {
+        let n_samples = rows.len();
         let mut mean = vec![0.0; n_features];
-        for row in samples.chunks_exact(n_features) {
-            for (acc, value) in mean.iter_mut().zip(row) {
+        for row in rows {
+            for (acc, value) in mean.iter_mut().zip(row.iter()) {
                 *acc += value;
             }
         }
         for acc in &mut mean {
             *acc /= n_samples as f64;
         }
-        let total_variance = samples
-            .chunks_exact(n_features)
+        let total_variance = rows
+            .iter()
             .flat_map(|row| row.iter().zip(&mean).map(|(x, m)| (x - m) * (x - m)))
             .sum::<f64>()
             / (n_samples - 1) as f64;
         let n_components = max_components.min(n_samples - 1).min(n_features);
         let (singular, right) = if uses_range_finder(n_samples, n_features, n_components) {
-            randomised_svd(samples, &mean, n_components)?
+            match contiguous {
+                Some(samples) => randomised_svd(samples, &mean, n_components)?,
+                None => {
+                    let samples: Vec<f64> =
+                        rows.iter().flat_map(|row| row.iter().copied()).collect();
+                    randomised_svd(&samples, &mean, n_components)?
+                }
+            }
         } else {
-            let centred = Mat::from_fn(n_samples, n_features, |i, j| {
-                samples[i * n_features + j] - mean[j]
-            });
+            let centred = Mat::from_fn(n_samples, n_features, |i, j| rows[i][j] - mean[j]);
             thin_svd(&centred)?
         };
         let singular = singular.column_vector();
@@ -597,6 +643,26 @@ mod tests {
                 .unwrap();
             assert!(fast.component(c)[pivot] > 0.0);
         }
+    }
+
+    /// Rows held elsewhere give the PCA of the same rows laid end to end, exactly (the exact SVD and
+    /// the range finder); bad rows are refused as `fit` refuses them.
+    #[test]
+    fn rows_in_place_give_the_pca_of_the_same_rows() {
+        for (n, p, k) in [(40, 30, 5), (EXACT_SVD_MAX_SAMPLES + 1, 60, 4)] {
+            let samples = falling_spectrum(n, p, 21);
+            let rows: Vec<&[f64]> = samples.chunks_exact(p).collect();
+            assert_eq!(
+                Pca::fit_rows(&rows, p, k).unwrap(),
+                Pca::fit(&samples, p, k).unwrap()
+            );
+        }
+        let short = [1.0, 2.0];
+        let long = [1.0, 2.0, 3.0];
+        assert!(Pca::fit_rows(&[&short[..], &long[..]], 2, 1).is_err());
+        assert!(Pca::fit_rows(&[&short[..]], 2, 1).is_err());
+        assert!(Pca::fit_rows(&[&short[..], &[f64::NAN, 1.0][..]], 2, 1).is_err());
+        assert!(Pca::fit_rows(&[&short[..], &[3.0, 1.0][..]], 2, 0).is_err());
     }
 
     #[test]

@@ -6,7 +6,6 @@
 //! gives (the test `cached_scores_equal_training_each_candidate_on_each_fold` checks it), at a fraction
 //! of the cost.
 
-use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
@@ -19,7 +18,7 @@ use crate::error::{CoreError, Result};
 use crate::metrics::MeanStd;
 use crate::pipeline::config::{CheckedTrainConfig, TrainConfig};
 use crate::pipeline::extract::{FeatureTable, LabeledImage};
-use crate::pipeline::train::{class_indices, class_names_of, project_rows};
+use crate::pipeline::train::{class_indices, class_names_of};
 use crate::projection::pca::Pca;
 use crate::selection::record::CandidateScore;
 
@@ -437,8 +436,12 @@ fn score_fold(
         Ok(classes) => classes,
         Err(err) => return Ok(vec![Err(err.to_string()); configs.len()]),
     };
-    let train_rows = table.exact_rows(&fold.train);
-    let validation_rows = table.exact_rows(&fold.validation);
+    // The fold's rows as the table holds them: the PCA reads them in place, and only the classifiers
+    // that take every feature get a copy (two folds are scored at once, each row ~10,000 values).
+    let rows_of = |indices: &[usize]| -> Vec<&[f64]> {
+        indices.iter().map(|&i| table.exact_row(i)).collect()
+    };
+    let (train_rows, validation_rows) = (rows_of(&fold.train), rows_of(&fold.validation));
     // `None`: the classifiers that take every feature, without a PCA.
     let mut dims_wanted: Vec<Option<usize>> = configs.iter().map(|c| c.pca_dims()).collect();
     dims_wanted.sort_unstable();
@@ -448,23 +451,17 @@ fn score_fold(
         let members: Vec<usize> = (0..configs.len())
             .filter(|&m| configs[m].pca_dims() == dims)
             .collect();
-        // (without a PCA the fold's rows are used as they are, not copied: ~10,000 features a row)
         let projected = match dims {
-            Some(dims) => Pca::fit(&train_rows, table.n_features, dims).and_then(|pca| {
-                let train = project_rows(&pca, &train_rows)?;
-                let validation = project_rows(&pca, &validation_rows)?;
+            Some(dims) => Pca::fit_rows(&train_rows, table.n_features, dims).and_then(|pca| {
+                let train = project_each(&pca, &train_rows)?;
+                let validation = project_each(&pca, &validation_rows)?;
                 let test = project_test(&pca, table, &fold.test)?;
-                Ok((
-                    pca.n_components(),
-                    Cow::Owned(train),
-                    Cow::Owned(validation),
-                    test,
-                ))
+                Ok((pca.n_components(), train, validation, test))
             }),
             None => Ok((
                 table.n_features,
-                Cow::Borrowed(train_rows.as_slice()),
-                Cow::Borrowed(validation_rows.as_slice()),
+                table.exact_rows(&fold.train),
+                table.exact_rows(&fold.validation),
                 fast_rows(table, &fold.test),
             )),
         };
@@ -520,6 +517,18 @@ fn score_fold(
         }
     }
     Ok(results)
+}
+
+/// `rows` projected as training projects them (`pipeline::train::project_rows` on the rows laid end
+/// to end).
+fn project_each(pca: &Pca, rows: &[&[f64]]) -> Result<Vec<f64>> {
+    let dims = pca.n_components();
+    let mut reduced = vec![0.0; rows.len() * dims];
+    let mut scratch = pca.scratch();
+    for (x, out) in rows.iter().zip(reduced.chunks_exact_mut(dims)) {
+        pca.project_fast_into(x, &mut scratch, out)?;
+    }
+    Ok(reduced)
 }
 
 /// The held-out images' features as a classification session computes them (without a PCA step).
