@@ -1,6 +1,7 @@
 //! Scoring the candidates of an automatic choice on its folds, each feature configuration's features
-//! computed once (and kept for the race's second phase and the refinement of the dims) and each fold's
-//! PCA fitted once per number of components, then shared by every classifier that uses them (a
+//! computed once per phase (one group's table kept at a time: a group scored again in the race's second
+//! phase or the refinement of the dims computes them again) and each fold's PCA fitted once per number
+//! of components, on the table's rows in place, then shared by every classifier that uses them (a
 //! classifier that takes every feature, ridge, sees them without a PCA). Gives, candidate for candidate, the scores that training each candidate
 //! on each fold with [`crate::pipeline::train`] and classifying the held-out images with a session
 //! gives (the test `cached_scores_equal_training_each_candidate_on_each_fold` checks it), at a fraction
@@ -135,7 +136,7 @@ type FoldResults = Vec<std::result::Result<f64, String>>;
 /// on the other folds, the groups ordered by their best first-folds accuracy, so that a budget cuts
 /// the least promising. With a `budget`, a group whose turn would end past it (judged from the slowest
 /// candidate so far) is not scored ([`CandidateScore::skipped`]); the first group of each phase always
-/// is. Features are computed once per group, in `tables`.
+/// is. Features are computed once per group and phase, in `tables`.
 pub(super) fn score_candidates(
     images: &[LabeledImage<'_>],
     folds: &[InnerFold],
