@@ -135,7 +135,7 @@ fn covariance_system<T: Copy + Into<f64> + Sync>(
 }
 
 /// `ZZᵀ` (lower triangle), summed over panels of columns.
-fn gram_system<T: Copy + Into<f64> + Sync>(
+pub(super) fn gram_system<T: Copy + Into<f64> + Sync>(
     rows: &[&[T]],
     p: usize,
     standardisation: &Standardisation<'_>,
@@ -164,7 +164,7 @@ fn gram_system<T: Copy + Into<f64> + Sync>(
 }
 
 /// `Zᵀ C` (`p x k`), panel by panel.
-fn primal_of<T: Copy + Into<f64> + Sync>(
+pub(super) fn primal_of<T: Copy + Into<f64> + Sync>(
     rows: &[&[T]],
     p: usize,
     standardisation: &Standardisation<'_>,

@@ -4,7 +4,7 @@
 use faer::{Mat, MatRef, Par};
 
 use super::direct::{self, Rows, Standardisation};
-use super::loo::{Spectrum, centre_columns};
+use super::loo::{Decomposition, Spectrum, centre_columns};
 use super::{RidgeConfig, RidgeModel, Scaling};
 use crate::classifier::calibration::fit_temperature;
 use crate::classifier::common::{accuracy_of_scores, check_vectors};
@@ -78,11 +78,30 @@ impl RidgeModel {
                 loo_samples: Some(pin.loo_samples),
             });
         }
-        let standardised = standardise(rows, &means, &scales);
-        let z = MatRef::from_row_major_slice(&standardised, classes.len(), dims);
-        // The Gram product and its eigendecomposition are most of the time; faer spreads them over the
-        // cores.
-        let spectrum = Spectrum::new(z, targets.as_ref(), Par::rayon(0))?;
+        let standardisation = Standardisation {
+            means: &means,
+            scales: &scales,
+        };
+        // The Gram product and its eigendecomposition are most of the time; faer spreads the product
+        // over the cores. With no more vectors than features (the Gram mode) the product is summed
+        // over panels of standardised columns, without a standardised copy of every vector.
+        let all: Vec<&[T]> = rows.iter().collect();
+        let standardised = match Decomposition::for_shape(all.len(), dims) {
+            Decomposition::Gram => None,
+            Decomposition::Covariance => Some(standardise(rows, &means, &scales)),
+        };
+        let spectrum = match &standardised {
+            None => Spectrum::from_gram(
+                direct::gram_system(&all, dims, &standardisation),
+                dims,
+                targets.as_ref(),
+            )?,
+            Some(standardised) => Spectrum::new(
+                MatRef::from_row_major_slice(standardised, classes.len(), dims),
+                targets.as_ref(),
+                Par::rayon(0),
+            )?,
+        };
         let choice = choose_alpha(&spectrum, &config.alphas)?;
         // The leave-one-out decisions: each target less its leave-one-out residual.
         let held_out = Mat::from_fn(targets.nrows(), targets.ncols(), |i, t| {
@@ -94,7 +113,17 @@ impl RidgeModel {
         } else {
             1.0
         };
-        let columns = spectrum.coefficients(choice.alpha);
+        let columns = match spectrum.dual(choice.alpha) {
+            Some(dual) if standardised.is_none() => {
+                direct::primal_of(&all, dims, &standardisation, dual.as_ref())
+            }
+            _ => spectrum
+                .coefficients(choice.alpha)
+                .ok_or_else(|| CoreError::Param {
+                    name: "ridge",
+                    reason: "internal: a covariance spectrum without its features".into(),
+                })?,
+        };
         let (coefficients, intercepts) =
             class_rows(columns.as_ref(), spectrum.target_means(), n_classes);
         Ok(Self {

@@ -45,7 +45,9 @@ impl Decomposition {
 /// One eigendecomposition of centred features, ready to give the leave-one-out residuals and the
 /// coefficients of any `α > 0`.
 pub struct Spectrum<'a> {
-    z: MatRef<'a, f64>,
+    /// The features, when the coefficients are read from them here (`None`: a Gram matrix given by
+    /// [`Spectrum::from_gram`], whose coefficients the caller forms from [`Spectrum::dual`]).
+    z: Option<MatRef<'a, f64>>,
     decomposition: Decomposition,
     /// `Λ`, clamped at zero.
     eigenvalues: Vec<f64>,
@@ -66,14 +68,50 @@ impl<'a> Spectrum<'a> {
     pub fn new(z: MatRef<'a, f64>, targets: MatRef<'_, f64>, par: Par) -> Result<Self> {
         let (n, p) = (z.nrows(), z.ncols());
         let decomposition = Decomposition::for_shape(n, p);
-        let (target_means, centred_targets) = centre_columns(targets);
         let (eigenvalues, eigenvectors) = match decomposition {
             Decomposition::Gram => symmetric_eigen(z, par)?,
             Decomposition::Covariance => symmetric_eigen(z.transpose(), par)?,
         };
-        let (basis, eigenvectors) = match decomposition {
-            Decomposition::Gram => (eigenvectors, None),
-            Decomposition::Covariance => {
+        Self::finish(
+            Some(z),
+            decomposition,
+            eigenvalues,
+            eigenvectors,
+            targets,
+            par,
+        )
+    }
+
+    /// The Gram mode (`n <= p`) from the lower triangle of `Z Zᵀ` (`n x n`) of `p` features, formed by
+    /// the caller (block by block, without a standardised copy of `Z`): the leave-one-out residuals as
+    /// [`new`](Self::new) gives them; the coefficients are `Zᵀ` [`dual`](Self::dual).
+    pub fn from_gram(gram: Mat<f64>, p: usize, targets: MatRef<'_, f64>) -> Result<Self> {
+        let (eigenvalues, eigenvectors) = eigen_of(gram, p)?;
+        Self::finish(
+            None,
+            Decomposition::Gram,
+            eigenvalues,
+            eigenvectors,
+            targets,
+            Par::Seq,
+        )
+    }
+
+    /// The rest of [`new`](Self::new): the basis and the projected targets.
+    fn finish(
+        z: Option<MatRef<'a, f64>>,
+        decomposition: Decomposition,
+        eigenvalues: Vec<f64>,
+        eigenvectors: Mat<f64>,
+        targets: MatRef<'_, f64>,
+        par: Par,
+    ) -> Result<Self> {
+        let (target_means, centred_targets) = centre_columns(targets);
+        let (basis, eigenvectors) = match (decomposition, z) {
+            // (a Gram matrix given by the caller is always the Gram mode)
+            (Decomposition::Gram, _) | (Decomposition::Covariance, None) => (eigenvectors, None),
+            (Decomposition::Covariance, Some(z)) => {
+                let (n, p) = (z.nrows(), z.ncols());
                 let mut basis = Mat::zeros(n, p);
                 matmul(&mut basis, Accum::Replace, z, &eigenvectors, 1.0, par);
                 // A direction of zero eigenvalue is one Z does not reach: Z v_j is rounding noise
@@ -153,34 +191,34 @@ impl<'a> Spectrum<'a> {
         })
     }
 
-    /// The coefficients at `alpha`, `p x k` (one column per target).
-    pub fn coefficients(&self, alpha: f64) -> Mat<f64> {
+    /// `(Z Zᵀ + αI)⁻¹ Y_c = Q D Qᵀ Y_c` (`n x k`) in the Gram mode, whose `Zᵀ` product is the
+    /// coefficients; `None` in the covariance mode.
+    pub fn dual(&self, alpha: f64) -> Option<Mat<f64>> {
+        if self.decomposition != Decomposition::Gram {
+            return None;
+        }
         let shrunk = self.shrunk(alpha);
-        let p = self.z.ncols();
-        let mut coefficients = Mat::zeros(p, shrunk.ncols());
-        match &self.eigenvectors {
-            // Zᵀ Q D Qᵀ Y_c
-            None => {
-                let mut dual = Mat::zeros(self.basis.nrows(), shrunk.ncols());
-                matmul(
-                    &mut dual,
-                    Accum::Replace,
-                    &self.basis,
-                    &shrunk,
-                    1.0,
-                    Par::Seq,
-                );
-                matmul(
-                    &mut coefficients,
-                    Accum::Replace,
-                    self.z.transpose(),
-                    &dual,
-                    1.0,
-                    Par::Seq,
-                );
-            }
+        let mut dual = Mat::zeros(self.basis.nrows(), shrunk.ncols());
+        matmul(
+            &mut dual,
+            Accum::Replace,
+            &self.basis,
+            &shrunk,
+            1.0,
+            Par::Seq,
+        );
+        Some(dual)
+    }
+
+    /// The coefficients at `alpha`, `p x k` (one column per target); `None` for a spectrum
+    /// [`from_gram`](Self::from_gram), whose caller forms them from [`dual`](Self::dual).
+    pub fn coefficients(&self, alpha: f64) -> Option<Mat<f64>> {
+        let z = self.z?;
+        let shrunk = self.shrunk(alpha);
+        let mut coefficients = Mat::zeros(z.ncols(), shrunk.ncols());
+        match (&self.eigenvectors, self.dual(alpha)) {
             // V D Pᵀ Y_c
-            Some(vectors) => matmul(
+            (Some(vectors), _) => matmul(
                 &mut coefficients,
                 Accum::Replace,
                 vectors,
@@ -188,8 +226,17 @@ impl<'a> Spectrum<'a> {
                 1.0,
                 Par::Seq,
             ),
+            // Zᵀ Q D Qᵀ Y_c
+            (None, dual) => matmul(
+                &mut coefficients,
+                Accum::Replace,
+                z.transpose(),
+                dual?.as_ref(),
+                1.0,
+                Par::Seq,
+            ),
         }
-        coefficients
+        Some(coefficients)
     }
 }
 
@@ -223,6 +270,14 @@ fn symmetric_eigen(a: MatRef<'_, f64>, par: Par) -> Result<(Vec<f64>, Mat<f64>)>
         1.0,
         par,
     );
+    eigen_of(product, a.nrows().max(a.ncols()))
+}
+
+/// The eigenvalues (ascending, those within rounding of zero set to zero, see [`symmetric_eigen`])
+/// and eigenvectors of the symmetric `product` (its lower triangle read), a Gram matrix of data whose
+/// larger side is `largest_side`.
+fn eigen_of(product: Mat<f64>, largest_side: usize) -> Result<(Vec<f64>, Mat<f64>)> {
+    let r = product.nrows();
     let mut values = Diag::<f64>::zeros(r);
     let mut vectors = Mat::<f64>::zeros(r, r);
     // faer's parallel tridiagonalisation sums per-thread parts, so its rounding (and at worst the
@@ -250,7 +305,7 @@ fn symmetric_eigen(a: MatRef<'_, f64>, par: Par) -> Result<(Vec<f64>, Mat<f64>)>
         ),
     })?;
     let largest = (0..r).map(|j| values[j]).fold(0.0, f64::max);
-    let tolerance = largest * a.nrows().max(a.ncols()) as f64 * f64::EPSILON;
+    let tolerance = largest * largest_side as f64 * f64::EPSILON;
     let eigenvalues = (0..r)
         .map(|j| {
             if values[j] <= tolerance {
@@ -379,6 +434,23 @@ mod tests {
                 }
             }
             let spectrum = Spectrum::new(z.as_ref(), y.as_ref(), Par::Seq).unwrap();
+            if n <= p {
+                // A Gram matrix given whole gives the same residuals and dual.
+                let mut gram = Mat::<f64>::zeros(n, n);
+                matmul(&mut gram, Accum::Replace, &z, z.transpose(), 1.0, Par::Seq);
+                let given = Spectrum::from_gram(gram, p, y.as_ref()).unwrap();
+                assert!(given.coefficients(1.0).is_none());
+                for alpha in [1e-2, 0.7, 50.0] {
+                    let (a, b) = (given.leave_one_out(alpha), spectrum.leave_one_out(alpha));
+                    let (c, d) = (given.dual(alpha).unwrap(), spectrum.dual(alpha).unwrap());
+                    for i in 0..n {
+                        for t in 0..k {
+                            assert!((a[(i, t)] - b[(i, t)]).abs() < 1e-9);
+                            assert!((c[(i, t)] - d[(i, t)]).abs() < 1e-9);
+                        }
+                    }
+                }
+            }
             assert_eq!(
                 spectrum.decomposition,
                 if n <= p {
@@ -413,7 +485,7 @@ mod tests {
             let spectrum = Spectrum::new(z.as_ref(), y.as_ref(), Par::rayon(2)).unwrap();
             let all: Vec<usize> = (0..n).collect();
             for alpha in [1e-3, 2.0, 300.0] {
-                let fast = spectrum.coefficients(alpha);
+                let fast = spectrum.coefficients(alpha).unwrap();
                 let (w, b) = direct_fit(&z, &y, &all, alpha);
                 for t in 0..k {
                     assert!((spectrum.target_means()[t] - b[t]).abs() < 1e-12);
