@@ -62,6 +62,25 @@ fn fit(
     )
 }
 
+/// Training vectors (no validation ones) of `n_classes` classes, `dims` values each, calibrated.
+fn training_only<'a, T>(
+    vectors: &'a [T],
+    classes: &'a [usize],
+    n_classes: usize,
+    dims: usize,
+) -> FitData<'a, T> {
+    FitData {
+        train: LabeledVectors { vectors, classes },
+        validation: LabeledVectors {
+            vectors: &[],
+            classes: &[],
+        },
+        n_classes,
+        dims,
+        calibrate: true,
+    }
+}
+
 /// Largest `|a - b|` over two equally long lists.
 fn max_difference(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
@@ -420,19 +439,7 @@ fn a_pinned_fit_is_the_leave_one_out_fit_at_its_alpha() {
     ];
     for (per_class, n_classes, dims, seed) in cases {
         let (x, y) = draw(per_class, n_classes, dims, seed);
-        let data = FitData {
-            train: LabeledVectors {
-                vectors: &x,
-                classes: &y,
-            },
-            validation: LabeledVectors {
-                vectors: &[],
-                classes: &[],
-            },
-            n_classes,
-            dims,
-            calibrate: true,
-        };
+        let data = training_only(&x, &y, n_classes, dims);
         let families: [fn(&RidgeConfig, FitData<'_>) -> presrs_core::error::Result<RidgeModel>; 2] =
             [RidgeFamily::fit, RidgeRawFamily::fit];
         let pins: [fn(&RidgeConfig, &RidgeModel) -> Option<RidgeConfig>; 2] =
@@ -679,32 +686,8 @@ fn single_precision_vectors_give_the_model_of_the_same_values() {
         #[allow(clippy::cast_possible_truncation)]
         let single: Vec<f32> = x.iter().map(|&v| v as f32).collect();
         let double: Vec<f64> = single.iter().map(|&v| f64::from(v)).collect();
-        let data = |vectors| FitData {
-            train: LabeledVectors {
-                vectors,
-                classes: &y,
-            },
-            validation: LabeledVectors {
-                vectors: &[],
-                classes: &[],
-            },
-            n_classes: 3,
-            dims,
-            calibrate: true,
-        };
-        let single_data = FitData {
-            train: LabeledVectors {
-                vectors: &single[..],
-                classes: &y,
-            },
-            validation: LabeledVectors {
-                vectors: &[],
-                classes: &[],
-            },
-            n_classes: 3,
-            dims,
-            calibrate: true,
-        };
+        let data = |vectors| training_only(vectors, &y, 3, dims);
+        let single_data = training_only(&single, &y, 3, dims);
         const { assert!(RidgeFamily::READS_SINGLE) };
         let searched = RidgeFamily::fit(&RidgeConfig::default(), data(&double)).unwrap();
         let from_single = RidgeFamily::fit_single(&RidgeConfig::default(), single_data).unwrap();

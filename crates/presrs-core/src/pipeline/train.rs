@@ -52,18 +52,12 @@ pub(crate) fn train_searching(
     let (pca, classifier, searched_on_subset) = if single {
         let train_features = features_of::<f32>(train, &preprocessor, Precision::Exact)?;
         let validation_features = features_of::<f32>(validation, &preprocessor, Precision::Exact)?;
-        let sets = Sets {
-            train: LabeledVectors {
-                vectors: &train_features,
-                classes: &train_classes,
-            },
-            validation: LabeledVectors {
-                vectors: &validation_features,
-                classes: &validation_classes,
-            },
-            n_classes: class_names.len(),
-            dims: n_features,
-        };
+        let sets = Sets::of(
+            (&train_features, &train_classes),
+            (&validation_features, &validation_classes),
+            class_names.len(),
+            n_features,
+        );
         let (classifier, searched) = fit_searching(&config.classifier, sets, search)?;
         (None, classifier, searched)
     } else {
@@ -79,18 +73,12 @@ pub(crate) fn train_searching(
             // The classifier takes every feature (and standardises them itself).
             None => (None, train_features, validation_features),
         };
-        let sets = Sets {
-            train: LabeledVectors {
-                vectors: &train_vectors,
-                classes: &train_classes,
-            },
-            validation: LabeledVectors {
-                vectors: &validation_vectors,
-                classes: &validation_classes,
-            },
-            n_classes: class_names.len(),
-            dims: pca.as_ref().map_or(n_features, Pca::n_components),
-        };
+        let sets = Sets::of(
+            (&train_vectors, &train_classes),
+            (&validation_vectors, &validation_classes),
+            class_names.len(),
+            pca.as_ref().map_or(n_features, Pca::n_components),
+        );
         let (classifier, searched) = fit_searching(&config.classifier, sets, search)?;
         (pca, classifier, searched)
     };
@@ -133,6 +121,29 @@ struct Sets<'a, T> {
     validation: LabeledVectors<'a, T>,
     n_classes: usize,
     dims: usize,
+}
+
+impl<'a, T> Sets<'a, T> {
+    /// The training and validation `(vectors, classes)` of `dims` values each.
+    fn of(
+        train: (&'a [T], &'a [usize]),
+        validation: (&'a [T], &'a [usize]),
+        n_classes: usize,
+        dims: usize,
+    ) -> Self {
+        Self {
+            train: LabeledVectors {
+                vectors: train.0,
+                classes: train.1,
+            },
+            validation: LabeledVectors {
+                vectors: validation.0,
+                classes: validation.1,
+            },
+            n_classes,
+            dims,
+        }
+    }
 }
 
 /// The precisions a classifier is fitted in: double for every family, single for those that read it.

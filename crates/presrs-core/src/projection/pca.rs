@@ -106,6 +106,21 @@ impl TryFrom<PcaFields> for Pca {
 
 /// Checks the input of [`Pca::fit`]; the number of samples.
 fn check_fit_input(samples: &[f64], n_features: usize, max_components: usize) -> Result<usize> {
+    check_shape(n_features, max_components)?;
+    if samples.len() % n_features != 0 {
+        return Err(CoreError::Shape {
+            what: "pca training matrix",
+            expected: format!("a multiple of {n_features} values"),
+            got: samples.len().to_string(),
+        });
+    }
+    let rows: Vec<&[f64]> = samples.chunks_exact(n_features).collect();
+    check_rows(&rows)?;
+    Ok(rows.len())
+}
+
+/// The checks of [`Pca::fit`] that need no data: features and components to keep.
+fn check_shape(n_features: usize, max_components: usize) -> Result<()> {
     if n_features == 0 {
         return Err(CoreError::Param {
             name: "pca features",
@@ -118,26 +133,27 @@ fn check_fit_input(samples: &[f64], n_features: usize, max_components: usize) ->
             reason: "at least one principal component must be kept".into(),
         });
     }
-    if samples.len() % n_features != 0 {
-        return Err(CoreError::Shape {
-            what: "pca training matrix",
-            expected: format!("a multiple of {n_features} values"),
-            got: samples.len().to_string(),
-        });
-    }
-    let n_samples = samples.len() / n_features;
-    if n_samples < 2 {
+    Ok(())
+}
+
+/// The checks of [`Pca::fit`] on its rows (each of the right length): two or more, finite.
+fn check_rows(rows: &[&[f64]]) -> Result<()> {
+    if rows.len() < 2 {
         return Err(CoreError::NotEnoughData(format!(
-            "PCA needs at least 2 training vectors, got {n_samples}"
+            "PCA needs at least 2 training vectors, got {}",
+            rows.len()
         )));
     }
-    if samples.iter().any(|value| !value.is_finite()) {
+    if rows
+        .iter()
+        .any(|row| row.iter().any(|value| !value.is_finite()))
+    {
         return Err(CoreError::Param {
             name: "pca training matrix",
             reason: "contains NaN or infinite values".into(),
         });
     }
-    Ok(n_samples)
+    Ok(())
 }
 
 /// The thin SVD of `centred` (`n_samples x n_features`): its singular values and right singular
@@ -307,6 +323,7 @@ impl Pca {
     /// [`fit`](Self::fit) on rows held elsewhere (e.g. some rows of a larger feature table), without a
     /// copy of them: the same PCA as `fit` on the rows laid end to end.
     pub fn fit_rows(rows: &[&[f64]], n_features: usize, max_components: usize) -> Result<Self> {
+        check_shape(n_features, max_components)?;
         if let Some(row) = rows.iter().find(|row| row.len() != n_features) {
             return Err(CoreError::Shape {
                 what: "pca training row",
@@ -314,21 +331,7 @@ impl Pca {
                 got: row.len().to_string(),
             });
         }
-        // (the checks of `fit` on the first two rows' shape; the values are checked below)
-        check_fit_input(
-            &vec![0.0; n_features * rows.len().min(2)],
-            n_features,
-            max_components,
-        )?;
-        if rows
-            .iter()
-            .any(|row| row.iter().any(|value| !value.is_finite()))
-        {
-            return Err(CoreError::Param {
-                name: "pca training matrix",
-                reason: "contains NaN or infinite values".into(),
-            });
-        }
+        check_rows(rows)?;
         Self::fit_checked_rows(rows, None, n_features, max_components)
     }
 
@@ -581,11 +584,8 @@ mod tests {
         x
     }
 
-    /// The oracle: the range finder's leading singular values and axes are the exact SVD's.
-    #[test]
-    fn the_range_finder_agrees_with_the_exact_svd() {
-        let (n, p, k) = (500, 300, 12);
-        let samples = falling_spectrum(n, p, 11);
+    /// The column means of `samples` (`n x p`) and the exact thin SVD of the rows less them.
+    fn centred_svd(samples: &[f64], n: usize, p: usize) -> (Vec<f64>, Diag<f64>, Mat<f64>) {
         let mut mean = vec![0.0; p];
         for row in samples.chunks_exact(p) {
             mean.iter_mut()
@@ -593,7 +593,16 @@ mod tests {
                 .for_each(|(m, v)| *m += v / n as f64);
         }
         let centred = Mat::from_fn(n, p, |i, j| samples[i * p + j] - mean[j]);
-        let (exact_values, exact_axes) = thin_svd(&centred).unwrap();
+        let (values, axes) = thin_svd(&centred).unwrap();
+        (mean, values, axes)
+    }
+
+    /// The oracle: the range finder's leading singular values and axes are the exact SVD's.
+    #[test]
+    fn the_range_finder_agrees_with_the_exact_svd() {
+        let (n, p, k) = (500, 300, 12);
+        let samples = falling_spectrum(n, p, 11);
+        let (mean, exact_values, exact_axes) = centred_svd(&samples, n, p);
         let (values, axes) = randomised_svd(&samples, &mean, k).unwrap();
         for c in 0..k {
             let (exact, found) = (exact_values.column_vector()[c], values.column_vector()[c]);
@@ -617,14 +626,7 @@ mod tests {
         assert!(uses_range_finder(n, p, k));
         let samples = falling_spectrum(n, p, 12);
         let fast = Pca::fit(&samples, p, k).unwrap();
-        let mut mean = vec![0.0; p];
-        for row in samples.chunks_exact(p) {
-            mean.iter_mut()
-                .zip(row)
-                .for_each(|(m, v)| *m += v / n as f64);
-        }
-        let centred = Mat::from_fn(n, p, |i, j| samples[i * p + j] - mean[j]);
-        let (values, axes) = thin_svd(&centred).unwrap();
+        let (_, values, axes) = centred_svd(&samples, n, p);
         assert_eq!(fast.n_components(), k);
         for c in 0..k {
             let s = values.column_vector()[c];

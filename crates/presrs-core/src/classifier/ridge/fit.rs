@@ -56,12 +56,12 @@ impl RidgeModel {
             scales.fill(1.0);
         }
         let targets = targets(classes, n_classes);
+        let standardisation = Standardisation {
+            means: &means,
+            scales: &scales,
+        };
         if let Some(pin) = &config.pinned {
             let (target_means, centred) = centre_columns(targets.as_ref());
-            let standardisation = Standardisation {
-                means: &means,
-                scales: &scales,
-            };
             let columns = direct::solve(rows, &standardisation, centred.as_ref(), pin.alpha)?;
             let (coefficients, intercepts) = class_rows(columns.as_ref(), &target_means, n_classes);
             return Ok(Self {
@@ -78,10 +78,6 @@ impl RidgeModel {
                 loo_samples: Some(pin.loo_samples),
             });
         }
-        let standardisation = Standardisation {
-            means: &means,
-            scales: &scales,
-        };
         // The Gram product and its eigendecomposition are most of the time; faer spreads the product
         // over the cores. With no more vectors than features (the Gram mode) the product is summed
         // over panels of standardised columns, without a standardised copy of every vector.
