@@ -53,7 +53,7 @@ impl OnlineClassifier {
     /// settings, sample frame, gait table) when it has one, else warm-up calibration on the first
     /// frames. `gait_table` adds terrain -> gait entries to the profile's. `decide_at`: a whole-stance
     /// model decides K frames after touchdown, on the stance so far, or (`"auto"`) at its first
-    /// decision point confident enough, instead of at lift-off; only at a moment the model was trained
+    /// decision point confident enough (else at its deadline point), instead of at lift-off; only at a moment the model was trained
     /// for (`presrs train --decide-at`), else a `ValueError` says how to train one.
     #[new]
     #[pyo3(signature = (model, *, gait_table = None, decide_at = None, novelty = true))]

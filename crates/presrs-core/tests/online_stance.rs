@@ -199,39 +199,63 @@ fn decide_at_k_decides_on_the_stance_so_far() {
 }
 
 /// `auto` decides at the first point whose confidence passes the model's threshold, by that point's
-/// classifier (as offline), else at the lift-off by the whole-stance one; each decision says why.
+/// classifier (as offline), else at its deadline point by that point's classifier, else at the
+/// lift-off by the whole-stance one; each decision says why.
 #[test]
-fn auto_decides_at_the_first_confident_point() {
+fn auto_decides_at_the_first_confident_point_else_at_its_deadline() {
     let points = [3, 6, 9];
     let (model, frames) = setup_with_points(false, &points);
+    check_auto(&model, &frames, &points);
+    // The same model with a deadline at 6 and a threshold few points pass: stances no point was
+    // confident about by 6 are decided there.
+    let mut early = model.early().unwrap().clone();
+    let auto = early.auto.as_mut().unwrap();
+    auto.threshold = 0.999;
+    auto.deadline = Some(6);
+    let with_deadline = model.clone().with_early(early).unwrap();
+    let reasons = check_auto(&with_deadline, &frames, &points);
+    assert!(reasons.contains(&EarlyReason::Deadline), "{reasons:?}");
+    // A deadline that is not one of the points is refused.
+    let mut early = model.early().unwrap().clone();
+    early.auto.as_mut().unwrap().deadline = Some(5);
+    let err = model.clone().with_early(early).unwrap_err();
+    assert!(err.to_string().contains("deadline 5"), "{err}");
+}
+
+/// Runs `model` with `auto` over `frames` and checks every decision against the offline rule; the
+/// reasons given, in order.
+fn check_auto(model: &TrainedModel, frames: &[Frame], points: &[usize]) -> Vec<EarlyReason> {
     let early = model.early().unwrap();
-    let threshold = early.auto.unwrap().threshold;
-    let run = run(&model, &frames, Some(DecideAt::AUTO));
+    let rule = early.auto.unwrap().rule();
+    let run = run(model, frames, Some(DecideAt::AUTO));
     assert_eq!(run.decisions.len(), 12);
+    let mut reasons = Vec::new();
     for ((decision, posteriors, _), (stance, sampled, _)) in run.decisions.iter().zip(&run.liftoffs)
     {
         assert!(sampled);
         let how = decision.stance.unwrap();
         let reason = how.early.unwrap();
-        // The first point offline whose confidence passes the threshold.
+        reasons.push(reason.reason);
+        // The first point offline whose confidence passes the threshold, or the deadline.
         let first = points.iter().find(|&&k| {
             k < stance.len && {
-                let (class, p) = offline(early.point(k).unwrap(), &frames, stance.start, k + 1);
-                p[class] >= threshold
+                let (class, p) = offline(early.point(k).unwrap(), frames, stance.start, k + 1);
+                rule.decides(k, p[class])
             }
         });
         match first {
             Some(&k) => {
-                assert_eq!(how.decided_at, DecidedAt::Offset(k));
-                assert_eq!(
-                    (reason.reason, reason.point),
-                    (EarlyReason::Confident, Some(k))
-                );
-                assert_eq!(reason.threshold, Some(threshold));
                 let (class, expected) =
-                    offline(early.point(k).unwrap(), &frames, stance.start, k + 1);
+                    offline(early.point(k).unwrap(), frames, stance.start, k + 1);
+                let why = if expected[class] >= rule.threshold {
+                    EarlyReason::Confident
+                } else {
+                    EarlyReason::Deadline
+                };
+                assert_eq!(how.decided_at, DecidedAt::Offset(k));
+                assert_eq!((reason.reason, reason.point), (why, Some(k)));
+                assert_eq!(reason.threshold, Some(rule.threshold));
                 assert_eq!((decision.class, posteriors), (class, &expected));
-                assert!(decision.confidence >= threshold);
             }
             None => {
                 assert_eq!(how.decided_at, DecidedAt::Liftoff);
@@ -240,6 +264,7 @@ fn auto_decides_at_the_first_confident_point() {
             }
         }
     }
+    reasons
 }
 
 /// A model decides only at the moments it was trained for: a point it lacks, or `auto` without

@@ -139,7 +139,8 @@ pub struct TerrainDecision {
     pub gait: String,
     pub latency_us: f64,
     /// Early decisions (`--decide-at K` or `auto`): the rule, `fixed` or `auto` (empty without
-    /// `--decide-at`); why then (`fixed`, `confident`, `not_confident`, `ended_first`); the decision
+    /// `--decide-at`); why then (`fixed`, `confident`, `deadline`, `not_confident`,
+    /// `ended_first`); the decision
     /// point whose classifier decided (-1: the whole-stance classifier); the frames after touchdown
     /// at which it decided; `auto`'s threshold (0 otherwise).
     pub early_rule: String,

@@ -40,6 +40,9 @@ pub fn describe_model(file: &ModelFile) -> String {
             selection.scores.len()
         ));
     }
+    if let Some(early) = early_summary(model) {
+        line(early);
+    }
     line(match model.novelty() {
         Some(novelty) => format!("novelty: {}", novelty.describe()),
         None => "novelty: none (every decision is one of the classes)".to_owned(),
@@ -108,6 +111,38 @@ pub fn sampling_summary(model: &TrainedModel) -> Option<String> {
                 text.push_str(", partial stances included");
             }
         }
+    }
+    Some(text)
+}
+
+/// A whole-stance model's early decisions in one line (`None` without decision points): the points,
+/// and `auto`'s rule with what validation measured of it.
+pub fn early_summary(model: &TrainedModel) -> Option<String> {
+    let early = model.early()?;
+    let frames: Vec<String> = early.frames().iter().map(usize::to_string).collect();
+    let mut text = format!(
+        "decision points: {} frames after touchdown",
+        frames.join(", ")
+    );
+    if let Some(auto) = &early.auto {
+        let threshold = if auto.threshold > 1.0 {
+            "no point confident enough".to_owned()
+        } else {
+            format!("threshold {:.3}", auto.threshold)
+        };
+        let deadline = auto.deadline.map_or_else(
+            || "no deadline (else at lift-off)".to_owned(),
+            |k| format!("else at the deadline point {k}"),
+        );
+        let _ = write!(
+            text,
+            "; auto: {threshold}, {deadline}; on {} held-out training stances {:.1} % (whole stance              {:.1} %), deciding at {:.1} frames on average ({:.0} % of each stance)",
+            auto.validation_stances,
+            100.0 * auto.auto_accuracy,
+            100.0 * auto.whole_accuracy,
+            auto.mean_decision_frame,
+            100.0 * auto.mean_decision_share
+        );
     }
     Some(text)
 }

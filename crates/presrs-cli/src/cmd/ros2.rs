@@ -77,7 +77,7 @@ pub struct Ros2Args {
           value_parser = |t: &str| crate::args::values::name_value(t, "TERRAIN=GAIT"))]
     pub gait: Vec<(String, String)>,
     /// A whole-stance model decides K frames after touchdown, on the stance so far, or at its first
-    /// confident decision point (`auto`) [default: at lift-off], as `presrs stream --decide-at`.
+    /// confident decision point (`auto`, else at its deadline point) [default: at lift-off], as `presrs stream --decide-at`.
     #[arg(long, value_name = "K|auto")]
     pub decide_at: Option<DecideAt>,
 }

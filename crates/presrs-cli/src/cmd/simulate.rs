@@ -88,7 +88,7 @@ pub struct SimulateArgs {
     #[arg(long, requires = "adaptive")]
     pub start_gait: Option<String>,
     /// With a whole-stance --adaptive model: decide K frames after touchdown, or at its first
-    /// confident decision point (`auto`), instead of at lift-off (a moment the model was trained for).
+    /// confident decision point (`auto`, else at its deadline point), instead of at lift-off (a moment the model was trained for).
     #[arg(long, value_name = "K|auto", requires = "adaptive")]
     pub decide_at: Option<DecideAt>,
     /// Runs per policy, at least 1 (seeds --seed, --seed + 1, ...); every policy runs on the same seeds.

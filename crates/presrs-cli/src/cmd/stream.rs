@@ -84,7 +84,7 @@ pub struct StreamArgs {
     #[arg(long)]
     pub sample_offset: Option<usize>,
     /// A whole-stance model decides K frames after touchdown, on the stance so far, or at its first
-    /// decision point confident enough (`auto`) [default: at lift-off]. Only a moment the model was
+    /// decision point confident enough (`auto`, else at its deadline point) [default: at lift-off]. Only a moment the model was
     /// trained for (`presrs train --decide-at`), or its whole length.
     #[arg(long, value_name = "K|auto")]
     pub decide_at: Option<DecideAt>,

@@ -164,6 +164,9 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         model.class_names().join(", ")
     )?;
     writeln!(out, "{}", presrs::describe::pipeline_summary(model))?;
+    if let Some(early) = presrs::describe::early_summary(model) {
+        writeln!(out, "{early}")?;
+    }
     if let Some(profile) = &file.online {
         writeln!(out, "{}", profile_summary(profile))?;
     }

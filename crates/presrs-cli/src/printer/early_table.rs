@@ -64,15 +64,19 @@ pub fn early_table(early: &EarlyEvaluation) -> String {
         100.0 * auto.decided_early,
         100.0 * auto.decided_by_mid_stance
     );
+    let _ = writeln!(out, "auto's rule by fold: {}", fold_rules(auto));
     if let Some(best) = auto.hindsight_best_by(0.5) {
         let threshold = best
             .threshold
             .map_or_else(|| "none".to_owned(), |t| format!("{t:.3}"));
+        let deadline = best
+            .deadline
+            .map_or_else(|| "none".to_owned(), |k| k.to_string());
         let _ = writeln!(
             out,
-            "in hindsight (one threshold chosen on these held-out stances: a bound, not a result): \
+            "in hindsight (one rule chosen on these held-out stances: a bound, not a result): \
              deciding by half the median stance on average, at best {:.1} % (threshold {threshold}, \
-             mean decision at {:.0} % of the median stance, {:.0} % decided before lift-off, {:.0} % \
+             deadline {deadline}, mean decision at {:.0} % of the median stance, {:.0} % decided before lift-off, {:.0} % \
              by mid-stance)",
             100.0 * best.accuracy,
             100.0 * best.mean_over_median_stance,
@@ -81,4 +85,26 @@ pub fn early_table(early: &EarlyEvaluation) -> String {
         );
     }
     out
+}
+
+/// Each fold's threshold and deadline: `0.986 else 31`, `never else 31`, `0.991 else lift-off`.
+fn fold_rules(auto: &presrs::eval::early::EarlyAuto) -> String {
+    let rules: Vec<String> = auto
+        .thresholds
+        .iter()
+        .zip(&auto.deadlines)
+        .map(|(threshold, deadline)| {
+            let threshold = if *threshold > 1.0 {
+                "never".to_owned()
+            } else {
+                format!("{threshold:.3}")
+            };
+            let deadline = deadline.map_or_else(|| "lift-off".to_owned(), |k| k.to_string());
+            format!("{threshold} else {deadline}")
+        })
+        .collect();
+    format!(
+        "{} (threshold, else the deadline point or lift-off)",
+        rules.join("; ")
+    )
 }

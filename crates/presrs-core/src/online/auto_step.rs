@@ -1,6 +1,7 @@
 //! `auto`'s step of a whole-stance model online: at each decision point the stance has reached, the
-//! point's classifier decides if its confidence passes the threshold learned at training; and what a
-//! decision made later (at the lift-off or the model's length) says about why. Methods of
+//! point's classifier decides if its confidence passes the threshold learned at training, or if the
+//! point is the deadline learned with it; and what a decision made later (at the lift-off or the
+//! model's length) says about why. Methods of
 //! [`OnlineClassifier`] kept apart from `mod.rs`, which holds the rest of its step.
 
 use super::{
@@ -22,19 +23,20 @@ impl WholeStance<'_> {
             rule,
             reason,
             point: None,
-            threshold: self.threshold,
+            threshold: self.auto.map(|rule| rule.threshold),
         })
     }
 }
 
 impl OnlineClassifier<'_> {
     /// With `auto`, the points reached by frame `t` of the stance from `start` are tried in order: the
-    /// first whose confidence is at least the threshold decides. Whether the stance was decided.
+    /// first whose confidence is at least the threshold decides, else the deadline point. Whether the
+    /// stance was decided.
     pub(super) fn try_confident_point(&mut self, stance_id: u64, start: usize, t: usize) -> bool {
         let Some(whole) = self.whole.as_mut() else {
             return false;
         };
-        let (Some(rule), Some(threshold)) = (whole.decide_at, whole.threshold) else {
+        let (Some(rule), Some(auto)) = (whole.decide_at, whole.auto) else {
             return false;
         };
         while let Some((k, session)) = whole.points.get_mut(whole.next_point)
@@ -48,26 +50,31 @@ impl OnlineClassifier<'_> {
                 .sample_in(start, k + 1, k + 1)
                 .and_then(|view| {
                     session.classify(&view).map(|p| {
-                        if p.confidence >= threshold {
+                        if auto.decides(k, p.confidence) {
                             posteriors.extend_from_slice(p.posteriors);
                         }
                         (p.class, p.confidence, p.novelty)
                     })
                 });
-            let how = StanceDecision {
-                decided_at: DecidedAt::Offset(k),
-                waited_for: start + k,
-                cut: false,
-                early: Some(EarlyDecision {
-                    rule,
-                    reason: EarlyReason::Confident,
-                    point: Some(k),
-                    threshold: Some(threshold),
-                }),
-            };
             match outcome {
-                Ok((_, confidence, _)) if confidence < threshold => {}
+                Ok((_, confidence, _)) if !auto.decides(k, confidence) => {}
                 Ok(decided) => {
+                    let reason = if decided.1 >= auto.threshold {
+                        EarlyReason::Confident
+                    } else {
+                        EarlyReason::Deadline
+                    };
+                    let how = StanceDecision {
+                        decided_at: DecidedAt::Offset(k),
+                        waited_for: start + k,
+                        cut: false,
+                        early: Some(EarlyDecision {
+                            rule,
+                            reason,
+                            point: Some(k),
+                            threshold: Some(auto.threshold),
+                        }),
+                    };
                     whole.open = None;
                     self.push_whole_decision(stance_id, start, k + 1, how, t, Ok(decided));
                     return true;

@@ -2,11 +2,11 @@
 //! ([`OnlineParams::decide_at`](crate::stance::causal::OnlineParams::decide_at)): the classifiers of the
 //! decision points it was trained for ([`crate::pipeline::EarlyDecisions`]) and the refusal of a moment
 //! it was not trained for, and what each decision says about why it was made when it was
-//! ([`EarlyDecision`]). `auto`'s step (the first point whose confidence passes the threshold) is the
-//! online classifier's (`online/mod.rs`).
+//! ([`EarlyDecision`]). `auto`'s step (the first point whose confidence passes the threshold, else the
+//! deadline point) is the online classifier's (`online/auto_step.rs`).
 
 use crate::error::{CoreError, Result};
-use crate::pipeline::{Session, TrainedModel};
+use crate::pipeline::{AutoRule, Session, TrainedModel};
 
 use crate::stance::causal::DecideAt;
 
@@ -18,6 +18,8 @@ pub enum EarlyReason {
     Fixed,
     /// `auto`: the point's confidence passed the threshold.
     Confident,
+    /// `auto`: no point's confidence passed the threshold by the deadline point, which decided.
+    Deadline,
     /// `auto`: no point's confidence passed the threshold before the lift-off (or the model's length).
     NotConfident,
     /// The stance ended (or reached the model's length) before the first point.
@@ -30,6 +32,7 @@ impl EarlyReason {
         match self {
             Self::Fixed => "fixed",
             Self::Confident => "confident",
+            Self::Deadline => "deadline",
             Self::NotConfident => "not_confident",
             Self::EndedFirst => "ended_first",
         }
@@ -53,11 +56,11 @@ pub struct EarlyDecision {
 pub(crate) type PointSessions<'m> = Vec<(usize, Session<'m>)>;
 
 /// The classifiers `decide_at` uses on `model` (the point `K`, or every point for `auto`) and `auto`'s
-/// threshold; an error when the model was not trained for that moment.
+/// rule; an error when the model was not trained for that moment.
 pub(crate) fn points_for(
     model: &TrainedModel,
     decide_at: Option<DecideAt>,
-) -> Result<(PointSessions<'_>, Option<f64>)> {
+) -> Result<(PointSessions<'_>, Option<AutoRule>)> {
     let Some(decide_at) = decide_at else {
         return Ok((Vec::new(), None));
     };
@@ -79,9 +82,9 @@ pub(crate) fn points_for(
         .filter(|point| decide_at.is_auto() || decide_at == DecideAt::Frames(point.frames))
         .map(|point| (point.frames, point.model.session()))
         .collect();
-    let threshold = decide_at
+    let rule = decide_at
         .is_auto()
-        .then(|| early.auto.map(|auto| auto.threshold))
+        .then(|| early.auto.map(|auto| auto.rule()))
         .flatten();
-    Ok((sessions, threshold))
+    Ok((sessions, rule))
 }

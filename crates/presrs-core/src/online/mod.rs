@@ -26,7 +26,8 @@
 //!   by the classifier the model holds for that point ([`crate::pipeline::EarlyDecisions`]: trained
 //!   on stances cut there), or by the whole-stance one when `K` reaches the model's length;
 //! - or, with `auto`, at the first of the model's decision points whose confidence passes the
-//!   threshold learned at training (else at the lift-off, whole). A moment the model was not trained
+//!   threshold learned at training, else at its deadline point (when it learned one and the stance
+//!   reaches it), else at the lift-off, whole. A moment the model was not trained
 //!   for is refused ([`TrainedModel::trained_for`]); each decision says why it was made then
 //!   ([`EarlyDecision`]);
 //! - a stance found longer than the model's length before its lift-off is decided then, on its first
@@ -45,7 +46,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result};
 use crate::frame::{FrameView, Grid};
 use crate::novelty::Novelty;
-use crate::pipeline::{Session, TrainedModel};
+use crate::pipeline::{AutoRule, Session, TrainedModel};
 use crate::sample::SampleKind;
 use crate::stance::causal::MAX_SEG_EVENTS;
 use crate::stance::{BaselineMode, ValidSegmentParams};
@@ -237,9 +238,9 @@ struct WholeStance<'m> {
     buffer: StanceBuffer,
     decide_at: Option<DecideAt>,
     /// The classifiers of the model's decision points that `decide_at` uses (frames after touchdown,
-    /// increasing), and `auto`'s threshold.
+    /// increasing), and `auto`'s rule.
     points: early::PointSessions<'m>,
-    threshold: Option<f64>,
+    auto: Option<AutoRule>,
     /// The next point to try in the stance under way (`auto`).
     next_point: usize,
     /// Partial stances are decided too: in the one-contact mode the stream is one partial stance.
@@ -289,12 +290,12 @@ impl<'m> WholeStance<'m> {
                 got: format!("crop {} giving {} images", model.crop(), model.image_grid()),
             });
         }
-        let (points, threshold) = early::points_for(model, online.decide_at)?;
+        let (points, auto) = early::points_for(model, online.decide_at)?;
         Ok(Some(Self {
             buffer,
             decide_at: online.decide_at,
             points,
-            threshold,
+            auto,
             next_point: 0,
             decide_partial: params.params().baseline == BaselineMode::Contact,
             open: None,

@@ -1,8 +1,9 @@
 //! Early decisions (anytime classification) of a whole-stance model: one classifier per decision point
 //! before lift-off, each trained on the training stances cut at its point (the same method as the
 //! whole-stance classifier: crop, features, projection and classifier family), and the confidence
-//! threshold with which `auto` decides at the first point that passes it (the idea of TEASER,
-//! Schäfer and Leser 2020, and of ECTS: decide when the prediction is safe, not at a fixed frame).
+//! threshold with which `auto` decides at the first point that passes it, else at a deadline point
+//! (the idea of TEASER, Schäfer and Leser 2020, and of ECTS: decide when the prediction is safe, not at
+//! a fixed frame).
 //!
 //! A point `K` is the stance's first `K + 1` frames (frames touchdown to touchdown + K), summarised as
 //! the online [`StanceBuffer`](crate::online::StanceBuffer) summarises them, as a sample of its own
@@ -29,10 +30,20 @@
 //! within half the stance) loses nothing. Waiting costs nothing until the decision is due, so `auto`
 //! spends the earliness it is allowed on confidence. A point estimate of the accuracy alone, without
 //! the bound, let one subject's 60 stances set a threshold that was too bold on another subject.
+//!
+//! **The deadline** is learned after the threshold: of the points at most [`AUTO_EARLINESS`] of the
+//! median stance after touchdown, the latest at which deciding every stance no point was confident
+//! about by then (by that point's classifier, whatever its confidence) keeps the early decisions
+//! safe by the same bound; none if no point does (the stance waits for its lift-off). The decision is
+//! due by then, and the points just before it are nearly as accurate as the whole stance while their
+//! confidences sit below the one threshold the earliest points set (docs/methods.md, "Early
+//! decisions").
 
 use crate::error::{CoreError, Result};
 use crate::pipeline::extract::LabeledImage;
-use crate::pipeline::model::{AutoThreshold, DecisionPoint, EarlyDecisions, TrainedModel};
+use crate::pipeline::model::{
+    AutoRule, AutoThreshold, DecisionPoint, EarlyDecisions, TrainedModel,
+};
 use crate::pipeline::train::train;
 use crate::selection::ValidateBy;
 use crate::selection::folds::make_folds;
@@ -120,12 +131,13 @@ pub struct OfflineDecision {
 }
 
 impl HeldOutStance {
-    /// `auto`'s decision with `threshold` over points `frames`: the first point whose confidence is at
-    /// least the threshold, else the whole stance at its lift-off.
-    pub fn decide(&self, frames: &[usize], threshold: f64) -> OfflineDecision {
+    /// `auto`'s decision by `rule` over points `frames`: the first point whose confidence is at least
+    /// the threshold, else the deadline point (when the stance reaches it), else the whole stance at
+    /// its lift-off.
+    pub fn decide(&self, frames: &[usize], rule: AutoRule) -> OfflineDecision {
         for (index, (&k, outcome)) in frames.iter().zip(&self.points).enumerate() {
             if let Some((class, confidence)) = *outcome
-                && confidence >= threshold
+                && rule.decides(k, confidence)
             {
                 return OfflineDecision {
                     class,
@@ -348,41 +360,58 @@ fn cut_at<'a>(set: &StanceImages<'a>, k: usize) -> Vec<LabeledImage<'a>> {
 /// The rule of the module docs over `held_out` stances: of the thresholds whose early decisions'
 /// accuracy, at its lower bound, is within [`AUTO_TOLERANCE`] of the whole-stance classifier's on
 /// the same stances, the highest whose mean decision comes by [`AUTO_EARLINESS`] of the median
-/// stance, else the lowest.
+/// stance, else the lowest; then the deadline: the latest point by [`AUTO_EARLINESS`] of the median
+/// stance at which deciding the stances the threshold leaves keeps the early decisions safe.
 pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThreshold {
     let never = 1.0 + f64::EPSILON.sqrt();
-    let whole_accuracy = accuracy(held_out, |stance| stance.whole.0);
     let mut candidates = point_confidences(held_out);
     candidates.push(never);
-    let mean_frame = |threshold: f64| {
-        let n = held_out.len().max(1) as f64;
-        let frames_sum: usize = held_out
-            .iter()
-            .map(|stance| stance.decide(frames, threshold).frame)
-            .sum();
-        frames_sum as f64 / n
-    };
     let due = AUTO_EARLINESS * median_length(held_out) as f64;
     let safe: Vec<f64> = candidates
         .into_iter()
-        .filter(|&t| early_decisions_are_safe(held_out, frames, t))
+        .filter(|&t| early_decisions_are_safe(held_out, frames, AutoRule::threshold(t)))
         .collect();
     let threshold = safe
         .iter()
         .rev()
         .copied()
-        .find(|&t| mean_frame(t) <= due)
+        .find(|&t| mean_decision_frame(held_out, frames, AutoRule::threshold(t)) <= due)
         .or_else(|| safe.first().copied())
         .unwrap_or(never);
+    let deadline = frames
+        .iter()
+        .rev()
+        .copied()
+        // A point is placed at its share of the median stance rounded to a frame: so is the due one.
+        .filter(|&k| k as f64 <= due.round())
+        .find(|&k| {
+            let rule = AutoRule {
+                threshold,
+                deadline: Some(k),
+            };
+            early_decisions_are_safe(held_out, frames, rule)
+        });
+    describe_rule(
+        held_out,
+        frames,
+        AutoRule {
+            threshold,
+            deadline,
+        },
+    )
+}
+
+/// `rule` with what it gives on `held_out`.
+fn describe_rule(held_out: &[HeldOutStance], frames: &[usize], rule: AutoRule) -> AutoThreshold {
+    let n = held_out.len().max(1) as f64;
     let decisions: Vec<OfflineDecision> = held_out
         .iter()
-        .map(|stance| stance.decide(frames, threshold))
+        .map(|stance| stance.decide(frames, rule))
         .collect();
-    let n = held_out.len().max(1) as f64;
     AutoThreshold {
-        threshold,
-        whole_accuracy,
-        auto_accuracy: accuracy(held_out, |stance| stance.decide(frames, threshold).class),
+        threshold: rule.threshold,
+        whole_accuracy: accuracy(held_out, |stance| stance.whole.0),
+        auto_accuracy: accuracy(held_out, |stance| stance.decide(frames, rule).class),
         mean_decision_frame: decisions.iter().map(|d| d.frame as f64).sum::<f64>() / n,
         mean_decision_share: decisions
             .iter()
@@ -391,15 +420,25 @@ pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThre
             .sum::<f64>()
             / n,
         validation_stances: held_out.len(),
+        deadline: rule.deadline,
     }
 }
 
-/// Whether `auto` with `threshold` is safe on `held_out`: no stance decided early, or the lower bound
-/// of the early decisions' accuracy within [`AUTO_TOLERANCE`] of the whole stance's on them.
-fn early_decisions_are_safe(held_out: &[HeldOutStance], frames: &[usize], threshold: f64) -> bool {
+/// The mean frame after touchdown at which `rule` decides `held_out` (0 without stances).
+fn mean_decision_frame(held_out: &[HeldOutStance], frames: &[usize], rule: AutoRule) -> f64 {
+    let frames_sum: usize = held_out
+        .iter()
+        .map(|stance| stance.decide(frames, rule).frame)
+        .sum();
+    frames_sum as f64 / held_out.len().max(1) as f64
+}
+
+/// Whether `auto` by `rule` is safe on `held_out`: no stance decided early, or the lower bound of the
+/// early decisions' accuracy within [`AUTO_TOLERANCE`] of the whole stance's on them.
+fn early_decisions_are_safe(held_out: &[HeldOutStance], frames: &[usize], rule: AutoRule) -> bool {
     let (mut early, mut right, mut whole_right) = (0usize, 0usize, 0usize);
     for stance in held_out {
-        let decision = stance.decide(frames, threshold);
+        let decision = stance.decide(frames, rule);
         if decision.point.is_some() {
             early += 1;
             right += usize::from(decision.class == stance.class);
@@ -484,17 +523,21 @@ mod tests {
         }
         let auto = learn_threshold(&stances, &frames);
         // 0.7 decides the first stance wrong at frame 4; 0.9, 0.95 and 0.97 are safe; 0.97 decides
-        // the sixty at frame 8 and the first at its lift-off (a mean of 8.2 frames, by mid-stance: 10
-        // frames), 0.99 none before lift-off.
+        // the sixty at frame 8 and would leave the first for its lift-off (a mean of 8.2 frames, by
+        // mid-stance: 10 frames), 0.99 none before lift-off. The point at 8 is safe as a deadline:
+        // it decides the first stance there, right.
         assert_eq!(auto.threshold, 0.97);
         assert_eq!((auto.whole_accuracy, auto.auto_accuracy), (1.0, 1.0));
-        assert_eq!(auto.mean_decision_frame, (20.0 + 60.0 * 8.0) / 61.0);
+        assert_eq!(auto.deadline, Some(8));
+        assert_eq!(auto.mean_decision_frame, 8.0);
         // With the second point past mid-stance, the highest safe threshold due in time is 0.9.
         let late_points = [4, 12];
         let auto = learn_threshold(&stances, &late_points);
         assert_eq!(auto.threshold, 0.9);
+        // The point at 4 as a deadline would decide the first stance wrong: too bold.
+        assert_eq!(auto.deadline, None);
         assert_eq!(auto.mean_decision_frame, (12.0 + 60.0 * 4.0) / 61.0);
-        let late = stances[0].decide(&frames, 0.99);
+        let late = stances[0].decide(&frames, AutoRule::threshold(0.99));
         assert_eq!((late.point, late.frame), (None, 20));
         // Three stances right early are too few to be sure of two points: auto waits.
         let few = learn_threshold(&stances[1..4], &frames);
@@ -504,7 +547,10 @@ mod tests {
             points: vec![Some((0, 0.99)), None],
             ..stances[0].clone()
         };
-        assert_eq!(short.decide(&frames, 0.999).point, None);
+        assert_eq!(
+            short.decide(&frames, AutoRule::threshold(0.999)).point,
+            None
+        );
     }
 
     #[test]
@@ -559,6 +605,45 @@ mod tests {
             err.contains("3, 6 frames") && err.contains("auto among them"),
             "{err}"
         );
+    }
+
+    /// The deadline decides the stances no point was confident about at the latest point by
+    /// mid-stance, when validation shows it safe; a point that is wrong too often is no deadline.
+    #[test]
+    fn the_deadline_is_the_latest_safe_point_by_mid_stance() {
+        let frames = [3, 6, 10];
+        // Sixty stances confident and right at every point; sixty unsure: wrong at 3, half wrong at
+        // 6, right at 10 but with a confidence (0.65) the early points' mistakes make unsafe.
+        let unsure = |i: usize, right_at_ten: bool| {
+            let class = i % 2;
+            let at_six = if i % 4 < 2 { class } else { 1 - class };
+            let at_ten = if right_at_ten { class } else { 1 - class };
+            stance(
+                class,
+                &[(1 - class, 0.6), (at_six, 0.7), (at_ten, 0.65)],
+                (class, 0.99),
+            )
+        };
+        let confident = |i: usize| {
+            let class = i % 2;
+            stance(class, &[(class, 0.99); 3], (class, 0.99))
+        };
+        let mut stances: Vec<HeldOutStance> = (0..60).map(confident).collect();
+        stances.extend((0..60).map(|i| unsure(i, true)));
+        let auto = learn_threshold(&stances, &frames);
+        // Only 0.99 and above are safe; 0.99 leaves the unsure sixty to their lift-off (a mean of
+        // 11.5 frames, past mid-stance), the deadline at 10 decides them right there.
+        assert_eq!((auto.threshold, auto.deadline), (0.99, Some(10)));
+        assert_eq!(auto.mean_decision_frame, (60.0 * 3.0 + 60.0 * 10.0) / 120.0);
+        assert_eq!(auto.auto_accuracy, 1.0);
+        let decision = stances[60].decide(&frames, auto.rule());
+        assert_eq!((decision.point, decision.frame), (Some(2), 10));
+        // Wrong at 10 for every fourth unsure stance, no point is a safe deadline.
+        let mut stances: Vec<HeldOutStance> = (0..60).map(confident).collect();
+        stances.extend((0..60).map(|i| unsure(i, i % 4 != 1)));
+        let auto = learn_threshold(&stances, &frames);
+        assert_eq!((auto.threshold, auto.deadline), (0.99, None));
+        assert_eq!(auto.mean_decision_frame, (60.0 * 3.0 + 60.0 * 20.0) / 120.0);
     }
 
     /// When every safe threshold decides after mid-stance, `auto` takes the earliest of them.

@@ -29,7 +29,7 @@ pub use early::{
 };
 pub use extract::{LabeledImage, extract_features, extract_features_many, extract_features_with};
 pub use model::{
-    AutoThreshold, DecisionPoint, EarlyDecisions, MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN,
+    AutoRule, AutoThreshold, DecisionPoint, EarlyDecisions, MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN,
     TrainedModel, TrainingSummary,
 };
 pub use novelty::MAX_NOVELTY_DIMS;

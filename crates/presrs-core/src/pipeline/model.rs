@@ -112,6 +112,45 @@ pub struct AutoThreshold {
     pub mean_decision_share: f64,
     /// Held-out stances the threshold was learned on.
     pub validation_stances: usize,
+    /// The point (frames after touchdown) at which a stance no point was confident about by then is
+    /// decided whatever its confidence (`None`: it waits for its lift-off). Absent from models
+    /// written before deadlines.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deadline: Option<usize>,
+}
+
+impl AutoThreshold {
+    /// The rule `auto` decides by.
+    pub fn rule(&self) -> AutoRule {
+        AutoRule {
+            threshold: self.threshold,
+            deadline: self.deadline,
+        }
+    }
+}
+
+/// How `auto` decides a stance: at the first point whose confidence is at least `threshold`, else at
+/// the `deadline` point whatever its confidence, else (no deadline, or the stance lifts off first)
+/// whole at its lift-off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AutoRule {
+    pub threshold: f64,
+    pub deadline: Option<usize>,
+}
+
+impl AutoRule {
+    /// `threshold` without a deadline.
+    pub fn threshold(threshold: f64) -> Self {
+        Self {
+            threshold,
+            deadline: None,
+        }
+    }
+
+    /// Whether a point `frames` after touchdown with `confidence` decides.
+    pub fn decides(&self, frames: usize, confidence: f64) -> bool {
+        confidence >= self.threshold || self.deadline == Some(frames)
+    }
 }
 
 /// A whole-stance model's classifiers for decision points before lift-off.
@@ -183,6 +222,14 @@ impl EarlyDecisions {
             return Err(bad(format!(
                 "threshold {} is not a confidence",
                 auto.threshold
+            )));
+        }
+        if let Some(deadline) = self.auto.and_then(|auto| auto.deadline)
+            && self.point(deadline).is_none()
+        {
+            return Err(bad(format!(
+                "the deadline {deadline} is not one of the decision points {:?}",
+                self.frames()
             )));
         }
         Ok(())

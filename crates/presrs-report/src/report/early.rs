@@ -99,7 +99,8 @@ pub(super) fn early_section<'a>(early: Option<&EarlyCurve>) -> Option<Section<'a
     let auto = early.auto.as_ref().map_or(String::new(), |auto| {
         format!(
             " <code>auto</code> decided at its first point whose confidence passed the threshold \
-             learned on validation: {} right, at a mean {} after touchdown ({:.0} % of the median \
+             learned on validation, else at the deadline point learned with it (when validation \
+             found one safe by mid-stance): {} right, at a mean {} after touchdown ({:.0} % of the median \
              stance; {:.0} % of the stances decided before their lift-off, {:.0} % by their \
              mid-stance).",
             percent(Some(auto.accuracy)),

@@ -56,7 +56,8 @@ pub struct EarlyCurve {
     pub points: Vec<EarlyCurvePoint>,
     /// The whole-stance classifier at lift-off, on the same held-out stances.
     pub whole_accuracy: f64,
-    /// `auto` (the first point whose confidence passes the learned threshold), when evaluated.
+    /// `auto` (the first point whose confidence passes the learned threshold, else the deadline point),
+    /// when evaluated.
     pub auto: Option<EarlyAutoResult>,
     /// Median length of the held-out stances, frames.
     pub median_stance_frames: usize,

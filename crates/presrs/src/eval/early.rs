@@ -8,7 +8,8 @@
 
 use presrs_core::evaluation::Evaluation;
 use presrs_core::pipeline::{
-    HeldOutStance, LabeledImage, StanceImages, TrainedModel, classify_stances, train_early,
+    AutoRule, HeldOutStance, LabeledImage, StanceImages, TrainedModel, classify_stances,
+    train_early,
 };
 use serde::Serialize;
 
@@ -55,6 +56,9 @@ pub struct EarlyAuto {
     pub decided_by_mid_stance: f64,
     /// The threshold of each fold's model, in the draws' order.
     pub thresholds: Vec<f64>,
+    /// The deadline point of each fold's model (frames after touchdown; `None`: its stances not
+    /// confident by then wait for their lift-off), in the draws' order.
+    pub deadlines: Vec<Option<usize>>,
     /// What one threshold for every fold would have given, chosen in hindsight on the held-out
     /// stances themselves: the thresholds no other beats in both accuracy and mean decision time,
     /// earliest first. A bound on what any threshold rule could reach with these classifiers, not a
@@ -62,11 +66,13 @@ pub struct EarlyAuto {
     pub hindsight: Vec<HindsightThreshold>,
 }
 
-/// One threshold applied to every held-out stance (see [`EarlyAuto::hindsight`]).
+/// One rule (threshold and deadline) applied to every held-out stance (see [`EarlyAuto::hindsight`]).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct HindsightThreshold {
-    /// `None`: no early decision (every stance decided whole at its lift-off).
+    /// `None`: no point decides by its confidence.
     pub threshold: Option<f64>,
+    /// `None`: no deadline (the stances no point was confident about decided whole at lift-off).
+    pub deadline: Option<usize>,
     pub accuracy: f64,
     pub mean_over_median_stance: f64,
     pub decided_early: f64,
@@ -187,7 +193,7 @@ pub fn evaluate_early(
     progress.start("early decisions, fold by fold", Some(draws.len() as u64));
     // Each held-out stance's outcomes, its data-set index and its fold.
     let mut tested: Vec<(HeldOutStance, usize, usize)> = Vec::new();
-    let mut thresholds = Vec::new();
+    let mut rules = Vec::new();
     let mut frame_right = vec![(0usize, 0usize); dataset.stances.points.len()];
     for (fold, draw) in draws.iter().enumerate() {
         let part = |indices: &[usize]| stance_images(dataset, &all, indices, &labels);
@@ -201,7 +207,11 @@ pub fn evaluate_early(
             .map(|f| f as presrs_core::pipeline::ChoosePoint<'_>);
         let early = train_early(&whole, &train_set, &validation, choose, draw.seed)
             .with_context(|| format!("{name}: training a fold's decision points"))?;
-        thresholds.push(early.auto.map_or(f64::INFINITY, |auto| auto.threshold));
+        rules.push(
+            early
+                .auto
+                .map_or(AutoRule::threshold(f64::INFINITY), |auto| auto.rule()),
+        );
         let model = whole.with_early(early)?;
         let outcomes = classify_stances(&model, &test)?;
         tested.extend(
@@ -223,7 +233,7 @@ pub fn evaluate_early(
     Ok(summarise(
         dataset,
         &tested,
-        &thresholds,
+        &rules,
         frames.map(|_| frame_right.as_slice()),
         draws.len(),
     ))
@@ -324,7 +334,7 @@ fn frame_model_at(
 fn summarise(
     dataset: &Dataset,
     tested: &[(HeldOutStance, usize, usize)],
-    thresholds: &[f64],
+    rules: &[AutoRule],
     frame_right: Option<&[(usize, usize)]>,
     folds: usize,
 ) -> EarlyEvaluation {
@@ -352,12 +362,15 @@ fn summarise(
             frame_tested: frame_right.map_or(0, |counts| counts[p].1),
         })
         .collect();
-    // Each stance decided with its fold's threshold.
+    // Each stance decided by its fold's rule.
     let decisions: Vec<_> = tested
         .iter()
         .map(|(stance, _, fold)| {
-            let threshold = thresholds.get(*fold).copied().unwrap_or(f64::INFINITY);
-            (stance, stance.decide(&frames, threshold))
+            let rule = rules
+                .get(*fold)
+                .copied()
+                .unwrap_or(AutoRule::threshold(f64::INFINITY));
+            (stance, stance.decide(&frames, rule))
         })
         .collect();
     let mean = |f: &dyn Fn(&HeldOutStance, &presrs_core::pipeline::OfflineDecision) -> f64| {
@@ -373,7 +386,8 @@ fn summarise(
         mean_over_median_stance: mean_frames / median.max(1) as f64,
         decided_early: mean(&|_, d| f64::from(u8::from(d.point.is_some()))),
         decided_by_mid_stance: mean(&|s, d| f64::from(u8::from(by_mid_stance(s, d)))),
-        thresholds: thresholds.to_vec(),
+        thresholds: rules.iter().map(|rule| rule.threshold).collect(),
+        deadlines: rules.iter().map(|rule| rule.deadline).collect(),
         hindsight,
     };
     EarlyEvaluation {
@@ -397,9 +411,9 @@ fn by_mid_stance(
     decision.point.is_some() && 2 * decision.frame <= stance.stance_frames
 }
 
-/// Every distinct confidence of the points' decisions tried as one threshold for all held-out
-/// stances (and no early decision at all); the thresholds not beaten in both accuracy and mean
-/// decision time, earliest first.
+/// Every distinct confidence of the points' decisions (and none) tried as one threshold for all
+/// held-out stances, with every point (and none) as the deadline; the rules not beaten in both
+/// accuracy and mean decision time, earliest first.
 fn hindsight_frontier(
     stances: &[HeldOutStance],
     frames: &[usize],
@@ -407,10 +421,14 @@ fn hindsight_frontier(
 ) -> Vec<HindsightThreshold> {
     let candidates = presrs_core::pipeline::point_confidences(stances);
     let n = stances.len().max(1) as f64;
-    let outcome = |threshold: Option<f64>| {
+    let outcome = |(threshold, deadline): (Option<f64>, Option<usize>)| {
+        let rule = AutoRule {
+            threshold: threshold.unwrap_or(f64::INFINITY),
+            deadline,
+        };
         let (mut right, mut frames_sum, mut early, mut by_mid) = (0usize, 0usize, 0usize, 0usize);
         for stance in stances {
-            let decision = stance.decide(frames, threshold.unwrap_or(f64::INFINITY));
+            let decision = stance.decide(frames, rule);
             right += usize::from(decision.class == stance.class);
             frames_sum += decision.frame;
             early += usize::from(decision.point.is_some());
@@ -418,16 +436,21 @@ fn hindsight_frontier(
         }
         HindsightThreshold {
             threshold,
+            deadline,
             accuracy: right as f64 / n,
             mean_over_median_stance: frames_sum as f64 / n / median.max(1) as f64,
             decided_early: early as f64 / n,
             decided_by_mid_stance: by_mid as f64 / n,
         }
     };
+    let deadlines: Vec<Option<usize>> = std::iter::once(None)
+        .chain(frames.iter().copied().map(Some))
+        .collect();
     let mut all: Vec<HindsightThreshold> = candidates
         .into_iter()
         .map(Some)
         .chain([None])
+        .flat_map(|threshold| deadlines.iter().map(move |&deadline| (threshold, deadline)))
         .map(outcome)
         .collect();
     all.sort_by(|a, b| {
@@ -480,11 +503,19 @@ mod tests {
         assert_eq!(frontier[0].threshold, Some(0.6));
         assert!((frontier[0].accuracy - 2.0 / 3.0).abs() < 1e-12);
         assert!((frontier[0].mean_over_median_stance - 0.2).abs() < 1e-12);
-        // Every threshold's outcome, recomputed by brute force, is matched or beaten by the frontier.
-        for threshold in [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99, 2.0] {
+        // Every rule's outcome, recomputed by brute force, is matched or beaten by the frontier.
+        let rules = [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99, 2.0]
+            .into_iter()
+            .flat_map(|threshold| {
+                [None, Some(2), Some(5)].map(|deadline| AutoRule {
+                    threshold,
+                    deadline,
+                })
+            });
+        for rule in rules {
             let decisions: Vec<_> = tested
                 .iter()
-                .map(|(s, _, _)| (s.class, s.decide(&[2, 5], threshold)))
+                .map(|(s, _, _)| (s.class, s.decide(&[2, 5], rule)))
                 .collect();
             let accuracy = decisions.iter().filter(|(c, d)| d.class == *c).count() as f64 / 3.0;
             let mean = decisions.iter().map(|(_, d)| d.frame as f64).sum::<f64>() / 3.0 / 10.0;
@@ -492,16 +523,17 @@ mod tests {
                 frontier
                     .iter()
                     .any(|h| h.accuracy >= accuracy && h.mean_over_median_stance <= mean + 1e-12),
-                "threshold {threshold}: {accuracy} at {mean} beats the frontier {frontier:?}"
+                "{rule:?}: {accuracy} at {mean} beats the frontier {frontier:?}"
             );
         }
         // By mid-stance: a decision at most half the stance's own length after touchdown (frame 5 of
         // 10 is, a point past it or the lift-off is not).
         assert_eq!(frontier[0].decided_by_mid_stance, 1.0);
         let late = stance(0, &[Some((0, 0.5)), Some((0, 0.9))], 0);
-        assert!(by_mid_stance(&late, &late.decide(&[2, 5], 0.8)));
-        assert!(!by_mid_stance(&late, &late.decide(&[2, 6], 0.8)));
-        assert!(!by_mid_stance(&late, &late.decide(&[2, 5], 0.95)));
+        let by = |t: f64| AutoRule::threshold(t);
+        assert!(by_mid_stance(&late, &late.decide(&[2, 5], by(0.8))));
+        assert!(!by_mid_stance(&late, &late.decide(&[2, 6], by(0.8))));
+        assert!(!by_mid_stance(&late, &late.decide(&[2, 5], by(0.95))));
         // Earliest first, each more accurate than the one before.
         for pair in frontier.windows(2) {
             assert!(pair[0].mean_over_median_stance <= pair[1].mean_over_median_stance);

@@ -90,7 +90,8 @@ pub struct EarlyDecisionEvent {
     /// `fixed` (`decide_at = K`) or `auto` (the first confident decision point).
     pub early_rule: EarlyRule,
     /// `fixed` (frame touchdown + K arrived), `confident` (the point's confidence passed the
-    /// threshold), `not_confident` (`auto`: no point did before the lift-off or the model's length),
+    /// threshold), `deadline` (`auto`: no point's did by the deadline point, which decided),
+    /// `not_confident` (`auto`: no point did before the lift-off or the model's length),
     /// `ended_first` (the stance ended or reached the model's length before the point).
     pub early_reason: EarlyReason,
     /// The decision point (frames after touchdown) whose classifier decided; `null`: the whole-stance
