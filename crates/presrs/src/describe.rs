@@ -136,7 +136,8 @@ pub fn early_summary(model: &TrainedModel) -> Option<String> {
         );
         let _ = write!(
             text,
-            "; auto: {threshold}, {deadline}; on {} held-out training stances {:.1} % (whole stance              {:.1} %), deciding at {:.1} frames on average ({:.0} % of each stance)",
+            "; auto: {threshold}, {deadline}; on {} held-out training stances {:.1} % (whole \
+             stance {:.1} %), deciding at {:.1} frames on average ({:.0} % of each stance)",
             auto.validation_stances,
             100.0 * auto.auto_accuracy,
             100.0 * auto.whole_accuracy,
