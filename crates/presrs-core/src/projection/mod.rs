@@ -3,6 +3,7 @@
 //! `crate::kernels`).
 
 mod fixed_basis;
+pub mod gram_svd;
 pub mod pca;
 
 pub use fixed_basis::FastInput;

@@ -5,6 +5,11 @@
 //! rows of `Vᵀ`, the explained variances `s² / (n - 1)`. At most `n_samples - 1` components carry variance
 //! after centring, so `min(dims, n_samples - 1, n_features)` are kept (the paper: 51 from 52 vectors).
 //!
+//! Large wide fits take a faster route to the same leading components: more than
+//! [`EXACT_SVD_MAX_SAMPLES`] samples, a randomised range finder; from
+//! [`GRAM_MIN_SAMPLES`](super::gram_svd::GRAM_MIN_SAMPLES) samples with at least twice as many
+//! features, the eigendecomposition of the `n x n` Gram matrix (`super::gram_svd`).
+//!
 //! An axis is only defined up to sign; each is flipped so that its largest-magnitude loading (the first one
 //! on ties) is positive, which makes the fit deterministic.
 
@@ -16,6 +21,8 @@ use serde::{Deserialize, Serialize};
 
 pub use super::fixed_basis::ProjectionScratch;
 use super::fixed_basis::{FastInput, FixedBasis};
+use super::gram_svd;
+pub use super::gram_svd::GRAM_MIN_SAMPLES;
 use crate::error::{CoreError, Result, check_len};
 
 /// A fitted PCA: `project(x) = basis · (x - mean)`.
@@ -368,6 +375,12 @@ impl Pca {
                     randomised_svd(&samples, &mean, n_components)?
                 }
             }
+        } else if let Some(leading) = gram_svd::uses_gram(n_samples, n_features)
+            .then(|| gram_svd::gram_svd(rows, &mean, n_components))
+            .transpose()?
+            .flatten()
+        {
+            leading
         } else {
             let centred = Mat::from_fn(n_samples, n_features, |i, j| rows[i][j] - mean[j]);
             thin_svd(&centred)?
@@ -645,6 +658,48 @@ mod tests {
                 .unwrap();
             assert!(fast.component(c)[pivot] > 0.0);
         }
+    }
+
+    /// Wide fits from `GRAM_MIN_SAMPLES` samples take the Gram matrix and give the exact SVD's PCA
+    /// to rounding (variances, axes and the sign rule); narrower or smaller ones keep the exact SVD.
+    #[test]
+    fn wide_fits_take_the_gram_matrix_and_agree_with_the_exact_svd() {
+        use super::gram_svd::{GRAM_MIN_SAMPLES, uses_gram};
+        assert!(!uses_gram(GRAM_MIN_SAMPLES - 1, 10_000));
+        assert!(uses_gram(GRAM_MIN_SAMPLES, 2 * GRAM_MIN_SAMPLES));
+        assert!(!uses_gram(GRAM_MIN_SAMPLES, 2 * GRAM_MIN_SAMPLES - 1));
+        let (n, p, k) = (GRAM_MIN_SAMPLES, 2 * GRAM_MIN_SAMPLES + 37, 20);
+        let samples = falling_spectrum(n, p, 13);
+        let rows: Vec<&[f64]> = samples.chunks_exact(p).collect();
+        let fast = Pca::fit_rows(&rows, p, k).unwrap();
+        assert_eq!(fast, Pca::fit(&samples, p, k).unwrap());
+        let (_, values, axes) = centred_svd(&samples, n, p);
+        for c in 0..k {
+            let s = values.column_vector()[c];
+            let variance = s * s / (n - 1) as f64;
+            let found = fast.explained_variance()[c];
+            assert!((variance - found).abs() <= 1e-10 * variance, "{c}");
+            let dot: f64 = (0..p).map(|j| axes[(j, c)] * fast.component(c)[j]).sum();
+            assert!((dot.abs() - 1.0).abs() < 1e-10, "axis {c}: {dot}");
+            let pivot = (0..p)
+                .max_by(|&a, &b| {
+                    fast.component(c)[a]
+                        .abs()
+                        .total_cmp(&fast.component(c)[b].abs())
+                })
+                .unwrap();
+            assert!(fast.component(c)[pivot] > 0.0);
+        }
+        // Components at the rounding floor (60 directions, then noise of 1e-3): the exact SVD's.
+        let deep = Pca::fit(&samples, p, 80).unwrap();
+        let (_, tail_values, _) = centred_svd(&samples, n, p);
+        let s = tail_values.column_vector()[79];
+        let variance = s * s / (n - 1) as f64;
+        let found = deep.explained_variance()[79];
+        assert!(
+            (variance - found).abs() <= 1e-9 * variance,
+            "{variance} {found}"
+        );
     }
 
     /// Rows held elsewhere give the PCA of the same rows laid end to end, exactly (the exact SVD and
