@@ -6,8 +6,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use presrs_core::classifier::{
-    ClassifierFamily, ClassifierKind, ClassifierModel, FitData, LabeledVectors, RidgeConfig,
-    RidgeFamily, RidgeModel, RidgeRawFamily,
+    ClassifierFamily, ClassifierKind, ClassifierModel, FitData, FitRows, LabeledVectors,
+    RidgeConfig, RidgeFamily, RidgeModel, RidgeRawFamily,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -698,4 +698,71 @@ fn single_precision_vectors_give_the_model_of_the_same_values() {
             RidgeFamily::fit(&pinned, data(&double)).unwrap()
         );
     }
+}
+
+/// Rows read in place (a feature table's, as the automatic choice scores ridge) give exactly the
+/// model of the same rows laid end to end, for both families, searched and pinned, with training and
+/// validation rows; rows of another length or a non-finite value are refused as `fit` refuses them.
+#[test]
+fn rows_in_place_give_the_model_of_the_same_rows_laid_end_to_end() {
+    let dims = 9;
+    let (x, y) = draw(20, 3, dims, 31);
+    let rows: Vec<&[f64]> = x.chunks_exact(dims).collect();
+    let (train, validation) = rows.split_at(40);
+    let (train_classes, validation_classes) = y.split_at(40);
+    let laid = |part: &[&[f64]]| part.concat();
+    let (train_laid, validation_laid) = (laid(train), laid(validation));
+    let data = FitData {
+        train: LabeledVectors {
+            vectors: &train_laid,
+            classes: train_classes,
+        },
+        validation: LabeledVectors {
+            vectors: &validation_laid,
+            classes: validation_classes,
+        },
+        n_classes: 3,
+        dims,
+        calibrate: true,
+    };
+    let in_place = FitRows {
+        train,
+        train_classes,
+        validation,
+        validation_classes,
+        n_classes: 3,
+        dims,
+        calibrate: true,
+    };
+    const { assert!(RidgeFamily::READS_ROWS && RidgeRawFamily::READS_ROWS) };
+    let searched = RidgeFamily::fit(&RidgeConfig::default(), data).unwrap();
+    assert_eq!(
+        RidgeFamily::fit_rows(&RidgeConfig::default(), in_place).unwrap(),
+        searched
+    );
+    assert_eq!(
+        RidgeRawFamily::fit_rows(&RidgeConfig::default(), in_place).unwrap(),
+        RidgeRawFamily::fit(&RidgeConfig::default(), data).unwrap()
+    );
+    let pinned = RidgeFamily::pinned(&RidgeConfig::default(), &searched).unwrap();
+    assert_eq!(
+        RidgeFamily::fit_rows(&pinned, in_place).unwrap(),
+        RidgeFamily::fit(&pinned, data).unwrap()
+    );
+    let short = &x[..dims - 1];
+    let mut bad_rows = train.to_vec();
+    bad_rows[3] = short;
+    let bad = FitRows {
+        train: &bad_rows,
+        ..in_place
+    };
+    assert!(RidgeFamily::fit_rows(&RidgeConfig::default(), bad).is_err());
+    let nan = [f64::NAN; 9];
+    bad_rows[3] = &nan;
+    let bad = FitRows {
+        train: &bad_rows,
+        ..in_place
+    };
+    let err = RidgeFamily::fit_rows(&RidgeConfig::default(), bad).unwrap_err();
+    assert!(err.to_string().contains("NaN"), "{err}");
 }

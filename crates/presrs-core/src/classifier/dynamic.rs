@@ -125,6 +125,21 @@ impl ClassifierConfig {
         self.0.fit_single(data).map(ClassifierModel)
     }
 
+    /// Whether the family trains on rows held elsewhere
+    /// ([`ClassifierFamily::READS_ROWS`](crate::classifier::ClassifierFamily::READS_ROWS)).
+    pub(crate) fn reads_rows(&self) -> bool {
+        self.0.reads_rows()
+    }
+
+    /// [`fit_with`](Self::fit_with) on rows held elsewhere (an error unless
+    /// [`reads_rows`](Self::reads_rows)).
+    pub(crate) fn fit_rows(
+        &self,
+        data: crate::classifier::family::FitRows<'_>,
+    ) -> Result<ClassifierModel> {
+        self.0.fit_rows(data).map(ClassifierModel)
+    }
+
     /// Whether the family can pin the hyper-parameters a model chose
     /// ([`ClassifierFamily::PINS`](crate::classifier::ClassifierFamily::PINS)).
     pub fn pins(&self) -> bool {

@@ -6,7 +6,7 @@ use std::any::{Any, TypeId};
 use std::fmt::Debug;
 use std::marker::PhantomData;
 
-use super::family::{ClassifierFamily, FitData};
+use super::family::{ClassifierFamily, FitData, FitRows};
 use crate::error::{CoreError, Result};
 
 /// A registered family, by its name.
@@ -29,6 +29,8 @@ pub(crate) trait DynConfig: Debug + Send + Sync {
     fn fit(&self, data: FitData<'_>) -> Result<Box<dyn DynModel>>;
     fn reads_single(&self) -> bool;
     fn fit_single(&self, data: FitData<'_, f32>) -> Result<Box<dyn DynModel>>;
+    fn reads_rows(&self) -> bool;
+    fn fit_rows(&self, data: FitRows<'_>) -> Result<Box<dyn DynModel>>;
     fn pins(&self) -> bool;
     /// `None` too when `model` belongs to another family.
     fn pinned(&self, model: &dyn DynModel) -> Option<Box<dyn DynConfig>>;
@@ -144,6 +146,14 @@ impl<F: ClassifierFamily> DynConfig for ConfigOf<F> {
 
     fn fit_single(&self, data: FitData<'_, f32>) -> Result<Box<dyn DynModel>> {
         Ok(Box::new(ModelOf::<F>(F::fit_single(&self.0, data)?)))
+    }
+
+    fn reads_rows(&self) -> bool {
+        F::READS_ROWS
+    }
+
+    fn fit_rows(&self, data: FitRows<'_>) -> Result<Box<dyn DynModel>> {
+        Ok(Box::new(ModelOf::<F>(F::fit_rows(&self.0, data)?)))
     }
 
     fn pins(&self) -> bool {

@@ -41,6 +41,19 @@ impl<T> Clone for FitData<'_, T> {
 
 impl<T> Copy for FitData<'_, T> {}
 
+/// The data of [`FitData`] as rows held elsewhere (each `dims` values, e.g. some rows of a feature
+/// table), for a family that reads them in place ([`ClassifierFamily::fit_rows`]).
+#[derive(Clone, Copy, Debug)]
+pub struct FitRows<'a> {
+    pub train: &'a [&'a [f64]],
+    pub train_classes: &'a [usize],
+    pub validation: &'a [&'a [f64]],
+    pub validation_classes: &'a [usize],
+    pub n_classes: usize,
+    pub dims: usize,
+    pub calibrate: bool,
+}
+
 /// A classifier family: its name, hyper-parameters, training and classification.
 pub trait ClassifierFamily: Send + Sync + 'static {
     /// The name users and files know it by (`--classifier NAME`, `{"kind": NAME}`): lower-case.
@@ -83,6 +96,19 @@ pub trait ClassifierFamily: Send + Sync + 'static {
         Err(crate::error::CoreError::Param {
             name: "classifier",
             reason: format!("{} does not read single-precision vectors", Self::NAME),
+        })
+    }
+
+    /// Whether [`fit_rows`](Self::fit_rows) trains on rows held elsewhere: a family that takes every
+    /// feature, so that the automatic choice scores it on its feature table's rows without a copy.
+    const READS_ROWS: bool = false;
+
+    /// [`fit`](Self::fit) on rows held elsewhere; only called when [`READS_ROWS`](Self::READS_ROWS).
+    fn fit_rows(config: &Self::Config, data: FitRows<'_>) -> Result<Self::Model> {
+        let _ = (config, data);
+        Err(crate::error::CoreError::Param {
+            name: "classifier",
+            reason: format!("{} does not read rows in place", Self::NAME),
         })
     }
 

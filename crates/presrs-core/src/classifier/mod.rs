@@ -21,7 +21,7 @@ pub mod ridge;
 pub mod svm;
 
 pub use dynamic::{ClassifierConfig, ClassifierModel, ClassifierScratch};
-pub use family::{ClassifierFamily, FitData};
+pub use family::{ClassifierFamily, FitData, FitRows};
 pub use registry::{ClassifierKind, register};
 
 pub use gaussian::{

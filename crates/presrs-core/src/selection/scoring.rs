@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use super::folds::InnerFold;
 use super::{RACE_FOLDS, RACE_MIN_FOLDS, RACE_Z, StageObserver};
-use crate::classifier::LabeledVectors;
+use crate::classifier::{FitRows, LabeledVectors};
 use crate::error::{CoreError, Result};
 use crate::metrics::MeanStd;
 use crate::pipeline::config::{CheckedTrainConfig, TrainConfig};
@@ -437,8 +437,8 @@ fn score_fold(
         Ok(classes) => classes,
         Err(err) => return Ok(vec![Err(err.to_string()); configs.len()]),
     };
-    // The fold's rows as the table holds them: the PCA reads them in place, and only the classifiers
-    // that take every feature get a copy (two folds are scored at once, each row ~10,000 values).
+    // The fold's rows as the table holds them: the PCA and the classifiers that take every feature
+    // read them in place (two folds are scored at once, each row ~10,000 values).
     let rows_of = |indices: &[usize]| -> Vec<&[f64]> {
         indices.iter().map(|&i| table.exact_row(i)).collect()
     };
@@ -452,6 +452,9 @@ fn score_fold(
         let members: Vec<usize> = (0..configs.len())
             .filter(|&m| configs[m].pca_dims() == dims)
             .collect();
+        // Classifiers that take every feature read the table's rows in place when they can.
+        let in_place =
+            dims.is_none() && members.iter().all(|&m| configs[m].classifier.reads_rows());
         let projected = match dims {
             Some(dims) => Pca::fit_rows(&train_rows, table.n_features, dims).and_then(|pca| {
                 let train = project_each(&pca, &train_rows)?;
@@ -459,6 +462,7 @@ fn score_fold(
                 let test = project_test(&pca, table, &fold.test)?;
                 Ok((pca.n_components(), train, validation, test))
             }),
+            None if in_place => Ok((table.n_features, Vec::new(), Vec::new(), Vec::new())),
             None => Ok((
                 table.n_features,
                 table.exact_rows(&fold.train),
@@ -475,22 +479,39 @@ fn score_fold(
                 continue;
             }
         };
+        let test_rows: Vec<&[f64]> = if in_place {
+            fold.test.iter().map(|&i| table.fast_row(i)).collect()
+        } else {
+            test.chunks_exact(dims).collect()
+        };
         let scored: Vec<(usize, std::result::Result<f64, String>)> = members
             .par_iter()
             .map(|&m| {
-                let fitted = configs[m].classifier.fit_with(
-                    LabeledVectors {
-                        vectors: &train,
-                        classes: &train_classes,
-                    },
-                    LabeledVectors {
-                        vectors: &validation,
-                        classes: &validation_classes,
-                    },
-                    class_names.len(),
-                    dims,
-                    false,
-                );
+                let fitted = if in_place {
+                    configs[m].classifier.fit_rows(FitRows {
+                        train: &train_rows,
+                        train_classes: &train_classes,
+                        validation: &validation_rows,
+                        validation_classes: &validation_classes,
+                        n_classes: class_names.len(),
+                        dims,
+                        calibrate: false,
+                    })
+                } else {
+                    configs[m].classifier.fit_with(
+                        LabeledVectors {
+                            vectors: &train,
+                            classes: &train_classes,
+                        },
+                        LabeledVectors {
+                            vectors: &validation,
+                            classes: &validation_classes,
+                        },
+                        class_names.len(),
+                        dims,
+                        false,
+                    )
+                };
                 let classifier = match fitted {
                     Ok(classifier) => classifier,
                     Err(err) => return Ok((m, Err(err.to_string()))),
@@ -498,7 +519,7 @@ fn score_fold(
                 let mut scratch = classifier.scratch();
                 let mut posteriors = vec![0.0; class_names.len()];
                 let mut correct = 0usize;
-                for (&i, reduced) in fold.test.iter().zip(test.chunks_exact(dims)) {
+                for (&i, reduced) in fold.test.iter().zip(&test_rows) {
                     if reduced.iter().any(|value| !value.is_finite()) {
                         return Err(CoreError::Param {
                             name: "image",

@@ -7,8 +7,9 @@ use super::direct::{self, Rows, Standardisation};
 use super::loo::{Decomposition, Spectrum, centre_columns};
 use super::{RidgeConfig, RidgeModel, Scaling};
 use crate::classifier::calibration::fit_temperature;
+use crate::classifier::common::LabeledVectors;
 use crate::classifier::common::{accuracy_of_scores, check_vectors};
-use crate::classifier::family::FitData;
+use crate::classifier::family::{FitData, FitRows};
 use crate::error::{CoreError, Result};
 
 impl RidgeModel {
@@ -35,6 +36,49 @@ impl RidgeModel {
         let classes: Vec<usize> = [data.train, data.validation]
             .iter()
             .flat_map(|s| s.classes.iter().copied())
+            .collect();
+        Self::fit_rows(config, &rows, &classes, n_classes, data.calibrate, scaling)
+    }
+
+    /// [`fit`](Self::fit) on rows held elsewhere (a feature table's), read in place.
+    pub(super) fn fit_views(
+        config: &RidgeConfig,
+        data: FitRows<'_>,
+        scaling: Scaling,
+    ) -> Result<Self> {
+        let (dims, n_classes) = (data.dims, data.n_classes);
+        for (rows, classes, what) in [
+            (data.train, data.train_classes, "ridge training vectors"),
+            (
+                data.validation,
+                data.validation_classes,
+                "ridge validation vectors",
+            ),
+        ] {
+            if rows.len() != classes.len() {
+                return Err(CoreError::Shape {
+                    what,
+                    expected: format!("{} rows", classes.len()),
+                    got: format!("{} rows", rows.len()),
+                });
+            }
+            for (row, class) in rows.iter().zip(classes.chunks_exact(1)) {
+                let one = LabeledVectors {
+                    vectors: row,
+                    classes: class,
+                };
+                check_vectors(&one, what, dims, n_classes)?;
+            }
+        }
+        let rows = Rows {
+            parts: data.train.iter().chain(data.validation).copied().collect(),
+            dims,
+        };
+        let classes: Vec<usize> = data
+            .train_classes
+            .iter()
+            .chain(data.validation_classes)
+            .copied()
             .collect();
         Self::fit_rows(config, &rows, &classes, n_classes, data.calibrate, scaling)
     }

@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::classifier::calibration::{is_usable_temperature, unit_temperature};
 use crate::classifier::common::softmax_in_place;
-use crate::classifier::family::{ClassifierFamily, FitData};
+use crate::classifier::family::{ClassifierFamily, FitData, FitRows};
 use crate::error::{CoreError, Result, check_len};
 use crate::kernels::matrix_vector;
 
@@ -432,6 +432,12 @@ impl ClassifierFamily for RidgeFamily {
         RidgeModel::fit(config, data, Scaling::Standardised)
     }
 
+    const READS_ROWS: bool = true;
+
+    fn fit_rows(config: &RidgeConfig, data: FitRows<'_>) -> Result<RidgeModel> {
+        RidgeModel::fit_views(config, data, Scaling::Standardised)
+    }
+
     const PINS: bool = true;
 
     fn pinned(config: &RidgeConfig, model: &RidgeModel) -> Option<RidgeConfig> {
@@ -498,6 +504,12 @@ impl ClassifierFamily for RidgeRawFamily {
 
     fn fit_single(config: &RidgeConfig, data: FitData<'_, f32>) -> Result<RidgeModel> {
         RidgeModel::fit(config, data, Scaling::Centred)
+    }
+
+    const READS_ROWS: bool = true;
+
+    fn fit_rows(config: &RidgeConfig, data: FitRows<'_>) -> Result<RidgeModel> {
+        RidgeModel::fit_views(config, data, Scaling::Centred)
     }
 
     const PINS: bool = true;
