@@ -68,6 +68,9 @@ pub(crate) fn train_searching(
                 let pca = Pca::fit(&train_features, n_features, dims)?;
                 let train_vectors = project_rows(&pca, &train_features)?;
                 let validation_vectors = project_rows(&pca, &validation_features)?;
+                // The features (`n x` thousands) are not needed past the projection: gone before
+                // the classifier's fit, which may hold an `n x n` kernel matrix of its own.
+                drop((train_features, validation_features));
                 (Some(pca), train_vectors, validation_vectors)
             }
             // The classifier takes every feature (and standardises them itself).
