@@ -8,6 +8,7 @@ pub mod evaluation;
 pub mod features;
 pub mod frame;
 mod kernels;
+mod linalg;
 pub mod metrics;
 pub mod novelty;
 pub mod online;

@@ -3,9 +3,7 @@
 //! is the identity there, as scikit-learn's `LinearDiscriminantAnalysis.transform` gives it. Distances
 //! to the class means in this space are what the novelty score measures.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::evd::{ComputeEigenvectors, self_adjoint_evd, self_adjoint_evd_scratch};
-use faer::{Mat, Par};
+use faer::Mat;
 use serde::{Deserialize, Serialize};
 
 use crate::classifier::gaussian::{Shrinkage, shrunk_factor};
@@ -235,27 +233,11 @@ fn times(matrix: &[f64], d: usize, x: &[f64]) -> Vec<f64> {
 /// the thread count.
 fn leading_eigenvectors(matrix: &Mat<f64>, count: usize) -> Result<Vec<Vec<f64>>> {
     let d = matrix.nrows();
-    let mut values = faer::diag::Diag::<f64>::zeros(d);
-    let mut vectors = Mat::<f64>::zeros(d, d);
-    let par = Par::Seq;
-    let mut workspace = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
-        d,
-        ComputeEigenvectors::Yes,
-        par,
-        Default::default(),
-    ));
-    self_adjoint_evd(
-        matrix.as_ref(),
-        values.as_mut(),
-        Some(vectors.as_mut()),
-        par,
-        MemStack::new(&mut workspace),
-        Default::default(),
-    )
-    .map_err(|err| CoreError::Param {
-        name: "novelty",
-        reason: format!("the between-class eigendecomposition did not converge ({err:?})"),
-    })?;
+    let (values, vectors) =
+        crate::linalg::symmetric_eigen(matrix.as_ref()).map_err(|err| CoreError::Param {
+            name: "novelty",
+            reason: format!("the between-class eigendecomposition did not converge ({err:?})"),
+        })?;
     let values = values.column_vector();
     let mut order: Vec<usize> = (0..d).collect();
     order.sort_by(|&a, &b| values[b].total_cmp(&values[a]));

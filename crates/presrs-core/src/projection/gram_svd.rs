@@ -6,16 +6,15 @@
 //! `n x n` symmetric eigendecomposition runs sequentially (its rounding does not depend on the thread
 //! count), and only the kept axes are formed. The squared spectrum loses the small singular values'
 //! relative precision, so an axis is taken from the Gram matrix only when its eigenvalue is at least
-//! [`RELATIVE_FLOOR`] of the largest (then it agrees with the exact SVD's to about `1e-10`, tested);
+//! `RELATIVE_FLOOR` of the largest (then it agrees with the exact SVD's to about `1e-10`, tested);
 //! otherwise the caller takes the exact SVD. Hand-written: faer has the pieces, not this use of them.
 
 use faer::diag::Diag;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::evd::{ComputeEigenvectors, self_adjoint_evd, self_adjoint_evd_scratch};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
 use crate::error::{CoreError, Result};
+use crate::linalg::symmetric_eigen;
 
 /// Columns centred at a time: the panel is `n x PANEL` (a few MB for thousands of samples).
 const PANEL: usize = 512;
@@ -35,7 +34,7 @@ pub fn uses_gram(n_samples: usize, n_features: usize) -> bool {
 }
 
 /// The `k` leading singular values and right singular vectors (one per column, `p x k`) of `rows`
-/// less `mean`; `None` when a kept component's eigenvalue is below [`RELATIVE_FLOOR`] of the largest
+/// less `mean`; `None` when a kept component's eigenvalue is below `RELATIVE_FLOOR` of the largest
 /// (the exact SVD is then needed).
 pub fn gram_svd(rows: &[&[f64]], mean: &[f64], k: usize) -> Result<Option<(Diag<f64>, Mat<f64>)>> {
     let (n, p) = (rows.len(), mean.len());
@@ -94,27 +93,10 @@ fn centre_panel(rows: &[&[f64]], mean: &[f64], start: usize, width: usize, panel
     }
 }
 
-/// The eigenvalues (ascending) and eigenvectors of the symmetric `gram`, sequentially.
+/// The eigenvalues (ascending) and eigenvectors of the symmetric `gram`.
 fn eigen(gram: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     let n = gram.nrows();
-    let mut values = Diag::<f64>::zeros(n);
-    let mut vectors = Mat::<f64>::zeros(n, n);
-    let par = Par::Seq;
-    let mut workspace = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
-        n,
-        ComputeEigenvectors::Yes,
-        par,
-        Default::default(),
-    ));
-    self_adjoint_evd(
-        gram.as_ref(),
-        values.as_mut(),
-        Some(vectors.as_mut()),
-        par,
-        MemStack::new(&mut workspace),
-        Default::default(),
-    )
-    .map_err(|err| CoreError::Param {
+    let (values, vectors) = symmetric_eigen(gram.as_ref()).map_err(|err| CoreError::Param {
         name: "pca",
         reason: format!(
             "the eigendecomposition of the {n} x {n} Gram matrix did not converge: {err:?}"

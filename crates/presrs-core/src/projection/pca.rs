@@ -7,7 +7,7 @@
 //!
 //! Large wide fits take a faster route to the same leading components: more than
 //! [`EXACT_SVD_MAX_SAMPLES`] samples, a randomised range finder; from
-//! [`GRAM_MIN_SAMPLES`](super::gram_svd::GRAM_MIN_SAMPLES) samples with at least twice as many
+//! [`GRAM_MIN_SAMPLES`] samples with at least twice as many
 //! features, the eigendecomposition of the `n x n` Gram matrix (`super::gram_svd`).
 //!
 //! An axis is only defined up to sign; each is flipped so that its largest-magnitude loading (the first one
@@ -610,6 +610,35 @@ mod tests {
         (mean, values, axes)
     }
 
+    /// Checks `fast` against the exact SVD of the same `n x p` rows (`values`, `axes`): its first `k`
+    /// variances and axes within `tolerance` (relative; axes up to sign), each axis's largest loading
+    /// positive (the sign rule).
+    fn assert_agrees_with_svd(
+        fast: &Pca,
+        (values, axes): (&Diag<f64>, &Mat<f64>),
+        n: usize,
+        k: usize,
+        tolerance: f64,
+    ) {
+        let p = fast.n_features();
+        for c in 0..k {
+            let s = values.column_vector()[c];
+            let variance = s * s / (n - 1) as f64;
+            let found = fast.explained_variance()[c];
+            assert!((variance - found).abs() <= tolerance * variance, "{c}");
+            let dot: f64 = (0..p).map(|j| axes[(j, c)] * fast.component(c)[j]).sum();
+            assert!((dot.abs() - 1.0).abs() < tolerance, "axis {c}: {dot}");
+            let pivot = (0..p)
+                .max_by(|&a, &b| {
+                    fast.component(c)[a]
+                        .abs()
+                        .total_cmp(&fast.component(c)[b].abs())
+                })
+                .unwrap();
+            assert!(fast.component(c)[pivot] > 0.0);
+        }
+    }
+
     /// The oracle: the range finder's leading singular values and axes are the exact SVD's.
     #[test]
     fn the_range_finder_agrees_with_the_exact_svd() {
@@ -641,23 +670,7 @@ mod tests {
         let fast = Pca::fit(&samples, p, k).unwrap();
         let (_, values, axes) = centred_svd(&samples, n, p);
         assert_eq!(fast.n_components(), k);
-        for c in 0..k {
-            let s = values.column_vector()[c];
-            let variance = s * s / (n - 1) as f64;
-            let found = fast.explained_variance()[c];
-            assert!((variance - found).abs() <= 1e-9 * variance, "{c}");
-            // the same sign rule: the largest loading positive
-            let dot: f64 = (0..p).map(|j| axes[(j, c)] * fast.component(c)[j]).sum();
-            assert!((dot.abs() - 1.0).abs() < 1e-9, "axis {c}: {dot}");
-            let pivot = (0..p)
-                .max_by(|&a, &b| {
-                    fast.component(c)[a]
-                        .abs()
-                        .total_cmp(&fast.component(c)[b].abs())
-                })
-                .unwrap();
-            assert!(fast.component(c)[pivot] > 0.0);
-        }
+        assert_agrees_with_svd(&fast, (&values, &axes), n, k, 1e-9);
     }
 
     /// Wide fits from `GRAM_MIN_SAMPLES` samples take the Gram matrix and give the exact SVD's PCA
@@ -674,22 +687,7 @@ mod tests {
         let fast = Pca::fit_rows(&rows, p, k).unwrap();
         assert_eq!(fast, Pca::fit(&samples, p, k).unwrap());
         let (_, values, axes) = centred_svd(&samples, n, p);
-        for c in 0..k {
-            let s = values.column_vector()[c];
-            let variance = s * s / (n - 1) as f64;
-            let found = fast.explained_variance()[c];
-            assert!((variance - found).abs() <= 1e-10 * variance, "{c}");
-            let dot: f64 = (0..p).map(|j| axes[(j, c)] * fast.component(c)[j]).sum();
-            assert!((dot.abs() - 1.0).abs() < 1e-10, "axis {c}: {dot}");
-            let pivot = (0..p)
-                .max_by(|&a, &b| {
-                    fast.component(c)[a]
-                        .abs()
-                        .total_cmp(&fast.component(c)[b].abs())
-                })
-                .unwrap();
-            assert!(fast.component(c)[pivot] > 0.0);
-        }
+        assert_agrees_with_svd(&fast, (&values, &axes), n, k, 1e-10);
         // Components at the rounding floor (60 directions, then noise of 1e-3): the exact SVD's.
         let deep = Pca::fit(&samples, p, 80).unwrap();
         let (_, tail_values, _) = centred_svd(&samples, n, p);

@@ -17,9 +17,6 @@
 //! Each `α` then costs `O(n r k)` (`r` = `n` or `p`); the decomposition `O(n p min(n, p))` is paid once.
 //! Eigenvalues within rounding of zero are read as zero (see `symmetric_eigen`).
 
-use faer::diag::Diag;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::evd::{ComputeEigenvectors, self_adjoint_evd, self_adjoint_evd_scratch};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{BlockStructure, matmul as triangular_matmul};
 use faer::{Accum, Mat, MatRef, Par};
@@ -278,32 +275,16 @@ fn symmetric_eigen(a: MatRef<'_, f64>, par: Par) -> Result<(Vec<f64>, Mat<f64>)>
 /// larger side is `largest_side`.
 fn eigen_of(product: Mat<f64>, largest_side: usize) -> Result<(Vec<f64>, Mat<f64>)> {
     let r = product.nrows();
-    let mut values = Diag::<f64>::zeros(r);
-    let mut vectors = Mat::<f64>::zeros(r, r);
-    // faer's parallel tridiagonalisation sums per-thread parts, so its rounding (and at worst the
-    // chosen α) would depend on the thread count; sequential, it costs little next to the product.
-    let evd_par = Par::Seq;
-    let mut workspace = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
-        r,
-        ComputeEigenvectors::Yes,
-        evd_par,
-        Default::default(),
-    ));
-    self_adjoint_evd(
-        product.as_ref(),
-        values.as_mut(),
-        Some(vectors.as_mut()),
-        evd_par,
-        MemStack::new(&mut workspace),
-        Default::default(),
-    )
-    .map_err(|err| CoreError::Param {
-        name: "ridge",
-        reason: format!(
-            "the eigendecomposition of the {r} x {r} Gram matrix did not converge ({err:?}); \
-             check the features for extreme values"
-        ),
-    })?;
+    // (sequential: the rounding, and at worst the chosen α, would otherwise depend on the thread
+    // count; it costs little next to the product)
+    let (values, vectors) =
+        crate::linalg::symmetric_eigen(product.as_ref()).map_err(|err| CoreError::Param {
+            name: "ridge",
+            reason: format!(
+                "the eigendecomposition of the {r} x {r} Gram matrix did not converge ({err:?}); \
+                 check the features for extreme values"
+            ),
+        })?;
     let largest = (0..r).map(|j| values[j]).fold(0.0, f64::max);
     let tolerance = largest * largest_side as f64 * f64::EPSILON;
     let eigenvalues = (0..r)
