@@ -50,14 +50,8 @@ fn fit(
     RidgeFamily::fit(
         config,
         FitData {
-            train: LabeledVectors { vectors, classes },
-            validation: LabeledVectors {
-                vectors: &[],
-                classes: &[],
-            },
-            n_classes,
-            dims: dims.max(1),
             calibrate,
+            ..training_only(vectors, classes, n_classes, dims.max(1))
         },
     )
 }

@@ -26,10 +26,9 @@
 //!   by the classifier the model holds for that point ([`crate::pipeline::EarlyDecisions`]: trained
 //!   on stances cut there), or by the whole-stance one when `K` reaches the model's length;
 //! - or, with `auto`, at the first of the model's decision points whose confidence passes the
-//!   threshold learned at training, else at its deadline point (when it learned one and the stance
-//!   reaches it), else at the lift-off, whole. A moment the model was not trained
-//!   for is refused ([`TrainedModel::trained_for`]); each decision says why it was made then
-//!   ([`EarlyDecision`]);
+//!   threshold learned at training, else at its deadline point, else at the lift-off, whole. A moment
+//!   the model was not trained for is refused ([`TrainedModel::trained_for`]); each decision says why
+//!   it was made then ([`EarlyDecision`]);
 //! - a stance found longer than the model's length before its lift-off is decided then, on its first
 //!   `length` frames (`cut`), as offline cuts it; their `area` channel counts contact against the
 //!   highest sensel of those frames, where offline it is the whole stance's.

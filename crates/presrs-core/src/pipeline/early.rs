@@ -391,7 +391,7 @@ pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThre
             };
             early_decisions_are_safe(held_out, frames, rule)
         });
-    describe_rule(
+    measure_rule(
         held_out,
         frames,
         AutoRule {
@@ -402,7 +402,7 @@ pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThre
 }
 
 /// `rule` with what it gives on `held_out`.
-fn describe_rule(held_out: &[HeldOutStance], frames: &[usize], rule: AutoRule) -> AutoThreshold {
+fn measure_rule(held_out: &[HeldOutStance], frames: &[usize], rule: AutoRule) -> AutoThreshold {
     let n = held_out.len().max(1) as f64;
     let decisions: Vec<OfflineDecision> = held_out
         .iter()

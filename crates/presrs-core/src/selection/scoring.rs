@@ -459,7 +459,7 @@ fn score_fold(
             Some(dims) => Pca::fit_rows(&train_rows, table.n_features, dims).and_then(|pca| {
                 let train = project_each(&pca, &train_rows)?;
                 let validation = project_each(&pca, &validation_rows)?;
-                let test = project_test(&pca, table, &fold.test)?;
+                let test = project_each(&pca, &test_rows_of(table, &fold.test))?;
                 Ok((pca.n_components(), train, validation, test))
             }),
             None if in_place => Ok((table.n_features, Vec::new(), Vec::new(), Vec::new())),
@@ -480,7 +480,7 @@ fn score_fold(
             }
         };
         let test_rows: Vec<&[f64]> = if in_place {
-            fold.test.iter().map(|&i| table.fast_row(i)).collect()
+            test_rows_of(table, &fold.test)
         } else {
             test.chunks_exact(dims).collect()
         };
@@ -541,6 +541,11 @@ fn score_fold(
     Ok(results)
 }
 
+/// The held-out images' features as a classification session computes them, in place.
+fn test_rows_of<'t>(table: &'t FeatureTable, test: &[usize]) -> Vec<&'t [f64]> {
+    test.iter().map(|&i| table.fast_row(i)).collect()
+}
+
 /// `rows` projected as training projects them (`pipeline::train::project_rows` on the rows laid end
 /// to end).
 fn project_each(pca: &Pca, rows: &[&[f64]]) -> Result<Vec<f64>> {
@@ -555,19 +560,5 @@ fn project_each(pca: &Pca, rows: &[&[f64]]) -> Result<Vec<f64>> {
 
 /// The held-out images' features as a classification session computes them (without a PCA step).
 fn fast_rows(table: &FeatureTable, test: &[usize]) -> Vec<f64> {
-    test.iter()
-        .flat_map(|&i| table.fast_row(i).iter().copied())
-        .collect()
-}
-
-/// The held-out images projected as a classification session projects them (its features, then the
-/// PCA's fixed-point projection).
-fn project_test(pca: &Pca, table: &FeatureTable, test: &[usize]) -> Result<Vec<f64>> {
-    let dims = pca.n_components();
-    let mut reduced = vec![0.0; test.len() * dims];
-    let mut scratch = pca.scratch();
-    for (&i, out) in test.iter().zip(reduced.chunks_exact_mut(dims)) {
-        pca.project_fast_into(table.fast_row(i), &mut scratch, out)?;
-    }
-    Ok(reduced)
+    test_rows_of(table, test).concat()
 }
