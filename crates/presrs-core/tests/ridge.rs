@@ -587,19 +587,7 @@ fn ridge_raw_matches_scikit_learn_without_a_scaler() {
         );
         let x = floats(&case["x_train"]);
         let classes = indices(&case["y_train"]);
-        let data = FitData {
-            train: LabeledVectors {
-                vectors: &x,
-                classes: &classes,
-            },
-            validation: LabeledVectors {
-                vectors: &[],
-                classes: &[],
-            },
-            n_classes,
-            dims,
-            calibrate: true,
-        };
+        let data = training_only(&x, &classes, n_classes, dims);
         let model = RidgeRawFamily::fit(&config, data).unwrap();
         assert_eq!(model.alpha(), case["alpha"].as_f64().unwrap(), "{name}");
         assert!(model.scales().iter().all(|&s| s == 1.0), "{name}");
