@@ -113,8 +113,9 @@ class Model:
         (n, channels, time). With a model that scores novelty, a sample far from every class is
         ``"unknown"``; ``novelty=False`` names one of the classes for every sample."""
     def novelty(self, x: Any) -> Any:
-        """The novelty score: a `float` for one sample, an array for a batch (the distance to the
-        nearest training sample in the model's discriminant space); above `novelty_threshold`, `predict` says
+        """The novelty score: a `float` for one sample, an array for a batch (in [0, 1]: 1 - the
+        nearest class's posterior x the credibility of the distance to the nearest training sample, in
+        the model's discriminant space; older models: that distance); above `novelty_threshold`, `predict` says
         ``"unknown"``. An error for a model without a novelty score."""
     def confidence(self, x: Any) -> Any:
         """The confidence a decision reports: a `float` for one sample, an array for a batch (the

@@ -390,9 +390,10 @@ impl Model {
         self.classes_array(py)?.call_method1("take", (indices,))
     }
 
-    /// The novelty score of one sample (a `float`) or of every sample of a batch (an array): the
-    /// distance to the nearest training sample in the model's discriminant space; above `novelty_threshold`,
-    /// `predict` says `"unknown"`. An error for a model without a novelty score.
+    /// The novelty score of one sample (a `float`) or of every sample of a batch (an array): in
+    /// [0, 1], 1 - the nearest class's posterior x the credibility of the distance to the nearest
+    /// training sample, in the model's discriminant space (older models: that distance); above
+    /// `novelty_threshold`, `predict` says `"unknown"`. An error for a model without a novelty score.
     fn novelty<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         if self.file().model.novelty().is_none() {
             return Err(data_error(

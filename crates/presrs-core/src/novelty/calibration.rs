@@ -8,7 +8,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use crate::error::{CoreError, Result};
-use crate::novelty::discriminant::{Discriminant, nearest};
+use crate::novelty::discriminant::{Discriminant, nearest, nearest_posterior};
 
 /// Folds: at most this many; more groups are merged, whole, into this many.
 const MAX_FOLDS: usize = 5;
@@ -29,14 +29,16 @@ pub enum CalibrationFolds {
     Split,
 }
 
-/// The held-out nearest-neighbour distance of every vector that could be held out.
+/// The held-out nearest-neighbour distance of every vector that could be held out, and the posterior
+/// of its nearest class mean there (one per distance).
 pub(crate) struct HeldOut {
     pub folds: CalibrationFolds,
     pub distances: Vec<f64>,
+    pub posteriors: Vec<f64>,
 }
 
 /// Each vector's distance to its nearest neighbour among the other folds' vectors, in their
-/// discriminant space. A vector whose class no other fold holds is skipped: its distance is that of a
+/// discriminant space, and its posterior there ([`nearest_posterior`]). A vector whose class no other fold holds is skipped: its distance is that of a
 /// class never seen, not of a new recording of a known one. An error, saying what to give, when the
 /// vectors come from fewer than [`MIN_GROUPS`] groups or no class is in two of them.
 pub(crate) fn held_out_distances(
@@ -49,6 +51,7 @@ pub(crate) fn held_out_distances(
     let fold_of = assign_folds(groups)?;
     let n_folds = fold_of.iter().copied().max().map_or(0, |last| last + 1);
     let mut distances = Vec::with_capacity(classes.len());
+    let mut posteriors = Vec::with_capacity(classes.len());
     for fold in 0..n_folds {
         let (mut train, mut train_classes) = (Vec::new(), Vec::new());
         for ((row, &class), &f) in vectors.chunks_exact(dims).zip(classes).zip(&fold_of) {
@@ -74,6 +77,7 @@ pub(crate) fn held_out_distances(
                 let distance = nearest(&neighbours, &projected);
                 if distance.is_finite() {
                     distances.push(distance);
+                    posteriors.push(nearest_posterior(&to_classes));
                 }
             }
         }
@@ -89,7 +93,26 @@ pub(crate) fn held_out_distances(
     Ok(HeldOut {
         folds: CalibrationFolds::Group,
         distances,
+        posteriors,
     })
+}
+
+/// Each held-out vector's score, `1 - posterior x credibility` (unsorted): its distance's credibility
+/// read against the other held-out distances (`sorted_distances`, itself among them), as a new
+/// sample's is read against all of them: `k / n` where `k` of the `n` are at least as far, itself
+/// counted.
+pub(crate) fn held_out_scores(held_out: &HeldOut, sorted_distances: &[f64]) -> Vec<f64> {
+    let n = sorted_distances.len() as f64;
+    held_out
+        .distances
+        .iter()
+        .zip(&held_out.posteriors)
+        .map(|(&distance, &posterior)| {
+            let at_least =
+                sorted_distances.len() - sorted_distances.partition_point(|&d| d < distance);
+            1.0 - posterior * at_least as f64 / n
+        })
+        .collect()
 }
 
 /// The fold of every vector by its group, more than [`MAX_FOLDS`] groups merged, whole, in sorted

@@ -265,3 +265,20 @@ pub(crate) fn nearest(points: &[f64], x: &[f64]) -> f64 {
         .fold(f64::INFINITY, f64::min)
         .sqrt()
 }
+
+/// The largest posterior of Gaussian classes centred on the class means with the identity covariance
+/// (the discriminant space's pooled one) and equal priors, from the distances to the means: linear
+/// discriminant analysis's confidence, read in the novelty score's own space. Classes no vector held
+/// (an infinite distance) have none; 0 when no class mean is reachable.
+pub(crate) fn nearest_posterior(distances: &[f64]) -> f64 {
+    let nearest = distances.iter().copied().fold(f64::INFINITY, f64::min);
+    if !nearest.is_finite() {
+        return 0.0;
+    }
+    // Shifted by the nearest squared distance so that the largest term is exp(0) = 1.
+    let total: f64 = distances
+        .iter()
+        .map(|d| (-(d * d - nearest * nearest) / 2.0).exp())
+        .sum();
+    1.0 / total
+}

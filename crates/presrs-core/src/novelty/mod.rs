@@ -3,19 +3,27 @@
 //!
 //! The score is read in the model's own feature space, the vectors its classifier sees (principal
 //! components): their discriminant space ([`Discriminant`], Fisher's directions with the pooled
-//! within-class covariance the identity), where the score is the distance to the nearest training
-//! vector (of any class). A class's training vectors need not lie around its mean (a terrain pressed at
-//! two angles makes two clusters), and a sample between two clusters, or beside a class's cloud, is far
-//! from every training vector while near a mean. A sample is `unknown` when the score exceeds the
-//! threshold, the quantile of the same distances over training vectors held out from the space and from
-//! the neighbours (their group held out, as a new recording is) that leaves [`DEFAULT_REJECTION`] of them
-//! out. No unknown class is needed, and `eval --leave-class-out` measures what it does with a class
-//! never seen (`docs/methods.md`).
+//! within-class covariance the identity). Two numbers are read there. The distance to the nearest
+//! training vector (of any class): a class's training vectors need not lie around its mean (a terrain
+//! pressed at two angles makes two clusters), and a sample between two clusters, or beside a class's
+//! cloud, is far from every training vector while near a mean. And the posterior of the nearest class
+//! mean (Gaussian classes with that covariance, equal priors: linear discriminant analysis's
+//! confidence), low for a sample between classes even when a training vector lies near it. The score
+//! is `1 - posterior x credibility of the distance`, the chance-like evidence of both, with no constant
+//! to tune (the credibility, defined below, of the distance among held-out ones).
 //!
-//! The same held-out distances give each score its credibility, its conformal p-value: the share of
-//! held-out known vectors at least as far. A decision's reported confidence is its posterior capped by
+//! Both are calibrated on training vectors held out from the space and from the neighbours (their
+//! group held out, as a new recording is): each held-out vector's distance and posterior in the space
+//! of the other folds, its distance's credibility among the other held-out distances. A sample is
+//! `unknown` when its score exceeds the threshold, the quantile of the held-out scores that leaves
+//! [`DEFAULT_REJECTION`] of them out. No unknown class is needed, and `eval --leave-class-out` measures
+//! what it does with a class never seen (`docs/methods.md`). Models written before the posterior
+//! joined the score keep the distance alone as their score.
+//!
+//! The held-out scores give each score its credibility, its conformal p-value: the share of held-out
+//! known vectors scoring at least as high. A decision's reported confidence is its posterior capped by
 //! it ([`Novelty::capped`]): a classifier is sure of the class it names among those it knows, and says
-//! nothing of whether the sample is one of them; a sample farther than 90 % of known ones is never
+//! nothing of whether the sample is one of them; a sample more novel than 90 % of known ones is never
 //! reported at 0.9.
 
 mod calibration;
@@ -27,7 +35,7 @@ use serde::{Deserialize, Serialize};
 
 pub use calibration::{CalibrationFolds, MIN_GROUPS};
 pub use discriminant::Discriminant;
-use discriminant::nearest;
+use discriminant::{nearest, nearest_posterior};
 
 use crate::error::{CoreError, Result, check_len};
 
@@ -40,7 +48,9 @@ pub const DEFAULT_REJECTION: f64 = 0.05;
 /// A novelty score and its verdict.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Novelty {
-    /// The distance to the nearest training vector in the discriminant space (larger: more novel).
+    /// The novelty score (larger: more novel): `1 - posterior x credibility of the distance`, in
+    /// [0, 1] (the module documentation); for models written before, the distance to the nearest
+    /// training vector in the discriminant space.
     pub score: f64,
     /// The score above which a sample is `unknown`.
     pub threshold: f64,
@@ -89,10 +99,15 @@ struct NoveltyFields {
     folds: CalibrationFolds,
     /// How many held-out distances set the scales and the threshold.
     calibration_vectors: usize,
-    /// Those distances, sorted: a score's credibility is read against them (absent from files written
-    /// before they were kept: no credibility then).
+    /// Those distances, sorted: a distance's credibility is read against them (absent from files
+    /// written before they were kept: no credibility then).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     calibration: Vec<f64>,
+    /// The held-out vectors' scores, `1 - posterior x credibility`, sorted: the threshold is their
+    /// quantile and a score's credibility is read against them. Absent from files written before the
+    /// posterior joined the score: their score is the distance, read against `calibration`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    combined: Vec<f64>,
 }
 
 impl From<NoveltyModel> for NoveltyFields {
@@ -146,6 +161,17 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
                 "the held-out calibration distances must be finite and sorted".into(),
             ));
         }
+        let sorted = fields.combined.windows(2).all(|w| w[0] <= w[1]);
+        if !(sorted && fields.combined.iter().all(|v| (0.0..=1.0).contains(v))) {
+            return Err(bad(
+                "the held-out scores must be sorted and in [0, 1]".into()
+            ));
+        }
+        if !fields.combined.is_empty() && fields.calibration.is_empty() {
+            return Err(bad(
+                "held-out scores without the held-out distances they were read against".into(),
+            ));
+        }
         if !(0.0..1.0).contains(&fields.rejection) {
             return Err(bad(format!(
                 "rejection {} is outside [0, 1)",
@@ -181,12 +207,14 @@ impl NoveltyModel {
         let space = Discriminant::fit(vectors, classes, n_classes, dims)?;
         let neighbours = space.project_rows(vectors)?;
         let held_out = calibration::held_out_distances(vectors, classes, groups, n_classes, dims)?;
-        let mut distances = held_out.distances;
+        let mut distances = held_out.distances.clone();
         distances.sort_by(f64::total_cmp);
-        let threshold = calibration::quantile(&distances, 1.0 - rejection);
+        let mut combined = calibration::held_out_scores(&held_out, &distances);
+        combined.sort_by(f64::total_cmp);
+        let threshold = calibration::quantile(&combined, 1.0 - rejection);
         if !(threshold.is_finite() && threshold > 0.0) {
             return Err(CoreError::NotEnoughData(
-                "no held-out distance to calibrate the novelty score on".into(),
+                "no held-out score to calibrate the novelty score on".into(),
             ));
         }
         Self::try_from(NoveltyFields {
@@ -197,6 +225,7 @@ impl NoveltyModel {
             folds: held_out.folds,
             calibration_vectors: distances.len(),
             calibration: distances,
+            combined,
         })
     }
 
@@ -214,12 +243,17 @@ impl NoveltyModel {
         scratch.projected.resize(space.n_axes(), 0.0);
         scratch.distances.resize(space.n_classes(), 0.0);
         space.distances_into(x, &mut scratch.projected, &mut scratch.distances)?;
-        let score = nearest(&self.fields.neighbours, &scratch.projected);
-        Ok(self.verdict(score))
+        let distance = nearest(&self.fields.neighbours, &scratch.projected);
+        if self.fields.combined.is_empty() {
+            return Ok(self.verdict(distance));
+        }
+        let posterior = nearest_posterior(&scratch.distances);
+        let credibility = conformal_p_value(&self.fields.calibration, distance).unwrap_or(1.0);
+        Ok(self.verdict(1.0 - posterior * credibility))
     }
 
-    /// The verdict on `score` (a distance as [`score_into`](Self::score_into) gives, or a mean of
-    /// them), with its credibility.
+    /// The verdict on `score` (as [`score_into`](Self::score_into) gives, or a mean of such scores),
+    /// with its credibility.
     pub fn verdict(&self, score: f64) -> Novelty {
         Novelty {
             credibility: self.credibility(score),
@@ -228,14 +262,13 @@ impl NoveltyModel {
     }
 
     /// The conformal p-value of `score`: `(k + 1) / (n + 1)` where `k` of the `n` held-out known
-    /// distances are at least `score`; `None` without them (an older file).
+    /// scores are at least `score`; `None` without them (an older file).
     pub fn credibility(&self, score: f64) -> Option<f64> {
-        let calibration = &self.fields.calibration;
-        if calibration.is_empty() || score.is_nan() {
-            return None;
+        if self.fields.combined.is_empty() {
+            conformal_p_value(&self.fields.calibration, score)
+        } else {
+            conformal_p_value(&self.fields.combined, score)
         }
-        let at_least = calibration.len() - calibration.partition_point(|&d| d < score);
-        Some((at_least + 1) as f64 / (calibration.len() + 1) as f64)
     }
 
     /// [`score_into`](Self::score_into) with buffers of its own.
@@ -270,9 +303,15 @@ impl NoveltyModel {
 
     /// In words, for `describe` and reports.
     pub fn describe(&self) -> String {
+        let score = if self.fields.combined.is_empty() {
+            "distance to the nearest training sample"
+        } else {
+            "1 - the nearest class's posterior x the credibility of the distance to the nearest training \
+             sample"
+        };
         format!(
-            "distance to the nearest training sample in a {}-direction discriminant space; unknown above {:.3} \
-             ({:.0} % of {} held-out training samples, folds by {})",
+            "{score} in a {}-direction discriminant space; unknown above {:.3} ({:.0} % of {} held-out \
+             training samples, folds by {})",
             self.fields.space.n_axes(),
             self.fields.threshold,
             100.0 * self.fields.rejection,
@@ -283,6 +322,16 @@ impl NoveltyModel {
             }
         )
     }
+}
+
+/// `(k + 1) / (n + 1)` where `k` of the `n` `sorted` values are at least `score`; `None` without
+/// values or for a NaN score.
+fn conformal_p_value(sorted: &[f64], score: f64) -> Option<f64> {
+    if sorted.is_empty() || score.is_nan() {
+        return None;
+    }
+    let at_least = sorted.len() - sorted.partition_point(|&d| d < score);
+    Some((at_least + 1) as f64 / (sorted.len() + 1) as f64)
 }
 
 /// The area under the ROC curve of a score that should be larger for `positives` than for `negatives`:

@@ -172,8 +172,8 @@ fn without_three_groups_the_score_is_refused_saying_why_and_the_threshold_is_the
     assert_eq!(model.folds(), CalibrationFolds::Group);
     let strict = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.01).unwrap();
     assert!(strict.threshold() > model.threshold());
-    // The threshold is the 0.9 quantile of the held-out distances it keeps.
-    let calibration = &model.fields.calibration;
+    // The threshold is the 0.9 quantile of the held-out scores it keeps.
+    let calibration = &model.fields.combined;
     let above = calibration
         .iter()
         .filter(|&&d| d > model.threshold())
@@ -229,12 +229,12 @@ fn a_model_round_trips_and_a_broken_one_is_refused() {
 }
 
 #[test]
-fn the_credibility_is_the_share_of_held_out_distances_at_least_as_far_and_caps_the_confidence() {
+fn the_credibility_is_the_share_of_held_out_scores_at_least_as_high_and_caps_the_confidence() {
     let (dims, n_classes) = (6, 4);
     let (vectors, classes, groups) = gaussian_classes(n_classes, 50, dims, 4.0, 6);
     let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
     let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
-    let calibration = &model.fields.calibration;
+    let calibration = &model.fields.combined;
     let n = calibration.len() as f64;
     assert_eq!(calibration.len(), model.fields.calibration_vectors);
     // Nearer than every held-out distance: (n + 1) / (n + 1); beyond them all: 1 / (n + 1).
@@ -250,7 +250,7 @@ fn the_credibility_is_the_share_of_held_out_distances_at_least_as_far_and_caps_t
     let at_threshold = model.credibility(model.threshold()).unwrap();
     assert!((0.03..=0.08).contains(&at_threshold), "{at_threshold}");
     // The verdict carries it and caps a posterior by it, never raising one.
-    let far = model.verdict(2.0 * model.threshold());
+    let far = model.verdict(1.0);
     let credibility = far.credibility.unwrap();
     assert!(far.unknown && credibility < 0.05);
     assert_eq!(far.capped(0.99), credibility);
@@ -259,11 +259,128 @@ fn the_credibility_is_the_share_of_held_out_distances_at_least_as_far_and_caps_t
     // A file written before the held-out distances were kept loads, without a credibility.
     let mut older = serde_json::to_value(&model).unwrap();
     older.as_object_mut().unwrap().remove("calibration");
+    older.as_object_mut().unwrap().remove("combined");
     let older: NoveltyModel = serde_json::from_value(older).unwrap();
     assert_eq!(older.verdict(1.0).credibility, None);
-    let mut unsorted = serde_json::to_value(&model).unwrap();
-    unsorted["calibration"] = serde_json::json!([2.0, 1.0]);
-    assert!(serde_json::from_value::<NoveltyModel>(unsorted).is_err());
+    for (field, values) in [
+        ("calibration", serde_json::json!([2.0, 1.0])),
+        ("combined", serde_json::json!([0.2, 0.1])),
+        ("combined", serde_json::json!([0.1, 1.5])),
+    ] {
+        let mut broken = serde_json::to_value(&model).unwrap();
+        broken[field] = values;
+        assert!(serde_json::from_value::<NoveltyModel>(broken).is_err());
+    }
+    // Held-out scores without the distances they were read against are refused.
+    let mut orphan = serde_json::to_value(&model).unwrap();
+    orphan.as_object_mut().unwrap().remove("calibration");
+    let err = serde_json::from_value::<NoveltyModel>(orphan).unwrap_err();
+    assert!(err.to_string().contains("held-out distances"), "{err}");
+}
+
+/// `(k + 1) / (n + 1)` by counting, `k` of `values` at least `x`.
+fn p_value_by_counting(values: &[f64], x: f64) -> f64 {
+    let at_least = values.iter().filter(|&&v| v >= x).count();
+    (at_least + 1) as f64 / (values.len() + 1) as f64
+}
+
+#[test]
+fn the_score_is_one_minus_the_posterior_times_the_distance_credibility_by_definition() {
+    let (dims, n_classes) = (6, 4);
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 40, dims, 3.0, 8);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
+    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
+    let fields = &model.fields;
+    assert_eq!(fields.combined.len(), fields.calibration.len());
+    let space = &fields.space;
+    let axes = space.n_axes();
+    let (test, _, _) = gaussian_classes(n_classes + 1, 10, dims, 3.0, 9);
+    for row in test.chunks_exact(dims) {
+        // The oracle: project, the nearest neighbour by brute force, the posterior as a softmax of
+        // -d^2 / 2 over the class means written out.
+        let z: Vec<f64> = space
+            .axes
+            .chunks_exact(dims)
+            .zip(&space.offset)
+            .map(|(axis, offset)| axis.iter().zip(row).map(|(a, x)| a * x).sum::<f64>() - offset)
+            .collect();
+        let squared =
+            |point: &[f64]| -> f64 { point.iter().zip(&z).map(|(p, v)| (p - v) * (p - v)).sum() };
+        let distance = fields
+            .neighbours
+            .chunks_exact(axes)
+            .map(|p| squared(p).sqrt())
+            .fold(f64::INFINITY, f64::min);
+        let weights: Vec<f64> = space
+            .class_means
+            .chunks_exact(axes)
+            .map(|mean| (-squared(mean) / 2.0).exp())
+            .collect();
+        let posterior = weights.iter().copied().fold(0.0, f64::max) / weights.iter().sum::<f64>();
+        let credibility = p_value_by_counting(&fields.calibration, distance);
+        let expected = 1.0 - posterior * credibility;
+        let novelty = model.score(row).unwrap();
+        assert!(
+            (novelty.score - expected).abs() < 1e-9,
+            "{} against {expected}",
+            novelty.score
+        );
+        assert_eq!(novelty.unknown, novelty.score > model.threshold());
+        let p = p_value_by_counting(&fields.combined, novelty.score);
+        assert!((novelty.credibility.unwrap() - p).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn a_file_without_the_held_out_scores_scores_by_the_distance_alone() {
+    let (dims, n_classes) = (5, 3);
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 30, dims, 3.0, 10);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
+    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
+    let mut json = serde_json::to_value(&model).unwrap();
+    json.as_object_mut().unwrap().remove("combined");
+    json["threshold"] = serde_json::json!(2.5);
+    let older: NoveltyModel = serde_json::from_value(json).unwrap();
+    let mut scratch = older.scratch();
+    for row in vectors.chunks_exact(dims).take(20) {
+        let mut projected = vec![0.0; older.fields.space.n_axes()];
+        let mut to_means = vec![0.0; n_classes];
+        older
+            .fields
+            .space
+            .distances_into(row, &mut projected, &mut to_means)
+            .unwrap();
+        let distance = nearest(&older.fields.neighbours, &projected);
+        let novelty = older.score_into(row, &mut scratch).unwrap();
+        assert_eq!(novelty.score, distance);
+        assert_eq!(novelty.unknown, distance > 2.5);
+        assert_eq!(
+            novelty.credibility,
+            Some(p_value_by_counting(&older.fields.calibration, distance))
+        );
+    }
+    assert!(older.describe().starts_with("distance to the nearest"));
+    assert!(
+        model
+            .describe()
+            .starts_with("1 - the nearest class's posterior")
+    );
+}
+
+#[test]
+fn the_held_out_scores_read_each_distance_against_all_held_out_ones() {
+    let held_out = calibration::HeldOut {
+        folds: CalibrationFolds::Group,
+        distances: vec![3.0, 1.0, 2.0, 2.0],
+        posteriors: vec![0.5, 1.0, 0.8, 0.9],
+    };
+    let sorted = [1.0, 2.0, 2.0, 3.0];
+    // 3.0: 1 of 4 at least as far; 1.0: 4 of 4; 2.0: 3 of 4.
+    let expected = [1.0 - 0.5 * 0.25, 0.0, 1.0 - 0.8 * 0.75, 1.0 - 0.9 * 0.75];
+    let scores = calibration::held_out_scores(&held_out, &sorted);
+    for (score, want) in scores.iter().zip(expected) {
+        assert!((score - want).abs() < 1e-12, "{score} against {want}");
+    }
 }
 
 #[test]

@@ -128,7 +128,7 @@ pub struct NoveltyVerdict {
     pub unknown: bool,
     /// The nearest class (the classifier's label, whether `unknown` or not).
     pub nearest: String,
-    /// The score: the distance to the nearest training sample in the model's discriminant space.
+    /// The score ([`presrs_core::novelty::Novelty::score`]): larger is more novel.
     pub novelty: f64,
     /// The score above which a sample is `unknown`.
     pub novelty_threshold: f64,
