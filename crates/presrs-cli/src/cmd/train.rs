@@ -167,6 +167,18 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if let Some(early) = presrs::describe::early_summary(model) {
         writeln!(out, "{early}")?;
     }
+    if let Some(seconds) = training.novelty_seconds {
+        let what = model.novelty().map_or_else(
+            || "none (every decision is one of the classes)".to_owned(),
+            |novelty| novelty.describe(),
+        );
+        let budget = if model.selection().is_some() {
+            ", not covered by the budget"
+        } else {
+            ""
+        };
+        writeln!(out, "novelty: {what}; fitted in {seconds:.1} s{budget}")?;
+    }
     if let Some(profile) = &file.online {
         writeln!(out, "{}", profile_summary(profile))?;
     }

@@ -63,8 +63,7 @@ pub fn leave_class_out_table(result: &LeaveClassOut) -> String {
     if result.models_without_novelty > 0 {
         let _ = writeln!(
             text,
-            "\n{} of {} models had no novelty score (their classifier takes every feature): their \
-             decisions are never unknown",
+            "\n{} of {} models had no novelty score: their decisions are never unknown",
             result.models_without_novelty, result.models
         );
     }

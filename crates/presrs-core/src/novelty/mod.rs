@@ -2,7 +2,9 @@
 //! to be one of them (`unknown`).
 //!
 //! The score is read in the model's own feature space, the vectors its classifier sees (principal
-//! components): their discriminant space ([`Discriminant`], Fisher's directions with the pooled
+//! components; a classifier of thousands of raw features, ridge on random convolutions, has its
+//! vectors reduced to principal components of their own first, [`NoveltyModel::with_reduction`]):
+//! their discriminant space ([`Discriminant`], Fisher's directions with the pooled
 //! within-class covariance the identity). Two numbers are read there. The distance to the nearest
 //! training vector (of any class): a class's training vectors need not lie around its mean (a terrain
 //! pressed at two angles makes two clusters), and a sample between two clusters, or beside a class's
@@ -38,6 +40,7 @@ pub use discriminant::Discriminant;
 use discriminant::{nearest, nearest_posterior};
 
 use crate::error::{CoreError, Result, check_len};
+use crate::projection::Pca;
 
 /// The label of a decision whose sample is none of the model's classes.
 pub const UNKNOWN_LABEL: &str = "unknown";
@@ -90,6 +93,10 @@ pub struct NoveltyModel {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct NoveltyFields {
+    /// Principal components the classifier's vectors are reduced to before the space, when the
+    /// classifier reads too many values for a covariance (absent: the space reads them as they are).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    reduction: Option<Pca>,
     space: Discriminant,
     /// The training vectors in the discriminant space, `n x axes` (row-major): the neighbours.
     neighbours: Vec<f64>,
@@ -167,6 +174,15 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
                 "the held-out scores must be sorted and in [0, 1]".into()
             ));
         }
+        if let Some(pca) = &fields.reduction
+            && pca.n_components() != space.dims
+        {
+            return Err(bad(format!(
+                "a reduction to {} components before a space of {} values does not fit",
+                pca.n_components(),
+                space.dims
+            )));
+        }
         if !fields.combined.is_empty() && fields.calibration.is_empty() {
             return Err(bad(
                 "held-out scores without the held-out distances they were read against".into(),
@@ -185,6 +201,7 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
 /// Reusable buffers of [`NoveltyModel::score_into`].
 #[derive(Clone, Debug, Default)]
 pub struct NoveltyScratch {
+    reduced: Vec<f64>,
     projected: Vec<f64>,
     distances: Vec<f64>,
 }
@@ -218,6 +235,7 @@ impl NoveltyModel {
             ));
         }
         Self::try_from(NoveltyFields {
+            reduction: None,
             space,
             neighbours,
             threshold,
@@ -229,9 +247,17 @@ impl NoveltyModel {
         })
     }
 
+    /// This model reading vectors that `pca` reduces to the ones it was fitted on (`NoveltyModel::fit`
+    /// on the projections): for a classifier of too many values for a covariance.
+    pub fn with_reduction(mut self, pca: Pca) -> Result<Self> {
+        self.fields.reduction = Some(pca);
+        Self::try_from(self.fields)
+    }
+
     /// Buffers sized for this model.
     pub fn scratch(&self) -> NoveltyScratch {
         NoveltyScratch {
+            reduced: vec![0.0; self.fields.space.dims()],
             projected: vec![0.0; self.fields.space.n_axes()],
             distances: vec![0.0; self.fields.space.n_classes()],
         }
@@ -240,6 +266,14 @@ impl NoveltyModel {
     /// The novelty of `x` (a vector the classifier sees). Does not allocate once `scratch` is sized.
     pub fn score_into(&self, x: &[f64], scratch: &mut NoveltyScratch) -> Result<Novelty> {
         let space = &self.fields.space;
+        let x = match &self.fields.reduction {
+            Some(pca) => {
+                scratch.reduced.resize(space.dims(), 0.0);
+                pca.project_into(x, &mut scratch.reduced)?;
+                &scratch.reduced[..]
+            }
+            None => x,
+        };
         scratch.projected.resize(space.n_axes(), 0.0);
         scratch.distances.resize(space.n_classes(), 0.0);
         space.distances_into(x, &mut scratch.projected, &mut scratch.distances)?;
@@ -291,9 +325,12 @@ impl NoveltyModel {
         self.fields.folds
     }
 
-    /// Length of the vectors scored.
+    /// Length of the vectors scored (the classifier's).
     pub fn dims(&self) -> usize {
-        self.fields.space.dims()
+        match &self.fields.reduction {
+            Some(pca) => pca.n_features(),
+            None => self.fields.space.dims(),
+        }
     }
 
     /// Number of classes.
@@ -309,9 +346,12 @@ impl NoveltyModel {
             "1 - the nearest class's posterior x the credibility of the distance to the nearest training \
              sample"
         };
+        let reduced = self.fields.reduction.as_ref().map_or(String::new(), |pca| {
+            format!(" (of {} principal components)", pca.n_components())
+        });
         format!(
-            "{score} in a {}-direction discriminant space; unknown above {:.3} ({:.0} % of {} held-out \
-             training samples, folds by {})",
+            "{score} in a {}-direction discriminant space{reduced}; unknown above {:.3} ({:.0} % of {} \
+             held-out training samples, folds by {})",
             self.fields.space.n_axes(),
             self.fields.threshold,
             100.0 * self.fields.rejection,

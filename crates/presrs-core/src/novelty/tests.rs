@@ -6,6 +6,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::*;
 use crate::classifier::gaussian::ledoit_wolf;
+use crate::projection::Pca;
 
 /// `per_class` vectors of each of `n_classes` Gaussian classes in `dims` dimensions: class `k`'s mean
 /// `spacing * k` along axis `k % dims`, unit noise with a correlated pair of axes; groups `g0..g4` in turn.
@@ -417,4 +418,39 @@ fn auroc_is_the_share_of_pairs_ordered_right() {
     assert_eq!(auroc(&[1.0], &[0.0]), Some(1.0));
     assert_eq!(auroc(&[], &[0.0]), None);
     assert_eq!(auroc(&[f64::NAN], &[0.0]), None);
+}
+
+#[test]
+fn a_reduction_scores_the_projection_and_must_fit_the_space() {
+    let (dims, n_classes) = (6, 4);
+    let (vectors, classes, groups) = gaussian_classes(n_classes, 40, dims, 3.0, 11);
+    let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
+    let pca = Pca::fit(&vectors, dims, 4).unwrap();
+    let projected: Vec<f64> = vectors
+        .chunks_exact(dims)
+        .flat_map(|row| pca.project(row).unwrap())
+        .collect();
+    let plain = NoveltyModel::fit(&projected, &classes, &groups, n_classes, 4, 0.05).unwrap();
+    let reduced = plain.clone().with_reduction(pca.clone()).unwrap();
+    assert_eq!((plain.dims(), reduced.dims()), (4, dims));
+    let mut scratch = reduced.scratch();
+    for row in vectors.chunks_exact(dims).take(15) {
+        assert_eq!(
+            reduced.score_into(row, &mut scratch).unwrap(),
+            plain.score(&pca.project(row).unwrap()).unwrap()
+        );
+    }
+    assert!(reduced.score(&[0.0; 4]).is_err());
+    let json = serde_json::to_value(&reduced).unwrap();
+    assert_eq!(
+        serde_json::from_value::<NoveltyModel>(json).unwrap(),
+        reduced
+    );
+    let err = plain
+        .with_reduction(Pca::fit(&vectors, dims, 3).unwrap())
+        .unwrap_err();
+    assert!(
+        err.to_string().contains("reduction to 3 components"),
+        "{err}"
+    );
 }

@@ -8,16 +8,27 @@ use crate::novelty::NoveltyModel;
 use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
 use crate::pipeline::train::class_indices;
+use crate::projection::Pca;
 
-/// The most values a vector may have for the novelty score: its discriminant space needs a
-/// `dims x dims` covariance (a model without a PCA step, ridge's thousands of features, has none).
+/// The most values a vector may have for the novelty score's discriminant space as they are: it needs a
+/// `dims x dims` covariance. A classifier that reads more (a model without a PCA step, ridge on
+/// thousands of random-convolution features) has its vectors reduced to [`NOVELTY_COMPONENTS`]
+/// principal components of their own first.
 pub const MAX_NOVELTY_DIMS: usize = 512;
+
+/// Principal components the novelty score of a wide classifier reads: the pipeline's default PCA size
+/// (the paper's 51), not tuned for novelty.
+pub const NOVELTY_COMPONENTS: usize = 51;
+
+/// The most training vectors that wide reduction is fitted on, evenly spaced over the training images:
+/// their `n x dims` matrix is held at once (2,000 x 10,000 values: 160 MB), while the rest are reduced
+/// one image at a time.
+pub const NOVELTY_PCA_SAMPLES: usize = 2000;
 
 impl TrainedModel {
     /// This model with a novelty score fitted on `images` (its training and validation images, with their
     /// groups: the threshold is calibrated by leaving groups out, and needs three or more), set to
-    /// reject `rejection` of held-out known vectors. The model is returned unchanged, without a score,
-    /// when its classifier takes more than [`MAX_NOVELTY_DIMS`] values.
+    /// reject `rejection` of held-out known vectors.
     pub fn with_novelty(self, images: &[LabeledImage<'_>], rejection: f64) -> Result<Self> {
         let groups: Vec<Option<&str>> = images.iter().map(|image| image.group).collect();
         self.with_novelty_by(images, &groups, rejection)
@@ -32,20 +43,42 @@ impl TrainedModel {
         rejection: f64,
     ) -> Result<Self> {
         let dims = self.classifier_dims();
-        if dims > MAX_NOVELTY_DIMS {
-            return Ok(self.without_novelty());
-        }
         let classes = class_indices(self.class_names(), images)?;
-        let vectors = self.reduced_vectors(images)?;
-        let novelty = NoveltyModel::fit(
-            &vectors,
-            &classes,
-            groups,
-            self.class_names().len(),
-            dims,
-            rejection,
-        )?;
+        let n_classes = self.class_names().len();
+        let novelty = if dims > MAX_NOVELTY_DIMS {
+            let pca = self.novelty_reduction(images)?;
+            let vectors = self.vectors_reduced_by(images, &pca)?;
+            let components = pca.n_components();
+            NoveltyModel::fit(&vectors, &classes, groups, n_classes, components, rejection)?
+                .with_reduction(pca)?
+        } else {
+            let vectors = self.reduced_vectors(images)?;
+            NoveltyModel::fit(&vectors, &classes, groups, n_classes, dims, rejection)?
+        };
         self.with_novelty_model(novelty)
+    }
+
+    /// Principal components of the classifier's vectors of at most [`NOVELTY_PCA_SAMPLES`] of
+    /// `images`, evenly spaced (no random draw: the same images give the same reduction).
+    fn novelty_reduction(&self, images: &[LabeledImage<'_>]) -> Result<Pca> {
+        let step = images.len().div_ceil(NOVELTY_PCA_SAMPLES).max(1);
+        let sample: Vec<LabeledImage<'_>> = images.iter().step_by(step).copied().collect();
+        let vectors = self.reduced_vectors(&sample)?;
+        Pca::fit(&vectors, self.classifier_dims(), NOVELTY_COMPONENTS)
+    }
+
+    /// The classifier's vectors of `images` reduced by `pca` (`n x components`), one image at a time.
+    fn vectors_reduced_by(&self, images: &[LabeledImage<'_>], pca: &Pca) -> Result<Vec<f64>> {
+        let components = pca.n_components();
+        let mut vectors = vec![0.0; images.len() * components];
+        vectors
+            .par_chunks_mut(components.max(1))
+            .zip(images.par_iter())
+            .try_for_each_init(
+                || self.session(),
+                |session, (out, image)| pca.project_into(session.reduce(&image.frame)?, out),
+            )?;
+        Ok(vectors)
     }
 
     /// The vectors the classifier sees of `images` (`n x classifier_dims`, row-major), as a session
@@ -69,8 +102,13 @@ impl TrainedModel {
 
 #[cfg(test)]
 mod tests {
+    use super::{MAX_NOVELTY_DIMS, NOVELTY_COMPONENTS};
+    use crate::classifier::ClassifierKind;
     use crate::frame::Frame;
+    use crate::novelty::NoveltyModel;
+    use crate::pipeline::train::class_indices;
     use crate::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
+    use crate::projection::Pca;
     use crate::testing::labeled_set;
 
     /// A model of three of the four synthetic classes with a novelty score, and test frames of all four.
@@ -124,6 +162,81 @@ mod tests {
         assert!(
             known_unknown <= 6,
             "{known_unknown} of 60 known frames unknown"
+        );
+    }
+
+    #[test]
+    fn a_classifier_of_every_feature_gets_a_score_of_its_own_principal_components() {
+        let set = labeled_set(30, 1);
+        let known: Vec<&(Frame, &str)> = set.iter().filter(|(_, l)| *l != set[3].1).collect();
+        let groups = ["r0", "r1", "r2", "r3", "r4"];
+        let images: Vec<LabeledImage<'_>> = known
+            .iter()
+            .enumerate()
+            .map(|(i, (frame, label))| LabeledImage {
+                group: Some(groups[i % 5]),
+                ..LabeledImage::new(frame.view(), label)
+            })
+            .collect();
+        let config = TrainConfig {
+            classifier: ClassifierKind::RIDGE_RAW.default_config(),
+            ..TrainConfig::default()
+        }
+        .check()
+        .unwrap();
+        let model = train(&images, &[], &config)
+            .unwrap()
+            .with_novelty(&images, 0.05)
+            .unwrap();
+        assert!(model.pca().is_none() && model.classifier_dims() > MAX_NOVELTY_DIMS);
+        let novelty = model.novelty().expect("a score for the wide classifier");
+        assert_eq!(novelty.dims(), model.classifier_dims());
+        assert!(
+            novelty.describe().contains("principal components"),
+            "{}",
+            novelty.describe()
+        );
+        assert_eq!(NOVELTY_COMPONENTS, TrainConfig::default().dims);
+        // The oracle: the reduction fitted by hand on every image (fewer than the sample cap), a
+        // score fitted on its projections, the two put together.
+        let vectors = model.reduced_vectors(&images).unwrap();
+        let pca = Pca::fit(&vectors, model.classifier_dims(), NOVELTY_COMPONENTS).unwrap();
+        let projected: Vec<f64> = vectors
+            .chunks_exact(model.classifier_dims())
+            .flat_map(|row| pca.project(row).unwrap())
+            .collect();
+        let classes = class_indices(model.class_names(), &images).unwrap();
+        let groups: Vec<Option<&str>> = images.iter().map(|image| image.group).collect();
+        let components = pca.n_components();
+        let oracle = NoveltyModel::fit(&projected, &classes, &groups, 3, components, 0.05)
+            .unwrap()
+            .with_reduction(pca)
+            .unwrap();
+        assert_eq!(novelty, &oracle);
+        let test = labeled_set(10, 2);
+        let mut session = model.session();
+        let (mut novel, mut known) = (Vec::new(), Vec::new());
+        for (frame, label) in &test {
+            let decided = session.classify(&frame.view()).unwrap().novelty.unwrap();
+            if *label == set[3].1 {
+                novel.push(decided.score);
+            } else {
+                known.push(decided.score);
+            }
+        }
+        let median = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        assert!(
+            median(&mut novel) > median(&mut known),
+            "{novel:?} against {known:?}"
+        );
+        let json = serde_json::to_value(&model).unwrap();
+        let back: TrainedModel = serde_json::from_value(json).unwrap();
+        assert_eq!(
+            back.session().classify(&test[0].0.view()).unwrap().novelty,
+            model.session().classify(&test[0].0.view()).unwrap().novelty
         );
     }
 

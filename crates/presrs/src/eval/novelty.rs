@@ -140,8 +140,8 @@ pub struct LeaveClassOut {
     pub mean_known_confident_without: f64,
     /// Models trained (held-out classes x draws).
     pub models: usize,
-    /// Models whose classifier takes too many values for a novelty score (ridge without PCA): their
-    /// decisions are never `unknown`.
+    /// Models without a novelty score: their decisions are never `unknown` (none since a wide
+    /// classifier's vectors are reduced for the score; kept for the JSON's readers).
     pub models_without_novelty: usize,
 }
 

@@ -62,6 +62,9 @@ pub struct Training {
     pub validation_counts: BTreeMap<String, usize>,
     /// What the user should know (fewer principal components than asked).
     pub warnings: Warnings,
+    /// Seconds spent fitting the novelty score after the model (outside the automatic choice's
+    /// budget); `None` when none was asked for.
+    pub novelty_seconds: Option<f64>,
 }
 
 impl Training {
@@ -113,8 +116,8 @@ pub fn train(dataset: &Dataset, options: &TrainOptions) -> Result<Training> {
     train_with_progress(dataset, options, &crate::progress::Quiet)
 }
 
-/// [`train`], telling `progress` which stage of the automatic choice runs ([`Progress::stage`]:
-/// features, scoring, training the winner).
+/// [`train`], telling `progress` which stage runs ([`Progress::stage`]: the automatic choice's
+/// features, scoring and training the winner, then the novelty score).
 ///
 /// [`Progress::stage`]: crate::progress::Progress::stage
 pub fn train_with_progress(
@@ -210,7 +213,12 @@ pub fn train_with_progress(
         options.seed,
     )?;
     let mut warnings = Warnings::new();
+    let novelty_started = std::time::Instant::now();
     let model = if options.novelty {
+        progress.stage(&format!(
+            "fitting the novelty score on {} samples",
+            train_images.len() + validation_images.len()
+        ));
         let recordings: Vec<&Sample> = split
             .train
             .iter()
@@ -226,6 +234,9 @@ pub fn train_with_progress(
     } else {
         model
     };
+    let novelty_seconds = options
+        .novelty
+        .then(|| novelty_started.elapsed().as_secs_f64());
     if let Some(per_class) = options.per_class
         && !split.capped.is_empty()
     {
@@ -263,6 +274,7 @@ pub fn train_with_progress(
         train_counts: count(&split.train),
         validation_counts: count(&split.validation),
         warnings,
+        novelty_seconds,
     })
 }
 
