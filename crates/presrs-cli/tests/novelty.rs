@@ -84,7 +84,10 @@ fn several_recordings_per_terrain_give_unknown_for_a_terrain_never_seen_and_one_
     // Two recordings (gaits) per terrain: the threshold is learned by holding recordings out.
     let said = train("two/manifest.csv", "two.json");
     assert!(!said.contains("no novelty score"), "{said}");
-    assert!(said.contains("progress: fitting the novelty score on 36 samples"), "{said}");
+    assert!(
+        said.contains("progress: fitting the novelty score on 36 samples"),
+        "{said}"
+    );
     let decided = labels(dir, "two.json", &files);
     let share = |file: &str, label: &str| {
         let of_file: Vec<_> = decided.iter().filter(|(f, _)| f.ends_with(file)).collect();

@@ -164,6 +164,18 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         model.class_names().join(", ")
     )?;
     writeln!(out, "{}", presrs::describe::pipeline_summary(model))?;
+    // (the automatic choice's cost line says the same for its winner)
+    if model.selection().is_none()
+        && let Some(searched_on) = model.summary().searched_on
+    {
+        writeln!(
+            out,
+            "{}'s hyper-parameters searched on a stratified subsample of {searched_on} of the {} samples \
+             (large data), then fitted on all of them",
+            model.classifier().kind(),
+            training.n_train() + training.n_validation()
+        )?;
+    }
     if let Some(early) = presrs::describe::early_summary(model) {
         writeln!(out, "{early}")?;
     }

@@ -12,7 +12,7 @@ use super::report::{EvalReport, RepeatResult};
 use super::tally::{Tally, TestOutcome};
 use crate::error::{CoreError, Result};
 use crate::frame::{Frame, FrameView};
-use crate::pipeline::{CheckedTrainConfig, LabeledImage, Selection, train};
+use crate::pipeline::{CheckedTrainConfig, LabeledImage, Selection};
 
 /// A function that trains a fold's model from its sets, and says which reading of the samples it
 /// classifies.
@@ -129,7 +129,15 @@ impl Evaluation<'_, '_> {
         match models {
             Models::Config(config) => {
                 let (reports, first_model) = self.run_with(&[samples], perturbs, &|fold| {
-                    let model = train(&images(fold.train), &images(fold.validation), config)?;
+                    // (on large data, the classifier's hyper-parameters are searched on a
+                    // subsample, as the automatic choice's winner's are)
+                    let (model, _) = crate::selection::train_fixed(
+                        &images(fold.train),
+                        &images(fold.validation),
+                        config,
+                        Some(crate::selection::SCORING_SAMPLES),
+                        fold.seed,
+                    )?;
                     Ok(FoldModel { model, view: 0 })
                 })?;
                 Ok(Evaluated {

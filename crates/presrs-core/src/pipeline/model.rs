@@ -22,6 +22,10 @@ pub struct TrainingSummary {
     /// Training and validation images per class, in class order.
     pub train_per_class: Vec<usize>,
     pub validation_per_class: Vec<usize>,
+    /// The images the classifier's hyper-parameters were searched on, when not all of them (a
+    /// stratified subsample of large data; the choice then fitted on every image).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub searched_on: Option<usize>,
 }
 
 /// Everything needed to classify images: crop, feature parameters, PCA, classifier state and class names.

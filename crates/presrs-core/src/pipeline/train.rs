@@ -97,6 +97,7 @@ pub(crate) fn train_searching(
         config: config.clone(),
         train_per_class: count(&train_classes),
         validation_per_class: count(&validation_classes),
+        searched_on: search.filter(|_| searched_on_subset).map(<[usize]>::len),
     };
     let model = TrainedModel::try_from(ModelFields {
         format_version: FORMAT_VERSION,

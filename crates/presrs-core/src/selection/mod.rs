@@ -371,6 +371,40 @@ fn dims_variants(scores: &[CandidateScore], dims: &[usize]) -> Result<Vec<Checke
     Ok(variants)
 }
 
+/// A fixed method trained as [`train`](crate::pipeline::train) trains it, except on large data: with
+/// more than `at_most` images (training and validation), a classifier that pins its hyper-parameters
+/// ([`ClassifierConfig::pins`](crate::classifier::ClassifierConfig::pins): ridge's `alpha`, the SVM's
+/// `C` and `gamma`) has them searched on a stratified subsample of `at_most` (drawn with `seed`, as the
+/// automatic choice draws its own) and only the choice fitted on every image, as the automatic choice's
+/// winner is. Returns the subsample's size when the search ran on one
+/// ([`TrainingSummary::searched_on`](crate::pipeline::TrainingSummary::searched_on) records it too).
+pub fn train_fixed(
+    train_images: &[LabeledImage<'_>],
+    validation_images: &[LabeledImage<'_>],
+    config: &CheckedTrainConfig,
+    at_most: Option<usize>,
+    seed: u64,
+) -> Result<(TrainedModel, Option<usize>)> {
+    let subsample = at_most
+        .filter(|_| config.config().classifier.pins())
+        .and_then(|at_most| {
+            let all: Vec<LabeledImage<'_>> = train_images
+                .iter()
+                .chain(validation_images)
+                .copied()
+                .collect();
+            subsample::stratified_subsample(&all, at_most, seed)
+        });
+    let (model, _) = train_searching(
+        train_images,
+        validation_images,
+        config,
+        subsample.as_deref(),
+    )?;
+    let searched_on = model.summary().searched_on;
+    Ok((model, searched_on))
+}
+
 /// [`select`] on training + validation images, then [`train`](crate::pipeline::train) of the winner
 /// on them; the model records the selection. When the candidates were scored on a subsample, a winner
 /// whose classifier pins its hyper-parameters ([`ClassifierConfig::pins`](crate::classifier::ClassifierConfig::pins))

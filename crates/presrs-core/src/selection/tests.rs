@@ -889,3 +889,53 @@ fn a_group_scored_again_computes_its_features_again_and_says_so() {
     let quiet = select(&images, &AutoChoice::new(&candidates, ValidateBy::Group), 1).unwrap();
     assert_eq!(selection.scores, quiet.scores);
 }
+
+/// A fixed ridge on large data gets the automatic choice's winner's treatment: its alpha searched on a
+/// stratified subsample (the same draw as the choice's with the same seed), recorded in the model's
+/// summary, the fit on every image; a family that pins nothing, and small data, train as `train`.
+#[test]
+fn a_fixed_method_on_large_data_is_searched_on_the_subsample_as_the_winner_is() {
+    use crate::classifier::{ClassifierKind, RidgeFamily};
+    let frames = four_class_frames(96, 5);
+    let images = grouped(&frames);
+    let ridge = TrainConfig {
+        classifier: ClassifierKind::RIDGE.default_config(),
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let (train_images, validation_images) = (&images[..64], &images[64..]);
+    let (fixed, searched_on) =
+        train_fixed(train_images, validation_images, &ridge, Some(48), 3).unwrap();
+    assert_eq!(searched_on, Some(48));
+    assert_eq!(fixed.summary().searched_on, Some(48));
+    // The automatic choice with this one candidate and the same subsample trains the same model.
+    let candidates = std::slice::from_ref(&ridge);
+    let large = AutoChoice::new(candidates, ValidateBy::Group).with_scoring_samples(Some(48));
+    let chosen = train_auto(train_images, validation_images, &large, 3).unwrap();
+    assert_eq!(fixed.classifier(), chosen.classifier());
+    assert_eq!(chosen.summary().searched_on, Some(48));
+    let pinned = fixed.classifier().get::<RidgeFamily>().unwrap();
+    assert_eq!(pinned.loo_samples(), Some(48));
+    // Small data, or no subsample asked for: `train`'s model, searched on every image.
+    let plain = train(train_images, validation_images, &ridge).unwrap();
+    for at_most in [Some(96), None] {
+        let (model, searched_on) =
+            train_fixed(train_images, validation_images, &ridge, at_most, 3).unwrap();
+        assert_eq!(searched_on, None);
+        assert_eq!(model.classifier(), plain.classifier());
+    }
+    // A Parzen window pins nothing: trained on every image as `train` trains it.
+    let parzen = TrainConfig {
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap();
+    let (model, searched_on) =
+        train_fixed(train_images, validation_images, &parzen, Some(48), 3).unwrap();
+    assert_eq!(searched_on, None);
+    let plain = train(train_images, validation_images, &parzen).unwrap();
+    assert_eq!(model.classifier(), plain.classifier());
+}

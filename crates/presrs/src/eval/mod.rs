@@ -435,6 +435,17 @@ impl<'d> EvalSetup<'d> {
         }
         warnings.extend(crate::method::validation_warning(&selections));
         warnings.extend(crate::method::budget_warning(&selections));
+        if !method.is_auto()
+            && let Some(first) = &first_model
+            && let Some(searched_on) = first.model.summary().searched_on
+        {
+            warnings.push(Message::from(format!(
+                "{}'s hyper-parameters were searched on a stratified subsample of {searched_on} of each \
+                 model's training samples (large data), then fitted on all of them, as the automatic \
+                 choice's winner is",
+                first.model.classifier().kind()
+            )));
+        }
         Ok(EvalOutcome {
             report,
             selections,

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use presrs_core::TrainedModel;
 use presrs_core::online::OnlineProfile;
-use presrs_core::pipeline::{LabeledImage, train as train_pipeline};
+use presrs_core::pipeline::LabeledImage;
 use presrs_core::split::{Split, ValidationSize, min_samples_per_class, stratified_split_capped};
 use presrs_core::stance::{ValidSegmentParams, segment};
 use presrs_io::message::{Message, Opt, Warnings};
@@ -172,11 +172,21 @@ pub fn train_with_progress(
             options.seed,
         )
     } else {
-        train_pipeline(
+        let config = method.train_config(grid)?;
+        progress.stage(&format!(
+            "training {} + {} on {} samples",
+            config.config().features.name(),
+            config.config().classifier.kind().as_str(),
+            train_images.len() + validation_images.len()
+        ));
+        presrs_core::selection::train_fixed(
             &train_images,
             &validation_images,
-            &method.train_config(grid)?,
+            &config,
+            Some(presrs_core::selection::SCORING_SAMPLES),
+            options.seed,
         )
+        .map(|(model, _)| model)
     }
     .and_then(|model| model.with_sample(dataset.sample))
     .map(|model| {
