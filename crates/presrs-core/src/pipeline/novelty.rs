@@ -111,20 +111,23 @@ mod tests {
     use crate::projection::Pca;
     use crate::testing::labeled_set;
 
-    /// A model of three of the four synthetic classes with a novelty score, and test frames of all four.
-    fn model_without_the_fourth() -> (TrainedModel, Vec<(Frame, &'static str)>) {
-        let set = labeled_set(30, 1);
-        let known: Vec<&(Frame, &str)> = set.iter().filter(|(_, l)| *l != set[3].1).collect();
-        // Five recordings, each holding every class.
+    /// The images of `set` but its fourth class, from five recordings each holding every class.
+    fn known_images<'a>(set: &'a [(Frame, &'static str)]) -> Vec<LabeledImage<'a>> {
         let groups = ["r0", "r1", "r2", "r3", "r4"];
-        let images: Vec<LabeledImage<'_>> = known
-            .iter()
+        set.iter()
+            .filter(|(_, label)| *label != set[3].1)
             .enumerate()
             .map(|(i, (frame, label))| LabeledImage {
                 group: Some(groups[i % 5]),
                 ..LabeledImage::new(frame.view(), label)
             })
-            .collect();
+            .collect()
+    }
+
+    /// A model of three of the four synthetic classes with a novelty score, and test frames of all four.
+    fn model_without_the_fourth() -> (TrainedModel, Vec<(Frame, &'static str)>) {
+        let set = labeled_set(30, 1);
+        let images = known_images(&set);
         let (train_images, validation_images) = images.split_at(60);
         let config = TrainConfig::default().check().unwrap();
         let model = train(train_images, validation_images, &config)
@@ -168,16 +171,7 @@ mod tests {
     #[test]
     fn a_classifier_of_every_feature_gets_a_score_of_its_own_principal_components() {
         let set = labeled_set(30, 1);
-        let known: Vec<&(Frame, &str)> = set.iter().filter(|(_, l)| *l != set[3].1).collect();
-        let groups = ["r0", "r1", "r2", "r3", "r4"];
-        let images: Vec<LabeledImage<'_>> = known
-            .iter()
-            .enumerate()
-            .map(|(i, (frame, label))| LabeledImage {
-                group: Some(groups[i % 5]),
-                ..LabeledImage::new(frame.view(), label)
-            })
-            .collect();
+        let images = known_images(&set);
         let config = TrainConfig {
             classifier: ClassifierKind::RIDGE_RAW.default_config(),
             ..TrainConfig::default()

@@ -808,16 +808,10 @@ fn an_svm_winner_is_searched_on_the_subsample_and_small_data_train_as_before() {
 /// the model a ridge with that alpha pinned gives. Small data train as before.
 #[test]
 fn a_ridge_winner_is_pinned_on_the_subsample_and_small_data_train_as_before() {
-    use crate::classifier::{ClassifierKind, RidgeFamily};
+    use crate::classifier::RidgeFamily;
     let frames = four_class_frames(96, 5);
     let images = grouped(&frames);
-    let ridge = TrainConfig {
-        classifier: ClassifierKind::RIDGE.default_config(),
-        dims: 8,
-        ..TrainConfig::default()
-    }
-    .check()
-    .unwrap();
+    let ridge = ridge_of_8_dims();
     let candidates = std::slice::from_ref(&ridge);
     let (train_images, validation_images) = (&images[..64], &images[64..]);
     let large = AutoChoice::new(candidates, ValidateBy::Group).with_scoring_samples(Some(48));
@@ -895,16 +889,10 @@ fn a_group_scored_again_computes_its_features_again_and_says_so() {
 /// summary, the fit on every image; a family that pins nothing, and small data, train as `train`.
 #[test]
 fn a_fixed_method_on_large_data_is_searched_on_the_subsample_as_the_winner_is() {
-    use crate::classifier::{ClassifierKind, RidgeFamily};
+    use crate::classifier::RidgeFamily;
     let frames = four_class_frames(96, 5);
     let images = grouped(&frames);
-    let ridge = TrainConfig {
-        classifier: ClassifierKind::RIDGE.default_config(),
-        dims: 8,
-        ..TrainConfig::default()
-    }
-    .check()
-    .unwrap();
+    let ridge = ridge_of_8_dims();
     let (train_images, validation_images) = (&images[..64], &images[64..]);
     let (fixed, searched_on) =
         train_fixed(train_images, validation_images, &ridge, Some(48), 3).unwrap();
@@ -938,4 +926,15 @@ fn a_fixed_method_on_large_data_is_searched_on_the_subsample_as_the_winner_is() 
     assert_eq!(searched_on, None);
     let plain = train(train_images, validation_images, &parzen).unwrap();
     assert_eq!(model.classifier(), plain.classifier());
+}
+
+/// Ridge with 8 principal components asked for (ridge takes every feature, so they are unused).
+fn ridge_of_8_dims() -> CheckedTrainConfig {
+    TrainConfig {
+        classifier: crate::classifier::ClassifierKind::RIDGE.default_config(),
+        dims: 8,
+        ..TrainConfig::default()
+    }
+    .check()
+    .unwrap()
 }
