@@ -32,7 +32,7 @@ pub use model::{
     AutoRule, AutoThreshold, DecisionPoint, EarlyDecisions, MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN,
     TrainedModel, TrainingSummary,
 };
-pub use novelty::MAX_NOVELTY_DIMS;
+pub use novelty::{MAX_NOVELTY_DIMS, NOVELTY_COMPONENTS, NOVELTY_PCA_SAMPLES};
 pub use session::{BATCH_BLOCK, Classification, Prediction, Session};
 pub use train::train;
 
