@@ -2,7 +2,7 @@
 //! point's classifier decides if its confidence passes the threshold learned at training, or if the
 //! point is the deadline learned with it; and what a decision made later (at the lift-off or the
 //! model's length) says about why. Methods of
-//! [`OnlineClassifier`] kept apart from `mod.rs`, which holds the rest of its step.
+//! [`OnlineClassifier`] kept apart from `mod.rs` and `whole.rs`, which hold the rest of its step.
 
 use super::{
     DecidedAt, DecisionKind, EarlyDecision, EarlyReason, Failure, OnlineClassifier, OnlineEvent,

@@ -40,15 +40,13 @@
 //! [`OnlineClassifier`] puts the segmenter and a [`Session`] together: one frame in, zero or more
 //! [`OnlineEvent`]s out, with all buffers allocated up front (no allocation per frame in steady state).
 
-use serde::{Deserialize, Serialize};
-
 use crate::error::{CoreError, Result};
 use crate::frame::{FrameView, Grid};
 use crate::novelty::Novelty;
-use crate::pipeline::{AutoRule, Session, TrainedModel};
+use crate::pipeline::{Session, TrainedModel};
 use crate::sample::SampleKind;
+use crate::stance::ValidSegmentParams;
 use crate::stance::causal::MAX_SEG_EVENTS;
-use crate::stance::{BaselineMode, ValidSegmentParams};
 // The causal detector's types, which this module's API speaks in, nameable from here as before they
 // moved beside the offline segmentation.
 pub use crate::stance::causal::{
@@ -61,141 +59,17 @@ pub use stance_buffer::StanceBuffer;
 
 mod auto_step;
 mod early;
+mod events;
 mod profile;
 mod stance_buffer;
+mod whole;
+mod whole_state;
 
 pub use early::{EarlyDecision, EarlyReason};
-
-/// Whether a decision is the single sample frame, the fusion of several, or a whole stance.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum DecisionKind {
-    Single,
-    Fused,
-    /// A whole-stance model's decision on the stance's summary (see [`StanceDecision`]).
-    Stance,
-}
-
-impl DecisionKind {
-    /// Its name in the stream protocol and the ROS 2 message (as serde writes it).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Single => "single",
-            Self::Fused => "fused",
-            Self::Stance => "stance",
-        }
-    }
-}
-
-/// What a whole-stance decision waited for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum DecidedAt {
-    /// The stance's lift-off: the whole stance.
-    Liftoff,
-    /// Frame `K` after touchdown ([`OnlineParams::decide_at`]): the stance so far.
-    Offset(usize),
-    /// The model's stance length, reached before the lift-off: the stance's first `length` frames.
-    Length(usize),
-}
-
-/// How a whole-stance model's decision was made.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StanceDecision {
-    pub decided_at: DecidedAt,
-    /// The frame the decision waited for: the lift-off frame, touchdown + K, or the frame at which the
-    /// stance was known to be longer than the model's length.
-    pub waited_for: usize,
-    /// The stance is longer than the model's length: its first `length` frames were used.
-    pub cut: bool,
-    /// With [`OnlineParams::decide_at`]: which classifier decided and why then.
-    pub early: Option<EarlyDecision>,
-}
-
-/// A classification of a stance. The posteriors are in [`Step::posteriors`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Decision {
-    pub stance_id: u64,
-    pub kind: DecisionKind,
-    pub touchdown_frame: usize,
-    /// The frame classified (single), or the last frame fused.
-    pub sample_frame: usize,
-    /// Frame whose arrival triggered the decision.
-    pub frame: usize,
-    /// Frames whose posteriors were averaged (1 for single); for a whole stance, the frames
-    /// summarised.
-    pub frames_used: usize,
-    pub class: usize,
-    pub confidence: f64,
-    /// For a whole-stance decision ([`DecisionKind::Stance`]): what it waited for.
-    pub stance: Option<StanceDecision>,
-    /// How far the sample lies from every class, when the model scores novelty (for a fused decision:
-    /// the mean score of the frames fused); `unknown` says it is none of them.
-    pub novelty: Option<Novelty>,
-    /// Index of this decision's posteriors in the step's posterior buffer.
-    slot: usize,
-}
-
-/// A frame the classifier was asked for but could not classify (e.g. its values are so large that its
-/// features overflow). The reason is in [`Step::error`]; the stance goes on.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Failure {
-    pub stance_id: u64,
-    /// The decision the frame was for: the single sample (which the stance then does not get), or one
-    /// frame of the fusion (which goes on without it).
-    pub kind: DecisionKind,
-    /// The frame that could not be classified.
-    pub sample_frame: usize,
-    /// Frame whose arrival triggered the attempt.
-    pub frame: usize,
-    /// Index of the error in the step's error buffer.
-    slot: usize,
-}
-
-/// One output of [`OnlineClassifier::push`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum OnlineEvent {
-    Touchdown(Touchdown),
-    Decision(Decision),
-    /// A frame to classify could not be: no decision from it (see [`Failure`]).
-    Failed(Failure),
-    Liftoff(Liftoff),
-}
-
-/// The events of one frame, borrowing the classifier's buffers.
-#[derive(Clone, Copy, Debug)]
-pub struct Step<'a> {
-    pub events: &'a [OnlineEvent],
-    posteriors: &'a [f64],
-    errors: &'a [CoreError],
-    n_classes: usize,
-}
-
-impl<'a> Step<'a> {
-    /// The posteriors of `decision` (one per class, class-index order).
-    pub fn posteriors(&self, decision: &Decision) -> &'a [f64] {
-        let start = decision.slot * self.n_classes;
-        self.posteriors
-            .get(start..start + self.n_classes)
-            .unwrap_or(&[])
-    }
-
-    /// Why the frame of `failure` could not be classified.
-    pub fn error(&self, failure: &Failure) -> Option<&'a CoreError> {
-        self.errors.get(failure.slot)
-    }
-}
-
-/// Counters of an [`OnlineClassifier`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct OnlineStats {
-    pub frames: u64,
-    pub stances: u64,
-    pub decisions: u64,
-    pub fused_decisions: u64,
-    /// Frames refused (wrong grid, non-finite values).
-    pub rejected_frames: u64,
-}
+pub use events::{
+    DecidedAt, Decision, DecisionKind, Failure, OnlineEvent, OnlineStats, StanceDecision, Step,
+};
+use whole_state::WholeStance;
 
 /// What classifying one sample gives: its class, confidence and novelty.
 type Verdict = (usize, f64, Option<Novelty>);
@@ -229,78 +103,6 @@ pub struct OnlineClassifier<'m> {
     stats: OnlineStats,
     /// A whole-stance model's state (`None` for a one-frame model).
     whole: Option<WholeStance<'m>>,
-}
-
-/// What a whole-stance model keeps online: the stance's frames, when to decide, the stance under way.
-#[derive(Debug)]
-struct WholeStance<'m> {
-    buffer: StanceBuffer,
-    decide_at: Option<DecideAt>,
-    /// The classifiers of the model's decision points that `decide_at` uses (frames after touchdown,
-    /// increasing), and `auto`'s rule.
-    points: early::PointSessions<'m>,
-    auto: Option<AutoRule>,
-    /// The next point to try in the stance under way (`auto`).
-    next_point: usize,
-    /// Partial stances are decided too: in the one-contact mode the stream is one partial stance.
-    decide_partial: bool,
-    /// The stance under way and not yet decided: its id and touchdown frame.
-    open: Option<(u64, usize)>,
-    /// Stances are reported without a decision (the end of a stream that ended in the warm-up).
-    report_only: bool,
-}
-
-impl<'m> WholeStance<'m> {
-    /// The whole-stance state for `model` (`None` for a one-frame model), with `online`'s settings
-    /// checked against the kind of model: fusion is for one-frame models, `decide_at` for whole
-    /// stances, and only for a moment the model was trained for ([`TrainedModel::trained_for`]).
-    fn for_model(
-        model: &'m TrainedModel,
-        params: &ValidSegmentParams,
-        online: &OnlineParams,
-    ) -> Result<Option<Self>> {
-        let SampleKind::Stance { summary, length } = model.sample() else {
-            return match online.decide_at {
-                Some(_) => Err(CoreError::Param {
-                    name: "decide_at",
-                    reason: "applies to whole-stance models (trained on stance samples); this \
-                             model classifies one frame of each stance, chosen by the sample offset"
-                        .into(),
-                }),
-                None => Ok(None),
-            };
-        };
-        if !online.fusion_offsets.is_empty() {
-            return Err(CoreError::Param {
-                name: "fusion_offsets",
-                reason: "a whole-stance model decides once per stance, on the stance's summary; \
-                         fusion averages one-frame decisions: leave the fusion offsets empty"
-                    .into(),
-            });
-        }
-        let buffer = StanceBuffer::new(summary, length.unwrap_or(model.image_grid().cols))?;
-        if model.crop().output_grid(buffer.sample_grid()).ok() != Some(model.image_grid()) {
-            return Err(CoreError::Shape {
-                what: "whole-stance model",
-                expected: format!(
-                    "a crop that keeps its {} stance summaries whole",
-                    buffer.sample_grid()
-                ),
-                got: format!("crop {} giving {} images", model.crop(), model.image_grid()),
-            });
-        }
-        let (points, auto) = early::points_for(model, online.decide_at)?;
-        Ok(Some(Self {
-            buffer,
-            decide_at: online.decide_at,
-            points,
-            auto,
-            next_point: 0,
-            decide_partial: params.params().baseline == BaselineMode::Contact,
-            open: None,
-            report_only: false,
-        }))
-    }
 }
 
 /// What a one-frame or series model takes as a stream's frames, in words.
@@ -679,211 +481,6 @@ impl<'m> OnlineClassifier<'m> {
         self.fusion_sum.fill(0.0);
         self.fusion_frames = 0;
         self.fusion_novelty = None;
-    }
-
-    /// A whole-stance model's step: the frame is kept (unless the stance under way already has the
-    /// model's length of frames), touchdowns open a stance, lift-offs decide it, and so do frame K
-    /// after touchdown and a stance found longer than the model's length. The detector's one-frame
-    /// requests (sample, fusion) do not apply.
-    fn handle_whole(&mut self, events: SegEvents, frame: Option<&FrameView<'_>>, t: usize) {
-        if let (Some(frame), Some(whole)) = (frame, self.whole.as_mut()) {
-            let length = whole.buffer.length();
-            if whole.open.is_none_or(|(_, start)| t < start + length) {
-                whole.buffer.keep(t, frame);
-            }
-        }
-        for event in events.iter() {
-            match event {
-                SegEvent::Touchdown(touchdown) => {
-                    self.touchdown(touchdown);
-                    if let Some(whole) = &mut self.whole
-                        && !whole.report_only
-                        && (!touchdown.partial || whole.decide_partial)
-                    {
-                        whole.open = Some((touchdown.stance_id, touchdown.touchdown_frame));
-                        whole.next_point = 0;
-                    }
-                }
-                SegEvent::Liftoff(liftoff) => {
-                    self.decide_at_liftoff(&liftoff);
-                    self.liftoff(liftoff);
-                }
-                SegEvent::HoldCurrent { .. }
-                | SegEvent::ClassifySample { .. }
-                | SegEvent::FuseCurrent { .. }
-                | SegEvent::FusionReady { .. } => {}
-            }
-        }
-        self.decide_before_liftoff(t);
-    }
-
-    /// The lift-off of the stance under way, not yet decided: decided on the whole stance (its first
-    /// `length` frames if longer), unless it is partial (cut by the end of the stream).
-    fn decide_at_liftoff(&mut self, liftoff: &Liftoff) {
-        let Some(whole) = &mut self.whole else {
-            return;
-        };
-        if whole.open.map(|(id, _)| id) != Some(liftoff.stance_id) {
-            return;
-        }
-        whole.open = None;
-        if liftoff.stance.partial && !whole.decide_partial {
-            return;
-        }
-        let how = StanceDecision {
-            decided_at: DecidedAt::Liftoff,
-            waited_for: liftoff.frame,
-            cut: liftoff.stance.len > whole.buffer.length(),
-            early: whole.late_reason(),
-        };
-        self.decide_whole(
-            liftoff.stance_id,
-            liftoff.stance.start,
-            liftoff.stance.len,
-            how,
-            liftoff.frame,
-        );
-    }
-
-    /// The stance under way is decided before its lift-off at frame `touchdown + K` (with
-    /// [`OnlineParams::decide_at`] `= K`, by the classifier of that point, or the whole-stance one
-    /// when `K` reaches the model's length), at the first decision point whose confidence passes the
-    /// threshold (`auto`), or once it is known to be longer than the model's length.
-    fn decide_before_liftoff(&mut self, t: usize) {
-        let Some(whole) = &self.whole else {
-            return;
-        };
-        let Some((stance_id, start)) = whole.open else {
-            return;
-        };
-        let length = whole.buffer.length();
-        if let Some(DecideAt::Frames(k)) = whole.decide_at
-            && t >= start + k
-        {
-            let point = whole.points.iter().position(|(frames, _)| *frames == k);
-            let how = StanceDecision {
-                decided_at: DecidedAt::Offset(k),
-                waited_for: start + k,
-                cut: k + 1 > length,
-                early: Some(EarlyDecision {
-                    rule: DecideAt::Frames(k),
-                    reason: EarlyReason::Fixed,
-                    point: point.map(|_| k),
-                    threshold: None,
-                }),
-            };
-            self.decide_whole_with(stance_id, start, k + 1, how, t, point);
-            return;
-        }
-        if self.try_confident_point(stance_id, start, t) {
-            return;
-        }
-        let longer = self
-            .segmenter
-            .open_stance()
-            .is_some_and(|open| open.stance_id == stance_id && open.known_len > length);
-        if longer {
-            let early = self.whole.as_ref().and_then(WholeStance::late_reason);
-            let how = StanceDecision {
-                decided_at: DecidedAt::Length(length),
-                waited_for: t,
-                cut: true,
-                early,
-            };
-            self.decide_whole(stance_id, start, length, how, t);
-        }
-    }
-
-    /// Classifies the summary of `frames` frames from `start` (at most the model's length) at frame
-    /// `t` with the whole-stance classifier: a [`DecisionKind::Stance`] decision, or a failure.
-    fn decide_whole(
-        &mut self,
-        stance_id: u64,
-        start: usize,
-        frames: usize,
-        how: StanceDecision,
-        t: usize,
-    ) {
-        self.decide_whole_with(stance_id, start, frames, how, t, None);
-    }
-
-    /// [`Self::decide_whole`] with the classifier of decision point `point` (an index into the
-    /// points in use), or the whole-stance one (`None`).
-    fn decide_whole_with(
-        &mut self,
-        stance_id: u64,
-        start: usize,
-        frames: usize,
-        how: StanceDecision,
-        t: usize,
-        point: Option<usize>,
-    ) {
-        let Some(whole) = self.whole.as_mut() else {
-            return;
-        };
-        whole.open = None;
-        let frames = frames.min(whole.buffer.length());
-        // A decision point's classifier takes samples of its own length, K + 1 frames.
-        let length = match point.and_then(|index| whole.points.get(index)) {
-            Some((k, _)) => k + 1,
-            None => whole.buffer.length(),
-        };
-        let session = match point.and_then(|index| whole.points.get_mut(index)) {
-            Some((_, session)) => session,
-            None => &mut self.session,
-        };
-        let outcome = whole
-            .buffer
-            .sample_in(start, frames, length)
-            .and_then(|view| {
-                session.classify(&view).map(|prediction| {
-                    self.posteriors.extend_from_slice(prediction.posteriors);
-                    (prediction.class, prediction.confidence, prediction.novelty)
-                })
-            });
-        self.push_whole_decision(stance_id, start, frames, how, t, outcome);
-    }
-
-    /// The event of a whole-stance classification (or its failure).
-    fn push_whole_decision(
-        &mut self,
-        stance_id: u64,
-        start: usize,
-        frames: usize,
-        how: StanceDecision,
-        t: usize,
-        outcome: Result<Verdict>,
-    ) {
-        let (class, confidence, novelty) = match outcome {
-            Ok(result) => result,
-            Err(err) => {
-                let slot = self.keep_error(err);
-                self.events.push(OnlineEvent::Failed(Failure {
-                    stance_id,
-                    kind: DecisionKind::Stance,
-                    sample_frame: start,
-                    frame: t,
-                    slot,
-                }));
-                return;
-            }
-        };
-        let slot = (self.posteriors.len() / self.n_classes.max(1)).saturating_sub(1);
-        self.stats.decisions += 1;
-        self.decided_stance = Some(stance_id);
-        self.events.push(OnlineEvent::Decision(Decision {
-            stance_id,
-            kind: DecisionKind::Stance,
-            touchdown_frame: start,
-            sample_frame: start + frames.saturating_sub(1),
-            frame: t,
-            frames_used: frames,
-            class,
-            confidence,
-            stance: Some(how),
-            novelty,
-            slot,
-        }));
     }
 
     /// A stance ended: the held copy is released, and the lift-off says whether it was decided.
