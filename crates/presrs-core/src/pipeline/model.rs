@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::classifier::{ClassifierModel, PweFamily, SigmaPoint};
+use crate::classifier::{ClassifierKind, ClassifierModel, PweFamily, SigmaPoint};
 use crate::crop::Crop;
 use crate::error::{CoreError, Result};
 use crate::features::{FeatureConfig, FeatureExtractor};
@@ -486,10 +486,13 @@ impl TrainedModel {
     }
 
     /// What the classifier sees, in words: `PCA 51 components`, or `no PCA: 9996 standardised
-    /// features` (a classifier that takes every feature standardises them itself).
+    /// features` (ridge standardises them itself), `no PCA: 9996 features as they are` (`ridge_raw`).
     pub fn describe_projection(&self) -> String {
         match &self.fields.pca {
             Some(pca) => format!("PCA {} components", pca.n_components()),
+            None if self.fields.classifier.kind() == ClassifierKind::RIDGE_RAW => {
+                format!("no PCA: {} features as they are", self.n_features())
+            }
             None => format!("no PCA: {} standardised features", self.n_features()),
         }
     }

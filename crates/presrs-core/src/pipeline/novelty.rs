@@ -46,8 +46,7 @@ impl TrainedModel {
         let classes = class_indices(self.class_names(), images)?;
         let n_classes = self.class_names().len();
         let novelty = if dims > MAX_NOVELTY_DIMS {
-            let pca = self.novelty_reduction(images)?;
-            let vectors = self.vectors_reduced_by(images, &pca)?;
+            let (pca, vectors) = self.novelty_reduction(images)?;
             let components = pca.n_components();
             NoveltyModel::fit(&vectors, &classes, groups, n_classes, components, rejection)?
                 .with_reduction(pca)?
@@ -59,42 +58,57 @@ impl TrainedModel {
     }
 
     /// Principal components of the classifier's vectors of at most [`NOVELTY_PCA_SAMPLES`] of
-    /// `images`, evenly spaced (no random draw: the same images give the same reduction).
-    fn novelty_reduction(&self, images: &[LabeledImage<'_>]) -> Result<Pca> {
+    /// `images`, evenly spaced (no random draw: the same images give the same reduction), and every
+    /// image's vector reduced by them (`n x components`): the fitted vectors projected when they are
+    /// every image's, else each image's features computed again, one image at a time.
+    fn novelty_reduction(&self, images: &[LabeledImage<'_>]) -> Result<(Pca, Vec<f64>)> {
         let step = images.len().div_ceil(NOVELTY_PCA_SAMPLES).max(1);
         let sample: Vec<LabeledImage<'_>> = images.iter().step_by(step).copied().collect();
-        let vectors = self.reduced_vectors(&sample)?;
-        Pca::fit(&vectors, self.classifier_dims(), NOVELTY_COMPONENTS)
-    }
-
-    /// The classifier's vectors of `images` reduced by `pca` (`n x components`), one image at a time.
-    fn vectors_reduced_by(&self, images: &[LabeledImage<'_>], pca: &Pca) -> Result<Vec<f64>> {
+        let dims = self.classifier_dims();
+        let sampled = self.reduced_vectors(&sample)?;
+        let pca = Pca::fit(&sampled, dims, NOVELTY_COMPONENTS)?;
         let components = pca.n_components();
-        let mut vectors = vec![0.0; images.len() * components];
-        vectors
-            .par_chunks_mut(components.max(1))
-            .zip(images.par_iter())
-            .try_for_each_init(
-                || self.session(),
-                |session, (out, image)| pca.project_into(session.reduce(&image.frame)?, out),
-            )?;
-        Ok(vectors)
+        // (projected as scoring projects a sample, `project_into`)
+        let vectors = if step == 1 {
+            let mut vectors = vec![0.0; images.len() * components];
+            for (x, out) in sampled
+                .chunks_exact(dims.max(1))
+                .zip(vectors.chunks_exact_mut(components.max(1)))
+            {
+                pca.project_into(x, out)?;
+            }
+            vectors
+        } else {
+            drop(sampled);
+            self.vectors_by(images, components, |x, out| pca.project_into(x, out))?
+        };
+        Ok((pca, vectors))
     }
 
     /// The vectors the classifier sees of `images` (`n x classifier_dims`, row-major), as a session
     /// computes them.
     pub fn reduced_vectors(&self, images: &[LabeledImage<'_>]) -> Result<Vec<f64>> {
-        let dims = self.classifier_dims();
-        let mut vectors = vec![0.0; images.len() * dims];
+        self.vectors_by(images, self.classifier_dims(), |x, out| {
+            out.copy_from_slice(x);
+            Ok(())
+        })
+    }
+
+    /// `width` values of each image (`n x width`, row-major), `write` filling them from the vector the
+    /// classifier sees, in parallel (a session per worker).
+    fn vectors_by(
+        &self,
+        images: &[LabeledImage<'_>],
+        width: usize,
+        write: impl Fn(&[f64], &mut [f64]) -> Result<()> + Sync,
+    ) -> Result<Vec<f64>> {
+        let mut vectors = vec![0.0; images.len() * width];
         vectors
-            .par_chunks_mut(dims.max(1))
+            .par_chunks_mut(width.max(1))
             .zip(images.par_iter())
             .try_for_each_init(
                 || self.session(),
-                |session, (out, image)| {
-                    out.copy_from_slice(session.reduce(&image.frame)?);
-                    Ok(())
-                },
+                |session, (out, image)| write(session.reduce(&image.frame)?, out),
             )?;
         Ok(vectors)
     }
@@ -183,6 +197,10 @@ mod tests {
             .with_novelty(&images, 0.05)
             .unwrap();
         assert!(model.pca().is_none() && model.classifier_dims() > MAX_NOVELTY_DIMS);
+        assert_eq!(
+            model.describe_projection(),
+            format!("no PCA: {} features as they are", model.n_features())
+        );
         let novelty = model.novelty().expect("a score for the wide classifier");
         assert_eq!(novelty.dims(), model.classifier_dims());
         assert!(
