@@ -42,6 +42,8 @@ pub enum Opt {
     Dims,
     /// The classifier.
     Classifier,
+    /// The feature families.
+    Features,
     /// The automatic choice's time budget.
     Budget,
     /// Sample stances cut by the start or end of a recording too.
@@ -99,7 +101,7 @@ pub enum PythonName {
 
 impl Opt {
     /// Every option, for tests that render them all.
-    pub const ALL: [Opt; 31] = [
+    pub const ALL: [Opt; 32] = [
         Opt::Axes,
         Opt::Topic,
         Opt::FramePeriod,
@@ -109,6 +111,7 @@ impl Opt {
         Opt::Validation,
         Opt::Dims,
         Opt::Classifier,
+        Opt::Features,
         Opt::Budget,
         Opt::IncludePartial,
         Opt::OneSamplePerFile,
@@ -145,6 +148,7 @@ impl Opt {
             Self::Validation => "--validation",
             Self::Dims => "--dims",
             Self::Classifier => "--classifier",
+            Self::Features => "--features",
             Self::Budget => "--budget",
             Self::IncludePartial => "--include-partial",
             Self::OneSamplePerFile => "--one-sample-per-file",
@@ -184,6 +188,7 @@ impl Opt {
             Self::Validation => Argument("validation"),
             Self::Dims => Argument("dims"),
             Self::Classifier => Argument("classifier"),
+            Self::Features => Argument("features"),
             Self::Budget => Argument("budget"),
             Self::IncludePartial => Argument("include_partial"),
             Self::OneSamplePerFile => Argument("one_sample_per_file"),

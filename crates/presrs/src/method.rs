@@ -403,6 +403,71 @@ pub fn budget_warning(selections: &[Selection]) -> Option<Message> {
     )
 }
 
+/// What the automatic choices of `selections` warn of, in order: a validation scheme passed over, a
+/// time budget that cut candidates, a choice the validation could not make.
+pub fn selection_warnings(selections: &[Selection]) -> Vec<Message> {
+    [validation_warning, budget_warning, tie_warning]
+        .into_iter()
+        .filter_map(|warning| warning(selections))
+        .collect()
+}
+
+/// The tied methods a warning names before it counts the rest.
+const TIES_NAMED: usize = 3;
+
+/// The warning for selections whose chosen candidate scored the same in validation as other methods
+/// (`None` when none did): in how many models, the first's score and tied methods, and what lets the
+/// validation rank them. Small or homogeneous training data (one walker's stances, where every random
+/// convolution candidate is right on every validation sample) leave the choice to the candidates' order.
+pub fn tie_warning(selections: &[Selection]) -> Option<Message> {
+    let tied: Vec<(&Selection, Vec<&CandidateScore>)> = selections
+        .iter()
+        .map(|selection| (selection, selection.tied()))
+        .filter(|(_, tied)| !tied.is_empty())
+        .collect();
+    let (first, others) = tied.first()?;
+    let chosen = first.chosen()?;
+    let models = if selections.len() == 1 {
+        String::new()
+    } else {
+        format!("in {} of {} models, ", tied.len(), selections.len())
+    };
+    let mut names: Vec<String> = others
+        .iter()
+        .take(TIES_NAMED)
+        .map(|s| method_name(s))
+        .collect();
+    if others.len() > TIES_NAMED {
+        names.push(format!("and {} more", others.len() - TIES_NAMED));
+    }
+    Some(
+        Message::from(format!(
+            "{models}the automatic choice's validation could not rank its best candidates: {} \
+             scored {:.2} % and so did {} other method(s) ({}), so the candidates' order, not the \
+             data, made the choice; training data from more groups (walkers, recordings, sessions) \
+             let the validation tell them apart, or fix the method with ",
+            method_name(chosen),
+            100.0 * chosen.accuracy.mean,
+            others.len(),
+            names.join(", ")
+        ))
+        .opt(Opt::Features)
+        .text(" and ")
+        .opt(Opt::Classifier),
+    )
+}
+
+/// A candidate's features (with their intensity transform) and classifier, without its components:
+/// `rocket_unscaled + ridge_raw`, `fft1d (sqrt) + pwe`.
+fn method_name(score: &CandidateScore) -> String {
+    let intensity = score.config.preprocess.intensity;
+    if intensity.is_none() {
+        format!("{} + {}", score.features, score.classifier)
+    } else {
+        format!("{} ({intensity}) + {}", score.features, score.classifier)
+    }
+}
+
 /// The warning for selections whose validation scheme was passed over because a held-out fold held a
 /// class its training part lacked (`None` when none was): one line, in how many models, the first
 /// class and fold, and what was used instead.
@@ -524,6 +589,7 @@ mod tests {
     #![allow(clippy::unwrap_used)]
 
     use super::*;
+    use presrs_io::message::Face;
 
     #[test]
     fn whole_stances_and_series_add_rocket_with_ridge_to_the_search() {
@@ -718,5 +784,70 @@ mod tests {
         };
         assert!(lda.check_validation_set(none, 0).is_ok());
         assert!(Method::paper().check_validation_set(none, 3).is_ok());
+    }
+
+    /// A candidate of `features` + `classifier` scored `mean` on every fold.
+    fn scored(features: &str, classifier: &str, mean: f64) -> CandidateScore {
+        CandidateScore {
+            features: features.into(),
+            classifier: classifier.into(),
+            config: TrainConfig::default(),
+            accuracy: presrs_core::metrics::MeanStd { mean, std: 0.0 },
+            per_fold: (0..3).map(|k| (format!("g{k}"), mean)).collect(),
+            error: None,
+            skipped: false,
+            dropped_early: false,
+        }
+    }
+
+    fn selection(scores: Vec<CandidateScore>) -> Selection {
+        Selection {
+            method: "three stratified 70/30 splits".into(),
+            chosen: 0,
+            scores,
+            fallback: None,
+            cost: None,
+        }
+    }
+
+    /// A tie in validation is said, with how many models it decided, the tied methods (the first
+    /// three, then a count), and the way out in each face's words; a clear winner says nothing.
+    #[test]
+    fn a_choice_the_validation_could_not_make_is_said() {
+        let tied = selection(
+            ["ridge_raw", "ridge", "svm", "lda", "knn"]
+                .iter()
+                .map(|classifier| scored("rocket_unscaled", classifier, 1.0))
+                .collect(),
+        );
+        let clear = selection(vec![
+            scored("rocket_unscaled", "ridge_raw", 1.0),
+            scored("rocket_unscaled", "svm", 0.9),
+        ]);
+        assert_eq!(tie_warning(std::slice::from_ref(&clear)), None);
+        let warning = tie_warning(&[tied.clone(), clear, tied]).unwrap();
+        let cli = warning.render(Face::Cli);
+        assert!(
+            cli.starts_with(
+                "in 2 of 3 models, the automatic choice's validation could not rank its best \
+                 candidates: rocket_unscaled + ridge_raw scored 100.00 % and so did 4 other \
+                 method(s) (rocket_unscaled + ridge, rocket_unscaled + svm, rocket_unscaled + lda, \
+                 and 1 more)"
+            ),
+            "{cli}"
+        );
+        assert!(
+            cli.ends_with("fix the method with --features and --classifier"),
+            "{cli}"
+        );
+        let python = warning.render(Face::Python);
+        assert!(
+            python.ends_with("fix the method with features= and classifier="),
+            "{python}"
+        );
+        assert_eq!(
+            selection_warnings(&[selection(vec![scored("fft1d", "pwe", 0.8)])]),
+            []
+        );
     }
 }

@@ -149,6 +149,40 @@ impl Selection {
     pub fn chosen(&self) -> Option<&CandidateScore> {
         self.scores.get(self.chosen)
     }
+
+    /// The other methods whose validation score is the chosen candidate's, each once (its first
+    /// candidate; another number of principal components of the chosen method does not count): the
+    /// validation could not rank them, so the candidates' order, not the data, made the choice. Empty
+    /// when the chosen candidate stands alone, or failed.
+    pub fn tied(&self) -> Vec<&CandidateScore> {
+        let Some(chosen) = self.chosen().filter(|chosen| chosen.is_contender()) else {
+            return Vec::new();
+        };
+        let mut tied: Vec<&CandidateScore> = Vec::new();
+        for score in &self.scores {
+            let same_score = (score.accuracy.mean - chosen.accuracy.mean).abs() <= TIE_TOLERANCE;
+            if score.is_contender()
+                && same_score
+                && !same_method(score, chosen)
+                && !tied.iter().any(|other| same_method(other, score))
+            {
+                tied.push(score);
+            }
+        }
+        tied
+    }
+}
+
+/// Validation scores closer than this are equal: fold accuracies are fractions of counts, and two
+/// candidates right on the same samples have the same mean to the last bit or nearly.
+const TIE_TOLERANCE: f64 = 1e-9;
+
+/// The same features (after the same intensity transform) and classifier, whatever the principal
+/// components.
+fn same_method(a: &CandidateScore, b: &CandidateScore) -> bool {
+    a.features == b.features
+        && a.classifier == b.classifier
+        && a.config.preprocess.intensity == b.config.preprocess.intensity
 }
 
 #[cfg(test)]

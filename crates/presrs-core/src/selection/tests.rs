@@ -938,3 +938,57 @@ fn ridge_of_8_dims() -> CheckedTrainConfig {
     .check()
     .unwrap()
 }
+
+/// A candidate of `features` + `classifier` scored `mean` on every fold.
+fn scored(features: &str, classifier: &str, dims: usize, mean: f64) -> CandidateScore {
+    CandidateScore {
+        features: features.into(),
+        classifier: classifier.into(),
+        config: TrainConfig {
+            dims,
+            ..TrainConfig::default()
+        },
+        accuracy: crate::metrics::MeanStd { mean, std: 0.0 },
+        per_fold: (0..3).map(|k| (format!("g{k}"), mean)).collect(),
+        error: None,
+        skipped: false,
+        dropped_early: false,
+    }
+}
+
+/// The methods that scored what the chosen one did are named once each; another number of components
+/// of the chosen method, a lower score, a failed or dropped candidate are not ties.
+#[test]
+fn the_methods_tied_with_the_chosen_one_are_named_once() {
+    let mut failed = scored("fft1d", "lda", 51, 1.0);
+    failed.error = Some("singular".into());
+    let mut dropped = scored("glcm", "knn", 51, 1.0);
+    dropped.dropped_early = true;
+    let mut selection = Selection {
+        method: "three folds".into(),
+        chosen: 0,
+        scores: vec![
+            scored("rocket", "ridge_raw", 51, 1.0),
+            scored("rocket", "ridge_raw", 102, 1.0),
+            scored("rocket", "svm", 51, 1.0),
+            scored("rocket", "svm", 102, 1.0),
+            scored("fft1d", "pwe", 51, 1.0 - 1e-6),
+            failed,
+            dropped,
+            scored("multirocket", "ridge", 51, 1.0),
+        ],
+        fallback: None,
+        cost: None,
+    };
+    let names = |s: &Selection| -> Vec<String> { s.tied().iter().map(|c| c.name()).collect() };
+    assert_eq!(
+        names(&selection),
+        ["rocket + svm, 51 dims", "multirocket + ridge, 51 dims"]
+    );
+    // a candidate alone at the top ties with nothing
+    selection.scores[0].accuracy.mean = 1.0;
+    selection.scores.truncate(2);
+    assert!(selection.tied().is_empty());
+    selection.scores[1] = scored("rocket", "svm", 51, 0.9);
+    assert!(selection.tied().is_empty());
+}

@@ -433,8 +433,7 @@ impl<'d> EvalSetup<'d> {
                 n_train.saturating_sub(1)
             )));
         }
-        warnings.extend(crate::method::validation_warning(&selections));
-        warnings.extend(crate::method::budget_warning(&selections));
+        warnings.extend(crate::method::selection_warnings(&selections));
         if !method.is_auto()
             && let Some(first) = &first_model
             && let Some(searched_on) = first.model.summary().searched_on

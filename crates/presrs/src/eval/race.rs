@@ -284,8 +284,7 @@ pub fn evaluate_racing_samples(
         done.into_iter().unzip();
     let selections: Vec<Selection> = selections.into_iter().flatten().collect();
     let mut warnings = frames.warnings.clone();
-    warnings.extend(crate::method::validation_warning(&selections));
-    warnings.extend(crate::method::budget_warning(&selections));
+    warnings.extend(crate::method::selection_warnings(&selections));
     let outcome = EvalOutcome {
         report,
         selections,

@@ -259,8 +259,7 @@ pub fn train_with_progress(
         ));
     }
     let selections = model.selection().cloned();
-    warnings.extend(crate::method::validation_warning(selections.as_slice()));
-    warnings.extend(crate::method::budget_warning(selections.as_slice()));
+    warnings.extend(crate::method::selection_warnings(selections.as_slice()));
     if let Some(dims) = method.dims
         && let Some(kept) = model.pca().map(|pca| pca.n_components())
         && kept < dims
