@@ -1,11 +1,12 @@
 //! Where a manifest report's extra inputs come from: the sensor and a few movies of the data set, and the
-//! velocity table and configuration of a `presrs simulate` folder.
+//! velocity table and configuration of a `presrs simulate` folder, and hops traced by the simulator.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use presrs_core::{Recording, SensorMeta};
 use presrs_io::read_recording_with;
+use presrs_sim::trace::{HopTrace, trace_hops};
 use presrs_sim::{SimConfig, VelocityTable};
 
 use crate::dataset::{Dataset, SampleOptions};
@@ -154,6 +155,27 @@ pub(super) fn simulate_outputs(dir: &Path) -> Option<(VelocityTable, SimConfig)>
         },
         config,
     ))
+}
+
+/// Four hops on the slowest and the fastest terrain of `table` at `gait` (nothing if tracing fails).
+pub(super) fn simulation_traces(
+    config: &SimConfig,
+    table: &VelocityTable,
+    gait: &str,
+) -> Vec<HopTrace> {
+    let mut terrains: Vec<&str> = Vec::new();
+    for preferred in ["wood", "grass"] {
+        if table.terrains.iter().any(|t| t == preferred) {
+            terrains.push(preferred);
+        }
+    }
+    if terrains.is_empty() {
+        terrains.extend(table.terrains.first().map(String::as_str));
+    }
+    terrains
+        .into_iter()
+        .filter_map(|t| trace_hops(config, t, gait, 4, 1e-3).ok())
+        .collect()
 }
 
 #[cfg(test)]
