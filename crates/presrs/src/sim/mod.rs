@@ -21,18 +21,14 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use presrs_sim::dataset::{BUILTIN_TERRAINS, first_repeated};
-use presrs_sim::terrain::HeightMap;
 use presrs_sim::{
     DatasetSpec, HopRecord, SimConfig, SimulatedDataset, Simulator, TrialOutput, TrialPlan,
     VelocityTable,
 };
 use rayon::prelude::*;
-use sha2::{Digest, Sha256};
 
 use crate::error::{Context, Error, Result};
 use crate::progress::Progress;
-use presrs_io::message::{Message, Opt};
 
 /// `return Err(Error::Data(..))` unless `cond`.
 macro_rules! ensure {
@@ -50,6 +46,13 @@ macro_rules! bail {
     };
 }
 
+mod inputs;
+mod stamp;
+
+pub use inputs::{check_dataset_out, check_gaits, dataset_names, load_config, read_terrain_image};
+pub use stamp::{DatasetKey, DatasetStamp, FileStamp, STAMP_FILE};
+use stamp::{STAMP_FORMAT, config_json, read_checked, write_hashed};
+
 /// What [`write_dataset`] wrote.
 #[derive(Clone, Debug)]
 pub struct DatasetSummary {
@@ -62,125 +65,6 @@ pub struct DatasetSummary {
     pub reruns: usize,
     pub velocity: VelocityTable,
     pub mean_stance_s: f64,
-}
-
-/// The stamp of a data set folder. It is written last, so its presence claims a complete data set.
-pub const STAMP_FILE: &str = "stamp.json";
-/// Layout version of [`DatasetStamp`]; a stamp of another format is not trusted (format 1 had 64-bit
-/// FNV fingerprints where format 2 has SHA-256).
-const STAMP_FORMAT: u32 = 2;
-
-/// What a data set was made from. Equal keys, equal data sets: the simulator is deterministic.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct DatasetKey {
-    pub presrs_version: String,
-    pub seed: u64,
-    pub terrains: Vec<String>,
-    pub gaits: Vec<String>,
-    /// Recorded hops per terrain and gait (the configuration's default resolved).
-    pub hops_per_gait: usize,
-    /// Body mass including payload, kg (the configuration's default resolved).
-    pub load_kg: f64,
-    /// Fingerprint of the simulator configuration as `config.json` holds it.
-    pub config_fingerprint: String,
-    /// Terrains given as height-map images: name and fingerprint of the map.
-    pub image_terrains: Vec<(String, String)>,
-}
-
-impl DatasetKey {
-    /// The key of the data set `config` and `spec` describe, made by this version of presrs.
-    pub fn new(config: &SimConfig, spec: &DatasetSpec) -> Self {
-        let image_terrains = spec
-            .image_terrains
-            .iter()
-            .map(|(name, map)| {
-                let mut hash = Fingerprint::new();
-                hash.update(&(map.width as u64).to_le_bytes());
-                hash.update(&(map.height as u64).to_le_bytes());
-                for v in &map.values {
-                    hash.update(&v.to_le_bytes());
-                }
-                (name.clone(), hash.hex())
-            })
-            .collect();
-        Self {
-            presrs_version: env!("CARGO_PKG_VERSION").to_owned(),
-            seed: spec.seed,
-            terrains: spec.terrains.clone(),
-            gaits: spec.gaits.clone(),
-            hops_per_gait: spec
-                .hops_per_gait
-                .unwrap_or(config.experiment.hops_per_gait),
-            load_kg: spec.load_kg.unwrap_or(config.robot.body_mass_kg),
-            config_fingerprint: Fingerprint::of(config_json(config).as_bytes()).hex(),
-            image_terrains,
-        }
-    }
-
-    /// Why a data set made with `self` is not the one `wanted` describes (`None`: it is).
-    pub fn mismatch(&self, wanted: &Self) -> Option<String> {
-        let list = |v: &[String]| v.join(",");
-        if self.presrs_version != wanted.presrs_version {
-            Some(format!(
-                "it was made by presrs {}, this is presrs {}",
-                self.presrs_version, wanted.presrs_version
-            ))
-        } else if self.seed != wanted.seed {
-            Some(format!(
-                "it was made with seed {}, not {}",
-                self.seed, wanted.seed
-            ))
-        } else if self.hops_per_gait != wanted.hops_per_gait {
-            Some(format!(
-                "it has {} hops per terrain and gait, not {}",
-                self.hops_per_gait, wanted.hops_per_gait
-            ))
-        } else if self.load_kg.to_bits() != wanted.load_kg.to_bits() {
-            Some(format!(
-                "it was simulated at {} kg, not {} kg",
-                self.load_kg, wanted.load_kg
-            ))
-        } else if self.terrains != wanted.terrains {
-            Some(format!(
-                "its terrains are {}, not {}",
-                list(&self.terrains),
-                list(&wanted.terrains)
-            ))
-        } else if self.gaits != wanted.gaits {
-            Some(format!(
-                "its gaits are {}, not {}",
-                list(&self.gaits),
-                list(&wanted.gaits)
-            ))
-        } else if self.config_fingerprint != wanted.config_fingerprint {
-            Some(format!(
-                "it was made with another simulator configuration (fingerprint {}, not {})",
-                self.config_fingerprint, wanted.config_fingerprint
-            ))
-        } else if self.image_terrains != wanted.image_terrains {
-            Some("its height-map terrains differ".to_owned())
-        } else {
-            None
-        }
-    }
-}
-
-/// Size and fingerprint (64-bit, hexadecimal) of a file of the data set.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct FileStamp {
-    pub bytes: u64,
-    pub fingerprint: String,
-}
-
-/// `stamp.json`: what the data set was made from and every file it consists of.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct DatasetStamp {
-    pub format: u32,
-    pub made_from: DatasetKey,
-    pub trials: usize,
-    pub frames: usize,
-    /// Every file of the data set, by path relative to its folder.
-    pub files: BTreeMap<String, FileStamp>,
 }
 
 /// One trial's truth, kept after its movie is written (an element of `truth/trials.json`).
@@ -565,63 +449,6 @@ pub fn check_simulator(
     Ok(())
 }
 
-/// The bytes of `dir/rel`, checked against the stamp's size and fingerprint.
-fn read_checked(dir: &Path, rel: &str, stamp: &DatasetStamp) -> Result<Vec<u8>> {
-    let path = dir.join(rel);
-    let expected = stamp
-        .files
-        .get(rel)
-        .ok_or_else(|| Error::data(format!("{STAMP_FILE} does not list {rel}")))?;
-    let bytes = match std::fs::read(&path) {
-        Ok(bytes) => bytes,
-        Err(err) if err.kind() == std::io::ErrorKind::NotFound => {
-            bail!("{} is missing", path.display())
-        }
-        Err(err) => return Err(err).with_context(|| format!("cannot read {}", path.display())),
-    };
-    let actual = FileStamp {
-        bytes: bytes.len() as u64,
-        fingerprint: Fingerprint::of(&bytes).hex(),
-    };
-    ensure!(
-        actual == *expected,
-        "{} has changed since it was written ({} bytes, fingerprint {}; the stamp says {} bytes, {})",
-        path.display(),
-        actual.bytes,
-        actual.fingerprint,
-        expected.bytes,
-        expected.fingerprint
-    );
-    Ok(bytes)
-}
-
-/// Writes `out_dir/rel` atomically with `write`, returning its size and fingerprint.
-fn write_hashed(
-    out_dir: &Path,
-    rel: &str,
-    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<FileStamp> {
-    let path = out_dir.join(rel);
-    let stamp = presrs_io::write_atomic(&path, |w| {
-        let mut hashing = HashingWriter {
-            inner: w,
-            hash: Fingerprint::new(),
-            bytes: 0,
-        };
-        write(&mut hashing)?;
-        Ok(FileStamp {
-            bytes: hashing.bytes,
-            fingerprint: hashing.hash.hex(),
-        })
-    })?;
-    Ok(stamp)
-}
-
-/// The configuration as `config.json` holds it.
-fn config_json(config: &SimConfig) -> String {
-    format!("{}\n", config.to_json_pretty())
-}
-
 /// Table I from the trials' truth.
 fn velocity_table(truths: &[TrialTruth]) -> VelocityTable {
     VelocityTable::from_trials(truths.iter().map(|t| {
@@ -636,55 +463,6 @@ fn velocity_table(truths: &[TrialTruth]) -> VelocityTable {
     }))
 }
 
-/// SHA-256 of bytes fed in pieces, as lowercase hex: the fingerprint of a data set's files and of
-/// what it was made from.
-#[derive(Clone, Debug, Default)]
-struct Fingerprint(Sha256);
-
-impl Fingerprint {
-    fn new() -> Self {
-        Self::default()
-    }
-
-    fn of(bytes: &[u8]) -> Self {
-        let mut hash = Self::new();
-        hash.update(bytes);
-        hash
-    }
-
-    fn update(&mut self, bytes: &[u8]) {
-        self.0.update(bytes);
-    }
-
-    fn hex(self) -> String {
-        self.0
-            .finalize()
-            .iter()
-            .map(|byte| format!("{byte:02x}"))
-            .collect()
-    }
-}
-
-/// A writer that fingerprints and counts what passes through it.
-struct HashingWriter<'a> {
-    inner: &'a mut dyn Write,
-    hash: Fingerprint,
-    bytes: u64,
-}
-
-impl Write for HashingWriter<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.hash.update(&buf[..n]);
-        self.bytes += n as u64;
-        Ok(n)
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
-
 /// Quotes a CSV cell when it needs it.
 fn csv_cell(text: &str) -> String {
     if text.contains([',', '"', '\n', '\r']) {
@@ -694,148 +472,11 @@ fn csv_cell(text: &str) -> String {
     }
 }
 
-/// The configuration: defaults, overridden by the JSON file if one is given.
-pub fn load_config(path: Option<&Path>) -> Result<SimConfig> {
-    match path {
-        None => Ok(SimConfig::default()),
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read the configuration {}", path.display()))?;
-            SimConfig::from_json(&text)
-                .with_context(|| format!("invalid configuration in {}", path.display()))
-        }
-    }
-}
-
-/// Checks, before anything is simulated, that a data set can be written in `out_dir`: a folder (or
-/// none yet) that accepts files, and one that holds no data set already (a `manifest.csv`) unless
-/// `replace`: a data set someone trains on is not replaced silently.
-pub fn check_dataset_out(out_dir: &Path, replace: bool) -> Result<()> {
-    presrs_io::output_path::check_output_dir(out_dir)?;
-    let manifest = out_dir.join("manifest.csv");
-    if manifest.exists() && !replace {
-        return Err(Error::invalid(
-            Message::new()
-                .text(format!(
-                    "{} already holds a data set ({}): give another folder, or ",
-                    out_dir.display(),
-                    manifest.display()
-                ))
-                .opt(Opt::Force)
-                .text(" to replace it"),
-        ));
-    }
-    Ok(())
-}
-
-/// Reads `NAME=PNG` as a height map scaled to `[0, 1]` (darkest pixel 0, brightest 1).
-pub fn read_terrain_image(name: &str, path: &Path) -> Result<(String, HeightMap)> {
-    let rec = presrs_io::png::read_png(path)
-        .with_context(|| format!("cannot read the height map {}", path.display()))?;
-    let grid = rec.grid();
-    let values = rec.data();
-    let (lo, hi) = values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-            (lo.min(v), hi.max(v))
-        });
-    let span = if hi > lo { hi - lo } else { 1.0 };
-    let scaled = values[..grid.len()]
-        .iter()
-        .map(|&v| ((v - lo) / span) as f32)
-        .collect();
-    let map = HeightMap::new(grid.cols, grid.rows, scaled)
-        .with_context(|| format!("unusable height map {}", path.display()))?;
-    Ok((name.to_owned(), map))
-}
-
-/// Checks that every gait of `gaits` is one of `config`'s or a variant `BASE@BETA` of one; the error
-/// names `option`.
-pub fn check_gaits<'a>(
-    option: Opt,
-    gaits: impl IntoIterator<Item = &'a String>,
-    config: &SimConfig,
-) -> Result<(), Message> {
-    let sim = Simulator::new(config.clone(), 0, Vec::new()).map_err(|e| e.to_string())?;
-    for gait in gaits {
-        sim.gait(gait.trim()).map_err(|e| {
-            let reason = match e {
-                presrs_sim::SimError::Param { reason, .. } => reason,
-                other => other.to_string(),
-            };
-            Message::new()
-                .opt_text(option, gait)
-                .text(format!(": {reason}"))
-        })?;
-    }
-    Ok(())
-}
-
-/// The terrains and gaits a data set would simulate, checked against each other and the configuration:
-/// each named once, terrains built-in or given as height-map images (`images`, every one used), gaits
-/// known. Empty `terrains` or `gaits` mean the paper's (plus the images). The error says what is wrong
-/// with which option.
-pub fn dataset_names(
-    terrains: &[String],
-    images: &[&str],
-    gaits: &[String],
-    config: &SimConfig,
-) -> std::result::Result<(Vec<String>, Vec<String>), Message> {
-    if let Some(twice) = first_repeated(images) {
-        return Err(Message::new().opt(Opt::TerrainImage).text(format!(
-            " gives the name {twice} to two images; give each its own"
-        )));
-    }
-    let terrains: Vec<String> = if terrains.is_empty() {
-        let mut terrains = DatasetSpec::paper(0).terrains;
-        terrains.extend(images.iter().map(|&n| n.to_owned()));
-        terrains
-    } else {
-        terrains.iter().map(|t| t.trim().to_owned()).collect()
-    };
-    if let Some(twice) = first_repeated(&terrains) {
-        return Err(Message::new().opt(Opt::Terrains).text(format!(
-            " lists {twice} twice; list each terrain once (a repeated terrain's images would be in \
-             the manifest twice, and could be both trained on and tested)"
-        )));
-    }
-    for terrain in &terrains {
-        if !BUILTIN_TERRAINS.contains(&terrain.as_str()) && !images.contains(&terrain.as_str()) {
-            return Err(Message::new()
-                .opt(Opt::Terrains)
-                .text(format!(
-                    ": unknown terrain {terrain:?}; the built-in terrains are {}, others must be \
-                     given as height maps with ",
-                    BUILTIN_TERRAINS.join(", ")
-                ))
-                .opt_is(Opt::TerrainImage, format!("{terrain}=PNG")));
-        }
-    }
-    if let Some(unused) = images.iter().find(|&&n| !terrains.iter().any(|t| t == n)) {
-        return Err(Message::new()
-            .opt_is(Opt::TerrainImage, unused)
-            .text(" is not among ")
-            .opt(Opt::Terrains)
-            .text("; add it there or leave the image out"));
-    }
-    let gaits: Vec<String> = if gaits.is_empty() {
-        DatasetSpec::paper(0).gaits
-    } else {
-        gaits.iter().map(|g| g.trim().to_owned()).collect()
-    };
-    if let Some(twice) = first_repeated(&gaits) {
-        return Err(Message::new()
-            .opt(Opt::Gaits)
-            .text(format!(" lists {twice} twice; list each gait once")));
-    }
-    check_gaits(Opt::Gaits, &gaits, config)?;
-    Ok((terrains, gaits))
-}
-
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+    use super::stamp::Fingerprint;
     use super::*;
     use crate::progress::Quiet;
 
