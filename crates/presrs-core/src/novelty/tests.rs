@@ -154,7 +154,7 @@ fn a_class_never_seen_is_unknown_and_known_ones_are_kept() {
 }
 
 #[test]
-fn without_three_groups_the_score_is_refused_saying_why_and_the_threshold_is_the_asked_quantile() {
+fn with_one_group_the_score_is_refused_saying_why_and_the_threshold_is_the_asked_quantile() {
     let (dims, n_classes) = (5, 3);
     let (vectors, classes, groups) = gaussian_classes(n_classes, 40, dims, 3.0, 4);
     let none = vec![None; classes.len()];
@@ -163,11 +163,15 @@ fn without_three_groups_the_score_is_refused_saying_why_and_the_threshold_is_the
         err.to_string().contains("120 of 120 samples have no group"),
         "{err}"
     );
+    let one = vec![Some("a"); classes.len()];
+    let err = NoveltyModel::fit(&vectors, &classes, &one, n_classes, dims, 0.1).unwrap_err();
+    assert!(err.to_string().contains("come from 1 group(s)"), "{err}");
+    // Two groups calibrate, each held out against the other.
     let two: Vec<Option<&str>> = (0..classes.len())
         .map(|i| Some(["a", "b"][i % 2]))
         .collect();
-    let err = NoveltyModel::fit(&vectors, &classes, &two, n_classes, dims, 0.1).unwrap_err();
-    assert!(err.to_string().contains("come from 2 group(s)"), "{err}");
+    let paired = NoveltyModel::fit(&vectors, &classes, &two, n_classes, dims, 0.1).unwrap();
+    assert_eq!(paired.folds(), CalibrationFolds::Group);
     let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
     let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.1).unwrap();
     assert_eq!(model.folds(), CalibrationFolds::Group);
