@@ -153,11 +153,18 @@ impl Selection {
     /// The other methods whose validation score is the chosen candidate's, each once (its first
     /// candidate; another number of principal components of the chosen method does not count): the
     /// validation could not rank them, so the candidates' order, not the data, made the choice. Empty
-    /// when the chosen candidate stands alone, or failed.
+    /// when the chosen candidate stands alone, failed, or is not the best (a rule such as one standard
+    /// error chose it below the best on purpose).
     pub fn tied(&self) -> Vec<&CandidateScore> {
         let Some(chosen) = self.chosen().filter(|chosen| chosen.is_contender()) else {
             return Vec::new();
         };
+        let beaten = self.scores.iter().any(|score| {
+            score.is_contender() && score.accuracy.mean > chosen.accuracy.mean + TIE_TOLERANCE
+        });
+        if beaten {
+            return Vec::new();
+        }
         let mut tied: Vec<&CandidateScore> = Vec::new();
         for score in &self.scores {
             let same_score = (score.accuracy.mean - chosen.accuracy.mean).abs() <= TIE_TOLERANCE;

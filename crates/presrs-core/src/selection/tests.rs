@@ -985,6 +985,10 @@ fn the_methods_tied_with_the_chosen_one_are_named_once() {
         names(&selection),
         ["rocket + svm, 51 dims", "multirocket + ridge, 51 dims"]
     );
+    // a choice below the best (the one-standard-error rule's) is the rule's, not a tie
+    selection.chosen = 4;
+    assert!(selection.tied().is_empty());
+    selection.chosen = 0;
     // a candidate alone at the top ties with nothing
     selection.scores[0].accuracy.mean = 1.0;
     selection.scores.truncate(2);
