@@ -432,11 +432,7 @@ pub fn tie_warning(selections: &[Selection]) -> Option<Message> {
     } else {
         format!("in {} of {} models, ", tied.len(), selections.len())
     };
-    let mut names: Vec<String> = others
-        .iter()
-        .take(TIES_NAMED)
-        .map(|s| method_name(s))
-        .collect();
+    let mut names: Vec<String> = others.iter().take(TIES_NAMED).map(|s| s.method()).collect();
     if others.len() > TIES_NAMED {
         names.push(format!("and {} more", others.len() - TIES_NAMED));
     }
@@ -446,7 +442,7 @@ pub fn tie_warning(selections: &[Selection]) -> Option<Message> {
              scored {:.2} % and so did {} other method(s) ({}), so the candidates' order, not the \
              data, made the choice; training data from more groups (walkers, recordings, sessions) \
              let the validation tell them apart, or fix the method with ",
-            method_name(chosen),
+            chosen.method(),
             100.0 * chosen.accuracy.mean,
             others.len(),
             names.join(", ")
@@ -455,17 +451,6 @@ pub fn tie_warning(selections: &[Selection]) -> Option<Message> {
         .text(" and ")
         .opt(Opt::Classifier),
     )
-}
-
-/// A candidate's features (with their intensity transform) and classifier, without its components:
-/// `rocket_unscaled + ridge_raw`, `fft1d (sqrt) + pwe`.
-fn method_name(score: &CandidateScore) -> String {
-    let intensity = score.config.preprocess.intensity;
-    if intensity.is_none() {
-        format!("{} + {}", score.features, score.classifier)
-    } else {
-        format!("{} ({intensity}) + {}", score.features, score.classifier)
-    }
 }
 
 /// The warning for selections whose validation scheme was passed over because a held-out fold held a

@@ -37,22 +37,27 @@ impl CandidateScore {
         self.error.is_none() && !self.dropped_early
     }
 
-    /// The candidate in words: its features (after an intensity transform, if any) + its classifier,
-    /// and its principal components (`fft1d (sqrt) + pwe, 51 dims`), or `all features` for a
-    /// classifier that takes every feature without a PCA step (`rocket + ridge, all features`).
+    /// The candidate in words: its [`method`](Self::method) and its principal components
+    /// (`fft1d (sqrt) + pwe, 51 dims`), or `all features` for a classifier that takes every feature
+    /// without a PCA step (`rocket + ridge, all features`).
     pub fn name(&self) -> String {
-        let intensity = self.config.preprocess.intensity;
-        let transform = if intensity.is_none() {
-            String::new()
-        } else {
-            format!(" ({intensity})")
-        };
         let dims = if self.config.classifier.kind().takes_all_features() {
             "all features".to_owned()
         } else {
             format!("{} dims", self.config.dims)
         };
-        format!("{}{transform} + {}, {dims}", self.features, self.classifier)
+        format!("{}, {dims}", self.method())
+    }
+
+    /// Its features (after an intensity transform, if any) + its classifier, whatever the principal
+    /// components: `rocket_unscaled + ridge_raw`, `fft1d (sqrt) + pwe`.
+    pub fn method(&self) -> String {
+        let intensity = self.config.preprocess.intensity;
+        if intensity.is_none() {
+            format!("{} + {}", self.features, self.classifier)
+        } else {
+            format!("{} ({intensity}) + {}", self.features, self.classifier)
+        }
     }
 }
 
