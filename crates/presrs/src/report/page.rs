@@ -13,7 +13,9 @@ use presrs_report::{
 };
 
 use super::provenance::provenance;
-use super::sources::{manifest_recordings, simulate_outputs, simulation_traces};
+use super::sources::{
+    manifest_recordings, preferred_condition, simulate_outputs, simulation_traces,
+};
 use crate::dataset::{Dataset, Sample, SampleOptions};
 use crate::error::{Context, Result};
 use crate::eval::{EvalOptions, EvalOutcome};
@@ -179,16 +181,7 @@ pub(super) fn write_manifest_report(
 ) -> Result<PathBuf> {
     let manifest_path = loaded.path();
     let samples = &loaded.samples;
-    let conditions: BTreeSet<&str> = loaded
-        .samples
-        .iter()
-        .filter_map(|s| s.condition.as_deref())
-        .collect();
-    let preferred = if conditions.contains("G2") {
-        Some("G2")
-    } else {
-        conditions.first().copied()
-    };
+    let preferred = preferred_condition(samples);
     let (meta, movies) = manifest_recordings(loaded, sample_options, preferred);
     let simulated = manifest_path.parent().and_then(|dir| {
         simulate_outputs(if dir.as_os_str().is_empty() {

@@ -16,7 +16,7 @@ use super::draws::shrink_draw;
 use super::model_check::labelled;
 use super::page::write_report;
 use super::provenance::provenance;
-use super::sources::{first_seconds, simulation_traces};
+use super::sources::{first_seconds, preferred_condition, simulation_traces};
 use crate::dataset::Sample;
 use crate::error::Result;
 use crate::train::split_images;
@@ -117,16 +117,7 @@ impl SimulationReportData {
                 }
             }
         }
-        let gaits: BTreeSet<&str> = samples
-            .iter()
-            .filter_map(|s| s.condition.as_deref())
-            .collect();
-        let train_gait = if gaits.contains("G2") {
-            Some("G2")
-        } else {
-            gaits.first().copied()
-        }
-        .map(str::to_owned);
+        let train_gait = preferred_condition(&samples).map(str::to_owned);
         // One recording per terrain, at the training gait.
         let mut seen = BTreeSet::new();
         let recordings = dataset

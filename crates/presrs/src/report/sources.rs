@@ -9,7 +9,7 @@ use presrs_io::read_recording_with;
 use presrs_sim::trace::{HopTrace, trace_hops};
 use presrs_sim::{SimConfig, VelocityTable};
 
-use crate::dataset::{Dataset, SampleOptions};
+use crate::dataset::{Dataset, Sample, SampleOptions};
 use crate::error::Result;
 
 /// The sensor metadata of the manifest's first file and up to four movies (one per label) for load
@@ -176,6 +176,20 @@ pub(super) fn simulation_traces(
         .into_iter()
         .filter_map(|t| trace_hops(config, t, gait, 4, 1e-3).ok())
         .collect()
+}
+
+/// The condition a report's figures show first: the paper's training gait `G2` when the samples have
+/// it, else their first condition in sorted order (`None` without conditions).
+pub(super) fn preferred_condition(samples: &[Sample]) -> Option<&str> {
+    let conditions: BTreeSet<&str> = samples
+        .iter()
+        .filter_map(|s| s.condition.as_deref())
+        .collect();
+    if conditions.contains("G2") {
+        Some("G2")
+    } else {
+        conditions.first().copied()
+    }
 }
 
 #[cfg(test)]
