@@ -512,7 +512,8 @@ pub struct NoveltyArgs {
     /// on (the default): a sample far from every trained class is decided `unknown`, the nearest class
     /// beside it (models trained before novelty scores existed have none and never do); off: every
     /// decision is one of the model's classes, as before.
-    #[arg(long, value_name = "on|off", default_value = "on", value_parser = parse_on_off)]
+    // `Set`: a `bool` field is otherwise a value-less flag, and `on`/`off` would be refused.
+    #[arg(long, value_name = "on|off", default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub novelty: bool,
 }
 
