@@ -81,6 +81,10 @@ pub struct AutoChoice<'c> {
     pub scoring_samples: Option<usize>,
     /// Told each stage as it begins, for a progress display.
     pub on_stage: Option<StageObserver<'c>>,
+    /// The candidate (an index into `candidates`) that wins a tie for the best score under
+    /// [`ChoiceRule::Best`], where the earlier candidate would otherwise: a prior for when the
+    /// validation cannot rank the best candidates. `None`: ties go to the earlier.
+    pub preferred_on_tie: Option<usize>,
 }
 
 /// Receives the automatic choice's stages as they begin, in words (`features: rocket`, `training the
@@ -146,6 +150,20 @@ fn one_standard_error(scores: &[CandidateScore], best: usize) -> usize {
         .unwrap_or(best)
 }
 
+/// `preferred` when it scored as well as `best` (within [`record::TIE_TOLERANCE`]), else `best`.
+fn preferred_if_tied(scores: &[CandidateScore], best: usize, preferred: Option<usize>) -> usize {
+    match preferred {
+        Some(p)
+            if scores[p].is_contender()
+                && scores[best].is_contender()
+                && scores[p].accuracy.mean >= scores[best].accuracy.mean - record::TIE_TOLERANCE =>
+        {
+            p
+        }
+        _ => best,
+    }
+}
+
 /// How many of the best candidates are scored again with other numbers of principal components.
 pub const REFINED: usize = 3;
 
@@ -160,6 +178,15 @@ impl<'c> AutoChoice<'c> {
             rule: ChoiceRule::Best,
             scoring_samples: Some(SCORING_SAMPLES),
             on_stage: None,
+            preferred_on_tie: None,
+        }
+    }
+
+    /// With candidate `index` (of `candidates`) winning a tie for the best score.
+    pub fn with_preferred_on_tie(self, index: Option<usize>) -> Self {
+        Self {
+            preferred_on_tie: index.filter(|&i| i < self.candidates.len()),
+            ..self
         }
     }
 
@@ -266,6 +293,7 @@ fn select_on(
         rule: _,
         scoring_samples: _,
         on_stage,
+        preferred_on_tie,
     } = *choice;
     if candidates.is_empty() {
         return Err(CoreError::Param {
@@ -311,8 +339,12 @@ fn select_on(
             chosen = i;
         }
     }
-    if choice.rule == ChoiceRule::OneStandardError && scores[chosen].is_contender() {
-        chosen = one_standard_error(&scores, chosen);
+    match choice.rule {
+        ChoiceRule::OneStandardError if scores[chosen].is_contender() => {
+            chosen = one_standard_error(&scores, chosen);
+        }
+        ChoiceRule::Best => chosen = preferred_if_tied(&scores, chosen, preferred_on_tie),
+        ChoiceRule::OneStandardError => {}
     }
     if !scores[chosen].is_contender() {
         // Every candidate failed (or, in a race, failed on a later fold after the others were

@@ -157,7 +157,8 @@ impl Selection {
 
     /// The other methods whose validation score is the chosen candidate's, each once (its first
     /// candidate; another number of principal components of the chosen method does not count): the
-    /// validation could not rank them, so the candidates' order, not the data, made the choice. Empty
+    /// validation could not rank them, so a prior (the preferred candidate, else the candidates'
+    /// order), not the data, made the choice. Empty
     /// when the chosen candidate stands alone, failed, or is not the best (a rule such as one standard
     /// error chose it below the best on purpose).
     pub fn tied(&self) -> Vec<&CandidateScore> {
@@ -187,7 +188,7 @@ impl Selection {
 
 /// Validation scores closer than this are equal: fold accuracies are fractions of counts, and two
 /// candidates right on the same samples have the same mean to the last bit or nearly.
-const TIE_TOLERANCE: f64 = 1e-9;
+pub(crate) const TIE_TOLERANCE: f64 = 1e-9;
 
 /// The same features (after the same intensity transform) and classifier, whatever the principal
 /// components.

@@ -996,3 +996,46 @@ fn the_methods_tied_with_the_chosen_one_are_named_once() {
     selection.scores[1] = scored("rocket", "svm", 51, 0.9);
     assert!(selection.tied().is_empty());
 }
+
+/// The preferred candidate wins a tie for the best score, and only a tie: not against a better
+/// candidate, not when it failed or was dropped, and a missing preference leaves the earlier.
+#[test]
+fn the_preferred_candidate_wins_a_tie_and_only_a_tie() {
+    let scores = [
+        scored("rocket_unscaled", "ridge_raw", 51, 1.0),
+        scored("rocket", "svm", 51, 1.0 - 1e-12),
+        scored("fft1d", "pwe", 51, 0.9),
+    ];
+    assert_eq!(preferred_if_tied(&scores, 0, Some(1)), 1);
+    assert_eq!(preferred_if_tied(&scores, 0, None), 0);
+    assert_eq!(preferred_if_tied(&scores, 0, Some(2)), 0);
+    let mut failed = scores.clone();
+    failed[1].error = Some("singular".into());
+    assert_eq!(preferred_if_tied(&failed, 0, Some(1)), 0);
+    let mut dropped = scores.clone();
+    dropped[1].dropped_early = true;
+    assert_eq!(preferred_if_tied(&dropped, 0, Some(1)), 0);
+}
+
+/// End to end: two candidates the validation cannot tell apart (the same method twice) go to the
+/// earlier, or to the preferred one when there is one; under `one-se` the order decides; a
+/// preference past the candidates is none.
+#[test]
+fn select_gives_a_tie_to_the_preferred_candidate() {
+    let frames = four_class_frames(48, 21);
+    let images = grouped(&frames);
+    let candidates = vec![TrainConfig::default().check().unwrap(); 2];
+    let choose = |choice: AutoChoice<'_>| {
+        let selection = select(&images, &choice, 1).unwrap();
+        assert_eq!(selection.tied().len(), 0, "the same method is not a tie");
+        selection.chosen
+    };
+    let choice = AutoChoice::new(&candidates, ValidateBy::Auto);
+    assert_eq!(choose(choice), 0);
+    assert_eq!(choose(choice.with_preferred_on_tie(Some(1))), 1);
+    assert_eq!(choose(choice.with_preferred_on_tie(Some(2))), 0);
+    let one_se = choice
+        .with_preferred_on_tie(Some(1))
+        .with_rule(ChoiceRule::OneStandardError);
+    assert_eq!(choose(one_se), 0);
+}
