@@ -64,7 +64,8 @@ pub const WHOLE_SAMPLE_FEATURES: [(FeatureKind, bool); 4] = [
 /// (`jiku-walk`, `icub20`, the simulator's stances) and the best worst set, and it is the nearest to the
 /// peer on the set where it is furthest below it (bench/real/RESULTS.md, "A prior for ties"). Without
 /// it, ties go to the earlier candidate. Scoring keeps the candidates' order (the cheap ones first).
-pub const PREFERRED_ON_TIE: (FeatureKind, ClassifierKind) = (FeatureKind::ROCKET, ClassifierKind::SVM);
+pub const PREFERRED_ON_TIE: (FeatureKind, ClassifierKind) =
+    (FeatureKind::ROCKET, ClassifierKind::SVM);
 
 /// The index in `candidates` of [`PREFERRED_ON_TIE`] (its first candidate), if it is one.
 fn preferred_on_tie(candidates: &[CheckedTrainConfig]) -> Option<usize> {

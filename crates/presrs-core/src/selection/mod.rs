@@ -156,7 +156,8 @@ fn preferred_if_tied(scores: &[CandidateScore], best: usize, preferred: Option<u
         Some(p)
             if scores[p].is_contender()
                 && scores[best].is_contender()
-                && scores[p].accuracy.mean >= scores[best].accuracy.mean - record::TIE_TOLERANCE =>
+                && scores[p].accuracy.mean
+                    >= scores[best].accuracy.mean - record::TIE_TOLERANCE =>
         {
             p
         }
