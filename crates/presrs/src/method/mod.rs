@@ -11,12 +11,19 @@ use presrs_core::preprocess::{Intensity, Preprocess};
 use presrs_core::sample::SampleKind;
 pub use presrs_core::selection::ChoiceRule;
 pub use presrs_core::selection::ValidateBy;
-use presrs_core::selection::{AutoChoice, CandidateScore, Selection, ValidationFallback};
+use presrs_core::selection::{AutoChoice, CandidateScore, Selection};
 use presrs_core::split::ValidationSize;
 use presrs_core::{CoreError, Crop, Grid};
 use presrs_io::message::{Message, Opt};
 
 use crate::error::{Error, Result};
+
+mod ties;
+mod warnings;
+
+pub use ties::PREFERRED_ON_TIE;
+use ties::preferred_on_tie;
+pub use warnings::{budget_warning, selection_warnings, tie_warning, validation_warning};
 
 /// Principal components kept unless told otherwise (the paper's 51).
 pub const DEFAULT_DIMS: usize = 51;
@@ -56,25 +63,6 @@ pub const WHOLE_SAMPLE_FEATURES: [(FeatureKind, bool); 4] = [
     (FeatureKind::MULTIROCKET_UNSCALED, false),
     (FeatureKind::MULTIROCKET, false),
 ];
-
-/// The method a tie for the best validation score goes to, when it is among the tied candidates:
-/// MiniRocket on scaled channels with the SVM on its principal components. A prior, for when the
-/// validation cannot rank (inside one walker of `jiku-walk` 42 methods score 100 %): of the
-/// random-convolution methods, it has the best mean over the three shared whole-sample sets
-/// (`jiku-walk`, `icub20`, the simulator's stances) and the best worst set, and it is the nearest to the
-/// peer on the set where it is furthest below it (bench/real/RESULTS.md, "A prior for ties"). Without
-/// it, ties go to the earlier candidate. Scoring keeps the candidates' order (the cheap ones first).
-pub const PREFERRED_ON_TIE: (FeatureKind, ClassifierKind) =
-    (FeatureKind::ROCKET, ClassifierKind::SVM);
-
-/// The index in `candidates` of [`PREFERRED_ON_TIE`] (its first candidate), if it is one.
-fn preferred_on_tie(candidates: &[CheckedTrainConfig]) -> Option<usize> {
-    let (features, classifier) = PREFERRED_ON_TIE;
-    candidates.iter().position(|candidate| {
-        let config = candidate.config();
-        config.features.kind() == Some(features) && config.classifier.kind() == classifier
-    })
-}
 
 /// A crop, or `auto`: decided from the image size.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -369,148 +357,6 @@ pub fn budget_from_seconds(seconds: f64) -> std::result::Result<Option<Duration>
     Ok((seconds > 0.0).then(|| Duration::from_secs_f64(seconds)))
 }
 
-/// The warning for selections whose time budget cut candidates (`None` when none was cut): how many
-/// models, which candidates (each feature family with its classifiers), and what to do.
-pub fn budget_warning(selections: &[Selection]) -> Option<Message> {
-    let cut: Vec<_> = selections
-        .iter()
-        .filter(|selection| selection.scores.iter().any(|score| score.skipped))
-        .collect();
-    let first = cut.first()?;
-    let skipped: Vec<&CandidateScore> = first.scores.iter().filter(|score| score.skipped).collect();
-    // Each feature family (with its transform, and its dims when refined) with its classifiers.
-    let mut families: Vec<(String, Vec<&str>)> = Vec::new();
-    for score in &skipped {
-        let intensity = score.config.preprocess.intensity;
-        let mut name = score.features.clone();
-        if !intensity.is_none() {
-            name.push_str(&format!(" ({intensity})"));
-        }
-        // (the refinement of the best candidates' dims)
-        if score.config.dims != first.scores[0].config.dims {
-            name.push_str(&format!(", {} dims", score.config.dims));
-        }
-        match families.iter_mut().find(|(family, _)| *family == name) {
-            Some((_, classifiers)) => classifiers.push(&score.classifier),
-            None => families.push((name, vec![&score.classifier])),
-        }
-    }
-    let families: Vec<String> = families
-        .into_iter()
-        .map(|(family, classifiers)| format!("{family} with {}", classifiers.join(", ")))
-        .collect();
-    let budget = skipped[0]
-        .error
-        .as_deref()
-        .unwrap_or("the time budget was spent");
-    let models = if selections.len() == 1 {
-        String::new()
-    } else {
-        format!("in {} of {} models, ", cut.len(), selections.len())
-    };
-    let message = Message::from(format!(
-        "{models}the automatic choice was cut short ({}): {} of {} candidates not tried ({}); give ",
-        budget.trim_start_matches("not tried: "),
-        skipped.len(),
-        first.scores.len(),
-        families.join("; ")
-    ));
-    Some(
-        message
-            .opt(Opt::Budget)
-            .text(" a larger value in seconds, or ")
-            .opt_is(Opt::Budget, 0)
-            .text(" for no limit (the choice then does not depend on the machine's speed)"),
-    )
-}
-
-/// What the automatic choices of `selections` warn of, in order: a validation scheme passed over, a
-/// time budget that cut candidates, a choice the validation could not make.
-pub fn selection_warnings(selections: &[Selection]) -> Vec<Message> {
-    [validation_warning, budget_warning, tie_warning]
-        .into_iter()
-        .filter_map(|warning| warning(selections))
-        .collect()
-}
-
-/// The tied methods a warning names before it counts the rest.
-const TIES_NAMED: usize = 3;
-
-/// The warning for selections whose chosen candidate scored the same in validation as other methods
-/// (`None` when none did): in how many models, the first's score and tied methods, and what lets the
-/// validation rank them. Small or homogeneous training data (one walker's stances, where every random
-/// convolution candidate is right on every validation sample) leave the choice to a prior:
-/// [`PREFERRED_ON_TIE`] when it is among the best, else the candidates' order.
-pub fn tie_warning(selections: &[Selection]) -> Option<Message> {
-    let tied: Vec<(&Selection, Vec<&CandidateScore>)> = selections
-        .iter()
-        .map(|selection| (selection, selection.tied()))
-        .filter(|(_, tied)| !tied.is_empty())
-        .collect();
-    let (first, others) = tied.first()?;
-    let chosen = first.chosen()?;
-    let models = if selections.len() == 1 {
-        String::new()
-    } else {
-        format!("in {} of {} models, ", tied.len(), selections.len())
-    };
-    let mut names: Vec<String> = others.iter().take(TIES_NAMED).map(|s| s.method()).collect();
-    let preferred = format!("{} + {}", PREFERRED_ON_TIE.0, PREFERRED_ON_TIE.1.as_str());
-    if others.len() > TIES_NAMED {
-        names.push(format!("and {} more", others.len() - TIES_NAMED));
-    }
-    Some(
-        Message::from(format!(
-            "{models}the automatic choice's validation could not rank its best candidates: {} \
-             scored {:.2} % and so did {} other method(s) ({}), so a prior, not the data, made \
-             the choice (a tie goes to {preferred} when it is among the best, else to the earlier \
-             candidate); training data from more groups (walkers, recordings, sessions) let the \
-             validation tell them apart, or fix the method with ",
-            chosen.method(),
-            100.0 * chosen.accuracy.mean,
-            others.len(),
-            names.join(", ")
-        ))
-        .opt(Opt::Features)
-        .text(" and ")
-        .opt(Opt::Classifier),
-    )
-}
-
-/// The warning for selections whose validation scheme was passed over because a held-out fold held a
-/// class its training part lacked (`None` when none was): one line, in how many models, the first
-/// class and fold, and what was used instead.
-pub fn validation_warning(selections: &[Selection]) -> Option<Message> {
-    let fell: Vec<&ValidationFallback> = selections
-        .iter()
-        .filter_map(|selection| selection.fallback.as_ref())
-        .collect();
-    let first = fell.first()?;
-    let (class, fold) = first.unseen.first()?;
-    let models = if selections.len() == 1 {
-        String::new()
-    } else {
-        format!("in {} of {} models, ", fell.len(), selections.len())
-    };
-    let more = match first.unseen.len() {
-        1 => String::new(),
-        n => format!(" (and {} other class(es) the same way)", n - 1),
-    };
-    let what = first.wanted.as_str();
-    Some(
-        Message::from(format!(
-            "{models}the automatic choice validated its candidates by {} instead of {}: holding \
-             out {what} {fold} leaves no training image of class {class}{more}, so every candidate \
-             would score 0 on it; images of one {what} may now be on both sides of a fold, which \
-             makes the internal estimate optimistic (",
-            first.used.describe(),
-            first.wanted.describe()
-        ))
-        .opt_text(Opt::ValidateBy, first.used.as_str())
-        .text(" chooses this without a warning)"),
-    )
-}
-
 /// The paper's method (1-D |FFT| + Parzen window, no intensity transform, the candidates' own number
 /// of components) among a selection's scores, with its index.
 pub fn paper_score(selection: &Selection) -> Option<(usize, &CandidateScore)> {
@@ -598,7 +444,6 @@ mod tests {
     #![allow(clippy::unwrap_used)]
 
     use super::*;
-    use presrs_io::message::Face;
 
     #[test]
     fn whole_stances_and_series_add_rocket_with_ridge_to_the_search() {
@@ -795,30 +640,6 @@ mod tests {
         assert!(Method::paper().check_validation_set(none, 3).is_ok());
     }
 
-    /// A candidate of `features` + `classifier` scored `mean` on every fold.
-    fn scored(features: &str, classifier: &str, mean: f64) -> CandidateScore {
-        CandidateScore {
-            features: features.into(),
-            classifier: classifier.into(),
-            config: TrainConfig::default(),
-            accuracy: presrs_core::metrics::MeanStd { mean, std: 0.0 },
-            per_fold: (0..3).map(|k| (format!("g{k}"), mean)).collect(),
-            error: None,
-            skipped: false,
-            dropped_early: false,
-        }
-    }
-
-    fn selection(scores: Vec<CandidateScore>) -> Selection {
-        Selection {
-            method: "three stratified 70/30 splits".into(),
-            chosen: 0,
-            scores,
-            fallback: None,
-            cost: None,
-        }
-    }
-
     /// A tie for the best goes to MiniRocket on scaled channels with the SVM when it is a candidate
     /// (whole samples, or `--classifier svm`), and to the earlier candidate otherwise (frames).
     #[test]
@@ -844,47 +665,5 @@ mod tests {
         };
         let with_ridge = ridge.candidates_for(grid, false, &stance).unwrap();
         assert_eq!(ridge.auto_choice(&with_ridge).preferred_on_tie, None);
-    }
-
-    /// A tie in validation is said, with how many models it decided, the tied methods (the first
-    /// three, then a count), and the way out in each face's words; a clear winner says nothing.
-    #[test]
-    fn a_choice_the_validation_could_not_make_is_said() {
-        let tied = selection(
-            ["ridge_raw", "ridge", "svm", "lda", "knn"]
-                .iter()
-                .map(|classifier| scored("rocket_unscaled", classifier, 1.0))
-                .collect(),
-        );
-        let clear = selection(vec![
-            scored("rocket_unscaled", "ridge_raw", 1.0),
-            scored("rocket_unscaled", "svm", 0.9),
-        ]);
-        assert_eq!(tie_warning(std::slice::from_ref(&clear)), None);
-        let warning = tie_warning(&[tied.clone(), clear, tied]).unwrap();
-        let cli = warning.render(Face::Cli);
-        assert!(
-            cli.starts_with(
-                "in 2 of 3 models, the automatic choice's validation could not rank its best \
-                 candidates: rocket_unscaled + ridge_raw scored 100.00 % and so did 4 other \
-                 method(s) (rocket_unscaled + ridge, rocket_unscaled + svm, rocket_unscaled + lda, \
-                 and 1 more), so a prior, not the data, made the choice (a tie goes to rocket + svm \
-                 when it is among the best, else to the earlier candidate)"
-            ),
-            "{cli}"
-        );
-        assert!(
-            cli.ends_with("fix the method with --features and --classifier"),
-            "{cli}"
-        );
-        let python = warning.render(Face::Python);
-        assert!(
-            python.ends_with("fix the method with features= and classifier="),
-            "{python}"
-        );
-        assert_eq!(
-            selection_warnings(&[selection(vec![scored("fft1d", "pwe", 0.8)])]),
-            []
-        );
     }
 }
