@@ -260,6 +260,35 @@ mod tests {
         }
     }
 
+    /// Every option that names a value, or has a default other than a flag's, takes a value: clap makes
+    /// a `bool` field a value-less flag whatever its parser (`--novelty on|off` once refused `off`).
+    #[test]
+    fn every_option_that_names_a_value_takes_one() {
+        fn check(command: &clap::Command, path: &str) {
+            for arg in command.get_arguments() {
+                if arg.get_action().takes_values() || arg.is_positional() {
+                    continue;
+                }
+                let name = format!("{path} --{}", arg.get_long().unwrap_or_default());
+                // (the derive names every field's value after it; another name was given on purpose)
+                let derived = arg.get_id().as_str().to_uppercase();
+                let named = arg
+                    .get_value_names()
+                    .is_some_and(|names| names.iter().any(|n| n.as_str() != derived));
+                assert!(!named, "{name} names a value but is a flag");
+                let flag_defaults = arg
+                    .get_default_values()
+                    .iter()
+                    .all(|v| v == "false" || v == "true");
+                assert!(flag_defaults, "{name} has a default value but is a flag");
+            }
+            for sub in command.get_subcommands() {
+                check(sub, &format!("{path} {}", sub.get_name()));
+            }
+        }
+        check(&command(), "presrs");
+    }
+
     #[test]
     fn help_points_to_nothing_a_user_does_not_have() {
         for (name, help) in helps() {
