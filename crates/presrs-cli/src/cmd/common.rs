@@ -32,8 +32,9 @@ pub struct PipelineArgs {
     /// four poolings); join
     /// several with + (fft1d+glcm); or auto (the default: chosen by validation inside the training data,
     /// by group or condition (--validate-by), among every family: the FFT ones first, then fft1d after
-    /// sqrt and log1p, then glcm and fft2d_polar+glcm, as far as --budget allows).
-    /// `--features fft1d --classifier pwe` is the paper's method.
+    /// sqrt and log1p, then glcm and fft2d_polar+glcm, as far as --budget allows; with --sample stance
+    /// or series among rocket_unscaled and rocket, or with --full-search every family, the random
+    /// convolutions first). `--features fft1d --classifier pwe` is the paper's method.
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<FeatureChoice>())]
     pub features: FeatureChoice,
     /// Classifier: pwe (Parzen window, the paper's), mle (Gaussian, shrunk full covariance per class),
@@ -43,7 +44,9 @@ pub struct PipelineArgs {
     /// data among the first five).
     #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<ClassifierChoice>())]
     pub classifier: ClassifierChoice,
-    /// With auto: score every candidate whatever the time it takes (the same as --budget 0).
+    /// With auto: score every candidate whatever the time it takes (as --budget 0), and with --sample
+    /// stance or series race every family (MultiRocket and the frame families too), not MiniRocket's
+    /// two alone.
     #[arg(long)]
     pub full_search: bool,
     /// With auto: seconds the automatic choice may spend scoring its candidates, per model trained (in

@@ -18,7 +18,7 @@ use crate::printer::profile_summary::profile_summary;
 #[derive(Debug, clap::Args)]
 #[command(
     after_help = "By default the feature family and classifier are chosen automatically by validation \
-inside the training data (--features auto --classifier auto; --full-search: no time budget).\n\n\
+inside the training data (--features auto --classifier auto; --full-search: no time budget and, on whole samples, every family).\n\n\
 Examples (sim/ made by `presrs simulate --out sim`; the second is the paper's method and protocol: \
 1-D |FFT| + Parzen window, 20 images per terrain from gait G2, 7 of them for choosing sigma):
   presrs train --manifest sim/manifest.csv --out g2.model.json
