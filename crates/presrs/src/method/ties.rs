@@ -6,7 +6,7 @@ use presrs_core::pipeline::CheckedTrainConfig;
 
 /// The method a tie for the best validation score goes to, when it is among the tied candidates:
 /// MiniRocket on scaled channels with the SVM on its principal components. A prior, for when the
-/// validation cannot rank (inside one walker of `jiku-walk` 42 methods score 100 %): of the
+/// validation cannot rank (inside one walker of `jiku-walk` most candidates score 100 %): of the
 /// random-convolution methods, it has the best mean over the three shared whole-sample sets
 /// (`jiku-walk`, `icub20`, the simulator's stances) and the best worst set (bench/real/RESULTS.md, "A
 /// prior for ties"). Without it, ties go to the earlier candidate. Scoring keeps the candidates' order (the cheap ones first).
