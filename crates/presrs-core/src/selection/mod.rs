@@ -65,7 +65,8 @@ pub const RACE_Z: f64 = 2.0;
 /// What an automatic choice chooses among, and how.
 #[derive(Clone, Copy, Debug)]
 pub struct AutoChoice<'c> {
-    /// In order of preference: ties go to the earlier, and a budget cuts from the end.
+    /// In order of preference: ties go to the earlier (unless to `preferred_on_tie`), and a budget cuts
+    /// from the end.
     pub candidates: &'c [CheckedTrainConfig],
     pub by: ValidateBy,
     /// Time for scoring the candidates; `None`: no limit (every candidate is scored, and the choice is
@@ -152,12 +153,14 @@ fn one_standard_error(scores: &[CandidateScore], best: usize) -> usize {
 
 /// `preferred` when it scored as well as `best` (within [`record::TIE_TOLERANCE`]), else `best`.
 fn preferred_if_tied(scores: &[CandidateScore], best: usize, preferred: Option<usize>) -> usize {
-    match preferred {
-        Some(p)
-            if scores[p].is_contender()
-                && scores[best].is_contender()
-                && scores[p].accuracy.mean
-                    >= scores[best].accuracy.mean - record::TIE_TOLERANCE =>
+    let (Some(p), Some(top)) = (preferred, scores.get(best)) else {
+        return best;
+    };
+    match scores.get(p) {
+        Some(candidate)
+            if candidate.is_contender()
+                && top.is_contender()
+                && candidate.accuracy.mean >= top.accuracy.mean - record::TIE_TOLERANCE =>
         {
             p
         }

@@ -1015,6 +1015,8 @@ fn the_preferred_candidate_wins_a_tie_and_only_a_tie() {
     let mut dropped = scores.clone();
     dropped[1].dropped_early = true;
     assert_eq!(preferred_if_tied(&dropped, 0, Some(1)), 0);
+    // a preference past the scores is none
+    assert_eq!(preferred_if_tied(&scores, 0, Some(7)), 0);
 }
 
 /// End to end: two candidates the validation cannot tell apart (the same method twice) go to the
