@@ -92,17 +92,31 @@ pub fn tie_warning(selections: &[Selection]) -> Option<Message> {
         format!("in {} of {} models, ", tied.len(), selections.len())
     };
     let mut names: Vec<String> = others.iter().take(TIES_NAMED).map(|s| s.method()).collect();
-    let preferred = format!("{} + {}", PREFERRED_ON_TIE.0, PREFERRED_ON_TIE.1.as_str());
+    // The prior is named where it was a candidate (whole samples); elsewhere the order alone decides.
+    let (features, classifier) = PREFERRED_ON_TIE;
+    let preferred_scored = first.scores.iter().any(|score| {
+        score.features == features.as_str()
+            && score.classifier == classifier.as_str()
+            && score.config.preprocess.intensity.is_none()
+    });
+    let prior = if preferred_scored {
+        format!(
+            "a prior, not the data, made the choice (a tie goes to {features} + {} when it is among \
+             the best, else to the earlier candidate)",
+            classifier.as_str()
+        )
+    } else {
+        "the candidates' order, not the data, made the choice".to_owned()
+    };
     if others.len() > TIES_NAMED {
         names.push(format!("and {} more", others.len() - TIES_NAMED));
     }
     Some(
         Message::from(format!(
             "{models}the automatic choice's validation could not rank its best candidates: {} \
-             scored {:.2} % and so did {} other method(s) ({}), so a prior, not the data, made \
-             the choice (a tie goes to {preferred} when it is among the best, else to the earlier \
-             candidate); training data from more groups (walkers, recordings, sessions) let the \
-             validation tell them apart, or fix the method with ",
+             scored {:.2} % and so did {} other method(s) ({}), so {prior}; training data from \
+             more groups (walkers, recordings, sessions) let the validation tell them apart, or fix \
+             the method with ",
             chosen.method(),
             100.0 * chosen.accuracy.mean,
             others.len(),
@@ -184,12 +198,14 @@ mod tests {
     /// three, then a count), and the way out in each face's words; a clear winner says nothing.
     #[test]
     fn a_choice_the_validation_could_not_make_is_said() {
-        let tied = selection(
+        // (the preferred `rocket` + `svm` was a candidate, below the tie)
+        let mut tied = selection(
             ["ridge_raw", "ridge", "svm", "lda", "knn"]
                 .iter()
                 .map(|classifier| scored("rocket_unscaled", classifier, 1.0))
                 .collect(),
         );
+        tied.scores.push(scored("rocket", "svm", 0.95));
         let clear = selection(vec![
             scored("rocket_unscaled", "ridge_raw", 1.0),
             scored("rocket_unscaled", "svm", 0.9),
@@ -219,6 +235,19 @@ mod tests {
         assert_eq!(
             selection_warnings(&[selection(vec![scored("fft1d", "pwe", 0.8)])]),
             []
+        );
+        // Where the preferred method was no candidate (frames), the order alone is named.
+        let frames = selection(vec![
+            scored("fft2d_polar", "pwe", 0.8),
+            scored("fft2d_polar", "knn", 0.8),
+        ]);
+        let cli = tie_warning(&[frames]).unwrap().render(Face::Cli);
+        assert!(
+            cli.contains(
+                "and so did 1 other method(s) (fft2d_polar + knn), so the candidates' order, not \
+                 the data, made the choice; training data"
+            ),
+            "{cli}"
         );
     }
 }
