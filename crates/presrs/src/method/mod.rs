@@ -56,17 +56,17 @@ pub const CANDIDATE_FEATURES: [&[FeatureKind]; 5] = [
 /// held-out gait) or, without the frame families, `multirocket_unscaled` + `ridge_raw` (59.6 %), where
 /// MiniRocket + `ridge_raw` gives 99.6 %; on `icub20` the frame families' SVMs won validation by 0.5-1
 /// point and tested 0.7 below MiniRocket + `ridge_raw`. The race of MiniRocket alone: the simulator
-/// 84.7 -> 94.6 %, `jiku-walk` and `icub20` unchanged (98.1, 97.3 %) in half the time on `icub20`
+/// 84.7 -> 94.6 %, `jiku-walk` and `icub20` unchanged (98.1, 97.3 %) with fewer candidates to score
 /// (bench/real/RESULTS.md, "MiniRocket alone in the default race").
 pub const DEFAULT_WHOLE_SAMPLE_FEATURES: [FeatureKind; 2] =
     [FeatureKind::ROCKET_UNSCALED, FeatureKind::ROCKET];
 
-/// The random-convolution families whole stances and series add to an automatic choice, in order of
-/// preference (ties go to the earlier; a time budget cuts from the end), each with whether it is paired
-/// with every classifier (or with the ridge classifiers only): MiniRocket before MultiRocket (on the
-/// shared sets MultiRocket scored lower, and its features cost about twice MiniRocket's: on `icub20`
-/// under the default budget it took the time the scaled MiniRocket needed; Tan et al. 2022 report it
-/// ahead on the UCR/UEA archives, so it is validated when the budget allows), and for each the channels
+/// The random-convolution families a full search (and a comparison) on whole stances and series adds
+/// before the frame families, in order of preference (ties go to the earlier; a time budget cuts from
+/// the end), each with whether it is paired with every classifier (or with the ridge classifiers only):
+/// MiniRocket before MultiRocket (on the shared sets MultiRocket scored lower, and its features cost
+/// about twice MiniRocket's; Tan et al. 2022 report it ahead on the UCR/UEA archives, so a full search
+/// validates it; the default race has MiniRocket's alone, [`DEFAULT_WHOLE_SAMPLE_FEATURES`]), and for each the channels
 /// in their own units before the channels scaled by their spread (aeon's input; on `jiku-walk` the
 /// scaling cost 2-5 points, sensors whose channels differ in units may need it, so both are validated).
 pub const WHOLE_SAMPLE_FEATURES: [(FeatureKind, bool); 4] = [

@@ -94,10 +94,10 @@ pub fn tie_warning(selections: &[Selection]) -> Option<Message> {
     let mut names: Vec<String> = others.iter().take(TIES_NAMED).map(|s| s.method()).collect();
     // The prior is named where it was a candidate (whole samples); elsewhere the order alone decides.
     let (features, classifier) = PREFERRED_ON_TIE;
+    // (by kind, whatever the intensity transform, as `ties::preferred_on_tie` finds it)
     let preferred_scored = first.scores.iter().any(|score| {
-        score.features == features.as_str()
-            && score.classifier == classifier.as_str()
-            && score.config.preprocess.intensity.is_none()
+        score.config.features.kind() == Some(features)
+            && score.config.classifier.kind() == classifier
     });
     let prior = if preferred_scored {
         format!(
@@ -170,12 +170,19 @@ mod tests {
     use presrs_core::pipeline::TrainConfig;
     use presrs_io::message::Face;
 
-    /// A candidate of `features` + `classifier` scored `mean` on every fold.
+    /// A candidate of `features` + `classifier` (its words and its configuration) scored `mean` on every
+    /// fold.
     fn scored(features: &str, classifier: &str, mean: f64) -> CandidateScore {
+        use presrs_core::classifier::ClassifierKind;
+        use presrs_core::features::FeatureKind;
         CandidateScore {
             features: features.into(),
             classifier: classifier.into(),
-            config: TrainConfig::default(),
+            config: TrainConfig {
+                features: FeatureKind::parse(features).unwrap().default_config(),
+                classifier: ClassifierKind::parse(classifier).unwrap().default_config(),
+                ..TrainConfig::default()
+            },
             accuracy: presrs_core::metrics::MeanStd { mean, std: 0.0 },
             per_fold: (0..3).map(|k| (format!("g{k}"), mean)).collect(),
             error: None,
