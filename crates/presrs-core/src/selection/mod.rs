@@ -82,9 +82,9 @@ pub struct AutoChoice<'c> {
     pub scoring_samples: Option<usize>,
     /// Told each stage as it begins, for a progress display.
     pub on_stage: Option<StageObserver<'c>>,
-    /// The candidate (an index into `candidates`) that wins a tie for the best score under
-    /// [`ChoiceRule::Best`], where the earlier candidate would otherwise: a prior for when the
-    /// validation cannot rank the best candidates. `None`: ties go to the earlier.
+    /// The candidate (an index into `candidates`) that wins a tie for the best score, under either
+    /// [`ChoiceRule`], where the order would otherwise decide: a prior for when the validation cannot
+    /// rank the best candidates. `None`: the rule alone decides.
     pub preferred_on_tie: Option<usize>,
 }
 
@@ -109,18 +109,26 @@ impl std::fmt::Debug for StageObserver<'_> {
     }
 }
 
-/// How the winner is picked from the candidates' fold accuracies.
+/// How the winner is picked from the candidates' fold accuracies. Under both, a tie for the best
+/// goes to the preferred candidate when there is one ([`AutoChoice::preferred_on_tie`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ChoiceRule {
     /// The highest mean (ties to the earlier candidate).
-    #[default]
     Best,
-    /// The earliest candidate (the search lists the paper's method first and the costlier families
-    /// last) whose mean is within one standard error of the best's (its folds' spread over the square
-    /// root of their number): on small validation sets, differences inside that are noise.
+    /// The earliest candidate (the search lists the paper's method first, the costlier families last,
+    /// and on whole samples the peers' pairing first) whose mean is within one standard error of the
+    /// best's (its folds' spread over the square root of their number): differences inside that are
+    /// noise, and the highest of a dozen noisy scores is more often a lucky candidate than a better
+    /// one. With fewer than [`ONE_SE_MIN_FOLDS`] folds, the best (one difference is no estimate of
+    /// the spread).
+    #[default]
     OneStandardError,
 }
+
+/// The fewest validation folds whose spread the one-standard-error rule trusts (with two, the standard
+/// error is one difference: a tolerance as noisy as the scores it is meant to see through).
+pub const ONE_SE_MIN_FOLDS: usize = 3;
 
 impl ChoiceRule {
     pub const NAMES: [&'static str; 2] = ["best", "one-se"];
@@ -141,9 +149,13 @@ impl std::str::FromStr for ChoiceRule {
     }
 }
 
-/// The earliest scored candidate within one standard error of `best`'s mean.
+/// The earliest scored candidate within one standard error of `best`'s mean; `best` itself when it
+/// was scored on fewer than [`ONE_SE_MIN_FOLDS`] folds.
 fn one_standard_error(scores: &[CandidateScore], best: usize) -> usize {
-    let folds = scores[best].per_fold.len().max(1) as f64;
+    if scores[best].per_fold.len() < ONE_SE_MIN_FOLDS {
+        return best;
+    }
+    let folds = scores[best].per_fold.len() as f64;
     let threshold = scores[best].accuracy.mean - scores[best].accuracy.std / folds.sqrt();
     scores
         .iter()
@@ -168,11 +180,28 @@ fn preferred_if_tied(scores: &[CandidateScore], best: usize, preferred: Option<u
     }
 }
 
+/// The winner by `rule` from `scores`, whose highest mean is `best`'s: a tie for it to `preferred` (see
+/// [`preferred_if_tied`]), else `best` or, under one standard error, the earliest close candidate.
+fn choose(
+    scores: &[CandidateScore],
+    best: usize,
+    rule: ChoiceRule,
+    preferred: Option<usize>,
+) -> usize {
+    let tied = preferred_if_tied(scores, best, preferred);
+    match rule {
+        _ if tied != best || !scores[best].is_contender() => tied,
+        ChoiceRule::Best => best,
+        ChoiceRule::OneStandardError => one_standard_error(scores, best),
+    }
+}
+
 /// How many of the best candidates are scored again with other numbers of principal components.
 pub const REFINED: usize = 3;
 
 impl<'c> AutoChoice<'c> {
-    /// Every candidate scored, validated as `by` says.
+    /// Every candidate scored, validated as `by` says, the winner the best (`with_rule` for another
+    /// rule).
     pub fn new(candidates: &'c [CheckedTrainConfig], by: ValidateBy) -> Self {
         Self {
             candidates,
@@ -343,13 +372,7 @@ fn select_on(
             chosen = i;
         }
     }
-    match choice.rule {
-        ChoiceRule::OneStandardError if scores[chosen].is_contender() => {
-            chosen = one_standard_error(&scores, chosen);
-        }
-        ChoiceRule::Best => chosen = preferred_if_tied(&scores, chosen, preferred_on_tie),
-        ChoiceRule::OneStandardError => {}
-    }
+    chosen = choose(&scores, chosen, choice.rule, preferred_on_tie);
     if !scores[chosen].is_contender() {
         // Every candidate failed (or, in a race, failed on a later fold after the others were
         // dropped); the first failure's reason stands for them.

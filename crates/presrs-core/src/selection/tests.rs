@@ -357,6 +357,15 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
     assert_eq!(one_standard_error(&raced, 3), 3);
     let far = [score(0.80, 0.0, None), score(0.95, 0.01, None)];
     assert_eq!(one_standard_error(&far, 1), 1);
+    // with two folds the spread is one difference: the best stands
+    let two_folds: Vec<CandidateScore> = scores
+        .iter()
+        .map(|score| CandidateScore {
+            per_fold: score.per_fold.clone().into_iter().take(2).collect(),
+            ..score.clone()
+        })
+        .collect();
+    assert_eq!(one_standard_error(&two_folds, 3), 3);
     assert_eq!(
         "one-se".parse::<ChoiceRule>(),
         Ok(ChoiceRule::OneStandardError)
@@ -1019,9 +1028,37 @@ fn the_preferred_candidate_wins_a_tie_and_only_a_tie() {
     assert_eq!(preferred_if_tied(&scores, 0, Some(7)), 0);
 }
 
+/// Under either rule a tie for the best goes to the preferred candidate; without a tie, `best` keeps
+/// the best and `one-se` takes the earliest close candidate (not the preferred one, however close).
+#[test]
+fn both_rules_give_a_tie_to_the_preferred_candidate_and_one_se_the_rest_to_the_order() {
+    let with_spread = |mut score: CandidateScore, std: f64| {
+        score.accuracy.std = std;
+        score
+    };
+    let tied = [
+        scored("rocket_unscaled", "ridge_raw", 51, 0.97),
+        scored("rocket_unscaled", "svm", 51, 0.98),
+        scored("rocket", "svm", 51, 0.98),
+    ];
+    for rule in [ChoiceRule::Best, ChoiceRule::OneStandardError] {
+        assert_eq!(choose(&tied, 1, rule, Some(2)), 2, "{rule:?}");
+    }
+    // no tie: the best's standard error (0.02 over 3 folds: 0.0115) reaches the first candidate
+    let close = [
+        scored("rocket_unscaled", "ridge_raw", 51, 0.97),
+        with_spread(scored("rocket_unscaled", "svm", 51, 0.98), 0.02),
+        scored("rocket", "svm", 51, 0.975),
+    ];
+    assert_eq!(choose(&close, 1, ChoiceRule::Best, Some(2)), 1);
+    assert_eq!(choose(&close, 1, ChoiceRule::OneStandardError, Some(2)), 0);
+    assert_eq!(choose(&close, 1, ChoiceRule::OneStandardError, None), 0);
+    assert_eq!(ChoiceRule::default(), ChoiceRule::OneStandardError);
+}
+
 /// End to end: two candidates the validation cannot tell apart (the same method twice) go to the
-/// earlier, or to the preferred one when there is one; under `one-se` the order decides; a
-/// preference past the candidates is none.
+/// earlier, or to the preferred one when there is one, under either rule; a preference past the
+/// candidates is none.
 #[test]
 fn select_gives_a_tie_to_the_preferred_candidate() {
     let frames = four_class_frames(48, 21);
@@ -1036,8 +1073,7 @@ fn select_gives_a_tie_to_the_preferred_candidate() {
     assert_eq!(choose(choice), 0);
     assert_eq!(choose(choice.with_preferred_on_tie(Some(1))), 1);
     assert_eq!(choose(choice.with_preferred_on_tie(Some(2))), 0);
-    let one_se = choice
-        .with_preferred_on_tie(Some(1))
-        .with_rule(ChoiceRule::OneStandardError);
+    let one_se = choice.with_rule(ChoiceRule::OneStandardError);
     assert_eq!(choose(one_se), 0);
+    assert_eq!(choose(one_se.with_preferred_on_tie(Some(1))), 1);
 }
