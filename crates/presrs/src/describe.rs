@@ -39,6 +39,14 @@ pub fn describe_model(file: &ModelFile) -> String {
             100.0 * chosen.accuracy.std,
             selection.scores.len()
         ));
+        if let Some(best) = selection.best_above_chosen() {
+            line(format!(
+                "  {} validated higher ({:.2} %), within one standard error: the earlier candidate \
+                 was kept (the one-standard-error rule)",
+                best.method(),
+                100.0 * best.accuracy.mean
+            ));
+        }
     }
     if let Some(early) = early_summary(model) {
         line(early);

@@ -46,6 +46,7 @@ pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usi
         ),
         _ => format!("chosen: {}", chosen.name()),
     });
+    lines.extend(higher_scored_note(selection));
     if let Some(note) = components_note(chosen, model, n_train) {
         lines.push(note);
     }
@@ -56,6 +57,17 @@ pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usi
     ));
     lines.extend(cost_line(selection));
     lines
+}
+
+/// Why the chosen candidate is not the highest-scoring one, when it is not (the one-standard-error rule).
+fn higher_scored_note(selection: &Selection) -> Option<String> {
+    let best = selection.best_above_chosen()?;
+    Some(format!(
+        "  {} scored higher ({:.2} %), but the chosen one is within one standard error of it and \
+         earlier in the search order (--choose one-se, the default; --choose best takes the highest)",
+        best.name(),
+        100.0 * best.accuracy.mean
+    ))
 }
 
 /// On how many samples the candidates were scored and where the time went: the scoring (what the
@@ -118,4 +130,45 @@ pub fn components_note(
         "the model keeps {kept} of the {asked} principal components asked for: {bound} (the \
          validation folds, trained on fewer {nouns}, may have kept fewer still)"
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use presrs_core::metrics::MeanStd;
+    use presrs_core::pipeline::TrainConfig;
+
+    fn scored(classifier: &str, mean: f64) -> CandidateScore {
+        CandidateScore {
+            features: "rocket_unscaled".into(),
+            classifier: classifier.into(),
+            config: TrainConfig::default(),
+            accuracy: MeanStd { mean, std: 0.01 },
+            per_fold: (0..4).map(|k| (format!("f{k}"), mean)).collect(),
+            error: None,
+            skipped: false,
+            dropped_early: false,
+        }
+    }
+
+    /// A choice below the best says which scored higher and which rule kept the earlier one; the best
+    /// chosen says nothing more.
+    #[test]
+    fn a_choice_below_the_best_names_the_best_and_the_rule() {
+        let mut selection = Selection {
+            method: "leave one group out".into(),
+            chosen: 0,
+            scores: vec![scored("ridge_raw", 0.978), scored("svm", 0.982)],
+            fallback: None,
+            cost: None,
+        };
+        let note = higher_scored_note(&selection).unwrap();
+        assert!(
+            note.contains("rocket_unscaled + svm, 51 dims scored higher (98.20 %)"),
+            "{note}"
+        );
+        assert!(note.contains("within one standard error") && note.contains("--choose best"));
+        selection.chosen = 1;
+        assert_eq!(higher_scored_note(&selection), None);
+    }
 }

@@ -165,10 +165,7 @@ impl Selection {
         let Some(chosen) = self.chosen().filter(|chosen| chosen.is_contender()) else {
             return Vec::new();
         };
-        let beaten = self.scores.iter().any(|score| {
-            score.is_contender() && score.accuracy.mean > chosen.accuracy.mean + TIE_TOLERANCE
-        });
-        if beaten {
+        if self.best_above_chosen().is_some() {
             return Vec::new();
         }
         let mut tied: Vec<&CandidateScore> = Vec::new();
@@ -183,6 +180,23 @@ impl Selection {
             }
         }
         tied
+    }
+
+    /// The best-scoring candidate when it scored above the chosen one: the one-standard-error rule
+    /// took an earlier candidate within the best's standard error ([`crate::selection::ChoiceRule`]).
+    /// `None` when the chosen candidate is (or ties) the best, or failed.
+    pub fn best_above_chosen(&self) -> Option<&CandidateScore> {
+        let chosen = self.chosen().filter(|chosen| chosen.is_contender())?;
+        let mut best: Option<&CandidateScore> = None;
+        for score in &self.scores {
+            let above = score.is_contender()
+                && score.accuracy.mean > chosen.accuracy.mean + TIE_TOLERANCE
+                && best.is_none_or(|best| score.accuracy.mean > best.accuracy.mean);
+            if above {
+                best = Some(score);
+            }
+        }
+        best
     }
 }
 

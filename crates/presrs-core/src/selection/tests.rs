@@ -994,9 +994,18 @@ fn the_methods_tied_with_the_chosen_one_are_named_once() {
         names(&selection),
         ["rocket + svm, 51 dims", "multirocket + ridge, 51 dims"]
     );
-    // a choice below the best (the one-standard-error rule's) is the rule's, not a tie
+    assert!(
+        selection.best_above_chosen().is_none(),
+        "the chosen one ties the best"
+    );
+    // a choice below the best (the one-standard-error rule's) is the rule's, not a tie, and names
+    // the best above it (the first of the best: failed and dropped candidates are not)
     selection.chosen = 4;
     assert!(selection.tied().is_empty());
+    let best = selection.best_above_chosen().map(CandidateScore::name);
+    assert_eq!(best.as_deref(), Some("rocket + ridge_raw, 51 dims"));
+    selection.chosen = 5;
+    assert!(selection.best_above_chosen().is_none(), "a failed choice");
     selection.chosen = 0;
     // a candidate alone at the top ties with nothing
     selection.scores[0].accuracy.mean = 1.0;
