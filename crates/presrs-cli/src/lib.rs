@@ -48,7 +48,8 @@ enum Command {
     /// Simulate the hopper on the paper's terrains and gaits; write TekScan movies and a manifest.
     #[command(after_help = "Example:\n  presrs simulate --out sim --seed 7")]
     Simulate(cmd::simulate::SimulateArgs),
-    /// Describe a recording: sensor, size, frames, period, units, load and the stance phases found.
+    /// Describe a recording: sensor, size, frames, period, units, load and the stance phases found (or
+    /// a model file).
     #[command(
         after_help = "Examples (sim/ made by `presrs simulate --out sim`; or any recording of yours):
   presrs inspect sim/recordings/wood_G2_000.asf

@@ -413,3 +413,37 @@ fn a_report_with_one_sample_per_file_says_what_it_did() {
         "{html}"
     );
 }
+
+/// A model file given to `inspect` is described (what it classifies and how, in text or JSON); given
+/// where a recording is read (`classify`'s files), it is named as a model file, not parsed as a text
+/// matrix ("expected a number, found `{`").
+#[test]
+fn inspect_describes_a_model_file_and_readers_name_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = write_image_set(dir.path(), (12, 12), 2, 6, 3, 0.0, 3);
+    let model = dir.path().join("m.json");
+    train_fixed(&manifest, &model);
+    let out = presrs(&["inspect", text(&model)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let description = stdout(&out);
+    assert!(description.starts_with("pwe classifier"), "{description}");
+    assert!(description.contains("fft1d"), "{description}");
+    let out = presrs(&["inspect", "--json", text(&model)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(json["model_file"], text(&model));
+    assert!(
+        json["description"][0]
+            .as_str()
+            .unwrap()
+            .starts_with("pwe classifier")
+    );
+    let out = presrs(&["classify", "--model", text(&model), text(&model)]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("m.json: a presrs model file, not a recording") && err.contains("inspect"),
+        "{err}"
+    );
+    assert!(!err.contains("expected a number"), "{err}");
+}

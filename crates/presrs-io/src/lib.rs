@@ -129,6 +129,9 @@ pub fn detect_kind(path: &Path, bytes: &[u8]) -> Result<FileKind, IoError> {
         }
         _ => {}
     }
+    if model_file::looks_like_model(bytes) {
+        return Err(IoError::unsupported(&name, model_file::MODEL_NOT_RECORDING));
+    }
     // Only the start of the file is needed to recognise a TekScan header.
     let head = &bytes[..bytes.len().min(64 * 1024)];
     if ext == "asf" || tekscan::looks_like_tekscan(&textutil::decode_text(head)) {

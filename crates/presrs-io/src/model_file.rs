@@ -95,6 +95,31 @@ pub fn load_model(path: &Path) -> Result<ModelFile, IoError> {
     parse_model(&bytes, &path.display().to_string())
 }
 
+/// Whether `bytes` (a file's first bytes are enough) start a presrs model file: a JSON object whose
+/// `format` field, which [`save_model`] writes first, is [`MODEL_FORMAT`].
+pub fn looks_like_model(bytes: &[u8]) -> bool {
+    let head = crate::textutil::decode_text(&bytes[..bytes.len().min(512)]);
+    let Some(object) = head.trim_start().strip_prefix('{') else {
+        return false;
+    };
+    let Some(after_key) = object.trim_start().strip_prefix("\"format\"") else {
+        return false;
+    };
+    after_key
+        .trim_start()
+        .strip_prefix(':')
+        .is_some_and(|value| {
+            value
+                .trim_start()
+                .starts_with(&format!("\"{MODEL_FORMAT}\""))
+        })
+}
+
+/// What a model file given where a recording was expected is told (words every face can show).
+pub const MODEL_NOT_RECORDING: &str = "a presrs model file, not a recording: give it where a model is \
+     asked for, and recordings where data are (`presrs inspect` describes a model file, as \
+     `Model.load(path).describe()` does in Python)";
+
 /// How to get a model, said when a file is not one (words every face can show).
 const TRAIN_ONE: &str =
     "train one with `presrs train` (or `presrs.Model.train` and `save` in Python)";
@@ -189,6 +214,41 @@ mod tests {
             },
         );
         serde_json::to_vec(&file).unwrap()
+    }
+
+    /// A model file is recognised from its first bytes, compact or pretty-printed, and so is nothing
+    /// else: other JSON, a manifest, a text matrix; read as a recording, it is named as a model.
+    #[test]
+    fn a_model_file_is_recognised_from_its_first_bytes_and_refused_as_a_recording() {
+        let compact = model_bytes();
+        assert!(looks_like_model(&compact));
+        let file: ModelFile = serde_json::from_slice(&compact).unwrap();
+        let pretty = serde_json::to_vec_pretty(&file).unwrap();
+        assert!(looks_like_model(&pretty[..100]));
+        for other in [
+            &b"{\"format\": \"presrs-eval-draws\"}"[..],
+            b"{\"model\": {\"format\": \"presrs-model\"}}",
+            b"path,label\na.asf,wood\n",
+            b"1 2 3\n4 5 6\n",
+            b"",
+        ] {
+            assert!(
+                !looks_like_model(other),
+                "{}",
+                String::from_utf8_lossy(other)
+            );
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.json");
+        std::fs::write(&path, &pretty).unwrap();
+        let err = crate::read_recording(&path).unwrap_err().to_string();
+        assert!(
+            err.starts_with(&format!(
+                "{}: a presrs model file, not a recording",
+                path.display()
+            )),
+            "{err}"
+        );
     }
 
     #[test]
