@@ -50,8 +50,9 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
     random draw (1 by default, as the command line's). ``image_shape`` says how to unflatten a 2-D ``X`` (one of its sizes may be ``-1``);
     ``validate_by`` how the automatic choice validates (``auto``, ``group``, ``condition``, ``split``;
     give ``groups`` to ``fit``); ``budget`` the seconds it may spend (``None``: no limit, the choice
-    independent of the machine); ``choose`` how it picks (``one-se``, the default: the earliest
-    candidate within one standard error of the best; or ``best``). ``sample`` (``frame``, ``stance``, ``series``),
+    independent of the machine); ``choose`` how it picks (``best``; ``one-se``: the earliest
+    candidate within one standard error of the best; ``auto``, the default: ``one-se`` on stances and
+    series, ``best`` on frames). ``sample`` (``frame``, ``stance``, ``series``),
     ``stance_length`` and ``series_axis``: what a sample is, as in :meth:`presrs.Model.train`.
     """
 
@@ -67,7 +68,7 @@ class TerrainClassifier(ClassifierMixin, BaseEstimator):
         image_shape=None,
         validate_by="auto",
         budget=60.0,
-        choose="one-se",
+        choose="auto",
         sample="frame",
         stance_length=None,
         series_axis=None,

@@ -153,7 +153,7 @@ impl Evaluation {
 #[pyo3(signature = (data, labels = None, *, groups = None, conditions = None, leave_one_out = None,
     train_condition = None, per_class = None, validation = 0.35, repeats = 10, seed = 1,
     features = "auto", classifier = "auto", dims = None, crop = "auto", full_search = false,
-    validate_by = "auto", budget = Some(60.0), choose = "one-se", sample = "frame",
+    validate_by = "auto", budget = Some(60.0), choose = "auto", sample = "frame",
     stance_length = None, series_axis = None, stance_frame = None, include_partial = false,
     one_sample_per_file = false, segment_params = None, lenient = false, axes = None, topic = None,
     frame_period_s = None, keep_dead_sensels = false, progress = None))]

@@ -231,9 +231,10 @@ impl Model {
     /// `validate_by` (`auto`, `group`, `condition`, `split`): how the automatic choice validates its
     /// candidates; `auto` leaves one group out when there are 3 or more groups, else one condition.
     /// `budget`: seconds the automatic choice may spend scoring candidates (the texture families,
-    /// scored last, are cut first, with a warning); `None` or 0: no limit. `choose`: `one-se` (the
-    /// earliest candidate within one standard error of the highest validation mean; that highest with
-    /// fewer than three validation folds) or `best` (the highest).
+    /// scored last, are cut first, with a warning); `None` or 0: no limit. `choose`: `best` (the
+    /// highest validation mean), `one-se` (the earliest candidate within one standard error of it; the
+    /// highest with fewer than three validation folds) or `auto` (`one-se` on stances and series,
+    /// `best` on frames).
     /// `sample`: what an item of `images` is: `frame` (one image), `stance` (a stance's movie
     /// `(frames, rows, cols)`, summarised over time as `presrs train --sample stance` does, laid into
     /// `stance_length` frames, by default the longest's) or `series` (channels x time;
@@ -241,7 +242,7 @@ impl Model {
     #[staticmethod]
     #[pyo3(signature = (images, labels, *, features = "auto", classifier = "auto", groups = None,
         conditions = None, seed = 1, dims = None, per_class = None, validation = 0.35, crop = "auto",
-        full_search = false, validate_by = "auto", budget = Some(60.0), choose = "one-se",
+        full_search = false, validate_by = "auto", budget = Some(60.0), choose = "auto",
         sample = "frame", stance_length = None, series_axis = None, novelty = true))]
     #[allow(clippy::too_many_arguments)]
     fn train(

@@ -54,13 +54,14 @@ pub struct PipelineArgs {
     /// 0: no limit (every candidate is tried, and the choice does not depend on the machine's speed).
     #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_budget)]
     pub budget: Budget,
-    /// With auto: how the winner is picked from the validation scores: one-se (the earliest candidate
-    /// in the search order, which lists the paper's method first, the costlier families last and on
-    /// whole samples MiniRocket with ridge first, within one standard error of the best; the best with
-    /// fewer than 3 validation folds) or best (the highest mean). Under both a tie for the best goes to
-    /// the prior (rocket + svm on whole samples)
-    #[arg(long, default_value = "one-se", value_parser = |t: &str| t.parse::<presrs::method::ChoiceRule>())]
-    pub choose: presrs::method::ChoiceRule,
+    /// With auto: how the winner is picked from the validation scores: best (the highest mean),
+    /// one-se (the earliest candidate in the search order, which lists the paper's method first, the
+    /// costlier families last and on whole samples MiniRocket with ridge first, within one standard
+    /// error of the best; the best with fewer than 3 validation folds) or auto (one-se on stances and
+    /// series, best on frames). Under each a tie for the best goes to the prior (rocket + svm on whole
+    /// samples)
+    #[arg(long, default_value = "auto", value_parser = |t: &str| t.parse::<presrs::method::Choose>())]
+    pub choose: presrs::method::Choose,
     /// Principal components kept, at least 1 (at most the number of training images minus one, and the
     /// number of features: a larger value is lowered to that, with a warning when given) [default: 51];
     /// ridge has no PCA step and ignores it.

@@ -65,6 +65,24 @@ pub fn early_table(early: &EarlyEvaluation) -> String {
         100.0 * auto.decided_by_mid_stance
     );
     let _ = writeln!(out, "auto's rule by fold: {}", fold_rules(auto));
+    if let Some(ahead) = early.frame_ahead() {
+        let points: Vec<String> = ahead.points.iter().map(usize::to_string).collect();
+        let above = ahead.above_whole.map_or_else(String::new, |(k, accuracy)| {
+            format!(
+                ", and at {k} frames above the whole stance ({:.1} against {:.1} %)",
+                100.0 * accuracy,
+                100.0 * early.whole_accuracy
+            )
+        });
+        let _ = writeln!(
+            out,
+            "the one-frame model is ahead at {} frames after touchdown (by up to {:.1} points, past 2 \
+             standard errors){above}: one frame carries the class better than the stance's summary \
+             there; --sample frame decides from one frame, --sample auto races the two",
+            points.join(", "),
+            100.0 * ahead.largest_lead
+        );
+    }
     if let Some(best) = auto.hindsight_best_by(0.5) {
         let threshold = best
             .threshold

@@ -64,7 +64,8 @@ fn higher_scored_note(selection: &Selection) -> Option<String> {
     let best = selection.best_above_chosen()?;
     Some(format!(
         "  {} scored higher ({:.2} %), but the chosen one is within one standard error of it and \
-         earlier in the search order (--choose one-se, the default; --choose best takes the highest)",
+         earlier in the search order (--choose one-se, the default on stances and series; --choose best \
+         takes the highest)",
         best.name(),
         100.0 * best.accuracy.mean
     ))

@@ -115,6 +115,7 @@ impl std::fmt::Debug for StageObserver<'_> {
 #[serde(rename_all = "snake_case")]
 pub enum ChoiceRule {
     /// The highest mean (ties to the earlier candidate).
+    #[default]
     Best,
     /// The earliest candidate (the search lists the paper's method first, the costlier families last,
     /// and on whole samples the peers' pairing first) whose mean is within one standard error of the
@@ -122,7 +123,6 @@ pub enum ChoiceRule {
     /// noise, and the highest of a dozen noisy scores is more often a lucky candidate than a better
     /// one. With fewer than [`ONE_SE_MIN_FOLDS`] folds, the best (one difference is no estimate of
     /// the spread).
-    #[default]
     OneStandardError,
 }
 

@@ -1062,7 +1062,6 @@ fn both_rules_give_a_tie_to_the_preferred_candidate_and_one_se_the_rest_to_the_o
     assert_eq!(choose(&close, 1, ChoiceRule::Best, Some(2)), 1);
     assert_eq!(choose(&close, 1, ChoiceRule::OneStandardError, Some(2)), 0);
     assert_eq!(choose(&close, 1, ChoiceRule::OneStandardError, None), 0);
-    assert_eq!(ChoiceRule::default(), ChoiceRule::OneStandardError);
 }
 
 /// End to end: two candidates the validation cannot tell apart (the same method twice) go to the

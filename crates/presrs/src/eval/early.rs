@@ -106,7 +106,56 @@ pub struct EarlyEvaluation {
     pub folds: usize,
 }
 
+/// Where the one-frame model beside the points decided clearly better than the stance model trained
+/// for them (see [`EarlyEvaluation::frame_ahead`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameAhead {
+    /// The points (frames after touchdown) where the one-frame model led.
+    pub points: Vec<usize>,
+    /// Its largest lead there (a difference of accuracies).
+    pub largest_lead: f64,
+    /// Its most accurate point, when that is above the whole stance's accuracy: (frames, accuracy).
+    pub above_whole: Option<(usize, f64)>,
+}
+
+/// How many standard errors of the difference of two accuracies a lead must exceed to be told (the
+/// race's bound, [`presrs_core::selection::RACE_Z`]).
+const LEAD_Z: f64 = presrs_core::selection::RACE_Z;
+
 impl EarlyEvaluation {
+    /// The points at which the one-frame model led the stance model by more than [`LEAD_Z`] standard
+    /// errors of the difference of the two accuracies over the same held-out stances (points whose
+    /// one-frame test set lacks stances that lift off before them are not compared). `None` when it
+    /// led at none: the stance's summary then carries the class at least as well as one frame.
+    pub fn frame_ahead(&self) -> Option<FrameAhead> {
+        let n = self.tested as f64;
+        let mut ahead = FrameAhead {
+            points: Vec::new(),
+            largest_lead: 0.0,
+            above_whole: None,
+        };
+        for point in &self.points {
+            let Some(frame) = point
+                .frame_accuracy
+                .filter(|_| point.frame_tested == self.tested)
+            else {
+                continue;
+            };
+            let stance = point.accuracy;
+            let spread = ((frame * (1.0 - frame) + stance * (1.0 - stance)) / n.max(1.0)).sqrt();
+            let lead = frame - stance;
+            if lead > LEAD_Z * spread && lead > 0.0 {
+                ahead.points.push(point.frames);
+                ahead.largest_lead = ahead.largest_lead.max(lead);
+                let best = ahead.above_whole.map_or(self.whole_accuracy, |(_, a)| a);
+                if frame > best {
+                    ahead.above_whole = Some((point.frames, frame));
+                }
+            }
+        }
+        (!ahead.points.is_empty()).then_some(ahead)
+    }
+
     /// The curve as the HTML report shows it; `note` says how the stances were held out.
     pub fn curve(&self, note: String) -> presrs_report::EarlyCurve {
         presrs_report::EarlyCurve {
@@ -539,5 +588,71 @@ mod tests {
             assert!(pair[0].mean_over_median_stance <= pair[1].mean_over_median_stance);
             assert!(pair[0].accuracy < pair[1].accuracy);
         }
+    }
+
+    fn evaluation(whole: f64, points: &[(usize, f64, Option<f64>, usize)]) -> EarlyEvaluation {
+        EarlyEvaluation {
+            whole_accuracy: whole,
+            points: points
+                .iter()
+                .map(
+                    |&(frames, accuracy, frame_accuracy, frame_tested)| EarlyPoint {
+                        frames,
+                        ms: None,
+                        share_of_median_stance: frames as f64 / 20.0,
+                        accuracy,
+                        frame_accuracy,
+                        frame_tested,
+                    },
+                )
+                .collect(),
+            auto: EarlyAuto {
+                accuracy: 0.0,
+                mean_frames: 0.0,
+                mean_ms: None,
+                mean_share_of_stance: 0.0,
+                mean_over_median_stance: 0.0,
+                decided_early: 0.0,
+                decided_by_mid_stance: 0.0,
+                thresholds: Vec::new(),
+                deadlines: Vec::new(),
+                hindsight: Vec::new(),
+            },
+            median_stance_frames: 20,
+            median_stance_ms: None,
+            frame_period_ms: None,
+            tested: 240,
+            folds: 3,
+        }
+    }
+
+    /// The one-frame model is told ahead where it leads past 2 standard errors of the difference on
+    /// the same stances (not by a stance or two, not on a smaller test set), with its largest lead,
+    /// and its best point when that is above the whole stance.
+    #[test]
+    fn the_one_frame_model_is_ahead_only_past_the_noise_on_the_same_stances() {
+        let early = evaluation(
+            0.917,
+            &[
+                (2, 0.858, Some(0.988), 240),
+                (4, 0.912, Some(1.0), 240),
+                (6, 0.90, Some(0.91), 240),
+                (8, 0.60, Some(0.95), 100),
+                (9, 0.95, None, 0),
+            ],
+        );
+        let ahead = early.frame_ahead().unwrap();
+        assert_eq!(ahead.points, vec![2, 4]);
+        assert!((ahead.largest_lead - 0.130).abs() < 1e-12);
+        assert_eq!(ahead.above_whole, Some((4, 1.0)));
+        // 0.90 against 0.91 on 240 stances is noise; behind is never ahead
+        let close = evaluation(
+            0.95,
+            &[(6, 0.90, Some(0.91), 240), (7, 0.9, Some(0.5), 240)],
+        );
+        assert_eq!(close.frame_ahead(), None);
+        // ahead but under the whole stance: no point above it
+        let under = evaluation(0.99, &[(2, 0.70, Some(0.90), 240)]);
+        assert_eq!(under.frame_ahead().unwrap().above_whole, None);
     }
 }
