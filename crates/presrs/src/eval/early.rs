@@ -120,7 +120,7 @@ pub struct FrameAhead {
 
 /// How many standard errors of the difference of two accuracies a lead must exceed to be told (the
 /// race's bound, [`presrs_core::selection::RACE_Z`]).
-const LEAD_Z: f64 = presrs_core::selection::RACE_Z;
+pub const LEAD_Z: f64 = presrs_core::selection::RACE_Z;
 
 impl EarlyEvaluation {
     /// The points at which the one-frame model led the stance model by more than [`LEAD_Z`] standard
