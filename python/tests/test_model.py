@@ -151,6 +151,26 @@ def test_auto_validates_by_the_groups_asked_for(sim_images):
         presrs.Model.train(images, labels, validate_by="sideways")
 
 
+def test_the_choice_rule_is_named_in_python_words(sim_images):
+    images, labels, gaits = sim_images
+    for rule in ("auto", "best", "one-se"):
+        model = presrs.Model.train(
+            images, labels, conditions=gaits, features="fft1d", choose=rule, seed=1
+        )
+        assert "chosen automatically" in model.describe()
+    with pytest.raises(presrs.DataError, match=r"choose=.median.*known: auto, best, one-se") as caught:
+        presrs.Model.train(images, labels, choose="median")
+    assert "--choose" not in str(caught.value)
+
+
+def test_a_model_file_read_as_a_recording_is_named(paper_model, tmp_path):
+    path = tmp_path / "model.json"
+    paper_model.save(path)
+    with pytest.raises(presrs.DataError, match="a presrs model file, not a recording") as caught:
+        presrs.read(path)
+    assert "Model.load(path).describe()" in str(caught.value)
+
+
 def test_auto_budget_cuts_from_the_end_and_none_is_no_limit(sim_images):
     images, labels, gaits = sim_images
     # fixed classifier: one candidate per feature group; a budget spent at once scores the first only
