@@ -164,12 +164,18 @@ impl Choose {
     }
 }
 
-/// Whether `candidate`'s features are a random-convolution family of whole samples.
+/// Whether `candidate`'s features are a random-convolution family of whole samples (MiniRocket's or
+/// MultiRocket's, any preset).
 fn is_random_convolution(candidate: &CheckedTrainConfig) -> bool {
-    let kind = candidate.config().features.kind();
-    WHOLE_SAMPLE_FEATURES
-        .iter()
-        .any(|(whole, _)| kind == Some(*whole))
+    let families = [
+        FeatureKind::ROCKET.family_name(),
+        FeatureKind::MULTIROCKET.family_name(),
+    ];
+    candidate
+        .config()
+        .features
+        .kind()
+        .is_some_and(|kind| families.contains(&kind.family_name()))
 }
 
 impl std::str::FromStr for Choose {
@@ -805,6 +811,16 @@ mod tests {
             ChoiceRule::OneStandardError
         );
         assert_eq!(auto.auto_choice(&frame).rule, ChoiceRule::Best);
+        // a preset named, the classifier chosen: still MiniRocket's race
+        let log = Method {
+            features: FeatureChoice::Kinds(vec![FeatureKind::ROCKET_LOG]),
+            ..Method::default()
+        };
+        let log_candidates = log.candidates_for(grid, false, &stance).unwrap();
+        assert_eq!(
+            log.auto_choice(&log_candidates).rule,
+            ChoiceRule::OneStandardError
+        );
         for rule in [ChoiceRule::Best, ChoiceRule::OneStandardError] {
             let named = Method {
                 choose: Choose::Rule(rule),
