@@ -65,7 +65,7 @@ pub fn early_table(early: &EarlyEvaluation) -> String {
         100.0 * auto.decided_by_mid_stance
     );
     let _ = writeln!(out, "auto's rule by fold: {}", fold_rules(auto));
-    if let Some(ahead) = early.frame_ahead() {
+    if let Some(ahead) = &early.frame_ahead {
         let points: Vec<String> = ahead.points.iter().map(usize::to_string).collect();
         let above = ahead.above_whole.map_or_else(String::new, |(k, accuracy)| {
             format!(

@@ -104,10 +104,13 @@ pub struct EarlyEvaluation {
     pub frame_period_ms: Option<f64>,
     pub tested: usize,
     pub folds: usize,
+    /// Where the one-frame model led the stance model ([`one_frame_lead`](Self::one_frame_lead)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_ahead: Option<FrameAhead>,
 }
 
 /// Where the one-frame model beside the points decided clearly better than the stance model trained
-/// for them (see [`EarlyEvaluation::frame_ahead`]).
+/// for them (see [`EarlyEvaluation::one_frame_lead`]).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FrameAhead {
     /// The points (frames after touchdown) where the one-frame model led.
@@ -127,7 +130,7 @@ impl EarlyEvaluation {
     /// errors of the difference of the two accuracies over the same held-out stances (points whose
     /// one-frame test set lacks stances that lift off before them are not compared). `None` when it
     /// led at none: the stance's summary then carries the class at least as well as one frame.
-    pub fn frame_ahead(&self) -> Option<FrameAhead> {
+    pub fn one_frame_lead(&self) -> Option<FrameAhead> {
         let n = self.tested as f64;
         let mut ahead = FrameAhead {
             points: Vec::new(),
@@ -439,7 +442,7 @@ fn summarise(
         deadlines: rules.iter().map(|rule| rule.deadline).collect(),
         hindsight,
     };
-    EarlyEvaluation {
+    let mut early = EarlyEvaluation {
         whole_accuracy: share(&|s| s.whole.0 == s.class),
         points,
         auto,
@@ -448,7 +451,10 @@ fn summarise(
         frame_period_ms: period_ms,
         tested: tested.len(),
         folds,
-    }
+        frame_ahead: None,
+    };
+    early.frame_ahead = early.one_frame_lead();
+    early
 }
 
 /// Whether `decision` came by `stance`'s mid-stance: at a point at most half its length after
@@ -623,6 +629,7 @@ mod tests {
             frame_period_ms: None,
             tested: 240,
             folds: 3,
+            frame_ahead: None,
         }
     }
 
@@ -641,7 +648,7 @@ mod tests {
                 (9, 0.95, None, 0),
             ],
         );
-        let ahead = early.frame_ahead().unwrap();
+        let ahead = early.one_frame_lead().unwrap();
         assert_eq!(ahead.points, vec![2, 4]);
         assert!((ahead.largest_lead - 0.130).abs() < 1e-12);
         assert_eq!(ahead.above_whole, Some((4, 1.0)));
@@ -650,9 +657,9 @@ mod tests {
             0.95,
             &[(6, 0.90, Some(0.91), 240), (7, 0.9, Some(0.5), 240)],
         );
-        assert_eq!(close.frame_ahead(), None);
+        assert_eq!(close.one_frame_lead(), None);
         // ahead but under the whole stance: no point above it
         let under = evaluation(0.99, &[(2, 0.70, Some(0.90), 240)]);
-        assert_eq!(under.frame_ahead().unwrap().above_whole, None);
+        assert_eq!(under.one_frame_lead().unwrap().above_whole, None);
     }
 }
