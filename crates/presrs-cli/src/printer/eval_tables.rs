@@ -122,6 +122,18 @@ pub fn choices_text(outcome: &EvalOutcome, internal: Option<&InternalEstimate>) 
         for (name, count) in chosen_counts(&outcome.selections) {
             let _ = writeln!(out, "  {name}: {count}");
         }
+        let below = outcome
+            .selections
+            .iter()
+            .filter(|selection| selection.best_above_chosen().is_some())
+            .count();
+        if below > 0 {
+            let _ = writeln!(
+                out,
+                "  in {below} of {models} models a candidate within one standard error of the best, earlier in \
+                 the search order, was kept (--choose one-se; --choose best takes the highest)"
+            );
+        }
     }
     if let Some(line) = selection_costs_line(&outcome.selections) {
         let _ = writeln!(out, "{line}");
