@@ -156,6 +156,16 @@ fn compare_prints_every_combination_and_auto_records_its_choice() {
         "{stderr}"
     );
     let json: serde_json::Value = serde_json::from_slice(&cut.stdout).unwrap();
+    // the JSON carries the warnings stderr printed, for a script that reads stdout alone
+    let warnings = json["warnings"].as_array().unwrap();
+    assert!(
+        warnings.iter().any(|w| w
+            .as_str()
+            .unwrap()
+            .contains("the automatic choice was cut short")),
+        "{warnings:?}"
+    );
+    assert!(json.get("warnings").is_some() && auto_has_no_cut(&auto.stdout));
     let scores = json["selections"][0]["scores"].as_array().unwrap();
     let skipped: Vec<bool> = scores.iter().map(|s| s["skipped"] == true).collect();
     assert_eq!(skipped, [vec![false; 5], vec![true; 70]].concat());
@@ -235,4 +245,11 @@ fn compare_runs_on_images_larger_than_the_default_padding() {
         .find(|row| row["features"] == "fft2d_polar" && row["classifier"] == "lda")
         .expect("the polar row");
     assert!(polar["overall_accuracy"].as_f64().unwrap() > 0.5, "{polar}");
+}
+
+/// Whether an eval document's warnings (absent when there are none) say nothing of a cut budget.
+fn auto_has_no_cut(stdout: &[u8]) -> bool {
+    let json: serde_json::Value = serde_json::from_slice(stdout).unwrap();
+    json.get("warnings")
+        .is_none_or(|warnings| !warnings.to_string().contains("cut short"))
 }

@@ -141,6 +141,9 @@ pub fn run(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     write_report(args, (&dataset, &options), &outcome, &faults)?;
     let mut eval = EvalJson::of(&outcome, &setup.never_trained);
     eval.memory = MemoryUse::now(dataset.samples.len());
+    eval.warnings = (setup.warnings.iter().map(ToString::to_string))
+        .chain(outcome.warnings.iter().map(ToString::to_string))
+        .collect();
     if args.json && perturbed.is_empty() {
         return write_json(out, &eval);
     }
@@ -282,6 +285,12 @@ fn run_racing(args: &EvalArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     write_report(args, (&readings.frames, &options), &raced.outcome, &[])?;
     let mut eval = EvalJson::of(&raced.outcome, &raced.never_trained);
     eval.memory = MemoryUse::now(readings.frames.samples.len());
+    eval.warnings = raced
+        .outcome
+        .warnings
+        .iter()
+        .map(ToString::to_string)
+        .collect();
     if args.json {
         return write_json(out, &eval);
     }

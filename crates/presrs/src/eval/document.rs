@@ -46,6 +46,10 @@ pub struct EvalJson<'r> {
     /// (`presrs eval --json`: at the end of the run).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub memory: Option<crate::resources::MemoryUse>,
+    /// The evaluation's warnings, in the caller's words (`presrs eval --json`: what it also prints on
+    /// stderr; empty, and absent, where the caller keeps them elsewhere, as Python's `warnings()`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// The confusion matrix of every repeat: counts and rows scaled to 1.
@@ -122,6 +126,7 @@ impl<'r> EvalJson<'r> {
             labels_never_trained: BTreeMap::new(),
             sample_races: Vec::new(),
             memory: None,
+            warnings: Vec::new(),
         }
     }
 }
