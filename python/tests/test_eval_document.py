@@ -16,8 +16,9 @@ TIMINGS = {
     "final_fit_seconds",
 }
 # The command's own process: its peak memory, which a Python process (whose peak is the whole
-# session's) does not report.
-CLI_ONLY = {"memory"}
+# session's) does not report; and its warnings in the command line's words (Python's are
+# `Evaluation.warnings()`, in its own).
+CLI_ONLY = {"memory", "warnings"}
 
 
 def _compare(ours, theirs, path="document"):
