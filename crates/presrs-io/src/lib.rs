@@ -76,13 +76,18 @@ pub fn read_recording_with(path: &Path, options: &ReadOptions) -> Result<Parsed,
 
 /// Whether the file at `path` starts with the MCAP magic bytes (read without loading the file).
 pub fn is_mcap_file(path: &Path) -> Result<bool, IoError> {
+    Ok(read_head(path, mcap::MCAP_MAGIC.len())? == mcap::MCAP_MAGIC)
+}
+
+/// The first `len` bytes of the file at `path` (fewer when it is shorter), without reading the rest.
+pub(crate) fn read_head(path: &Path, len: usize) -> Result<Vec<u8>, IoError> {
     use std::io::Read;
     let file = std::fs::File::open(path).map_err(|source| IoError::io("read", path, source))?;
-    let mut head = Vec::with_capacity(mcap::MCAP_MAGIC.len());
-    file.take(mcap::MCAP_MAGIC.len() as u64)
+    let mut head = Vec::with_capacity(len);
+    file.take(len as u64)
         .read_to_end(&mut head)
         .map_err(|source| IoError::io("read", path, source))?;
-    Ok(head == mcap::MCAP_MAGIC)
+    Ok(head)
 }
 
 /// Decides the format of a file from its content and extension:

@@ -95,10 +95,18 @@ pub fn load_model(path: &Path) -> Result<ModelFile, IoError> {
     parse_model(&bytes, &path.display().to_string())
 }
 
+/// How many of a file's first bytes tell a model file ([`looks_like_model`]).
+const MODEL_HEAD_BYTES: usize = 512;
+
+/// Whether the file at `path` is a presrs model file, from its first bytes (the rest is not read).
+pub fn is_model_file(path: &Path) -> Result<bool, IoError> {
+    Ok(looks_like_model(&crate::read_head(path, MODEL_HEAD_BYTES)?))
+}
+
 /// Whether `bytes` (a file's first bytes are enough) start a presrs model file: a JSON object whose
 /// `format` field, which [`save_model`] writes first, is [`MODEL_FORMAT`].
 pub fn looks_like_model(bytes: &[u8]) -> bool {
-    let head = crate::textutil::decode_text(&bytes[..bytes.len().min(512)]);
+    let head = crate::textutil::decode_text(&bytes[..bytes.len().min(MODEL_HEAD_BYTES)]);
     let Some(object) = head.trim_start().strip_prefix('{') else {
         return false;
     };

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use presrs::inspect::inspect;
-use presrs_io::model_file::{load_model, looks_like_model};
+use presrs_io::model_file::{is_model_file, load_model};
 
 use super::common::{SampleArgs, write_json};
 use crate::printer::inspect_table::print_inspect_table;
@@ -48,16 +48,4 @@ pub fn run(args: &InspectArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         return write_json(out, &report);
     }
     print_inspect_table(&report, out)
-}
-
-/// Whether `path` starts like a model file (its first bytes are read, not the whole file).
-fn is_model_file(path: &std::path::Path) -> anyhow::Result<bool> {
-    use std::io::Read;
-    let file = std::fs::File::open(path)
-        .map_err(|source| presrs_io::error::IoError::io("read", path, source))?;
-    let mut head = Vec::with_capacity(512);
-    file.take(512)
-        .read_to_end(&mut head)
-        .map_err(|source| presrs_io::error::IoError::io("read", path, source))?;
-    Ok(looks_like_model(&head))
 }

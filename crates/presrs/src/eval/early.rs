@@ -147,7 +147,7 @@ impl EarlyEvaluation {
             let stance = point.accuracy;
             let spread = ((frame * (1.0 - frame) + stance * (1.0 - stance)) / n.max(1.0)).sqrt();
             let lead = frame - stance;
-            if lead > LEAD_Z * spread && lead > 0.0 {
+            if lead > LEAD_Z * spread {
                 ahead.points.push(point.frames);
                 ahead.largest_lead = ahead.largest_lead.max(lead);
                 let best = ahead.above_whole.map_or(self.whole_accuracy, |(_, a)| a);

@@ -524,15 +524,20 @@ mod tests {
 
     use super::*;
 
+    /// Whole stances of the default summary and length.
+    fn whole_stance() -> SampleKind {
+        SampleKind::Stance {
+            summary: Default::default(),
+            length: None,
+        }
+    }
+
     /// On whole samples the default race is MiniRocket's two presets with every classifier, ridge
     /// first; the full search adds MultiRocket (with the ridges) and the frame families after them.
     #[test]
     fn whole_stances_and_series_add_rocket_with_ridge_to_the_search() {
         let grid = Grid::new(12, 54);
-        let stance = SampleKind::Stance {
-            summary: Default::default(),
-            length: None,
-        };
+        let stance = whole_stance();
         let default = Method::default();
         let frame = default.candidates(grid, false).unwrap();
         let learned = |c: &&CheckedTrainConfig| c.config().features.learns();
@@ -764,10 +769,7 @@ mod tests {
     #[test]
     fn a_tie_goes_to_the_preferred_method_only_when_it_is_a_candidate() {
         let grid = Grid::new(12, 54);
-        let stance = SampleKind::Stance {
-            summary: Default::default(),
-            length: None,
-        };
+        let stance = whole_stance();
         let auto = Method::default();
         let whole = auto.candidates_for(grid, false, &stance).unwrap();
         let preferred = auto.auto_choice(&whole).preferred_on_tie.unwrap();
@@ -792,10 +794,7 @@ mod tests {
     #[test]
     fn the_rule_follows_the_race_unless_named() {
         let grid = Grid::new(12, 54);
-        let stance = SampleKind::Stance {
-            summary: Default::default(),
-            length: None,
-        };
+        let stance = whole_stance();
         let auto = Method::default();
         assert_eq!(auto.choose, Choose::Auto);
         let whole = auto.candidates_for(grid, false, &stance).unwrap();
