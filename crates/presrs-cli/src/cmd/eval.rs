@@ -80,7 +80,7 @@ pub struct EvalArgs {
     #[arg(long, value_name = "DIR")]
     pub export_draws: Option<PathBuf>,
     /// With --sample stance: evaluate early decisions at these frames after touchdown
-    /// (`8,16,32,whole`, or `auto`: 10-50 % of the median stance), each fold training a classifier
+    /// (`8,16,32,whole`, or `auto`: 10-80 % of the median stance), each fold training a classifier
     /// per point and `auto`'s threshold, beside the one-frame model at the same offsets: accuracy
     /// against decision time, and `auto`'s accuracy and mean decision time.
     #[arg(long, value_name = "K,...,whole|auto",

@@ -75,7 +75,7 @@ pub struct TrainArgs {
     /// With --sample stance: also train classifiers for decisions before lift-off, at these frames after
     /// touchdown (each on the training stances cut there, with the whole stance's method, or its own
     /// automatic choice when the method is automatic), and the confidence threshold and deadline
-    /// point of `stream --decide-at auto`: `8,16,32,whole`, or `auto` (points at 10-50 % of the
+    /// point of `stream --decide-at auto`: `8,16,32,whole`, or `auto` (points at 10-80 % of the
     /// median training stance). `whole`: the lift-off only.
     #[arg(long, value_name = "K,...,whole|auto", default_value = "whole",
           value_parser = |t: &str| t.parse::<DecisionPoints>())]

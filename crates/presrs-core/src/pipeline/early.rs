@@ -31,11 +31,13 @@
 //! spends the earliness it is allowed on confidence. A point estimate of the accuracy alone, without
 //! the bound, let one subject's 60 stances set a threshold that was too bold on another subject.
 //!
-//! **The deadline** is learned after the threshold: of the points at most [`AUTO_EARLINESS`] of the
-//! median stance after touchdown, the latest at which deciding every stance no point was confident
-//! about by then (by that point's classifier, whatever its confidence) keeps the early decisions
-//! safe by the same bound; none if no point does (the stance waits for its lift-off). The decision is
-//! due by then, and the points just before it are nearly as accurate as the whole stance while their
+//! **The deadline** is learned after the threshold: of the points at which deciding every stance no
+//! point was confident about by then (by that point's classifier, whatever its confidence) keeps the
+//! early decisions safe by the same bound, the latest with which the mean decision on the held-out
+//! stances still comes by [`AUTO_EARLINESS`] of their median length (else the earliest safe one);
+//! none if no point is safe (the stance waits for its lift-off). The budget is on the mean, as for
+//! the threshold: the unsure stances may wait past mid-stance for a point that knows more, while
+//! the confident ones, decided early, pay for it. The late points are the accurate ones while their
 //! confidences sit below the one threshold the earliest points set (docs/methods.md, "Early
 //! decisions").
 
@@ -55,8 +57,9 @@ pub const AUTO_TOLERANCE: f64 = 0.02;
 /// The z of the lower bound on the early decisions' validation accuracy (one-sided, about 84 %).
 pub const AUTO_BOUND_Z: f64 = 1.0;
 
-/// When `auto`'s decision is due on average: this share of the median validation stance (an early
-/// decision is one made by mid-stance, while the gait can still change before the next touchdown).
+/// When `auto`'s decision is due on average: this share of the median validation stance (by
+/// mid-stance on average, while the gait can still change before the next touchdown; the threshold
+/// and the deadline both spend this budget).
 pub const AUTO_EARLINESS: f64 = 0.5;
 
 /// Stances as images for early decisions: each whole (laid into the model's length), each cut at every
@@ -360,8 +363,9 @@ fn cut_at<'a>(set: &StanceImages<'a>, k: usize) -> Vec<LabeledImage<'a>> {
 /// The rule of the module docs over `held_out` stances: of the thresholds whose early decisions'
 /// accuracy, at its lower bound, is within [`AUTO_TOLERANCE`] of the whole-stance classifier's on
 /// the same stances, the highest whose mean decision comes by [`AUTO_EARLINESS`] of the median
-/// stance, else the lowest; then the deadline: the latest point by [`AUTO_EARLINESS`] of the median
-/// stance at which deciding the stances the threshold leaves keeps the early decisions safe.
+/// stance, else the lowest; then the deadline: of the points at which deciding the stances the
+/// threshold leaves keeps the early decisions safe, the latest with which the mean decision still
+/// comes by [`AUTO_EARLINESS`] of the median stance, else the earliest.
 pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThreshold {
     let never = 1.0 + f64::EPSILON.sqrt();
     let mut candidates = point_confidences(held_out);
@@ -378,19 +382,23 @@ pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThre
         .find(|&t| mean_decision_frame(held_out, frames, AutoRule::threshold(t)) <= due)
         .or_else(|| safe.first().copied())
         .unwrap_or(never);
-    let deadline = frames
+    let with_deadline = |k: usize| AutoRule {
+        threshold,
+        deadline: Some(k),
+    };
+    let safe_deadlines: Vec<usize> = frames
+        .iter()
+        .copied()
+        .filter(|&k| early_decisions_are_safe(held_out, frames, with_deadline(k)))
+        .collect();
+    // A later deadline never decides earlier, so the mean decision grows with it: the latest due in
+    // time, else the earliest safe one (safety before earliness, as for the threshold).
+    let deadline = safe_deadlines
         .iter()
         .rev()
         .copied()
-        // A point is placed at its share of the median stance rounded to a frame: so is the due one.
-        .filter(|&k| k as f64 <= due.round())
-        .find(|&k| {
-            let rule = AutoRule {
-                threshold,
-                deadline: Some(k),
-            };
-            early_decisions_are_safe(held_out, frames, rule)
-        });
+        .find(|&k| mean_decision_frame(held_out, frames, with_deadline(k)) <= due)
+        .or_else(|| safe_deadlines.first().copied());
     measure_rule(
         held_out,
         frames,
@@ -534,8 +542,9 @@ mod tests {
         let late_points = [4, 12];
         let auto = learn_threshold(&stances, &late_points);
         assert_eq!(auto.threshold, 0.9);
-        // The point at 4 as a deadline would decide the first stance wrong: too bold.
-        assert_eq!(auto.deadline, None);
+        // The point at 4 as a deadline would decide the first stance wrong: too bold; the one at 12
+        // is safe and due in time (it decides no stance the threshold leaves).
+        assert_eq!(auto.deadline, Some(12));
         assert_eq!(auto.mean_decision_frame, (12.0 + 60.0 * 4.0) / 61.0);
         let late = stances[0].decide(&frames, AutoRule::threshold(0.99));
         assert_eq!((late.point, late.frame), (None, 20));
@@ -607,10 +616,10 @@ mod tests {
         );
     }
 
-    /// The deadline decides the stances no point was confident about at the latest point by
-    /// mid-stance, when validation shows it safe; a point that is wrong too often is no deadline.
+    /// The deadline decides the stances no point was confident about at the latest safe point due in
+    /// time, when validation shows it safe; a point that is wrong too often is no deadline.
     #[test]
-    fn the_deadline_is_the_latest_safe_point_by_mid_stance() {
+    fn the_deadline_is_the_latest_safe_point_due_in_time() {
         let frames = [3, 6, 10];
         // Sixty stances confident and right at every point; sixty unsure: wrong at 3, half wrong at
         // 6, right at 10 but with a confidence (0.65) the early points' mistakes make unsafe.
@@ -644,6 +653,49 @@ mod tests {
         let auto = learn_threshold(&stances, &frames);
         assert_eq!((auto.threshold, auto.deadline), (0.99, None));
         assert_eq!(auto.mean_decision_frame, (60.0 * 3.0 + 60.0 * 20.0) / 120.0);
+    }
+
+    /// A point past mid-stance is a deadline when the confident stances, decided early, keep the mean
+    /// decision by mid-stance; of two such points the latest due in time; when none is due in time,
+    /// the earliest safe one.
+    #[test]
+    fn a_deadline_past_mid_stance_is_taken_while_the_mean_comes_by_mid_stance() {
+        // Stances of 20 frames (due by frame 10 on average); points at 3, 10 and 14. The unsure
+        // stances are wrong at 3 (at 0.7) and right at 10 and 14 with a confidence (0.65) the wrong
+        // early answers make unsafe as a threshold.
+        let frames = [3, 10, 14];
+        let unsure = |i: usize| {
+            let class = i % 2;
+            stance(
+                class,
+                &[(1 - class, 0.7), (class, 0.65), (class, 0.65)],
+                (class, 0.99),
+            )
+        };
+        let confident = |i: usize| {
+            let class = i % 2;
+            stance(class, &[(class, 0.99); 3], (class, 0.99))
+        };
+        let set = |unsure_count: usize| {
+            let mut stances: Vec<HeldOutStance> = (0..60).map(confident).collect();
+            stances.extend((0..unsure_count).map(unsure));
+            stances
+        };
+        // Sixty confident at frame 3, sixty unsure: the deadline at 14 gives a mean of 8.5 frames.
+        let auto = learn_threshold(&set(60), &frames);
+        assert_eq!((auto.threshold, auto.deadline), (0.99, Some(14)));
+        assert_eq!(auto.mean_decision_frame, (60.0 * 3.0 + 60.0 * 14.0) / 120.0);
+        // 120 unsure: 14 would give 10.33 frames, 10 gives 7.67.
+        let auto = learn_threshold(&set(120), &frames);
+        assert_eq!((auto.threshold, auto.deadline), (0.99, Some(10)));
+        assert_eq!(
+            auto.mean_decision_frame,
+            (60.0 * 3.0 + 120.0 * 10.0) / 180.0
+        );
+        // Without the point at 10, none is due in time: the earliest safe one, 14.
+        let auto = learn_threshold(&set(120), &[3, 14]);
+        assert_eq!(auto.deadline, Some(14));
+        assert!(auto.mean_decision_frame > 10.0);
     }
 
     /// When every safe threshold decides after mid-stance, `auto` takes the earliest of them.
