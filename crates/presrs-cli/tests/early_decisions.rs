@@ -19,6 +19,11 @@ fn shared(path: &str) -> PathBuf {
 
 /// A small whole-stance model of every `jiku-walk` movie, with `extra` options.
 fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    train_output(dir, name, extra).0
+}
+
+/// [`train`], with what it printed.
+fn train_output(dir: &Path, name: &str, extra: &[&str]) -> (PathBuf, std::process::Output) {
     let out = dir.join(name);
     let manifest = shared("real/jiku-walk/manifest.csv");
     let mut args = vec![
@@ -40,7 +45,7 @@ fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
     args.extend_from_slice(extra);
     let output = presrs(&args);
     assert!(output.status.success(), "{}", stderr(&output));
-    out
+    (out, output)
 }
 
 /// The refusal of `decide_at` by `command` with `model`: an error naming the option and how to train
@@ -68,9 +73,31 @@ fn assert_refused(args: &[&str], decide_at: &str) {
 fn a_moment_the_model_was_not_trained_for_is_refused_by_every_command_line_face() {
     let dir = tempfile::tempdir().unwrap();
     let whole = train(dir.path(), "whole.json", &[]);
-    let points = train(dir.path(), "points.json", &["--decide-at", "8,16,whole"]);
+    let (points, output) = train_output(dir.path(), "points.json", &["--decide-at", "8,16,whole"]);
+    // Where the time went, on stdout; which point or inner fold runs, as progress.
+    let printed = stdout(&output);
+    let line = printed
+        .lines()
+        .find(|line| line.starts_with("decision points: 8, 16 frames"))
+        .unwrap_or_else(|| panic!("{printed}"));
+    assert!(
+        line.contains("trained in ")
+            && line.contains("the points' classifiers ")
+            && line.contains("classifiers in 3 inner folds"),
+        "{line}"
+    );
+    let progress = stderr(&output);
+    assert!(
+        progress.contains("decision point 8 frames (1 of 2): training on 120 cut stances")
+            && progress.contains("auto's rule: inner fold 1 of 3"),
+        "{progress}"
+    );
     let stored: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&points).unwrap()).unwrap();
+    let cost = &stored["model"]["early"]["cost"];
+    assert_eq!(cost["inner_models"].as_u64(), Some(9), "{cost}");
+    assert_eq!(cost["rule_stances"], cost["stances"]);
+    assert!(cost["points_seconds"].as_f64().unwrap() >= 0.0);
     let frames: Vec<u64> = stored["model"]["early"]["points"]
         .as_array()
         .unwrap()

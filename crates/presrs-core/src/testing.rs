@@ -173,7 +173,7 @@ pub fn stance_model_with_points(
         cuts: points.iter().map(|&k| (k, Vec::new())).collect(),
         ..StanceImages::default()
     };
-    let early = train_early(&model, &train_set, &validation, None, 1)?;
+    let early = train_early(&model, &train_set, &validation, None, 1, None)?;
     model.with_early(early)
 }
 

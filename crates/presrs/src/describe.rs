@@ -153,6 +153,26 @@ pub fn early_summary(model: &TrainedModel) -> Option<String> {
             100.0 * auto.mean_decision_share
         );
     }
+    if let Some(cost) = &early.cost {
+        let of = if cost.rule_stances < cost.stances {
+            format!(
+                " of a stratified subsample of {} of the {} stances",
+                cost.rule_stances, cost.stances
+            )
+        } else {
+            String::new()
+        };
+        let _ = write!(
+            text,
+            "; trained in {:.1} s (the points' classifiers {:.1} s; auto's rule {:.1} s, {} \
+             classifiers in {} inner folds{of})",
+            cost.total_seconds(),
+            cost.points_seconds,
+            cost.rule_seconds,
+            cost.inner_models,
+            cost.inner_folds
+        );
+    }
     Some(text)
 }
 

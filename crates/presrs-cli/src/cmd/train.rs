@@ -177,7 +177,14 @@ pub fn run(args: &TrainArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
     }
     if let Some(early) = presrs::describe::early_summary(model) {
-        writeln!(out, "{early}")?;
+        // (each point's own automatic choice has its budget; the rest is after the model's)
+        let budget =
+            if model.selection().is_some() && model.early().is_some_and(|e| e.cost.is_some()) {
+                ", not covered by the budget"
+            } else {
+                ""
+            };
+        writeln!(out, "{early}{budget}")?;
     }
     if let Some(seconds) = training.novelty_seconds {
         let what = model.novelty().map_or_else(

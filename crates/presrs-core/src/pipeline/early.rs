@@ -43,12 +43,15 @@
 
 use crate::error::{CoreError, Result};
 use crate::pipeline::extract::LabeledImage;
+use std::time::Instant;
+
 use crate::pipeline::model::{
-    AutoRule, AutoThreshold, DecisionPoint, EarlyDecisions, TrainedModel,
+    AutoRule, AutoThreshold, DecisionPoint, EarlyCost, EarlyDecisions, TrainedModel,
 };
 use crate::pipeline::train::train;
-use crate::selection::ValidateBy;
 use crate::selection::folds::make_folds;
+use crate::selection::subsample::{SCORING_SAMPLES, stratified_subsample};
+use crate::selection::{StageObserver, ValidateBy};
 
 /// How far below the whole-stance classifier's validation accuracy the lower bound of `auto`'s early
 /// decisions' accuracy may fall (two points: the loss the early decision may cost).
@@ -159,34 +162,53 @@ impl HeldOutStance {
     }
 }
 
-/// Trains a decision point's classifier on the stances cut there (training, validation): how a
-/// whole-stance model from the automatic choice has a method chosen for each point (the method that
-/// suits the whole stance need not suit its first frames).
+/// Trains the classifier of decision point `K` (its first argument) on the stances cut there
+/// (training, validation): how a whole-stance model from the automatic choice has a method chosen
+/// for each point (the method that suits the whole stance need not suit its first frames).
 pub type ChoosePoint<'f> =
-    &'f dyn Fn(&[LabeledImage<'_>], &[LabeledImage<'_>]) -> Result<TrainedModel>;
+    &'f dyn Fn(usize, &[LabeledImage<'_>], &[LabeledImage<'_>]) -> Result<TrainedModel>;
 
 /// Trains the early decisions of `whole` (a whole-stance model trained on `train.whole` with
 /// `validation.whole` validating): each point's model on the stances cut there, by `choose` when
 /// given (a method chosen per point) or else with the whole model's method, and `auto`'s threshold
 /// from the inner folds of all those stances, each point retrained there with its own method (see the
-/// module docs).
+/// module docs). `on_stage` is told each point and each inner fold as it begins; the time each part
+/// took is in the result's `cost`.
 pub fn train_early(
     whole: &TrainedModel,
     train_set: &StanceImages<'_>,
     validation: &StanceImages<'_>,
     choose: Option<ChoosePoint<'_>>,
     seed: u64,
+    on_stage: Option<StageObserver<'_>>,
 ) -> Result<EarlyDecisions> {
     train_set.check()?;
     validation.check()?;
+    let started = Instant::now();
     let length = whole.image_grid().cols;
+    let due: Vec<_> = train_set
+        .cuts
+        .iter()
+        .zip(&validation.cuts)
+        .filter(|((frames, _), _)| frames + 1 < length)
+        .collect();
     let mut points = Vec::new();
-    for ((frames, cut), (_, cut_validation)) in train_set.cuts.iter().zip(&validation.cuts) {
-        if frames + 1 >= length {
-            continue;
-        }
+    for (i, ((frames, cut), (_, cut_validation))) in due.iter().enumerate() {
+        StageObserver::tell(on_stage, || {
+            let how = if choose.is_some() {
+                "choosing its method"
+            } else {
+                "training"
+            };
+            format!(
+                "decision point {frames} frames ({} of {}): {how} on {} cut stances",
+                i + 1,
+                due.len(),
+                cut.len() + cut_validation.len()
+            )
+        });
         let model = match choose {
-            Some(choose) => choose(cut, cut_validation)?.with_sample(whole.sample())?,
+            Some(choose) => choose(*frames, cut, cut_validation)?.with_sample(whole.sample())?,
             None => train_like(whole, cut, cut_validation)?,
         };
         points.push(DecisionPoint {
@@ -194,16 +216,42 @@ pub fn train_early(
             model,
         });
     }
+    let points_seconds = started.elapsed().as_secs_f64();
+    let rule_started = Instant::now();
     let all = train_set.joined(validation);
-    let held_out = held_out_stances(whole, &all, &points, seed)?;
+    let rule_set = rule_stances(&all, RULE_STANCES, seed);
+    let (held_out, inner_folds) = held_out_stances(whole, &rule_set, &points, seed, on_stage)?;
     let kept: Vec<usize> = points.iter().map(|p| p.frames).collect();
     let auto = learn_threshold(&held_out, &kept);
+    let cost = EarlyCost {
+        points_seconds,
+        rule_seconds: rule_started.elapsed().as_secs_f64(),
+        inner_folds,
+        inner_models: inner_folds * (points.len() + 1),
+        rule_stances: rule_set.whole.len(),
+        stances: all.whole.len(),
+    };
     let early = EarlyDecisions {
         points,
         auto: Some(auto),
+        cost: Some(cost),
     };
     early.check(whole)?;
     Ok(early)
+}
+
+/// The most stances `auto`'s rule is learned from: on more, a stratified subsample (by label, group
+/// and condition) of this many, as the automatic choice scores its candidates. The rule needs a few
+/// thousand held-out stances, not all of a robot's logs, and its inner folds retrain the whole stance
+/// and every point once each.
+pub const RULE_STANCES: usize = SCORING_SAMPLES;
+
+/// `all`, or a stratified subsample of `at_most` of its stances (seeded) when it holds more.
+fn rule_stances<'a>(all: &StanceImages<'a>, at_most: usize, seed: u64) -> StanceImages<'a> {
+    match stratified_subsample(&all.whole, at_most, seed) {
+        Some(rows) => all.select(&rows),
+        None => all.clone(),
+    }
 }
 
 /// A model trained with `like`'s method (its configuration) and sample kind.
@@ -218,16 +266,27 @@ pub fn train_like(
 
 /// Every stance of `all` held out once (the inner folds of the automatic choice) and classified at
 /// `points` and whole by models of their methods (`whole`'s, and each point's own) trained on the
-/// fold's others.
+/// fold's others; and the number of folds. `on_stage` is told each fold as it begins.
 pub fn held_out_stances(
     whole: &TrainedModel,
     all: &StanceImages<'_>,
     points: &[DecisionPoint],
     seed: u64,
-) -> Result<Vec<HeldOutStance>> {
+    on_stage: Option<StageObserver<'_>>,
+) -> Result<(Vec<HeldOutStance>, usize)> {
     let folds = make_folds(&all.whole, ValidateBy::Auto, seed)?;
     let mut held_out = Vec::new();
-    for fold in &folds.folds {
+    let count = folds.folds.len();
+    for (i, fold) in folds.folds.iter().enumerate() {
+        StageObserver::tell(on_stage, || {
+            format!(
+                "auto's rule: inner fold {} of {count}, the whole stance and {} points trained on \
+                 {} stances",
+                i + 1,
+                points.len(),
+                fold.train.len() + fold.validation.len()
+            )
+        });
         let train_part = all.select(&fold.train);
         let validation_part = all.select(&fold.validation);
         let test = all.select(&fold.test);
@@ -239,7 +298,7 @@ pub fn held_out_stances(
             points,
         )?);
     }
-    Ok(held_out)
+    Ok((held_out, count))
 }
 
 /// `test`'s stances classified at every point of `points` and whole, by models of `like`'s method
@@ -696,6 +755,36 @@ mod tests {
         let auto = learn_threshold(&set(120), &[3, 14]);
         assert_eq!(auto.deadline, Some(14));
         assert!(auto.mean_decision_frame > 10.0);
+    }
+
+    /// On more stances than the cap, the rule's stances are a stratified subsample: every class keeps
+    /// its share, each stance comes with its own cuts and length, the same seed draws the same.
+    #[test]
+    fn the_rule_learns_from_a_stratified_subsample_of_many_stances() {
+        use crate::frame::{Frame, Grid};
+        let frames: Vec<Frame> = (0..40)
+            .map(|i| Frame::new(Grid::new(1, 3), vec![i as f64; 3]).unwrap())
+            .collect();
+        let labels = ["a", "b"];
+        // Thirty stances of class a, ten of b; stance i is i + 10 frames long.
+        let image = |i: usize| LabeledImage::new(frames[i].view(), labels[usize::from(i >= 30)]);
+        let all = StanceImages {
+            whole: (0..40).map(image).collect(),
+            cuts: vec![(2, (0..40).map(image).collect())],
+            stance_frames: (0..40).map(|i| i + 10).collect(),
+        };
+        assert_eq!(rule_stances(&all, 40, 1).whole.len(), 40);
+        let some = rule_stances(&all, 20, 1);
+        assert_eq!(some.whole.len(), 20);
+        let count = |label: &str| some.whole.iter().filter(|im| im.label == label).count();
+        assert_eq!((count("a"), count("b")), (15, 5));
+        for (i, image) in some.whole.iter().enumerate() {
+            let original = image.frame.values()[0] as usize;
+            assert_eq!(some.stance_frames[i], original + 10);
+            assert_eq!(some.cuts[0].1[i].frame.values()[0] as usize, original);
+        }
+        let again = rule_stances(&all, 20, 1);
+        assert_eq!(again.stance_frames, some.stance_frames);
     }
 
     /// When every safe threshold decides after mid-stance, `auto` takes the earliest of them.

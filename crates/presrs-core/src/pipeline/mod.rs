@@ -24,13 +24,13 @@ pub(crate) mod train;
 pub use config::{CheckedTrainConfig, TrainConfig};
 pub use early::{
     AUTO_BOUND_Z, AUTO_EARLINESS, AUTO_TOLERANCE, ChoosePoint, HeldOutStance, OfflineDecision,
-    StanceImages, classify_held_out, classify_stances, held_out_stances, learn_threshold,
-    median_length, point_confidences, train_early, train_like, wilson_lower_bound,
+    RULE_STANCES, StanceImages, classify_held_out, classify_stances, held_out_stances,
+    learn_threshold, median_length, point_confidences, train_early, train_like, wilson_lower_bound,
 };
 pub use extract::{LabeledImage, extract_features, extract_features_many, extract_features_with};
 pub use model::{
-    AutoRule, AutoThreshold, DecisionPoint, EarlyDecisions, MAX_MODEL_SENSELS, MAX_TRANSFORM_LEN,
-    TrainedModel, TrainingSummary,
+    AutoRule, AutoThreshold, DecisionPoint, EarlyCost, EarlyDecisions, MAX_MODEL_SENSELS,
+    MAX_TRANSFORM_LEN, TrainedModel, TrainingSummary,
 };
 pub use novelty::{MAX_NOVELTY_DIMS, NOVELTY_COMPONENTS, NOVELTY_PCA_SAMPLES};
 pub use session::{BATCH_BLOCK, Classification, Prediction, Session};

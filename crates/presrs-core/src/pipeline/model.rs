@@ -166,6 +166,37 @@ pub struct EarlyDecisions {
     /// What `auto` decides with (absent: `auto` is refused).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub auto: Option<AutoThreshold>,
+    /// Where training the points' classifiers and `auto`'s rule spent its time (absent from models
+    /// written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost: Option<EarlyCost>,
+}
+
+/// Where training the early decisions spent its time: after the whole-stance model, and outside the
+/// automatic choice's budget (each point's own choice has the budget of its own).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EarlyCost {
+    /// Seconds spent training the points' classifiers on every training stance (each point's method
+    /// chosen there when the model's is the automatic choice).
+    pub points_seconds: f64,
+    /// Seconds spent learning `auto`'s rule: the inner folds, each retraining the whole-stance
+    /// classifier and every point's on the fold's other stances.
+    pub rule_seconds: f64,
+    /// The inner folds of the rule, and the classifiers trained in them.
+    pub inner_folds: usize,
+    pub inner_models: usize,
+    /// The stances the rule was learned from, of all the training stances (fewer: a stratified
+    /// subsample, [`RULE_STANCES`](crate::pipeline::RULE_STANCES)).
+    pub rule_stances: usize,
+    pub stances: usize,
+}
+
+impl EarlyCost {
+    /// Every second of it.
+    pub fn total_seconds(&self) -> f64 {
+        self.points_seconds + self.rule_seconds
+    }
 }
 
 impl EarlyDecisions {

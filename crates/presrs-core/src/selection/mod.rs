@@ -31,7 +31,7 @@
 pub(crate) mod folds;
 pub(crate) mod record;
 mod scoring;
-mod subsample;
+pub(crate) mod subsample;
 #[cfg(test)]
 mod tests;
 pub(crate) mod validate_by;

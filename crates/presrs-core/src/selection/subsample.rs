@@ -23,7 +23,7 @@ type Stratum<'a> = (&'a str, Option<&'a str>, Option<&'a str>);
 /// each stratum's share in proportion to its size (largest remainders get the rest; ties to the
 /// earlier stratum), its members shuffled with `seed`. `None` when there are no more than `at_most`.
 /// Deterministic in `seed`.
-pub(super) fn stratified_subsample(
+pub(crate) fn stratified_subsample(
     images: &[LabeledImage<'_>],
     at_most: usize,
     seed: u64,

@@ -17,7 +17,7 @@ use crate::dataset::{Dataset, SampleOptions};
 use crate::error::{Context, Error, Result};
 use crate::eval::EvalSetup;
 use crate::method::Method;
-use crate::progress::Progress;
+use crate::progress::{Progress, Quiet};
 use crate::train::early::stance_images;
 
 /// Accuracy at one decision point, frames after touchdown.
@@ -253,11 +253,12 @@ pub fn evaluate_early(
             (part(&draw.train), part(&draw.validation), part(&draw.test));
         let whole = train_whole(method, dataset, &train_set, &validation, draw.seed)
             .with_context(|| format!("{name}: training a fold"))?;
-        let chooser = crate::train::early::point_chooser(method, &dataset.sample, draw.seed);
+        let chooser =
+            crate::train::early::point_chooser(method, &dataset.sample, draw.seed, &Quiet);
         let choose = chooser
-            .as_ref()
+            .as_deref()
             .map(|f| f as presrs_core::pipeline::ChoosePoint<'_>);
-        let early = train_early(&whole, &train_set, &validation, choose, draw.seed)
+        let early = train_early(&whole, &train_set, &validation, choose, draw.seed, None)
             .with_context(|| format!("{name}: training a fold's decision points"))?;
         rules.push(
             early

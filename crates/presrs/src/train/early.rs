@@ -8,9 +8,12 @@ use presrs_core::pipeline::{LabeledImage, StanceImages, train_early};
 use presrs_core::sample::SampleKind;
 use presrs_core::split::Split;
 
+use presrs_core::selection::StageObserver;
+
 use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
 use crate::method::Method;
+use crate::progress::Progress;
 
 /// Shares of the median training stance at which `--decide-at auto` puts its decision points: over
 /// most of the stance, as TEASER and ECTS place theirs. `auto`'s decision is due by mid-stance on
@@ -118,51 +121,64 @@ pub fn stance_images<'d>(
 
 /// A decision point's classifier chosen as a whole-stance model of `method` is when `method` leaves
 /// a choice (features or classifier `auto`): the automatic choice among its candidates for the stances
-/// cut at the point, validated on the cut validation stances. `None` for a fixed method (the points
-/// take the whole-stance model's).
+/// cut at the point, validated on the cut validation stances, its stages told to `progress` (named by
+/// the point). `None` for a fixed method (the points take the whole-stance model's).
 pub fn point_chooser<'m>(
     method: &'m Method,
     sample: &'m SampleKind,
     seed: u64,
-) -> Option<
-    impl Fn(&[LabeledImage<'_>], &[LabeledImage<'_>]) -> presrs_core::error::Result<TrainedModel> + 'm,
-> {
-    method.is_auto().then_some(
-        move |train: &[LabeledImage<'_>], validation: &[LabeledImage<'_>]| {
-            let grid = train
-                .first()
-                .map(|image| image.frame.grid())
-                .ok_or_else(|| CoreError::Param {
+    progress: &'m dyn Progress,
+) -> Option<PointChooser<'m>> {
+    let choose = move |k: usize, train: &[LabeledImage<'_>], validation: &[LabeledImage<'_>]| {
+        let grid = train
+            .first()
+            .map(|image| image.frame.grid())
+            .ok_or_else(|| CoreError::Param {
+                name: "decision point",
+                reason: "no training stance reaches the point".into(),
+            })?;
+        let candidates =
+            method
+                .candidates_for(grid, false, sample)
+                .map_err(|err| CoreError::Param {
                     name: "decision point",
-                    reason: "no training stance reaches the point".into(),
+                    reason: err.to_string(),
                 })?;
-            let candidates =
-                method
-                    .candidates_for(grid, false, sample)
-                    .map_err(|err| CoreError::Param {
-                        name: "decision point",
-                        reason: err.to_string(),
-                    })?;
-            presrs_core::selection::train_auto(
-                train,
-                validation,
-                &method.auto_choice(&candidates),
-                seed,
-            )
-        },
-    )
+        let tell = |stage: &str| progress.stage(&format!("decision point {k} frames: {stage}"));
+        presrs_core::selection::train_auto(
+            train,
+            validation,
+            &method
+                .auto_choice(&candidates)
+                .with_stages(StageObserver(&tell)),
+            seed,
+        )
+    };
+    method
+        .is_auto()
+        .then(|| Box::new(choose) as PointChooser<'m>)
 }
+
+/// What [`point_chooser`] gives: a [`presrs_core::pipeline::ChoosePoint`] that owns its closure.
+pub type PointChooser<'m> = Box<
+    dyn Fn(
+            usize,
+            &[LabeledImage<'_>],
+            &[LabeledImage<'_>],
+        ) -> presrs_core::error::Result<TrainedModel>
+        + 'm,
+>;
 
 /// `model` with the early decisions of the data set's decision points, trained on the draw `split` of
 /// the samples at `pool` (indices into the data set; `labels` by pool index), each point's method
-/// chosen as the model's was (`method`, [`point_chooser`]). Unchanged when the data set holds no cuts.
+/// chosen as the model's was (`method`, [`point_chooser`]), each stage told to `progress`. Unchanged
+/// when the data set holds no cuts.
 pub fn with_early_decisions(
     model: TrainedModel,
     (dataset, method): (&Dataset, &Method),
-    pool: &[usize],
-    split: &Split,
-    labels: &[&str],
+    (pool, split, labels): (&[usize], &Split, &[&str]),
     seed: u64,
+    progress: &dyn Progress,
 ) -> Result<TrainedModel> {
     if dataset.stances.points.is_empty() {
         return Ok(model);
@@ -174,16 +190,20 @@ pub fn with_early_decisions(
     }
     let train_set = stance_images(dataset, pool, &split.train, labels);
     let validation = stance_images(dataset, pool, &split.validation, labels);
-    let chooser = point_chooser(method, &dataset.sample, seed);
+    let chooser = point_chooser(method, &dataset.sample, seed, progress);
     let choose = chooser
-        .as_ref()
+        .as_deref()
         .map(|f| f as presrs_core::pipeline::ChoosePoint<'_>);
-    let early = train_early(&model, &train_set, &validation, choose, seed).with_context(|| {
-        format!(
-            "{}: cannot train the decision points",
-            dataset.path().display()
-        )
-    })?;
+    let tell = |stage: &str| progress.stage(stage);
+    let on_stage = Some(StageObserver(&tell));
+    let early = train_early(&model, &train_set, &validation, choose, seed, on_stage).with_context(
+        || {
+            format!(
+                "{}: cannot train the decision points",
+                dataset.path().display()
+            )
+        },
+    )?;
     model
         .with_early(early)
         .with_context(|| format!("{}: decision points", dataset.path().display()))

@@ -217,10 +217,9 @@ pub fn train_with_progress(
     let model = early::with_early_decisions(
         model,
         (dataset, method),
-        &pool_indices,
-        &split,
-        &labels,
+        (&pool_indices, &split, &labels),
         options.seed,
+        progress,
     )?;
     let mut warnings = Warnings::new();
     let novelty_started = std::time::Instant::now();

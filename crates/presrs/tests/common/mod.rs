@@ -68,6 +68,10 @@ pub fn with_points(model: TrainedModel, dataset: &Dataset) -> TrainedModel {
         })
         .collect();
     model
-        .with_early(EarlyDecisions { points, auto: None })
+        .with_early(EarlyDecisions {
+            points,
+            auto: None,
+            cost: None,
+        })
         .unwrap()
 }
