@@ -11,8 +11,9 @@
 //! there are). A stance that lifts off before frame `K` is decided at its lift-off, whole, by the
 //! whole-stance classifier, online and here alike.
 //!
-//! **The threshold** is learned from out-of-sample confidences: the training and validation stances are
-//! split into the automatic choice's inner folds (by group, condition or stratified splits), each fold's
+//! **The threshold** is learned from out-of-sample confidences: the training and validation stances (at
+//! most [`RULE_STANCES`] of them, a stratified subsample of more) are split into the automatic
+//! choice's inner folds (by group, condition or stratified splits), each fold's
 //! classifiers are trained on the rest, and each held-out stance is classified at every point and
 //! whole. A threshold (among the confidences seen, and "never") is *safe* when its early decisions
 //! are safe with a margin for the few stances validation has: over the stances `auto` decides before
@@ -41,10 +42,10 @@
 //! confidences sit below the one threshold the earliest points set (docs/methods.md, "Early
 //! decisions").
 
-use crate::error::{CoreError, Result};
-use crate::pipeline::extract::LabeledImage;
 use std::time::Instant;
 
+use crate::error::{CoreError, Result};
+use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::{
     AutoRule, AutoThreshold, DecisionPoint, EarlyCost, EarlyDecisions, TrainedModel,
 };
