@@ -213,6 +213,29 @@ fn eval_decide_at_prints_the_curve_and_reports_it() {
         table.contains("decided before lift-off") && table.contains("by mid-stance"),
         "{table}"
     );
+    // Each fold's rule with what it gave on its 30 held-out stances: their mean is auto's figure.
+    let percent = |text: &str| -> f64 { text.trim().trim_end_matches('%').trim().parse().unwrap() };
+    let overall = percent(
+        table
+            .lines()
+            .find_map(|line| line.strip_prefix("auto: "))
+            .and_then(|rest| rest.split(" (").next())
+            .unwrap_or_else(|| panic!("{table}")),
+    );
+    let by_fold = table
+        .lines()
+        .find_map(|line| line.strip_prefix("auto's rule by fold: "))
+        .unwrap_or_else(|| panic!("{table}"));
+    let folds: Vec<f64> = by_fold
+        .split("; ")
+        .filter_map(|rule| rule.split_once(" (")?.1.split(", whole").next())
+        .map(percent)
+        .collect();
+    assert_eq!(folds.len(), 2, "{by_fold}");
+    assert!(
+        ((folds[0] + folds[1]) / 2.0 - overall).abs() < 0.11,
+        "{by_fold} against {overall}"
+    );
     // The one-frame model at 55 is tested on the stances that reach frame 55 only.
     let late = table
         .lines()

@@ -105,24 +105,37 @@ pub fn early_table(early: &EarlyEvaluation) -> String {
     out
 }
 
-/// Each fold's threshold and deadline: `0.986 else 31`, `never else 31`, `0.991 else lift-off`.
+/// Each fold's threshold and deadline, with what it gave on the fold's held-out stances and the
+/// whole stance's there: `0.986 else 31 (91.7 %, whole 96.7 %)`, `never else 31 (...)`, `0.991 else
+/// lift-off (...)`.
 fn fold_rules(auto: &presrs::eval::early::EarlyAuto) -> String {
     let rules: Vec<String> = auto
         .thresholds
         .iter()
         .zip(&auto.deadlines)
-        .map(|(threshold, deadline)| {
+        .enumerate()
+        .map(|(fold, (threshold, deadline))| {
             let threshold = if *threshold > 1.0 {
                 "never".to_owned()
             } else {
                 format!("{threshold:.3}")
             };
             let deadline = deadline.map_or_else(|| "lift-off".to_owned(), |k| k.to_string());
-            format!("{threshold} else {deadline}")
+            let measured = match (
+                auto.fold_accuracies.get(fold),
+                auto.fold_whole_accuracies.get(fold),
+            ) {
+                (Some(auto), Some(whole)) => {
+                    format!(" ({:.1} %, whole {:.1} %)", 100.0 * auto, 100.0 * whole)
+                }
+                _ => String::new(),
+            };
+            format!("{threshold} else {deadline}{measured}")
         })
         .collect();
     format!(
-        "{} (threshold, else the deadline point or lift-off)",
+        "{} (threshold, else the deadline point or lift-off; auto's accuracy and the whole stance's \
+         on the fold's held-out stances)",
         rules.join("; ")
     )
 }

@@ -59,6 +59,10 @@ pub struct EarlyAuto {
     /// The deadline point of each fold's model (frames after touchdown; `None`: its stances not
     /// confident by then wait for their lift-off), in the draws' order.
     pub deadlines: Vec<Option<usize>>,
+    /// `auto`'s accuracy on each fold's held-out stances, and the whole stance's there, in the
+    /// draws' order: which fold's rule cost what.
+    pub fold_accuracies: Vec<f64>,
+    pub fold_whole_accuracies: Vec<f64>,
     /// What one threshold for every fold would have given, chosen in hindsight on the held-out
     /// stances themselves: the thresholds no other beats in both accuracy and mean decision time,
     /// earliest first. A bound on what any threshold rule could reach with these classifiers, not a
@@ -431,6 +435,21 @@ fn summarise(
     };
     let mean_frames = mean(&|_, d| d.frame as f64);
     let hindsight = hindsight_frontier(&stances, &frames, median);
+    let by_fold =
+        |right: &dyn Fn(&HeldOutStance, &presrs_core::pipeline::OfflineDecision) -> bool| {
+            (0..rules.len())
+                .map(|fold| {
+                    let (mut hits, mut count) = (0usize, 0usize);
+                    for ((stance, decision), (_, _, f)) in decisions.iter().zip(tested) {
+                        if *f == fold {
+                            count += 1;
+                            hits += usize::from(right(stance, decision));
+                        }
+                    }
+                    hits as f64 / count.max(1) as f64
+                })
+                .collect::<Vec<f64>>()
+        };
     let auto = EarlyAuto {
         accuracy: mean(&|s, d| f64::from(u8::from(d.class == s.class))),
         mean_frames,
@@ -441,6 +460,8 @@ fn summarise(
         decided_by_mid_stance: mean(&|s, d| f64::from(u8::from(by_mid_stance(s, d)))),
         thresholds: rules.iter().map(|rule| rule.threshold).collect(),
         deadlines: rules.iter().map(|rule| rule.deadline).collect(),
+        fold_accuracies: by_fold(&|s, d| d.class == s.class),
+        fold_whole_accuracies: by_fold(&|s, _| s.whole.0 == s.class),
         hindsight,
     };
     let mut early = EarlyEvaluation {
@@ -623,6 +644,8 @@ mod tests {
                 decided_by_mid_stance: 0.0,
                 thresholds: Vec::new(),
                 deadlines: Vec::new(),
+                fold_accuracies: Vec::new(),
+                fold_whole_accuracies: Vec::new(),
                 hindsight: Vec::new(),
             },
             median_stance_frames: 20,
