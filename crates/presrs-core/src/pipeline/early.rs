@@ -187,14 +187,14 @@ pub fn train_early(
     validation.check()?;
     let started = Instant::now();
     let length = whole.image_grid().cols;
-    let due: Vec<_> = train_set
+    let trained: Vec<_> = train_set
         .cuts
         .iter()
         .zip(&validation.cuts)
         .filter(|((frames, _), _)| frames + 1 < length)
         .collect();
     let mut points = Vec::new();
-    for (i, ((frames, cut), (_, cut_validation))) in due.iter().enumerate() {
+    for (i, ((frames, cut), (_, cut_validation))) in trained.iter().enumerate() {
         StageObserver::tell(on_stage, || {
             let how = if choose.is_some() {
                 "choosing its method"
@@ -204,7 +204,7 @@ pub fn train_early(
             format!(
                 "decision point {frames} frames ({} of {}): {how} on {} cut stances",
                 i + 1,
-                due.len(),
+                trained.len(),
                 cut.len() + cut_validation.len()
             )
         });
@@ -220,7 +220,8 @@ pub fn train_early(
     let points_seconds = started.elapsed().as_secs_f64();
     let rule_started = Instant::now();
     let all = train_set.joined(validation);
-    let rule_set = rule_stances(&all, RULE_STANCES, seed);
+    let stances = all.whole.len();
+    let rule_set = rule_stances(all, RULE_STANCES, seed);
     let (held_out, inner_folds) = held_out_stances(whole, &rule_set, &points, seed, on_stage)?;
     let kept: Vec<usize> = points.iter().map(|p| p.frames).collect();
     let auto = learn_threshold(&held_out, &kept);
@@ -230,7 +231,7 @@ pub fn train_early(
         inner_folds,
         inner_models: inner_folds * (points.len() + 1),
         rule_stances: rule_set.whole.len(),
-        stances: all.whole.len(),
+        stances,
     };
     let early = EarlyDecisions {
         points,
@@ -248,10 +249,10 @@ pub fn train_early(
 pub const RULE_STANCES: usize = SCORING_SAMPLES;
 
 /// `all`, or a stratified subsample of `at_most` of its stances (seeded) when it holds more.
-fn rule_stances<'a>(all: &StanceImages<'a>, at_most: usize, seed: u64) -> StanceImages<'a> {
+fn rule_stances(all: StanceImages<'_>, at_most: usize, seed: u64) -> StanceImages<'_> {
     match stratified_subsample(&all.whole, at_most, seed) {
         Some(rows) => all.select(&rows),
-        None => all.clone(),
+        None => all,
     }
 }
 
@@ -774,8 +775,8 @@ mod tests {
             cuts: vec![(2, (0..40).map(image).collect())],
             stance_frames: (0..40).map(|i| i + 10).collect(),
         };
-        assert_eq!(rule_stances(&all, 40, 1).whole.len(), 40);
-        let some = rule_stances(&all, 20, 1);
+        assert_eq!(rule_stances(all.clone(), 40, 1).whole.len(), 40);
+        let some = rule_stances(all.clone(), 20, 1);
         assert_eq!(some.whole.len(), 20);
         let count = |label: &str| some.whole.iter().filter(|im| im.label == label).count();
         assert_eq!((count("a"), count("b")), (15, 5));
@@ -784,7 +785,7 @@ mod tests {
             assert_eq!(some.stance_frames[i], original + 10);
             assert_eq!(some.cuts[0].1[i].frame.values()[0] as usize, original);
         }
-        let again = rule_stances(&all, 20, 1);
+        let again = rule_stances(all, 20, 1);
         assert_eq!(again.stance_frames, some.stance_frames);
     }
 

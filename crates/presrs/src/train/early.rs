@@ -6,9 +6,8 @@ use presrs_core::TrainedModel;
 use presrs_core::error::CoreError;
 use presrs_core::pipeline::{LabeledImage, StanceImages, train_early};
 use presrs_core::sample::SampleKind;
-use presrs_core::split::Split;
-
 use presrs_core::selection::StageObserver;
+use presrs_core::split::Split;
 
 use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
