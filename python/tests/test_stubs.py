@@ -53,4 +53,4 @@ def test_everything_public_has_a_docstring():
 def test_the_registered_names_are_exported():
     # The classifier and feature-family names come from the library's registration.
     assert presrs.CLASSIFIERS[:5] == ("pwe", "mle", "lda", "svm", "knn")
-    assert {"fft1d", "fft2d", "fft2d_polar", "glcm"} <= set(presrs.FEATURE_FAMILIES)
+    assert {"fft1d", "fft2d", "fft2d_polar", "glcm", "contact"} <= set(presrs.FEATURE_FAMILIES)

@@ -24,7 +24,9 @@ use crate::printer::progress_lines::{ProgressLines, progress_interval};
 #[derive(Debug, Clone, clap::Args)]
 pub struct PipelineArgs {
     /// Feature family: fft1d (the paper's 1-D |FFT| of the row-major image), fft2d (half 2-D |FFT|),
-    /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes), rocket
+    /// fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture attributes),
+    /// contact (the contact's areas, lengths, elongation, load and radial profile, standardised over the
+    /// training images; not raced by auto), rocket
     /// (MiniRocket over a series: rows are channels, each scaled by its spread; with --sample stance or
     /// series), rocket_unscaled (the channels in their own units), rocket_log (a signed log of every
     /// value first), rocket_duration and rocket_log_duration (a whole stance's duration as one more

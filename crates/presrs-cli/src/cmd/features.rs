@@ -32,6 +32,7 @@ pub struct FeaturesArgs {
     /// (the paper's |FFT| of the row-major, zero-padded image: 1025 values for 38x41), fft2d (half 2-D
     /// |FFT|), fft2d_polar (ring and wedge sums of the 2-D |FFT|), glcm (co-occurrence texture
     /// attributes); join several with + (fft1d+glcm): each part scaled to unit norm, as in a model.
+    /// (contact and the rocket families are learned from training images: only a model computes them.)
     // `std::vec::Vec`: one value holding several families, not a repeatable option
     #[arg(long, default_value = "fft1d", value_parser = parse_features)]
     pub features: std::vec::Vec<FeatureKind>,

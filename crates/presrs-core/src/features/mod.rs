@@ -6,6 +6,7 @@
 //! models, tagged by `kind`). [`FeatureConfig::extractor`] builds a reusable [`FeatureExtractor`] for one
 //! image grid that owns its plans and buffers, so extracting does not allocate.
 
+pub mod contact;
 mod dynamic;
 mod erased;
 mod family;
@@ -19,6 +20,7 @@ pub use dynamic::{FeatureConfig, FeatureExtractor, Precision};
 pub use family::{FeatureFamily, FitImages, MAX_TRANSFORM_LEN};
 pub use registry::{FeatureKind, register};
 
+pub use contact::{ContactConfig, ContactExtractor, ContactFamily, ContactScale};
 pub use fft1d::{Fft1dConfig, Fft1dExtractor, Fft1dFamily};
 pub use fft2d::{Fft2dConfig, Fft2dExtractor, Fft2dFamily, Fft2dForm};
 pub use glcm::{GLCM_ATTRIBUTE_NAMES, GlcmConfig, GlcmExtractor, GlcmFamily};

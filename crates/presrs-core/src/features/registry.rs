@@ -7,6 +7,7 @@ use std::sync::RwLock;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::{CoreError, Result};
+use crate::features::contact::ContactFamily;
 use crate::features::erased::{DynFamily, Erased};
 use crate::features::family::FeatureFamily;
 use crate::features::fft1d::Fft1dFamily;
@@ -17,10 +18,11 @@ use crate::features::rocket::multi_family::MultiRocketFamily;
 
 /// The built-in families, in the order users see them. One line per family (every preset of it is a
 /// name).
-const BUILT_IN: [&dyn DynFamily; 5] = [
+const BUILT_IN: [&dyn DynFamily; 6] = [
     Erased::<Fft1dFamily>::FAMILY,
     Erased::<Fft2dFamily>::FAMILY,
     Erased::<GlcmFamily>::FAMILY,
+    Erased::<ContactFamily>::FAMILY,
     Erased::<RocketFamily>::FAMILY,
     Erased::<MultiRocketFamily>::FAMILY,
 ];
@@ -45,6 +47,9 @@ impl FeatureKind {
     pub const FFT2D_POLAR: Self = Self::preset::<Fft2dFamily>(1);
     /// Haralick attributes of grey-level co-occurrence matrices.
     pub const GLCM: Self = Self::preset::<GlcmFamily>(0);
+    /// Contact geometry: areas above shares of the peak, the load's moments and radial profile, mean
+    /// and peak, standardised over the training images.
+    pub const CONTACT: Self = Self::preset::<ContactFamily>(0);
     /// MiniRocket's random convolutions of a series (an image's rows as channels over time), learned
     /// from the training samples.
     pub const ROCKET: Self = Self::preset::<RocketFamily>(0);
