@@ -156,18 +156,14 @@ fn the_family_is_learned_and_checks_its_parameters() {
 }
 
 /// A model with the contact family stores its learned scale, loads back and classifies alike; a
-/// stored scale cut short is refused on loading.
+/// stored scale of the wrong length is refused on loading.
 #[test]
 fn a_model_keeps_its_contact_scale() {
     use presrs_core::features::{FeatureConfig, FeatureKind};
     use presrs_core::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
-    use presrs_core::testing::{SYNTHETIC_CLASSES, synthetic_frame};
-    use rand::SeedableRng;
+    use presrs_core::testing::labeled_set;
 
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-    let set: Vec<_> = (0..4 * 10)
-        .map(|i| (synthetic_frame(i % 4, &mut rng), SYNTHETIC_CLASSES[i % 4]))
-        .collect();
+    let set = labeled_set(10, 5);
     let images: Vec<LabeledImage<'_>> = set
         .iter()
         .map(|(frame, label)| LabeledImage::new(frame.view(), label))
