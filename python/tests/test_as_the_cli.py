@@ -317,8 +317,12 @@ def test_every_feature_and_classifier_name_the_docs_give_is_accepted():
 
 def test_each_listed_name_trains_a_model(sim_images):
     images, labels, _ = sim_images
-    for family in ("fft2d_polar", "fft1d+glcm"):
-        presrs.Model.train(images[:40], labels[:40], features=family, classifier="lda")
+    for family in ("fft2d_polar", "fft1d+glcm", "fft2d_polar+contact"):
+        model = presrs.Model.train(images[:40], labels[:40], features=family, classifier="lda")
+        assert len(model.predict(images[:4])) == 4
+    # contact learns its scale from training images: only a model computes it, said in Python's words
+    learned = _refused(presrs.features, images[:2], family="contact")
+    assert "train a model" in learned, learned
     message = _refused(presrs.features, images[:2], family="auto")
     assert all(f in message for f in presrs.FEATURE_FAMILIES), message
 
