@@ -19,7 +19,7 @@
 //! An image without load gives zeros. The raw measures are in unlike units (shares, lengths, logs of
 //! the sensor's units), so the family learns from the training images each measure's mean and spread
 //! and writes the standardised values ([`ContactScale`]): every measure then weighs alike once the part
-//! is scaled to unit norm beside other families. Cheap: one pass over the image per measure group.
+//! is scaled to unit norm beside other families. Cheap: two passes over the image.
 
 use serde::{Deserialize, Serialize};
 
@@ -165,47 +165,41 @@ pub fn raw_measures_into(config: &ContactConfig, grid: Grid, image: &[f64], out:
     let (areas, rest) = out.split_at_mut(config.area_shares.len());
     let (moments, profile) = rest.split_at_mut(MOMENT_AND_INTENSITY_MEASURES);
     let len = image.len() as f64;
-    for (area, share) in areas.iter_mut().zip(&config.area_shares) {
-        let above = image.iter().filter(|&&v| load(v) > share * peak).count();
-        *area = above as f64 / len;
-    }
+    let scale = len.sqrt();
     let (centre_row, centre_col) = (row_sum / total, col_sum / total);
+    // One pass around the centre of pressure: the areas, the second moments, the radial profile.
     let (mut rr, mut cc, mut rc) = (0.0, 0.0, 0.0);
     for (index, &v) in image.iter().enumerate() {
+        let v = load(v);
+        for (area, share) in areas.iter_mut().zip(&config.area_shares) {
+            *area += f64::from(u8::from(v > share * peak));
+        }
         let (dr, dc) = (
             (index / grid.cols) as f64 - centre_row,
             (index % grid.cols) as f64 - centre_col,
         );
-        let v = load(v);
         rr += v * dr * dr;
         cc += v * dc * dc;
         rc += v * dr * dc;
+        let distance = (dr * dr + dc * dc).sqrt();
+        for (within, radius) in profile.iter_mut().zip(&config.profile_radii) {
+            if distance < radius * scale / 2.0 {
+                *within += v;
+            }
+        }
     }
+    areas.iter_mut().for_each(|area| *area /= len);
+    profile.iter_mut().for_each(|within| *within /= total);
     let (rr, cc, rc) = (rr / total, cc / total, rc / total);
     // The eigenvalues of [[rr, rc], [rc, cc]], largest first.
     let half_trace = 0.5 * (rr + cc);
     let root = (0.25 * (rr - cc) * (rr - cc) + rc * rc).sqrt();
     let (major, minor) = (half_trace + root, (half_trace - root).max(0.0));
-    let scale = len.sqrt();
     moments[0] = major.sqrt() / scale;
     moments[1] = minor.sqrt() / scale;
     moments[2] = if major > 0.0 { minor / major } else { 0.0 };
     moments[3] = (total / len).ln_1p();
     moments[4] = peak.ln_1p();
-    for (share, radius) in profile.iter_mut().zip(&config.profile_radii) {
-        let limit = radius * scale / 2.0;
-        let within: f64 = image
-            .iter()
-            .enumerate()
-            .filter(|(index, _)| {
-                let dr = (index / grid.cols) as f64 - centre_row;
-                let dc = (index % grid.cols) as f64 - centre_col;
-                (dr * dr + dc * dc).sqrt() < limit
-            })
-            .map(|(_, &v)| load(v))
-            .sum();
-        *share = within / total;
-    }
 }
 
 /// Computes the standardised contact measures; holds its grid and scale.
@@ -275,23 +269,17 @@ impl FeatureFamily for ContactFamily {
         }
         let measures = config.measures();
         let n = images.len() as f64;
-        let (mut sum, mut sum_squares) = (vec![0.0; measures], vec![0.0; measures]);
-        let mut raw = vec![0.0; measures];
-        for index in 0..images.len() {
-            raw_measures_into(config, images.grid, images.image(index), &mut raw);
-            for ((s, q), v) in sum.iter_mut().zip(&mut sum_squares).zip(&raw) {
-                *s += v;
-                *q += v * v;
-            }
+        let mut raw = vec![0.0; images.len() * measures];
+        for (index, out) in raw.chunks_exact_mut(measures).enumerate() {
+            raw_measures_into(config, images.grid, images.image(index), out);
         }
-        let mean: Vec<f64> = sum.iter().map(|s| s / n).collect();
-        let spread = sum_squares
-            .iter()
-            .zip(&mean)
-            .map(|(q, m)| {
-                let variance = (q / n - m * m).max(0.0);
+        let column = |m: usize| raw.iter().skip(m).step_by(measures);
+        let mean: Vec<f64> = (0..measures).map(|m| column(m).sum::<f64>() / n).collect();
+        let spread = (0..measures)
+            .map(|m| {
+                let variance = column(m).map(|v| (v - mean[m]).powi(2)).sum::<f64>() / n;
                 let spread = variance.sqrt();
-                if spread > 1e-12 * (1.0 + m.abs()) {
+                if spread > 1e-12 * (1.0 + mean[m].abs()) {
                     spread
                 } else {
                     1.0
