@@ -129,6 +129,11 @@ fn the_family_is_learned_and_checks_its_parameters() {
         ..ContactConfig::default()
     };
     assert!(bad.check().unwrap_err().to_string().contains("(0, 1)"));
+    let many = ContactConfig {
+        profile_radii: vec![0.5; 65],
+        ..ContactConfig::default()
+    };
+    assert!(many.check().unwrap_err().to_string().contains("at most 64"));
     // a stored scale of the wrong length or with a zero spread is refused (model files are checked)
     let values = vec![1.0; 3 * grid.len()];
     let mut fitted = ContactFamily::fit(

@@ -30,6 +30,10 @@ use crate::frame::Grid;
 /// Measures besides the areas and the profile: major and minor length, elongation, mean and peak.
 const MOMENT_AND_INTENSITY_MEASURES: usize = 5;
 
+/// The most area shares, and the most profile radii, a configuration (or a model file) may hold: each
+/// costs a comparison per sensel of every image.
+pub const MAX_CONTACT_LEVELS: usize = 64;
+
 /// Parameters of the contact-geometry features.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -86,6 +90,16 @@ impl ContactConfig {
                 reason,
             })
         };
+        if self.area_shares.len() > MAX_CONTACT_LEVELS
+            || self.profile_radii.len() > MAX_CONTACT_LEVELS
+        {
+            return bad(format!(
+                "at most {MAX_CONTACT_LEVELS} area shares and {MAX_CONTACT_LEVELS} profile radii, got \
+                 {} and {}",
+                self.area_shares.len(),
+                self.profile_radii.len()
+            ));
+        }
         if self.area_shares.iter().any(|s| !(*s > 0.0 && *s < 1.0)) {
             return bad("every area share must be in (0, 1)".into());
         }
