@@ -195,9 +195,11 @@ pub fn raw_measures_into(config: &ContactConfig, grid: Grid, image: &[f64], out:
         rr += v * dr * dr;
         cc += v * dc * dc;
         rc += v * dr * dc;
-        let distance = (dr * dr + dc * dc).sqrt();
+        // (squared: `d < r` is `d² < r²` for distances, without a root per sensel)
+        let squared = dr * dr + dc * dc;
         for (within, radius) in profile.iter_mut().zip(&config.profile_radii) {
-            if distance < radius * scale / 2.0 {
+            let limit = radius * scale / 2.0;
+            if squared < limit * limit {
                 *within += v;
             }
         }
