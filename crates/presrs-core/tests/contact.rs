@@ -41,7 +41,7 @@ fn assert_close(got: &[f64], expected: &[f64], what: &str) {
 
 fn raw(config: &ContactConfig, grid: Grid, image: &[f64]) -> Vec<f64> {
     let mut out = vec![f64::NAN; config.measures()];
-    raw_measures_into(config, grid, image, &mut out);
+    raw_measures_into(config, grid, image, &mut out).unwrap();
     out
 }
 
@@ -99,6 +99,9 @@ fn closed_forms_of_a_point_and_a_bar() {
             .iter()
             .all(|&v| v == 0.0)
     );
+    // a buffer or an image of the wrong size is an error, not a panic
+    assert!(raw_measures_into(&config, grid, &bar, &mut [0.0; 3]).is_err());
+    assert!(raw_measures_into(&config, grid, &bar[1..], &mut [0.0; 20]).is_err());
 }
 
 #[test]

@@ -161,8 +161,16 @@ impl ContactConfig {
     }
 }
 
-/// Writes the raw (unstandardised) measures of `image` into `out` (`config.measures()` long).
-pub fn raw_measures_into(config: &ContactConfig, grid: Grid, image: &[f64], out: &mut [f64]) {
+/// Writes the raw (unstandardised) measures of `image` (of `grid`) into `out` (`config.measures()`
+/// long). Does not allocate.
+pub fn raw_measures_into(
+    config: &ContactConfig,
+    grid: Grid,
+    image: &[f64],
+    out: &mut [f64],
+) -> Result<()> {
+    check_len("contact image", grid.len(), image.len())?;
+    check_len("contact measures", config.measures(), out.len())?;
     out.fill(0.0);
     let load = |v: f64| v.max(0.0);
     let (mut total, mut peak, mut row_sum, mut col_sum) = (0.0, 0.0f64, 0.0, 0.0);
@@ -174,7 +182,7 @@ pub fn raw_measures_into(config: &ContactConfig, grid: Grid, image: &[f64], out:
         col_sum += v * (index % grid.cols) as f64;
     }
     if total <= 0.0 {
-        return;
+        return Ok(());
     }
     let (areas, rest) = out.split_at_mut(config.area_shares.len());
     let (moments, profile) = rest.split_at_mut(MOMENT_AND_INTENSITY_MEASURES);
@@ -216,6 +224,7 @@ pub fn raw_measures_into(config: &ContactConfig, grid: Grid, image: &[f64], out:
     moments[2] = if major > 0.0 { minor / major } else { 0.0 };
     moments[3] = (total / len).ln_1p();
     moments[4] = peak.ln_1p();
+    Ok(())
 }
 
 /// Computes the standardised contact measures; holds its grid and scale.
@@ -244,9 +253,7 @@ impl ContactExtractor {
     }
 
     pub fn extract_into(&self, image: &[f64], out: &mut [f64]) -> Result<()> {
-        check_len("contact image", self.grid.len(), image.len())?;
-        check_len("contact feature buffer", self.config.measures(), out.len())?;
-        raw_measures_into(&self.config, self.grid, image, out);
+        raw_measures_into(&self.config, self.grid, image, out)?;
         for ((value, mean), spread) in out.iter_mut().zip(&self.scale.mean).zip(&self.scale.spread)
         {
             *value = (*value - mean) / spread;
@@ -286,8 +293,8 @@ impl FeatureFamily for ContactFamily {
         let measures = config.measures();
         let n = images.len() as f64;
         let mut raw = vec![0.0; images.len() * measures];
-        for (index, out) in raw.chunks_exact_mut(measures).enumerate() {
-            raw_measures_into(config, images.grid, images.image(index), out);
+        for (index, out) in raw.chunks_exact_mut(measures.max(1)).enumerate() {
+            raw_measures_into(config, images.grid, images.image(index), out)?;
         }
         let column = |m: usize| raw.iter().skip(m).step_by(measures);
         let mean: Vec<f64> = (0..measures).map(|m| column(m).sum::<f64>() / n).collect();
