@@ -122,8 +122,10 @@ def main():
             train, test = (g != test_group) & (y != held_class), g == test_group
             features = X
             if args.contact:
-                mean, spread = C[train].mean(0), C[train].std(0)
-                spread[spread <= 1e-12 * (1 + np.abs(mean))] = 1.0
+                n, eps = train.sum(), np.finfo(float).eps
+                mean, variance = C[train].mean(0), C[train].var(0)
+                zero = variance <= n * eps * variance + (n * mean * eps) ** 2  # as StandardScaler
+                spread = np.where(zero, 1.0, np.sqrt(variance))
                 features = np.hstack([X, unit((C - mean) / spread)])
             s = scores(features[train], y[train], g[train], features[test])
             novel += list(s[y[test] == held_class])

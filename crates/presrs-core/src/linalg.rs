@@ -32,3 +32,39 @@ pub(crate) fn symmetric_eigen(matrix: MatRef<'_, f64>) -> Result<(Diag<f64>, Mat
     )?;
     Ok((values, vectors))
 }
+
+/// The mean and scale of every column of the rows `rows()` gives (`dims` values each): the population standard
+/// deviation, or 1 where the variance is within rounding of zero (scikit-learn's `StandardScaler`:
+/// `var <= n ε var + (n ε mean)²`), so that a constant column standardises to 0. Two passes.
+pub(crate) fn column_standardisation<'r, T, I>(
+    rows: impl Fn() -> I,
+    dims: usize,
+) -> (Vec<f64>, Vec<f64>)
+where
+    T: Copy + Into<f64> + 'r,
+    I: Iterator<Item = &'r [T]>,
+{
+    let n = rows().count() as f64;
+    let mut means = vec![0.0; dims];
+    for row in rows() {
+        means.iter_mut().zip(row).for_each(|(m, &v)| *m += v.into());
+    }
+    means.iter_mut().for_each(|m| *m /= n);
+    let mut variances = vec![0.0; dims];
+    for row in rows() {
+        for ((var, &v), m) in variances.iter_mut().zip(row).zip(&means) {
+            let d = v.into() - m;
+            *var += d * d;
+        }
+    }
+    let scales = variances
+        .iter()
+        .zip(&means)
+        .map(|(sum, mean)| {
+            let var = sum / n;
+            let bound = n * f64::EPSILON * var + (n * mean * f64::EPSILON).powi(2);
+            if var <= bound { 1.0 } else { var.sqrt() }
+        })
+        .collect();
+    (means, scales)
+}

@@ -137,6 +137,9 @@ fn the_family_is_learned_and_checks_its_parameters() {
         ..ContactConfig::default()
     };
     assert!(many.check().unwrap_err().to_string().contains("at most 64"));
+    let (grid, image) = (Grid::new(2, 2), [1.0; 4]);
+    let err = raw_measures_into(&many, grid, &image, &mut vec![0.0; many.measures()]).unwrap_err();
+    assert!(err.to_string().contains("at most 64"), "{err}");
     // a stored scale of the wrong length or with a zero spread is refused (model files are checked)
     let values = vec![1.0; 3 * grid.len()];
     let mut fitted = ContactFamily::fit(

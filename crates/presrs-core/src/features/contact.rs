@@ -26,6 +26,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result, check_len};
 use crate::features::family::{FeatureFamily, FitImages};
 use crate::frame::Grid;
+use crate::linalg::column_standardisation;
 
 /// Measures besides the areas and the profile: major and minor length, elongation, mean and peak.
 const MOMENT_AND_INTENSITY_MEASURES: usize = 5;
@@ -171,6 +172,9 @@ pub fn raw_measures_into(
 ) -> Result<()> {
     check_len("contact image", grid.len(), image.len())?;
     check_len("contact measures", config.measures(), out.len())?;
+    if config.area_shares.len().max(config.profile_radii.len()) > MAX_CONTACT_LEVELS {
+        return config.check();
+    }
     out.fill(0.0);
     let load = |v: f64| v.max(0.0);
     let (mut total, mut peak, mut row_sum, mut col_sum) = (0.0, 0.0f64, 0.0, 0.0);
@@ -189,12 +193,26 @@ pub fn raw_measures_into(
     let len = image.len() as f64;
     let scale = len.sqrt();
     let (centre_row, centre_col) = (row_sum / total, col_sum / total);
+    // The levels and the squared radii, once per image (on the stack: at most MAX_CONTACT_LEVELS);
+    // squared because `d < r` is `d² < r²` for distances, without a root per sensel.
+    let mut levels = [0.0; MAX_CONTACT_LEVELS];
+    let mut limits = [0.0; MAX_CONTACT_LEVELS];
+    for (level, share) in levels.iter_mut().zip(&config.area_shares) {
+        *level = share * peak;
+    }
+    for (limit, radius) in limits.iter_mut().zip(&config.profile_radii) {
+        *limit = (radius * scale / 2.0).powi(2);
+    }
+    let (levels, limits) = (
+        &levels[..config.area_shares.len()],
+        &limits[..config.profile_radii.len()],
+    );
     // One pass around the centre of pressure: the areas, the second moments, the radial profile.
     let (mut rr, mut cc, mut rc) = (0.0, 0.0, 0.0);
     for (index, &v) in image.iter().enumerate() {
         let v = load(v);
-        for (area, share) in areas.iter_mut().zip(&config.area_shares) {
-            *area += f64::from(u8::from(v > share * peak));
+        for (area, level) in areas.iter_mut().zip(levels) {
+            *area += f64::from(u8::from(v > *level));
         }
         let (dr, dc) = (
             (index / grid.cols) as f64 - centre_row,
@@ -203,11 +221,9 @@ pub fn raw_measures_into(
         rr += v * dr * dr;
         cc += v * dc * dc;
         rc += v * dr * dc;
-        // (squared: `d < r` is `d² < r²` for distances, without a root per sensel)
         let squared = dr * dr + dc * dc;
-        for (within, radius) in profile.iter_mut().zip(&config.profile_radii) {
-            let limit = radius * scale / 2.0;
-            if squared < limit * limit {
+        for (within, limit) in profile.iter_mut().zip(limits) {
+            if squared < *limit {
                 *within += v;
             }
         }
@@ -231,6 +247,7 @@ pub fn raw_measures_into(
 #[derive(Clone, Debug)]
 pub struct ContactExtractor {
     grid: Grid,
+    /// The measures' parameters (its fitted scale moved to `scale`).
     config: ContactConfig,
     scale: ContactScale,
 }
@@ -239,7 +256,8 @@ impl ContactExtractor {
     /// An extractor for images of `grid`; the features are learned, so `config` must be fitted.
     pub fn new(grid: Grid, config: &ContactConfig) -> Result<Self> {
         config.output_len(grid)?;
-        let scale = config.fitted.clone().ok_or_else(|| CoreError::Param {
+        let mut config = config.clone();
+        let scale = config.fitted.take().ok_or_else(|| CoreError::Param {
             name: "contact",
             reason: "the contact measures are standardised by their spread over the training \
                      images: train a model with them (they have no extractor before training)"
@@ -247,7 +265,7 @@ impl ContactExtractor {
         })?;
         Ok(Self {
             grid,
-            config: config.clone(),
+            config,
             scale,
         })
     }
@@ -281,8 +299,9 @@ impl FeatureFamily for ContactFamily {
         config.check()
     }
 
-    /// Each measure's mean and spread over `images` (a spread of zero, a measure constant over the
-    /// training images, is taken as 1: the measure is then 0 for them and reads any departure).
+    /// Each measure's mean and spread over `images` (a spread within rounding of zero, a measure
+    /// constant over the training images, is taken as 1: the measure is then 0 for them and reads any
+    /// departure; [`column_standardisation`], as ridge standardises).
     fn fit(config: &ContactConfig, images: FitImages<'_>) -> Result<ContactConfig> {
         config.output_len(images.grid)?;
         if images.is_empty() {
@@ -291,24 +310,11 @@ impl FeatureFamily for ContactFamily {
             ));
         }
         let measures = config.measures();
-        let n = images.len() as f64;
         let mut raw = vec![0.0; images.len() * measures];
         for (index, out) in raw.chunks_exact_mut(measures.max(1)).enumerate() {
             raw_measures_into(config, images.grid, images.image(index), out)?;
         }
-        let column = |m: usize| raw.iter().skip(m).step_by(measures);
-        let mean: Vec<f64> = (0..measures).map(|m| column(m).sum::<f64>() / n).collect();
-        let spread = (0..measures)
-            .map(|m| {
-                let variance = column(m).map(|v| (v - mean[m]).powi(2)).sum::<f64>() / n;
-                let spread = variance.sqrt();
-                if spread > 1e-12 * (1.0 + mean[m].abs()) {
-                    spread
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let (mean, spread) = column_standardisation(|| raw.chunks_exact(measures.max(1)), measures);
         Ok(ContactConfig {
             fitted: Some(ContactScale { mean, spread }),
             ..config.clone()

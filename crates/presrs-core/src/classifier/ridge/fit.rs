@@ -11,6 +11,7 @@ use crate::classifier::common::LabeledVectors;
 use crate::classifier::common::{accuracy_of_scores, check_vectors};
 use crate::classifier::family::{FitData, FitRows};
 use crate::error::{CoreError, Result};
+use crate::linalg::column_standardisation;
 
 impl RidgeModel {
     /// Trains on the training and validation vectors together (see the module documentation); with
@@ -95,7 +96,7 @@ impl RidgeModel {
         config.check()?;
         let dims = rows.dims;
         require_every_class(classes, n_classes)?;
-        let (means, mut scales) = standardisation(rows);
+        let (means, mut scales) = column_standardisation(|| rows.iter(), dims);
         if scaling == Scaling::Centred {
             scales.fill(1.0);
         }
@@ -220,36 +221,6 @@ fn require_every_class(classes: &[usize], n_classes: usize) -> Result<()> {
         )));
     }
     Ok(())
-}
-
-/// The mean and scale of every feature over `rows`: the population standard deviation, or 1 where the
-/// variance is within rounding of zero (scikit-learn's `StandardScaler`: `var <= n ε var + (n ε
-/// mean)²`).
-fn standardisation<T: Copy + Into<f64>>(rows: &Rows<'_, T>) -> (Vec<f64>, Vec<f64>) {
-    let dims = rows.dims;
-    let n = rows.len() as f64;
-    let mut means = vec![0.0; dims];
-    for row in rows.iter() {
-        means.iter_mut().zip(row).for_each(|(m, &v)| *m += v.into());
-    }
-    means.iter_mut().for_each(|m| *m /= n);
-    let mut variances = vec![0.0; dims];
-    for row in rows.iter() {
-        for ((var, &v), m) in variances.iter_mut().zip(row).zip(&means) {
-            let d = v.into() - m;
-            *var += d * d;
-        }
-    }
-    let scales = variances
-        .iter()
-        .zip(&means)
-        .map(|(sum, mean)| {
-            let var = sum / n;
-            let bound = n * f64::EPSILON * var + (n * mean * f64::EPSILON).powi(2);
-            if var <= bound { 1.0 } else { var.sqrt() }
-        })
-        .collect();
-    (means, scales)
 }
 
 /// `rows`, standardised, row-major.
