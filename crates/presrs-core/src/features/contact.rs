@@ -301,7 +301,7 @@ impl FeatureFamily for ContactFamily {
 
     /// Each measure's mean and spread over `images` (a spread within rounding of zero, a measure
     /// constant over the training images, is taken as 1: the measure is then 0 for them and reads any
-    /// departure; [`column_standardisation`], as ridge standardises).
+    /// departure; `linalg::column_standardisation`, as ridge standardises).
     fn fit(config: &ContactConfig, images: FitImages<'_>) -> Result<ContactConfig> {
         config.output_len(images.grid)?;
         if images.is_empty() {
