@@ -119,10 +119,13 @@ pub enum ChoiceRule {
     Best,
     /// The earliest candidate (the search lists the paper's method first, the costlier families last,
     /// and on whole samples the peers' pairing first) whose mean is within one standard error of the
-    /// best's (its folds' spread over the square root of their number): differences inside that are
-    /// noise, and the highest of a dozen noisy scores is more often a lucky candidate than a better
-    /// one. With fewer than [`ONE_SE_MIN_FOLDS`] folds, the best (one difference is no estimate of
-    /// the spread).
+    /// best's: differences inside that are noise, and the highest of a dozen noisy scores is more
+    /// often a lucky candidate than a better one. The standard error is its folds' spread over the
+    /// square root of their number, but never below the binomial standard error of an accuracy
+    /// measured on all the held-out samples, `sqrt(p (1 - p) / n)`: three to five folds that happen
+    /// to agree say little of their spread, and no accuracy is known better than its samples allow.
+    /// With fewer than [`ONE_SE_MIN_FOLDS`] folds, the best (one difference is no estimate of the
+    /// spread).
     OneStandardError,
 }
 
@@ -149,14 +152,17 @@ impl std::str::FromStr for ChoiceRule {
     }
 }
 
-/// The earliest scored candidate within one standard error of `best`'s mean; `best` itself when it
-/// was scored on fewer than [`ONE_SE_MIN_FOLDS`] folds.
-fn one_standard_error(scores: &[CandidateScore], best: usize) -> usize {
+/// The earliest scored candidate within one standard error of `best`'s mean (the folds' or, if larger,
+/// the binomial one of `held_out` samples); `best` itself when it was scored on fewer than
+/// [`ONE_SE_MIN_FOLDS`] folds.
+fn one_standard_error(scores: &[CandidateScore], best: usize, held_out: usize) -> usize {
     if scores[best].per_fold.len() < ONE_SE_MIN_FOLDS {
         return best;
     }
     let folds = scores[best].per_fold.len() as f64;
-    let threshold = scores[best].accuracy.mean - scores[best].accuracy.std / folds.sqrt();
+    let mean = scores[best].accuracy.mean;
+    let binomial = (mean * (1.0 - mean) / held_out.max(1) as f64).sqrt();
+    let threshold = mean - (scores[best].accuracy.std / folds.sqrt()).max(binomial);
     scores
         .iter()
         .position(|score| score.is_contender() && score.accuracy.mean >= threshold)
@@ -187,12 +193,13 @@ fn choose(
     best: usize,
     rule: ChoiceRule,
     preferred: Option<usize>,
+    held_out: usize,
 ) -> usize {
     let tied = preferred_if_tied(scores, best, preferred);
     match rule {
         _ if tied != best || !scores[best].is_contender() => tied,
         ChoiceRule::Best => best,
-        ChoiceRule::OneStandardError => one_standard_error(scores, best),
+        ChoiceRule::OneStandardError => one_standard_error(scores, best, held_out),
     }
 }
 
@@ -372,7 +379,8 @@ fn select_on(
             chosen = i;
         }
     }
-    chosen = choose(&scores, chosen, choice.rule, preferred_on_tie);
+    let held_out = folds.iter().map(|fold| fold.test.len()).sum();
+    chosen = choose(&scores, chosen, choice.rule, preferred_on_tie, held_out);
     if !scores[chosen].is_contender() {
         // Every candidate failed (or, in a race, failed on a later fold after the others were
         // dropped); the first failure's reason stands for them.

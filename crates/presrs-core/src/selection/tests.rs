@@ -329,8 +329,9 @@ fn a_spent_budget_scores_the_first_feature_group_only() {
 }
 
 /// The one-standard-error rule picks the earliest candidate whose mean is within the best's standard
-/// error (spread over the square root of the folds); failed candidates never; the best itself when
-/// nothing earlier is close; and the rules parse by name.
+/// error (spread over the square root of the folds, at least the binomial one of the held-out
+/// samples); failed candidates never; the best itself when nothing earlier is close; and the rules
+/// parse by name.
 #[test]
 fn one_standard_error_picks_the_earliest_close_candidate() {
     let score = |mean: f64, std: f64, error: Option<&str>| CandidateScore {
@@ -343,6 +344,8 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
         skipped: false,
         dropped_early: false,
     };
+    // so many held-out samples that the binomial error (0.002 at 0.95) is below the folds' spread
+    const MANY: usize = 10_000;
     // best: 0.95 with std 0.04 over 4 folds -> standard error 0.02, threshold 0.93
     let scores = [
         score(0.0, 0.0, Some("failed")),
@@ -350,13 +353,18 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
         score(0.93, 0.02, None),
         score(0.95, 0.04, None),
     ];
-    assert_eq!(one_standard_error(&scores, 3), 2);
+    assert_eq!(one_standard_error(&scores, 3, MANY), 2);
     // a candidate dropped early in a race is never picked, however close its first folds were
     let mut raced = scores.clone();
     raced[2].dropped_early = true;
-    assert_eq!(one_standard_error(&raced, 3), 3);
+    assert_eq!(one_standard_error(&raced, 3, MANY), 3);
     let far = [score(0.80, 0.0, None), score(0.95, 0.01, None)];
-    assert_eq!(one_standard_error(&far, 1), 1);
+    assert_eq!(one_standard_error(&far, 1, MANY), 1);
+    // folds that agree (no spread) on few samples: the binomial error, sqrt(0.95 x 0.05 / 100) =
+    // 0.022, admits the earlier candidate 0.02 below; on 10,000 samples (0.002) it does not
+    let agreeing = [score(0.93, 0.0, None), score(0.95, 0.0, None)];
+    assert_eq!(one_standard_error(&agreeing, 1, 100), 0);
+    assert_eq!(one_standard_error(&agreeing, 1, MANY), 1);
     // with two folds the spread is one difference: the best stands
     let two_folds: Vec<CandidateScore> = scores
         .iter()
@@ -365,7 +373,7 @@ fn one_standard_error_picks_the_earliest_close_candidate() {
             ..score.clone()
         })
         .collect();
-    assert_eq!(one_standard_error(&two_folds, 3), 3);
+    assert_eq!(one_standard_error(&two_folds, 3, 100), 3);
     assert_eq!(
         "one-se".parse::<ChoiceRule>(),
         Ok(ChoiceRule::OneStandardError)
@@ -1051,7 +1059,7 @@ fn both_rules_give_a_tie_to_the_preferred_candidate_and_one_se_the_rest_to_the_o
         scored("rocket", "svm", 51, 0.98),
     ];
     for rule in [ChoiceRule::Best, ChoiceRule::OneStandardError] {
-        assert_eq!(choose(&tied, 1, rule, Some(2)), 2, "{rule:?}");
+        assert_eq!(choose(&tied, 1, rule, Some(2), 10_000), 2, "{rule:?}");
     }
     // no tie: the best's standard error (0.02 over 3 folds: 0.0115) reaches the first candidate
     let close = [
@@ -1059,9 +1067,15 @@ fn both_rules_give_a_tie_to_the_preferred_candidate_and_one_se_the_rest_to_the_o
         with_spread(scored("rocket_unscaled", "svm", 51, 0.98), 0.02),
         scored("rocket", "svm", 51, 0.975),
     ];
-    assert_eq!(choose(&close, 1, ChoiceRule::Best, Some(2)), 1);
-    assert_eq!(choose(&close, 1, ChoiceRule::OneStandardError, Some(2)), 0);
-    assert_eq!(choose(&close, 1, ChoiceRule::OneStandardError, None), 0);
+    assert_eq!(choose(&close, 1, ChoiceRule::Best, Some(2), 10_000), 1);
+    assert_eq!(
+        choose(&close, 1, ChoiceRule::OneStandardError, Some(2), 10_000),
+        0
+    );
+    assert_eq!(
+        choose(&close, 1, ChoiceRule::OneStandardError, None, 10_000),
+        0
+    );
 }
 
 /// End to end: two candidates the validation cannot tell apart (the same method twice) go to the
