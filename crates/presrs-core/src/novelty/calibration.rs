@@ -120,7 +120,7 @@ pub(crate) fn held_out_scores(held_out: &HeldOut, sorted_distances: &[f64]) -> V
 
 /// The fold of every vector by its group, more than [`MAX_FOLDS`] groups merged, whole, in sorted
 /// order; an error when a vector has no group or there are fewer than [`MIN_GROUPS`].
-fn assign_folds(groups: &[Option<&str>]) -> Result<Vec<usize>> {
+pub(crate) fn assign_folds(groups: &[Option<&str>]) -> Result<Vec<usize>> {
     let distinct: BTreeSet<&str> = groups.iter().flatten().copied().collect();
     let missing = groups.iter().filter(|g| g.is_none()).count();
     if missing > 0 || distinct.len() < MIN_GROUPS {

@@ -29,6 +29,7 @@
 //! reported at 0.9.
 
 mod calibration;
+mod contact;
 mod discriminant;
 #[cfg(test)]
 mod tests;
@@ -36,6 +37,9 @@ mod tests;
 use serde::{Deserialize, Serialize};
 
 pub use calibration::{CalibrationFolds, MIN_GROUPS};
+pub use contact::{
+    CHECKED_CLASSES, CONTACT_CHECK_SAMPLES, ContactCheck, NoveltyContact, check_contact,
+};
 pub use discriminant::Discriminant;
 use discriminant::{nearest, nearest_posterior};
 
@@ -115,6 +119,14 @@ struct NoveltyFields {
     /// posterior joined the score: their score is the distance, read against `calibration`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     combined: Vec<f64>,
+    /// The contact's geometry appended to the classifier's vector before the space (frame models whose
+    /// training data showed it separates their classes better; absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    contact: Option<NoveltyContact>,
+    /// What leaving classes out inside the training data measured of the contact part (frame models;
+    /// absent otherwise and from files written before the check).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    contact_check: Option<ContactCheck>,
 }
 
 impl From<NoveltyModel> for NoveltyFields {
@@ -174,6 +186,17 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
                 "the held-out scores must be sorted and in [0, 1]".into()
             ));
         }
+        if let Some(contact) = &fields.contact {
+            contact.check()?;
+            if fields.reduction.is_some() || space.dims <= contact.measures() {
+                return Err(bad(format!(
+                    "a contact part of {} measures needs a space of more values, read as they are (not \
+                     after a reduction), got {}",
+                    contact.measures(),
+                    space.dims
+                )));
+            }
+        }
         if let Some(pca) = &fields.reduction
             && pca.n_components() != space.dims
         {
@@ -202,6 +225,7 @@ impl TryFrom<NoveltyFields> for NoveltyModel {
 #[derive(Clone, Debug, Default)]
 pub struct NoveltyScratch {
     reduced: Vec<f64>,
+    joined: Vec<f64>,
     projected: Vec<f64>,
     distances: Vec<f64>,
 }
@@ -244,7 +268,53 @@ impl NoveltyModel {
             calibration_vectors: distances.len(),
             calibration: distances,
             combined,
+            contact: None,
+            contact_check: None,
         })
+    }
+
+    /// [`fit`](Self::fit) on `vectors` joined with the contact part fitted on their `raw` measures (of
+    /// `config`, `n x measures`): a score that reads both ([`score_parts_into`](Self::score_parts_into)).
+    #[allow(clippy::too_many_arguments)]
+    pub fn fit_with_contact(
+        config: &crate::features::contact::ContactConfig,
+        vectors: &[f64],
+        raw: &[f64],
+        classes: &[usize],
+        groups: &[Option<&str>],
+        n_classes: usize,
+        dims: usize,
+        rejection: f64,
+    ) -> Result<Self> {
+        let contact = NoveltyContact::fit(config, raw, vectors, dims)?;
+        let joined = contact.joined(vectors, dims, raw)?;
+        let mut model = Self::fit(
+            &joined,
+            classes,
+            groups,
+            n_classes,
+            dims + contact.measures(),
+            rejection,
+        )?;
+        model.fields.contact = Some(contact);
+        Self::try_from(model.fields)
+    }
+
+    /// This score with what the check of its contact part measured ([`check_contact`]).
+    pub fn with_contact_check(mut self, check: Option<ContactCheck>) -> Self {
+        self.fields.contact_check = check;
+        self
+    }
+
+    /// What the check of the contact part measured, for a frame model's score.
+    pub fn contact_check(&self) -> Option<ContactCheck> {
+        self.fields.contact_check
+    }
+
+    /// The contact part, when the score reads one: its raw measures of the prepared image are given
+    /// to [`score_parts_into`](Self::score_parts_into).
+    pub fn contact(&self) -> Option<&NoveltyContact> {
+        self.fields.contact.as_ref()
     }
 
     /// This model reading vectors that `pca` reduces to the ones it was fitted on (`NoveltyModel::fit`
@@ -258,14 +328,45 @@ impl NoveltyModel {
     pub fn scratch(&self) -> NoveltyScratch {
         NoveltyScratch {
             reduced: vec![0.0; self.fields.space.dims()],
+            joined: vec![0.0; self.fields.space.dims()],
             projected: vec![0.0; self.fields.space.n_axes()],
             distances: vec![0.0; self.fields.space.n_classes()],
         }
     }
 
-    /// The novelty of `x` (a vector the classifier sees). Does not allocate once `scratch` is sized.
+    /// The novelty of `x` (a vector the classifier sees), for a score without a contact part (an
+    /// error otherwise). Does not allocate once `scratch` is sized.
     pub fn score_into(&self, x: &[f64], scratch: &mut NoveltyScratch) -> Result<Novelty> {
+        self.score_parts_into(x, None, scratch)
+    }
+
+    /// The novelty of `x` (a vector the classifier sees) and, when the score has a contact part
+    /// ([`contact`](Self::contact)), the raw contact measures of the same image (an error without
+    /// them). Does not allocate once `scratch` is sized.
+    pub fn score_parts_into(
+        &self,
+        x: &[f64],
+        contact: Option<&[f64]>,
+        scratch: &mut NoveltyScratch,
+    ) -> Result<Novelty> {
         let space = &self.fields.space;
+        let x = match (&self.fields.contact, contact) {
+            (Some(part), Some(raw)) => {
+                scratch.joined.resize(space.dims(), 0.0);
+                part.join_into(x, raw, &mut scratch.joined)?;
+                &scratch.joined[..]
+            }
+            (Some(_), None) => {
+                return Err(CoreError::Param {
+                    name: "novelty",
+                    reason:
+                        "this score reads the contact's geometry beside the classifier's vector, \
+                             and none was given"
+                            .into(),
+                });
+            }
+            (None, _) => x,
+        };
         let x = match &self.fields.reduction {
             Some(pca) => {
                 scratch.reduced.resize(space.dims(), 0.0);
@@ -327,9 +428,10 @@ impl NoveltyModel {
 
     /// Length of the vectors scored (the classifier's).
     pub fn dims(&self) -> usize {
-        match &self.fields.reduction {
-            Some(pca) => pca.n_features(),
-            None => self.fields.space.dims(),
+        match (&self.fields.reduction, &self.fields.contact) {
+            (Some(pca), _) => pca.n_features(),
+            (None, Some(contact)) => self.fields.space.dims() - contact.measures(),
+            (None, None) => self.fields.space.dims(),
         }
     }
 
@@ -346,9 +448,14 @@ impl NoveltyModel {
             "1 - the nearest class's posterior x the credibility of the distance to the nearest training \
              sample"
         };
-        let reduced = self.fields.reduction.as_ref().map_or(String::new(), |pca| {
-            format!(" (of {} principal components)", pca.n_components())
-        });
+        let reduced = match (&self.fields.reduction, &self.fields.contact) {
+            (Some(pca), _) => format!(" (of {} principal components)", pca.n_components()),
+            (None, Some(contact)) => format!(
+                " (of the classifier's values and {} measures of the contact's geometry)",
+                contact.measures()
+            ),
+            (None, None) => String::new(),
+        };
         format!(
             "{score} in a {}-direction discriminant space{reduced}; unknown above {:.3} ({:.0} % of {} \
              held-out training samples, folds by {})",
@@ -360,7 +467,16 @@ impl NoveltyModel {
                 CalibrationFolds::Group => "group",
                 CalibrationFolds::Split => "stratified split",
             }
-        )
+        ) + &self.fields.contact_check.map_or(String::new(), |check| {
+            format!(
+                "; the contact's geometry {}: leaving {} classes out inside the training data, AUROC \
+                 {:.3} without it, {:.3} with it",
+                if check.taken { "joined" } else { "not joined" },
+                check.classes,
+                check.without,
+                check.with
+            )
+        })
     }
 }
 

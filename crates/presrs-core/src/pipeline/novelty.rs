@@ -4,7 +4,8 @@
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::novelty::NoveltyModel;
+use crate::features::contact::ContactConfig;
+use crate::novelty::{NoveltyModel, check_contact};
 use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
 use crate::pipeline::train::class_indices;
@@ -50,11 +51,37 @@ impl TrainedModel {
             let components = pca.n_components();
             NoveltyModel::fit(&vectors, &classes, groups, n_classes, components, rejection)?
                 .with_reduction(pca)?
+        } else if self.sample().is_frame() {
+            let vectors = self.reduced_vectors(images)?;
+            let config = ContactConfig::default();
+            let raw = self.raw_contact(&config, images)?;
+            let check = check_contact(&config, &vectors, &raw, &classes, groups, n_classes, dims)?;
+            let novelty = if check.is_some_and(|check| check.taken) {
+                NoveltyModel::fit_with_contact(
+                    &config, &vectors, &raw, &classes, groups, n_classes, dims, rejection,
+                )?
+            } else {
+                NoveltyModel::fit(&vectors, &classes, groups, n_classes, dims, rejection)?
+            };
+            novelty.with_contact_check(check)
         } else {
             let vectors = self.reduced_vectors(images)?;
             NoveltyModel::fit(&vectors, &classes, groups, n_classes, dims, rejection)?
         };
         self.with_novelty_model(novelty)
+    }
+
+    /// The raw contact measures of `config` of every image's prepared image (`n x measures`).
+    fn raw_contact(&self, config: &ContactConfig, images: &[LabeledImage<'_>]) -> Result<Vec<f64>> {
+        let measures = config.measures();
+        let mut raw = vec![0.0; images.len() * measures];
+        raw.par_chunks_mut(measures.max(1))
+            .zip(images.par_iter())
+            .try_for_each_init(
+                || self.session(),
+                |session, (out, image)| session.raw_contact_into(config, &image.frame, out),
+            )?;
+        Ok(raw)
     }
 
     /// Principal components of the classifier's vectors of at most [`NOVELTY_PCA_SAMPLES`] of

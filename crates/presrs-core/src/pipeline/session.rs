@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::classifier::ClassifierScratch;
 use crate::error::{CoreError, Result, check_len};
 use crate::features::Precision;
+use crate::features::contact::{ContactConfig, raw_measures_into};
 use crate::frame::FrameView;
 use crate::novelty::{Novelty, NoveltyScratch};
 use crate::pipeline::extract::Preprocessor;
@@ -35,6 +36,7 @@ impl TrainedModel {
                 .as_ref()
                 .map(|novelty| novelty.scratch())
                 .unwrap_or_default(),
+            contact: Vec::new(),
         }
     }
 
@@ -65,6 +67,8 @@ pub struct Session<'m> {
     scratch: ClassifierScratch,
     posteriors: Vec<f64>,
     novelty: NoveltyScratch,
+    /// The raw contact measures of the frame, when the novelty score reads them.
+    contact: Vec<f64>,
 }
 
 /// The result of [`Session::classify`], borrowing the session's buffers.
@@ -113,6 +117,7 @@ impl<'m> Session<'m> {
     /// Classifies one frame. Errors when the frame's grid does not give the model's grid once cropped,
     /// or when it holds non-finite values.
     pub fn classify(&mut self, frame: &FrameView<'_>) -> Result<Prediction<'_>> {
+        let contact = self.contact_measures(frame)?;
         self.reduce(frame)?;
         let model = self.model;
         let reduced = if model.fields.pca.is_some() {
@@ -121,7 +126,8 @@ impl<'m> Session<'m> {
             &self.features
         };
         let class = classify_reduced(model, reduced, &mut self.scratch, &mut self.posteriors)?;
-        let novelty = novelty_of(model, reduced, &mut self.novelty)?;
+        let contact = contact.then_some(&self.contact[..]);
+        let novelty = novelty_of(model, reduced, contact, &mut self.novelty)?;
         Ok(Prediction {
             class,
             label: &model.fields.class_names[class],
@@ -129,6 +135,38 @@ impl<'m> Session<'m> {
             posteriors: &self.posteriors,
             novelty,
         })
+    }
+
+    /// When the model's novelty score reads the contact's geometry, its raw measures of `frame`'s
+    /// prepared image (cropped and transformed as the features see it) into the session's buffer;
+    /// whether it does.
+    pub(crate) fn contact_measures(&mut self, frame: &FrameView<'_>) -> Result<bool> {
+        let Some(part) = self.model.novelty().and_then(|n| n.contact()) else {
+            return Ok(false);
+        };
+        let mut buffer = std::mem::take(&mut self.contact);
+        buffer.resize(part.measures(), 0.0);
+        let written = self.raw_contact_into(part.config(), frame, &mut buffer);
+        self.contact = buffer;
+        written.map(|()| true)
+    }
+
+    /// The raw contact measures of `config` of `frame`'s prepared image (cropped and transformed as
+    /// the features see it) into `out` (`config.measures()` long).
+    pub(crate) fn raw_contact_into(
+        &mut self,
+        config: &ContactConfig,
+        frame: &FrameView<'_>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let grid = self.preprocessor.preparation.image_grid;
+        let image = self.preprocessor.preparation.prepare(frame)?;
+        raw_measures_into(config, grid, image, out)
+    }
+
+    /// The raw contact measures [`contact_measures`](Self::contact_measures) last wrote.
+    pub(crate) fn last_contact(&self) -> &[f64] {
+        &self.contact
     }
 
     /// The feature vector of `frame` (before PCA), exact: as training computes it.
@@ -207,17 +245,19 @@ pub(crate) fn reported_confidence(posterior: f64, novelty: Option<Novelty>) -> f
     novelty.map_or(posterior, |n| n.capped(posterior))
 }
 
-/// The novelty of a reduced vector, when the model scores it.
+/// The novelty of a reduced vector (with the image's raw contact measures when the score reads them),
+/// when the model scores it.
 fn novelty_of(
     model: &TrainedModel,
     reduced: &[f64],
+    contact: Option<&[f64]>,
     scratch: &mut NoveltyScratch,
 ) -> Result<Option<Novelty>> {
     model
         .fields
         .novelty
         .as_ref()
-        .map(|novelty| novelty.score_into(reduced, scratch))
+        .map(|novelty| novelty.score_parts_into(reduced, contact, scratch))
         .transpose()
 }
 
@@ -231,6 +271,8 @@ struct BatchSession<'m> {
     features: Vec<f32>,
     /// Row-major `block x n_components`.
     reduced: Vec<f64>,
+    /// Row-major `block x measures`: the raw contact measures, when the novelty score reads them.
+    contacts: Vec<f64>,
 }
 
 impl<'m> BatchSession<'m> {
@@ -239,6 +281,7 @@ impl<'m> BatchSession<'m> {
             session: model.session(),
             features: Vec::new(),
             reduced: Vec::new(),
+            contacts: Vec::new(),
         }
     }
 
@@ -253,15 +296,31 @@ impl<'m> BatchSession<'m> {
                 .collect();
         };
         let (n_features, dims) = (pca.n_features(), pca.n_components());
+        let measures = model
+            .novelty()
+            .and_then(|n| n.contact())
+            .map_or(0, |part| part.measures());
         self.features.resize(frames.len() * n_features, 0.0);
         self.reduced.resize(frames.len() * dims, 0.0);
+        self.contacts.resize(frames.len() * measures, 0.0);
         // A frame whose features fail keeps its error; its row is zeroed and its projection ignored.
         let mut failed: Vec<Option<CoreError>> = Vec::with_capacity(frames.len());
-        for (frame, row) in frames
+        for (k, (frame, row)) in frames
             .iter()
             .zip(self.features.chunks_exact_mut(n_features))
+            .enumerate()
         {
-            let error = single_features_into(session, frame, row).err();
+            let contact = (measures > 0)
+                .then(|| {
+                    session.contact_measures(frame)?;
+                    self.contacts[k * measures..(k + 1) * measures]
+                        .copy_from_slice(session.last_contact());
+                    Ok::<(), CoreError>(())
+                })
+                .transpose();
+            let error = contact
+                .and_then(|_| single_features_into(session, frame, row))
+                .err();
             if error.is_some() {
                 row.fill(0.0);
             }
@@ -282,10 +341,12 @@ impl<'m> BatchSession<'m> {
                 })
                 .collect();
         }
+        let contacts = &self.contacts;
         failed
             .into_iter()
             .zip(self.reduced.chunks_exact(dims))
-            .map(|(error, reduced)| match error {
+            .enumerate()
+            .map(|(k, (error, reduced))| match error {
                 Some(err) => Err(err),
                 None => {
                     let class = classify_reduced(
@@ -294,7 +355,9 @@ impl<'m> BatchSession<'m> {
                         &mut session.scratch,
                         &mut session.posteriors,
                     )?;
-                    let novelty = novelty_of(model, reduced, &mut session.novelty)?;
+                    let contact =
+                        (measures > 0).then(|| &contacts[k * measures..(k + 1) * measures]);
+                    let novelty = novelty_of(model, reduced, contact, &mut session.novelty)?;
                     Ok(Classification {
                         class,
                         confidence: reported_confidence(session.posteriors[class], novelty),
