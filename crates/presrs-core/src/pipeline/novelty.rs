@@ -308,4 +308,52 @@ mod tests {
             (b.class, b.posteriors, None)
         );
     }
+
+    /// A score with the contact part (forced, whatever the check says): the session, the batch path and
+    /// an oracle (the reduced vector and the raw measures of the prepared image, scored by the part
+    /// directly) agree, the model file keeps the part, and the check's figures reach `describe`.
+    #[test]
+    fn a_score_with_the_contact_part_is_the_same_on_every_path_and_kept_in_the_file() {
+        use crate::features::contact::ContactConfig;
+        let (model, test) = model_without_the_fourth();
+        let set = labeled_set(30, 1);
+        let images = known_images(&set);
+        let groups: Vec<Option<&str>> = images.iter().map(|image| image.group).collect();
+        let classes = class_indices(model.class_names(), &images).unwrap();
+        let config = ContactConfig::default();
+        let vectors = model.reduced_vectors(&images).unwrap();
+        let raw = model.raw_contact(&config, &images).unwrap();
+        let dims = model.classifier_dims();
+        let check =
+            crate::novelty::check_contact(&config, &vectors, &raw, &classes, &groups, 3, dims)
+                .unwrap();
+        let scorer = NoveltyModel::fit_with_contact(
+            &config, &vectors, &raw, &classes, &groups, 3, dims, 0.05,
+        )
+        .unwrap()
+        .with_contact_check(check);
+        let model = model.with_novelty_model(scorer).unwrap();
+        let novelty = model.novelty().unwrap();
+        assert!(novelty.contact().is_some());
+        assert!(novelty.describe().contains("contact's geometry"));
+        let views: Vec<_> = test.iter().map(|(frame, _)| frame.view()).collect();
+        let batch = model.classify_batch(&views);
+        let (mut session, mut reducer) = (model.session(), model.session());
+        let mut measures = vec![0.0; config.measures()];
+        for (view, batched) in views.iter().zip(&batch) {
+            let single = session.classify(view).unwrap().to_classification();
+            assert_eq!(&single, batched.as_ref().unwrap());
+            let reduced = reducer.reduce(view).unwrap().to_vec();
+            reducer
+                .raw_contact_into(&config, view, &mut measures)
+                .unwrap();
+            let oracle = novelty
+                .score_parts_into(&reduced, Some(&measures), &mut novelty.scratch())
+                .unwrap();
+            assert_eq!(single.novelty, Some(oracle));
+        }
+        let text = serde_json::to_string(&model).unwrap();
+        let back: TrainedModel = serde_json::from_str(&text).unwrap();
+        assert_eq!(back.novelty(), model.novelty());
+    }
 }
