@@ -36,10 +36,9 @@ mod tests;
 
 use serde::{Deserialize, Serialize};
 
+pub(crate) use calibration::assign_folds;
 pub use calibration::{CalibrationFolds, MIN_GROUPS};
-pub use contact::{
-    CHECKED_CLASSES, CONTACT_CHECK_SAMPLES, ContactCheck, NoveltyContact, check_contact,
-};
+pub use contact::{ContactCheck, NoveltyContact};
 pub use discriminant::Discriminant;
 use discriminant::{nearest, nearest_posterior};
 
@@ -300,7 +299,7 @@ impl NoveltyModel {
         Self::try_from(model.fields)
     }
 
-    /// This score with what the check of its contact part measured ([`check_contact`]).
+    /// This score with what the check of its contact part measured.
     pub fn with_contact_check(mut self, check: Option<ContactCheck>) -> Self {
         self.fields.contact_check = check;
         self

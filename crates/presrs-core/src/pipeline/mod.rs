@@ -14,6 +14,7 @@
 //! training and afterwards, must have the same grid once cropped.
 
 pub(crate) mod config;
+pub(crate) mod contact_check;
 pub(crate) mod early;
 pub(crate) mod extract;
 pub(crate) mod model;

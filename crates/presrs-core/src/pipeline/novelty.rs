@@ -5,7 +5,8 @@ use rayon::prelude::*;
 
 use crate::error::Result;
 use crate::features::contact::ContactConfig;
-use crate::novelty::{NoveltyModel, check_contact};
+use crate::novelty::NoveltyModel;
+use crate::pipeline::contact_check::check_contact;
 use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
 use crate::pipeline::train::class_indices;
@@ -324,9 +325,10 @@ mod tests {
         let vectors = model.reduced_vectors(&images).unwrap();
         let raw = model.raw_contact(&config, &images).unwrap();
         let dims = model.classifier_dims();
-        let check =
-            crate::novelty::check_contact(&config, &vectors, &raw, &classes, &groups, 3, dims)
-                .unwrap();
+        let check = crate::pipeline::contact_check::check_contact(
+            &config, &vectors, &raw, &classes, &groups, 3, dims,
+        )
+        .unwrap();
         let scorer = NoveltyModel::fit_with_contact(
             &config, &vectors, &raw, &classes, &groups, 3, dims, 0.05,
         )
