@@ -305,11 +305,6 @@ impl NoveltyModel {
         self
     }
 
-    /// What the check of the contact part measured, for a frame model's score.
-    pub fn contact_check(&self) -> Option<ContactCheck> {
-        self.fields.contact_check
-    }
-
     /// The contact part, when the score reads one: its raw measures of the prepared image are given
     /// to [`score_parts_into`](Self::score_parts_into).
     pub fn contact(&self) -> Option<&NoveltyContact> {
@@ -327,7 +322,11 @@ impl NoveltyModel {
     pub fn scratch(&self) -> NoveltyScratch {
         NoveltyScratch {
             reduced: vec![0.0; self.fields.space.dims()],
-            joined: vec![0.0; self.fields.space.dims()],
+            joined: if self.fields.contact.is_some() {
+                vec![0.0; self.fields.space.dims()]
+            } else {
+                Vec::new()
+            },
             projected: vec![0.0; self.fields.space.n_axes()],
             distances: vec![0.0; self.fields.space.n_classes()],
         }

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use crate::error::{Result, check_len};
 use crate::features::contact::ContactConfig;
-use crate::novelty::{ContactCheck, NoveltyContact, NoveltyModel, assign_folds, auroc};
+use crate::novelty::{ContactCheck, DEFAULT_REJECTION, NoveltyModel, assign_folds, auroc};
 
 /// The most classes the check leaves out, evenly spaced in the classes' order.
 pub(crate) const CHECKED_CLASSES: usize = 6;
@@ -37,15 +37,22 @@ pub(crate) fn check_contact(
         vectors.len() / dims.max(1),
         classes.len(),
     )?;
-    let measures = config.measures();
+    let all = Rows {
+        vectors,
+        raw,
+        classes,
+        groups,
+        dims,
+        measures: config.measures(),
+    };
     let step = classes.len().div_ceil(CONTACT_CHECK_SAMPLES).max(1);
     let at: Vec<usize> = (0..classes.len()).step_by(step).collect();
-    let (vectors, raw) = (rows(vectors, dims, &at), rows(raw, measures, &at));
-    let classes: Vec<usize> = at.iter().map(|&i| classes[i]).collect();
-    let groups: Vec<Option<&str>> = at.iter().map(|&i| groups[i]).collect();
-    let folds = assign_folds(&groups)?;
-    let n_folds = folds.iter().copied().max().map_or(0, |last| last + 1);
-    let present: Vec<usize> = (0..n_classes).filter(|c| classes.contains(c)).collect();
+    let data = all.select(&at);
+    let data = data.rows();
+    let folds = assign_folds(data.groups)?;
+    let present: Vec<usize> = (0..n_classes)
+        .filter(|c| data.classes.contains(c))
+        .collect();
     let picked: Vec<usize> = if present.len() <= CHECKED_CLASSES {
         present.clone()
     } else {
@@ -56,62 +63,7 @@ pub(crate) fn check_contact(
     // Each class left out in parallel: its scores depend on nothing but the data.
     let pairs: Vec<Option<(f64, f64)>> = picked
         .par_iter()
-        .map(|&left_out| -> Result<Option<(f64, f64)>> {
-            let mut scores = [(Vec::new(), Vec::new()), (Vec::new(), Vec::new())];
-            for fold in 0..n_folds {
-                let fit: Vec<usize> = (0..classes.len())
-                    .filter(|&i| classes[i] != left_out && folds[i] != fold)
-                    .collect();
-                let held: Vec<usize> = (0..classes.len()).filter(|&i| folds[i] == fold).collect();
-                let fit_vectors = rows(&vectors, dims, &fit);
-                let fit_raw = rows(&raw, measures, &fit);
-                let fit_classes: Vec<usize> = fit.iter().map(|&i| classes[i]).collect();
-                let fit_groups: Vec<Option<&str>> = fit.iter().map(|&i| groups[i]).collect();
-                let held_vectors = rows(&vectors, dims, &held);
-                let held_raw = rows(&raw, measures, &held);
-                let fitted = |part: bool| -> Result<Vec<f64>> {
-                    let (model, held) = if part {
-                        let contact = NoveltyContact::fit(config, &fit_raw, &fit_vectors, dims)?;
-                        let joined = contact.joined(&fit_vectors, dims, &fit_raw)?;
-                        let model = NoveltyModel::fit(
-                            &joined,
-                            &fit_classes,
-                            &fit_groups,
-                            n_classes,
-                            dims + measures,
-                            crate::novelty::DEFAULT_REJECTION,
-                        )?;
-                        (model, contact.joined(&held_vectors, dims, &held_raw)?)
-                    } else {
-                        let model = NoveltyModel::fit(
-                            &fit_vectors,
-                            &fit_classes,
-                            &fit_groups,
-                            n_classes,
-                            dims,
-                            crate::novelty::DEFAULT_REJECTION,
-                        )?;
-                        (model, held_vectors.clone())
-                    };
-                    let width = if part { dims + measures } else { dims };
-                    let mut scratch = model.scratch();
-                    held.chunks_exact(width)
-                        .map(|x| model.score_into(x, &mut scratch).map(|n| n.score))
-                        .collect()
-                };
-                // A fold whose rest cannot give a score (one group or class left) checks nothing.
-                let (Ok(plain), Ok(joined)) = (fitted(false), fitted(true)) else {
-                    continue;
-                };
-                for (k, &i) in held.iter().enumerate() {
-                    let novel = classes[i] == left_out;
-                    for (side, s) in scores.iter_mut().zip([plain[k], joined[k]]) {
-                        if novel { &mut side.0 } else { &mut side.1 }.push(s);
-                    }
-                }
-            }
-            Ok(auroc(&scores[0].0, &scores[0].1).zip(auroc(&scores[1].0, &scores[1].1)))
-        })
+        .map(|&left_out| class_aurocs(config, &data, &folds, n_classes, left_out))
         .collect::<Result<_>>()?;
     let (without, with): (Vec<f64>, Vec<f64>) = pairs.into_iter().flatten().unzip();
     let k = without.len();
@@ -136,11 +88,135 @@ pub(crate) fn check_contact(
     }))
 }
 
-/// The rows `at` of `data` (`width` values each).
-fn rows(data: &[f64], width: usize, at: &[usize]) -> Vec<f64> {
-    at.iter()
-        .flat_map(|&i| data[i * width..(i + 1) * width].iter().copied())
+/// The AUROC of `left_out`'s vectors against the others', without and with the part, each fold of
+/// `folds` held out in turn from a score fitted without it and without the class; `None` when no fold
+/// could be scored or a side is empty.
+fn class_aurocs(
+    config: &ContactConfig,
+    data: &Rows<'_>,
+    folds: &[usize],
+    n_classes: usize,
+    left_out: usize,
+) -> Result<Option<(f64, f64)>> {
+    let n_folds = folds.iter().copied().max().map_or(0, |last| last + 1);
+    // [without, with], each (novel, known)
+    let mut scores = [(Vec::new(), Vec::new()), (Vec::new(), Vec::new())];
+    for fold in 0..n_folds {
+        let fit: Vec<usize> = (0..data.classes.len())
+            .filter(|&i| data.classes[i] != left_out && folds[i] != fold)
+            .collect();
+        let held: Vec<usize> = (0..data.classes.len())
+            .filter(|&i| folds[i] == fold)
+            .collect();
+        let (fit, held_rows) = (data.select(&fit), data.select(&held));
+        // A fold whose rest cannot give a score (one group or class left) checks nothing.
+        let (Ok(plain), Ok(joined)) = (
+            held_out_scores(config, &fit.rows(), &held_rows.rows(), n_classes, false),
+            held_out_scores(config, &fit.rows(), &held_rows.rows(), n_classes, true),
+        ) else {
+            continue;
+        };
+        for (k, &i) in held.iter().enumerate() {
+            let novel = data.classes[i] == left_out;
+            for (side, s) in scores.iter_mut().zip([plain[k], joined[k]]) {
+                if novel { &mut side.0 } else { &mut side.1 }.push(s);
+            }
+        }
+    }
+    Ok(auroc(&scores[0].0, &scores[0].1).zip(auroc(&scores[1].0, &scores[1].1)))
+}
+
+/// The scores of `held` under a score fitted (and calibrated) on `fit`, with the contact part or not.
+fn held_out_scores(
+    config: &ContactConfig,
+    fit: &Rows<'_>,
+    held: &Rows<'_>,
+    n_classes: usize,
+    part: bool,
+) -> Result<Vec<f64>> {
+    let model = if part {
+        NoveltyModel::fit_with_contact(
+            config,
+            fit.vectors,
+            fit.raw,
+            fit.classes,
+            fit.groups,
+            n_classes,
+            fit.dims,
+            DEFAULT_REJECTION,
+        )?
+    } else {
+        NoveltyModel::fit(
+            fit.vectors,
+            fit.classes,
+            fit.groups,
+            n_classes,
+            fit.dims,
+            DEFAULT_REJECTION,
+        )?
+    };
+    let mut scratch = model.scratch();
+    held.vectors
+        .chunks_exact(held.dims)
+        .zip(held.raw.chunks_exact(held.measures))
+        .map(|(x, raw)| {
+            model
+                .score_parts_into(x, part.then_some(raw), &mut scratch)
+                .map(|n| n.score)
+        })
         .collect()
+}
+
+/// Training vectors with their raw contact measures, classes and groups, row by row.
+struct Rows<'a> {
+    vectors: &'a [f64],
+    raw: &'a [f64],
+    classes: &'a [usize],
+    groups: &'a [Option<&'a str>],
+    dims: usize,
+    measures: usize,
+}
+
+/// The rows of [`Rows`] that [`Rows::select`] copies out.
+struct OwnedRows<'a> {
+    vectors: Vec<f64>,
+    raw: Vec<f64>,
+    classes: Vec<usize>,
+    groups: Vec<Option<&'a str>>,
+    dims: usize,
+    measures: usize,
+}
+
+impl<'a> Rows<'a> {
+    /// The rows `at`, in that order.
+    fn select(&self, at: &[usize]) -> OwnedRows<'a> {
+        let take = |data: &[f64], width: usize| -> Vec<f64> {
+            at.iter()
+                .flat_map(|&i| data[i * width..(i + 1) * width].iter().copied())
+                .collect()
+        };
+        OwnedRows {
+            vectors: take(self.vectors, self.dims),
+            raw: take(self.raw, self.measures),
+            classes: at.iter().map(|&i| self.classes[i]).collect(),
+            groups: at.iter().map(|&i| self.groups[i]).collect(),
+            dims: self.dims,
+            measures: self.measures,
+        }
+    }
+}
+
+impl<'a> OwnedRows<'a> {
+    fn rows(&self) -> Rows<'_> {
+        Rows {
+            vectors: &self.vectors,
+            raw: &self.raw,
+            classes: &self.classes,
+            groups: &self.groups,
+            dims: self.dims,
+            measures: self.measures,
+        }
+    }
 }
 
 #[cfg(test)]

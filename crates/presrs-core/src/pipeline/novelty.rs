@@ -52,22 +52,28 @@ impl TrainedModel {
             let components = pca.n_components();
             NoveltyModel::fit(&vectors, &classes, groups, n_classes, components, rejection)?
                 .with_reduction(pca)?
-        } else if self.sample().is_frame() {
-            let vectors = self.reduced_vectors(images)?;
-            let config = ContactConfig::default();
-            let raw = self.raw_contact(&config, images)?;
-            let check = check_contact(&config, &vectors, &raw, &classes, groups, n_classes, dims)?;
-            let novelty = if check.is_some_and(|check| check.taken) {
-                NoveltyModel::fit_with_contact(
-                    &config, &vectors, &raw, &classes, groups, n_classes, dims, rejection,
-                )?
-            } else {
-                NoveltyModel::fit(&vectors, &classes, groups, n_classes, dims, rejection)?
-            };
-            novelty.with_contact_check(check)
         } else {
             let vectors = self.reduced_vectors(images)?;
-            NoveltyModel::fit(&vectors, &classes, groups, n_classes, dims, rejection)?
+            // A frame model's score reads the contact's geometry when its own classes, left out
+            // inside the training data, are told apart better with it (`contact_check`).
+            let (raw, check) = if self.sample().is_frame() {
+                let config = ContactConfig::default();
+                let raw = self.raw_contact(&config, images)?;
+                let check =
+                    check_contact(&config, &vectors, &raw, &classes, groups, n_classes, dims)?;
+                (Some((config, raw)), check)
+            } else {
+                (None, None)
+            };
+            match raw {
+                Some((config, raw)) if check.is_some_and(|check| check.taken) => {
+                    NoveltyModel::fit_with_contact(
+                        &config, &vectors, &raw, &classes, groups, n_classes, dims, rejection,
+                    )?
+                }
+                _ => NoveltyModel::fit(&vectors, &classes, groups, n_classes, dims, rejection)?,
+            }
+            .with_contact_check(check)
         };
         self.with_novelty_model(novelty)
     }

@@ -164,11 +164,6 @@ impl<'m> Session<'m> {
         raw_measures_into(config, grid, image, out)
     }
 
-    /// The raw contact measures [`contact_measures`](Self::contact_measures) last wrote.
-    pub(crate) fn last_contact(&self) -> &[f64] {
-        &self.contact
-    }
-
     /// The feature vector of `frame` (before PCA), exact: as training computes it.
     pub fn features(&mut self, frame: &FrameView<'_>) -> Result<&[f64]> {
         self.preprocessor
@@ -310,16 +305,9 @@ impl<'m> BatchSession<'m> {
             .zip(self.features.chunks_exact_mut(n_features))
             .enumerate()
         {
-            let contact = (measures > 0)
-                .then(|| {
-                    session.contact_measures(frame)?;
-                    self.contacts[k * measures..(k + 1) * measures]
-                        .copy_from_slice(session.last_contact());
-                    Ok::<(), CoreError>(())
-                })
-                .transpose();
-            let error = contact
-                .and_then(|_| single_features_into(session, frame, row))
+            let contact = &mut self.contacts[k * measures..(k + 1) * measures];
+            let error = contact_into(session, frame, contact)
+                .and_then(|()| single_features_into(session, frame, row))
                 .err();
             if error.is_some() {
                 row.fill(0.0);
@@ -368,6 +356,16 @@ impl<'m> BatchSession<'m> {
             })
             .collect()
     }
+}
+
+/// The raw contact measures of `frame` into `out` when the model's novelty score reads them (`out`
+/// is then as long as they are; empty otherwise).
+fn contact_into(session: &mut Session<'_>, frame: &FrameView<'_>, out: &mut [f64]) -> Result<()> {
+    if out.is_empty() || !session.contact_measures(frame)? {
+        return Ok(());
+    }
+    out.copy_from_slice(&session.contact);
+    Ok(())
 }
 
 /// The features of `frame` as classification computes them, in f32, into `out`: straight from the fast
