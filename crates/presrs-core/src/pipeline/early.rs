@@ -447,7 +447,11 @@ pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThre
     let rule = in_time
         .map(|rule| {
             let confidence = mean_decision_confidence(held_out, frames, rule);
-            (confidence, mean_decision_frame(held_out, frames, rule), rule)
+            (
+                confidence,
+                mean_decision_frame(held_out, frames, rule),
+                rule,
+            )
         })
         .max_by(|(a, a_frame, a_rule), (b, b_frame, b_rule)| {
             a.total_cmp(b)
