@@ -11,37 +11,36 @@
 //! there are). A stance that lifts off before frame `K` is decided at its lift-off, whole, by the
 //! whole-stance classifier, online and here alike.
 //!
-//! **The rule** (a threshold, and a deadline point or none) is learned from out-of-sample
-//! confidences: the training and validation stances (at most [`RULE_STANCES`] of them, a stratified
-//! subsample of more) are split into the automatic choice's inner folds (by group, condition or
-//! stratified splits), each fold's classifiers are trained on the rest, and each held-out stance is
-//! classified at every point and whole. A rule is *safe* when its early decisions are safe with a
-//! margin for the few stances validation has: over the stances it decides before their lift-off, the
-//! Wilson lower bound (z = [`AUTO_BOUND_Z`]) of its accuracy is at most [`AUTO_TOLERANCE`] below the
-//! whole-stance classifier's accuracy on the same stances. For no deadline and for each point as the
-//! deadline, `auto` takes the *highest* safe threshold whose mean decision on the held-out stances
-//! comes by [`AUTO_EARLINESS`] of their median length; of those rules, the one whose decisions are
-//! the *most confident on average* (if none comes in time, the lowest safe threshold and the earliest
-//! safe deadline: safety before earliness).
+//! **The threshold** is learned from out-of-sample confidences: the training and validation stances (at
+//! most [`RULE_STANCES`] of them, a stratified subsample of more) are split into the automatic
+//! choice's inner folds (by group, condition or stratified splits), each fold's
+//! classifiers are trained on the rest, and each held-out stance is classified at every point and
+//! whole. A threshold (among the confidences seen, and "never") is *safe* when its early decisions
+//! are safe with a margin for the few stances validation has: over the stances `auto` decides before
+//! their lift-off, the Wilson lower bound (z = [`AUTO_BOUND_Z`]) of its accuracy is at most
+//! [`AUTO_TOLERANCE`] below the whole-stance classifier's accuracy on the same stances. Of the safe
+//! thresholds, `auto` takes the *highest* whose mean decision on the held-out stances comes by
+//! [`AUTO_EARLINESS`] of their median length (if none does, the lowest safe one: safety before
+//! earliness).
 //!
-//! Why the highest threshold within the earliness budget rather than the lowest safe one: validation
-//! inside the training data is optimistic about early points, because it cannot see the shift to
-//! what the training data lack (another person's gait, another surface): on jiku-walk, a fold trained
-//! on one walker found its first point safe at any threshold and decided every stance of the other
-//! walker at 10 % of the stance, 15 points below the whole stance, where one threshold waiting longer
-//! (still within half the stance) loses nothing. Waiting costs nothing until the decision is due, so
-//! `auto` spends the earliness it is allowed on confidence. A point estimate of the accuracy alone,
-//! without the bound, let one subject's 60 stances set a threshold that was too bold on another
-//! subject.
+//! Why the highest within the earliness budget rather than the lowest safe one: validation inside
+//! the training data is optimistic about early points, because it cannot see the shift to what the
+//! training data lack (another person's gait, another surface): on jiku-walk, a fold trained on one
+//! walker found its first point safe at any threshold and decided every stance of the other walker at
+//! 10 % of the stance, 15 points below the whole stance, where one threshold waiting longer (still
+//! within half the stance) loses nothing. Waiting costs nothing until the decision is due, so `auto`
+//! spends the earliness it is allowed on confidence. A point estimate of the accuracy alone, without
+//! the bound, let one subject's 60 stances set a threshold that was too bold on another subject.
 //!
-//! Why the deadline: a stance no point is confident about would otherwise wait for its lift-off, past
-//! the time the decision is due; the late points are accurate while their confidences sit below the
-//! one threshold the earliest points set. Why the most confident rule, not the most accurate one or
-//! the latest deadline: inside the training data every safe rule is nearly always right, so
-//! validation accuracy cannot rank them, while the mean confidence of their decisions (what they
-//! expect to get right, the confidences being calibrated) still does: it weighs a later deadline that
-//! knows more against a lower threshold that decides more stances early, and a deadline against
-//! waiting for the whole stance (docs/methods.md, "Early decisions").
+//! **The deadline** is learned after the threshold: of the points at which deciding every stance no
+//! point was confident about by then (by that point's classifier, whatever its confidence) keeps the
+//! early decisions safe by the same bound, the latest with which the mean decision on the held-out
+//! stances still comes by [`AUTO_EARLINESS`] of their median length (else the earliest safe one);
+//! none if no point is safe (the stance waits for its lift-off). The budget is on the mean, as for
+//! the threshold: the unsure stances may wait past mid-stance for a point that knows more, while
+//! the confident ones, decided early, pay for it. The late points are the accurate ones while their
+//! confidences sit below the one threshold the earliest points set (docs/methods.md, "Early
+//! decisions").
 
 use std::time::Instant;
 
@@ -422,106 +421,53 @@ fn cut_at<'a>(set: &StanceImages<'a>, k: usize) -> Vec<LabeledImage<'a>> {
         .unwrap_or_default()
 }
 
-/// The rule of the module docs over `held_out` stances: for no deadline and for each point as the
-/// deadline, the highest threshold whose decisions are safe (their accuracy, at its lower bound,
-/// within [`AUTO_TOLERANCE`] of the whole-stance classifier's on the same stances) and come by
-/// [`AUTO_EARLINESS`] of the median stance on average; of those rules, the one whose decisions are
-/// the most confident on average. When no rule is due in time: the lowest safe threshold and the
-/// earliest safe deadline with it (safety before earliness).
+/// The rule of the module docs over `held_out` stances: of the thresholds whose early decisions'
+/// accuracy, at its lower bound, is within [`AUTO_TOLERANCE`] of the whole-stance classifier's on
+/// the same stances, the highest whose mean decision comes by [`AUTO_EARLINESS`] of the median
+/// stance, else the lowest; then the deadline: of the points at which deciding the stances the
+/// threshold leaves keeps the early decisions safe, the latest with which the mean decision still
+/// comes by [`AUTO_EARLINESS`] of the median stance, else the earliest.
 pub fn learn_threshold(held_out: &[HeldOutStance], frames: &[usize]) -> AutoThreshold {
     let never = 1.0 + f64::EPSILON.sqrt();
-    let mut thresholds = point_confidences(held_out);
-    thresholds.push(never);
+    let mut candidates = point_confidences(held_out);
+    candidates.push(never);
     let due = AUTO_EARLINESS * median_length(held_out) as f64;
-    let deadlines = std::iter::once(None).chain(frames.iter().copied().map(Some));
-    let in_time = deadlines.filter_map(|deadline| {
-        highest_safe_in_time(held_out, frames, &thresholds, deadline, due).map(|threshold| {
-            AutoRule {
-                threshold,
-                deadline,
-            }
-        })
-    });
-    // Of rules as confident, the one deciding sooner; of rules deciding alike, the one without a
-    // deadline (a deadline that decided nothing in validation is untested).
-    let rule = in_time
-        .map(|rule| {
-            let confidence = mean_decision_confidence(held_out, frames, rule);
-            (
-                confidence,
-                mean_decision_frame(held_out, frames, rule),
-                rule,
-            )
-        })
-        .max_by(|(a, a_frame, a_rule), (b, b_frame, b_rule)| {
-            a.total_cmp(b)
-                .then(b_frame.total_cmp(a_frame))
-                .then(b_rule.deadline.is_some().cmp(&a_rule.deadline.is_some()))
-        })
-        .map(|(_, _, rule)| rule)
-        .unwrap_or_else(|| safest_rule(held_out, frames, &thresholds, never));
-    measure_rule(held_out, frames, rule)
-}
-
-/// The highest of `thresholds` (ascending) that, with `deadline`, decides `held_out` safely with the
-/// mean decision by frame `due`; `None` when none does. The mean decision only grows with the
-/// threshold, so the search starts at the highest threshold due in time and goes down.
-fn highest_safe_in_time(
-    held_out: &[HeldOutStance],
-    frames: &[usize],
-    thresholds: &[f64],
-    deadline: Option<usize>,
-    due: f64,
-) -> Option<f64> {
-    let rule = |threshold| AutoRule {
-        threshold,
-        deadline,
-    };
-    let in_time =
-        thresholds.partition_point(|&t| mean_decision_frame(held_out, frames, rule(t)) <= due);
-    thresholds[..in_time]
+    let safe: Vec<f64> = candidates
+        .into_iter()
+        .filter(|&t| early_decisions_are_safe(held_out, frames, AutoRule::threshold(t)))
+        .collect();
+    let threshold = safe
         .iter()
         .rev()
         .copied()
-        .find(|&t| early_decisions_are_safe(held_out, frames, rule(t)))
-}
-
-/// The rule when none is due in time: the lowest safe threshold (else never), and the earliest point
-/// that is safe as its deadline (else none).
-fn safest_rule(
-    held_out: &[HeldOutStance],
-    frames: &[usize],
-    thresholds: &[f64],
-    never: f64,
-) -> AutoRule {
-    let threshold = thresholds
+        .find(|&t| mean_decision_frame(held_out, frames, AutoRule::threshold(t)) <= due)
+        .or_else(|| safe.first().copied())
+        .unwrap_or(never);
+    let with_deadline = |k: usize| AutoRule {
+        threshold,
+        deadline: Some(k),
+    };
+    let safe_deadlines: Vec<usize> = frames
         .iter()
         .copied()
-        .find(|&t| early_decisions_are_safe(held_out, frames, AutoRule::threshold(t)))
-        .unwrap_or(never);
-    let deadline = frames.iter().copied().find(|&k| {
-        let rule = AutoRule {
-            threshold,
-            deadline: Some(k),
-        };
-        early_decisions_are_safe(held_out, frames, rule)
-    });
-    AutoRule {
-        threshold,
-        deadline,
-    }
-}
-
-/// The mean confidence of `rule`'s decisions on `held_out` (the whole-stance classifier's at
-/// lift-off for the stances no point decides; 0 without stances): with calibrated confidences, the
-/// accuracy the rule expects, which still ranks rules where their validation accuracies are all
-/// perfect.
-fn mean_decision_confidence(held_out: &[HeldOutStance], frames: &[usize], rule: AutoRule) -> f64 {
-    let sum: f64 = held_out
+        .filter(|&k| early_decisions_are_safe(held_out, frames, with_deadline(k)))
+        .collect();
+    // A later deadline never decides earlier, so the mean decision grows with it: the latest due in
+    // time, else the earliest safe one (safety before earliness, as for the threshold).
+    let deadline = safe_deadlines
         .iter()
-        .map(|stance| stance.decide(frames, rule).confidence)
-        .sum();
-    sum / held_out.len().max(1) as f64
+        .rev()
+        .copied()
+        .find(|&k| mean_decision_frame(held_out, frames, with_deadline(k)) <= due)
+        .or_else(|| safe_deadlines.first().copied());
+    measure_rule(
+        held_out,
+        frames,
+        AutoRule {
+            threshold,
+            deadline,
+        },
+    )
 }
 
 /// `rule` with what it gives on `held_out`.
@@ -632,12 +578,11 @@ mod tests {
         }
     }
 
-    /// `auto` decides at the first confident point; a threshold is safe at its lower bound, so a
+    /// `auto` decides at the first confident point; the threshold is safe at its lower bound, so a
     /// confident wrong early answer raises it, and so do too few right ones to trust; of the safe
-    /// rules due by half the median stance, `auto` takes the one whose decisions are the most
-    /// confident.
+    /// ones it takes the highest whose mean decision comes by half the median stance.
     #[test]
-    fn the_rule_is_the_most_confident_safe_one_due_by_mid_stance() {
+    fn the_threshold_is_the_highest_safe_one_whose_decisions_come_by_mid_stance() {
         let frames = [4, 8];
         // Sixty stances of 20 frames right early at 0.9 and above; one wrong at 0.7.
         let mut stances = vec![stance(0, &[(1, 0.7), (0, 0.95)], (0, 0.99))];
@@ -646,25 +591,27 @@ mod tests {
             stances.push(stance(class, &[(class, 0.9), (class, 0.97)], (class, 0.99)));
         }
         let auto = learn_threshold(&stances, &frames);
-        // 0.7 decides the first stance wrong at frame 4, and so does the point at 4 as a deadline.
-        // Due by frame 10 on average: 0.97 without a deadline (the sixty at frame 8 at 0.97, the
-        // first at its lift-off at 0.99: a mean of 8.2 frames), or every stance at the deadline 8
-        // (the first there at 0.95): the first rule's decisions are the more confident.
-        assert_eq!((auto.threshold, auto.deadline), (0.97, None));
+        // 0.7 decides the first stance wrong at frame 4; 0.9, 0.95 and 0.97 are safe; 0.97 decides
+        // the sixty at frame 8 and would leave the first for its lift-off (a mean of 8.2 frames, by
+        // mid-stance: 10 frames), 0.99 none before lift-off. The point at 8 is safe as a deadline:
+        // it decides the first stance there, right.
+        assert_eq!(auto.threshold, 0.97);
         assert_eq!((auto.whole_accuracy, auto.auto_accuracy), (1.0, 1.0));
-        assert_eq!(auto.mean_decision_frame, (60.0 * 8.0 + 20.0) / 61.0);
-        // With the second point past mid-stance, the highest safe threshold due in time is 0.9 (the
-        // first stance decided at 12, at 0.95); the deadline at 12 would decide alike: none is kept.
+        assert_eq!(auto.deadline, Some(8));
+        assert_eq!(auto.mean_decision_frame, 8.0);
+        // With the second point past mid-stance, the highest safe threshold due in time is 0.9.
         let late_points = [4, 12];
         let auto = learn_threshold(&stances, &late_points);
-        assert_eq!((auto.threshold, auto.deadline), (0.9, None));
+        assert_eq!(auto.threshold, 0.9);
+        // The point at 4 as a deadline would decide the first stance wrong: too bold; the one at 12
+        // is safe and due in time (it decides no stance the threshold leaves).
+        assert_eq!(auto.deadline, Some(12));
         assert_eq!(auto.mean_decision_frame, (12.0 + 60.0 * 4.0) / 61.0);
         let late = stances[0].decide(&frames, AutoRule::threshold(0.99));
         assert_eq!((late.point, late.frame), (None, 20));
         // Three stances right early are too few to be sure of two points: auto waits.
         let few = learn_threshold(&stances[1..4], &frames);
         assert!(few.threshold > 1.0, "{}", few.threshold);
-        assert_eq!(few.deadline, None);
         // A stance that lifts off before a point has no outcome there.
         let short = HeldOutStance {
             points: vec![Some((0, 0.99)), None],
@@ -730,10 +677,10 @@ mod tests {
         );
     }
 
-    /// A deadline decides the stances no point was confident about, when validation shows it safe
-    /// and no threshold alone decides in time; a point that is wrong too often is no deadline.
+    /// The deadline decides the stances no point was confident about at the latest safe point due in
+    /// time, when validation shows it safe; a point that is wrong too often is no deadline.
     #[test]
-    fn a_safe_deadline_decides_the_unsure_stances_in_time() {
+    fn the_deadline_is_the_latest_safe_point_due_in_time() {
         let frames = [3, 6, 10];
         // Sixty stances confident and right at every point; sixty unsure: wrong at 3, half wrong at
         // 6, right at 10 but with a confidence (0.65) the early points' mistakes make unsafe.
@@ -754,17 +701,14 @@ mod tests {
         let mut stances: Vec<HeldOutStance> = (0..60).map(confident).collect();
         stances.extend((0..60).map(|i| unsure(i, true)));
         let auto = learn_threshold(&stances, &frames);
-        // Only 0.99 and above are safe thresholds; 0.99 alone leaves the unsure sixty to their
-        // lift-off (a mean of 11.5 frames, past mid-stance); the points at 3 and 6 are unsafe
-        // deadlines; at 10 every stance is decided right, by frame 10.
-        assert!(auto.threshold > 1.0, "{}", auto.threshold);
-        assert_eq!(auto.deadline, Some(10));
-        assert_eq!(auto.mean_decision_frame, 10.0);
+        // Only 0.99 and above are safe; 0.99 leaves the unsure sixty to their lift-off (a mean of
+        // 11.5 frames, past mid-stance), the deadline at 10 decides them right there.
+        assert_eq!((auto.threshold, auto.deadline), (0.99, Some(10)));
+        assert_eq!(auto.mean_decision_frame, (60.0 * 3.0 + 60.0 * 10.0) / 120.0);
         assert_eq!(auto.auto_accuracy, 1.0);
         let decision = stances[60].decide(&frames, auto.rule());
         assert_eq!((decision.point, decision.frame), (Some(2), 10));
-        // Wrong at 10 for every fourth unsure stance, no point is a safe deadline, and no rule is due
-        // in time: the lowest safe threshold, the unsure stances left to their lift-off.
+        // Wrong at 10 for every fourth unsure stance, no point is a safe deadline.
         let mut stances: Vec<HeldOutStance> = (0..60).map(confident).collect();
         stances.extend((0..60).map(|i| unsure(i, i % 4 != 1)));
         let auto = learn_threshold(&stances, &frames);
@@ -773,18 +717,19 @@ mod tests {
     }
 
     /// A point past mid-stance is a deadline when the confident stances, decided early, keep the mean
-    /// decision by mid-stance and its decisions are the more confident; when no rule is due in time,
-    /// the earliest safe deadline.
+    /// decision by mid-stance; of two such points the latest due in time; when none is due in time,
+    /// the earliest safe one.
     #[test]
     fn a_deadline_past_mid_stance_is_taken_while_the_mean_comes_by_mid_stance() {
         // Stances of 20 frames (due by frame 10 on average); points at 3, 10 and 14. The unsure
-        // stances are wrong at 3 (at 0.7), right at 10 (at 0.6) and at 14 (at 0.65).
+        // stances are wrong at 3 (at 0.7) and right at 10 and 14 with a confidence (0.65) the wrong
+        // early answers make unsafe as a threshold.
         let frames = [3, 10, 14];
         let unsure = |i: usize| {
             let class = i % 2;
             stance(
                 class,
-                &[(1 - class, 0.7), (class, 0.6), (class, 0.65)],
+                &[(1 - class, 0.7), (class, 0.65), (class, 0.65)],
                 (class, 0.99),
             )
         };
@@ -797,18 +742,20 @@ mod tests {
             stances.extend((0..unsure_count).map(unsure));
             stances
         };
-        // Sixty confident at frame 3 and sixty unsure at the deadline 14: a mean of 8.5 frames, and
-        // more confident than every stance at 10.
+        // Sixty confident at frame 3, sixty unsure: the deadline at 14 gives a mean of 8.5 frames.
         let auto = learn_threshold(&set(60), &frames);
         assert_eq!((auto.threshold, auto.deadline), (0.99, Some(14)));
         assert_eq!(auto.mean_decision_frame, (60.0 * 3.0 + 60.0 * 14.0) / 120.0);
-        // 120 unsure: 14 would give 10.33 frames; every stance at 10 comes in time.
+        // 120 unsure: 14 would give 10.33 frames, 10 gives 7.67.
         let auto = learn_threshold(&set(120), &frames);
-        assert_eq!(auto.deadline, Some(10));
-        assert_eq!(auto.mean_decision_frame, 10.0);
-        // Without the point at 10, none is due in time: the earliest safe deadline, 14.
+        assert_eq!((auto.threshold, auto.deadline), (0.99, Some(10)));
+        assert_eq!(
+            auto.mean_decision_frame,
+            (60.0 * 3.0 + 120.0 * 10.0) / 180.0
+        );
+        // Without the point at 10, none is due in time: the earliest safe one, 14.
         let auto = learn_threshold(&set(120), &[3, 14]);
-        assert_eq!((auto.threshold, auto.deadline), (0.99, Some(14)));
+        assert_eq!(auto.deadline, Some(14));
         assert!(auto.mean_decision_frame > 10.0);
     }
 
