@@ -9,6 +9,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use crate::error::{CoreError, Result};
 use crate::novelty::discriminant::{Discriminant, nearest, nearest_posterior};
+use crate::novelty::labelled::LabelledVectors;
 
 /// Folds: at most this many; more groups are merged, whole, into this many.
 const MAX_FOLDS: usize = 5;
@@ -44,14 +45,14 @@ pub(crate) struct HeldOut {
 /// discriminant space, and its posterior there ([`nearest_posterior`]). A vector whose class no other fold holds is skipped: its distance is that of a
 /// class never seen, not of a new recording of a known one. An error, saying what to give, when the
 /// vectors come from fewer than [`MIN_GROUPS`] groups or no class is in two of them.
-pub(crate) fn held_out_distances(
-    vectors: &[f64],
-    classes: &[usize],
-    groups: &[Option<&str>],
-    n_classes: usize,
-    dims: usize,
-) -> Result<HeldOut> {
-    let fold_of = assign_folds(groups)?;
+pub(crate) fn held_out_distances(data: LabelledVectors<'_>) -> Result<HeldOut> {
+    let (vectors, classes, n_classes, dims) = (
+        data.vectors(),
+        data.classes(),
+        data.n_classes(),
+        data.dims(),
+    );
+    let fold_of = assign_folds(data.groups())?;
     let n_folds = fold_of.iter().copied().max().map_or(0, |last| last + 1);
     let mut distances = Vec::with_capacity(classes.len());
     let mut posteriors = Vec::with_capacity(classes.len());

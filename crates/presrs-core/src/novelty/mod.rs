@@ -31,6 +31,7 @@
 mod calibration;
 mod contact;
 mod discriminant;
+mod labelled;
 #[cfg(test)]
 mod tests;
 
@@ -41,8 +42,9 @@ pub use calibration::{CalibrationFolds, MIN_GROUPS};
 pub use contact::{ContactCheck, NoveltyContact};
 pub use discriminant::Discriminant;
 use discriminant::{nearest, nearest_posterior};
+pub use labelled::LabelledVectors;
 
-use crate::error::{CoreError, Result, check_len};
+use crate::error::{CoreError, Result};
 use crate::projection::Pca;
 
 /// The label of a decision whose sample is none of the model's classes.
@@ -230,23 +232,16 @@ pub struct NoveltyScratch {
 }
 
 impl NoveltyModel {
-    /// Fits the space on `vectors` (`n x dims`, row-major, the classifier's training and validation
-    /// vectors) of `classes`, keeps the vectors' projections as the neighbours, and calibrates the
-    /// threshold on held-out nearest-neighbour distances (folds by `groups`, one per vector: at least
-    /// [`MIN_GROUPS`] of them, and classes found in two or more) so that `rejection` of them are above
-    /// it. An error saying what is missing otherwise.
-    pub fn fit(
-        vectors: &[f64],
-        classes: &[usize],
-        groups: &[Option<&str>],
-        n_classes: usize,
-        dims: usize,
-        rejection: f64,
-    ) -> Result<Self> {
-        check_len("novelty groups", classes.len(), groups.len())?;
-        let space = Discriminant::fit(vectors, classes, n_classes, dims)?;
+    /// Fits the space on `data`'s vectors (the classifier's training and validation vectors), keeps
+    /// their projections as the neighbours, and calibrates the threshold on held-out
+    /// nearest-neighbour distances (folds by the vectors' groups: at least [`MIN_GROUPS`] of them, and
+    /// classes found in two or more) so that `rejection` of them are above it. An error saying what is
+    /// missing otherwise.
+    pub fn fit(data: LabelledVectors<'_>, rejection: f64) -> Result<Self> {
+        let vectors = data.vectors();
+        let space = Discriminant::fit(vectors, data.classes(), data.n_classes(), data.dims())?;
         let neighbours = space.project_rows(vectors)?;
-        let held_out = calibration::held_out_distances(vectors, classes, groups, n_classes, dims)?;
+        let held_out = calibration::held_out_distances(data)?;
         let mut distances = held_out.distances.clone();
         distances.sort_by(f64::total_cmp);
         let mut combined = calibration::held_out_scores(&held_out, &distances);
@@ -272,29 +267,20 @@ impl NoveltyModel {
         })
     }
 
-    /// [`fit`](Self::fit) on `vectors` joined with the contact part fitted on their `raw` measures (of
-    /// `config`, `n x measures`): a score that reads both ([`score_parts_into`](Self::score_parts_into)).
-    #[allow(clippy::too_many_arguments)]
+    /// [`fit`](Self::fit) on `data`'s vectors joined with the contact part fitted on their `raw`
+    /// measures (of `config`, `n x measures`): a score that reads both
+    /// ([`score_parts_into`](Self::score_parts_into)).
     pub fn fit_with_contact(
         config: &crate::features::contact::ContactConfig,
-        vectors: &[f64],
+        data: LabelledVectors<'_>,
         raw: &[f64],
-        classes: &[usize],
-        groups: &[Option<&str>],
-        n_classes: usize,
-        dims: usize,
         rejection: f64,
     ) -> Result<Self> {
+        let (vectors, dims) = (data.vectors(), data.dims());
         let contact = NoveltyContact::fit(config, raw, vectors, dims)?;
         let joined = contact.joined(vectors, dims, raw)?;
-        let mut model = Self::fit(
-            &joined,
-            classes,
-            groups,
-            n_classes,
-            dims + contact.measures(),
-            rejection,
-        )?;
+        let joined_data = data.with_vectors(&joined, dims + contact.measures())?;
+        let mut model = Self::fit(joined_data, rejection)?;
         model.fields.contact = Some(contact);
         Self::try_from(model.fields)
     }

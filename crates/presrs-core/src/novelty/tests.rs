@@ -124,11 +124,14 @@ fn a_class_never_seen_is_unknown_and_known_ones_are_kept() {
     let known = classes.iter().position(|&c| c == n_classes - 1).unwrap();
     let groups: Vec<Option<&str>> = groups[..known].iter().map(|g| Some(g.as_str())).collect();
     let model = NoveltyModel::fit(
-        &vectors[..known * dims],
-        &classes[..known],
-        &groups,
-        n_classes - 1,
-        dims,
+        LabelledVectors::new(
+            &vectors[..known * dims],
+            &classes[..known],
+            &groups,
+            n_classes - 1,
+            dims,
+        )
+        .unwrap(),
         DEFAULT_REJECTION,
     )
     .unwrap();
@@ -158,24 +161,44 @@ fn with_one_group_the_score_is_refused_saying_why_and_the_threshold_is_the_asked
     let (dims, n_classes) = (5, 3);
     let (vectors, classes, groups) = gaussian_classes(n_classes, 40, dims, 3.0, 4);
     let none = vec![None; classes.len()];
-    let err = NoveltyModel::fit(&vectors, &classes, &none, n_classes, dims, 0.1).unwrap_err();
+    let err = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &none, n_classes, dims).unwrap(),
+        0.1,
+    )
+    .unwrap_err();
     assert!(
         err.to_string().contains("120 of 120 samples have no group"),
         "{err}"
     );
     let one = vec![Some("a"); classes.len()];
-    let err = NoveltyModel::fit(&vectors, &classes, &one, n_classes, dims, 0.1).unwrap_err();
+    let err = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &one, n_classes, dims).unwrap(),
+        0.1,
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("come from 1 group(s)"), "{err}");
     // Two groups calibrate, each held out against the other.
     let two: Vec<Option<&str>> = (0..classes.len())
         .map(|i| Some(["a", "b"][i % 2]))
         .collect();
-    let paired = NoveltyModel::fit(&vectors, &classes, &two, n_classes, dims, 0.1).unwrap();
+    let paired = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &two, n_classes, dims).unwrap(),
+        0.1,
+    )
+    .unwrap();
     assert_eq!(paired.folds(), CalibrationFolds::Group);
     let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
-    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.1).unwrap();
+    let model = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &groups, n_classes, dims).unwrap(),
+        0.1,
+    )
+    .unwrap();
     assert_eq!(model.folds(), CalibrationFolds::Group);
-    let strict = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.01).unwrap();
+    let strict = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &groups, n_classes, dims).unwrap(),
+        0.01,
+    )
+    .unwrap();
     assert!(strict.threshold() > model.threshold());
     // The threshold is the 0.9 quantile of the held-out scores it keeps.
     let calibration = &model.fields.combined;
@@ -202,12 +225,20 @@ fn a_class_recorded_in_one_group_does_not_calibrate_and_one_group_per_class_is_r
         .zip(&groups)
         .map(|(&c, g)| Some(if c == 2 { "solo" } else { g.as_str() }))
         .collect();
-    let model = NoveltyModel::fit(&vectors, &classes, &mixed, n_classes, dims, 0.05).unwrap();
+    let model = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &mixed, n_classes, dims).unwrap(),
+        0.05,
+    )
+    .unwrap();
     assert_eq!(model.fields.calibration_vectors, 80);
     // Every class in a group of its own: nothing to calibrate on, and the error says so.
     let names = ["c0", "c1", "c2"];
     let own: Vec<Option<&str>> = classes.iter().map(|&c| Some(names[c])).collect();
-    let err = NoveltyModel::fit(&vectors, &classes, &own, n_classes, dims, 0.05).unwrap_err();
+    let err = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &own, n_classes, dims).unwrap(),
+        0.05,
+    )
+    .unwrap_err();
     assert!(
         err.to_string()
             .contains("no class is recorded in two groups"),
@@ -219,7 +250,11 @@ fn a_class_recorded_in_one_group_does_not_calibrate_and_one_group_per_class_is_r
 fn a_model_round_trips_and_a_broken_one_is_refused() {
     let (vectors, classes, groups) = gaussian_classes(3, 20, 4, 3.0, 5);
     let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
-    let model = NoveltyModel::fit(&vectors, &classes, &groups, 3, 4, 0.05).unwrap();
+    let model = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &groups, 3, 4).unwrap(),
+        0.05,
+    )
+    .unwrap();
     let json = serde_json::to_value(&model).unwrap();
     let back: NoveltyModel = serde_json::from_value(json.clone()).unwrap();
     assert_eq!(back, model);
@@ -238,7 +273,11 @@ fn the_credibility_is_the_share_of_held_out_scores_at_least_as_high_and_caps_the
     let (dims, n_classes) = (6, 4);
     let (vectors, classes, groups) = gaussian_classes(n_classes, 50, dims, 4.0, 6);
     let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
-    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
+    let model = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &groups, n_classes, dims).unwrap(),
+        0.05,
+    )
+    .unwrap();
     let calibration = &model.fields.combined;
     let n = calibration.len() as f64;
     assert_eq!(calibration.len(), model.fields.calibration_vectors);
@@ -294,7 +333,11 @@ fn the_score_is_one_minus_the_posterior_times_the_distance_credibility_by_defini
     let (dims, n_classes) = (6, 4);
     let (vectors, classes, groups) = gaussian_classes(n_classes, 40, dims, 3.0, 8);
     let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
-    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
+    let model = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &groups, n_classes, dims).unwrap(),
+        0.05,
+    )
+    .unwrap();
     let fields = &model.fields;
     assert_eq!(fields.combined.len(), fields.calibration.len());
     let space = &fields.space;
@@ -341,7 +384,11 @@ fn a_file_without_the_held_out_scores_scores_by_the_distance_alone() {
     let (dims, n_classes) = (5, 3);
     let (vectors, classes, groups) = gaussian_classes(n_classes, 30, dims, 3.0, 10);
     let groups: Vec<Option<&str>> = groups.iter().map(|g| Some(g.as_str())).collect();
-    let model = NoveltyModel::fit(&vectors, &classes, &groups, n_classes, dims, 0.05).unwrap();
+    let model = NoveltyModel::fit(
+        LabelledVectors::new(&vectors, &classes, &groups, n_classes, dims).unwrap(),
+        0.05,
+    )
+    .unwrap();
     let mut json = serde_json::to_value(&model).unwrap();
     json.as_object_mut().unwrap().remove("combined");
     json["threshold"] = serde_json::json!(2.5);
@@ -434,7 +481,11 @@ fn a_reduction_scores_the_projection_and_must_fit_the_space() {
         .chunks_exact(dims)
         .flat_map(|row| pca.project(row).unwrap())
         .collect();
-    let plain = NoveltyModel::fit(&projected, &classes, &groups, n_classes, 4, 0.05).unwrap();
+    let plain = NoveltyModel::fit(
+        LabelledVectors::new(&projected, &classes, &groups, n_classes, 4).unwrap(),
+        0.05,
+    )
+    .unwrap();
     let reduced = plain.clone().with_reduction(pca.clone()).unwrap();
     assert_eq!((plain.dims(), reduced.dims()), (4, dims));
     let mut scratch = reduced.scratch();
@@ -457,4 +508,31 @@ fn a_reduction_scores_the_projection_and_must_fit_the_space() {
         err.to_string().contains("reduction to 3 components"),
         "{err}"
     );
+}
+
+/// The labelled vectors are checked once: a row count that does not match the classes, a group per
+/// vector missing, a class past the classes' count or vectors of no values are refused by name.
+#[test]
+fn labelled_vectors_refuse_what_does_not_fit_together() {
+    let vectors = [0.0; 6];
+    let classes = [0, 1, 1];
+    let groups = [Some("a"), Some("b"), None];
+    let data = LabelledVectors::new(&vectors, &classes, &groups, 2, 2).unwrap();
+    assert_eq!(
+        (data.dims(), data.n_classes(), data.classes().len()),
+        (2, 2, 3)
+    );
+    let err = |result: Result<LabelledVectors<'_>>| result.unwrap_err().to_string();
+    assert!(
+        err(LabelledVectors::new(&vectors, &classes, &groups, 2, 3)).contains("novelty vectors")
+    );
+    assert!(
+        err(LabelledVectors::new(&vectors, &classes, &groups[..2], 2, 2))
+            .contains("novelty groups")
+    );
+    assert!(err(LabelledVectors::new(&vectors, &classes, &groups, 1, 2)).contains("class 1 of 1"));
+    assert!(err(LabelledVectors::new(&[], &[], &[], 2, 0)).contains("novelty dims"));
+    let wider = [0.0; 9];
+    assert_eq!(data.with_vectors(&wider, 3).unwrap().dims(), 3);
+    assert!(data.with_vectors(&wider, 2).is_err());
 }

@@ -7,7 +7,9 @@ use rayon::prelude::*;
 
 use crate::error::{Result, check_len};
 use crate::features::contact::ContactConfig;
-use crate::novelty::{ContactCheck, DEFAULT_REJECTION, NoveltyModel, assign_folds, auroc};
+use crate::novelty::{
+    ContactCheck, DEFAULT_REJECTION, LabelledVectors, NoveltyModel, assign_folds, auroc,
+};
 
 /// The most classes the check leaves out, evenly spaced in the classes' order.
 pub(crate) const CHECKED_CLASSES: usize = 6;
@@ -16,35 +18,34 @@ pub(crate) const CHECKED_CLASSES: usize = 6;
 /// `2 x CHECKED_CLASSES x folds` scores fits a space and calibrates it on them.
 pub(crate) const CONTACT_CHECK_SAMPLES: usize = 2000;
 
-/// Leaves up to [`CHECKED_CLASSES`] classes out in turn inside the training data (`vectors`, `n x
-/// dims`, with their `raw` contact measures of `config`, `classes` and `groups`): for each, and each
-/// calibration fold (groups, as the threshold's), a score fitted without the class and the fold (its
-/// own calibration included) scores the fold's vectors, and the AUROC of the class's against the
-/// others' is read with and without the part. The part is taken when the mean gain exceeds one standard
-/// error of the per-class gains (two classes at least). At most [`CONTACT_CHECK_SAMPLES`] vectors are
-/// read, evenly spaced. `None` when no class could be checked.
+/// Leaves up to [`CHECKED_CLASSES`] classes out in turn inside the training data (`data`, with their
+/// `raw` contact measures of `config`): for each, and each calibration fold (groups, as the
+/// threshold's), a score fitted without the class and the fold (its own calibration included) scores
+/// the fold's vectors, and the AUROC of the class's against the others' is read with and without the
+/// part. The part is taken when the mean gain exceeds one standard error of the per-class gains (two
+/// classes at least). At most [`CONTACT_CHECK_SAMPLES`] vectors are read, evenly spaced. `None` when
+/// no class could be checked.
 pub(crate) fn check_contact(
     config: &ContactConfig,
-    vectors: &[f64],
+    data: LabelledVectors<'_>,
     raw: &[f64],
-    classes: &[usize],
-    groups: &[Option<&str>],
-    n_classes: usize,
-    dims: usize,
 ) -> Result<Option<ContactCheck>> {
+    let measures = config.measures();
     check_len(
-        "novelty classes",
-        vectors.len() / dims.max(1),
-        classes.len(),
+        "contact measures",
+        data.classes().len() * measures,
+        raw.len(),
     )?;
+    let n_classes = data.n_classes();
     let all = Rows {
-        vectors,
+        vectors: data.vectors(),
         raw,
-        classes,
-        groups,
-        dims,
-        measures: config.measures(),
+        classes: data.classes(),
+        groups: data.groups(),
+        dims: data.dims(),
+        measures,
     };
+    let classes = data.classes();
     let step = classes.len().div_ceil(CONTACT_CHECK_SAMPLES).max(1);
     let at: Vec<usize> = (0..classes.len()).step_by(step).collect();
     let data = all.select(&at);
@@ -134,26 +135,11 @@ fn held_out_scores(
     n_classes: usize,
     part: bool,
 ) -> Result<Vec<f64>> {
+    let data = LabelledVectors::new(fit.vectors, fit.classes, fit.groups, n_classes, fit.dims)?;
     let model = if part {
-        NoveltyModel::fit_with_contact(
-            config,
-            fit.vectors,
-            fit.raw,
-            fit.classes,
-            fit.groups,
-            n_classes,
-            fit.dims,
-            DEFAULT_REJECTION,
-        )?
+        NoveltyModel::fit_with_contact(config, data, fit.raw, DEFAULT_REJECTION)?
     } else {
-        NoveltyModel::fit(
-            fit.vectors,
-            fit.classes,
-            fit.groups,
-            n_classes,
-            fit.dims,
-            DEFAULT_REJECTION,
-        )?
+        NoveltyModel::fit(data, DEFAULT_REJECTION)?
     };
     let mut scratch = model.scratch();
     held.vectors
@@ -267,17 +253,25 @@ mod tests {
     fn the_check_takes_the_part_only_where_it_separates_classes_left_out() {
         let config = ContactConfig::default();
         let (vectors, raw, classes, groups) = classes_with_contact(30, 3.0, 1);
-        let check = check_contact(&config, &vectors, &raw, &classes, &groups_of(&groups), 5, 6)
-            .unwrap()
-            .unwrap();
+        let check = check_contact(
+            &config,
+            LabelledVectors::new(&vectors, &classes, &groups_of(&groups), 5, 6).unwrap(),
+            &raw,
+        )
+        .unwrap()
+        .unwrap();
         assert_eq!(check.classes, 5);
         assert!(check.taken, "{check:?}");
         assert!(check.with > check.without + 0.05, "{check:?}");
 
         let (vectors, raw, classes, groups) = classes_with_contact(30, 0.0, 2);
-        let check = check_contact(&config, &vectors, &raw, &classes, &groups_of(&groups), 5, 6)
-            .unwrap()
-            .unwrap();
+        let check = check_contact(
+            &config,
+            LabelledVectors::new(&vectors, &classes, &groups_of(&groups), 5, 6).unwrap(),
+            &raw,
+        )
+        .unwrap()
+        .unwrap();
         assert!(!check.taken, "{check:?}");
     }
 
@@ -301,17 +295,16 @@ mod tests {
         let (fit_vectors, fit_raw) = (rows(&vectors, 6), rows(&raw, measures));
         let with = NoveltyModel::fit_with_contact(
             &config,
-            &fit_vectors,
+            LabelledVectors::new(&fit_vectors, &kept_classes, &kept_groups, 4, 6).unwrap(),
             &fit_raw,
-            &kept_classes,
-            &kept_groups,
-            4,
-            6,
             0.05,
         )
         .unwrap();
-        let without =
-            NoveltyModel::fit(&fit_vectors, &kept_classes, &kept_groups, 4, 6, 0.05).unwrap();
+        let without = NoveltyModel::fit(
+            LabelledVectors::new(&fit_vectors, &kept_classes, &kept_groups, 4, 6).unwrap(),
+            0.05,
+        )
+        .unwrap();
         assert_eq!(with.dims(), 6);
         assert_eq!(with.contact().unwrap().measures(), measures);
         let hidden = classes.iter().position(|&c| c == 4).unwrap();

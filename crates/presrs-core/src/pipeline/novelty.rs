@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use crate::error::Result;
 use crate::features::contact::ContactConfig;
-use crate::novelty::NoveltyModel;
+use crate::novelty::{LabelledVectors, NoveltyModel};
 use crate::pipeline::contact_check::check_contact;
 use crate::pipeline::extract::LabeledImage;
 use crate::pipeline::model::TrainedModel;
@@ -49,29 +49,27 @@ impl TrainedModel {
         let n_classes = self.class_names().len();
         let novelty = if dims > MAX_NOVELTY_DIMS {
             let (pca, vectors) = self.novelty_reduction(images)?;
-            let components = pca.n_components();
-            NoveltyModel::fit(&vectors, &classes, groups, n_classes, components, rejection)?
-                .with_reduction(pca)?
+            let data =
+                LabelledVectors::new(&vectors, &classes, groups, n_classes, pca.n_components())?;
+            NoveltyModel::fit(data, rejection)?.with_reduction(pca)?
         } else {
             let vectors = self.reduced_vectors(images)?;
+            let data = LabelledVectors::new(&vectors, &classes, groups, n_classes, dims)?;
             // A frame model's score reads the contact's geometry when its own classes, left out
             // inside the training data, are told apart better with it (`contact_check`).
             let (raw, check) = if self.sample().is_frame() {
                 let config = ContactConfig::default();
                 let raw = self.raw_contact(&config, images)?;
-                let check =
-                    check_contact(&config, &vectors, &raw, &classes, groups, n_classes, dims)?;
+                let check = check_contact(&config, data, &raw)?;
                 (Some((config, raw)), check)
             } else {
                 (None, None)
             };
             match raw {
                 Some((config, raw)) if check.is_some_and(|check| check.taken) => {
-                    NoveltyModel::fit_with_contact(
-                        &config, &vectors, &raw, &classes, groups, n_classes, dims, rejection,
-                    )?
+                    NoveltyModel::fit_with_contact(&config, data, &raw, rejection)?
                 }
-                _ => NoveltyModel::fit(&vectors, &classes, groups, n_classes, dims, rejection)?,
+                _ => NoveltyModel::fit(data, rejection)?,
             }
             .with_contact_check(check)
         };
@@ -153,7 +151,7 @@ mod tests {
     use super::{MAX_NOVELTY_DIMS, NOVELTY_COMPONENTS};
     use crate::classifier::ClassifierKind;
     use crate::frame::Frame;
-    use crate::novelty::NoveltyModel;
+    use crate::novelty::{LabelledVectors, NoveltyModel};
     use crate::pipeline::train::class_indices;
     use crate::pipeline::{LabeledImage, TrainConfig, TrainedModel, train};
     use crate::projection::Pca;
@@ -254,10 +252,13 @@ mod tests {
         let classes = class_indices(model.class_names(), &images).unwrap();
         let groups: Vec<Option<&str>> = images.iter().map(|image| image.group).collect();
         let components = pca.n_components();
-        let oracle = NoveltyModel::fit(&projected, &classes, &groups, 3, components, 0.05)
-            .unwrap()
-            .with_reduction(pca)
-            .unwrap();
+        let oracle = NoveltyModel::fit(
+            LabelledVectors::new(&projected, &classes, &groups, 3, components).unwrap(),
+            0.05,
+        )
+        .unwrap()
+        .with_reduction(pca)
+        .unwrap();
         assert_eq!(novelty, &oracle);
         let test = labeled_set(10, 2);
         let mut session = model.session();
@@ -332,11 +333,16 @@ mod tests {
         let raw = model.raw_contact(&config, &images).unwrap();
         let dims = model.classifier_dims();
         let check = crate::pipeline::contact_check::check_contact(
-            &config, &vectors, &raw, &classes, &groups, 3, dims,
+            &config,
+            LabelledVectors::new(&vectors, &classes, &groups, 3, dims).unwrap(),
+            &raw,
         )
         .unwrap();
         let scorer = NoveltyModel::fit_with_contact(
-            &config, &vectors, &raw, &classes, &groups, 3, dims, 0.05,
+            &config,
+            LabelledVectors::new(&vectors, &classes, &groups, 3, dims).unwrap(),
+            &raw,
+            0.05,
         )
         .unwrap()
         .with_contact_check(check);
