@@ -251,27 +251,20 @@ mod tests {
     /// out inside the training data finds the part helps; contact measures of noise: it does not.
     #[test]
     fn the_check_takes_the_part_only_where_it_separates_classes_left_out() {
-        let config = ContactConfig::default();
-        let (vectors, raw, classes, groups) = classes_with_contact(30, 3.0, 1);
-        let check = check_contact(
-            &config,
-            LabelledVectors::new(&vectors, &classes, &groups_of(&groups), 5, 6).unwrap(),
-            &raw,
-        )
-        .unwrap()
-        .unwrap();
+        let check_of = |separation: f64, seed: u64| {
+            let (vectors, raw, classes, groups) = classes_with_contact(30, separation, seed);
+            let groups = groups_of(&groups);
+            let data = LabelledVectors::new(&vectors, &classes, &groups, 5, 6).unwrap();
+            check_contact(&ContactConfig::default(), data, &raw)
+                .unwrap()
+                .unwrap()
+        };
+        let check = check_of(3.0, 1);
         assert_eq!(check.classes, 5);
         assert!(check.taken, "{check:?}");
         assert!(check.with > check.without + 0.05, "{check:?}");
 
-        let (vectors, raw, classes, groups) = classes_with_contact(30, 0.0, 2);
-        let check = check_contact(
-            &config,
-            LabelledVectors::new(&vectors, &classes, &groups_of(&groups), 5, 6).unwrap(),
-            &raw,
-        )
-        .unwrap()
-        .unwrap();
+        let check = check_of(0.0, 2);
         assert!(!check.taken, "{check:?}");
     }
 
