@@ -106,6 +106,14 @@ fn a_moment_the_model_was_not_trained_for_is_refused_by_every_command_line_face(
         .collect();
     assert_eq!(frames, [8, 16]);
     assert!(stored["model"]["early"]["auto"]["threshold"].is_number());
+    // jiku-walk's two walkers are too few groups to learn auto's rule by leaving one out: it is
+    // learned on stratified splits, and train says what that cannot see.
+    assert_eq!(stored["model"]["early"]["auto"]["validated_by"], "split");
+    assert!(
+        progress.contains("warning: auto's rule for early decisions was learned on training stances held out by three stratified 70/30 splits")
+            && progress.contains("train without --decide-at"),
+        "{progress}"
+    );
     for (model, decide_at) in [(&whole, "8"), (&whole, "auto"), (&points, "12")] {
         let model = model.to_str().unwrap();
         assert_refused(
@@ -255,4 +263,60 @@ fn eval_decide_at_prints_the_curve_and_reports_it() {
     assert!(page.contains("8.0 frames") && page.contains("16.0 frames"));
     assert!(page.contains("auto: mean"));
     assert!(report.join("early_decisions.png").is_file());
+}
+
+/// With 3 or more groups (here four, each holding every class), auto's rule is learned by leaving
+/// groups out, and train warns of nothing about it.
+#[test]
+fn with_enough_groups_the_rule_is_learned_by_leaving_groups_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = shared("real/jiku-walk/manifest.csv");
+    let folder = source.parent().unwrap();
+    let text = std::fs::read_to_string(&source).unwrap();
+    let mut manifest = String::from("path,label,condition,group\n");
+    for (i, line) in text.lines().skip(1).enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        let path = folder.join(fields[0]);
+        manifest.push_str(&format!(
+            "{},{},walk,g{}\n",
+            path.display(),
+            fields[1],
+            i % 4
+        ));
+    }
+    let manifest_path = dir.path().join("four_groups.csv");
+    std::fs::write(&manifest_path, manifest).unwrap();
+    let out = dir.path().join("grouped.json");
+    let output = presrs(&[
+        "train",
+        "--manifest",
+        manifest_path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--sample",
+        "stance",
+        "--one-sample-per-file",
+        "--features",
+        "rocket",
+        "--classifier",
+        "lda",
+        "--dims",
+        "20",
+        "--decide-at",
+        "8,16,whole",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        !stderr(&output).contains("auto's rule for early decisions"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(
+        stdout(&output).contains("held-out training stances (leaving one group out)"),
+        "{}",
+        stdout(&output)
+    );
+    let stored: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(stored["model"]["early"]["auto"]["validated_by"], "group");
 }

@@ -144,9 +144,11 @@ pub fn early_summary(model: &TrainedModel) -> Option<String> {
         );
         let _ = write!(
             text,
-            "; auto: {threshold}, {deadline}; on {} held-out training stances {:.1} % (whole \
+            "; auto: {threshold}, {deadline}; on {} held-out training stances{} {:.1} % (whole \
              stance {:.1} %), deciding at {:.1} frames on average ({:.0} % of each stance)",
             auto.validation_stances,
+            auto.validated_by
+                .map_or_else(String::new, |by| format!(" ({})", by.describe())),
             100.0 * auto.auto_accuracy,
             100.0 * auto.whole_accuracy,
             auto.mean_decision_frame,

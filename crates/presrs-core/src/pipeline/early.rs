@@ -222,9 +222,13 @@ pub fn train_early(
     let all = train_set.joined(validation);
     let stances = all.whole.len();
     let rule_set = rule_stances(all, RULE_STANCES, seed);
-    let (held_out, inner_folds) = held_out_stances(whole, &rule_set, &points, seed, on_stage)?;
+    let (held_out, inner_folds, validated_by) =
+        held_out_stances(whole, &rule_set, &points, seed, on_stage)?;
     let kept: Vec<usize> = points.iter().map(|p| p.frames).collect();
-    let auto = learn_threshold(&held_out, &kept);
+    let auto = AutoThreshold {
+        validated_by: Some(validated_by),
+        ..learn_threshold(&held_out, &kept)
+    };
     let cost = EarlyCost {
         points_seconds,
         rule_seconds: rule_started.elapsed().as_secs_f64(),
@@ -268,14 +272,15 @@ pub fn train_like(
 
 /// Every stance of `all` held out once (the inner folds of the automatic choice) and classified at
 /// `points` and whole by models of their methods (`whole`'s, and each point's own) trained on the
-/// fold's others; and the number of folds. `on_stage` is told each fold as it begins.
+/// fold's others; the number of folds, and how they were made. `on_stage` is told each fold as it
+/// begins.
 pub fn held_out_stances(
     whole: &TrainedModel,
     all: &StanceImages<'_>,
     points: &[DecisionPoint],
     seed: u64,
     on_stage: Option<StageObserver<'_>>,
-) -> Result<(Vec<HeldOutStance>, usize)> {
+) -> Result<(Vec<HeldOutStance>, usize, ValidateBy)> {
     let folds = make_folds(&all.whole, ValidateBy::Auto, seed)?;
     let mut held_out = Vec::new();
     let count = folds.folds.len();
@@ -300,7 +305,7 @@ pub fn held_out_stances(
             points,
         )?);
     }
-    Ok((held_out, count))
+    Ok((held_out, count, folds.used))
 }
 
 /// `test`'s stances classified at every point of `points` and whole, by models of `like`'s method
@@ -489,6 +494,7 @@ fn measure_rule(held_out: &[HeldOutStance], frames: &[usize], rule: AutoRule) ->
             .sum::<f64>()
             / n,
         validation_stances: held_out.len(),
+        validated_by: None,
         deadline: rule.deadline,
     }
 }

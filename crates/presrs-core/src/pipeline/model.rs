@@ -116,6 +116,10 @@ pub struct AutoThreshold {
     pub mean_decision_share: f64,
     /// Held-out stances the threshold was learned on.
     pub validation_stances: usize,
+    /// How those stances were held out (inner folds by group, condition or stratified splits); absent
+    /// from models written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validated_by: Option<crate::selection::ValidateBy>,
     /// The point (frames after touchdown) at which a stance no point was confident about by then is
     /// decided whatever its confidence (`None`: it waits for its lift-off). Absent from models
     /// written before deadlines.

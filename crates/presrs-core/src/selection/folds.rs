@@ -28,6 +28,8 @@ pub(crate) struct Folds {
     pub method: String,
     /// The scheme passed over, if one was.
     pub fallback: Option<ValidationFallback>,
+    /// The scheme the folds were made by.
+    pub used: ValidateBy,
 }
 
 /// The folds of `images` as `by` says (resolved from the images' groups and conditions), with the
@@ -49,6 +51,7 @@ pub(crate) fn make_folds(images: &[LabeledImage<'_>], by: ValidateBy, seed: u64)
                 folds,
                 method,
                 fallback: fallback.map(|f| ValidationFallback { used: tried, ..f }),
+                used: tried,
             });
         }
         let (folds, method) = if tried == ValidateBy::Group {
@@ -62,6 +65,7 @@ pub(crate) fn make_folds(images: &[LabeledImage<'_>], by: ValidateBy, seed: u64)
                 folds,
                 method,
                 fallback: fallback.map(|f| ValidationFallback { used: tried, ..f }),
+                used: tried,
             });
         }
         fallback.get_or_insert(ValidationFallback {

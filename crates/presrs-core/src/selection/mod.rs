@@ -345,6 +345,7 @@ fn select_on(
         folds,
         method,
         fallback,
+        ..
     } = folds::make_folds(images, by, seed)?;
     // Each candidate's folds in order, classifiers in parallel: the scores, and so the choice, do not
     // depend on the number of threads.

@@ -6,8 +6,9 @@ use presrs_core::TrainedModel;
 use presrs_core::error::CoreError;
 use presrs_core::pipeline::{LabeledImage, StanceImages, train_early};
 use presrs_core::sample::SampleKind;
-use presrs_core::selection::StageObserver;
+use presrs_core::selection::{StageObserver, ValidateBy};
 use presrs_core::split::Split;
+use presrs_io::message::{Message, Opt};
 
 use crate::dataset::Dataset;
 use crate::error::{Context, Error, Result};
@@ -206,6 +207,32 @@ pub fn with_early_decisions(
     model
         .with_early(early)
         .with_context(|| format!("{}: decision points", dataset.path().display()))
+}
+
+/// The warning for a model whose `auto` rule was learned on stances held out other than by group
+/// (`None` otherwise): validation inside the same walkers, surfaces or sessions cannot see how a new
+/// one's stances differ, and the early points are where they differ most; a rule it calls safe may
+/// decide a new walker's stances early, confidently and wrongly (on `jiku-walk`, leave one walker out,
+/// 0-12 points under the whole stance; `bench/real/RESULTS.md`, "Early decisions, seventh run").
+pub fn rule_validation_warning(model: &TrainedModel) -> Option<Message> {
+    let auto = model.early()?.auto.as_ref()?;
+    let by = auto.validated_by?;
+    if by == ValidateBy::Group {
+        return None;
+    }
+    Some(
+        Message::from(format!(
+            "auto's rule for early decisions was learned on training stances held out by {}, not by \
+             leaving groups out (that needs 3 or more groups, each class in more than one): it \
+             cannot see how the stances of a new walker, surface or session differ, and the early \
+             points are where they differ most, so on such stances it may decide early, \
+             confidently and wrongly; give each stance's walker or session as its `group` in the \
+             manifest to learn it by leaving groups out, or train without ",
+            by.describe()
+        ))
+        .opt(Opt::DecideAt)
+        .text(" to decide at lift-off"),
+    )
 }
 
 #[cfg(test)]

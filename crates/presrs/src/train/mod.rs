@@ -222,6 +222,7 @@ pub fn train_with_progress(
         progress,
     )?;
     let mut warnings = Warnings::new();
+    warnings.extend(early::rule_validation_warning(&model));
     let novelty_started = std::time::Instant::now();
     let model = if options.novelty {
         progress.stage(&format!(
