@@ -24,8 +24,17 @@ fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
 
 /// [`train`], with what it printed.
 fn train_output(dir: &Path, name: &str, extra: &[&str]) -> (PathBuf, std::process::Output) {
+    train_manifest(&shared("real/jiku-walk/manifest.csv"), dir, name, extra)
+}
+
+/// [`train_output`] on the stances of `manifest`.
+fn train_manifest(
+    manifest: &Path,
+    dir: &Path,
+    name: &str,
+    extra: &[&str],
+) -> (PathBuf, std::process::Output) {
     let out = dir.join(name);
-    let manifest = shared("real/jiku-walk/manifest.csv");
     let mut args = vec![
         "train",
         "--manifest",
@@ -286,26 +295,12 @@ fn with_enough_groups_the_rule_is_learned_by_leaving_groups_out() {
     }
     let manifest_path = dir.path().join("four_groups.csv");
     std::fs::write(&manifest_path, manifest).unwrap();
-    let out = dir.path().join("grouped.json");
-    let output = presrs(&[
-        "train",
-        "--manifest",
-        manifest_path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--sample",
-        "stance",
-        "--one-sample-per-file",
-        "--features",
-        "rocket",
-        "--classifier",
-        "lda",
-        "--dims",
-        "20",
-        "--decide-at",
-        "8,16,whole",
-    ]);
-    assert!(output.status.success(), "{}", stderr(&output));
+    let (out, output) = train_manifest(
+        &manifest_path,
+        dir.path(),
+        "grouped.json",
+        &["--decide-at", "8,16,whole"],
+    );
     assert!(
         !stderr(&output).contains("auto's rule for early decisions"),
         "{}",
