@@ -5,6 +5,7 @@
 use std::fmt::Write;
 
 use presrs_core::TrainedModel;
+use presrs_core::features::{FeatureConfig, RocketFamily};
 use presrs_io::model_file::ModelFile;
 
 /// A description of `file`, one fact a line.
@@ -178,6 +179,14 @@ pub fn early_summary(model: &TrainedModel) -> Option<String> {
     Some(text)
 }
 
+/// The features' name, with MiniRocket's draws when there are several (`rocket_unscaled, 4 draws`).
+fn features_name(features: &FeatureConfig) -> String {
+    match features.params::<RocketFamily>() {
+        Some(params) if params.draws > 1 => format!("{}, {} draws", features.name(), params.draws),
+        _ => features.name(),
+    }
+}
+
 /// The image path of `model` in one line: crop, the sample's size in its kind's terms (`38x41 image`,
 /// `12 channels x 83 frames`), preprocessing, features, PCA or none (and the Parzen window's sigma).
 pub fn pipeline_summary(model: &TrainedModel) -> String {
@@ -187,7 +196,7 @@ pub fn pipeline_summary(model: &TrainedModel) -> String {
         model.sample().shape_text(model.image_grid()),
         model.preprocess(),
         model.n_features(),
-        model.features().name(),
+        features_name(model.features()),
         model.describe_projection(),
         model
             .sigma()

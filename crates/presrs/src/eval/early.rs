@@ -313,7 +313,12 @@ fn train_whole(
         presrs_core::selection::train_auto(
             &train_set.whole,
             &validation.whole,
-            &method.auto_choice(&method.candidates_for(grid, false, &dataset.sample)?),
+            &method.auto_choice(&method.candidates_for(
+                grid,
+                false,
+                &dataset.sample,
+                crate::method::race_draws_for(train_set.whole.len()),
+            )?),
             seed,
         )
     } else {
@@ -366,7 +371,7 @@ fn frame_model_at(
         return Ok((0, test.len()));
     };
     let method = Method::default();
-    let candidates = method.candidates_for(first.frame.grid(), false, &reading.sample)?;
+    let candidates = method.candidates_for(first.frame.grid(), false, &reading.sample, 1)?;
     let model = presrs_core::selection::train_auto(
         &train_images,
         &validation,

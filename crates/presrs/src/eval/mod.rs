@@ -395,7 +395,12 @@ impl<'d> EvalSetup<'d> {
         let grid = self.samples[0].frame.grid();
         let config = method.train_config(grid)?;
         let candidates = if method.is_auto() {
-            method.candidates_for(grid, false, &self.dataset.sample)?
+            method.candidates_for(
+                grid,
+                false,
+                &self.dataset.sample,
+                crate::method::race_draws_for(self.samples.len()),
+            )?
         } else {
             Vec::new()
         };
@@ -461,6 +466,7 @@ impl<'d> EvalSetup<'d> {
             self.samples[0].frame.grid(),
             true,
             &self.dataset.sample,
+            crate::method::race_draws_for(self.samples.len()),
         )?;
         self.run("comparing", configs.len(), progress, |evaluation| {
             evaluation.compare(&configs)
@@ -484,7 +490,12 @@ impl<'d> EvalSetup<'d> {
         let grid = self.samples[0].frame.grid();
         let (config, paper) = (method.train_config(grid)?, method.paper_config(grid)?);
         let candidates = if method.is_auto() {
-            method.candidates_for(grid, false, &self.dataset.sample)?
+            method.candidates_for(
+                grid,
+                false,
+                &self.dataset.sample,
+                crate::method::race_draws_for(self.samples.len()),
+            )?
         } else {
             Vec::new()
         };

@@ -210,7 +210,12 @@ pub fn leave_class_out(
     let grid = samples[0].frame.grid();
     let config = method.train_config(grid)?;
     let candidates = if method.is_auto() {
-        method.candidates_for(grid, false, &setup.dataset().sample)?
+        method.candidates_for(
+            grid,
+            false,
+            &setup.dataset().sample,
+            crate::method::race_draws_for(samples.len()),
+        )?
     } else {
         Vec::new()
     };

@@ -246,7 +246,12 @@ pub fn evaluate_racing_samples(
     for setup in [&frames, &whole] {
         let samples = setup.samples();
         let grid = samples[0].frame.grid();
-        candidates.push(method.candidates_for(grid, false, &setup.dataset().sample)?);
+        candidates.push(method.candidates_for(
+            grid,
+            false,
+            &setup.dataset().sample,
+            crate::method::race_draws_for(samples.len()),
+        )?);
     }
     let kinds = [readings.frames.sample, readings.whole.sample];
     let views: [&[LabeledImage<'_>]; 2] = [frames.samples(), whole.samples()];

@@ -5,7 +5,7 @@ use std::str::FromStr;
 use std::time::Duration;
 
 use presrs_core::classifier::ClassifierKind;
-use presrs_core::features::{FeatureConfig, FeatureKind};
+use presrs_core::features::{FeatureConfig, FeatureKind, RocketFamily, RocketParams};
 use presrs_core::pipeline::{CheckedTrainConfig, TrainConfig};
 use presrs_core::preprocess::{Intensity, Preprocess};
 use presrs_core::sample::SampleKind;
@@ -75,6 +75,40 @@ pub const WHOLE_SAMPLE_FEATURES: [(FeatureKind, bool); 4] = [
     (FeatureKind::MULTIROCKET_UNSCALED, false),
     (FeatureKind::MULTIROCKET, false),
 ];
+
+/// The most MiniRocket draws ([`RocketParams::draws`]) a race on whole samples fits side by side.
+pub const MAX_RACE_DRAWS: usize = 4;
+
+/// The MiniRocket feature values (samples x features, all draws) up to which a race on whole samples
+/// adds draws: 64 million, 256 MB in single precision, which keeps the scale goals' sets (10^4 samples
+/// and more) at one draw.
+pub const DRAW_BUDGET_VALUES: usize = 64_000_000;
+
+/// How many MiniRocket draws of `features_per_draw` features a race on `samples` whole samples fits side
+/// by side: as many as [`DRAW_BUDGET_VALUES`] allows, 1 to [`MAX_RACE_DRAWS`]. One draw's luck moves
+/// the accuracy by tenths of a point on real sets and by points on small ones; four draws side by side
+/// scored above the mean single draw on every shared whole-sample set (bench/real/RESULTS.md,
+/// "MiniRocket's draws side by side"), at four times the features' cost, so only where that is small.
+pub fn race_draws(samples: usize, features_per_draw: usize) -> usize {
+    let per_draw = samples.max(1).saturating_mul(features_per_draw.max(1));
+    (DRAW_BUDGET_VALUES / per_draw).clamp(1, MAX_RACE_DRAWS)
+}
+
+/// [`race_draws`] for MiniRocket's default features (about 10,000 a draw) on `samples` samples.
+pub fn race_draws_for(samples: usize) -> usize {
+    race_draws(samples, RocketParams::default().config().output_len())
+}
+
+/// `features` with `draws` MiniRocket draws when it is MiniRocket's (other families as they are).
+fn with_draws(features: FeatureConfig, draws: usize) -> FeatureConfig {
+    match features.params::<RocketFamily>() {
+        Some(params) => FeatureConfig::of::<RocketFamily>(RocketParams {
+            draws,
+            ..params.clone()
+        }),
+        None => features,
+    }
+}
 
 /// A crop, or `auto`: decided from the image size.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -262,7 +296,7 @@ impl Method {
     /// (with the paper's features, or with every cheap family in a full search), then the texture
     /// families (with the transforms in a full search): a time budget cuts from the end.
     pub fn candidates(&self, grid: Grid, all: bool) -> Result<Vec<CheckedTrainConfig>> {
-        self.candidates_for(grid, all, &SampleKind::Frame)
+        self.candidates_for(grid, all, &SampleKind::Frame, 1)
     }
 
     /// [`candidates`](Self::candidates) for samples of `sample`: on whole stances and series an automatic
@@ -270,12 +304,14 @@ impl Method {
     /// (and in a comparison, `all`) every random-convolution family ([`WHOLE_SAMPLE_FEATURES`]) first,
     /// then the frame families. Each random-convolution family is paired with the ridge classifiers
     /// first (`ridge_raw`, then `ridge`: the pairing the papers use), then, for MiniRocket, with the
-    /// others (MultiRocket with the ridges only, unless `all`, to bound the search's cost).
+    /// others (MultiRocket with the ridges only, unless `all`, to bound the search's cost). MiniRocket
+    /// paired with a ridge fits `draws` draws side by side (see [`race_draws`]).
     pub fn candidates_for(
         &self,
         grid: Grid,
         all: bool,
         sample: &SampleKind,
+        draws: usize,
     ) -> Result<Vec<CheckedTrainConfig>> {
         let classifiers: Vec<ClassifierKind> = match self.classifier {
             ClassifierChoice::Kind(kind) if !all => vec![kind],
@@ -299,6 +335,7 @@ impl Method {
                     continue;
                 }
                 let features = kind.default_config();
+                let drawn = with_draws(features.clone(), draws);
                 let ridges = [ClassifierKind::RIDGE_RAW, ClassifierKind::RIDGE];
                 let paired: Vec<ClassifierKind> = match (auto_classifier, all || every_classifier) {
                     (false, _) => classifiers.clone(),
@@ -306,6 +343,13 @@ impl Method {
                     (true, true) => ridges.iter().chain(&classifiers).copied().collect(),
                 };
                 for classifier in paired {
+                    // The ridges read every feature, where a draw's luck shows; the others read
+                    // principal components, which more draws would cost as many times to compute.
+                    let features = if ridges.contains(&classifier) {
+                        &drawn
+                    } else {
+                        &features
+                    };
                     out.push(self.config(grid, features.clone(), classifier.default_config())?);
                 }
             }
@@ -542,7 +586,7 @@ mod tests {
         let frame = default.candidates(grid, false).unwrap();
         let learned = |c: &&CheckedTrainConfig| c.config().features.learns();
         assert!(frame.iter().filter(learned).count() == 0);
-        let race = default.candidates_for(grid, false, &stance).unwrap();
+        let race = default.candidates_for(grid, false, &stance, 1).unwrap();
         let mut every_classifier = vec![ClassifierKind::RIDGE_RAW, ClassifierKind::RIDGE];
         every_classifier.extend(ClassifierKind::auto_candidates());
         let pairs =
@@ -563,7 +607,7 @@ mod tests {
             full_search: true,
             ..Method::default()
         };
-        let whole = auto.candidates_for(grid, false, &stance).unwrap();
+        let whole = auto.candidates_for(grid, false, &stance, 1).unwrap();
         let paired = |kind: FeatureKind| -> Vec<ClassifierKind> {
             whole
                 .iter()
@@ -607,7 +651,7 @@ mod tests {
             classifier: ClassifierChoice::Kind(ClassifierKind::SVM),
             ..Method::default()
         };
-        let with_svm = svm.candidates_for(grid, false, &stance).unwrap();
+        let with_svm = svm.candidates_for(grid, false, &stance, 1).unwrap();
         assert_eq!(with_svm.len(), 2);
         assert!(
             with_svm
@@ -618,10 +662,10 @@ mod tests {
             full_search: true,
             ..svm
         };
-        let with_svm = full_svm.candidates_for(grid, false, &stance).unwrap();
+        let with_svm = full_svm.candidates_for(grid, false, &stance, 1).unwrap();
         assert_eq!(with_svm.iter().filter(learned).count(), 4);
         assert!(with_svm.len() > 4);
-        let compare = auto.candidates_for(grid, true, &stance).unwrap();
+        let compare = auto.candidates_for(grid, true, &stance, 1).unwrap();
         assert_eq!(compare.iter().filter(learned).count(), 4 * every.len());
         // A fixed method stays fixed; a series adds rocket too.
         let fixed = Method {
@@ -630,7 +674,7 @@ mod tests {
         };
         assert!(
             fixed
-                .candidates_for(grid, false, &stance)
+                .candidates_for(grid, false, &stance, 1)
                 .unwrap()
                 .iter()
                 .all(|c| c.config().features.is_fft1d())
@@ -639,12 +683,67 @@ mod tests {
             time_in_rows: false,
         };
         assert_eq!(
-            auto.candidates_for(grid, false, &series).unwrap().len(),
+            auto.candidates_for(grid, false, &series, 1).unwrap().len(),
             whole.len()
         );
         assert_eq!(
-            default.candidates_for(grid, false, &series).unwrap().len(),
+            default
+                .candidates_for(grid, false, &series, 1)
+                .unwrap()
+                .len(),
             race.len()
+        );
+    }
+
+    /// The race's ridges read four MiniRocket draws while the features of every draw stay under the
+    /// budget (a few thousand samples), fewer above it, one on a robot's logs; the classifiers on
+    /// principal components read one draw.
+    #[test]
+    fn the_race_s_ridges_read_several_draws_on_small_sets_only() {
+        let per_draw = RocketParams::default().config().output_len();
+        assert_eq!(per_draw, 9996);
+        assert_eq!(race_draws(120, per_draw), MAX_RACE_DRAWS);
+        assert_eq!(race_draws(1000, per_draw), 4);
+        assert_eq!(race_draws(1601, per_draw), 3);
+        assert_eq!(race_draws(2500, per_draw), 2);
+        assert_eq!(race_draws(11_256, per_draw), 1);
+        assert_eq!(race_draws(100_000, per_draw), 1);
+        assert_eq!(
+            race_draws(0, 0),
+            MAX_RACE_DRAWS,
+            "no samples: nothing to cost"
+        );
+        let grid = Grid::new(60, 75);
+        let series = SampleKind::Series {
+            time_in_rows: false,
+        };
+        let draws_of = |samples: usize| -> Vec<(String, usize)> {
+            Method::default()
+                .candidates_for(grid, false, &series, race_draws_for(samples))
+                .unwrap()
+                .iter()
+                .map(|c| {
+                    let config = c.config();
+                    let draws = config
+                        .features
+                        .params::<RocketFamily>()
+                        .map_or(0, |params| params.draws);
+                    (config.classifier.kind().as_str().to_owned(), draws)
+                })
+                .collect()
+        };
+        for (classifier, draws) in draws_of(1000) {
+            let ridge = classifier.starts_with("ridge");
+            assert_eq!(draws, if ridge { 4 } else { 1 }, "{classifier}");
+        }
+        assert!(draws_of(50_000).iter().all(|(_, draws)| *draws == 1));
+        // Frames have no MiniRocket candidate.
+        assert!(
+            Method::default()
+                .candidates(Grid::new(44, 44), false)
+                .unwrap()
+                .iter()
+                .all(|c| c.config().features.params::<RocketFamily>().is_none())
         );
     }
 
@@ -771,7 +870,7 @@ mod tests {
         let grid = Grid::new(12, 54);
         let stance = whole_stance();
         let auto = Method::default();
-        let whole = auto.candidates_for(grid, false, &stance).unwrap();
+        let whole = auto.candidates_for(grid, false, &stance, 1).unwrap();
         let preferred = auto.auto_choice(&whole).preferred_on_tie.unwrap();
         let config = whole[preferred].config();
         assert_eq!(config.features.kind(), Some(FeatureKind::ROCKET));
@@ -784,7 +883,7 @@ mod tests {
             classifier: ClassifierChoice::Kind(ClassifierKind::RIDGE),
             ..Method::default()
         };
-        let with_ridge = ridge.candidates_for(grid, false, &stance).unwrap();
+        let with_ridge = ridge.candidates_for(grid, false, &stance, 1).unwrap();
         assert_eq!(ridge.auto_choice(&with_ridge).preferred_on_tie, None);
     }
 
@@ -797,13 +896,13 @@ mod tests {
         let stance = whole_stance();
         let auto = Method::default();
         assert_eq!(auto.choose, Choose::Auto);
-        let whole = auto.candidates_for(grid, false, &stance).unwrap();
+        let whole = auto.candidates_for(grid, false, &stance, 1).unwrap();
         let frame = auto.candidates(grid, false).unwrap();
         let full = Method {
             full_search: true,
             ..Method::default()
         };
-        let full_whole = full.candidates_for(grid, false, &stance).unwrap();
+        let full_whole = full.candidates_for(grid, false, &stance, 1).unwrap();
         assert_eq!(auto.auto_choice(&whole).rule, ChoiceRule::OneStandardError);
         assert_eq!(
             full.auto_choice(&full_whole).rule,
@@ -815,7 +914,7 @@ mod tests {
             features: FeatureChoice::Kinds(vec![FeatureKind::ROCKET_LOG]),
             ..Method::default()
         };
-        let log_candidates = log.candidates_for(grid, false, &stance).unwrap();
+        let log_candidates = log.candidates_for(grid, false, &stance, 1).unwrap();
         assert_eq!(
             log.auto_choice(&log_candidates).rule,
             ChoiceRule::OneStandardError

@@ -50,9 +50,12 @@ pub fn fault_sweep(
         config
     };
     let candidates = if auto {
-        options
-            .method
-            .candidates_for(grid, false, &options.samples.kind)?
+        options.method.candidates_for(
+            grid,
+            false,
+            &options.samples.kind,
+            crate::method::race_draws_for(samples.len()),
+        )?
     } else {
         Vec::new()
     };

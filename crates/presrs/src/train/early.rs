@@ -137,13 +137,12 @@ pub fn point_chooser<'m>(
                 name: "decision point",
                 reason: "no training stance reaches the point".into(),
             })?;
-        let candidates =
-            method
-                .candidates_for(grid, false, sample)
-                .map_err(|err| CoreError::Param {
-                    name: "decision point",
-                    reason: err.to_string(),
-                })?;
+        let candidates = method
+            .candidates_for(grid, false, sample, 1)
+            .map_err(|err| CoreError::Param {
+                name: "decision point",
+                reason: err.to_string(),
+            })?;
         let tell = |stage: &str| progress.stage(&format!("decision point {k} frames: {stage}"));
         presrs_core::selection::train_auto(
             train,

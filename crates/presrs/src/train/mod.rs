@@ -161,7 +161,12 @@ pub fn train_with_progress(
         group: pool[i].group.as_deref(),
     });
     let model = if method.is_auto() {
-        let candidates = method.candidates_for(grid, false, &dataset.sample)?;
+        let candidates = method.candidates_for(
+            grid,
+            false,
+            &dataset.sample,
+            crate::method::race_draws_for(pool.len()),
+        )?;
         let tell = |stage: &str| progress.stage(stage);
         presrs_core::selection::train_auto(
             &train_images,

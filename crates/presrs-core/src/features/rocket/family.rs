@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result, check_len};
 use crate::features::family::{FeatureFamily, FitImages};
 use crate::features::rocket::config::{RocketConfig, check_shape};
+use crate::features::rocket::draws;
 use crate::features::rocket::duration::{DurationScale, frames_before_padding};
 use crate::features::rocket::kernels::KERNEL_LENGTH;
 use crate::features::rocket::model::RocketModel;
@@ -60,6 +61,10 @@ pub struct RocketParams {
     /// features as one more ([`super::duration`]); for whole stances, whose lengths vary.
     #[serde(default, skip_serializing_if = "is_false")]
     pub duration: bool,
+    /// Independent MiniRocket draws whose features stand side by side ([`super::draws`]); 1, the
+    /// paper's single model, unless set (and then not written, so that such files read as before).
+    #[serde(default = "one_draw", skip_serializing_if = "is_one_draw")]
+    pub draws: usize,
     /// Learned at training.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fitted: Option<FittedRocket>,
@@ -81,6 +86,14 @@ fn is_false(flag: &bool) -> bool {
     !*flag
 }
 
+fn one_draw() -> usize {
+    1
+}
+
+fn is_one_draw(draws: &usize) -> bool {
+    *draws == 1
+}
+
 /// (the default is not written, so that a scaled model's file reads as before)
 pub(super) fn is_scaled(channel_scaling: &bool) -> bool {
     *channel_scaling
@@ -96,6 +109,7 @@ impl Default for RocketParams {
             channel_scaling: true,
             log_values: false,
             duration: false,
+            draws: 1,
             fitted: None,
         }
     }
@@ -112,22 +126,36 @@ impl RocketParams {
     }
 }
 
-/// What training learned: each channel's scale and the MiniRocket model.
+/// What training learned: each channel's scale and the MiniRocket model (its first draw, and the
+/// others when there are several).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FittedRocket {
     /// Each channel is divided by its scale before the convolutions.
     pub channel_scales: Vec<f64>,
     pub model: RocketModel,
+    /// The draws after the first (seeds `seed + 1, ...`), their features after the first's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub more_draws: Vec<RocketModel>,
     /// The duration feature's scale, when the family adds it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub duration: Option<DurationScale>,
 }
 
 impl FittedRocket {
-    /// Features: MiniRocket's, and the duration when there is one.
+    /// Features: MiniRocket's of every draw, and the duration when there is one.
     pub fn output_len(&self) -> usize {
-        self.model.output_len() + usize::from(self.duration.is_some())
+        self.minirocket_len() + usize::from(self.duration.is_some())
+    }
+
+    /// MiniRocket's features of every draw.
+    pub fn minirocket_len(&self) -> usize {
+        self.draws().map(RocketModel::output_len).sum()
+    }
+
+    /// The draws, the first one first.
+    pub fn draws(&self) -> impl Iterator<Item = &RocketModel> {
+        std::iter::once(&self.model).chain(&self.more_draws)
     }
 }
 
@@ -253,6 +281,7 @@ impl FeatureFamily for RocketFamily {
 
     fn check(params: &RocketParams) -> Result<()> {
         params.config().check()?;
+        draws::check_count(params.draws)?;
         if let Some(fitted) = &params.fitted {
             fitted.model.check()?;
             if fitted.model.config() != &params.config() {
@@ -261,6 +290,12 @@ impl FeatureFamily for RocketFamily {
                     reason: "the fitted model's settings differ from the family's".into(),
                 });
             }
+            draws::check_more(
+                &params.config(),
+                params.draws,
+                &fitted.model,
+                &fitted.more_draws,
+            )?;
             check_len(
                 "rocket channel scales",
                 fitted.model.channels(),
@@ -321,13 +356,17 @@ impl FeatureFamily for RocketFamily {
             signed_log(&mut scaled);
         }
         let model = RocketModel::fit(&params.config(), &scaled, channels, padded)?;
+        let more_draws =
+            draws::fit_more(&params.config(), params.draws, &scaled, channels, padded)?;
+        let minirocket_len = model.output_len() * params.draws;
         let duration = params
             .duration
-            .then(|| DurationScale::fit(images, model.output_len()));
+            .then(|| DurationScale::fit(images, minirocket_len));
         Ok(RocketParams {
             fitted: Some(FittedRocket {
                 channel_scales,
                 model,
+                more_draws,
                 duration,
             }),
             ..params.clone()
@@ -338,7 +377,7 @@ impl FeatureFamily for RocketFamily {
         check_shape("rocket series", grid.rows, padded_length(grid.cols))?;
         match &params.fitted {
             Some(_) => Ok(fitted_for(params, grid)?.output_len()),
-            None => Ok(params.config().output_len() + usize::from(params.duration)),
+            None => Ok(params.config().output_len() * params.draws + usize::from(params.duration)),
         }
     }
 
@@ -348,7 +387,11 @@ impl FeatureFamily for RocketFamily {
             // (`rocket_d1_k0_q0`, or `rocket_unscaled_d1_k0_q0`: each starts with its preset's name)
             Some(_) => {
                 let fitted = fitted_for(params, grid)?;
-                let mut names = fitted.model.feature_names();
+                let mut names: Vec<String> = fitted
+                    .draws()
+                    .enumerate()
+                    .flat_map(|(index, model)| draws::names_of_draw(model, Self::NAME, index))
+                    .collect();
                 if fitted.duration.is_some() {
                     names.push(format!("{}_frames", Self::NAME));
                 }
@@ -394,10 +437,12 @@ impl FeatureFamily for RocketFamily {
         if extractor.log_values {
             signed_log(&mut extractor.scaled);
         }
-        let (rocket, duration) = out.split_at_mut(fitted.model.output_len());
-        fitted
-            .model
-            .transform_into(&extractor.scaled, rocket, &mut extractor.scratch)?;
+        let (mut rocket, duration) = out.split_at_mut(fitted.minirocket_len());
+        for model in fitted.draws() {
+            let (draw, rest) = rocket.split_at_mut(model.output_len());
+            model.transform_into(&extractor.scaled, draw, &mut extractor.scratch)?;
+            rocket = rest;
+        }
         if let (Some(scale), [slot]) = (&fitted.duration, duration) {
             *slot = scale.feature(frames_before_padding(image, extractor.grid.cols));
         }
@@ -440,6 +485,7 @@ mod tests {
 
     use super::*;
     use crate::features::FeatureConfig;
+    use crate::features::rocket::RocketConfig;
     use crate::features::rocket::oracle;
 
     /// Continuous values (no ties with the biases), channels of very different units.
@@ -755,6 +801,91 @@ mod tests {
         let plain = fitted_preset("rocket_unscaled", &values);
         let plain_json = serde_json::to_string(&plain).unwrap();
         assert!(!plain_json.contains("duration") && !plain_json.contains("log_values"));
+    }
+
+    /// `draws: 3` is three MiniRocket models fitted with the seeds 0, 1, 2 on the same series, their
+    /// features (the oracle's) side by side and named apart; stored, read back and checked.
+    #[test]
+    fn several_draws_stand_side_by_side() {
+        let (channels, length) = (3, 20);
+        let grid = Grid::new(channels, length);
+        let values = series(6, channels, length, 0.0);
+        let params = RocketParams {
+            num_features: 168,
+            channel_scaling: false,
+            draws: 3,
+            ..RocketParams::default()
+        };
+        let fitted = FeatureConfig::of::<RocketFamily>(params.clone())
+            .fit(FitImages {
+                grid,
+                values: &values,
+            })
+            .unwrap();
+        let fitted_params = fitted.params::<RocketFamily>().unwrap();
+        let rocket = fitted_params.fitted.as_ref().unwrap();
+        let sample = series(1, channels, length, 1.0);
+        let features = fitted.extractor(grid).unwrap().extract(&sample).unwrap();
+        let mut expected = Vec::new();
+        for seed in 0..3 {
+            let config = RocketConfig {
+                seed,
+                ..params.config()
+            };
+            let model = RocketModel::fit(&config, &values, channels, length).unwrap();
+            expected.extend(oracle::transform(&model, &sample));
+        }
+        assert_eq!(features, expected);
+        assert_eq!(features.len(), 3 * 168);
+        assert_ne!(features[..168], features[168..336], "the draws differ");
+        assert_eq!(
+            RocketFamily::output_len(fitted_params, grid).unwrap(),
+            features.len()
+        );
+        assert_eq!(
+            RocketFamily::output_len(&params, grid).unwrap(),
+            features.len()
+        );
+        let names = RocketFamily::feature_names(fitted_params, grid).unwrap();
+        let distinct: std::collections::HashSet<_> = names.iter().collect();
+        assert_eq!(
+            (names.len(), distinct.len()),
+            (features.len(), features.len())
+        );
+        assert!(
+            names[168].starts_with("rocket_unscaled_r1_d"),
+            "{}",
+            names[168]
+        );
+        let json = serde_json::to_string(&fitted).unwrap();
+        assert!(json.contains(r#""draws":3"#), "{json}");
+        assert_eq!(
+            serde_json::from_str::<FeatureConfig>(&json).unwrap(),
+            fitted
+        );
+        // One draw is not written (older files read as before); a draw missing or of another seed,
+        // or no draw at all, is an error naming the setting.
+        assert!(
+            !serde_json::to_string(&RocketParams::default())
+                .unwrap()
+                .contains("draws")
+        );
+        let mut missing = fitted_params.clone();
+        if let Some(rocket) = missing.fitted.as_mut() {
+            rocket.more_draws.pop();
+        }
+        assert!(RocketFamily::check(&missing).is_err_and(|e| e.to_string().contains("draws")));
+        let mut reseeded = fitted_params.clone();
+        if let Some(rocket) = reseeded.fitted.as_mut() {
+            rocket.more_draws.swap(0, 1);
+        }
+        assert!(RocketFamily::check(&reseeded).is_err_and(|e| e.to_string().contains("draw 1")));
+        let none = RocketParams {
+            draws: 0,
+            ..RocketParams::default()
+        };
+        assert!(RocketFamily::check(&none).is_err_and(|e| e.to_string().contains("draws")));
+        assert_eq!(rocket.draws().count(), 3);
     }
 
     #[test]

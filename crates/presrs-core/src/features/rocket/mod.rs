@@ -14,6 +14,7 @@
 //!   seed, and the biases from quantiles of the chosen examples' convolutions (in parallel);
 //! - [`transform`]: the fast transform of one sample into the proportions of positive values (PPV),
 //!   without allocating ([`RocketScratch`]), and of many samples in parallel;
+//! - [`draws`]: several independent draws (seeds) side by side, the family's `draws` setting;
 //! - [`family`]: MiniRocket as the feature family `rocket` (an image read as channels x time, its
 //!   channels scaled by their spread in the training samples, or in their own units, or their signed
 //!   logs), and [`duration`] the whole stance's duration as one more feature;
@@ -33,6 +34,7 @@
 //! (`length - 8 * dilation` outputs).
 
 pub mod config;
+pub mod draws;
 pub mod duration;
 pub mod family;
 pub mod fit;
