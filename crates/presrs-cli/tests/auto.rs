@@ -661,3 +661,42 @@ fn train_and_eval_state_their_peak_memory_per_sample_and_their_stages() {
     assert!(cost["final_fit_seconds"].as_f64().unwrap() > 0.0, "{cost}");
     assert_eq!(cost["budget_seconds"], 60.0, "{cost}");
 }
+
+/// On a small whole-stance set the race's ridges read four MiniRocket draws side by side: `train`'s
+/// summary and `inspect` name them, and the model file stores the four fitted draws.
+#[test]
+fn the_race_s_ridges_read_four_draws_on_a_small_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/real/jiku-walk/manifest.csv");
+    let model = dir.path().join("m.json");
+    let train = presrs(&[
+        "train",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--sample",
+        "stance",
+        "--one-sample-per-file",
+        "--classifier",
+        "ridge_raw",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(train.status.success(), "{}", stderr(&train));
+    assert!(stdout(&train).contains(", 4 draws)"), "{}", stdout(&train));
+    let inspect = presrs(&["inspect", model.to_str().unwrap()]);
+    assert!(inspect.status.success(), "{}", stderr(&inspect));
+    assert!(
+        stdout(&inspect).contains(", 4 draws)"),
+        "{}",
+        stdout(&inspect)
+    );
+    let stored: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let features = &stored["model"]["features"];
+    assert_eq!(features["draws"], 4, "{features}");
+    assert_eq!(
+        features["fitted"]["more_draws"].as_array().unwrap().len(),
+        3
+    );
+}
