@@ -17,18 +17,26 @@ pub fn selection_lines(selection: &Selection, model: &TrainedModel, n_train: usi
         .map(|score| score.per_fold.len())
         .max()
         .unwrap_or(0);
+    // (names padded to the longest, at least 40 characters, so the scores stand in one column)
+    let width = selection
+        .scores
+        .iter()
+        .map(|score| score.name().len())
+        .max()
+        .unwrap_or(0)
+        .max(40);
     for (i, score) in selection.scores.iter().enumerate() {
         let mark = if i == selection.chosen { "*" } else { " " };
-        let name = score.name();
+        let name = format!("{:<width$}", score.name());
         lines.push(match &score.error {
             None if score.dropped_early => format!(
-                "{mark} {name:<40} {:6.2} % on the first {} of {folds} folds: clearly behind, dropped",
+                "{mark} {name} {:6.2} % on the first {} of {folds} folds: clearly behind, dropped",
                 100.0 * score.accuracy.mean,
                 score.per_fold.len()
             ),
-            None => format!("{mark} {name:<40} {}", percent(score)),
-            Some(err) if score.skipped => format!("{mark} {name:<40} {err}"),
-            Some(err) => format!("{mark} {name:<40} failed: {err}"),
+            None => format!("{mark} {name} {}", percent(score)),
+            Some(err) if score.skipped => format!("{mark} {name} {err}"),
+            Some(err) => format!("{mark} {name} failed: {err}"),
         });
     }
     let Some(chosen) = selection.chosen() else {

@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::features::RocketFamily;
 use crate::metrics::MeanStd;
 use crate::pipeline::config::TrainConfig;
 use crate::selection::validate_by::ValidateBy;
@@ -39,14 +40,24 @@ impl CandidateScore {
 
     /// The candidate in words: its [`method`](Self::method) and its principal components
     /// (`fft1d (sqrt) + pwe, 51 dims`), or `all features` for a classifier that takes every feature
-    /// without a PCA step (`rocket + ridge, all features`).
+    /// without a PCA step (`rocket + ridge, all features`), and MiniRocket's draws when there are
+    /// several (`rocket_unscaled + ridge_raw, all features, 4 draws`).
     pub fn name(&self) -> String {
         let dims = if self.config.classifier.kind().takes_all_features() {
             "all features".to_owned()
         } else {
             format!("{} dims", self.config.dims)
         };
-        format!("{}, {dims}", self.method())
+        let draws = self
+            .config
+            .features
+            .params::<RocketFamily>()
+            .map_or(1, |params| params.draws);
+        if draws > 1 {
+            format!("{}, {dims}, {draws} draws", self.method())
+        } else {
+            format!("{}, {dims}", self.method())
+        }
     }
 
     /// Its features (after an intensity transform, if any) + its classifier, whatever the principal

@@ -1099,3 +1099,33 @@ fn select_gives_a_tie_to_the_preferred_candidate() {
     assert_eq!(choose(one_se), 0);
     assert_eq!(choose(one_se.with_preferred_on_tie(Some(1))), 1);
 }
+
+/// A candidate on several MiniRocket draws says so in its name; one draw (and every other family)
+/// reads as before.
+#[test]
+fn a_candidate_s_name_counts_its_minirocket_draws() {
+    use crate::classifier::ClassifierKind;
+    use crate::features::{FeatureConfig, RocketFamily, RocketParams};
+    let rocket = |draws: usize| {
+        let mut score = scored("rocket_unscaled", "ridge_raw", 51, 0.9);
+        score.config.features = FeatureConfig::of::<RocketFamily>(RocketParams {
+            channel_scaling: false,
+            draws,
+            ..RocketParams::default()
+        });
+        score.config.classifier = ClassifierKind::RIDGE_RAW.default_config();
+        score
+    };
+    assert_eq!(
+        rocket(4).name(),
+        "rocket_unscaled + ridge_raw, all features, 4 draws"
+    );
+    assert_eq!(
+        rocket(1).name(),
+        "rocket_unscaled + ridge_raw, all features"
+    );
+    assert_eq!(
+        scored("fft1d", "pwe", 51, 0.9).name(),
+        "fft1d + pwe, 51 dims"
+    );
+}
