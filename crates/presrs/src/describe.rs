@@ -5,7 +5,7 @@
 use std::fmt::Write;
 
 use presrs_core::TrainedModel;
-use presrs_core::features::{FeatureConfig, RocketFamily};
+use presrs_core::features::{FeatureConfig, minirocket_draws};
 use presrs_io::model_file::ModelFile;
 
 /// A description of `file`, one fact a line.
@@ -181,9 +181,9 @@ pub fn early_summary(model: &TrainedModel) -> Option<String> {
 
 /// The features' name, with MiniRocket's draws when there are several (`rocket_unscaled, 4 draws`).
 fn features_name(features: &FeatureConfig) -> String {
-    match features.params::<RocketFamily>() {
-        Some(params) if params.draws > 1 => format!("{}, {} draws", features.name(), params.draws),
-        _ => features.name(),
+    match minirocket_draws(features) {
+        1 => features.name(),
+        draws => format!("{}, {draws} draws", features.name()),
     }
 }
 

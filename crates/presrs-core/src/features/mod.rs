@@ -29,6 +29,13 @@ pub use rocket::multi_family::{
     FittedMultiRocket, MultiRocketExtractor, MultiRocketFamily, MultiRocketParams,
 };
 
+/// The MiniRocket draws of `features` ([`RocketParams::draws`]) when they are MiniRocket's, else 1.
+pub fn minirocket_draws(features: &FeatureConfig) -> usize {
+    features
+        .params::<RocketFamily>()
+        .map_or(1, |params| params.draws)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

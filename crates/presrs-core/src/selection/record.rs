@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::features::RocketFamily;
+use crate::features::minirocket_draws;
 use crate::metrics::MeanStd;
 use crate::pipeline::config::TrainConfig;
 use crate::selection::validate_by::ValidateBy;
@@ -48,11 +48,7 @@ impl CandidateScore {
         } else {
             format!("{} dims", self.config.dims)
         };
-        let draws = self
-            .config
-            .features
-            .params::<RocketFamily>()
-            .map_or(1, |params| params.draws);
+        let draws = minirocket_draws(&self.config.features);
         if draws > 1 {
             format!("{}, {dims}, {draws} draws", self.method())
         } else {

@@ -137,6 +137,7 @@ pub fn point_chooser<'m>(
                 name: "decision point",
                 reason: "no training stance reaches the point".into(),
             })?;
+        // One MiniRocket draw: each point is a race of its own, so draws would multiply by the points.
         let candidates = method
             .candidates_for(grid, false, sample, 1)
             .map_err(|err| CoreError::Param {
